@@ -1,0 +1,29 @@
+# Two commands do all set-up on a fresh machine (a C compiler, python3 >= 3.11 assumed):
+#   make demo   builds the paper FMUs, runs earth/Mars/moon, writes CSV and a figure to results/
+#   make test   installs what the tests need and runs them all
+PYTHON ?= python3
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+SCENES := paper_earth paper_mars paper_moon
+
+.PHONY: demo test venv clean
+
+$(VENV)/bin/python:
+	$(PYTHON) -m venv $(VENV)
+
+$(STAMP): pyproject.toml | $(VENV)/bin/python
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e ".[test]"
+	touch $(STAMP)
+
+venv: $(STAMP)
+
+demo: $(STAMP)
+	$(PY) examples/paper_demo.py --out results
+
+test: $(STAMP)
+	$(PY) -m pytest -q
+
+clean:
+	rm -rf results build .pytest_cache

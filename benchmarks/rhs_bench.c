@@ -1,0 +1,54 @@
+/* Times one evaluation of the generated right-hand side gw_ode (ns per call).
+ * Built by benchmarks/rhs_cost.py against a scene's generated gw_funcs.c. */
+#define _POSIX_C_SOURCE 199309L
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+#include "gw_model.h"
+
+static double now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int main(int argc, char **argv) {
+    const gw_model *m = &GW_MODEL;
+    long n = argc > 1 ? atol(argv[1]) : 2000000L;
+    gw_int sz_arg, sz_res, sz_iw, sz_w;
+    double x0[64], xdot[64], t = 0.0, acc = 0.0, t0, best = 1e30;
+    const double *arg[16];
+    double *res[16];
+    gw_int *iw;
+    double *w;
+    int rep;
+    if (m->nx > 64) return 2;
+    m->ode.work(&sz_arg, &sz_res, &sz_iw, &sz_w);
+    iw = calloc((size_t)sz_iw + 1, sizeof *iw);
+    w = calloc((size_t)sz_w + 1, sizeof *w);
+    { /* x0 = init(s_start, p_start) */
+        gw_int a, r, i2, w2;
+        gw_int *iw0; double *w0;
+        m->init.work(&a, &r, &i2, &w2);
+        iw0 = calloc((size_t)i2 + 1, sizeof *iw0); w0 = calloc((size_t)w2 + 1, sizeof *w0);
+        arg[0] = m->s_start; arg[1] = m->p_start; res[0] = x0;
+        m->init.eval(arg, res, iw0, w0, 0);
+        free(iw0); free(w0);
+    }
+    arg[0] = &t; arg[1] = x0; arg[2] = m->u_start; arg[3] = m->p_start; res[0] = xdot;
+    for (rep = 0; rep < 5; rep++) {
+        long i;
+        t0 = now();
+        for (i = 0; i < n; i++) {
+            x0[m->nx - 1] += 1e-15; /* defeat hoisting */
+            m->ode.eval(arg, res, iw, w, 0);
+            acc += xdot[m->nx - 2];
+        }
+        t0 = (now() - t0) / (double)n * 1e9;
+        if (t0 < best) best = t0;
+    }
+    printf("%.2f\n", best);
+    fprintf(stderr, "checksum %g\n", acc);
+    free(iw); free(w);
+    return 0;
+}

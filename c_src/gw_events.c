@@ -1,0 +1,123 @@
+/*
+ * gw_events.c -- state events.  After every accepted internal step the event
+ * indicators are evaluated at the end of the step; every indicator that went from
+ * > 0 to <= 0 is located on the dense output by the Illinois method (bracketing,
+ * safeguarded by bisection) to |dt| <= 1e-12 max(1, |t|).  The earliest crossing
+ * wins; the state at the event is the dense output at the located time, which is
+ * the right end of the final bracket, so the indicator there is <= 0 and it
+ * cannot fire again until it has become positive.
+ */
+#include <math.h>
+
+#include "gw_instance.h"
+
+#define GW_EVENT_MAX_ITER 200
+
+static const char *event_name(const gw_instance *I, int i) {
+    return (I->m->event_names && I->m->event_names[i]) ? I->m->event_names[i] : "?";
+}
+
+/* g(t) = indicator i on the dense output; uses I->xtmp and I->eev as scratch. */
+static int indicator(gw_instance *I, int i, double t, double *g) {
+    gw_dense_eval(I, t, I->xtmp);
+    if (gw_eval_evt(I, t, I->xtmp, I->eev) != 0) return -1;
+    *g = I->eev[i];
+    return 0;
+}
+
+/* Locate the crossing of indicator i in [a, b], fa > 0 >= fb.  Returns the right end
+ * of the final bracket (g <= 0 there). */
+static int locate(gw_instance *I, int i, double a, double fa, double b, double fb, double *t_out) {
+    const double tol = 1e-12 * (fabs(b) > 1.0 ? fabs(b) : 1.0);
+    double width = b - a;
+    int side = 0, bisect = 0, it;
+    for (it = 0; it < GW_EVENT_MAX_ITER && (b - a) > tol; it++) {
+        double c, fc, w;
+        c = bisect ? 0.5 * (a + b) : b - fb * (b - a) / (fb - fa);
+        if (!(c > a && c < b)) c = 0.5 * (a + b);
+        if (c - a < 0.25 * tol) c = a + 0.25 * tol; /* always make progress */
+        if (b - c < 0.25 * tol) c = b - 0.25 * tol;
+        if (indicator(I, i, c, &fc) != 0) return -1;
+        if (!(fc > 0.0)) { /* <= 0 or NaN: the crossing is at or before c */
+            b = c;
+            fb = isfinite(fc) ? fc : -fa;
+            if (side == -1) fa *= 0.5; /* Illinois modification */
+            side = -1;
+            if (fc == 0.0) break;
+        } else {
+            a = c;
+            fa = fc;
+            if (side == 1) fb *= 0.5;
+            side = 1;
+        }
+        w = b - a;
+        bisect = (w > 0.5 * width); /* no halving: bisect next */
+        width = w;
+    }
+    *t_out = b;
+    return 0;
+}
+
+static void log_event(const gw_instance *I, int i, double te, int terminate) {
+    if (terminate) {
+        if (gw_log_enabled(I, GW_LOG_EVENTS))
+            gw_log(I, fmi2OK, GW_LOG_EVENTS,
+                   "event %s at t=%.17g: simulation terminated at t=%.17g", event_name(I, i),
+                   te, te);
+    } else if (gw_log_enabled(I, GW_LOG_EVENTS)) {
+        gw_log(I, fmi2Warning, GW_LOG_EVENTS, "warning: event %s at t=%.17g", event_name(I, i),
+               te);
+    } else if (gw_log_enabled(I, GW_LOG_WARNING)) {
+        gw_log(I, fmi2Warning, GW_LOG_WARNING, "warning: event %s at t=%.17g", event_name(I, i),
+               te);
+    }
+}
+
+gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_event) {
+    const gw_model *m = I->m;
+    int i, ne = m->ne, winner = -1, terminate = 0;
+    double best = t1;
+    if (gw_eval_evt(I, t1, I->xnew, I->enew) != 0) {
+        GW_ERROR(I, "evaluation of the event indicators failed at t=%.17g", t1);
+        return GW_EV_ERROR;
+    }
+    for (i = 0; i < ne; i++)
+        if (I->e[i] > 0.0 && !(I->enew[i] > 0.0)) break;
+    if (i == ne) return GW_EV_NONE;
+
+    gw_dense_prepare(I);
+    for (; i < ne; i++) {
+        double te;
+        if (!(I->e[i] > 0.0 && !(I->enew[i] > 0.0))) continue;
+        if (locate(I, i, t0, I->e[i], t1, isfinite(I->enew[i]) ? I->enew[i] : -I->e[i], &te)) {
+            GW_ERROR(I, "evaluation of the event indicators failed while locating event %s",
+                     event_name(I, i));
+            return GW_EV_ERROR;
+        }
+        if (winner < 0 || te < best) {
+            best = te;
+            winner = i;
+        }
+    }
+    /* the state and the indicators at the event */
+    gw_dense_eval(I, best, I->xev);
+    if (gw_eval_evt(I, best, I->xev, I->eev) != 0) {
+        GW_ERROR(I, "evaluation of the event indicators failed at t=%.17g", best);
+        return GW_EV_ERROR;
+    }
+    for (i = 0; i < ne; i++) {
+        int fires = (i == winner) || (I->e[i] > 0.0 && !(I->eev[i] > 0.0));
+        if (!fires) continue;
+        if (I->eev[i] > 0.0) I->eev[i] = 0.0; /* the winner is at its crossing */
+        I->flags[i] = 1;
+        I->n_events++;
+        if (m->event_actions && m->event_actions[i] == GW_EVENT_WARN) {
+            log_event(I, i, best, 0);
+        } else {
+            terminate = 1;
+            log_event(I, i, best, 1);
+        }
+    }
+    *t_event = best;
+    return terminate ? GW_EV_TERMINATE : GW_EV_WARN;
+}

@@ -1,0 +1,109 @@
+/*
+ * gw_model.h -- the contract between the generic FMI runtime (c_src/) and one
+ * generated model (model_desc.c + CasADi-generated functions, written by fmu_build).
+ *
+ * The runtime knows nothing of the wheel: every size, variable and function it
+ * needs comes through the single constant `GW_MODEL` defined by generated code.
+ *
+ * Vectors (all double):
+ *   x  continuous state            (nx)   integrated by the runtime
+ *   s  start values                (ns)   user-facing initial values (angles, rates, ...)
+ *   u  inputs                      (nu)   FMI inputs, piecewise constant over a step
+ *   p  parameters                  (np)   FMI parameters seen by the equations
+ *   y  outputs                     (ny)   everything readable that is computed from x
+ *   e  event indicators            (ne)   an event happens when e_i goes from > 0 to <= 0
+ *   c  validity checks             (nc)   each c_i must be > 0 at initialisation
+ *
+ * Generated functions (CasADi calling convention, see CodeGenerator docs):
+ *   int f(const double **arg, double **res, gw_int *iw, double *w, int mem);
+ *   int f_work(gw_int *sz_arg, gw_int *sz_res, gw_int *sz_iw, gw_int *sz_w);
+ * Their inputs and outputs, in this order (all dense column vectors; an input of
+ * size 0 may be passed as NULL):
+ *   init(s, p)       -> x0          consistent initial state from the start values
+ *   ode (t, x, u, p) -> xdot        right-hand side
+ *   out (t, x, u, p) -> y           outputs
+ *   evt (t, x, u, p) -> e           event indicators          (NULL eval if ne == 0)
+ *   chk (s, p)       -> c           validity checks           (NULL eval if nc == 0)
+ *   nom (p)          -> x_nominal   state scales for absolute tolerances (NULL -> ones)
+ *   jac (t, x, u, p) -> J           dense d xdot / d x, column-major nx*nx (NULL if absent)
+ * Each instance allocates its own arg/res/iw/w buffers from the sizes f_work reports
+ * (CasADi SX functions are reentrant then); mem is always 0.
+ */
+#ifndef GW_MODEL_H
+#define GW_MODEL_H
+
+typedef long long gw_int; /* must equal casadi_int of the generated code */
+
+typedef int (*gw_eval_fn)(const double **arg, double **res, gw_int *iw, double *w, int mem);
+typedef int (*gw_work_fn)(gw_int *sz_arg, gw_int *sz_res, gw_int *sz_iw, gw_int *sz_w);
+
+typedef struct {
+    gw_eval_fn eval; /* NULL: the model has no such function */
+    gw_work_fn work;
+} gw_function;
+
+/* FMI base type of a variable (ENUM is set/got through fmi2Set/GetInteger). */
+typedef enum { GW_REAL = 0, GW_INTEGER = 1, GW_BOOLEAN = 2, GW_ENUM = 3 } gw_type;
+
+/* Where a variable's value lives. */
+typedef enum {
+    GW_VAR_PARAM = 0,   /* p[index]; settable before initialisation ends (tunable: any time) */
+    GW_VAR_START = 1,   /* s[index] until initialisation ends; then read from y[out_index] */
+    GW_VAR_INPUT = 2,   /* u[index]; settable any time after instantiation */
+    GW_VAR_OUTPUT = 3,  /* y[index]; read-only */
+    GW_VAR_SETTING = 4, /* runtime setting, index is a gw_setting (solver, tolerances) */
+    GW_VAR_EVENT = 5    /* Boolean: true once event indicator `index` has fired */
+} gw_kind;
+
+/* Runtime settings exposed as FMI parameters (kind GW_VAR_SETTING). */
+typedef enum {
+    GW_SET_SOLVER = 0,   /* Enumeration, values gw_solver */
+    GW_SET_REL_TOL = 1,  /* Real */
+    GW_SET_ABS_TOL = 2,  /* Real */
+    GW_SET_MAX_STEP = 3  /* Real, s: bound of internal steps; the fixed step of euler/rk4 */
+} gw_setting;
+
+/* Enumeration values of the `solver` parameter (modelDescription.xml uses the same). */
+typedef enum {
+    GW_SOLVER_EULER = 1,
+    GW_SOLVER_RK4 = 2,
+    GW_SOLVER_DOPRI5 = 3,
+    GW_SOLVER_ROSENBROCK = 4 /* reserved: not yet implemented */
+} gw_solver;
+
+/* What happens when an event indicator crosses zero from above. */
+typedef enum {
+    GW_EVENT_TERMINATE = 0, /* stop at the located time: fmi2Discard + fmi2Terminated */
+    GW_EVENT_WARN = 1       /* log a warning at the located time, set the flag, go on */
+} gw_event_action;
+
+typedef struct {
+    unsigned int vr;
+    const char *name;
+    gw_type type;
+    gw_kind kind;
+    int index;     /* into p, s, u, y, settings or events, by kind */
+    int out_index; /* GW_VAR_START: index of the same quantity in y; otherwise -1 */
+    int tunable;   /* GW_VAR_PARAM: may change after initialisation */
+} gw_variable;
+
+typedef struct {
+    const char *identifier; /* modelIdentifier */
+    const char *token;      /* guid of modelDescription.xml */
+    int nx, ns, nu, np, ny, ne, nc;
+    const double *s_start, *u_start, *p_start; /* defaults, sizes ns, nu, np */
+    int n_vars;
+    const gw_variable *vars; /* sorted by vr */
+    gw_function init, ode, out, evt, chk, nom, jac;
+    const char *const *x_names;        /* nx, for log messages */
+    const char *const *event_names;    /* ne */
+    const int *event_actions;          /* ne, gw_event_action */
+    const char *const *check_messages; /* nc, e.g. "M must be > 0" */
+    int default_solver;                /* gw_solver */
+    double default_rel_tol, default_abs_tol, default_max_step;
+} gw_model;
+
+/* Defined by the generated model_desc.c. */
+extern const gw_model GW_MODEL;
+
+#endif /* GW_MODEL_H */

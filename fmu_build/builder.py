@@ -1,0 +1,97 @@
+"""Scene -> FMU: model, generated C, modelDescription.xml, compile, zip."""
+from __future__ import annotations
+
+import hashlib
+import shutil
+import tempfile
+import uuid
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from fmu_build.codegen import DESC_FILE, FUNCTION_FILE, generate_functions, write_model_desc
+from fmu_build.compiler import compile_shared, fmi_headers_dir
+from fmu_build.documentation import write_index_html
+from fmu_build.model_description import write_model_description
+from fmu_build.scene import Scene
+from fmu_build.variables import build_table
+from model.build import build_model
+from model.spec import ModelSpec
+
+RUNTIME_DIR = Path(__file__).resolve().parent.parent / "c_src"
+FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+PLATFORM = "linux64"
+
+
+@dataclass
+class BuildResult:
+    fmu: Path
+    spec: ModelSpec
+    sources: Path  # directory holding every C file of the FMU
+    identifier: str
+
+
+def runtime_sources() -> list[Path]:
+    if not RUNTIME_DIR.is_dir():
+        raise FileNotFoundError(f"C runtime not found at {RUNTIME_DIR}; install gyrowheel from its source tree")
+    return sorted(RUNTIME_DIR.glob("*.c")) + sorted(RUNTIME_DIR.glob("*.h"))
+
+
+def model_spec(scene: Scene) -> ModelSpec:
+    return build_model(wheel=scene.wheel, initial=scene.initial, effects=scene.effects,
+                       formulation=scene.formulation, name=scene.name, description=scene.description)
+
+
+def _guid(*parts: str) -> str:
+    digest = hashlib.sha256("\0".join(parts).encode()).digest()
+    return "{" + str(uuid.UUID(bytes=digest[:16], version=5)) + "}"
+
+
+def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = None) -> BuildResult:
+    """Build the FMU of `scene` at `output`; sources stay in build_dir if given."""
+    output = Path(output)
+    tmp = None
+    if build_dir is None:
+        tmp = tempfile.TemporaryDirectory(prefix="gyrowheel-")
+        build_dir = tmp.name
+    build_dir = Path(build_dir)
+    root = build_dir / "fmu"
+    if root.exists():
+        shutil.rmtree(root)
+    src = root / "sources"
+    try:
+        spec = model_spec(scene)
+        table = build_table(spec, scene.experiment, scene.outputs)
+        identifier = scene.name
+        fns = generate_functions(spec, src)
+        for f in runtime_sources():
+            shutil.copy2(f, src / f.name)
+        for h in FMI_HEADERS:
+            shutil.copy2(fmi_headers_dir() / h, src / h)
+        funcs_c = (src / f"{FUNCTION_FILE}.c").read_text()
+        guid = _guid(funcs_c, repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]),
+                     repr(scene.experiment), identifier)
+        write_model_desc(spec, table, scene.experiment, identifier, guid, fns, src)
+        c_files = sorted(p.name for p in src.glob("*.c"))
+        generated = {f"{FUNCTION_FILE}.c", DESC_FILE}
+        compile_shared([src / c for c in c_files], generated, [src], root / "binaries" / PLATFORM /
+                       f"{identifier}.so", build_dir / "obj")
+        xml = write_model_description(scene, table, identifier, guid, c_files, spec.description)
+        (root / "modelDescription.xml").write_text(xml)
+        (root / "documentation").mkdir(exist_ok=True)
+        (root / "documentation" / "index.html").write_text(write_index_html(scene, table, identifier, guid))
+        output.parent.mkdir(parents=True, exist_ok=True)
+        _zip(root, output)
+        return BuildResult(fmu=output, spec=spec, sources=src, identifier=identifier)
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
+
+
+def _zip(root: Path, output: Path) -> None:
+    tmp = output.with_suffix(output.suffix + ".part")
+    with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
+        for path in sorted(root.rglob("*")):
+            if path.is_file():
+                zf.write(path, path.relative_to(root).as_posix())
+    tmp.replace(output)

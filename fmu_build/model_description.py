@@ -1,0 +1,151 @@
+"""modelDescription.xml (FMI 2.0 Co-Simulation) from the variable table."""
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from datetime import datetime, timezone
+
+from fmu_build.scene import SOLVERS, Scene
+from fmu_build.variables import Variable
+
+LOG_CATEGORIES = {  # must match c_src/gw_log.c
+    "logEvents": "events: fall, warnings at located event times",
+    "logSolver": "integrator statistics per communication step",
+    "logStatusWarning": "messages with status fmi2Warning",
+    "logStatusError": "messages with status fmi2Error",
+    "logStatusFatal": "messages with status fmi2Fatal",
+    "logAll": "everything",
+}
+
+# name -> (SI base unit exponents, display units {name: factor})
+UNITS = {
+    "m": ({"m": 1}, {}),
+    "s": ({"s": 1}, {}),
+    "kg": ({"kg": 1}, {}),
+    "rad": ({"rad": 1}, {"deg": 57.29577951308232}),
+    "rad/s": ({"rad": 1, "s": -1}, {"rpm": 9.549296585513721, "deg/s": 57.29577951308232}),
+    "rad/s2": ({"rad": 1, "s": -2}, {}),
+    "m/s": ({"m": 1, "s": -1}, {"km/h": 3.6}),
+    "m/s2": ({"m": 1, "s": -2}, {}),
+    "N": ({"kg": 1, "m": 1, "s": -2}, {}),
+    "N.m": ({"kg": 1, "m": 2, "s": -2}, {}),
+    "J": ({"kg": 1, "m": 2, "s": -2}, {}),
+    "W": ({"kg": 1, "m": 2, "s": -3}, {}),
+    "1/s": ({"s": -1}, {}),
+    "kg.m2": ({"kg": 1, "m": 2}, {}),
+    "kg/m3": ({"kg": 1, "m": -3}, {}),
+}
+
+
+def _fmt(value: float) -> str:
+    return repr(float(value))
+
+
+def _unit_of(v: Variable) -> str | None:
+    u = v.quantity.unit
+    return u if u and u != "1" else None
+
+
+def write_model_description(scene: Scene, table: list[Variable], identifier: str, guid: str,
+                            sources: list[str], description: str) -> str:
+    """The XML text. `sources` are the C files listed under <SourceFiles>."""
+    exp = scene.experiment
+    root = ET.Element("fmiModelDescription", {
+        "fmiVersion": "2.0",
+        "modelName": scene.name,
+        "guid": guid,
+        "description": description,
+        "generationTool": "gyrowheel",
+        "generationDateAndTime": datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "variableNamingConvention": "flat",
+        "numberOfEventIndicators": "0",
+    })
+    cs = ET.SubElement(root, "CoSimulation", {
+        "modelIdentifier": identifier,
+        "canHandleVariableCommunicationStepSize": "true",
+        "canInterpolateInputs": "false",
+        "maxOutputDerivativeOrder": "0",
+        "canRunAsynchronuously": "false",
+        "canBeInstantiatedOnlyOncePerProcess": "false",
+        "canNotUseMemoryManagementFunctions": "false",
+        "canGetAndSetFMUstate": "true",
+        "canSerializeFMUstate": "true",
+        "providesDirectionalDerivative": "false",
+    })
+    files = ET.SubElement(cs, "SourceFiles")
+    for name in sources:
+        ET.SubElement(files, "File", {"name": name})
+
+    used = sorted({u for v in table if (u := _unit_of(v))})
+    unknown = [u for u in used if u not in UNITS]
+    if unknown:
+        raise ValueError(f"unit {unknown[0]!r} has no definition in fmu_build.model_description.UNITS")
+    units = ET.SubElement(root, "UnitDefinitions")
+    for name in used:
+        base, displays = UNITS[name]
+        unit = ET.SubElement(units, "Unit", {"name": name})
+        ET.SubElement(unit, "BaseUnit", {k: str(e) for k, e in base.items()})
+        for dname, factor in displays.items():
+            ET.SubElement(unit, "DisplayUnit", {"name": dname, "factor": _fmt(factor)})
+
+    types = ET.SubElement(root, "TypeDefinitions")
+    solver_type = ET.SubElement(types, "SimpleType", {"name": "Solver"})
+    enum = ET.SubElement(solver_type, "Enumeration")
+    for name, value in SOLVERS.items():
+        ET.SubElement(enum, "Item", {"name": name, "value": str(value)})
+
+    cats = ET.SubElement(root, "LogCategories")
+    for name, desc in LOG_CATEGORIES.items():
+        ET.SubElement(cats, "Category", {"name": name, "description": desc})
+
+    ET.SubElement(root, "DefaultExperiment", {
+        "startTime": _fmt(exp.start_time), "stopTime": _fmt(exp.stop_time),
+        "tolerance": _fmt(exp.rel_tol), "stepSize": _fmt(exp.output_interval),
+    })
+
+    mvs = ET.SubElement(root, "ModelVariables")
+    for v in table:
+        attrs = {"name": v.name, "valueReference": str(v.vr)}
+        if v.quantity.description:
+            attrs["description"] = v.quantity.description
+        attrs["causality"] = v.causality
+        attrs["variability"] = v.variability
+        if v.initial:
+            attrs["initial"] = v.initial
+        sv = ET.SubElement(mvs, "ScalarVariable", attrs)
+        type_attrs: dict[str, str] = {}
+        if v.declared_type:
+            type_attrs["declaredType"] = v.declared_type
+        if v.type == "Real":
+            if (u := _unit_of(v)):
+                type_attrs["unit"] = u
+            if v.quantity.display_unit:
+                type_attrs["displayUnit"] = v.quantity.display_unit
+        if v.initial in ("exact", "approx") or v.causality == "input":
+            if v.type == "Real":
+                type_attrs["start"] = _fmt(v.start)
+            elif v.type == "Boolean":
+                type_attrs["start"] = "true" if v.start else "false"
+            else:
+                type_attrs["start"] = str(int(v.start))
+        ET.SubElement(sv, v.type, type_attrs)
+
+    ms = ET.SubElement(root, "ModelStructure")
+    outputs = ET.SubElement(ms, "Outputs")
+    for i, v in enumerate(table, start=1):
+        if v.causality == "output":
+            ET.SubElement(outputs, "Unknown", _unknown_attrs(i, v.dependencies))
+    initial = ET.SubElement(ms, "InitialUnknowns")
+    for i, v in enumerate(table, start=1):
+        if v.causality == "output" and v.initial in ("calculated", "approx"):
+            ET.SubElement(initial, "Unknown", _unknown_attrs(i, v.initial_dependencies))
+    if len(initial) == 0:
+        ms.remove(initial)
+    ET.indent(root, "  ")
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _unknown_attrs(index: int, deps: tuple[int, ...] | None) -> dict[str, str]:
+    attrs = {"index": str(index)}
+    if deps is not None:
+        attrs["dependencies"] = " ".join(str(d) for d in deps)
+    return attrs

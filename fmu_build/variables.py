@@ -1,0 +1,134 @@
+"""The one variable table: every FMI variable of an FMU, with its C location.
+
+modelDescription.xml and the C value-reference map (model_desc.c) are both
+written from this table, so the two cannot disagree.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from fmu_build.scene import SOLVERS, Experiment
+from model.spec import ModelSpec, Quantity
+
+# The variables every FMU keeps (INTERFACE.md); [outputs] keep cannot remove them.
+REQUIRED_OUTPUTS = ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot",
+                    "z", "vx", "vy", "energy")
+
+# C enums of c_src/gw_model.h
+KIND = {"param": "GW_VAR_PARAM", "start": "GW_VAR_START", "input": "GW_VAR_INPUT",
+        "output": "GW_VAR_OUTPUT", "setting": "GW_VAR_SETTING", "event": "GW_VAR_EVENT"}
+TYPE = {"Real": "GW_REAL", "Integer": "GW_INTEGER", "Boolean": "GW_BOOLEAN", "Enumeration": "GW_ENUM"}
+SETTING_INDEX = {"solver": 0, "rel_tol": 1, "abs_tol": 2, "max_step": 3}
+
+
+@dataclass
+class Variable:
+    """One row: FMI attributes plus where the runtime keeps the value."""
+
+    vr: int
+    quantity: Quantity
+    type: str  # Real, Integer, Boolean, Enumeration
+    causality: str
+    variability: str
+    initial: str | None
+    kind: str  # key of KIND
+    index: int
+    out_index: int = -1
+    declared_type: str | None = None
+    dependencies: tuple[int, ...] | None = None  # 1-based indices, for ModelStructure
+    initial_dependencies: tuple[int, ...] | None = None
+
+    @property
+    def name(self) -> str:
+        return self.quantity.name
+
+    @property
+    def start(self):
+        return self.quantity.start
+
+
+def solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
+    """The runtime's own parameters (INTERFACE.md, solver settings)."""
+    return [
+        (Quantity("solver", "", "internal Co-Simulation integrator", SOLVERS[exp.solver]), "Enumeration", "Solver"),
+        (Quantity("rel_tol", "1", "relative error tolerance of adaptive solvers "
+                  "(overridden by fmi2SetupExperiment's tolerance)", exp.rel_tol), "Real", None),
+        (Quantity("abs_tol", "1", "absolute error tolerance of adaptive solvers "
+                  "(scaled by each state's nominal value)", exp.abs_tol), "Real", None),
+        (Quantity("max_step", "s", "upper bound of internal steps; the fixed step of euler and rk4",
+                  exp.max_step), "Real", None),
+    ]
+
+
+def _depends(expr: ca.SX, syms: ca.SX) -> list[bool]:
+    """Which elements of syms the expression depends on (structurally)."""
+    if syms.numel() == 0:
+        return []
+    return [bool(d) for d in ca.which_depends(expr, syms, 1, False)]
+
+
+def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None) -> list[Variable]:
+    """All variables, value references 1.., in the order of modelDescription.xml."""
+    rows: list[Variable] = []
+
+    def add(**kw):
+        rows.append(Variable(vr=len(rows) + 1, **kw))
+
+    for i, q in enumerate(spec.parameters):
+        add(quantity=q, type="Real", causality="parameter",
+            variability="tunable" if q.tunable else "fixed", initial="exact", kind="param", index=i)
+    for q, typ, declared in solver_settings(exp):
+        add(quantity=q, type=typ, causality="parameter", variability="fixed", initial="exact",
+            kind="setting", index=SETTING_INDEX[q.name], declared_type=declared)
+    for i, q in enumerate(spec.inputs):
+        add(quantity=q, type="Real", causality="input", variability="continuous", initial=None,
+            kind="input", index=i)
+    start_names = {q.name: i for i, q in enumerate(spec.starts)}
+    if keep is not None:
+        known = {q.name for q, _ in spec.outputs}
+        unknown = [k for k in keep if k not in known]
+        if unknown:
+            raise ValueError(f"[outputs] keep: unknown output {unknown[0]!r}; valid: {', '.join(sorted(known))}")
+    for j, (q, _) in enumerate(spec.outputs):
+        if keep is not None and q.name not in keep and q.name not in REQUIRED_OUTPUTS:
+            continue
+        if q.name in start_names:
+            add(quantity=q, type="Real", causality="output", variability="continuous", initial="exact",
+                kind="start", index=start_names[q.name], out_index=j)
+        else:
+            add(quantity=q, type="Real", causality="output", variability="continuous",
+                initial="calculated", kind="output", index=j)
+    for k, ev in enumerate(spec.events):
+        add(quantity=ev.flag, type="Boolean", causality="output", variability="discrete",
+            initial="calculated", kind="event", index=k)
+    _structure(spec, rows)
+    return rows
+
+
+def _structure(spec: ModelSpec, rows: list[Variable]) -> None:
+    """Exact ModelStructure dependencies from CasADi's sparsity.
+
+    Outputs depend directly only on inputs (Co-Simulation); initial unknowns on
+    the exact start values, parameters and inputs they are computed from.
+    """
+    by_kind_index = {(r.kind, r.index): i + 1 for i, r in enumerate(rows)}
+    y = [e for _, e in spec.outputs]
+    x0 = spec.init
+    for row in rows:
+        if row.causality != "output":
+            continue
+        if row.kind == "event":
+            expr = spec.events[row.index].expr
+        else:
+            expr = y[row.out_index if row.kind == "start" else row.index]
+        direct = _depends(expr, spec.u)
+        row.dependencies = tuple(by_kind_index[("input", i)] for i, d in enumerate(direct) if d)
+        if row.initial == "calculated":
+            at_start = ca.substitute(expr, spec.x, x0)
+            deps = [by_kind_index[("start", i)] for i, d in enumerate(_depends(at_start, spec.s))
+                    if d and ("start", i) in by_kind_index]
+            deps += [by_kind_index[("param", i)] for i, d in enumerate(_depends(at_start, spec.p)) if d]
+            deps += list(row.dependencies)
+            row.initial_dependencies = tuple(sorted(deps))

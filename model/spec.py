@@ -1,0 +1,92 @@
+"""The symbolic model handed to code generation: one table of named quantities.
+
+A ModelSpec is everything fmu_build needs and nothing it must know about wheels:
+symbol vectors (t, x, s, u, p), the expressions of the generated functions
+(init, ode, out, evt, chk, nom) and the metadata (names, units, defaults,
+descriptions) of every FMI-visible quantity.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+
+
+@dataclass
+class Quantity:
+    """A named scalar of the model: a parameter, start value, input or output."""
+
+    name: str
+    unit: str = "1"
+    description: str = ""
+    start: float | None = None
+    tunable: bool = False
+    display_unit: str | None = None
+
+
+@dataclass
+class Event:
+    """An event indicator: fires when expr goes from > 0 to <= 0."""
+
+    name: str
+    expr: ca.SX
+    action: str  # "terminate" or "warn"
+    flag: Quantity  # the Boolean output that turns true when it fires
+
+
+@dataclass
+class Check:
+    """A validity condition expr > 0 checked at initialisation, with its message."""
+
+    expr: ca.SX
+    message: str
+
+
+@dataclass
+class ModelSpec:
+    """Symbols, expressions and metadata of one generated model."""
+
+    name: str
+    description: str
+    t: ca.SX
+    x: ca.SX
+    x_names: list[str]
+    s: ca.SX
+    starts: list[Quantity]
+    u: ca.SX
+    inputs: list[Quantity]
+    p: ca.SX
+    parameters: list[Quantity]
+    init: ca.SX  # x0(s, p)
+    ode: ca.SX  # x_dot(t, x, u, p)
+    outputs: list[tuple[Quantity, ca.SX]]  # y(t, x, u, p)
+    events: list[Event] = field(default_factory=list)
+    checks: list[Check] = field(default_factory=list)
+    nominal: ca.SX | None = None  # x scale(p) for absolute tolerances
+    effects: list[str] = field(default_factory=list)
+    formulation: str = "reduced"
+
+    def output_index(self, name: str) -> int:
+        for i, (q, _) in enumerate(self.outputs):
+            if q.name == name:
+                return i
+        raise KeyError(name)
+
+    def functions(self) -> dict[str, ca.Function]:
+        """The CasADi Functions that code generation turns into C (gw_<name>)."""
+        t, x, s, u, p = self.t, self.x, self.s, self.u, self.p
+        y = ca.vertcat(*[e for _, e in self.outputs])
+        fns = {
+            "init": ca.Function("gw_init", [s, p], [self.init], ["s", "p"], ["x0"]),
+            "ode": ca.Function("gw_ode", [t, x, u, p], [self.ode], ["t", "x", "u", "p"], ["xdot"]),
+            "out": ca.Function("gw_out", [t, x, u, p], [y], ["t", "x", "u", "p"], ["y"]),
+        }
+        if self.events:
+            e = ca.vertcat(*[ev.expr for ev in self.events])
+            fns["evt"] = ca.Function("gw_evt", [t, x, u, p], [e], ["t", "x", "u", "p"], ["e"])
+        if self.checks:
+            c = ca.vertcat(*[ch.expr for ch in self.checks])
+            fns["chk"] = ca.Function("gw_chk", [s, p], [c], ["s", "p"], ["c"])
+        if self.nominal is not None:
+            fns["nom"] = ca.Function("gw_nom", [p], [self.nominal], ["p"], ["x_nominal"])
+        return fns

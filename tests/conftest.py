@@ -1,0 +1,77 @@
+"""Shared fixtures: the paper model, built FMUs (once per session) and integration helpers."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import model
+from fmu_build import build_fmu, load_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = ROOT / "examples" / "scenes"
+PAPER = dict(M=2.0, R=0.17, k_diam=0.25, k_axial=0.4, g=9.81)
+
+
+class CasadiWheel:
+    """The project's CasADi model as numpy callables (parameters by name)."""
+
+    def __init__(self, formulation: str = "reduced", **values):
+        wheel = {k: v for k, v in values.items() if k in ("M", "R", "k_diam", "k_axial", "beta_min")}
+        g = values.get("g", 9.81)
+        self.spec = model.build_model(wheel=wheel, effects={"gravity": {"g": g}}, formulation=formulation)
+        self.fns = self.spec.functions()
+        self.p = np.array([q.start for q in self.spec.parameters], dtype=float)
+        self.out_names = [q.name for q, _ in self.spec.outputs]
+
+    def x0(self, **start) -> np.ndarray:
+        s = np.array([start.get(q.name, q.start) for q in self.spec.starts], dtype=float)
+        return np.array(self.fns["init"](s, self.p)).ravel()
+
+    def rhs(self, t, x):
+        return np.array(self.fns["ode"](t, x, [], self.p)).ravel()
+
+    def out(self, x) -> dict[str, float]:
+        y = np.array(self.fns["out"](0.0, x, [], self.p)).ravel()
+        return dict(zip(self.out_names, y))
+
+    def integrate(self, x0, t_end, rtol=1e-11, atol=1e-12, t_eval=None):
+        from scipy.integrate import solve_ivp
+        sol = solve_ivp(self.rhs, (0.0, t_end), x0, method="DOP853", rtol=rtol, atol=atol,
+                        t_eval=t_eval, dense_output=False)
+        assert sol.success, sol.message
+        return sol
+
+
+def steady_precession(beta: float, rho: float, M: float, R: float, k_diam: float, k_axial: float,
+                      g: float, sign: float = -1.0) -> dict[str, float]:
+    """Initial rates of steady precession (eq. 52 generalised, eq. 49 corrected)."""
+    I_d, I_a = k_diam * M * R**2, k_axial * M * R**2
+    alpha_dot = sign * math.sqrt(M * g * R**2 / math.tan(beta) / ((I_a + M * R**2) * rho + I_d * R * math.cos(beta)))
+    gamma_dot = -(rho / R + math.cos(beta)) * alpha_dot
+    return dict(beta=beta, alpha_dot=alpha_dot, gamma_dot=gamma_dot, beta_dot=0.0)
+
+
+def critical_spin(M, R, k_diam, k_axial, g) -> float:
+    """Spin rate above which straight upright rolling is stable."""
+    I_d, I_a = k_diam * M * R**2, k_axial * M * R**2
+    return math.sqrt(M * g * R * I_d / (I_a * (I_a + M * R**2)))
+
+
+@pytest.fixture(scope="session")
+def paper_model() -> CasadiWheel:
+    return CasadiWheel(**PAPER)
+
+
+@pytest.fixture(scope="session")
+def fmu_dir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("fmus")
+
+
+@pytest.fixture(scope="session")
+def earth_fmu(fmu_dir) -> Path:
+    """The paper's earth scene, built once (sources kept under fmu_dir/earth_build)."""
+    scene = load_scene(SCENES / "paper_earth.toml")
+    return build_fmu(scene, fmu_dir / "paper_earth.fmu", build_dir=fmu_dir / "earth_build").fmu

@@ -1,0 +1,71 @@
+"""The gyrowheel command: build, simulate, info; bad input is one line and a non-zero exit."""
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+
+import pytest
+
+from conftest import ROOT, SCENES
+
+
+def gyrowheel(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "fmu_build", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd or ROOT)
+
+
+def test_build_simulate_info(tmp_path):
+    fmu = tmp_path / "moon.fmu"
+    r = gyrowheel("build", SCENES / "paper_moon.toml", "-o", fmu)
+    assert r.returncode == 0, r.stderr
+    assert fmu.is_file() and "built" in r.stdout
+    out, png = tmp_path / "moon.csv", tmp_path / "moon.png"
+    r = gyrowheel("simulate", fmu, "--stop-time", 2, "--output-interval", 0.5, "--set", "gamma_dot=7",
+                  "--set", "solver=rk4", "-o", out, "--plot", png)
+    assert r.returncode == 0, r.stderr
+    rows = list(csv.DictReader(out.open()))
+    assert [float(row["time"]) for row in rows] == [0.0, 0.5, 1.0, 1.5, 2.0]
+    assert float(rows[0]["gamma_dot"]) == 7.0
+    assert png.stat().st_size > 10_000
+    r = gyrowheel("info", fmu)
+    assert r.returncode == 0
+    assert "paper_moon" in r.stdout and "gamma_dot" in r.stdout and "1.625" in r.stdout
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    fmu = tmp_path_factory.mktemp("cli") / "earth.fmu"
+    assert gyrowheel("build", SCENES / "paper_earth.toml", "-o", fmu).returncode == 0
+    return fmu
+
+
+def _bad_scene(tmp_path, text):
+    p = tmp_path / "bad.toml"
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize("args,fragment", [
+    (("build", "missing.toml"), "missing.toml: no such scene file"),
+    (("simulate", "missing.fmu"), "missing.fmu: no such FMU file"),
+    (("info", "missing.fmu"), "missing.fmu: no such FMU file"),
+    (("simulate", "{fmu}", "--set", "colour=3"), "unknown variable 'colour'"),
+    (("simulate", "{fmu}", "--set", "M=heavy"), "value 'heavy' for 'M' is not a valid Real"),
+    (("simulate", "{fmu}", "--set", "solver=rk45"), "valid: euler, rk4, dopri5"),
+    (("simulate", "{fmu}", "--set", "energy=3"), "'energy' is a calculated output"),
+    (("simulate", "{fmu}", "--set", "M"), "expected NAME=VALUE"),
+    (("simulate", "{fmu}", "--stop-time", "-1"), "--stop-time must be > 0"),
+    (("simulate", "{fmu}", "--set", "M=-2"), "M (mass) must be > 0"),
+    (("build", "{bad}"), "bad.toml: [wheel] mass: unknown key"),
+])
+def test_bad_input_is_one_line(built, tmp_path, args, fragment):
+    bad = _bad_scene(tmp_path, "[wheel]\nmass = 2\n")
+    args = [a.format(fmu=built, bad=bad) for a in args]
+    r = gyrowheel(*args, cwd=tmp_path)
+    assert r.returncode != 0
+    assert "Traceback" not in r.stderr
+    lines = [line for line in r.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1, r.stderr
+    assert lines[0].startswith("gyrowheel: error: ")
+    assert fragment in lines[0]

@@ -179,7 +179,7 @@ static int needs_outputs(const gw_instance *I, const fmi2ValueReference vr[], si
         const gw_variable *v = find_var(I->m, vr[k]);
         if (!v) continue;
         if (v->kind == GW_VAR_OUTPUT) return 1;
-        if (v->kind == GW_VAR_START && !before_init_end(I)) return 1;
+        if (v->kind == GW_VAR_START && v->out_index >= 0 && !before_init_end(I)) return 1;
     }
     return 0;
 }
@@ -197,7 +197,8 @@ static double setting_value(const gw_instance *I, int index) {
 static double value_of(const gw_instance *I, const gw_variable *v) {
     switch (v->kind) {
     case GW_VAR_PARAM: return I->p[v->index];
-    case GW_VAR_START: return before_init_end(I) ? I->s[v->index] : I->y[v->out_index];
+    case GW_VAR_START:
+        return (before_init_end(I) || v->out_index < 0) ? I->s[v->index] : I->y[v->out_index];
     case GW_VAR_INPUT: return I->u[v->index];
     case GW_VAR_OUTPUT: return I->y[v->index];
     case GW_VAR_SETTING: return setting_value(I, v->index);
@@ -280,41 +281,46 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2Boolean loggingOn) {
     const gw_model *m = &GW_MODEL;
     gw_instance *I;
+    gw_callbacks cb;
     const char *name = instanceName ? instanceName : "";
     (void)fmuResourceLocation;
     (void)visible;
     if (!functions) return NULL;
+    cb.logger = functions->logger;
+    cb.allocateMemory = functions->allocateMemory;
+    cb.freeMemory = functions->freeMemory;
+    cb.componentEnvironment = functions->componentEnvironment;
     if (!functions->allocateMemory || !functions->freeMemory) {
-        gw_log_cb(functions, name, fmi2Error, "logStatusError",
+        gw_log_cb(&cb, name, fmi2Error, "logStatusError",
                   "fmi2Instantiate: allocateMemory and freeMemory callbacks are required");
         return NULL;
     }
     if (!instanceName || instanceName[0] == '\0') {
-        gw_log_cb(functions, name, fmi2Error, "logStatusError",
+        gw_log_cb(&cb, name, fmi2Error, "logStatusError",
                   "fmi2Instantiate: missing instance name");
         return NULL;
     }
     if (fmuType != fmi2CoSimulation) {
-        gw_log_cb(functions, name, fmi2Error, "logStatusError",
+        gw_log_cb(&cb, name, fmi2Error, "logStatusError",
                   "fmi2Instantiate: %s supports Co-Simulation only (fmuType=%d)",
                   m->identifier, (int)fmuType);
         return NULL;
     }
     if (!fmuGUID || strcmp(fmuGUID, m->token) != 0) {
-        gw_log_cb(functions, name, fmi2Error, "logStatusError",
+        gw_log_cb(&cb, name, fmi2Error, "logStatusError",
                   "fmi2Instantiate: GUID \"%s\" does not match the model's \"%s\"",
                   fmuGUID ? fmuGUID : "(null)", m->token);
         return NULL;
     }
     if (!m->ode.eval || !m->init.eval || (m->ny > 0 && !m->out.eval) ||
         (m->ne > 0 && !m->evt.eval) || (m->nc > 0 && !m->chk.eval)) {
-        gw_log_cb(functions, name, fmi2Error, "logStatusError",
+        gw_log_cb(&cb, name, fmi2Error, "logStatusError",
                   "fmi2Instantiate: model %s lacks a required function", m->identifier);
         return NULL;
     }
     I = gw_instance_new(m, name, functions, loggingOn);
     if (!I) {
-        gw_log_cb(functions, name, fmi2Error, "logStatusError",
+        gw_log_cb(&cb, name, fmi2Error, "logStatusError",
                   "fmi2Instantiate: out of memory");
         return NULL;
     }
@@ -333,7 +339,10 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
     if (toleranceDefined) {
         if (!(tolerance > 0.0) || !isfinite(tolerance))
             FAIL("fmi2SetupExperiment: tolerance %g must be finite and > 0", tolerance);
-        I->rel_tol = tolerance; /* overrides rel_tol */
+        /* overrides rel_tol, also when rel_tol is set later (applied at init) */
+        I->rel_tol = tolerance;
+        I->tol_defined = 1;
+        I->tolerance = tolerance;
     }
     if (stopTimeDefined) {
         if (!isfinite(stopTime) || stopTime < startTime)
@@ -342,6 +351,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
     }
     I->t_start = startTime;
     I->t = startTime;
+    if (!toleranceDefined) I->tol_defined = 0;
     I->stop_defined = stopTimeDefined ? 1 : 0;
     I->t_stop = stopTimeDefined ? stopTime : 0.0;
     END_FUNCTION();
@@ -375,6 +385,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     ok &= check_finite_vec(I, I->u, m->nu, GW_VAR_INPUT, "input");
     if (!ok) FAIL("fmi2ExitInitializationMode: non-finite values");
     /* settings */
+    if (I->tol_defined) I->rel_tol = I->tolerance;
     if (I->solver == GW_SOLVER_ROSENBROCK)
         FAIL("fmi2ExitInitializationMode: solver rosenbrock not available");
     if (I->solver != GW_SOLVER_EULER && I->solver != GW_SOLVER_RK4 &&

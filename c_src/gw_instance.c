@@ -86,7 +86,10 @@ gw_instance *gw_instance_new(const gw_model *m, const char *name, const fmi2Call
     if (!I) return NULL;
     memset(I, 0, sizeof(*I));
     I->m = m;
-    I->cb = *cb;
+    I->cb.logger = cb->logger;
+    I->cb.allocateMemory = cb->allocateMemory;
+    I->cb.freeMemory = cb->freeMemory;
+    I->cb.componentEnvironment = cb->componentEnvironment;
     I->logging_on = logging_on ? 1 : 0;
     I->log_mask = logging_on ? ((1u << GW_LOG_N) - 1u) : 0u;
     I->name = str_dup(I, name);
@@ -189,6 +192,8 @@ void gw_instance_defaults(gw_instance *I) {
     I->t_start = 0.0;
     I->t_stop = 0.0;
     I->stop_defined = 0;
+    I->tol_defined = 0;
+    I->tolerance = 0.0;
     I->t = 0.0;
     for (i = 0; i < m->ns; i++) I->s[i] = m->s_start ? m->s_start[i] : 0.0;
     for (i = 0; i < m->nu; i++) I->u[i] = m->u_start ? m->u_start[i] : 0.0;

@@ -53,10 +53,19 @@ typedef struct {
     gw_int n_arg, n_res; /* allocated lengths of arg / res */
 } gw_fun;
 
+/* The importer's callbacks, copied field by field (the FMI 2.0.0 headers declare
+ * the fields of fmi2CallbackFunctions const, which forbids copying the struct). */
+typedef struct {
+    fmi2CallbackLogger logger;
+    fmi2CallbackAllocateMemory allocateMemory;
+    fmi2CallbackFreeMemory freeMemory;
+    fmi2ComponentEnvironment componentEnvironment;
+} gw_callbacks;
+
 /* ---- the instance ---------------------------------------------------------- */
 typedef struct gw_instance {
     const gw_model *m;
-    fmi2CallbackFunctions cb; /* copy of the importer's callbacks */
+    gw_callbacks cb;          /* copy of the importer's callbacks */
     char *name;               /* instance name (copied) */
 
     int state; /* one GW_ST_* bit */
@@ -70,6 +79,8 @@ typedef struct gw_instance {
     /* experiment */
     double t_start, t_stop;
     int stop_defined;
+    int tol_defined;  /* fmi2SetupExperiment tolerance: overrides rel_tol at init */
+    double tolerance;
 
     /* model data */
     double t;
@@ -132,7 +143,7 @@ GW_INTERNAL void gw_log(const gw_instance *I, fmi2Status status, gw_log_category
     ;
 /* log an fmi2Error (always passed to the logger) */
 #define GW_ERROR(I, ...) gw_log((I), fmi2Error, GW_LOG_ERROR, __VA_ARGS__)
-GW_INTERNAL void gw_log_cb(const fmi2CallbackFunctions *cb, const char *name, fmi2Status status,
+GW_INTERNAL void gw_log_cb(const gw_callbacks *cb, const char *name, fmi2Status status,
                            const char *category, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 5, 6)))

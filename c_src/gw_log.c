@@ -13,8 +13,16 @@
 
 #include "gw_instance.h"
 
-static const char *const category_names[GW_LOG_N] = {
-    "logEvents", "logSolver", "logStatusWarning", "logStatusError", "logStatusFatal", "logAll"};
+static const char *category_name(int cat) {
+    switch (cat) {
+    case GW_LOG_EVENTS: return "logEvents";
+    case GW_LOG_SOLVER: return "logSolver";
+    case GW_LOG_WARNING: return "logStatusWarning";
+    case GW_LOG_ERROR: return "logStatusError";
+    case GW_LOG_FATAL: return "logStatusFatal";
+    default: return "logAll";
+    }
+}
 
 int gw_log_enabled(const gw_instance *I, gw_log_category cat) {
     if (!I || !I->cb.logger || !I->logging_on) return 0;
@@ -33,7 +41,7 @@ static void format_message(char *buf, size_t size, const char *fmt, va_list ap) 
     buf[j] = '\0';
 }
 
-static void vlog_cb(const fmi2CallbackFunctions *cb, const char *name, fmi2Status status,
+static void vlog_cb(const gw_callbacks *cb, const char *name, fmi2Status status,
                     const char *category, const char *fmt, va_list ap) {
     char buf[2048];
     if (!cb || !cb->logger) return;
@@ -41,7 +49,7 @@ static void vlog_cb(const fmi2CallbackFunctions *cb, const char *name, fmi2Statu
     cb->logger(cb->componentEnvironment, name ? name : "", status, category, buf);
 }
 
-void gw_log_cb(const fmi2CallbackFunctions *cb, const char *name, fmi2Status status,
+void gw_log_cb(const gw_callbacks *cb, const char *name, fmi2Status status,
                const char *category, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
@@ -56,7 +64,7 @@ void gw_log(const gw_instance *I, fmi2Status status, gw_log_category cat, const 
     if (!always && !gw_log_enabled(I, cat)) return;
     if (status == fmi2Fatal) cat = GW_LOG_FATAL;
     va_start(ap, fmt);
-    vlog_cb(&I->cb, I->name, status, category_names[cat], fmt, ap);
+    vlog_cb(&I->cb, I->name, status, category_name(cat), fmt, ap);
     va_end(ap);
 }
 
@@ -78,7 +86,7 @@ fmi2Status gw_set_debug_logging(gw_instance *I, fmi2Boolean on, size_t n,
     for (i = 0; i < n; i++) {
         int k, found = -1;
         for (k = 0; k < GW_LOG_N; k++)
-            if (categories[i] && strcmp(categories[i], category_names[k]) == 0) found = k;
+            if (categories[i] && strcmp(categories[i], category_name(k)) == 0) found = k;
         if (found < 0) {
             GW_ERROR(I, "fmi2SetDebugLogging: unknown log category \"%s\"",
                      categories[i] ? categories[i] : "(null)");

@@ -318,6 +318,11 @@ static gw_int_result integrate_dopri5(gw_instance *I, double t_end) {
             last = 1;
         }
         t1 = last ? t_end : I->t + h;
+        if (!last && (h < gw_h_min(I->t) || !(t1 > I->t))) {
+            /* the controller asks for steps that no longer advance time */
+            GW_ERROR(I, "step size underflow at t=%.17g (h=%g)", I->t, h);
+            return GW_INT_ERROR;
+        }
         if (step_dopri5(I, h, t1, &err)) return GW_INT_ERROR;
         if (err <= 1.0) {
             gw_int_result r;

@@ -11,9 +11,9 @@
  *   12      7*4        int32 nx, ns, nu, np, ny, ne, nc
  *   40      4          uint32 L = strlen(model token)
  *   44      L          model token (GUID), no terminating NUL
- *   then    6*4        int32 fmi state, solver, stop_defined, terminated,
+ *   then    7*4        int32 fmi state, solver, stop_defined, tol_defined, terminated,
  *                            last fmi2DoStep status, y_valid
- *           8*8        double t, t_start, t_stop, last_successful_time,
+ *           9*8        double t, t_start, t_stop, tolerance, last_successful_time,
  *                             rel_tol, abs_tol, max_step, h_adapt (DOPRI5 step size)
  *           5*8        uint64 n_rhs, n_accepted, n_rejected, n_evt, n_events
  *           8*nx       double x
@@ -87,12 +87,14 @@ static void write_state(const gw_instance *I, writer *w, size_t total) {
     put_i32(w, I->state);
     put_i32(w, I->solver);
     put_i32(w, I->stop_defined);
+    put_i32(w, I->tol_defined);
     put_i32(w, I->terminated);
     put_i32(w, I->last_dostep_status);
     put_i32(w, I->y_valid);
     put_f64(w, I->t);
     put_f64(w, I->t_start);
     put_f64(w, I->t_stop);
+    put_f64(w, I->tolerance);
     put_f64(w, I->last_successful_time);
     put_f64(w, I->rel_tol);
     put_f64(w, I->abs_tol);
@@ -231,12 +233,14 @@ static int apply_state(gw_instance *I, const char *fn, const unsigned char *buf,
     I->state = st;
     I->solver = get_i32(&r);
     I->stop_defined = get_i32(&r);
+    I->tol_defined = get_i32(&r);
     I->terminated = get_i32(&r);
     I->last_dostep_status = get_i32(&r);
     I->y_valid = get_i32(&r);
     I->t = get_f64(&r);
     I->t_start = get_f64(&r);
     I->t_stop = get_f64(&r);
+    I->tolerance = get_f64(&r);
     I->last_successful_time = get_f64(&r);
     I->rel_tol = get_f64(&r);
     I->abs_tol = get_f64(&r);

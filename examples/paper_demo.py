@@ -16,6 +16,7 @@ import numpy as np
 from fmpy.util import write_csv
 
 from fmu_build import build_fmu, load_scene
+from fmu_build.analysis import fit_circle, relative_energy_drift
 from fmu_build.plotting import plot_trajectories
 from fmu_build.simulate import run
 
@@ -25,13 +26,12 @@ SCENES = {"earth": "paper_earth.toml", "Mars": "paper_mars.toml", "moon": "paper
 
 def summarise(name: str, r: np.ndarray, seconds: float) -> str:
     beta = np.degrees(r["beta"])
-    cx, cy = r["x"].mean(), r["y"].mean()
-    radius = np.hypot(r["x"] - cx, r["y"] - cy).mean()
-    drift = (r["energy"][-1] - r["energy"][0]) / abs(r["energy"][0])
+    radius = fit_circle(r["x"], r["y"])[2]
+    drift = relative_energy_drift(r["energy"])
     fell = bool(r["fallen"][-1])
     end = f"fell flat at t = {r['time'][-1]:.3f} s" if fell else f"still rolling at t = {r['time'][-1]:.1f} s"
-    return (f"{name:<6} lean {beta.min():6.1f} .. {beta.max():5.1f} deg, mean path radius {radius:5.2f} m, "
-            f"energy drift {drift:+.1e}, {end}  ({seconds * 1e3:.0f} ms)")
+    return (f"{name:<6} lean {beta.min():6.1f} .. {beta.max():5.1f} deg, path radius {radius:5.2f} m, "
+            f"energy drift {drift:.1e}, {end}  ({seconds * 1e3:.0f} ms)")
 
 
 def main() -> int:

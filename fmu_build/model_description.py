@@ -97,9 +97,12 @@ def write_model_description(scene: Scene, table: list[Variable], identifier: str
     for name, desc in LOG_CATEGORIES.items():
         ET.SubElement(cats, "Category", {"name": name, "description": desc})
 
+    # No tolerance attribute on purpose: importers (fmpy among them) pass DefaultExperiment's
+    # tolerance to fmi2SetupExperiment, which overrides rel_tol (INTERFACE.md), so a user's
+    # rel_tol would be silently ignored. The scene's rel_tol is the parameter's start value.
     ET.SubElement(root, "DefaultExperiment", {
         "startTime": _fmt(exp.start_time), "stopTime": _fmt(exp.stop_time),
-        "tolerance": _fmt(exp.rel_tol), "stepSize": _fmt(exp.output_interval),
+        "stepSize": _fmt(exp.output_interval),
     })
 
     mvs = ET.SubElement(root, "ModelVariables")

@@ -64,6 +64,34 @@ def test_reduced_and_multiplier_forms_agree(paper_model):
         assert mult.out(xm)["constraint_violation"] < 1e-12
 
 
+@pytest.mark.parametrize("k_diam,k_axial,g", [(0.25, 0.4, 9.81), (0.5, 1.0, 1.625), (0.3, 0.2, 3.721)])
+def test_rhs_matches_independent_newton_euler(k_diam, k_axial, g):
+    """CasADi's Lagrangian null-space RHS equals a sympy Newton-Euler derivation at random states."""
+    from reference import newton_euler as ne
+    params = dict(M=1.3, R=0.21, k_diam=k_diam, k_axial=k_axial, g=g)
+    wheel = CasadiWheel(**params)
+    for _ in range(20):
+        qv, vv = _random_state()
+        x = np.r_[qv, vv]
+        np.testing.assert_allclose(wheel.rhs(0, x), ne.rhs(x, [params[k] for k in ne.PARAM_NAMES]),
+                                   rtol=1e-10, atol=1e-10)
+
+
+def test_multipliers_are_the_contact_force():
+    """lambda of the multiplier form = horizontal contact force of the Newton-Euler derivation."""
+    from reference import newton_euler as ne
+    mult = CasadiWheel("multipliers", **PAPER)
+    params = [PAPER[k] for k in ne.PARAM_NAMES]
+    for _ in range(10):
+        qv, vv = _random_state()
+        x = np.r_[qv, vv]
+        xm = mult.x0(**dict(zip(["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"], x)))
+        out = mult.out(xm)
+        F = ne.contact_force(x, params)
+        assert out["lambda_x"] == pytest.approx(F[0], rel=1e-9, abs=1e-9)
+        assert out["lambda_y"] == pytest.approx(F[1], rel=1e-9, abs=1e-9)
+
+
 def test_energy_conserved_paper_scenario(paper_model):
     x0 = paper_model.x0()
     E0 = paper_model.out(x0)["energy"]

@@ -125,15 +125,15 @@ static void h_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status s
         h_log[h_log_len] = '\0';
     }
     h_log_count++;
-    if (h_log_echo) fputs(line, stderr);
+    if (h_log_echo || getenv("GW_TEST_ECHO")) fputs(line, stderr);
 }
 
-static void log_clear(void) {
+static inline void log_clear(void) {
     h_log_len = 0;
     h_log[0] = '\0';
     h_log_count = 0;
 }
-static int log_contains(const char *s) { return strstr(h_log, s) != NULL; }
+static inline int log_contains(const char *s) { return strstr(h_log, s) != NULL; }
 
 static fmi2CallbackFunctions h_callbacks = {h_logger, h_alloc, h_free, NULL, NULL};
 
@@ -145,5 +145,7 @@ static int h_finish(const char *what) {
             h_failures, h_total);
     return h_failures == 0 ? 0 : 1;
 }
+
+static inline fmi2Status gw_worst_test(fmi2Status a, fmi2Status b) { return a > b ? a : b; }
 
 #endif

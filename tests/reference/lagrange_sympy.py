@@ -17,7 +17,7 @@ the 7x7 linear system is solved numerically.
 API: ``accelerations(state, params) -> (q_ddot (5,), lam (2,))`` with
 state = (x, y, alpha, beta, gamma, alpha_dot, beta_dot, gamma_dot) (x_dot, y_dot are
 taken from the constraint), params = (M, R, k_diam, k_axial, g);
-``rhs(state, params) -> (8,)`` like :func:`tests.reference.newton_euler.rhs`;
+``rhs(state, params) -> (8,)`` like ``newton_euler.rhs``;
 ``energy(state, params)``.  The multipliers are the horizontal contact-force
 components (lambda_1 = M X_ddot = F_x, lambda_2 = M Y_ddot = F_y, eqs. 40-41).
 """

@@ -25,6 +25,7 @@ I_axial = k_axial M R^2 (about n), z = R sin(beta), gravity along -z.
 Public API (all numeric functions accept plain sequences / numpy arrays):
 
 * ``rhs(state, params) -> ndarray (8,)``
+* ``accelerations(state, params) -> ndarray (3,)``   (alpha_ddot, beta_ddot, gamma_ddot)
 * ``contact_force(state, params) -> ndarray (3,)``   (Fx, Fy, Fz) on the wheel, ground frame
 * ``energy(state, params) -> float``                 T + M g R sin(beta)
 * ``steady_precession_rate(beta, rho, params) -> float``  alpha_dot > 0 of steady precession
@@ -67,6 +68,7 @@ __all__ = [
     "symbols",
     "derive",
     "rhs",
+    "accelerations",
     "contact_force",
     "energy",
     "centre_velocity",
@@ -312,6 +314,8 @@ def steady_precession_rate(beta, rho, params) -> float:
     """alpha_dot (> 0 root) of steady precession with lean beta, wheel centre on a circle of radius rho.
 
     alpha_dot^2 = M g R^2 cot(beta) / ((I_axial + M R^2) rho + I_diam R cos(beta)).
+    The circle is x = -rho sin(alpha), y = rho cos(alpha): for beta < pi/2 use rho > 0; a wheel
+    leaning the other way (beta > pi/2) precesses about a circle with rho < 0.
     Returns nan when the right-hand side is negative (no such steady motion)."""
     sq = float(_numeric()["steady"](float(beta), float(rho), _tup(params)))
     return math.sqrt(sq) if sq >= 0 else float("nan")

@@ -1,0 +1,78 @@
+"""What the paper FMU costs: one RHS evaluation and the 20 s earth scenario.
+
+Every number is printed next to a peer measured in the same run:
+- RHS: the generated C (compiled with the FMU's own portable flags) versus the same
+  CasADi Function evaluated by CasADi's virtual machine from Python.
+- 20 s scenario at rel_tol 1e-8: one fmi2DoStep(0, 20) of the FMU's DOPRI5, fmpy's
+  simulate_fmu with 2001 output points, and CasADi's cvodes integrator on the same model.
+
+    python benchmarks/paper_cost.py
+"""
+from __future__ import annotations
+
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+from fmpy import simulate_fmu
+
+from fmu_build import build_fmu, load_scene
+from fmu_build.compiler import OPTIMISE, compiler
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def best_of(fn, repeat=5):
+    best = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def rhs_ns(sources: Path, work: Path) -> float:
+    exe = work / "rhs_bench"
+    subprocess.run([compiler(), "-std=c99", *OPTIMISE, f"-I{sources}", str(sources / "gw_funcs.c"),
+                    str(sources / "model_desc.c"), str(ROOT / "benchmarks" / "rhs_bench.c"), "-o", str(exe), "-lm"],
+                   check=True)
+    return float(subprocess.run([str(exe), "2000000"], capture_output=True, text=True, check=True).stdout)
+
+
+def main() -> None:
+    scene = load_scene(ROOT / "examples" / "scenes" / "paper_earth.toml")
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        built = build_fmu(scene, work / "earth.fmu", build_dir=work / "build")
+        spec = built.spec
+        fns = spec.functions()
+        p = np.array([q.start for q in spec.parameters])
+        x0 = np.array(fns["init"]([q.start for q in spec.starts], p)).ravel()
+
+        c_ns = rhs_ns(built.sources, work)
+        ode = fns["ode"]
+        n = 20000
+        vm_ns = best_of(lambda: [ode(0.0, x0, [], p) for _ in range(n)], 3) / n * 1e9
+        print(f"RHS evaluation: generated C {c_ns:.1f} ns; CasADi VM from Python {vm_ns:.0f} ns "
+              f"(ratio {vm_ns / c_ns:.0f}x); expression: {ode.n_instructions()} instructions")
+
+        from fmi_slave import one_step_seconds
+        fmu_s = min(one_step_seconds(built.fmu, 20.0, rel_tol=1e-8, abs_tol=1e-10) for _ in range(7))
+        sim_s = best_of(lambda: simulate_fmu(str(built.fmu), stop_time=20.0, output_interval=0.01,
+                                             start_values={"rel_tol": 1e-8, "abs_tol": 1e-10}), 3)
+        x = ca.SX.sym("x", spec.x.numel())
+        dae = {"x": x, "ode": ode(0.0, x, ca.DM.zeros(0, 1), p)}
+        cv = ca.integrator("cv", "cvodes", dae, 0.0, 20.0, {"reltol": 1e-8, "abstol": 1e-10})
+        cv_s = best_of(lambda: cv(x0=x0), 5)
+        print(f"20 s paper scenario, rel_tol 1e-8: fmi2DoStep(0, 20) {fmu_s * 1e3:.2f} ms; "
+              f"simulate_fmu with 2001 outputs {sim_s * 1e3:.1f} ms; CasADi cvodes {cv_s * 1e3:.1f} ms "
+              f"(cvodes / FMU = {cv_s / fmu_s:.1f}x)")
+
+
+if __name__ == "__main__":
+    import sys
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    main()

@@ -1,0 +1,623 @@
+/*
+ * test_oscillator.c -- drives the runtime like an importer, linked statically with
+ * toy_oscillator.c (harmonic oscillator, TERMINATE event "hit" at acos(pos_lim)).
+ */
+#include "harness.h"
+
+#define TOKEN "{0sc1-11a7-0r00-0000-000000000001}"
+#define PI 3.14159265358979323846
+
+enum { VR_K = 0, VR_POS_LIM = 1, VR_N_INT = 2, VR_USE_FORCE = 3, VR_POS = 10, VR_VEL = 11,
+       VR_ENERGY = 20, VR_FORCE = 21, VR_F = 30, VR_SOLVER = 40, VR_REL_TOL = 41,
+       VR_ABS_TOL = 42, VR_MAX_STEP = 43, VR_HIT = 50 };
+
+static fmi2Component inst(const char *name) {
+    return fmi2Instantiate(name, fmi2CoSimulation, TOKEN, "", &h_callbacks, fmi2False, fmi2False);
+}
+
+static double getr(fmi2Component c, fmi2ValueReference vr) {
+    double v = NAN;
+    fmi2GetReal(c, &vr, 1, &v);
+    return v;
+}
+static fmi2Status setr(fmi2Component c, fmi2ValueReference vr, double v) {
+    return fmi2SetReal(c, &vr, 1, &v);
+}
+static fmi2Status seti(fmi2Component c, fmi2ValueReference vr, int v) {
+    fmi2Integer x = v;
+    return fmi2SetInteger(c, &vr, 1, &x);
+}
+static int getb(fmi2Component c, fmi2ValueReference vr) {
+    fmi2Boolean b = -1;
+    fmi2GetBoolean(c, &vr, 1, &b);
+    return b;
+}
+
+/* instantiate, configure, initialise */
+static fmi2Component start(const char *name, int solver, double rtol, double atol, double max_step,
+                           double pos_lim) {
+    fmi2Component c = inst(name);
+    CHECK(c != NULL);
+    CHECK_STATUS(seti(c, VR_SOLVER, solver), fmi2OK);
+    CHECK_STATUS(setr(c, VR_REL_TOL, rtol), fmi2OK);
+    CHECK_STATUS(setr(c, VR_ABS_TOL, atol), fmi2OK);
+    CHECK_STATUS(setr(c, VR_MAX_STEP, max_step), fmi2OK);
+    CHECK_STATUS(setr(c, VR_POS_LIM, pos_lim), fmi2OK);
+    CHECK_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+    return c;
+}
+
+static double last_time(fmi2Component c) {
+    double t = NAN;
+    CHECK_STATUS(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t), fmi2OK);
+    return t;
+}
+
+static void test_instantiate(void) {
+    fmi2CallbackFunctions no_alloc = {h_logger, NULL, h_free, NULL, NULL};
+    fmi2CallbackFunctions no_logger = {NULL, h_alloc, h_free, NULL, NULL};
+    fmi2Component c;
+    int k, ok = 0;
+    log_clear();
+    CHECK(fmi2Instantiate("a", fmi2ModelExchange, TOKEN, "", &h_callbacks, 0, 0) == NULL);
+    CHECK_LOG("Co-Simulation only");
+    CHECK(fmi2Instantiate("a", fmi2CoSimulation, "{wrong}", "", &h_callbacks, 0, 0) == NULL);
+    CHECK_LOG("does not match");
+    CHECK(fmi2Instantiate("a", fmi2CoSimulation, NULL, "", &h_callbacks, 0, 0) == NULL);
+    CHECK(fmi2Instantiate("a", fmi2CoSimulation, TOKEN, "", &no_alloc, 0, 0) == NULL);
+    CHECK_LOG("required");
+    CHECK(fmi2Instantiate("", fmi2CoSimulation, TOKEN, "", &h_callbacks, 0, 0) == NULL);
+    CHECK_LOG("missing instance name");
+    CHECK(fmi2Instantiate("a", fmi2CoSimulation, TOKEN, "", NULL, 0, 0) == NULL);
+    CHECK(h_live == 0);
+
+    /* no logger: everything works, errors just are not reported */
+    c = fmi2Instantiate("quiet", fmi2CoSimulation, TOKEN, "", &no_logger, fmi2True, fmi2True);
+    CHECK(c != NULL);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2Error);
+    CHECK_STATUS(fmi2Reset(c), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2OK);
+    fmi2FreeInstance(c);
+    fmi2FreeInstance(NULL);
+    CHECK(h_live == 0);
+
+    /* every allocation failing in turn: NULL, logged, nothing leaked */
+    for (k = 0; k < 200; k++) {
+        log_clear();
+        h_fail_after = k;
+        c = inst("oom");
+        h_fail_after = -1;
+        if (c) {
+            ok = 1;
+            fmi2FreeInstance(c);
+            break;
+        }
+        CHECK_LOG("out of memory");
+        CHECK(h_live == 0);
+    }
+    CHECK(ok);
+    CHECK(k > 10);
+    CHECK(h_live == 0);
+}
+
+static void test_initial_values(void) {
+    fmi2Component c = inst("init");
+    fmi2ValueReference vrs[3] = {VR_POS, VR_VEL, VR_ENERGY};
+    double v[3];
+    fmi2Integer iv = -1;
+    fmi2ValueReference vr;
+    /* readable already in Instantiated */
+    CHECK_NEAR(getr(c, VR_POS), 1.0, 0.0);
+    CHECK_NEAR(getr(c, VR_ENERGY), 0.5, 1e-15);
+    CHECK_STATUS(fmi2SetupExperiment(c, fmi2True, 1e-9, 0.0, fmi2False, 0.0), fmi2OK);
+    CHECK_NEAR(getr(c, VR_REL_TOL), 1e-9, 0.0); /* tolerance overrides rel_tol */
+    CHECK_STATUS(setr(c, VR_REL_TOL, 1e-3), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    CHECK_STATUS(setr(c, VR_POS, 0.8), fmi2OK);
+    CHECK_STATUS(setr(c, VR_VEL, 0.0), fmi2OK);
+    CHECK_STATUS(fmi2GetReal(c, vrs, 3, v), fmi2OK);
+    CHECK_NEAR(v[0], 0.8, 0.0);
+    CHECK_NEAR(v[2], 0.32, 1e-15);
+    CHECK_STATUS(setr(c, VR_K, 2.0), fmi2OK);
+    CHECK_NEAR(getr(c, VR_ENERGY), 0.64, 1e-15);
+    CHECK_NEAR(getr(c, VR_ABS_TOL), 1e-8, 0.0);
+    CHECK_NEAR(getr(c, VR_MAX_STEP), 0.01, 0.0);
+    vr = VR_SOLVER;
+    CHECK_STATUS(fmi2GetInteger(c, &vr, 1, &iv), fmi2OK);
+    CHECK(iv == 3);
+    vr = VR_N_INT;
+    CHECK_STATUS(fmi2GetInteger(c, &vr, 1, &iv), fmi2OK);
+    CHECK(iv == 3);
+    CHECK_STATUS(seti(c, VR_N_INT, 7), fmi2OK);
+    CHECK_STATUS(fmi2GetInteger(c, &vr, 1, &iv), fmi2OK);
+    CHECK(iv == 7);
+    CHECK(getb(c, VR_USE_FORCE) == fmi2True);
+    CHECK(getb(c, VR_HIT) == fmi2False);
+    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+    CHECK_NEAR(getr(c, VR_REL_TOL), 1e-9, 0.0); /* the tolerance wins over a later rel_tol */
+    CHECK_NEAR(getr(c, VR_POS), 0.8, 0.0);
+    CHECK_NEAR(getr(c, VR_ENERGY), 0.64, 1e-15);
+    CHECK_STATUS(fmi2GetString(c, NULL, 0, NULL), fmi2OK);
+    CHECK_STATUS(fmi2SetString(c, NULL, 0, NULL), fmi2OK);
+    fmi2FreeInstance(c);
+}
+
+/* A call that must fail with fmi2Error, log `msg`, and leave the instance in Error. */
+#define EXPECT_ERROR(c, call, msg)                                                           \
+    do {                                                                                     \
+        log_clear();                                                                         \
+        CHECK_STATUS(call, fmi2Error);                                                       \
+        CHECK_LOG(msg);                                                                      \
+        log_clear();                                                                         \
+        CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2Error);                             \
+        CHECK_LOG("illegal call in state Error");                                            \
+        CHECK_STATUS(fmi2Reset(c), fmi2OK);                                                  \
+    } while (0)
+
+static void test_variable_errors(void) {
+    fmi2Component c = inst("vars");
+    fmi2ValueReference vr;
+    fmi2Integer iv = 1;
+    fmi2Boolean bv = fmi2True;
+    double r;
+    fmi2String sv = "x";
+    EXPECT_ERROR(c, setr(c, 99, 1.0), "unknown value reference 99");
+    vr = 25;
+    EXPECT_ERROR(c, fmi2GetReal(c, &vr, 1, &r), "unknown value reference 25");
+    EXPECT_ERROR(c, seti(c, VR_K, 1), "k (vr=0) is of type Real");
+    vr = VR_N_INT;
+    EXPECT_ERROR(c, fmi2GetReal(c, &vr, 1, &r), "n_int (vr=2) is of type Integer");
+    vr = VR_POS;
+    EXPECT_ERROR(c, fmi2SetBoolean(c, &vr, 1, &bv), "pos (vr=10) is of type Real");
+    EXPECT_ERROR(c, setr(c, VR_K, NAN), "variable k (vr=0) is not finite");
+    EXPECT_ERROR(c, setr(c, VR_POS, INFINITY), "variable pos (vr=10) is not finite");
+    EXPECT_ERROR(c, setr(c, VR_ENERGY, 1.0), "energy (vr=20) is read-only");
+    vr = VR_HIT;
+    EXPECT_ERROR(c, fmi2SetBoolean(c, &vr, 1, &bv), "hit (vr=50) is read-only");
+    vr = 0;
+    EXPECT_ERROR(c, fmi2GetString(c, &vr, 1, &sv), "no String variables");
+    EXPECT_ERROR(c, fmi2SetString(c, &vr, 1, &sv), "no String variables");
+    (void)iv;
+    fmi2FreeInstance(c);
+
+    /* after initialisation: starts, settings and fixed parameters are frozen */
+    c = start("frozen", 3, 1e-6, 1e-8, 0.1, -2.0);
+    EXPECT_ERROR(c, setr(c, VR_POS, 0.5), "pos (vr=10) cannot be set in state StepComplete");
+    c = (fmi2FreeInstance(c), start("frozen", 3, 1e-6, 1e-8, 0.1, -2.0));
+    EXPECT_ERROR(c, setr(c, VR_K, 2.0), "k (vr=0) cannot be set");
+    c = (fmi2FreeInstance(c), start("frozen", 3, 1e-6, 1e-8, 0.1, -2.0));
+    EXPECT_ERROR(c, setr(c, VR_REL_TOL, 1e-3), "rel_tol (vr=41) cannot be set");
+    c = (fmi2FreeInstance(c), start("frozen", 3, 1e-6, 1e-8, 0.1, -2.0));
+    EXPECT_ERROR(c, seti(c, VR_SOLVER, 1), "solver (vr=40) cannot be set");
+    c = (fmi2FreeInstance(c), start("frozen", 3, 1e-6, 1e-8, 0.1, -2.0));
+    CHECK_STATUS(setr(c, VR_POS_LIM, -3.0), fmi2OK); /* tunable */
+    CHECK_STATUS(setr(c, VR_F, 0.0), fmi2OK);        /* input */
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2OK);
+    fmi2FreeInstance(c);
+}
+
+static void test_logging(void) {
+    fmi2Component c = start("log", 2, 1e-6, 1e-8, 0.1, -2.0);
+    fmi2String bad[2] = {"logSolver", "logFoo"};
+    fmi2String solver_cat[1] = {"logSolver"};
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 0.3, fmi2True), fmi2OK);
+    CHECK(h_log_count == 0);
+    CHECK_STATUS(fmi2SetDebugLogging(c, fmi2True, 1, solver_cat), fmi2OK);
+    CHECK_STATUS(fmi2DoStep(c, 0.3, 0.3, fmi2True), fmi2OK);
+    CHECK_LOG("|logSolver] fmi2DoStep t=0.29999999999999999 h=0.29999999999999999");
+    CHECK_LOG("solver=rk4 accepted=3 rejected=0 rhs=");
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, 0.6, 0.25, fmi2True), fmi2OK);
+    CHECK_LOG("accepted=3");
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, 0.85, 0.2, fmi2True), fmi2OK);
+    CHECK_LOG("accepted=2");
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, 1.05, 1e-7, fmi2True), fmi2OK);
+    CHECK_LOG("accepted=1");
+    CHECK_STATUS(fmi2SetDebugLogging(c, fmi2False, 0, NULL), fmi2OK);
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, 1.05 + 1e-7, 0.1, fmi2True), fmi2OK);
+    CHECK(h_log_count == 0);
+    CHECK_STATUS(fmi2SetDebugLogging(c, fmi2True, 0, NULL), fmi2OK);
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, 1.15 + 1e-7, 0.1, fmi2True), fmi2OK);
+    CHECK_LOG("logSolver");
+    EXPECT_ERROR(c, fmi2SetDebugLogging(c, fmi2True, 2, bad), "unknown log category \"logFoo\"");
+    fmi2FreeInstance(c);
+}
+
+static void test_checks_and_settings(void) {
+    fmi2Component c = inst("chk");
+    struct {
+        fmi2ValueReference vr;
+        double v;
+        const char *msg;
+    } cases[] = {
+        {VR_K, -1.0, "k must be > 0 (check value -1)"},
+        {VR_K, 0.0, "k must be > 0 (check value 0)"},
+        {VR_REL_TOL, 0.0, "rel_tol = 0 must be finite and > 0"},
+        {VR_ABS_TOL, -1e-9, "abs_tol = -1e-09 must be finite and > 0"},
+        {VR_MAX_STEP, -0.1, "max_step = -0.1 must be finite and > 0"},
+    };
+    size_t i;
+    for (i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+        CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+        CHECK_STATUS(setr(c, cases[i].vr, cases[i].v), fmi2OK);
+        EXPECT_ERROR(c, fmi2ExitInitializationMode(c), cases[i].msg);
+    }
+    CHECK_STATUS(seti(c, VR_SOLVER, 4), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    EXPECT_ERROR(c, fmi2ExitInitializationMode(c), "solver rosenbrock not available");
+    CHECK_STATUS(seti(c, VR_SOLVER, 99), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    EXPECT_ERROR(c, fmi2ExitInitializationMode(c), "unknown solver 99");
+    /* after all that, defaults are back and the instance works */
+    CHECK_NEAR(getr(c, VR_K), 1.0, 0.0);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 1.0, fmi2True), fmi2OK);
+    CHECK_NEAR(getr(c, VR_POS), cos(1.0), 1e-5);
+    fmi2FreeInstance(c);
+}
+
+static void run_accuracy(int solver, double rtol, double max_step, double tol) {
+    fmi2Component c = start("acc", solver, rtol, rtol * 1e-2, max_step, -2.0);
+    int i;
+    fmi2Status st = fmi2OK;
+    long allocs = h_total;
+    for (i = 0; i < 20; i++) st = gw_worst_test(st, fmi2DoStep(c, i * 0.1, 0.1, fmi2True));
+    CHECK(st == fmi2OK);
+    CHECK(h_total == allocs); /* fmi2DoStep never allocates */
+    CHECK_NEAR(getr(c, VR_POS), cos(2.0), tol);
+    CHECK_NEAR(getr(c, VR_VEL), -sin(2.0), tol);
+    CHECK_NEAR(getr(c, VR_ENERGY), 0.5, 2 * tol);
+    CHECK(last_time(c) == 19 * 0.1 + 0.1);
+    fmi2FreeInstance(c);
+}
+
+static void test_accuracy(void) {
+    run_accuracy(3, 1e-10, 1.0, 1e-8);
+    run_accuracy(3, 1e-6, 0.01, 1e-5);
+    run_accuracy(2, 1e-6, 1e-3, 1e-10);
+    run_accuracy(1, 1e-6, 1e-5, 1e-4);
+}
+
+static void run_terminate(int solver, double rtol, double max_step, double h, double tol) {
+    fmi2Component c = start("term", solver, rtol, rtol * 1e-2, max_step, 0.5);
+    const double te = PI / 3.0;
+    double t = 0.0, v[2];
+    fmi2ValueReference vrs[2] = {VR_POS, VR_VEL};
+    fmi2Boolean term = fmi2True;
+    fmi2Status st = fmi2OK;
+    int n = 0;
+    long allocs = h_total;
+    while (n < 1000) {
+        st = fmi2DoStep(c, t, h, fmi2True);
+        if (st != fmi2OK) break;
+        CHECK_STATUS(fmi2GetBooleanStatus(c, fmi2Terminated, &term), fmi2OK);
+        CHECK(term == fmi2False);
+        CHECK(getb(c, VR_HIT) == fmi2False);
+        t += h;
+        n++;
+    }
+    CHECK(st == fmi2Discard);
+    CHECK(h_total == allocs);
+    CHECK(t < te && t + h > te);
+    CHECK_STATUS(fmi2GetBooleanStatus(c, fmi2Terminated, &term), fmi2OK);
+    CHECK(term == fmi2True);
+    CHECK_NEAR(last_time(c), te, tol);
+    CHECK_STATUS(fmi2GetReal(c, vrs, 2, v), fmi2OK);
+    CHECK(isfinite(v[0]) && isfinite(v[1]));
+    CHECK_NEAR(v[0], 0.5, tol);
+    CHECK(v[0] <= 0.5);
+    CHECK_NEAR(v[1], -sin(te), tol);
+    CHECK(getb(c, VR_HIT) == fmi2True);
+    /* never loops: the next step is an error with a reason */
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, t, h, fmi2True), fmi2Error);
+    CHECK_LOG("simulation terminated at t=1.0471");
+    CHECK_STATUS(fmi2DoStep(c, t, h, fmi2True), fmi2Error);
+    CHECK_NEAR(getr(c, VR_POS), 0.5, tol); /* still readable (debugging) */
+    fmi2FreeInstance(c);
+}
+
+static void test_terminate_event(void) {
+    fmi2Component c;
+    fmi2Boolean term;
+    run_terminate(3, 1e-12, 1.0, 0.1, 1e-9);
+    run_terminate(3, 1e-12, 1.0, 100.0, 1e-9);
+    run_terminate(3, 1e-12, 0.01, 0.01, 1e-9);
+    run_terminate(2, 1e-6, 1e-3, 0.1, 1e-9);
+    run_terminate(2, 1e-6, 1e-3, 2.0, 1e-9);
+    run_terminate(1, 1e-6, 1e-6, 0.5, 1e-5);
+
+    /* fmi2Terminate after the Discard, then stepping is refused */
+    c = start("term2", 3, 1e-8, 1e-10, 1.0, 0.5);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 2.0, fmi2True), fmi2Discard);
+    CHECK_STATUS(fmi2Terminate(c), fmi2OK);
+    CHECK_NEAR(getr(c, VR_POS), 0.5, 1e-7);
+    CHECK_STATUS(fmi2GetBooleanStatus(c, fmi2Terminated, &term), fmi2OK);
+    CHECK(term == fmi2True);
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, 2.0, 1.0, fmi2True), fmi2Error);
+    CHECK_LOG("simulation terminated at t=");
+    CHECK_STATUS(fmi2Reset(c), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 2.0, fmi2True), fmi2OK); /* pos_lim back to -2 */
+    fmi2FreeInstance(c);
+
+    /* tunable pos_lim set during the simulation */
+    c = start("term3", 3, 1e-12, 1e-14, 1.0, -2.0);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 0.5, fmi2True), fmi2OK);
+    CHECK_STATUS(setr(c, VR_POS_LIM, 0.0), fmi2OK);
+    CHECK_STATUS(fmi2DoStep(c, 0.5, 1.5, fmi2True), fmi2Discard);
+    CHECK_NEAR(last_time(c), PI / 2, 1e-9);
+    CHECK_NEAR(getr(c, VR_POS), 0.0, 1e-9);
+    fmi2FreeInstance(c);
+}
+
+static void test_landing(void) {
+    fmi2Component c = start("land", 3, 1e-10, 1e-12, 1.0, -2.0);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 100.0, fmi2True), fmi2OK);
+    CHECK(last_time(c) == 100.0);
+    CHECK_NEAR(getr(c, VR_POS), cos(100.0), 1e-6);
+    CHECK_STATUS(fmi2DoStep(c, 100.0, 1e-7, fmi2True), fmi2OK);
+    CHECK(last_time(c) == 100.0 + 1e-7);
+    CHECK_NEAR(getr(c, VR_POS), cos(100.0 + 1e-7), 1e-6);
+    /* tiny relative mismatch of the communication point is accepted */
+    CHECK_STATUS(fmi2DoStep(c, 100.0 + 1e-7 + 1e-12, 0.5, fmi2True), fmi2OK);
+    fmi2FreeInstance(c);
+
+    c = start("land4", 2, 1e-6, 1e-8, 0.01, -2.0);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 100.0, fmi2True), fmi2OK);
+    CHECK(last_time(c) == 100.0);
+    CHECK_NEAR(getr(c, VR_POS), cos(100.0), 1e-7);
+    CHECK_STATUS(fmi2DoStep(c, 100.0, 1e-7, fmi2True), fmi2OK);
+    CHECK(last_time(c) == 100.0 + 1e-7);
+    fmi2FreeInstance(c);
+}
+
+static void test_dostep_errors(void) {
+    fmi2Component c = inst("dostep");
+    fmi2Status st;
+    int i;
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2Error);
+    CHECK_LOG("fmi2DoStep: illegal call in state Instantiated");
+    fmi2FreeInstance(c);
+
+    c = start("dostep", 3, 1e-6, 1e-8, 0.1, -2.0);
+    EXPECT_ERROR(c, fmi2DoStep(c, 0.0, 0.0, fmi2True), "step size 0 must be finite and > 0");
+    fmi2FreeInstance(c);
+    c = start("dostep", 3, 1e-6, 1e-8, 0.1, -2.0);
+    EXPECT_ERROR(c, fmi2DoStep(c, 0.0, -1.0, fmi2True), "must be finite and > 0");
+    fmi2FreeInstance(c);
+    c = start("dostep", 3, 1e-6, 1e-8, 0.1, -2.0);
+    EXPECT_ERROR(c, fmi2DoStep(c, 0.0, NAN, fmi2True), "must be finite and > 0");
+    fmi2FreeInstance(c);
+    c = start("dostep", 3, 1e-6, 1e-8, 0.1, -2.0);
+    EXPECT_ERROR(c, fmi2DoStep(c, 0.5, 0.1, fmi2True), "does not match the FMU time");
+    fmi2FreeInstance(c);
+
+    /* stop time */
+    c = inst("stop");
+    CHECK_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, 1.0), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+    st = fmi2OK;
+    for (i = 0; i < 10; i++) st = gw_worst_test(st, fmi2DoStep(c, i * 0.1, 0.1, fmi2True));
+    CHECK(st == fmi2OK);
+    EXPECT_ERROR(c, fmi2DoStep(c, 1.0, 0.1, fmi2True), "goes beyond stopTime");
+    fmi2FreeInstance(c);
+
+    /* state machine */
+    c = inst("sm");
+    log_clear();
+    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2Error);
+    CHECK_LOG("fmi2ExitInitializationMode: illegal call in state Instantiated");
+    CHECK_STATUS(fmi2Reset(c), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    EXPECT_ERROR(c, fmi2SetupExperiment(c, fmi2False, 0, 0, fmi2False, 0), "illegal call");
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    EXPECT_ERROR(c, fmi2Terminate(c), "fmi2Terminate: illegal call in state InitializationMode");
+    fmi2FreeInstance(c);
+}
+
+static void test_status_and_unsupported(void) {
+    fmi2Component c = start("status", 3, 1e-6, 1e-8, 0.1, -2.0);
+    fmi2Status sv = fmi2Fatal;
+    fmi2Integer iv;
+    fmi2String strv;
+    fmi2Boolean bv = fmi2True;
+    double r;
+    fmi2ValueReference vr = VR_POS;
+    fmi2Integer order = 1;
+    fmi2EventInfo ei;
+    CHECK(strcmp(fmi2GetTypesPlatform(), "default") == 0);
+    CHECK(strcmp(fmi2GetVersion(), "2.0") == 0);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2OK);
+    CHECK_STATUS(fmi2GetStatus(c, fmi2DoStepStatus, &sv), fmi2OK);
+    CHECK(sv == fmi2OK);
+    CHECK_STATUS(fmi2GetStatus(c, fmi2PendingStatus, &sv), fmi2Discard);
+    CHECK_STATUS(fmi2GetIntegerStatus(c, fmi2DoStepStatus, &iv), fmi2Discard);
+    CHECK_STATUS(fmi2GetStringStatus(c, fmi2PendingStatus, &strv), fmi2Discard);
+    CHECK_STATUS(fmi2GetRealStatus(c, fmi2DoStepStatus, &r), fmi2Discard);
+    CHECK_STATUS(fmi2GetBooleanStatus(c, fmi2DoStepStatus, &bv), fmi2Discard);
+    CHECK_STATUS(fmi2GetBooleanStatus(c, fmi2Terminated, &bv), fmi2OK);
+    CHECK(bv == fmi2False);
+    CHECK(last_time(c) == 0.1);
+    CHECK_STATUS(fmi2DoStep(c, 0.1, 0.1, fmi2True), fmi2OK); /* Discard changed nothing */
+
+    EXPECT_ERROR(c, fmi2CancelStep(c), "never asynchronous");
+    CHECK_STATUS(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &r), fmi2Error); /* Instantiated */
+    CHECK_STATUS(fmi2Reset(c), fmi2OK);
+    EXPECT_ERROR(c, fmi2SetRealInputDerivatives(c, &vr, 1, &order, &r), "canInterpolateInputs");
+    EXPECT_ERROR(c, fmi2GetRealOutputDerivatives(c, &vr, 1, &order, &r),
+                 "MaxOutputDerivativeOrder");
+    EXPECT_ERROR(c, fmi2GetDirectionalDerivative(c, &vr, 1, &vr, 1, &r, &r), "not provided");
+    EXPECT_ERROR(c, fmi2EnterEventMode(c), "fmi2EnterEventMode: Model Exchange is not supported");
+    EXPECT_ERROR(c, fmi2NewDiscreteStates(c, &ei), "Model Exchange");
+    EXPECT_ERROR(c, fmi2EnterContinuousTimeMode(c), "Model Exchange");
+    EXPECT_ERROR(c, fmi2CompletedIntegratorStep(c, fmi2True, &bv, &bv), "Model Exchange");
+    EXPECT_ERROR(c, fmi2SetTime(c, 0.0), "Model Exchange");
+    EXPECT_ERROR(c, fmi2SetContinuousStates(c, &r, 1), "Model Exchange");
+    EXPECT_ERROR(c, fmi2GetDerivatives(c, &r, 1), "Model Exchange");
+    EXPECT_ERROR(c, fmi2GetEventIndicators(c, &r, 1), "Model Exchange");
+    EXPECT_ERROR(c, fmi2GetContinuousStates(c, &r, 1), "Model Exchange");
+    EXPECT_ERROR(c, fmi2GetNominalsOfContinuousStates(c, &r, 1), "Model Exchange");
+    fmi2FreeInstance(c);
+}
+
+static void test_fmu_state(void) {
+    fmi2Component c = start("state", 3, 1e-8, 1e-10, 1.0, 0.5), d;
+    fmi2FMUstate s = NULL, s2 = NULL, s3 = NULL, bad = NULL;
+    size_t size = 0;
+    fmi2Byte *bytes, *copy;
+    double p1, p2, p3, v1;
+    int i;
+    for (i = 0; i < 5; i++) CHECK_STATUS(fmi2DoStep(c, i * 0.1, 0.1, fmi2True), fmi2OK);
+    CHECK_STATUS(fmi2GetFMUstate(c, &s), fmi2OK);
+    CHECK_STATUS(fmi2GetFMUstate(c, &s), fmi2OK); /* overwrite in place */
+    CHECK_STATUS(fmi2DoStep(c, 0.5, 0.3, fmi2True), fmi2OK);
+    p1 = getr(c, VR_POS);
+    v1 = getr(c, VR_VEL);
+    /* into the terminating event, then back */
+    CHECK_STATUS(fmi2DoStep(c, 0.8, 0.5, fmi2True), fmi2Discard);
+    CHECK_STATUS(fmi2SetFMUstate(c, s), fmi2OK);
+    CHECK(last_time(c) == 0.5);
+    CHECK(getb(c, VR_HIT) == fmi2False);
+    CHECK_STATUS(fmi2DoStep(c, 0.5, 0.3, fmi2True), fmi2OK);
+    p2 = getr(c, VR_POS);
+    CHECK(p1 == p2); /* bitwise: step size and FSAL restored */
+    CHECK(v1 == getr(c, VR_VEL));
+
+    CHECK_STATUS(fmi2SerializedFMUstateSize(c, s, &size), fmi2OK);
+    CHECK(size > 44);
+    bytes = (fmi2Byte *)malloc(size);
+    copy = (fmi2Byte *)malloc(size);
+    CHECK_STATUS(fmi2SerializeFMUstate(c, s, bytes, size), fmi2OK);
+    CHECK(memcmp(bytes, "GWST", 4) == 0);
+    CHECK_STATUS(fmi2SerializeFMUstate(c, s, bytes, size - 1), fmi2Error);
+    CHECK_STATUS(fmi2Reset(c), fmi2OK);
+
+    /* deserialize into another instance */
+    d = inst("state2");
+    CHECK_STATUS(fmi2DeSerializeFMUstate(d, bytes, size, &s2), fmi2OK);
+    CHECK_STATUS(fmi2DeSerializeFMUstate(d, bytes, size, &s2), fmi2OK); /* reuse */
+    CHECK_STATUS(fmi2SetFMUstate(d, s2), fmi2OK);
+    CHECK_NEAR(getr(d, VR_POS_LIM), 0.5, 0.0);
+    CHECK_STATUS(fmi2DoStep(d, 0.5, 0.3, fmi2True), fmi2OK);
+    p3 = getr(d, VR_POS);
+    CHECK(p3 == p1);
+
+    /* corrupted byte streams */
+#define BAD_STREAM(mutate, n, msg)                                                           \
+    do {                                                                                     \
+        memcpy(copy, bytes, size);                                                           \
+        mutate;                                                                              \
+        log_clear();                                                                         \
+        CHECK_STATUS(fmi2DeSerializeFMUstate(d, copy, n, &bad), fmi2Error);                  \
+        CHECK(bad == NULL);                                                                  \
+        CHECK_LOG(msg);                                                                      \
+        CHECK_STATUS(fmi2SetFMUstate(d, s2), fmi2OK); /* recovers from Error */            \
+    } while (0)
+    BAD_STREAM(copy[0] = 'X', size, "bad magic");
+    BAD_STREAM((void)0, 10, "bad magic or too short");
+    BAD_STREAM(copy[4] = 7, size, "layout version 7");
+    BAD_STREAM(copy[12] = 9, size, "do not match this model");
+    BAD_STREAM(copy[46] ^= 1, size, "belongs to another model");
+    BAD_STREAM((void)0, size - 1, "expected");
+    BAD_STREAM(copy[8] ^= 1, size, "expected");
+    CHECK_STATUS(fmi2DoStep(d, 0.5, 0.3, fmi2True), fmi2OK);
+    CHECK(getr(d, VR_POS) == p1);
+
+    /* a state of the Error state, restore of an errored instance */
+    CHECK_STATUS(fmi2DoStep(d, 0.0, 0.3, fmi2True), fmi2Error);
+    CHECK_STATUS(fmi2GetFMUstate(d, &s3), fmi2OK);
+    CHECK_STATUS(fmi2SetFMUstate(d, s2), fmi2OK);
+    CHECK_STATUS(fmi2DoStep(d, 0.5, 0.1, fmi2True), fmi2OK);
+    CHECK_STATUS(fmi2SetFMUstate(d, s3), fmi2OK);
+    CHECK_STATUS(fmi2DoStep(d, 0.8, 0.1, fmi2True), fmi2Error);
+
+    CHECK_STATUS(fmi2FreeFMUstate(d, &s3), fmi2OK);
+    CHECK(s3 == NULL);
+    CHECK_STATUS(fmi2FreeFMUstate(d, &s3), fmi2OK);
+    CHECK_STATUS(fmi2FreeFMUstate(d, &s2), fmi2OK);
+    CHECK_STATUS(fmi2FreeFMUstate(c, &s), fmi2OK);
+    free(bytes);
+    free(copy);
+    fmi2FreeInstance(c);
+    fmi2FreeInstance(d);
+}
+
+static void test_two_instances(void) {
+    fmi2Component a = inst("A"), b = inst("B");
+    int i;
+    CHECK_STATUS(setr(b, VR_K, 4.0), fmi2OK);
+    CHECK_STATUS(setr(a, VR_REL_TOL, 1e-10), fmi2OK);
+    CHECK_STATUS(setr(b, VR_REL_TOL, 1e-10), fmi2OK);
+    CHECK_STATUS(setr(a, VR_ABS_TOL, 1e-12), fmi2OK);
+    CHECK_STATUS(setr(b, VR_ABS_TOL, 1e-12), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(a), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(b), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(b), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(a), fmi2OK);
+    for (i = 0; i < 10; i++) {
+        CHECK_STATUS(fmi2DoStep(a, i * 0.2, 0.2, fmi2True), fmi2OK);
+        CHECK_STATUS(fmi2DoStep(b, i * 0.2, 0.2, fmi2True), fmi2OK);
+        CHECK_NEAR(getr(a, VR_POS), cos((i + 1) * 0.2), 1e-8);
+        CHECK_NEAR(getr(b, VR_POS), cos(2.0 * (i + 1) * 0.2), 1e-8);
+    }
+    fmi2FreeInstance(a);
+    fmi2FreeInstance(b);
+}
+
+static void test_reset_and_inputs(void) {
+    fmi2Component c = start("reset", 3, 1e-10, 1e-12, 1.0, -2.0);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 1.0, fmi2True), fmi2OK);
+    CHECK_STATUS(fmi2Reset(c), fmi2OK);
+    CHECK_NEAR(getr(c, VR_K), 1.0, 0.0);
+    CHECK_NEAR(getr(c, VR_POS), 1.0, 0.0);
+    CHECK_NEAR(getr(c, VR_POS_LIM), -2.0, 0.0);
+    CHECK_NEAR(getr(c, VR_REL_TOL), 1e-6, 0.0);
+    CHECK(getb(c, VR_HIT) == fmi2False);
+    CHECK_STATUS(setr(c, VR_REL_TOL, 1e-10), fmi2OK);
+    CHECK_STATUS(setr(c, VR_ABS_TOL, 1e-12), fmi2OK);
+    CHECK_STATUS(setr(c, VR_F, 1.0), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+    /* f = 1: equilibrium at pos = 1 */
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 1.0, fmi2True), fmi2OK);
+    CHECK_NEAR(getr(c, VR_POS), 1.0, 1e-10);
+    CHECK_NEAR(getr(c, VR_FORCE), 1.0, 0.0);
+    CHECK_STATUS(setr(c, VR_F, 2.0), fmi2OK);
+    CHECK_NEAR(getr(c, VR_FORCE), 2.0, 0.0); /* outputs follow the new input */
+    CHECK_STATUS(fmi2DoStep(c, 1.0, 1.0, fmi2True), fmi2OK);
+    CHECK_NEAR(getr(c, VR_POS), 2.0 - cos(1.0), 1e-8);
+    EXPECT_ERROR(c, setr(c, VR_F, NAN), "f (vr=30) is not finite");
+    fmi2FreeInstance(c);
+}
+
+int main(void) {
+    test_instantiate();
+    test_initial_values();
+    test_variable_errors();
+    test_logging();
+    test_checks_and_settings();
+    test_accuracy();
+    test_terminate_event();
+    test_landing();
+    test_dostep_errors();
+    test_status_and_unsupported();
+    test_fmu_state();
+    test_two_instances();
+    test_reset_and_inputs();
+    return h_finish("test_oscillator");
+}

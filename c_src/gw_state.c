@@ -277,6 +277,19 @@ static gw_blob *blob_alloc(const gw_instance *I, size_t size) {
 
 /* ---- FMI functions ------------------------------------------------------------ */
 
+/* The blob *FMUstate if it has the right size, else a new one (the old one freed). */
+static gw_blob *blob_reuse(gw_instance *I, const char *fn, fmi2FMUstate *FMUstate, size_t size) {
+    gw_blob *b = (gw_blob *)*FMUstate;
+    if (b && b->size != size) {
+        gw_free(I, b);
+        b = NULL;
+        *FMUstate = NULL;
+    }
+    if (!b) b = blob_alloc(I, size);
+    if (!b) GW_ERROR(I, "%s: out of memory", fn);
+    return b;
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     gw_instance *I = (gw_instance *)c;
     gw_blob *b;
@@ -288,17 +301,8 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
         return gw_end(I, fmi2Error);
     }
     size = state_size(I);
-    b = (gw_blob *)*FMUstate;
-    if (b && b->size != size) { /* reuse a previous state of this model if possible */
-        gw_free(I, b);
-        b = NULL;
-        *FMUstate = NULL;
-    }
-    if (!b) b = blob_alloc(I, size);
-    if (!b) {
-        GW_ERROR(I, "fmi2GetFMUstate: out of memory");
-        return gw_end(I, fmi2Error);
-    }
+    b = blob_reuse(I, "fmi2GetFMUstate", FMUstate, size);
+    if (!b) return gw_end(I, fmi2Error);
     w.buf = b->data;
     w.pos = 0;
     write_state(I, &w, size);
@@ -371,17 +375,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     }
     if (!check_header(I, "fmi2DeSerializeFMUstate", (const unsigned char *)serializedState, size))
         return gw_end(I, fmi2Error);
-    b = (gw_blob *)*FMUstate;
-    if (b && b->size != size) { /* reuse a previous state of this model if possible */
-        gw_free(I, b);
-        b = NULL;
-        *FMUstate = NULL;
-    }
-    if (!b) b = blob_alloc(I, size);
-    if (!b) {
-        GW_ERROR(I, "fmi2DeSerializeFMUstate: out of memory");
-        return gw_end(I, fmi2Error);
-    }
+    b = blob_reuse(I, "fmi2DeSerializeFMUstate", FMUstate, size);
+    if (!b) return gw_end(I, fmi2Error);
     memcpy(b->data, serializedState, size);
     *FMUstate = (fmi2FMUstate)b;
     return fmi2OK;

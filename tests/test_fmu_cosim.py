@@ -340,3 +340,26 @@ def test_initial_outputs_readable_in_initialization_mode(earth_fmu):
         s.slave.exitInitializationMode()
     finally:
         s.free()
+
+
+def test_log_categories_match_the_runtime(earth_fmu, md):
+    """Every category in modelDescription.xml is accepted by fmi2SetDebugLogging; others are not."""
+    categories = [c.name for c in md.logCategories]
+    assert set(categories) == {"logEvents", "logSolver", "logStatusWarning", "logStatusError",
+                               "logStatusFatal", "logAll"}
+    s = Slave(earth_fmu)
+    try:
+        s.slave.setDebugLogging(True, categories)
+        s.init()
+        s.slave.doStep(0.0, 0.1)
+        assert "fmi2DoStep" in s.log_text()  # logSolver's per-step summary
+        with pytest.raises(FMICallException):
+            s.slave.setDebugLogging(True, ["logEverything"])
+        assert "logEverything" in s.log_text()
+    finally:
+        s.free()
+
+
+def test_rel_tol_is_not_overridden_by_a_default_tolerance(md):
+    """DefaultExperiment carries no tolerance, so importers do not silently override rel_tol."""
+    assert md.defaultExperiment.tolerance is None

@@ -1,0 +1,37 @@
+"""The generated wheel code and the runtime together, under ASan/UBSan and valgrind."""
+from __future__ import annotations
+
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from test_c_runtime import FMI_HEADERS, STRICT, TESTS_C, VALGRIND, run
+
+
+@pytest.fixture(scope="module")
+def wheel_sources(earth_fmu, fmu_dir) -> Path:
+    return fmu_dir / "earth_build" / "fmu" / "sources"
+
+
+def _compile(sources: Path, out: Path, extra: list[str]) -> Path:
+    exe = out / "test_wheel"
+    cmd = ["gcc", *STRICT, "-Wno-unused-parameter", *extra, f"-I{FMI_HEADERS}", f"-I{sources}",
+           f"-I{TESTS_C}", "-fvisibility=hidden", *map(str, sorted(sources.glob("*.c"))),
+           str(TESTS_C / "test_wheel.c"), "-lm", "-o", str(exe)]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, f"{' '.join(cmd)}\n{r.stdout}{r.stderr}"
+    return exe
+
+
+def test_wheel_under_sanitizers(wheel_sources, tmp_path):
+    exe = _compile(wheel_sources, tmp_path, ["-O1", "-g", "-fno-omit-frame-pointer",
+                                             "-fsanitize=address,undefined", "-fno-sanitize-recover=all"])
+    run([str(exe)], env=dict(os.environ, ASAN_OPTIONS="detect_leaks=1",
+                             UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"))
+
+
+def test_wheel_under_valgrind(wheel_sources, tmp_path):
+    exe = _compile(wheel_sources, tmp_path, ["-O1", "-g"])
+    run([VALGRIND, "-q", "--error-exitcode=1", "--leak-check=full", "--errors-for-leak-kinds=all", str(exe)])

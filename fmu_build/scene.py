@@ -19,7 +19,6 @@ from pathlib import Path
 
 from model.build import FORMULATIONS, start_values, wheel_parameters
 from model.effects import CATALOGUE
-from model.effects.gravity import PRESETS as GRAVITY_PRESETS
 
 SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
@@ -109,16 +108,40 @@ def _wheel(r: _Reader, data: dict) -> dict[str, float]:
     return wheel
 
 
-def _initial(r: _Reader, data: dict) -> dict[str, float]:
+def _initial(r: _Reader, data: dict, effects: dict[str, dict]) -> dict[str, float]:
     for key in ("x_dot", "y_dot", "vx", "vy"):
         if key in data:
             raise r.fail("initial", key, "is not free: rolling without slip fixes the centre "
                          "velocity from alpha_dot, beta_dot, gamma_dot")
-    initial = _numbers_with_degrees(r, "initial", data, [q.name for q in start_values()])
+    names = [q.name for q in start_values()]
+    for effect in effects:
+        names += [q.name for q in CATALOGUE[effect].starts()]
+    initial = _numbers_with_degrees(r, "initial", data, names)
     beta = initial.get("beta")
     if beta is not None and not 0 < beta < math.pi:
         raise r.fail("initial", "beta", f"must lie in (0, pi) (0 and pi are lying flat), got {beta!r}")
     return initial
+
+
+def _effect_value(r: _Reader, table: str, key: str, value, cls) -> float | str:
+    choices = cls.choices()
+    if key in choices:
+        if value not in choices[key]:
+            raise r.fail(table, key, f"unknown choice {value!r}; valid: {', '.join(choices[key])}")
+        return value
+    presets = cls.presets().get(key, {})
+    if isinstance(value, str):
+        if value not in presets:
+            valid = f"{', '.join(presets)} or a number" if presets else "a number"
+            raise r.fail(table, key, f"unknown preset {value!r}; valid: {valid}")
+        return presets[value]
+    quantity = next(q for q in cls.parameters() if q.name == key)
+    v = r.number(table, key, value)
+    if quantity.minimum is not None and v < quantity.minimum:
+        raise r.fail(table, key, f"must be >= {quantity.minimum:g}, got {v!r}")
+    if quantity.maximum is not None and v > quantity.maximum:
+        raise r.fail(table, key, f"must be <= {quantity.maximum:g}, got {v!r}")
+    return v
 
 
 def _effects(r: _Reader, data: dict) -> dict[str, dict]:
@@ -126,22 +149,14 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
     for name, options in data.items():
         table = f"effects.{name}"
         if name not in CATALOGUE:
-            raise r.fail(table, None, f"unknown effect; valid: {', '.join(sorted(CATALOGUE))}")
+            raise r.fail(table, None, f"unknown effect; valid: {', '.join(CATALOGUE)}")
         if not isinstance(options, dict):
             raise r.fail(table, None, "must be a table")
-        params = {q.name for q in CATALOGUE[name].parameters()}
-        r.unknown(table, options, params)
-        values = {}
-        for key, value in options.items():
-            if name == "gravity" and key == "g" and isinstance(value, str):
-                if value not in GRAVITY_PRESETS:
-                    raise r.fail(table, key, f"unknown preset {value!r}; valid: {', '.join(GRAVITY_PRESETS)} or a number")
-                values[key] = GRAVITY_PRESETS[value]
-            else:
-                values[key] = r.number(table, key, value)
-        if name == "gravity" and values.get("g", 0.0) < 0:
-            raise r.fail(table, "g", f"must be >= 0, got {values['g']!r}")
-        effects[name] = values
+        cls = CATALOGUE[name]
+        r.unknown(table, options, {q.name for q in cls.parameters()} | set(cls.choices()))
+        effects[name] = {key: _effect_value(r, table, key, value, cls) for key, value in options.items()}
+    if "slope" in effects and "gravity" not in effects:
+        raise r.fail("effects.slope", None, "needs [effects.gravity] (a slope tilts gravity)")
     return effects
 
 
@@ -184,9 +199,9 @@ def parse_scene(text: str, where: str = "<scene>") -> Scene:
     if scene.formulation not in FORMULATIONS:
         raise r.fail("model", "formulation", f"unknown {scene.formulation!r}; valid: {', '.join(FORMULATIONS)}")
     scene.wheel = _wheel(r, r.table(data, "wheel"))
-    scene.initial = _initial(r, r.table(data, "initial"))
     if "effects" in data:
         scene.effects = _effects(r, r.table(data, "effects"))
+    scene.initial = _initial(r, r.table(data, "initial"), scene.effects)
     scene.experiment = _experiment(r, r.table(data, "experiment"))
     outputs = r.table(data, "outputs")
     r.unknown("outputs", outputs, {"keep"})

@@ -2,9 +2,11 @@
 
 The base wheel is a rigid body of revolution (mass M, rolling radius R, inertias
 I_diam = k_diam M R^2 about diameters and I_axial = k_axial M R^2 about the axle)
-rolling without slip on flat ground (paper eqs. 18-22, general inertia). The
-formulation is the reduced Kane-Maggi form (default) or the multiplier form with
-constraint stabilisation; both come from the same T, V and A.
+rolling without slip on flat ground (paper eqs. 18-22, general inertia). Effects
+add energies, bodies, forces, coordinates, states, inputs, parameters, outputs,
+events and checks (model/effects/). The formulation is the reduced Kane-Maggi
+form (default) or the multiplier form with constraint stabilisation; both come
+from the same T, V and A (model/lagrangian.py).
 """
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ import math
 
 import casadi as ca
 
-from model.context import WheelContext
+from model.context import Body, WheelContext
 from model.effects import CATALOGUE
 from model.kinematics import WheelKinematics
 from model.lagrangian import ConstrainedSystem
@@ -58,16 +60,23 @@ def _with_values(quantities: list[Quantity], values: dict[str, float]) -> list[Q
     return quantities
 
 
-def _base_context(wheel: dict[str, float]) -> WheelContext:
-    q = ca.SX.sym("q", 5)
-    qd = ca.SX.sym("qd", 5)
-    ctx = WheelContext(q=q, qd=qd, kin=None, par={})  # type: ignore[arg-type]
+def base_context(wheel: dict[str, float]) -> WheelContext:
+    """The wheel alone: coordinates, parameters, kinetic energy, its body, checks."""
+    ctx = WheelContext(coords=[])
+    for name in COORDINATES:
+        ctx.coordinate(name)
     for quantity in _with_values(wheel_parameters(), wheel):
         ctx.parameter(quantity)
-    ctx.kin = WheelKinematics(q, qd, ctx.par["R"])
     P = ctx.par
-    ctx.check(P["M"], "M (mass) must be > 0")
-    ctx.check(P["R"], "R (radius) must be > 0")
+    ctx.kin = kin = WheelKinematics(ctx.q, ctx.qd, P["R"])
+    M, R = P["M"], P["R"]
+    inertia = ca.diag(ca.vertcat(P["k_diam"], P["k_diam"], P["k_axial"])) * M * R**2
+    w, v = kin.omega_lmn, kin.centre_velocity
+    # eq. (22) with general inertia; z_dot is part of v (z = R sin beta)
+    ctx.kinetic.append(0.5 * M * ca.dot(v, v) + 0.5 * ca.mtimes([w.T, inertia, w]))
+    ctx.bodies.append(Body(M, kin.centre))
+    ctx.check(M, "M (mass) must be > 0")
+    ctx.check(R, "R (radius) must be > 0")
     ctx.check(P["k_diam"], "k_diam must be > 0")
     ctx.check(P["k_axial"], "k_axial must be > 0")
     ctx.check_true(P["k_axial"] <= 2 * P["k_diam"],
@@ -79,20 +88,6 @@ def _base_context(wheel: dict[str, float]) -> WheelContext:
     return ctx
 
 
-def kinetic_energy(ctx: WheelContext):
-    """T(q, qd) of eq. (22) with general inertia (z_dot included, z = R sin beta)."""
-    M, R = ctx.par["M"], ctx.par["R"]
-    I = ca.diag(ca.vertcat(ctx.par["k_diam"], ctx.par["k_diam"], ctx.par["k_axial"])) * M * R**2
-
-    def T(q, qd):
-        kin = WheelKinematics(q, qd, R)
-        v = kin.centre_velocity
-        w = kin.omega_lmn
-        return 0.5 * M * ca.dot(v, v) + 0.5 * ca.mtimes([w.T, I, w])
-
-    return T
-
-
 def build_model(wheel: dict[str, float] | None = None,
                 initial: dict[str, float] | None = None,
                 effects: dict[str, dict] | None = None,
@@ -102,104 +97,202 @@ def build_model(wheel: dict[str, float] | None = None,
     """The ModelSpec of a wheel with the named effects.
 
     wheel: values of the base parameters (M, R, k_diam, k_axial, beta_min);
-    initial: start values (x, y, alpha, beta, gamma, alpha_dot, beta_dot, gamma_dot);
-    effects: {effect name: {parameter: value}}; gravity alone by default.
+    initial: start values (x, y, alpha, beta, gamma, alpha_dot, beta_dot, gamma_dot,
+    and those effects add); effects: {effect name: {parameter: value}}, gravity
+    alone by default. Effects are applied in catalogue order, whatever the scene's.
     """
     if formulation not in FORMULATIONS:
         raise ValueError(f"formulation must be one of {', '.join(FORMULATIONS)}, not {formulation!r}")
     effects = {"gravity": {}} if effects is None else effects
-    ctx = _base_context(wheel or {})
-    for effect_name, options in effects.items():
+    for effect_name in effects:
         if effect_name not in CATALOGUE:
-            raise ValueError(f"unknown effect {effect_name!r}; valid: {', '.join(sorted(CATALOGUE))}")
-        CATALOGUE[effect_name](options).apply(ctx)
+            raise ValueError(f"unknown effect {effect_name!r}; valid: {', '.join(CATALOGUE)}")
+    ctx = base_context(wheel or {})
+    for effect_name, effect_cls in CATALOGUE.items():
+        if effect_name in effects:
+            effect_cls(effects[effect_name]).apply(ctx)
+    return _Assembler(ctx, formulation, initial or {}).spec(name, description, list(effects))
 
-    T = kinetic_energy(ctx)
-    V = sum(ctx.potentials, ca.SX(0))
 
-    def Q_nc(q, qd):
-        Q = ca.SX.zeros(5)
-        for force in ctx.forces:
-            Q = Q + force(q, qd)
+class _Assembler:
+    """Turns a filled WheelContext into state equations (one formulation)."""
+
+    def __init__(self, ctx: WheelContext, formulation: str, initial: dict[str, float]):
+        self.ctx, self.formulation, self.initial = ctx, formulation, initial
+        free = [c for c in ctx.coords if c.free]
+        driven = [c for c in ctx.coords if not c.free]
+        self.free, self.driven = free, driven
+        ctx.coords[:] = free + driven  # free coordinates first (ConstrainedSystem's order)
+        self.q, self.qd, self.qdd = ctx.all_q(), ctx.all_qd(), ctx.all_qdd()
+        self.late = ctx.late
+
+    # -- terms --------------------------------------------------------------
+    def energies(self):
+        ctx = self.ctx
+        T = sum(ctx.kinetic, ca.SX(0))
+        V = sum(ctx.potentials, ca.SX(0))
+        if ctx.gravity is not None:
+            for body in ctx.bodies:
+                V = V - body.mass * ca.dot(ctx.gravity, body.position)
+        return T, V
+
+    def generalised_forces(self):
+        if not self.ctx.forces:
+            return None
+        Q = ca.SX.zeros(self.q.numel())
+        for f in self.ctx.forces:
+            J = ca.jacobian(f.velocity, self.qd)
+            Q = Q + ca.mtimes(J.T, f.value)
         return Q
 
-    A = ctx.kin.rolling_constraint()
-    system = ConstrainedSystem(q=ctx.q, T=T, V=V, A=A, Q_nc=Q_nc if ctx.forces else None)
-    S = system.null_space(DEPENDENT)
+    def powers(self):
+        diss, act = ca.SX(0), ca.SX(0)
+        for f in self.ctx.forces:
+            p = ca.dot(ca.vec(f.value), ca.vec(f.velocity))
+            if f.kind == "dissipative":
+                diss = diss - p
+            elif f.kind == "actuator":
+                act = act + p
+        return diss, act
 
-    starts = _with_values(start_values(), initial or {})
-    s = ca.SX.sym("s", len(starts))
-    P = ctx.par
-    p = ca.vertcat(*[P[q.name] for q in ctx.parameters])
-    q0, v0 = s[0:5], s[5:8]
-    beta0 = s[3]
-    ctx.check(beta0, "beta (initial lean) must be > 0")
-    ctx.check(math.pi - beta0, "beta (initial lean) must be < pi")
-    ctx.check(ca.sin(beta0) - ca.sin(P["beta_min"]),
-              "initial lean beta must lie between beta_min and pi - beta_min (the wheel is already flat)")
+    def contact_force(self):
+        """Total ground force on the system, from Newton's law for all bodies (back-substitution)."""
+        ctx = self.ctx
+        F = ca.SX.zeros(3)
+        for body in ctx.bodies:
+            F = F + body.mass * ctx.acceleration(body.position)
+            if ctx.gravity is not None:
+                F = F - body.mass * ctx.gravity
+        for f in ctx.forces:
+            if f.point:
+                F = F - f.value
+        return F
 
-    t = ca.SX.sym("t")
-    v = ca.SX.sym("v", 3)
-    if formulation == "reduced":
-        red = system.reduced(S, v)
-        x = ca.vertcat(ctx.q, v)
-        x_names = list(COORDINATES + SPEEDS)
-        qd = red.q_dot
-        ode = ca.vertcat(qd, red.v_dot())
-        init = s
-        energy = red.energy
+    # -- state equations ----------------------------------------------------
+    def spec(self, name: str, description: str, effect_names: list[str]) -> ModelSpec:
+        ctx, P = self.ctx, self.ctx.par
+        T, V = self.energies()
+        Fc = self.contact_force()
+        unknowns = [(ctx.Fn, Fc[2])] if ctx.uses_Fn else []
+        nf = len(self.free)
+        A = ca.horzcat(ctx.kin.rolling_constraint(), ca.SX.zeros(2, nf - 5))
+        system = ConstrainedSystem(q=self.q, qd=self.qd, qdd=self.qdd, n_free=nf, T=T, V=V, A=A,
+                                   Q_nc=self.generalised_forces(), unknowns=unknowns)
+        qd_driven = ca.vertcat(*[c.rate for c in self.driven]) if self.driven else ca.SX(0, 1)
+        qdd_driven = ca.vertcat(*[c.accel for c in self.driven]) if self.driven else ca.SX(0, 1)
+        S = system.null_space(DEPENDENT)
+        q_free = ca.vertcat(*[c.q for c in self.free])
+        independent = [c for i, c in enumerate(self.free) if i not in DEPENDENT]
+        v = ca.vertcat(*[c.qd for c in independent])
+
+        starts = _with_values(start_values(), {})
+        extra_starts = [c.start for c in self.free[5:]] + [c.rate_start for c in self.free[5:]]
+        state_starts = [st.quantity for st in ctx.states]
+        starts = _with_values(starts + extra_starts + state_starts, self.initial)
+        s = ca.SX.sym("s", len(starts))
+        s_by_name = {qq.name: s[i] for i, qq in enumerate(starts)}
+        e_states = ca.vertcat(*[st.sym for st in ctx.states]) if ctx.states else ca.SX(0, 1)
+        e_start = ca.vertcat(*[s_by_name[st.quantity.name] for st in ctx.states]) if ctx.states else ca.SX(0, 1)
+        q0 = ca.vertcat(*[s_by_name[n] for n in COORDINATES], *[s_by_name[c.start.name] for c in self.free[5:]])
+        v0 = ca.vertcat(*[s_by_name[n] for n in SPEEDS], *[s_by_name[c.rate_start.name] for c in self.free[5:]])
+
         extra_outputs: list[tuple[Quantity, ca.SX]] = []
-        nominal_rates = [1.0, 1.0, 1.0]
-    else:
-        qd = ca.SX.sym("qd", 5)
-        k_stab = ctx.parameter(Quantity("k_stab", "1/s", "velocity-constraint stabilisation gain", 10.0))
-        p = ca.vertcat(p, k_stab)
-        mult = system.multipliers(qd, k_stab)
-        x = ca.vertcat(ctx.q, qd)
-        x_names = list(COORDINATES) + ["x_dot", "y_dot"] + list(SPEEDS)
-        ode = ca.vertcat(qd, mult.q_ddot)
-        S0 = ca.substitute(S, ctx.q, q0)
-        init = ca.vertcat(q0, ca.mtimes(S0, v0))
-        energy = mult.energy
-        extra_outputs = [
-            (Quantity("constraint_violation", "m/s", "|A(q) q_dot|, drift of the rolling constraint"),
-             ca.norm_2(mult.violation)),
-            (Quantity("lambda_x", "N", "constraint multiplier: contact force along x"), mult.lam[0]),
-            (Quantity("lambda_y", "N", "constraint multiplier: contact force along y"), mult.lam[1]),
+        if self.formulation == "reduced":
+            qd_all, qdd_all, v_dot, x_sol = system.reduced(S, v, ca.SX.sym("v_dot", v.numel()),
+                                                           qd_driven, qdd_driven)
+            x = ca.vertcat(q_free, v, e_states)
+            x_names = [c.name for c in self.free] + [c.name + "_dot" for c in independent]
+            ode_mech = ca.vertcat(qd_all[:nf], v_dot)
+            init = ca.vertcat(q0, v0, e_start)
+            nominal_rates = [1.0] * v.numel()
+        else:
+            k_stab = ctx.parameter(Quantity("k_stab", "1/s", "velocity-constraint stabilisation gain", 10.0))
+            qd_free = ca.vertcat(*[c.qd for c in self.free])
+            qdd_all, lam, x_sol, violation = system.multipliers(qd_free, qd_driven, qdd_driven, k_stab)
+            qd_all = ca.vertcat(qd_free, qd_driven)
+            x = ca.vertcat(q_free, qd_free, e_states)
+            x_names = [c.name for c in self.free] + [c.name + "_dot" for c in self.free]
+            ode_mech = ca.vertcat(qd_free, qdd_all[:nf])
+            S0 = ca.substitute(S, q_free, q0)
+            init = ca.vertcat(q0, ca.mtimes(S0, v0), e_start)
+            nominal_rates = [1.0] * nf
+            extra_outputs = [
+                (Quantity("constraint_violation", "m/s", "|A(q) q_dot|, drift of the rolling constraint"),
+                 ca.norm_2(violation)),
+                (Quantity("lambda_x", "N", "constraint multiplier: contact force along x"), lam[0]),
+                (Quantity("lambda_y", "N", "constraint multiplier: contact force along y"), lam[1]),
+            ]
+        x_names += [st.quantity.name for st in ctx.states]
+
+        P_diss, P_act = self.powers()
+        tau_driven = system.driven_forces()
+        P_act = P_act + ca.dot(tau_driven, qd_driven) if self.driven else P_act
+        placeholders = ca.vertcat(self.qd, self.qdd, self.late["T"], self.late["V"], self.late["P_diss"],
+                                  self.late["P_act"])
+        values = ca.vertcat(qd_all, qdd_all, T, V, P_diss, P_act)
+        for c in self.driven:
+            if c.value is not None:
+                placeholders = ca.vertcat(placeholders, c.q)
+                values = ca.vertcat(values, c.value)
+            elif ca.depends_on(T, c.q) or ca.depends_on(V, c.q):
+                raise ValueError(f"driven coordinate {c.name} has no value state but the energies depend on it")
+        if ctx.uses_Fn:
+            placeholders = ca.vertcat(placeholders, ctx.Fn)
+            values = ca.vertcat(values, x_sol[0])
+
+        keep = [i for i in range(placeholders.numel()) if not ca.is_equal(placeholders[i], values[i])]
+        placeholders, values = placeholders[keep], values[keep]  # drop identities (independent speeds)
+
+        def bind(expr):
+            """Placeholders -> state expressions (repeated: the values contain placeholders too)."""
+            expr = ca.SX(expr)
+            for _ in range(6):
+                if not ca.depends_on(ca.vec(expr), placeholders):
+                    return expr
+                expr = ca.substitute(expr, placeholders, values)
+            raise RuntimeError("placeholders could not be bound (a cycle between late quantities)")
+
+        self.bind = bind
+        ctx.late_values = {"Fc": bind(Fc)}
+        derivs = [bind(st.derivative) for st in ctx.states]
+        ode = ca.vertcat(bind(ode_mech), *derivs)
+
+        by_name = {qq.name: qq for qq in starts}
+        outputs = [(by_name[n], self.q[i]) for i, n in enumerate(COORDINATES)]
+        outputs += [(by_name[n], bind(self.qd[2 + i])) for i, n in enumerate(SPEEDS)]
+        kin = ctx.kin
+        outputs += [
+            (Quantity("z", "m", "centre height R sin(beta)"), kin.centre[2]),
+            (Quantity("vx", "m/s", "centre velocity x, from the rolling constraint"), bind(kin.centre_velocity[0])),
+            (Quantity("vy", "m/s", "centre velocity y, from the rolling constraint"), bind(kin.centre_velocity[1])),
+            (Quantity("energy", "J", "total mechanical energy T + V"), bind(T + V)),
         ]
-        nominal_rates = [1.0] * 5
-        v = qd[2:5]
+        for c in self.free[5:]:
+            outputs += [(c.start, c.q), (c.rate_start, bind(c.qd))]
+        outputs += [(st.quantity, st.sym) for st in ctx.states if st.output]
+        outputs += [(Quantity(f"{c.name}_torque", "N.m", f"torque the motor of {c.name} supplies"),
+                     bind(tau_driven[i])) for i, c in enumerate(self.driven)]
+        outputs += [(qq, bind(self._late(e))) for qq, e in ctx.outputs] + extra_outputs
 
-    # Expressions of the effects were written in the placeholder (q, qd); bind them to the state.
-    def bind(expr):
-        return ca.substitute(expr, ca.vertcat(ctx.q, ctx.qd), ca.vertcat(ctx.q, qd))
+        fallen = Quantity("fallen", "", "true once the wheel has fallen flat (beta <= beta_min or >= pi - beta_min)")
+        events = [Event("fall", ca.sin(self.q[3]) - ca.sin(P["beta_min"]), "terminate", fallen)]
+        events += [Event(n, bind(self._late(e)), a, f) for n, e, a, f in ctx.events]
 
-    kin = WheelKinematics(ctx.q, qd, P["R"])
-    by_name = {qq.name: qq for qq in starts}
-    outputs = [(by_name[n], ctx.q[i]) for i, n in enumerate(COORDINATES)]
-    outputs += [(by_name[n], v[i]) for i, n in enumerate(SPEEDS)]
-    outputs += [
-        (Quantity("z", "m", "centre height R sin(beta)"), kin.centre[2]),
-        (Quantity("vx", "m/s", "centre velocity x, from the rolling constraint"), kin.centre_velocity[0]),
-        (Quantity("vy", "m/s", "centre velocity y, from the rolling constraint"), kin.centre_velocity[1]),
-        (Quantity("energy", "J", "total mechanical energy T + V"), bind(energy)),
-    ]
-    outputs += [(qq, bind(e)) for qq, e in ctx.outputs] + extra_outputs
+        beta0 = s_by_name["beta"]
+        ctx.check(beta0, "beta (initial lean) must be > 0")
+        ctx.check(math.pi - beta0, "beta (initial lean) must be < pi")
+        ctx.check(ca.sin(beta0) - ca.sin(P["beta_min"]),
+                  "initial lean beta must lie between beta_min and pi - beta_min (the wheel is already flat)")
+        p = ca.vertcat(*[P[qq.name] for qq in ctx.parameters])
+        nominal = ca.vertcat(P["R"], P["R"], *([1.0] * (nf - 2)), *nominal_rates,
+                             *[1.0] * len(ctx.states))
+        return ModelSpec(
+            name=name, description=description, t=ca.SX.sym("t"), x=x, x_names=x_names,
+            s=s, starts=starts, u=ca.vertcat(*[sym for _, sym in ctx.inputs]) if ctx.inputs else ca.SX(0, 1),
+            inputs=[qq for qq, _ in ctx.inputs], p=p, parameters=ctx.parameters,
+            init=init, ode=ode, outputs=outputs, events=events, checks=ctx.checks, nominal=nominal,
+            effects=effect_names, formulation=self.formulation)
 
-    fallen = Quantity("fallen", "", "true once the wheel has fallen flat (beta <= beta_min or >= pi - beta_min)")
-    events = [Event("fall", ca.sin(ctx.q[3]) - ca.sin(P["beta_min"]), "terminate", fallen)]
-    events += [Event(n, bind(e), a, f) for n, e, a, f in ctx.events]
-
-    nominal = ca.vertcat(P["R"], P["R"], 1, 1, 1, *nominal_rates)
-    return ModelSpec(
-        name=name, description=description, t=t, x=x, x_names=x_names,
-        s=s, starts=starts, u=ca.SX.sym("u", 0), inputs=[], p=p, parameters=ctx.parameters,
-        init=init, ode=ode, outputs=outputs, events=events,
-        checks=[ca_check for ca_check in _bind_checks(ctx, s)], nominal=nominal,
-        effects=list(effects), formulation=formulation)
-
-
-def _bind_checks(ctx: WheelContext, s: ca.SX):
-    """Checks may use start values (beta0) and parameters only."""
-    for check in ctx.checks:
-        yield check
+    def _late(self, expr):
+        """The contact-force placeholder -> the back-substituted contact force."""
+        return ca.substitute(ca.SX(expr), self.ctx.Fc, self.ctx.late_values["Fc"])

@@ -1,73 +1,90 @@
 """Equations of motion of a constrained mechanical system, derived by CasADi.
 
 Given kinetic energy T(q, q_dot), potential V(q), Pfaffian constraints
-A(q) q_dot = 0 and non-conservative generalised forces Q_nc(q, q_dot), this module
-builds the two formulations compared in Kelly's NASA report
+A(q) q_dot = 0 and non-conservative generalised forces Q_nc, this module builds
+the two formulations compared in Kelly's NASA report
 (seeds/kelly-nasa-constrained-motion.txt):
 
 * reduced (null-space / Kane-Maggi): q_dot = S(q) v with A S = 0 and
-  S^T (M S v_dot + M S_dot v + c - Q) = 0, a system in the independent speeds v
-  only; the constraints hold by construction.
+  S^T (M q_ddot + c - Q) = 0, q_ddot = S v_dot + S_dot v: a system in the
+  independent speeds v only; the constraints hold by construction.
 * multipliers (the paper's eq. 6 route): [M  -A^T; A  0] [q_ddot; lambda] =
   [Q - c; -A_dot q_dot - k A q_dot], the last term a velocity-level
   stabilisation of the drift of the nonholonomic constraints.
 
-Here M = d2T/dq_dot2, c = d/dq(dT/dq_dot) q_dot - dT/dq (Coriolis and
-centrifugal terms) and Q = -dV/dq + Q_nc. Every derivative is taken by CasADi.
+M = d2T/dq_dot2, c = d/dq(dT/dq_dot) q_dot - dT/dq (Coriolis and centrifugal
+terms), Q = -dV/dq + Q_nc; every derivative is taken by CasADi.
+
+Two extensions the effects need:
+* driven coordinates (rheonomic): coordinates whose rate and acceleration are
+  prescribed (a servo-held tilt, a flywheel at constant speed). They enter T and
+  so the equations of the free coordinates; their own equations are dropped (the
+  motor supplies whatever torque it takes).
+* extra unknowns: Q_nc may depend on quantities that are themselves affine in the
+  accelerations (the normal load on a rolling-resistance torque). Their defining
+  equations are appended and everything is solved as one linear system.
+
+All expressions are written in placeholder symbols (q, q_dot, q_ddot of every
+coordinate); `formulate_*` return the accelerations as expressions of the state.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Callable
+from dataclasses import dataclass, field
 
 import casadi as ca
-
-EnergyFn = Callable[[ca.SX, ca.SX], ca.SX]
 
 
 @dataclass
 class ConstrainedSystem:
-    """A Lagrangian system with linear velocity constraints A(q) q_dot = 0.
+    """Placeholders and terms of a system with linear velocity constraints.
 
-    T: kinetic energy as a function of (q, q_dot); V: potential energy of q;
-    A: constraint matrix (m x n) of q; Q_nc: generalised non-conservative force
-    as a function of (q, q_dot), or None.
+    q, qd, qdd: placeholders of all coordinates (free first, then driven);
+    n_free: how many are free; T, V: energies in (q, qd); A: constraint matrix
+    (m x n_free) in q; Q_nc: generalised forces (n, one per coordinate) in
+    (q, qd, unknowns); unknowns: extra unknown symbols with their defining
+    expressions (unknown = expr(q, qd, qdd)), e.g. the normal force.
     """
 
     q: ca.SX
-    T: EnergyFn
+    qd: ca.SX
+    qdd: ca.SX
+    n_free: int
+    T: ca.SX
     V: ca.SX
     A: ca.SX
-    Q_nc: EnergyFn | None = None
+    Q_nc: ca.SX | None = None
+    unknowns: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
 
     @property
     def n(self) -> int:
         return self.q.numel()
 
-    def _terms(self, qd: ca.SX):
-        """Mass matrix, velocity terms c and generalised force Q at (q, qd)."""
-        T = self.T(self.q, qd)
-        p = ca.gradient(T, qd)
-        M = ca.jacobian(p, qd)
-        c = ca.mtimes(ca.jacobian(p, self.q), qd) - ca.gradient(T, self.q)
+    def terms(self):
+        """Mass matrix, velocity terms c and generalised force Q (all in placeholders)."""
+        p = ca.gradient(self.T, self.qd)
+        M = ca.jacobian(p, self.qd)
+        c = ca.mtimes(ca.jacobian(p, self.q), self.qd) - ca.gradient(self.T, self.q)
         Q = -ca.gradient(self.V, self.q)
         if self.Q_nc is not None:
-            Q = Q + self.Q_nc(self.q, qd)
+            Q = Q + self.Q_nc
         return M, c, Q
 
+    def driven_forces(self) -> ca.SX:
+        """Generalised forces the motors of the driven coordinates must supply (placeholders)."""
+        M, c, Q = self.terms()
+        return (ca.mtimes(M, self.qdd) + c - Q)[self.n_free:]
+
     def null_space(self, dependent: list[int]) -> ca.SX:
-        """S(q) with A S = 0, from A = [A_d A_i] split by the dependent coordinates.
+        """S(q) (n_free x n_free - m) with A S = 0, from A = [A_d A_i].
 
         q_dot_d = -A_d^-1 A_i q_dot_i, so S stacks -A_d^-1 A_i over the identity
-        (rows permuted back to the order of q).
+        (rows permuted back to the order of the free coordinates).
         """
-        n, m = self.n, self.A.size1()
+        n, m = self.n_free, self.A.size1()
         if len(dependent) != m:
             raise ValueError(f"need {m} dependent coordinates, got {len(dependent)}")
         independent = [i for i in range(n) if i not in dependent]
-        A_d = self.A[:, dependent]
-        A_i = self.A[:, independent]
-        B = -ca.solve(A_d, A_i)
+        B = -ca.solve(self.A[:, dependent], self.A[:, independent])
         S = ca.SX.zeros(n, len(independent))
         for row, i in enumerate(dependent):
             S[i, :] = B[row, :]
@@ -75,52 +92,66 @@ class ConstrainedSystem:
             S[i, col] = 1
         return ca.simplify(S)
 
-    def reduced(self, S: ca.SX, v: ca.SX) -> "ReducedForm":
-        """Kane-Maggi equations in the independent speeds v, q_dot = S(q) v."""
-        qd_sym = ca.SX.sym("qd", self.n)
-        M, c, Q = self._terms(qd_sym)
-        qd = ca.mtimes(S, v)
-        M, c, Q = ca.substitute([M, c, Q], [qd_sym], [qd])
-        S_dot_v = ca.jtimes(qd, self.q, qd)  # d(S v)/dq q_dot with v held fixed
-        M_r = ca.mtimes([S.T, M, S])
-        f_r = ca.mtimes(S.T, Q - c - ca.mtimes(M, S_dot_v))
-        return ReducedForm(S=S, v=v, q_dot=qd, M_r=M_r, f_r=f_r,
-                           energy=self.T(self.q, qd) + self.V)
+    def _solve(self, residual: ca.SX, w: ca.SX) -> ca.SX:
+        """w from the residual, which is affine in w: A w + b = 0."""
+        A = ca.jacobian(residual, w)
+        if ca.depends_on(A, w):
+            raise ValueError("the equations are not affine in the accelerations and extra unknowns; "
+                             "generalised forces must be linear in the normal force")
+        b = ca.substitute(residual, w, ca.DM.zeros(w.numel()))
+        return ca.solve(A, -b)
 
-    def multipliers(self, qd: ca.SX, k_stab: ca.SX | float = 0.0) -> "MultiplierForm":
-        """KKT system of eq. (6) with velocity-level constraint stabilisation."""
-        M, c, Q = self._terms(qd)
-        A = self.A
-        m = A.size1()
-        A_dot_qd = ca.jtimes(ca.mtimes(A, qd), self.q, qd)
-        K = ca.vertcat(ca.horzcat(M, -A.T), ca.horzcat(A, ca.SX.zeros(m, m)))
-        rhs = ca.vertcat(Q - c, -A_dot_qd - k_stab * ca.mtimes(A, qd))
-        sol = ca.solve(K, rhs)
-        return MultiplierForm(q_ddot=sol[: self.n], lam=sol[self.n:],
-                              violation=ca.mtimes(A, qd),
-                              energy=self.T(self.q, qd) + self.V)
+    def _unknowns(self):
+        if not self.unknowns:
+            return ca.SX(0, 1), ca.SX(0, 1)
+        syms = ca.vertcat(*[s for s, _ in self.unknowns])
+        exprs = ca.vertcat(*[e for _, e in self.unknowns])
+        return syms, exprs
 
+    def reduced(self, S: ca.SX, v: ca.SX, v_dot: ca.SX, qd_driven: ca.SX, qdd_driven: ca.SX):
+        """Kane-Maggi form. Returns (q_dot, q_ddot, v_dot solved, unknowns solved) as expressions.
 
-@dataclass
-class ReducedForm:
-    """v_dot = M_r^-1 f_r; q_dot = S v."""
+        q_dot = [S v; qd_driven], q_ddot = [S v_dot + S_dot v; qdd_driven]; v_dot and the
+        extra unknowns come from one linear solve.
+        """
+        nf = self.n_free
+        qf = self.q[:nf]
+        qd_free = ca.mtimes(S, v)
+        qd_all = ca.vertcat(qd_free, qd_driven)
+        S_dot_v = ca.jtimes(qd_free, qf, qd_free)  # d(S v)/dq q_dot with v held fixed
+        qdd_all = ca.vertcat(ca.mtimes(S, v_dot) + S_dot_v, qdd_driven)
+        M, c, Q = self.terms()
+        eq = ca.mtimes(S.T, (ca.mtimes(M, self.qdd) + c - Q)[:nf])
+        x_syms, x_exprs = self._unknowns()
+        residual = ca.vertcat(eq, x_syms - x_exprs)
+        residual = ca.substitute(residual, ca.vertcat(self.qd, self.qdd), ca.vertcat(qd_all, qdd_all))
+        w = ca.vertcat(v_dot, x_syms)
+        sol = self._solve(residual, w)
+        v_dot_sol, x_sol = sol[: v.numel()], sol[v.numel():]
+        qdd_sol = ca.substitute(qdd_all, v_dot, v_dot_sol)
+        return qd_all, qdd_sol, v_dot_sol, x_sol
 
-    S: ca.SX
-    v: ca.SX
-    q_dot: ca.SX
-    M_r: ca.SX
-    f_r: ca.SX
-    energy: ca.SX
+    def multipliers(self, qd_free: ca.SX, qd_driven: ca.SX, qdd_driven: ca.SX, k_stab):
+        """KKT system of eq. (6) with velocity stabilisation.
 
-    def v_dot(self) -> ca.SX:
-        return ca.solve(self.M_r, self.f_r)
-
-
-@dataclass
-class MultiplierForm:
-    """q_ddot and the multipliers lambda (generalised constraint forces)."""
-
-    q_ddot: ca.SX
-    lam: ca.SX
-    violation: ca.SX
-    energy: ca.SX
+        Returns (q_ddot of all coordinates, lambda, unknowns, constraint residual A q_dot).
+        """
+        nf = self.n_free
+        qf = self.q[:nf]
+        qdd_free = ca.SX.sym("qdd_free", nf)
+        lam = ca.SX.sym("lambda", self.A.size1())
+        qd_all = ca.vertcat(qd_free, qd_driven)
+        qdd_all = ca.vertcat(qdd_free, qdd_driven)
+        M, c, Q = self.terms()
+        Aqd = ca.mtimes(self.A, qd_free)
+        A_dot_qd = ca.jtimes(Aqd, qf, qd_free)
+        dyn = (ca.mtimes(M, self.qdd) + c - Q)[:nf] - ca.mtimes(self.A.T, lam)
+        con = ca.mtimes(self.A, qdd_free) + A_dot_qd + k_stab * Aqd
+        x_syms, x_exprs = self._unknowns()
+        residual = ca.vertcat(dyn, con, x_syms - x_exprs)
+        residual = ca.substitute(residual, ca.vertcat(self.qd, self.qdd), ca.vertcat(qd_all, qdd_all))
+        w = ca.vertcat(qdd_free, lam, x_syms)
+        sol = self._solve(residual, w)
+        m = self.A.size1()
+        qdd_sol = ca.vertcat(sol[:nf], qdd_driven)
+        return qdd_sol, sol[nf: nf + m], sol[nf + m:], Aqd

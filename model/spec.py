@@ -22,6 +22,8 @@ class Quantity:
     start: float | None = None
     tunable: bool = False
     display_unit: str | None = None
+    minimum: float | None = None  # inclusive limits a scene value is checked against
+    maximum: float | None = None
 
 
 @dataclass

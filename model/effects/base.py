@@ -6,27 +6,57 @@ from model.spec import Quantity
 
 
 class Effect:
-    """One physical effect: declares parameters, adds terms to the context.
+    """One physical effect: declares parameters and options, adds terms to the context.
 
-    `options` holds the scene's values for this effect (already validated against
-    `parameters()`); they become the parameters' start values.
+    `options` holds the scene's values for this effect (validated by the scene
+    reader against `parameters()` and `choices()`); numbers become the parameters'
+    start values, strings select structural options (e.g. what an event does).
     """
 
     name: str = ""
     summary: str = ""
 
-    def __init__(self, options: dict[str, float] | None = None):
+    def __init__(self, options: dict | None = None):
         self.options = dict(options or {})
 
     @classmethod
     def parameters(cls) -> list[Quantity]:
+        """FMI parameters of the effect, with defaults and limits."""
         return []
 
-    def start(self, quantity: Quantity) -> Quantity:
-        """The parameter with the scene's value as its start value."""
-        if quantity.name in self.options:
-            quantity.start = float(self.options[quantity.name])
-        return quantity
+    @classmethod
+    def starts(cls) -> list[Quantity]:
+        """Initial values the effect adds (settable in a scene's [initial])."""
+        return []
+
+    def start_quantity(self, name: str) -> Quantity:
+        return next(q for q in self.starts() if q.name == name)
+
+    @classmethod
+    def choices(cls) -> dict[str, tuple[str, ...]]:
+        """Structural string options: name -> allowed values, the first is the default."""
+        return {}
+
+    @classmethod
+    def presets(cls) -> dict[str, dict[str, float]]:
+        """Named values a parameter may be given as (parameter -> {name: value})."""
+        return {}
+
+    def choice(self, key: str) -> str:
+        return self.options.get(key, self.choices()[key][0])
+
+    def declare(self, ctx: WheelContext) -> dict:
+        """Declare every parameter with the scene's value as start; return the symbols by name."""
+        syms = {}
+        for q in self.parameters():
+            if q.name in self.options:
+                q.start = float(self.options[q.name])
+            syms[q.name] = ctx.parameter(q)
+            if q.minimum is not None:
+                ctx.check_true(syms[q.name] >= q.minimum, f"{q.name} must be >= {q.minimum:g}")
+            if q.maximum is not None:
+                ctx.check_true(syms[q.name] <= q.maximum, f"{q.name} must be <= {q.maximum:g}")
+        return syms
 
     def apply(self, ctx: WheelContext) -> None:
         raise NotImplementedError

@@ -1,5 +1,10 @@
-"""Uniform gravity along -z: potential M g z with z = R sin(beta) (eq. 23)."""
+"""Uniform gravity: potential -sum(m g . r) over all bodies (eq. 23 for the wheel alone).
+
+The field is stored as a ground-frame vector (0, 0, -g) so the slope effect can tilt it.
+"""
 from __future__ import annotations
+
+import casadi as ca
 
 from model.context import WheelContext
 from model.effects.base import Effect
@@ -10,14 +15,16 @@ PRESETS = {"earth": 9.81, "mars": 3.721, "moon": 1.625}
 
 class Gravity(Effect):
     name = "gravity"
-    summary = "uniform gravitational field g along -z"
+    summary = "uniform gravitational field g along -z (presets earth, mars, moon)"
 
     @classmethod
     def parameters(cls) -> list[Quantity]:
-        return [Quantity("g", "m/s2", "gravitational acceleration", 9.81)]
+        return [Quantity("g", "m/s2", "gravitational acceleration", 9.81, minimum=0.0)]
+
+    @classmethod
+    def presets(cls) -> dict[str, dict[str, float]]:
+        return {"g": dict(PRESETS)}
 
     def apply(self, ctx: WheelContext) -> None:
-        (g_q,) = (self.start(q) for q in self.parameters())
-        g = ctx.parameter(g_q)
-        ctx.potentials.append(ctx.par["M"] * g * ctx.kin.centre[2])
-        ctx.check_true(g >= 0, "g must be >= 0")
+        g = self.declare(ctx)["g"]
+        ctx.gravity = ca.vertcat(0, 0, -g)

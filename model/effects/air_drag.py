@@ -1,0 +1,38 @@
+"""Air drag: a force on the centre and a torque on the spin.
+
+F = -(c_lin + 1/2 rho_air cd_area |v|) v on the centre A (v its velocity);
+tau = -1/2 rho_air cm_spin R^5 |w_z| w_z about the axle (w_z the axial rate).
+|v| is sqrt(v . v + (1e-6 m/s)^2) so the force stays differentiable at rest.
+"""
+from __future__ import annotations
+
+import casadi as ca
+
+from model.context import WheelContext
+from model.effects.base import Effect
+from model.spec import Quantity
+
+
+class AirDrag(Effect):
+    name = "air_drag"
+    summary = "linear + quadratic drag on the centre, quadratic drag torque on the spin"
+
+    @classmethod
+    def parameters(cls) -> list[Quantity]:
+        return [
+            Quantity("rho_air", "kg/m3", "air density", 1.225, minimum=0.0),
+            Quantity("cd_area", "m2", "drag coefficient x frontal area", 0.02, minimum=0.0),
+            Quantity("c_lin", "N.s/m", "linear (viscous) drag coefficient", 0.0, minimum=0.0),
+            Quantity("cm_spin", "1", "spin drag moment coefficient", 0.01, minimum=0.0),
+        ]
+
+    def apply(self, ctx: WheelContext) -> None:
+        p = self.declare(ctx)
+        v = ctx.kin.centre_velocity
+        speed = ca.sqrt(ca.dot(v, v) + 1e-12)
+        F = -(p["c_lin"] + 0.5 * p["rho_air"] * p["cd_area"] * speed) * v
+        ctx.force(F, v, "dissipative", point=True)
+        w_z = ca.dot(ctx.kin.omega, ctx.kin.n)
+        tau = -0.5 * p["rho_air"] * p["cm_spin"] * ctx.par["R"] ** 5 * ca.fabs(w_z) * w_z
+        ctx.force(tau, w_z, "dissipative")
+        ctx.output(Quantity("drag_force", "N", "magnitude of the drag force on the centre"), ca.norm_2(F))

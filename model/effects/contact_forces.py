@@ -1,0 +1,54 @@
+"""Contact forces by back-substitution (Kelly's "complete" formulation).
+
+The ground force on the system follows from Newton's law for all bodies once the
+accelerations are known: F = sum(m_i a_i) - sum(m_i) g - (forces of the air).
+Outputs: normal force F_n, longitudinal F_long (along the heading (cos a, sin a)),
+lateral F_lat (in the ground plane, to the left of the heading), and the friction use
+|F_t| / F_n (-1 while F_n <= 0: friction is undefined off the ground).
+Events: lift-off (F_n reaches 0) and slip (|F_t| reaches mu F_n), each "terminate",
+"warn" or "ignore"; rolling without slip and point contact stop being valid there.
+"""
+from __future__ import annotations
+
+import casadi as ca
+
+from model.context import WheelContext
+from model.effects.base import Effect
+from model.spec import Quantity
+
+ACTIONS = ("terminate", "warn", "ignore")
+
+
+class ContactForces(Effect):
+    name = "contact_forces"
+    summary = "normal, longitudinal, lateral contact force and friction use; lift-off and slip events"
+
+    @classmethod
+    def parameters(cls) -> list[Quantity]:
+        return [Quantity("mu", "1", "friction coefficient for the slip check", 0.8, minimum=0.0)]
+
+    @classmethod
+    def choices(cls) -> dict[str, tuple[str, ...]]:
+        return {"on_lift_off": ACTIONS, "on_slip": ("warn", "terminate", "ignore")}
+
+    def apply(self, ctx: WheelContext) -> None:
+        p = self.declare(ctx)
+        F = ctx.Fc
+        a = ctx.q[2]
+        F_n = F[2]
+        F_long = F[0] * ca.cos(a) + F[1] * ca.sin(a)
+        F_lat = -F[0] * ca.sin(a) + F[1] * ca.cos(a)
+        F_t = ca.sqrt(F_long**2 + F_lat**2)
+        ctx.output(Quantity("F_n", "N", "normal contact force (ground on wheel)"), F_n)
+        ctx.output(Quantity("F_long", "N", "contact force along the heading"), F_long)
+        ctx.output(Quantity("F_lat", "N", "contact force across the heading (to the left)"), F_lat)
+        ctx.output(Quantity("friction_use", "1", "|F_t| / F_n, the friction coefficient needed (-1: F_n <= 0)"),
+                   ca.if_else(F_n > 0, F_t / F_n, -1))
+        lift = self.choice("on_lift_off")
+        if lift != "ignore":
+            ctx.events.append(("lift_off", F_n, lift,
+                               Quantity("lifted_off", "", "true once the normal force has reached zero")))
+        slip = self.choice("on_slip")
+        if slip != "ignore":
+            ctx.events.append(("slip", p["mu"] * F_n - F_t, slip,
+                               Quantity("slipping", "", "true once the friction needed has exceeded mu")))

@@ -35,3 +35,42 @@ def one_step_seconds(fmu: Path, stop: float, **values) -> float:
     s.terminate()
     s.freeInstance()
     return dt
+
+
+def many_steps_seconds(fmu: Path, n_steps: int, h: float, read: tuple[str, ...] = (),
+                       **values) -> tuple[float, float, bool, dict[str, float]]:
+    """Wall time of n_steps calls fmi2DoStep(t, h) through fmpy's FMU2Slave (set-up excluded).
+
+    Returns (seconds, time reached, terminated, {name: final value} for the names in `read`):
+    a step that ends in fmi2Discard (the wheel fell, or a "terminate" event fired) stops the
+    loop; `terminated` is then true and the time reached is fmi2LastSuccessfulTime.
+    """
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
+
+    md, unzipdir = _open(fmu)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier)
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    for name, value in values.items():
+        s.setReal([vr[name]], [value])
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    do_step, done = s.doStep, 0
+    t0 = time.perf_counter()
+    try:
+        for done in range(n_steps):
+            do_step(done * h, h)
+        done = n_steps
+    except FMICallException:
+        pass
+    dt = time.perf_counter() - t0
+    t = done * h
+    terminated = done < n_steps and s.getBooleanStatus(fmi2Terminated)
+    if terminated:
+        t = s.getRealStatus(fmi2LastSuccessfulTime)
+    finals = {name: s.getReal([vr[name]])[0] for name in read}
+    s.terminate()
+    s.freeInstance()
+    return dt, t, terminated, finals

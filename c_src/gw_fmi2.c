@@ -440,7 +440,20 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     I->fcur_valid = 1;
     if (m->ne > 0 && gw_eval_evt(I, I->t, I->x, I->e) != 0)
         FAIL("fmi2ExitInitializationMode: evaluation of the event indicators failed");
-    for (i = 0; i < m->ne; i++) I->flags[i] = 0;
+    /* An event whose condition holds already at the start cannot be crossed later:
+     * a terminating one means an invalid initial state, a warning one is flagged now. */
+    for (i = 0; i < m->ne; i++) {
+        I->flags[i] = 0;
+        if (I->e[i] > 0.0) continue;
+        if (m->event_actions && m->event_actions[i] == GW_EVENT_WARN) {
+            I->flags[i] = 1;
+            gw_log(I, fmi2Warning, GW_LOG_EVENTS, "warning: event %s holds already at the start t=%.17g",
+                   m->event_names ? m->event_names[i] : "?", I->t);
+        } else {
+            FAIL("fmi2ExitInitializationMode: the initial state already triggers event %s "
+                 "(indicator %g <= 0)", m->event_names ? m->event_names[i] : "?", I->e[i]);
+        }
+    }
     I->terminated = 0;
     I->h_adapt = 0.0;
     I->last_successful_time = I->t;

@@ -1,9 +1,15 @@
-"""Rolling resistance: a torque about the axle opposing rolling, proportional to the load.
+"""Rolling resistance: energy lost per metre of rim rolled over the ground, proportional to the load.
 
-tau = -c_rr R F_n tanh(w_z / omega_eps), w_z = omega . n = gamma_dot + alpha_dot cos(beta)
-the rolling rate (centre speed / R). F_n is the normal contact force, solved together
-with the accelerations (it depends on them). tanh regularises the sign of Coulomb-like
-resistance below omega_eps, so a wheel at rest is not forced to chatter.
+The rim advances over the ground at the rate gamma_dot (the spin relative to the
+frame {l, m, n} whose l points at the contact): the contact point moves R gamma_dot
+along the rim. The resistance dissipates c_rr F_n per metre rolled, so its power is
+-c_rr F_n R |gamma_dot| and its generalised force acts on gamma:
+    Q_gamma = -c_rr R F_n tanh(gamma_dot / rr_omega_eps).
+In straight rolling this is the familiar force c_rr F_n at the contact (torque c_rr R F_n).
+A couple about the axle would instead act on omega . n = gamma_dot + alpha_dot cos(beta),
+which vanishes for a wheel spinning on a fixed centre (Euler's disk) although its rim rolls.
+F_n is solved together with the accelerations (it depends on them); tanh regularises the
+Coulomb-like sign below rr_omega_eps so a wheel at rest is not forced to chatter.
 """
 from __future__ import annotations
 
@@ -16,7 +22,7 @@ from model.spec import Quantity
 
 class RollingResistance(Effect):
     name = "rolling_resistance"
-    summary = "torque -c_rr R F_n sign(rolling rate) about the axle"
+    summary = "resistance c_rr F_n to the rolling of the rim (power -c_rr F_n R |gamma_dot|)"
 
     @classmethod
     def parameters(cls) -> list[Quantity]:
@@ -28,7 +34,8 @@ class RollingResistance(Effect):
 
     def apply(self, ctx: WheelContext) -> None:
         p = self.declare(ctx)
-        w_z = ca.dot(ctx.kin.omega, ctx.kin.n)
-        tau = -p["c_rr"] * ctx.par["R"] * ctx.Fn * ca.tanh(w_z / p["rr_omega_eps"])
-        ctx.force(tau, w_z, "dissipative")
-        ctx.output(Quantity("rolling_resistance_torque", "N.m", "rolling-resistance torque about the axle"), tau)
+        gamma_dot = ctx.qd[4]
+        tau = -p["c_rr"] * ctx.par["R"] * ctx.Fn * ca.tanh(gamma_dot / p["rr_omega_eps"])
+        ctx.force(tau, gamma_dot, "dissipative")
+        ctx.output(Quantity("rolling_resistance_torque", "N.m", "rolling-resistance torque on the rim's rolling"),
+                   tau)

@@ -1,0 +1,275 @@
+"""Effects against independent expectations: dissipation laws, slope, contact forces, Gyrover."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+
+from conftest import PAPER, SCENES, steady_precession
+from fmi_helpers import Slave
+from fmu_build import build_fmu, parse_scene
+from fmu_build.analysis import fit_circle
+
+M, R, KA, KD, G = 2.0, 0.17, 0.4, 0.25, 9.81
+BASE = """
+[wheel]
+M = 2.0
+R = 0.17
+k_diam = 0.25
+k_axial = 0.4
+[effects.gravity]
+g = 9.81
+"""
+
+
+@pytest.fixture(scope="module")
+def build(tmp_path_factory):
+    """Build (and cache) an FMU from scene text."""
+    root = tmp_path_factory.mktemp("effects")
+    cache: dict[str, str] = {}
+
+    def _build(text: str, name: str) -> str:
+        if text not in cache:
+            scene = parse_scene(f'[model]\nname = "{name}"\n' + text, f"{name}.toml")
+            cache[text] = str(build_fmu(scene, root / f"{name}.fmu", build_dir=root / f"{name}_build").fmu)
+        return cache[text]
+    return _build
+
+
+@pytest.fixture(scope="module")
+def euler_fmu(tmp_path_factory):
+    from fmu_build import load_scene
+    root = tmp_path_factory.mktemp("euler")
+    return str(build_fmu(load_scene(SCENES / "euler_disk.toml"), root / "euler_disk.fmu").fmu)
+
+
+def _run(fmu, stop, dt, **start):
+    return simulate_fmu(fmu, stop_time=stop, output_interval=dt,
+                        start_values={"rel_tol": 1e-10, "abs_tol": 1e-12, **start})
+
+
+# -- dissipation ------------------------------------------------------------------
+
+def test_rolling_resistance_decelerates_at_c_rr_g_over_1_plus_k_axial(build):
+    """Straight upright rolling: Q_gamma = -c_rr R M g gives v_dot = -c_rr g / (1 + k_axial)."""
+    fmu = build(BASE + "[effects.rolling_resistance]\nc_rr = 0.02\n", "rr")
+    r = _run(fmu, 1.0, 0.1, beta=math.pi / 2, gamma_dot=10.0)
+    a = np.polyfit(r["time"], r["vx"], 1)[0]
+    assert a == pytest.approx(-0.02 * G / (1 + KA), rel=1e-6)
+
+
+def test_air_drag_law(build):
+    """Drag on the centre: M (1 + k_axial) v_dot = -(c_lin v + rho cd_area v^2 / 2) at t = 0."""
+    fmu = build(BASE + "[effects.air_drag]\nc_lin = 0.3\ncd_area = 0.05\ncm_spin = 0.0\n", "drag")
+    v0, dt = 3.0, 1e-4
+    r = _run(fmu, dt, dt, beta=math.pi / 2, gamma_dot=v0 / R)
+    a = (r["vx"][-1] - r["vx"][0]) / dt
+    expected = -(0.3 * v0 + 0.5 * 1.225 * 0.05 * v0**2) / (M * (1 + KA))
+    assert a == pytest.approx(expected, rel=1e-3)
+
+
+def test_spin_friction_decelerates_a_pivoting_wheel(build):
+    """Upright, pivoting about the vertical (no rolling): I_diam alpha_ddot = -c_pivot M g."""
+    fmu = build(BASE + "[effects.spin_friction]\nc_pivot = 0.002\n", "pivot")
+    dt = 1e-3
+    r = _run(fmu, dt, dt, beta=math.pi / 2, alpha_dot=3.0, gamma_dot=0.0)
+    a = (r["alpha_dot"][-1] - r["alpha_dot"][0]) / dt
+    assert a == pytest.approx(-0.002 * M * G / (KD * M * R**2), rel=1e-3)
+
+
+@pytest.mark.parametrize("scene", ["euler_disk", "drag_and_resistance"])
+def test_energy_lost_equals_work_of_dissipative_forces(build, euler_fmu, scene):
+    """E(0) - E(t) = integral of dissipated_power dt (trapezoid over the outputs) and = dissipated_energy."""
+    if scene == "euler_disk":
+        r = simulate_fmu(euler_fmu, stop_time=5.0, output_interval=1e-3)
+    else:
+        fmu = build(BASE + "[effects.rolling_resistance]\n[effects.air_drag]\n[effects.spin_friction]\n"
+                    "[effects.energy]\n", "dissipative")
+        r = _run(fmu, 5.0, 1e-3, gamma_dot=12.0)
+    lost = r["energy"][0] - r["energy"]
+    work = np.concatenate([[0.0], np.cumsum(np.diff(r["time"]) * 0.5 * (r["dissipated_power"][1:] +
+                                                                         r["dissipated_power"][:-1]))])
+    assert lost[-1] > 0.01 * r["energy"][0]  # a real loss
+    np.testing.assert_allclose(work, lost, atol=2e-4 * abs(r["energy"][0]))
+    np.testing.assert_allclose(r["dissipated_energy"], lost, atol=1e-6 * abs(r["energy"][0]))
+    assert np.all(r["dissipated_power"] >= -1e-12)
+
+
+def test_dissipation_ends_in_a_clean_fall(euler_fmu):
+    """Euler's disk: dissipation drives it flat; the FMU stops at the located fall."""
+    r = simulate_fmu(euler_fmu, stop_time=60.0, output_interval=1e-2)
+    assert r["fallen"][-1] and r["time"][-1] < 60.0
+    assert math.sin(r["beta"][-1]) == pytest.approx(math.sin(0.05), abs=1e-9)
+    assert np.all(np.isfinite(r["alpha_dot"]))
+    assert abs(r["alpha_dot"][-1]) > 2 * abs(r["alpha_dot"][0])  # the precession speeds up as it falls
+
+
+# -- slope ------------------------------------------------------------------------
+
+@pytest.mark.parametrize("direction_deg", [0.0, 90.0])
+def test_slope_accelerates_at_g_sin_over_1_plus_k_axial(build, direction_deg):
+    th = math.radians(5.0)
+    fmu = build(BASE + f"[effects.slope]\nslope_angle = {th!r}\nslope_direction = {math.radians(direction_deg)!r}\n",
+                f"slope{int(direction_deg)}")
+    r = _run(fmu, 1.0, 0.1, beta=math.pi / 2, alpha=math.radians(direction_deg), gamma_dot=2.0)
+    v = np.hypot(r["vx"], r["vy"])
+    a = np.polyfit(r["time"], v, 1)[0]
+    assert a == pytest.approx(G * math.sin(th) / (1 + KA), rel=1e-8)
+    heading = math.radians(direction_deg)
+    assert r["vx"][-1] * math.cos(heading) + r["vy"][-1] * math.sin(heading) == pytest.approx(v[-1], rel=1e-9)
+
+
+# -- contact forces ----------------------------------------------------------------
+
+def test_contact_force_upright_rolling(build):
+    fmu = build(BASE + "[effects.contact_forces]\n", "contact")
+    r = _run(fmu, 1.0, 0.1, beta=math.pi / 2, gamma_dot=8.0)
+    np.testing.assert_allclose(r["F_n"], M * G, rtol=1e-12)
+    np.testing.assert_allclose(r["F_long"], 0.0, atol=1e-9)
+    np.testing.assert_allclose(r["F_lat"], 0.0, atol=1e-9)
+    np.testing.assert_allclose(r["friction_use"], 0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("beta_deg,rho", [(80.0, 1.0), (70.0, 0.5)])
+def test_contact_force_in_steady_precession_is_centripetal(build, beta_deg, rho):
+    """F_n = M g; the horizontal force is M v^2 / rho, pointing to the centre of the circle."""
+    fmu = build(BASE + "[effects.contact_forces]\n", "contact")
+    start = steady_precession(math.radians(beta_deg), rho, **PAPER)
+    r = _run(fmu, 4.0, 0.01, **start)
+    cx, cy, radius = fit_circle(r["x"], r["y"])
+    assert radius == pytest.approx(rho, rel=1e-6)
+    v = rho * abs(start["alpha_dot"])
+    a = r["alpha"]
+    Fx = r["F_long"] * np.cos(a) - r["F_lat"] * np.sin(a)
+    Fy = r["F_long"] * np.sin(a) + r["F_lat"] * np.cos(a)
+    to_centre = np.c_[cx - r["x"], cy - r["y"]] / rho
+    np.testing.assert_allclose(r["F_n"], M * G, rtol=1e-8)
+    np.testing.assert_allclose(Fx * to_centre[:, 0] + Fy * to_centre[:, 1], M * v**2 / rho, rtol=1e-6)
+    np.testing.assert_allclose(Fx * to_centre[:, 1] - Fy * to_centre[:, 0], 0.0, atol=1e-6 * M * v**2 / rho)
+
+
+def test_slip_warning_when_friction_use_exceeds_mu(build):
+    """Steady precession needs friction v^2 / (g rho) = 0.125; with mu = 0.13 and the motion
+    perturbed by beta_dot = 0.1 rad/s the wobble crosses mu: a warning, the flag, the run goes on."""
+    fmu = build(BASE + "[effects.contact_forces]\nmu = 0.13\non_slip = 'warn'\n", "slip")
+    start = steady_precession(math.radians(80.0), 1.0, **PAPER)
+    start["beta_dot"] = 0.1
+    msgs = []
+    r = simulate_fmu(fmu, stop_time=3.0, output_interval=0.01, debug_logging=True, start_values=start,
+                     logger=lambda *a: msgs.append(a[-1].decode() if isinstance(a[-1], bytes) else str(a[-1])))
+    assert not r["slipping"][0] and r["slipping"][-1]
+    first = r["time"][np.argmax(r["slipping"])]
+    assert np.all(r["friction_use"][r["time"] < first - 0.01] < 0.13)
+    assert r["time"][-1] == pytest.approx(3.0)  # warn: no stop
+    assert any("slip" in m for m in msgs)
+
+
+def test_terminating_event_already_true_at_the_start_is_an_error(build):
+    """A state that already violates a terminating condition (here: slip) is refused with a reason."""
+    fmu = build(BASE + "[effects.contact_forces]\nmu = 0.01\non_slip = 'terminate'\n", "slip_stop")
+    s = Slave(fmu)
+    try:
+        from fmpy.fmi1 import FMICallException
+        with pytest.raises(FMICallException):
+            s.init(beta=math.radians(70), gamma_dot=12.0)
+        assert "already triggers event slip" in s.log_text()
+    finally:
+        s.free()
+
+
+# -- Gyrover actuation ---------------------------------------------------------------
+
+GYROVER = BASE + "[effects.gyrover]\n[effects.energy]\n"
+
+
+def _lean_acceleration(fmu, flywheel_rate, tilt_rate, h=1e-4):
+    """beta_ddot at t = 0 from beta(h) = beta0 + beta_ddot h^2 / 2 (beta_dot0 = 0)."""
+    s = Slave(fmu)
+    try:
+        # servo at rest on a ramp: tilt_cmd = tilt + 2 zeta rate / omega gives zero servo acceleration
+        s.init(flywheel_rate=flywheel_rate, tilt_rate=tilt_rate, beta=math.pi / 2, gamma_dot=10.0,
+               rel_tol=1e-12, abs_tol=1e-14)
+        s.set(tilt_cmd=2 * 1.0 * tilt_rate / 20.0)
+        s.slave.doStep(0.0, h)
+        return 2 * (s.get("beta") - math.pi / 2) / h**2
+    finally:
+        s.free()
+
+
+@pytest.mark.parametrize("flywheel_rate,tilt_rate", [(400.0, 0.5), (-400.0, 0.5), (800.0, -0.3)])
+def test_tilting_a_spinning_flywheel_leans_the_wheel(build, flywheel_rate, tilt_rate):
+    """Angular-momentum balance: the tilt turns the flywheel's momentum I_a Omega n about l, so
+    the wheel and assembly receive the roll torque tilt_rate I_a Omega about the travel axis;
+    with the lean inertia about the contact point (wheel I_diam + M R^2, assembly m (R - L)^2 +
+    flywheel I_diam) that is the initial lean acceleration. Upright with beta_dot = alpha_dot =
+    0, gravity and the wheel's own gyroscopic terms vanish."""
+    fmu = build(GYROVER, "gyrover")
+    md = read_model_description(fmu)
+    p = {v.name: float(v.start) for v in md.modelVariables if v.causality == "parameter" and v.type == "Real"}
+    I_roll = KD * M * R**2 + M * R**2 + p["m_fly"] * (R - p["L_pend"]) ** 2 + p["I_fly_diam"]
+    expected = tilt_rate * p["I_fly_axial"] * flywheel_rate / I_roll
+    assert _lean_acceleration(fmu, flywheel_rate, tilt_rate) == pytest.approx(expected, rel=2e-3)
+
+
+def _heading_after_held_tilt(fmu, flywheel_rate, tilt, seconds=3.0):
+    s = Slave(fmu)
+    try:
+        s.init(flywheel_rate=flywheel_rate, beta=math.pi / 2, gamma_dot=10.0)
+        s.set(tilt_cmd=tilt)
+        t = 0.0
+        for _ in range(int(round(seconds / 1e-2))):
+            s.slave.doStep(t, 1e-2)
+            t += 1e-2
+        return s.get("alpha")
+    finally:
+        s.free()
+
+
+def test_held_tilt_steers_towards_the_lean_it_causes(build):
+    """Co-rotating flywheel: tilting it by +tilt leans the wheel left (test above) and turns it
+    left, -tilt turns it right by the same angle; a flywheel at rest does not steer."""
+    fmu = build(GYROVER, "gyrover")
+    left, right = _heading_after_held_tilt(fmu, 400.0, 0.3), _heading_after_held_tilt(fmu, 400.0, -0.3)
+    assert left > 0.05
+    assert right == pytest.approx(-left, rel=1e-6)
+    still = _heading_after_held_tilt(fmu, 0.0, 0.3)
+    assert abs(still) < 0.05 * left
+    assert abs(_lean_acceleration(fmu, 0.0, 0.5)) < 1e-3 * abs(_lean_acceleration(fmu, 400.0, 0.5))
+
+
+def test_actuator_work_balances_energy(build):
+    """No dissipation: energy(t) - energy(0) = actuator_work(t) (drive, tilt and spin motors)."""
+    fmu = build(GYROVER, "gyrover")
+    s = Slave(fmu)
+    try:
+        s.init(gamma_dot=10.0, beta=math.radians(85), rel_tol=1e-11, abs_tol=1e-13)
+        e0 = s.get("energy")
+        t = 0.0
+        for i in range(200):
+            s.set(tilt_cmd=0.3 * math.sin(3 * t), drive_torque=-0.2 if i < 100 else 0.1)
+            s.slave.doStep(t, 5e-3)
+            t += 5e-3
+        e, w = s.get("energy", "actuator_work")
+    finally:
+        s.free()
+    assert abs(w) > 0.05  # the motors did real work
+    assert e - e0 == pytest.approx(w, abs=1e-7 * e0)
+
+
+# -- only what a scene asks for --------------------------------------------------------
+
+def test_every_example_scene_builds_validates_and_simulates(tmp_path):
+    from fmpy.validation import validate_fmu
+    from fmu_build import load_scene
+    for path in sorted(SCENES.glob("*.toml")):
+        scene = load_scene(path)
+        fmu = build_fmu(scene, tmp_path / f"{scene.name}.fmu").fmu
+        assert validate_fmu(str(fmu)) == [], path.name
+        r = simulate_fmu(str(fmu))
+        names = r.dtype.names
+        for n in names:
+            if n != "time":
+                assert np.all(np.isfinite(r[n].astype(float))), (path.name, n)
+        assert r["time"][-1] > 0

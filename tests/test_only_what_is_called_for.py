@@ -1,0 +1,97 @@
+"""A scene's FMU contains, computes and exposes only the effects the scene names.
+
+Checked on the artefacts themselves: the variables of modelDescription.xml, and the
+generated C (the CasADi functions and model_desc.c), not just the model's metadata.
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+from fmpy import read_model_description
+
+from fmu_build import build_fmu, parse_scene
+
+BASE_VARIABLES = {
+    "M", "R", "k_diam", "k_axial", "beta_min", "g", "solver", "rel_tol", "abs_tol", "max_step",
+    "x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot", "z", "vx", "vy", "energy", "fallen",
+}
+EFFECT_VARIABLES = {  # what each effect adds, by name (docs/effects.md)
+    "slope": {"slope_angle", "slope_direction"},
+    "rolling_resistance": {"c_rr", "rr_omega_eps", "rolling_resistance_torque"},
+    "spin_friction": {"c_pivot", "d_pivot", "pivot_omega_eps", "pivot_torque"},
+    "air_drag": {"rho_air", "cd_area", "c_lin", "cm_spin", "drag_force"},
+    "contact_forces": {"mu", "F_n", "F_long", "F_lat", "friction_use", "lifted_off", "slipping"},
+    "energy": {"kinetic_energy", "potential_energy", "contact_x", "contact_y"},
+    "gyrover": {"m_fly", "L_pend", "I_fly_axial", "I_fly_diam", "flywheel_rate", "tilt_omega", "tilt_zeta",
+                "tilt_cmd", "drive_torque", "theta_p", "theta_p_dot", "tilt", "tilt_rate", "tilt_torque",
+                "flywheel_torque", "flywheel_momentum"},
+}
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    root = tmp_path_factory.mktemp("only")
+    cache = {}
+
+    def _built(*effects: str) -> tuple[set[str], Path]:
+        key = tuple(sorted(effects))
+        if key not in cache:
+            name = "_".join(("w",) + key)
+            text = f'[model]\nname = "{name}"\n[effects.gravity]\n' + "".join(f"[effects.{e}]\n" for e in effects)
+            result = build_fmu(parse_scene(text, f"{name}.toml"), root / f"{name}.fmu", build_dir=root / name)
+            names = {v.name for v in read_model_description(str(result.fmu)).modelVariables}
+            cache[key] = (names, result.sources)
+        return cache[key]
+    return _built
+
+
+def _ode_body(sources: Path) -> str:
+    """The C body of the CasADi function behind gw_ode."""
+    text = (sources / "gw_funcs.c").read_text()
+    callee = re.search(r"int gw_ode\(const casadi_real\*\* arg.*?\{\s*return (casadi_f\d+)\(", text, re.S).group(1)
+    start = text.index(f"static int {callee}(")
+    return text[start: text.index("\n}\n", start)]
+
+
+def test_base_wheel_exposes_exactly_the_interface(built):
+    names, _ = built()
+    assert names == BASE_VARIABLES
+
+
+@pytest.mark.parametrize("effect", sorted(EFFECT_VARIABLES))
+def test_each_effect_adds_exactly_its_variables(built, effect):
+    names, sources = built(effect)
+    extra = EFFECT_VARIABLES[effect]
+    assert names == BASE_VARIABLES | extra  # energy alone: nothing dissipates or drives, no dissipated_*
+    desc = (sources / "model_desc.c").read_text()
+    for other, their in EFFECT_VARIABLES.items():
+        if other != effect:
+            for var in their - extra:
+                assert f'"{var}"' not in desc, (effect, var)
+
+
+def test_energy_reports_what_the_other_effects_bring(built):
+    names, _ = built("energy", "rolling_resistance", "gyrover")
+    assert {"dissipated_energy", "dissipated_power", "actuator_work", "actuator_power"} <= names
+
+
+def test_the_right_hand_side_contains_only_named_effects(built):
+    """Outputs-only effects leave the generated RHS identical; force laws appear only where named."""
+    _, base = built()
+    base_ode = _ode_body(base)
+    for outputs_only in ("contact_forces", "energy"):
+        assert _ode_body(built(outputs_only)[1]) == base_ode, outputs_only
+    assert "tanh(" not in base_ode and "tanh(" not in (base / "gw_funcs.c").read_text()
+    for law in ("rolling_resistance", "spin_friction"):
+        assert "tanh(" in _ode_body(built(law)[1]), law  # the regularised Coulomb laws
+    assert len(_ode_body(built("air_drag")[1])) > len(base_ode)
+    assert "tanh(" not in _ode_body(built("air_drag")[1])
+
+
+def test_a_lunar_coasting_study_pays_for_no_drag(built):
+    names, sources = built("rolling_resistance", "contact_forces")
+    assert not names & (EFFECT_VARIABLES["air_drag"] | EFFECT_VARIABLES["gyrover"])
+    header = (sources / "model_desc.c").read_text()
+    assert ".nu = 0" in header  # no inputs: nothing of the Gyrover actuation

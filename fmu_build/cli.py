@@ -69,15 +69,32 @@ def cmd_simulate(args) -> int:
     except SimulationError as exc:
         raise CliError(str(exc), EXIT_FAILURE if "reported" in str(exc) else EXIT_BAD_INPUT) from None
     output = Path(args.output or fmu.with_suffix(".csv").name)
-    write_csv(str(output), result)
-    last = result[-1]
-    fallen = "fallen" in result.dtype.names and bool(last["fallen"])
-    print(f"wrote {output}: {len(result)} rows, t = {result['time'][0]:g} .. {last['time']:g} s"
-          + (" (the wheel fell flat)" if fallen else ""))
+    write_csv(str(output), _numeric(result))
+    print(f"wrote {output}: {len(result)} rows, t = {result['time'][0]:g} .. {result['time'][-1]:g} s"
+          + _events_summary(result))
     if args.plot:
         plot_trajectories({fmu.stem: result}, args.plot, title=fmu.stem)
         print(f"wrote {args.plot}")
     return 0
+
+
+def _numeric(result):
+    """Booleans as 0/1, so that the CSV reads back as numbers (fmpy.util.read_csv, numpy)."""
+    import numpy as np
+    dtype = [(n, "i1" if result.dtype[n] == np.bool_ else result.dtype[n]) for n in result.dtype.names]
+    return result.astype(dtype)
+
+
+def _events_summary(result) -> str:
+    """' (events: fallen at t = 17.46 s, slipping at t = 3.2 s)' for every Boolean flag that turned true."""
+    import numpy as np
+    fired = []
+    for name in result.dtype.names:
+        if result.dtype[name] == np.bool_ and result[name][-1]:
+            i = int(np.argmax(result[name]))
+            when = "at" if i == len(result) - 1 else "by"  # a terminal event ends the run: exact time
+            fired.append(f"{name} {when} t = {result['time'][i]:.6g} s")
+    return f" (events: {', '.join(fired)})" if fired else ""
 
 
 def cmd_info(args) -> int:

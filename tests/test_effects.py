@@ -228,8 +228,8 @@ def _heading_after_held_tilt(fmu, flywheel_rate, tilt, seconds=3.0):
 
 
 def test_held_tilt_steers_towards_the_lean_it_causes(build):
-    """Co-rotating flywheel: tilting it by +tilt leans the wheel left (test above) and turns it
-    left, -tilt turns it right by the same angle; a flywheel at rest does not steer."""
+    """Co-rotating flywheel: tilting it by +tilt leans the wheel left (test above) and rotates its
+    heading left, -tilt right by the same angle; a flywheel at rest does not steer."""
     fmu = build(GYROVER, "gyrover")
     left, right = _heading_after_held_tilt(fmu, 400.0, 0.3), _heading_after_held_tilt(fmu, 400.0, -0.3)
     assert left > 0.05

@@ -43,8 +43,9 @@ from model.effects import CATALOGUE  # noqa: E402
 STEP = 1e-3  # communication step [s]
 N_STEPS = 10000  # 10 s of simulated time: with rolling resistance the wheel falls at 10.7 s
 VM_CALLS = 2000
-RHS_CALLS = 400000  # per repetition; rhs_bench.c takes the best of 5
-ROUNDS = 5
+RHS_CALLS = 50000  # per repetition; rhs_bench.c takes the best of 5 repetitions
+RHS_RUNS = 4  # runs of rhs_bench per round: many short samples (this VM's speed is bimodal)
+ROUNDS = 6
 
 SCENE = """
 [model]
@@ -141,13 +142,14 @@ def main() -> None:
             many_steps_seconds(r["fmu"], 1000, STEP)
         for rnd in range(ROUNDS):
             for r in rows[rnd % len(rows):] + rows[:rnd % len(rows)]:  # rotated: no set always first
-                r["c_ns"] = min(r["c_ns"], rhs_run_ns(r["exe"]))
+                r["c_ns"] = min(r["c_ns"], *(rhs_run_ns(r["exe"]) for _ in range(RHS_RUNS)))
                 ode, x0, u, p = r["ode"], r["x0"], r["u"], r["p"]
                 r["vm_ns"] = min(r["vm_ns"], best_of(lambda: [ode(0.0, x0, u, p) for _ in range(VM_CALLS)], 1)
                                  / VM_CALLS * 1e9)
-                sec, r["reached"], r["terminated"], r["finals"] = many_steps_seconds(
-                    r["fmu"], N_STEPS, STEP, read=("beta", "gamma_dot"))
-                r["step_s"] = min(r["step_s"], sec)
+                for _ in range(2):
+                    sec, r["reached"], r["terminated"], r["finals"] = many_steps_seconds(
+                        r["fmu"], N_STEPS, STEP, read=("beta", "gamma_dot"))
+                    r["step_s"] = min(r["step_s"], sec)
             overhead = min(overhead, fmpy_call_overhead_ns(rows[0]["fmu"]))
             print(f"  round {rnd + 1}/{ROUNDS}: {time.perf_counter() - t_start:.0f} s", file=sys.stderr)
 

@@ -26,6 +26,8 @@
  *   chk (s, p)       -> c           validity checks           (NULL eval if nc == 0)
  *   nom (p)          -> x_nominal   state scales for absolute tolerances (NULL -> ones)
  *   jac (t, x, u, p) -> J           dense d xdot / d x, column-major nx*nx (NULL if absent)
+ *   dir (t, x, u, p) -> D           dense d [xdot; y] / d [x; u], column-major
+ *                                   (nx+ny) x (nx+nu), for fmi2GetDirectionalDerivative
  * Each instance allocates its own arg/res/iw/w buffers from the sizes f_work reports
  * (CasADi SX functions are reentrant then); mem is always 0.
  */
@@ -52,7 +54,9 @@ typedef enum {
     GW_VAR_INPUT = 2,   /* u[index]; settable any time after instantiation */
     GW_VAR_OUTPUT = 3,  /* y[index]; read-only */
     GW_VAR_SETTING = 4, /* runtime setting, index is a gw_setting (solver, tolerances) */
-    GW_VAR_EVENT = 5    /* Boolean: true once event indicator `index` has fired */
+    GW_VAR_EVENT = 5,   /* Boolean: true once event indicator `index` has fired */
+    GW_VAR_STATE = 6,   /* x[index], a continuous state with no start variable of its own (local) */
+    GW_VAR_DERIVATIVE = 7 /* xdot[index], the derivative of continuous state `index` (local) */
 } gw_kind;
 
 /* Runtime settings exposed as FMI parameters (kind GW_VAR_SETTING). */
@@ -84,7 +88,10 @@ typedef struct {
     gw_kind kind;
     int index;     /* into p, s, u, y, settings or events, by kind */
     int out_index; /* GW_VAR_START: index of the same quantity in y; otherwise -1 */
+    /* Every continuous state x[i] is exposed by exactly one variable: a GW_VAR_START whose
+     * `state_index` is i, or a GW_VAR_STATE; its derivative by a GW_VAR_DERIVATIVE. */
     int tunable;   /* GW_VAR_PARAM: may change after initialisation */
+    int state_index; /* GW_VAR_START / GW_VAR_STATE: the continuous state it is; otherwise -1 */
 } gw_variable;
 
 typedef struct {
@@ -94,7 +101,7 @@ typedef struct {
     const double *s_start, *u_start, *p_start; /* defaults, sizes ns, nu, np */
     int n_vars;
     const gw_variable *vars; /* sorted by vr */
-    gw_function init, ode, out, evt, chk, nom, jac;
+    gw_function init, ode, out, evt, chk, nom, jac, dir;
     const char *const *x_names;        /* nx, for log messages */
     const char *const *event_names;    /* ne */
     const int *event_actions;          /* ne, gw_event_action */

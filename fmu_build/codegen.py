@@ -18,7 +18,7 @@ from model.spec import ModelSpec
 
 FUNCTION_FILE = "gw_funcs"
 DESC_FILE = "model_desc.c"
-SLOTS = ("init", "ode", "out", "evt", "chk", "nom", "jac")
+SLOTS = ("init", "ode", "out", "evt", "chk", "nom", "jac", "dir")
 EVENT_ACTION = {"terminate": "GW_EVENT_TERMINATE", "warn": "GW_EVENT_WARN"}
 
 
@@ -66,7 +66,7 @@ def write_model_desc(spec: ModelSpec, table: list[Variable], exp: Experiment, id
     for v in rows:
         var_lines.append(
             f"    {{{v.vr}u, {_c_string(v.name)}, {TYPE[v.type]}, {KIND[v.kind]}, {v.index}, "
-            f"{v.out_index}, {1 if v.quantity.tunable else 0}}},")
+            f"{v.out_index}, {1 if v.quantity.tunable else 0}, {v.state_index}}},")
     slots = []
     for slot in SLOTS:
         if slot in fns:

@@ -49,8 +49,13 @@ def _unit_of(v: Variable) -> str | None:
 
 
 def write_model_description(scene: Scene, table: list[Variable], identifier: str, guid: str,
-                            sources: list[str], description: str) -> str:
-    """The XML text. `sources` are the C files listed under <SourceFiles>."""
+                            sources: list[str], description: str, model_exchange: bool = False,
+                            directional: bool = False) -> str:
+    """The XML text. `sources` are the C files listed under <SourceFiles>.
+
+    model_exchange adds the ModelExchange interface (the runtime's fmi2GetDerivatives & co.),
+    directional declares fmi2GetDirectionalDerivative (CasADi's exact Jacobian).
+    """
     exp = scene.experiment
     root = ET.Element("fmiModelDescription", {
         "fmiVersion": "2.0",
@@ -62,6 +67,20 @@ def write_model_description(scene: Scene, table: list[Variable], identifier: str
         "variableNamingConvention": "flat",
         "numberOfEventIndicators": "0",
     })
+    if model_exchange:
+        root.set("numberOfEventIndicators", str(sum(1 for v in table if v.kind == "event")))
+        me = ET.SubElement(root, "ModelExchange", {
+            "modelIdentifier": identifier,
+            "completedIntegratorStepNotNeeded": "true",
+            "canBeInstantiatedOnlyOncePerProcess": "false",
+            "canNotUseMemoryManagementFunctions": "false",
+            "canGetAndSetFMUstate": "true",
+            "canSerializeFMUstate": "true",
+            "providesDirectionalDerivative": "true" if directional else "false",
+        })
+        me_files = ET.SubElement(me, "SourceFiles")
+        for name in sources:
+            ET.SubElement(me_files, "File", {"name": name})
     cs = ET.SubElement(root, "CoSimulation", {
         "modelIdentifier": identifier,
         "canHandleVariableCommunicationStepSize": "true",
@@ -72,7 +91,7 @@ def write_model_description(scene: Scene, table: list[Variable], identifier: str
         "canNotUseMemoryManagementFunctions": "false",
         "canGetAndSetFMUstate": "true",
         "canSerializeFMUstate": "true",
-        "providesDirectionalDerivative": "false",
+        "providesDirectionalDerivative": "true" if directional else "false",
     })
     files = ET.SubElement(cs, "SourceFiles")
     for name in sources:
@@ -124,6 +143,8 @@ def write_model_description(scene: Scene, table: list[Variable], identifier: str
         if v.type == "Real":
             if (u := _unit_of(v)):
                 type_attrs["unit"] = u
+            if v.derivative_of is not None:
+                type_attrs["derivative"] = str(v.derivative_of)
             if v.quantity.display_unit:
                 type_attrs["displayUnit"] = v.quantity.display_unit
         if v.initial in ("exact", "approx") or v.causality == "input":
@@ -140,9 +161,15 @@ def write_model_description(scene: Scene, table: list[Variable], identifier: str
     for i, v in enumerate(table, start=1):
         if v.causality == "output":
             ET.SubElement(outputs, "Unknown", _unknown_attrs(i, v.dependencies))
+    derivatives = ET.SubElement(ms, "Derivatives")
+    for i, v in enumerate(table, start=1):
+        if v.kind == "derivative":
+            ET.SubElement(derivatives, "Unknown", _unknown_attrs(i, v.dependencies))
+    if len(derivatives) == 0:
+        ms.remove(derivatives)
     initial = ET.SubElement(ms, "InitialUnknowns")
     for i, v in enumerate(table, start=1):
-        if v.causality == "output" and v.initial in ("calculated", "approx"):
+        if (v.causality == "output" or v.kind in ("state", "derivative")) and v.initial in ("calculated", "approx"):
             ET.SubElement(initial, "Unknown", _unknown_attrs(i, v.initial_dependencies))
     if len(initial) == 0:
         ms.remove(initial)

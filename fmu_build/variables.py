@@ -18,7 +18,8 @@ REQUIRED_OUTPUTS = ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot",
 
 # C enums of c_src/gw_model.h
 KIND = {"param": "GW_VAR_PARAM", "start": "GW_VAR_START", "input": "GW_VAR_INPUT",
-        "output": "GW_VAR_OUTPUT", "setting": "GW_VAR_SETTING", "event": "GW_VAR_EVENT"}
+        "output": "GW_VAR_OUTPUT", "setting": "GW_VAR_SETTING", "event": "GW_VAR_EVENT",
+        "state": "GW_VAR_STATE", "derivative": "GW_VAR_DERIVATIVE"}
 TYPE = {"Real": "GW_REAL", "Integer": "GW_INTEGER", "Boolean": "GW_BOOLEAN", "Enumeration": "GW_ENUM"}
 SETTING_INDEX = {"solver": 0, "rel_tol": 1, "abs_tol": 2, "max_step": 3}
 
@@ -39,6 +40,8 @@ class Variable:
     declared_type: str | None = None
     dependencies: tuple[int, ...] | None = None  # 1-based indices, for ModelStructure
     initial_dependencies: tuple[int, ...] | None = None
+    state_index: int = -1  # the continuous state this variable is (start or state kinds)
+    derivative_of: int | None = None  # derivative kind: 1-based index of the state's variable
 
     @property
     def name(self) -> str:
@@ -103,8 +106,40 @@ def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None)
     for k, ev in enumerate(spec.events):
         add(quantity=ev.flag, type="Boolean", causality="output", variability="discrete",
             initial="calculated", kind="event", index=k)
+    _states(spec, rows, add)
     _structure(spec, rows)
     return rows
+
+
+def _states(spec: ModelSpec, rows: list[Variable], add) -> None:
+    """Every continuous state as a variable (its start variable, else a local) and its derivative."""
+    by_name = {r.name: r for r in rows if r.kind == "start"}
+    state_rows = []
+    for i, name in enumerate(spec.x_names):
+        row = by_name.get(name)
+        if row is not None:
+            row.state_index = i
+        else:
+            add(quantity=Quantity(name, _unit_of_state(spec, name), "internal continuous state"),
+                type="Real", causality="local", variability="continuous", initial="calculated",
+                kind="state", index=i, state_index=i)
+            row = rows[-1]
+        state_rows.append(row)
+    for i, row in enumerate(state_rows):
+        unit = row.quantity.unit
+        add(quantity=Quantity(f"der({row.name})", _per_second(unit), f"time derivative of {row.name}"),
+            type="Real", causality="local", variability="continuous", initial="calculated",
+            kind="derivative", index=i, derivative_of=rows.index(row) + 1)
+
+
+def _unit_of_state(spec: ModelSpec, name: str) -> str:
+    if name.endswith("_dot"):
+        return "m/s" if name in ("x_dot", "y_dot") else "rad/s"
+    return "1"
+
+
+def _per_second(unit: str) -> str:
+    return {"m": "m/s", "rad": "rad/s", "rad/s": "rad/s2", "m/s": "m/s2", "J": "W", "1": "1/s"}.get(unit, "1/s")
 
 
 def _structure(spec: ModelSpec, rows: list[Variable]) -> None:
@@ -114,17 +149,24 @@ def _structure(spec: ModelSpec, rows: list[Variable]) -> None:
     the exact start values, parameters and inputs they are computed from.
     """
     by_kind_index = {(r.kind, r.index): i + 1 for i, r in enumerate(rows)}
+    state_var = {r.state_index: i + 1 for i, r in enumerate(rows) if r.state_index >= 0}
     y = [e for _, e in spec.outputs]
     x0 = spec.init
     for row in rows:
-        if row.causality != "output":
+        if row.causality != "output" and row.kind not in ("derivative", "state"):
             continue
         if row.kind == "event":
             expr = spec.events[row.index].expr
+        elif row.kind == "derivative":
+            expr = spec.ode[row.index]
+        elif row.kind == "state":
+            expr = spec.x[row.index]
         else:
             expr = y[row.out_index if row.kind == "start" else row.index]
-        direct = _depends(expr, spec.u)
-        row.dependencies = tuple(by_kind_index[("input", i)] for i, d in enumerate(direct) if d)
+        # knowns: inputs (Co-Simulation and Model Exchange) and continuous states (Model Exchange)
+        deps = [state_var[i] for i, d in enumerate(_depends(expr, spec.x)) if d and row.kind != "state"]
+        deps += [by_kind_index[("input", i)] for i, d in enumerate(_depends(expr, spec.u)) if d]
+        row.dependencies = tuple(sorted(deps))
         if row.initial == "calculated":
             at_start = ca.substitute(expr, spec.x, x0)
             deps = [by_kind_index[("start", i)] for i, d in enumerate(_depends(at_start, spec.s))

@@ -91,4 +91,9 @@ class ModelSpec:
             fns["chk"] = ca.Function("gw_chk", [s, p], [c], ["s", "p"], ["c"])
         if self.nominal is not None:
             fns["nom"] = ca.Function("gw_nom", [p], [self.nominal], ["p"], ["x_nominal"])
+        fns["jac"] = ca.Function("gw_jac", [t, x, u, p], [ca.densify(ca.jacobian(self.ode, x))],
+                                 ["t", "x", "u", "p"], ["J"])
+        fns["dir"] = ca.Function("gw_dir", [t, x, u, p],
+                                 [ca.densify(ca.jacobian(ca.vertcat(self.ode, y), ca.vertcat(x, u)))],
+                                 ["t", "x", "u", "p"], ["D"])
         return fns

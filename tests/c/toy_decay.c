@@ -25,11 +25,11 @@ static int out_f(const double **arg, double **res, gw_int *iw, double *w, int me
 static const double s_start[] = {1.0};
 
 static const gw_variable vars[] = {
-    {0, "x", GW_REAL, GW_VAR_START, 0, 0, 0},
-    {1, "solver", GW_ENUM, GW_VAR_SETTING, GW_SET_SOLVER, -1, 0},
-    {2, "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0},
-    {3, "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0},
-    {4, "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0},
+    {0, "x", GW_REAL, GW_VAR_START, 0, 0, 0, 0},
+    {1, "solver", GW_ENUM, GW_VAR_SETTING, GW_SET_SOLVER, -1, 0, -1},
+    {2, "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0, -1},
+    {3, "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0, -1},
+    {4, "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0, -1},
 };
 
 static const char *const x_names[] = {"x"};
@@ -48,6 +48,7 @@ const gw_model GW_MODEL = {
     {NULL, NULL},
     {NULL, NULL},
     {NULL, NULL},
+    {NULL, NULL}, /* dir */
     x_names,
     NULL,
     NULL,

@@ -87,20 +87,20 @@ static const double u_start[] = {0.0};
 static const double p_start[] = {1.0, -2.0, 3.0, 1.0};
 
 static const gw_variable vars[] = {
-    {0, "k", GW_REAL, GW_VAR_PARAM, 0, -1, 0},
-    {1, "pos_lim", GW_REAL, GW_VAR_PARAM, 1, -1, 1},
-    {2, "n_int", GW_INTEGER, GW_VAR_PARAM, 2, -1, 0},
-    {3, "use_force", GW_BOOLEAN, GW_VAR_PARAM, 3, -1, 0},
-    {10, "pos", GW_REAL, GW_VAR_START, 0, 0, 0},
-    {11, "vel", GW_REAL, GW_VAR_START, 1, 1, 0},
-    {20, "energy", GW_REAL, GW_VAR_OUTPUT, 2, -1, 0},
-    {21, "force", GW_REAL, GW_VAR_OUTPUT, 3, -1, 0},
-    {30, "f", GW_REAL, GW_VAR_INPUT, 0, -1, 0},
-    {40, "solver", GW_ENUM, GW_VAR_SETTING, GW_SET_SOLVER, -1, 0},
-    {41, "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0},
-    {42, "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0},
-    {43, "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0},
-    {50, "hit", GW_BOOLEAN, GW_VAR_EVENT, 0, -1, 0},
+    {0, "k", GW_REAL, GW_VAR_PARAM, 0, -1, 0, -1},
+    {1, "pos_lim", GW_REAL, GW_VAR_PARAM, 1, -1, 1, -1},
+    {2, "n_int", GW_INTEGER, GW_VAR_PARAM, 2, -1, 0, -1},
+    {3, "use_force", GW_BOOLEAN, GW_VAR_PARAM, 3, -1, 0, -1},
+    {10, "pos", GW_REAL, GW_VAR_START, 0, 0, 0, 0},
+    {11, "vel", GW_REAL, GW_VAR_START, 1, 1, 0, 1},
+    {20, "energy", GW_REAL, GW_VAR_OUTPUT, 2, -1, 0, -1},
+    {21, "force", GW_REAL, GW_VAR_OUTPUT, 3, -1, 0, -1},
+    {30, "f", GW_REAL, GW_VAR_INPUT, 0, -1, 0, -1},
+    {40, "solver", GW_ENUM, GW_VAR_SETTING, GW_SET_SOLVER, -1, 0, -1},
+    {41, "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0, -1},
+    {42, "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0, -1},
+    {43, "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0, -1},
+    {50, "hit", GW_BOOLEAN, GW_VAR_EVENT, 0, -1, 0, -1},
 };
 
 static const char *const x_names[] = {"pos", "vel"};
@@ -122,6 +122,7 @@ const gw_model GW_MODEL = {
     {chk_f, chk_w},
     {nom_f, nom_w},
     {NULL, NULL},
+    {NULL, NULL}, /* dir */
     x_names,
     event_names,
     event_actions,

@@ -55,18 +55,18 @@ static const double u_start[] = {1.0};
 static const double p_start[] = {0.25, 0.0, 0.5};
 
 static const gw_variable vars[] = {
-    {0, "x_thresh", GW_REAL, GW_VAR_PARAM, 0, -1, 0},
-    {1, "g", GW_REAL, GW_VAR_PARAM, 1, -1, 1},
-    {2, "x_thresh2", GW_REAL, GW_VAR_PARAM, 2, -1, 0},
-    {5, "x", GW_REAL, GW_VAR_START, 0, 0, 0},
-    {6, "x2", GW_REAL, GW_VAR_OUTPUT, 1, -1, 0},
-    {7, "u", GW_REAL, GW_VAR_INPUT, 0, -1, 0},
-    {8, "solver", GW_ENUM, GW_VAR_SETTING, GW_SET_SOLVER, -1, 0},
-    {9, "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0},
-    {10, "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0},
-    {11, "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0},
-    {12, "crossed1", GW_BOOLEAN, GW_VAR_EVENT, 0, -1, 0},
-    {13, "crossed2", GW_BOOLEAN, GW_VAR_EVENT, 1, -1, 0},
+    {0, "x_thresh", GW_REAL, GW_VAR_PARAM, 0, -1, 0, -1},
+    {1, "g", GW_REAL, GW_VAR_PARAM, 1, -1, 1, -1},
+    {2, "x_thresh2", GW_REAL, GW_VAR_PARAM, 2, -1, 0, -1},
+    {5, "x", GW_REAL, GW_VAR_START, 0, 0, 0, 0},
+    {6, "x2", GW_REAL, GW_VAR_OUTPUT, 1, -1, 0, -1},
+    {7, "u", GW_REAL, GW_VAR_INPUT, 0, -1, 0, -1},
+    {8, "solver", GW_ENUM, GW_VAR_SETTING, GW_SET_SOLVER, -1, 0, -1},
+    {9, "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0, -1},
+    {10, "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0, -1},
+    {11, "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0, -1},
+    {12, "crossed1", GW_BOOLEAN, GW_VAR_EVENT, 0, -1, 0, -1},
+    {13, "crossed2", GW_BOOLEAN, GW_VAR_EVENT, 1, -1, 0, -1},
 };
 
 static const char *const x_names[] = {"x"};
@@ -88,6 +88,7 @@ const gw_model GW_MODEL = {
     {chk_f, w_2_1},
     {NULL, NULL},
     {NULL, NULL},
+    {NULL, NULL}, /* dir */
     x_names,
     event_names,
     event_actions,

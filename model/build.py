@@ -21,6 +21,8 @@ from model.lagrangian import ConstrainedSystem
 from model.spec import Event, ModelSpec, Quantity
 
 FORMULATIONS = ("reduced", "multipliers")
+SPEED_CHOICES = ("body", "angle_rates")
+BODY_SPEEDS = ("omega_l", "omega_m", "omega_n")
 
 COORDINATES = ("x", "y", "alpha", "beta", "gamma")
 SPEEDS = ("alpha_dot", "beta_dot", "gamma_dot")
@@ -93,14 +95,20 @@ def build_model(wheel: dict[str, float] | None = None,
                 effects: dict[str, dict] | None = None,
                 formulation: str = "reduced",
                 name: str = "wheel",
-                description: str = "Gyrover wheel rolling without slip") -> ModelSpec:
+                description: str = "Gyrover wheel rolling without slip",
+                speeds: str = "angle_rates") -> ModelSpec:
     """The ModelSpec of a wheel with the named effects.
 
     wheel: values of the base parameters (M, R, k_diam, k_axial, beta_min);
     initial: start values (x, y, alpha, beta, gamma, alpha_dot, beta_dot, gamma_dot,
     and those effects add); effects: {effect name: {parameter: value}}, gravity
     alone by default. Effects are applied in catalogue order, whatever the scene's.
+    speeds (reduced form): the wheel's independent speeds, "body" = the angular velocity on
+    {l, m, n} (Kane's choice: diagonal reduced mass matrix, cheapest right-hand side) or
+    "angle_rates" = (alpha_dot, beta_dot, gamma_dot).
     """
+    if speeds not in SPEED_CHOICES:
+        raise ValueError(f"speeds must be one of {', '.join(SPEED_CHOICES)}, not {speeds!r}")
     if formulation not in FORMULATIONS:
         raise ValueError(f"formulation must be one of {', '.join(FORMULATIONS)}, not {formulation!r}")
     effects = {"gravity": {}} if effects is None else effects
@@ -111,14 +119,14 @@ def build_model(wheel: dict[str, float] | None = None,
     for effect_name, effect_cls in CATALOGUE.items():
         if effect_name in effects:
             effect_cls(effects[effect_name]).apply(ctx)
-    return _Assembler(ctx, formulation, initial or {}).spec(name, description, list(effects))
+    return _Assembler(ctx, formulation, initial or {}, speeds).spec(name, description, list(effects))
 
 
 class _Assembler:
     """Turns a filled WheelContext into state equations (one formulation)."""
 
-    def __init__(self, ctx: WheelContext, formulation: str, initial: dict[str, float]):
-        self.ctx, self.formulation, self.initial = ctx, formulation, initial
+    def __init__(self, ctx: WheelContext, formulation: str, initial: dict[str, float], speeds: str = "angle_rates"):
+        self.ctx, self.formulation, self.initial, self.speeds = ctx, formulation, initial, speeds
         free = [c for c in ctx.coords if c.free]
         driven = [c for c in ctx.coords if not c.free]
         self.free, self.driven = free, driven
@@ -198,10 +206,19 @@ class _Assembler:
 
         extra_outputs: list[tuple[Quantity, ca.SX]] = []
         if self.formulation == "reduced":
+            x_names = [c.name for c in self.free] + [c.name + "_dot" for c in independent]
+            if self.speeds == "body":
+                # u = Omega(q) (alpha_dot, beta_dot, gamma_dot) = omega on {l, m, n}: q_dot = S W u
+                Omega = ca.jacobian(ctx.kin.omega_lmn, v[:3])
+                W = ca.diagcat(ca.solve(Omega, ca.SX.eye(3)), ca.SX.eye(v.numel() - 3))
+                S = ca.mtimes(S, W)
+                u_body = ca.SX.sym("w", 3)
+                v = ca.vertcat(u_body, v[3:])
+                v0 = ca.vertcat(ca.mtimes(ca.substitute(Omega, q_free, q0), v0[:3]), v0[3:])
+                x_names[nf:nf + 3] = list(BODY_SPEEDS)
             qd_all, qdd_all, v_dot, x_sol = system.reduced(S, v, ca.SX.sym("v_dot", v.numel()),
                                                            qd_driven, qdd_driven)
             x = ca.vertcat(q_free, v, e_states)
-            x_names = [c.name for c in self.free] + [c.name + "_dot" for c in independent]
             ode_mech = ca.vertcat(qd_all[:nf], v_dot)
             init = ca.vertcat(q0, v0, e_start)
             nominal_rates = [1.0] * v.numel()

@@ -32,6 +32,31 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import casadi as ca
+import numpy as np
+
+
+def prune_identically_zero(A: ca.SX, trials: int = 6, seed: int = 20261122) -> ca.SX:
+    """A with its identically-zero entries made structural zeros.
+
+    Symbolic expressions such as R^2 (s_a c_a - c_a s_a) b_dot vanish for all arguments but
+    CasADi cannot see it, so it would solve a dense system. An entry that evaluates to zero
+    (to 1e-13 of the largest) at `trials` random points of its arguments is identically zero
+    with probability 1 (Schwartz-Zippel: a nonzero analytic function vanishes only on a null
+    set); every other entry is kept exactly as derived.
+    """
+    syms = ca.symvar(A)
+    if not syms:
+        return A
+    f = ca.Function("prune", syms, [A])
+    rng = np.random.default_rng(seed)
+    zero = np.ones(A.shape, dtype=bool)
+    for _ in range(trials):
+        value = np.array(f(*rng.uniform(0.2, 1.3, len(syms))))
+        zero &= np.abs(value) <= 1e-13 * max(np.abs(value).max(), 1e-300)
+    pruned = ca.SX(A)
+    for i, j in zip(*np.nonzero(zero)):
+        pruned[int(i), int(j)] = 0
+    return ca.sparsify(pruned)
 
 
 @dataclass
@@ -99,7 +124,7 @@ class ConstrainedSystem:
             raise ValueError("the equations are not affine in the accelerations and extra unknowns; "
                              "generalised forces must be linear in the normal force")
         b = ca.substitute(residual, w, ca.DM.zeros(w.numel()))
-        return ca.solve(A, -b)
+        return ca.solve(prune_identically_zero(A), -b)
 
     def _unknowns(self):
         if not self.unknowns:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import PAPER, CasadiWheel, critical_spin, steady_precession
-from model.kinematics import WheelKinematics
+from model.kinematics import WheelKinematics, angular_velocity
 
 RNG = np.random.default_rng(20261122)
 
@@ -23,7 +23,7 @@ def test_angular_velocity_matches_eq12():
     """omega on {l, m, n} = (-alpha_dot sin beta, beta_dot, gamma_dot + alpha_dot cos beta), eq. (12)."""
     q, qd, R = ca.SX.sym("q", 5), ca.SX.sym("qd", 5), ca.SX.sym("R")
     kin = WheelKinematics(q, qd, R)
-    f = ca.Function("w", [q, qd], [kin.omega_lmn, kin.omega - __import__("model.kinematics", fromlist=["x"]).angular_velocity(kin.body, q, qd)])
+    f = ca.Function("w", [q, qd], [kin.omega_lmn, kin.omega - angular_velocity(kin.body, q, qd)])
     for _ in range(20):
         qv, vv = _random_state()
         qdv = np.r_[0.3, -0.2, vv]

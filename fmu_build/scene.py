@@ -85,8 +85,10 @@ class _Reader:
                 raise self.fail(table, key, f"unknown key; valid: {', '.join(sorted(valid))}")
 
 
-def _numbers_with_degrees(r: _Reader, table: str, data: dict, names: list[str]) -> dict[str, float]:
-    valid = set(names) | {f"{n}_deg" for n in names if n in ANGLES}
+def _numbers_with_degrees(r: _Reader, table: str, data: dict, names: list[str],
+                          angles: set[str] = ANGLES) -> dict[str, float]:
+    """Numbers by name; every angle (unit rad) may be given in degrees as <name>_deg."""
+    valid = set(names) | {f"{n}_deg" for n in names if n in angles}
     r.unknown(table, data, valid)
     out: dict[str, float] = {}
     for key, value in data.items():
@@ -113,10 +115,11 @@ def _initial(r: _Reader, data: dict, effects: dict[str, dict]) -> dict[str, floa
         if key in data:
             raise r.fail("initial", key, "is not free: rolling without slip fixes the centre "
                          "velocity from alpha_dot, beta_dot, gamma_dot")
-    names = [q.name for q in start_values()]
+    quantities = start_values()
     for effect in effects:
-        names += [q.name for q in CATALOGUE[effect].starts()]
-    initial = _numbers_with_degrees(r, "initial", data, names)
+        quantities += CATALOGUE[effect].starts()
+    angles = {q.name for q in quantities if q.unit == "rad"}
+    initial = _numbers_with_degrees(r, "initial", data, [q.name for q in quantities], angles)
     beta = initial.get("beta")
     if beta is not None and not 0 < beta < math.pi:
         raise r.fail("initial", "beta", f"must lie in (0, pi) (0 and pi are lying flat), got {beta!r}")
@@ -155,8 +158,9 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
         cls = CATALOGUE[name]
         r.unknown(table, options, {q.name for q in cls.parameters()} | set(cls.choices()))
         effects[name] = {key: _effect_value(r, table, key, value, cls) for key, value in options.items()}
-    if "slope" in effects and "gravity" not in effects:
-        raise r.fail("effects.slope", None, "needs [effects.gravity] (a slope tilts gravity)")
+    if "gravity" not in effects:
+        raise r.fail("effects", None, "[effects.gravity] is required: every FMU exposes g "
+                     "(INTERFACE.md); use g = 0 for a weightless wheel")
     return effects
 
 

@@ -294,6 +294,11 @@ class _Assembler:
         fallen = Quantity("fallen", "", "true once the wheel has fallen flat (beta <= beta_min or >= pi - beta_min)")
         events = [Event("fall", ca.sin(self.q[3]) - ca.sin(P["beta_min"]), "terminate", fallen)]
         events += [Event(n, bind(self._late(e)), a, f) for n, e, a, f in ctx.events]
+        if ctx.uses_Fn and not any(ev.name == "lift_off" for ev in events):
+            # load-proportional laws (rolling resistance, pivot friction) would push, not resist,
+            # with F_n < 0: the model ends there, so stop and say so (contact_forces may choose otherwise)
+            events.append(Event("lift_off", bind(self._late(ctx.Fc[2])), "terminate",
+                                Quantity("lifted_off", "", "true once the normal force has reached zero")))
 
         beta0 = s_by_name["beta"]
         ctx.check(beta0, "beta (initial lean) must be > 0")

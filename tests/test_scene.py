@@ -34,9 +34,11 @@ def test_defaults_are_the_paper_scenario():
     ("[wheel]\nR = nan", "[wheel] R: must be finite"),
     ("[wheel]\nM = true", "[wheel] M: must be a number, got bool"),
     ("[effects.drag]\nc = 1", "[effects.drag]: unknown effect; valid: gravity, slope, gyrover"),
+    ("[effects.air_drag]\n", "[effects]: [effects.gravity] is required"),
     ("[effects.gravity]\ng = 'jupiter'", "[effects.gravity] g: unknown preset 'jupiter'; valid: earth, mars, moon"),
     ("[effects.gravity]\ng = -1.0", "[effects.gravity] g: must be >= 0, got -1.0"),
     ("[effects.gravity]\nrho = 1.0", "[effects.gravity] rho: unknown key; valid: g"),
+    ("[effects.gravity]\n[effects.gyrover]\n[initial]\ntilt_deg = 'x'", "[initial] tilt_deg: must be a number"),
     ("[initial]\nx_dot = 1.0", "[initial] x_dot: is not free: rolling without slip"),
     ("[initial]\nbeta = 0.0", "[initial] beta: must lie in (0, pi)"),
     ("[initial]\nbeta = 1.0\nbeta_deg = 50", "given twice"),
@@ -63,6 +65,12 @@ def test_bad_scenes_name_file_table_and_key(text, fragment):
 def test_missing_file(tmp_path):
     with pytest.raises(SceneError, match="no such scene file"):
         load_scene(tmp_path / "nope.toml")
+
+
+def test_effect_angles_in_degrees():
+    scene = parse_scene("[effects.gravity]\n[effects.gyrover]\n[initial]\ntilt_deg = 30\ntheta_p_deg = -10\n")
+    assert scene.initial["tilt"] == pytest.approx(math.radians(30))
+    assert scene.initial["theta_p"] == pytest.approx(math.radians(-10))
 
 
 def test_degrees_and_presets():

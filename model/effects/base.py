@@ -49,6 +49,8 @@ class Effect:
         """Declare every parameter with the scene's value as start; return the symbols by name."""
         syms = {}
         for q in self.parameters():
+            if self.options.get("_no_" + q.name):
+                continue
             if q.name in self.options:
                 q.start = float(self.options[q.name])
             syms[q.name] = ctx.parameter(q)

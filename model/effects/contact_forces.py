@@ -32,6 +32,9 @@ class ContactForces(Effect):
         return {"on_lift_off": ACTIONS, "on_slip": ("warn", "terminate", "ignore")}
 
     def apply(self, ctx: WheelContext) -> None:
+        slip = self.choice("on_slip")
+        if slip == "ignore":  # mu is used by the slip check only
+            self.options["_no_mu"] = True
         p = self.declare(ctx)
         F = ctx.Fc
         a = ctx.q[2]
@@ -48,7 +51,6 @@ class ContactForces(Effect):
         if lift != "ignore":
             ctx.events.append(("lift_off", F_n, lift,
                                Quantity("lifted_off", "", "true once the normal force has reached zero")))
-        slip = self.choice("on_slip")
         if slip != "ignore":
             ctx.events.append(("slip", p["mu"] * F_n - F_t, slip,
                                Quantity("slipping", "", "true once the friction needed has exceeded mu")))

@@ -1,13 +1,14 @@
 # Two commands do all set-up on a fresh machine (a C compiler, python3 >= 3.11 assumed):
 #   make demo   builds the paper FMUs, runs earth/Mars/moon, writes CSV and a figure to results/
 #   make test   installs what the tests need and runs them all
+#   make bench  the work-precision benchmark (results/bench/*.png, work_precision.md)
 PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 SCENES := paper_earth paper_mars paper_moon
 
-.PHONY: demo test venv clean
+.PHONY: demo test bench venv clean
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -24,6 +25,9 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+
+bench: $(STAMP)
+	$(PY) benchmarks/work_precision.py --out results/bench
 
 clean:
 	rm -rf results build .pytest_cache

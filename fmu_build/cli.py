@@ -118,6 +118,27 @@ def cmd_info(args) -> int:
     return 0
 
 
+def cmd_bench(args) -> int:
+    """Run benchmarks/work_precision.py (it lives in the source tree, beside the packages)."""
+    import runpy
+    script = Path(__file__).resolve().parent.parent / "benchmarks" / "work_precision.py"
+    if not script.is_file():
+        raise CliError(f"{script}: benchmark script not found (run from a gyrowheel source checkout)",
+                       EXIT_FAILURE)
+    argv = [str(script), "--out", args.out] + (["--quick"] if args.quick else [])
+    if args.scenarios:
+        argv += ["--scenarios", *args.scenarios]
+    saved = sys.argv
+    try:
+        sys.argv = argv
+        runpy.run_path(str(script), run_name="__main__")
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    finally:
+        sys.argv = saved
+    return 0
+
+
 def make_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="gyrowheel", description="Build and run FMI 2.0 FMUs of a rolling wheel.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -134,6 +155,11 @@ def make_parser() -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", help="CSV file to write")
     s.add_argument("--plot", metavar="PNG", help="also plot the trajectory")
     s.set_defaults(func=cmd_simulate)
+    w = sub.add_parser("bench", help="work-precision benchmark of every solver against peers")
+    w.add_argument("--quick", action="store_true", help="a short smoke run")
+    w.add_argument("--scenarios", nargs="*", help="paper, long, stiff, near_flat (default: all)")
+    w.add_argument("--out", default="results/bench", help="directory for the figures and the table")
+    w.set_defaults(func=cmd_bench)
     i = sub.add_parser("info", help="describe an FMU")
     i.add_argument("fmu")
     i.set_defaults(func=cmd_info)

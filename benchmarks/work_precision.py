@@ -1,0 +1,278 @@
+"""Work-precision benchmark: what accuracy costs in time, for every solver, against peers.
+
+Scenarios (each a scene, built into an FMU):
+  paper      the paper's earth scenario, 20 s
+  long       the same wheel for 1000 s (conservative rolling)
+  stiff      Gyrover with a 10^4 rpm flywheel and a stiff tilt servo (eigenvalues ~ -2000 1/s)
+  near_flat  Euler-disk-like precession at 10 deg above the ground
+Methods, all on the same CasADi model:
+  gyrowheel/<solver>  the FMU's internal solvers, one fmi2DoStep(0, T) through fmpy
+  casadi/cvodes       CasADi's integrator on the same expression graph
+  scipy/<method>      scipy.integrate.solve_ivp (DOP853, Radau, LSODA) calling the CasADi function
+  fmpy-ME/CVode       fmpy's CVODE driving the FMU through Model Exchange
+Error: max-norm of the final state against a reference at tolerance 1e-13 (the FMU's DOP853,
+cross-checked against scipy DOP853); also the relative energy drift.
+
+    python benchmarks/work_precision.py [--quick] [--scenarios paper stiff] [--out results/bench]
+
+Writes <out>/work_precision_<scenario>.png, <out>/work_precision.md and prints the tables.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from fmi_slave import FmuRunner  # noqa: E402
+
+from fmu_build import build_fmu, parse_scene  # noqa: E402
+
+WHEEL = """
+[wheel]
+M = 2.0
+R = 0.17
+k_diam = 0.25
+k_axial = 0.4
+beta_min = 0.02
+"""
+SCENARIOS = {
+    "paper": (WHEEL + "[effects.gravity]\ng = 9.81\n[initial]\nbeta_deg = 80.0\ngamma_dot = 6.0\n", 20.0),
+    "long": (WHEEL + "[effects.gravity]\ng = 9.81\n[initial]\nbeta_deg = 80.0\ngamma_dot = 6.0\n", 1000.0),
+    "stiff": (WHEEL + "[effects.gravity]\ng = 9.81\n[effects.gyrover]\nflywheel_rate = 1047.2\n"
+              "tilt_omega = 2000.0\n[initial]\nbeta_deg = 85.0\ngamma_dot = 8.0\ntilt = 0.2\n", 2.0),
+    "near_flat": (WHEEL.replace("k_axial = 0.4", "k_axial = 0.5") + "[effects.gravity]\ng = 9.81\n"
+                  "[initial]\nbeta_deg = 10.0\nalpha_dot = 24.5195\ngamma_dot = -24.1470\n", 5.0),
+}
+TARGETS = (1e-3, 1e-5, 1e-7, 1e-9)
+TOLS = [10.0 ** -k for k in range(3, 13)]
+FIXED_STEPS = [10.0 ** -k for k in (2, 2.5, 3, 3.5, 4)]
+SOLVER_CODES = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5}
+
+
+@dataclass
+class Point:
+    method: str
+    setting: float
+    seconds: float
+    error: float
+    energy_drift: float
+
+
+def near_flat_start(beta_deg: float = 10.0, k_diam: float = 0.25, R: float = 0.17, g: float = 9.81):
+    """Steady precession about a fixed centre (rho = 0 in eq. 52): the rates used above."""
+    b = math.radians(beta_deg)
+    ad = math.sqrt(g / (k_diam * R * math.sin(b)))
+    return ad, -math.cos(b) * ad
+
+
+def best_time(fn, repeat: int) -> tuple[float, object]:
+    best, out = float("inf"), None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+class Scenario:
+    def __init__(self, name: str, text: str, stop: float, work: Path):
+        self.name, self.stop = name, stop
+        scene = parse_scene(f'[model]\nname = "bench_{name}"\n' + text, f"{name}.toml")
+        built = build_fmu(scene, work / f"{name}.fmu", build_dir=work / name)
+        self.fmu, self.spec = built.fmu, built.spec
+        self.runner = FmuRunner(self.fmu)
+        self.fns = self.spec.functions()
+        self.p = np.array([q.start for q in self.spec.parameters], dtype=float)
+        self.s0 = np.array([q.start for q in self.spec.starts], dtype=float)
+        self.x0 = np.array(self.fns["init"](self.s0, self.p)).ravel()
+        self.u = np.array([q.start for q in self.spec.inputs], dtype=float)
+        self.state_names = [q.name for q, _ in self.spec.outputs][:8]
+        out_names = [q.name for q, _ in self.spec.outputs]
+        self.state_rows = [out_names.index(n) for n in self.state_names]
+        self.energy_row = out_names.index("energy")
+        self.reference = None
+        self.E0 = float(np.array(self.fns["out"](0.0, self.x0, self.u, self.p)).ravel()[self.energy_row])
+
+    def outputs_of(self, x: np.ndarray) -> tuple[np.ndarray, float]:
+        y = np.array(self.fns["out"](self.stop, x, self.u, self.p)).ravel()
+        return y[self.state_rows], float(y[self.energy_row])
+
+    def score(self, method, setting, seconds, states, energy) -> Point:
+        err = float(np.max(np.abs(np.asarray(states) - self.reference)))
+        return Point(method, setting, seconds, err, abs(energy - self.E0) / abs(self.E0))
+
+
+def run_internal(sc: Scenario, solver: str, settings, repeat: int) -> list[Point]:
+    points = []
+    for value in settings:
+        values = {"solver": SOLVER_CODES[solver]}
+        if solver in ("euler", "rk4"):
+            values["max_step"] = value
+        else:
+            values.update(rel_tol=value, abs_tol=value * 1e-2, max_step=sc.stop)
+        try:
+            seconds = float("inf")
+            for _ in range(repeat):
+                res = sc.runner.one_step(sc.stop, sc.state_names + ["energy"], **values)
+                seconds = min(seconds, sc.runner.last_seconds)
+        except Exception as exc:  # a solver that cannot do this scenario at this setting
+            print(f"  {solver} {value:g}: {exc}", file=sys.stderr)
+            continue
+        points.append(sc.score(f"gyrowheel/{solver}", value, seconds, res[:-1], res[-1]))
+    return points
+
+
+def run_cvodes(sc: Scenario, repeat: int) -> list[Point]:
+    x = ca.SX.sym("x", sc.x0.size)
+    dae = {"x": x, "ode": sc.fns["ode"](0.0, x, sc.u, sc.p)}
+    points = []
+    for tol in TOLS:
+        integ = ca.integrator("cv", "cvodes", dae, 0.0, sc.stop, {"reltol": tol, "abstol": tol * 1e-2,
+                                                                 "max_num_steps": 10**7})
+        seconds, res = best_time(lambda: integ(x0=sc.x0), repeat)
+        states, energy = sc.outputs_of(np.array(res["xf"]).ravel())
+        points.append(sc.score("casadi/cvodes", tol, seconds, states, energy))
+    return points
+
+
+def run_scipy(sc: Scenario, method: str, repeat: int) -> list[Point]:
+    from scipy.integrate import solve_ivp
+    ode, jac = sc.fns["ode"], sc.fns["jac"]
+
+    def f(t, x):
+        return np.array(ode(t, x, sc.u, sc.p)).ravel()
+
+    def J(t, x):
+        return np.array(jac(t, x, sc.u, sc.p))
+    points = []
+    for tol in TOLS[: (6 if method == "DOP853" else 5)]:
+        kw = {"jac": J} if method in ("Radau", "LSODA") else {}
+        seconds, sol = best_time(lambda: solve_ivp(f, (0.0, sc.stop), sc.x0, method=method, rtol=tol,
+                                                   atol=tol * 1e-2, **kw), repeat)
+        if not sol.success:
+            continue
+        states, energy = sc.outputs_of(sol.y[:, -1])
+        points.append(sc.score(f"scipy/{method}", tol, seconds, states, energy))
+    return points
+
+
+def run_fmpy_me(sc: Scenario, repeat: int) -> list[Point]:
+    from fmpy import simulate_fmu
+    points = []
+    for tol in TOLS[:8]:
+        try:
+            seconds, r = best_time(lambda: simulate_fmu(str(sc.fmu), fmi_type="ModelExchange", solver="CVode",
+                                                        stop_time=sc.stop, output_interval=sc.stop,
+                                                        relative_tolerance=tol), repeat)
+        except Exception as exc:
+            print(f"  fmpy ME: {exc}", file=sys.stderr)
+            return points
+        points.append(sc.score("fmpy-ME/CVode", tol, seconds, [r[n][-1] for n in sc.state_names], r["energy"][-1]))
+    return points
+
+
+def cheapest(points: list[Point], target: float) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for p in points:
+        if p.error <= target and p.seconds < out.get(p.method, float("inf")):
+            out[p.method] = p.seconds
+    return out
+
+
+def plot(name: str, points: list[Point], path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    for method in dict.fromkeys(p.method for p in points):
+        pts = sorted((p for p in points if p.method == method), key=lambda p: p.seconds)
+        style = "-o" if method.startswith("gyrowheel") else "--s"
+        ax.loglog([p.seconds for p in pts], [max(p.error, 1e-16) for p in pts], style, ms=3.5, label=method)
+    ax.set_xlabel("CPU time [s]")
+    ax.set_ylabel("final-state error (max norm)")
+    ax.set_title(f"work-precision: {name}")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def table(name: str, points: list[Point]) -> str:
+    lines = [f"### {name}", "", "| method | error <= 1e-3 | <= 1e-5 | <= 1e-7 | <= 1e-9 |", "|---|---|---|---|---|"]
+    best_ours = {t: min((s for m, s in cheapest(points, t).items() if m.startswith("gyrowheel")), default=None)
+                 for t in TARGETS}
+    for method in dict.fromkeys(p.method for p in points):
+        cells = []
+        for t in TARGETS:
+            s = cheapest(points, t).get(method)
+            if s is None:
+                cells.append("-")
+            elif best_ours[t] and not method.startswith("gyrowheel"):
+                cells.append(f"{s * 1e3:.3g} ms ({s / best_ours[t]:.0f}x)")
+            else:
+                cells.append(f"{s * 1e3:.3g} ms")
+        lines.append(f"| {method} | " + " | ".join(cells) + " |")
+    lines.append("")
+    lines.append("Cheapest time to reach each final-state error; in brackets the ratio to the fastest "
+                 "gyrowheel solver at that error.")
+    return "\n".join(lines)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenarios", nargs="*", default=list(SCENARIOS), choices=list(SCENARIOS))
+    parser.add_argument("--quick", action="store_true", help="few settings, no repetitions (a smoke run)")
+    parser.add_argument("--out", default="results/bench")
+    args = parser.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    repeat = 1 if args.quick else 3
+    global TOLS, FIXED_STEPS
+    if args.quick:
+        TOLS, FIXED_STEPS = [1e-4, 1e-7], [1e-2, 1e-3]
+    report = ["# Work-precision results", ""]
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in args.scenarios:
+            text, stop = SCENARIOS[name]
+            if args.quick:
+                stop = min(stop, 2.0)
+            sc = Scenario(name, text, stop, Path(tmp))
+            ref = sc.runner.one_step(stop, sc.state_names, solver=SOLVER_CODES["dop853"], rel_tol=1e-13,
+                                     abs_tol=1e-15, max_step=stop)
+            sc.reference = np.asarray(ref)
+            points: list[Point] = []
+            for solver in ("euler", "rk4"):
+                if name != "long" or solver == "rk4":
+                    points += run_internal(sc, solver, FIXED_STEPS, repeat)
+            for solver in ("dopri5", "dop853", "rosenbrock"):
+                points += run_internal(sc, solver, TOLS, repeat)
+            points += run_cvodes(sc, repeat)
+            if stop <= 20.0:
+                for method in ("DOP853", "Radau", "LSODA"):
+                    points += run_scipy(sc, method, 1)
+                points += run_fmpy_me(sc, 1)
+            plot(name, points, out / f"work_precision_{name}.png")
+            text_table = table(f"{name} ({stop:g} s)", points)
+            print(text_table)
+            report += [text_table, "", f"![{name}](work_precision_{name}.png)", ""]
+            drift = {p.method: p.energy_drift for p in sorted(points, key=lambda p: -p.setting)}
+            report.append("Energy drift at the tightest setting: " +
+                          ", ".join(f"{m} {d:.1e}" for m, d in drift.items()) + "\n")
+    (out / "work_precision.md").write_text("\n".join(report))
+    print(f"wrote {out / 'work_precision.md'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -121,3 +121,36 @@ gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_eve
     *t_event = best;
     return terminate ? GW_EV_TERMINATE : GW_EV_WARN;
 }
+
+/* ---- Model Exchange ------------------------------------------------------------ */
+
+/* The importer has located the crossing and set t and x there; this only decides
+ * which indicators fire.  A WARN indicator fires when it went from > 0 (at the
+ * previous event update) to <= 0; a TERMINATE indicator fires when it is <= 0 now
+ * (it cannot be <= 0 at the start: fmi2ExitInitializationMode refuses that) and has
+ * not fired before.  A non-finite indicator counts as <= 0, as in gw_events_check. */
+gw_ev_result gw_events_me_update(gw_instance *I, const double *e_now) {
+    const gw_model *m = I->m;
+    int i, terminate = 0, warn = 0;
+    for (i = 0; i < m->ne; i++) {
+        const int was_positive = I->e[i] > 0.0;
+        const int now_le = !(e_now[i] > 0.0);
+        const int is_warn = m->event_actions && m->event_actions[i] == GW_EVENT_WARN;
+        int fires;
+        if (is_warn)
+            fires = now_le && was_positive;
+        else
+            fires = now_le && (was_positive || !I->flags[i]);
+        I->e[i] = e_now[i];
+        if (!fires) continue;
+        I->flags[i] = 1;
+        I->n_events++;
+        log_event(I, i, I->t, !is_warn);
+        if (is_warn)
+            warn = 1;
+        else
+            terminate = 1;
+    }
+    if (terminate) return GW_EV_TERMINATE;
+    return warn ? GW_EV_WARN : GW_EV_NONE;
+}

@@ -1,9 +1,14 @@
 /*
- * gw_fmi2.c -- the FMI 2.0 Co-Simulation interface: instance life cycle, state
- * machine, variable access through GW_MODEL.vars, initialisation, fmi2DoStep and
- * the status functions.  The FMU-state functions are in gw_state.c.  The Model
- * Exchange functions exist (every fmi2* function of fmi2Functions.h is exported)
- * but return fmi2Error.
+ * gw_fmi2.c -- the FMI 2.0 interfaces, Co-Simulation and Model Exchange in one
+ * library: instance life cycle, state machine, variable access through
+ * GW_MODEL.vars, initialisation, fmi2DoStep and the status functions (CS), the
+ * continuous-time and event functions (ME), and fmi2GetDirectionalDerivative from
+ * the model's `dir` function (both).  The FMU-state functions are in gw_state.c.
+ *
+ * State machine (bit masks as in modelica/Reference-FMUs):
+ *   CS: Instantiated -> InitializationMode -> StepComplete <-> StepFailed -> Terminated
+ *   ME: Instantiated -> InitializationMode -> EventMode <-> ContinuousTimeMode -> Terminated
+ * A function of the other interface fails with fmi2Error and a logged reason.
  */
 #include <math.h>
 #include <string.h>
@@ -12,21 +17,37 @@
 #include "gw_solver.h"
 
 /* ---- states in which each function may be called ------------------------- */
+#define ST_ME (GW_ST_EVENT_MODE | GW_ST_CONT_TIME_MODE)
 #define ST_ANY                                                                              \
     (GW_ST_INSTANTIATED | GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED |      \
-     GW_ST_TERMINATED | GW_ST_ERROR)
+     GW_ST_TERMINATED | GW_ST_ERROR | ST_ME)
 #define ST_BEFORE_INIT_END (GW_ST_INSTANTIATED | GW_ST_INIT_MODE)
 #define MASK_SetDebugLogging ST_ANY
 #define MASK_Reset ST_ANY
 #define MASK_SetupExperiment GW_ST_INSTANTIATED
 #define MASK_EnterInitializationMode GW_ST_INSTANTIATED
 #define MASK_ExitInitializationMode GW_ST_INIT_MODE
-#define MASK_Terminate (GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED)
+#define MASK_Terminate (GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED | ST_ME)
 #define MASK_Get ST_ANY
-#define MASK_Set (GW_ST_INSTANTIATED | GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE)
+#define MASK_Set (GW_ST_INSTANTIATED | GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE | ST_ME)
 #define MASK_DoStep GW_ST_STEP_COMPLETE
 #define MASK_Status (GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED | GW_ST_TERMINATED | GW_ST_ERROR)
 #define MASK_NotSupported ST_ANY
+/* Model Exchange */
+#define MASK_EnterEventMode ST_ME
+#define MASK_NewDiscreteStates GW_ST_EVENT_MODE
+#define MASK_EnterContinuousTimeMode GW_ST_EVENT_MODE
+#define MASK_CompletedIntegratorStep GW_ST_CONT_TIME_MODE
+#define MASK_SetTime ST_ME
+#define MASK_SetContinuousStates GW_ST_CONT_TIME_MODE
+#define MASK_GetDerivatives (GW_ST_INIT_MODE | ST_ME | GW_ST_TERMINATED | GW_ST_ERROR)
+#define MASK_GetEventIndicators MASK_GetDerivatives
+#define MASK_GetContinuousStates MASK_GetDerivatives
+#define MASK_GetNominals (GW_ST_INSTANTIATED | ST_ME | GW_ST_TERMINATED | GW_ST_ERROR)
+/* both interfaces */
+#define MASK_GetDirectionalDerivative                                                       \
+    (GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED | GW_ST_TERMINATED |        \
+     GW_ST_ERROR | ST_ME)
 
 static const char *state_name(int state) {
     switch (state) {
@@ -37,6 +58,8 @@ static const char *state_name(int state) {
     case GW_ST_TERMINATED: return "Terminated";
     case GW_ST_ERROR: return "Error";
     case GW_ST_FATAL: return "Fatal";
+    case GW_ST_EVENT_MODE: return "EventMode";
+    case GW_ST_CONT_TIME_MODE: return "ContinuousTimeMode";
     default: return "?";
     }
 }
@@ -63,6 +86,31 @@ fmi2Status gw_end(gw_instance *I, fmi2Status status) {
 #define BEGIN(fn, mask)                                                                     \
     gw_instance *I = (gw_instance *)c;                                                      \
     fmi2Status status = fmi2OK;                                                             \
+    if (!gw_begin(I, fn, mask)) return fmi2Error;                                           \
+    if (0) goto END
+/* 1 if the instance was instantiated for `type`; else logs, enters Error, returns 0 */
+static int check_interface(gw_instance *I, const char *fn, int type) {
+    if (!I) return 0;
+    if (I->fmu_type == type) return 1;
+    if (type == fmi2ModelExchange)
+        GW_ERROR(I, "%s: Model Exchange is not supported by this instance (instantiated for "
+                 "Co-Simulation)", fn);
+    else
+        GW_ERROR(I, "%s: Co-Simulation function, not available in an instance instantiated "
+                 "for Model Exchange", fn);
+    if (I->state != GW_ST_FATAL) I->state = GW_ST_ERROR;
+    return 0;
+}
+#define BEGIN_ME(fn, mask)                                                                  \
+    gw_instance *I = (gw_instance *)c;                                                      \
+    fmi2Status status = fmi2OK;                                                             \
+    if (!check_interface(I, fn, fmi2ModelExchange)) return fmi2Error;                       \
+    if (!gw_begin(I, fn, mask)) return fmi2Error;                                           \
+    if (0) goto END
+#define BEGIN_CS(fn, mask)                                                                  \
+    gw_instance *I = (gw_instance *)c;                                                      \
+    fmi2Status status = fmi2OK;                                                             \
+    if (!check_interface(I, fn, fmi2CoSimulation)) return fmi2Error;                        \
     if (!gw_begin(I, fn, mask)) return fmi2Error;                                           \
     if (0) goto END
 #define CHECK(expr)                                                                         \
@@ -137,6 +185,23 @@ static int before_init_end(const gw_instance *I) {
     return (I->state & ST_BEFORE_INIT_END) != 0;
 }
 
+static int is_me(const gw_instance *I) { return I->fmu_type == fmi2ModelExchange; }
+
+/* t, x, u or p changed: the cached outputs, derivatives and Jacobian are stale. */
+static void point_changed(gw_instance *I) {
+    I->y_valid = 0;
+    I->xdot_valid = 0;
+    I->dir_valid = 0;
+}
+
+/* Status for non-finite model values: Model Exchange answers fmi2Discard (the importer
+ * may retry with a smaller step, FMI 2.0 section 2.1.3), Co-Simulation fmi2Error. */
+static fmi2Status nonfinite_status(const gw_instance *I) {
+    return is_me(I) ? fmi2Discard : fmi2Error;
+}
+#define LOG_NONFINITE(I, ...)                                                               \
+    gw_log((I), nonfinite_status(I), is_me(I) ? GW_LOG_WARNING : GW_LOG_ERROR, __VA_ARGS__)
+
 /* Make I->y hold the outputs at the current point.  Before initialisation ends
  * they are computed on the fly from x = init(s, p). */
 static fmi2Status update_outputs(gw_instance *I, const char *fn) {
@@ -165,12 +230,51 @@ static fmi2Status update_outputs(gw_instance *I, const char *fn) {
     for (i = 0; i < m->ny; i++)
         if (!isfinite(I->y[i])) {
             const char *nm = name_of(m, GW_VAR_OUTPUT, i);
-            GW_ERROR(I, "%s: output %s is not finite (%g) at t=%.17g", fn, nm ? nm : "?",
-                     I->y[i], I->t);
-            return fmi2Error;
+            LOG_NONFINITE(I, "%s: output %s is not finite (%g) at t=%.17g", fn, nm ? nm : "?",
+                          I->y[i], I->t);
+            return nonfinite_status(I);
         }
     I->y_valid = 1;
     return fmi2OK;
+}
+
+/* Make I->xdot hold ode(t, x, u, p) at the current point (before initialisation ends:
+ * at x = init(s, p), not cached). */
+static fmi2Status update_derivatives(gw_instance *I, const char *fn) {
+    const gw_model *m = I->m;
+    int i, pre = before_init_end(I);
+    if (!pre && I->xdot_valid) return fmi2OK;
+    if (pre && gw_eval_init(I, I->x) != 0) {
+        GW_ERROR(I, "%s: evaluation of the initial state failed", fn);
+        return fmi2Error;
+    }
+    if (gw_rhs(I, I->t, I->x, I->xdot) != 0) {
+        GW_ERROR(I, "%s: evaluation of the right-hand side failed at t=%.17g", fn, I->t);
+        return fmi2Error;
+    }
+    for (i = 0; i < m->nx; i++)
+        if (!isfinite(I->xdot[i])) {
+            if (pre) { /* as for the initial outputs: the parameters may still change */
+                gw_log(I, fmi2Warning, GW_LOG_WARNING,
+                       "%s: initial derivative of state %s is not finite (check the "
+                       "parameters)", fn, m->x_names ? m->x_names[i] : "?");
+                return fmi2Warning;
+            }
+            LOG_NONFINITE(I, "%s: derivative of state %s is not finite (%g) at t=%.17g", fn,
+                          m->x_names ? m->x_names[i] : "?", I->xdot[i], I->t);
+            return nonfinite_status(I);
+        }
+    I->xdot_valid = !pre;
+    return fmi2OK;
+}
+
+static int needs_derivatives(const gw_instance *I, const fmi2ValueReference vr[], size_t nvr) {
+    size_t k;
+    for (k = 0; k < nvr; k++) {
+        const gw_variable *v = find_var(I->m, vr[k]);
+        if (v && v->kind == GW_VAR_DERIVATIVE) return 1;
+    }
+    return 0;
 }
 
 static int needs_outputs(const gw_instance *I, const fmi2ValueReference vr[], size_t nvr) {
@@ -180,6 +284,7 @@ static int needs_outputs(const gw_instance *I, const fmi2ValueReference vr[], si
         if (!v) continue;
         if (v->kind == GW_VAR_OUTPUT) return 1;
         if (v->kind == GW_VAR_START && v->out_index >= 0 && !before_init_end(I)) return 1;
+        if (v->kind == GW_VAR_STATE && before_init_end(I)) return 1; /* x = init(s, p) */
     }
     return 0;
 }
@@ -203,6 +308,8 @@ static double value_of(const gw_instance *I, const gw_variable *v) {
     case GW_VAR_OUTPUT: return I->y[v->index];
     case GW_VAR_SETTING: return setting_value(I, v->index);
     case GW_VAR_EVENT: return I->flags[v->index] ? 1.0 : 0.0;
+    case GW_VAR_STATE: return I->x[v->index];
+    case GW_VAR_DERIVATIVE: return I->xdot[v->index];
     default: return 0.0;
     }
 }
@@ -211,9 +318,19 @@ static double value_of(const gw_instance *I, const gw_variable *v) {
 static int settable(gw_instance *I, const char *fn, const gw_variable *v) {
     int ok;
     switch (v->kind) {
-    case GW_VAR_PARAM:
-        ok = v->tunable ? (I->state & MASK_Set) != 0 : before_init_end(I);
+    case GW_VAR_PARAM: /* tunable: in Model Exchange only in Event Mode, not in CT Mode */
+        ok = v->tunable ? (I->state & MASK_Set & ~GW_ST_CONT_TIME_MODE) != 0
+                        : before_init_end(I);
         break;
+    case GW_VAR_STATE:
+        GW_ERROR(I, "%s: variable %s (vr=%u) is a continuous state and cannot be set%s", fn,
+                 v->name, v->vr,
+                 is_me(I) ? " (use fmi2SetContinuousStates)" : "");
+        return 0;
+    case GW_VAR_DERIVATIVE:
+        GW_ERROR(I, "%s: variable %s (vr=%u) is a state derivative and cannot be set", fn,
+                 v->name, v->vr);
+        return 0;
     case GW_VAR_START:
     case GW_VAR_SETTING: ok = before_init_end(I); break;
     case GW_VAR_INPUT: ok = (I->state & MASK_Set) != 0; break;
@@ -232,7 +349,7 @@ static void store(gw_instance *I, const gw_variable *v, double value) {
     case GW_VAR_PARAM:
         I->p[v->index] = value;
         if (!before_init_end(I)) { /* tunable parameter during the simulation */
-            I->y_valid = 0;
+            point_changed(I);
             I->fcur_valid = 0;
             gw_eval_nom(I, I->nominal);
         }
@@ -240,7 +357,7 @@ static void store(gw_instance *I, const gw_variable *v, double value) {
     case GW_VAR_START: I->s[v->index] = value; break;
     case GW_VAR_INPUT:
         I->u[v->index] = value;
-        I->y_valid = 0;
+        point_changed(I);
         I->fcur_valid = 0;
         break;
     case GW_VAR_SETTING:
@@ -300,10 +417,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                   "fmi2Instantiate: missing instance name");
         return NULL;
     }
-    if (fmuType != fmi2CoSimulation) {
+    if (fmuType != fmi2CoSimulation && fmuType != fmi2ModelExchange) {
         gw_log_cb(&cb, name, fmi2Error, "logStatusError",
-                  "fmi2Instantiate: %s supports Co-Simulation only (fmuType=%d)",
-                  m->identifier, (int)fmuType);
+                  "fmi2Instantiate: %s: unknown fmuType %d (expected fmi2ModelExchange=%d or "
+                  "fmi2CoSimulation=%d)", m->identifier, (int)fmuType, (int)fmi2ModelExchange,
+                  (int)fmi2CoSimulation);
         return NULL;
     }
     if (!fmuGUID || strcmp(fmuGUID, m->token) != 0) {
@@ -319,11 +437,16 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return NULL;
     }
     I = gw_instance_new(m, name, functions, loggingOn);
+    if (I && gw_instance_me_alloc(I) != 0) {
+        gw_instance_free(I);
+        I = NULL;
+    }
     if (!I) {
         gw_log_cb(&cb, name, fmi2Error, "logStatusError",
                   "fmi2Instantiate: out of memory");
         return NULL;
     }
+    I->fmu_type = (int)fmuType;
     return (fmi2Component)I;
 }
 
@@ -380,16 +503,14 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     int i, ok;
     BEGIN("fmi2ExitInitializationMode", MASK_ExitInitializationMode);
     m = I->m;
+    point_changed(I);
     ok = check_finite_vec(I, I->p, m->np, GW_VAR_PARAM, "parameter");
     ok &= check_finite_vec(I, I->s, m->ns, GW_VAR_START, "start value");
     ok &= check_finite_vec(I, I->u, m->nu, GW_VAR_INPUT, "input");
     if (!ok) FAIL("fmi2ExitInitializationMode: non-finite values");
     /* settings */
     if (I->tol_defined) I->rel_tol = I->tolerance;
-    if (I->solver == GW_SOLVER_ROSENBROCK)
-        FAIL("fmi2ExitInitializationMode: solver rosenbrock not available");
-    if (I->solver != GW_SOLVER_EULER && I->solver != GW_SOLVER_RK4 &&
-        I->solver != GW_SOLVER_DOPRI5)
+    if (!gw_solver_available(I->solver))
         FAIL("fmi2ExitInitializationMode: unknown solver %d", I->solver);
     if (!(I->rel_tol > 0.0) || !isfinite(I->rel_tol))
         FAIL("fmi2ExitInitializationMode: rel_tol = %g must be finite and > 0", I->rel_tol);
@@ -428,7 +549,8 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
         if (!isfinite(I->x[i]))
             FAIL("fmi2ExitInitializationMode: initial state %s is not finite (%g)",
                  m->x_names ? m->x_names[i] : "?", I->x[i]);
-    I->state = GW_ST_STEP_COMPLETE; /* from here on y is the simulation's output */
+    /* from here on y is the simulation's output; ME continues in Event Mode */
+    I->state = is_me(I) ? GW_ST_EVENT_MODE : GW_ST_STEP_COMPLETE;
     I->y_valid = 0;
     CHECK(update_outputs(I, "fmi2ExitInitializationMode"));
     if (gw_rhs(I, I->t, I->x, I->k[0]) != 0)
@@ -438,6 +560,8 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
             FAIL("fmi2ExitInitializationMode: derivative of state %s is not finite (%g)",
                  m->x_names ? m->x_names[i] : "?", I->k[0][i]);
     I->fcur_valid = 1;
+    memcpy(I->xdot, I->k[0], (size_t)m->nx * sizeof(double));
+    I->xdot_valid = 1;
     if (m->ne > 0 && gw_eval_evt(I, I->t, I->x, I->e) != 0)
         FAIL("fmi2ExitInitializationMode: evaluation of the event indicators failed");
     /* An event whose condition holds already at the start cannot be crossed later:
@@ -471,6 +595,7 @@ fmi2Status fmi2Terminate(fmi2Component c) {
 fmi2Status fmi2Reset(fmi2Component c) {
     BEGIN("fmi2Reset", MASK_Reset);
     gw_instance_defaults(I);
+    point_changed(I);
     END_FUNCTION();
 }
 
@@ -482,6 +607,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     BEGIN("fmi2GetReal", MASK_Get);
     CHECK_ARRAYS("fmi2GetReal", vr, nvr, value);
     if (needs_outputs(I, vr, nvr)) CHECK(update_outputs(I, "fmi2GetReal"));
+    if (needs_derivatives(I, vr, nvr)) CHECK(update_derivatives(I, "fmi2GetReal"));
     for (k = 0; k < nvr; k++) {
         const gw_variable *v = lookup(I, "fmi2GetReal", vr[k], GW_REAL);
         if (!v) {
@@ -600,90 +726,280 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     END_FUNCTION();
 }
 
-/* ---- directional derivatives (not provided yet) -------------------------- */
+/* ---- directional derivatives (both interfaces) ------------------------------- */
+
+/* Row of D for an unknown: 0..nx-1 xdot, nx.. y; or *xrow >= 0 for the identity row of
+ * a continuous state.  0 if v is no output, state or derivative. */
+static int dd_unknown(const gw_model *m, const gw_variable *v, int *row, int *xrow) {
+    *row = -1;
+    *xrow = -1;
+    if (v->type != GW_REAL) return 0;
+    switch (v->kind) {
+    case GW_VAR_OUTPUT: *row = m->nx + v->index; return 1;
+    case GW_VAR_DERIVATIVE: *row = v->index; return 1;
+    case GW_VAR_STATE: *xrow = v->state_index >= 0 ? v->state_index : v->index; return 1;
+    case GW_VAR_START:
+        if (v->state_index >= 0) {
+            *xrow = v->state_index;
+            return 1;
+        }
+        if (v->out_index >= 0) {
+            *row = m->nx + v->out_index;
+            return 1;
+        }
+        return 0;
+    default: return 0;
+    }
+}
+
+/* Column of D for a known: 0..nx-1 x, nx.. u.  -1 if v is no state or input. */
+static int dd_known(const gw_model *m, const gw_variable *v) {
+    if (v->type != GW_REAL) return -1;
+    if (v->kind == GW_VAR_INPUT) return m->nx + v->index;
+    if (v->kind == GW_VAR_STATE) return v->state_index >= 0 ? v->state_index : v->index;
+    if (v->kind == GW_VAR_START && v->state_index >= 0) return v->state_index;
+    return -1;
+}
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
                                         size_t nUnknown, const fmi2ValueReference vKnown_ref[],
                                         size_t nKnown, const fmi2Real dvKnown[],
                                         fmi2Real dvUnknown[]) {
-    BEGIN("fmi2GetDirectionalDerivative", MASK_NotSupported);
-    (void)vUnknown_ref;
-    (void)nUnknown;
-    (void)vKnown_ref;
-    (void)nKnown;
-    (void)dvKnown;
-    (void)dvUnknown;
-    FAIL("fmi2GetDirectionalDerivative: not provided by this FMU "
-         "(providesDirectionalDerivative=false)");
+    static const char fn[] = "fmi2GetDirectionalDerivative";
+    const gw_model *m;
+    size_t i, j;
+    int nrow;
+    gw_instance *I = (gw_instance *)c;
+    fmi2Status status = fmi2OK;
+    /* a function the model does not provide fails alike in every state */
+    if (I && !I->f_dir.eval && I->state != GW_ST_FATAL) {
+        GW_ERROR(I, "%s: not provided by this FMU (providesDirectionalDerivative=false)", fn);
+        I->state = GW_ST_ERROR;
+        return fmi2Error;
+    }
+    if (!gw_begin(I, fn, MASK_GetDirectionalDerivative)) return fmi2Error;
+    m = I->m;
+    nrow = m->nx + m->ny;
+    if (nUnknown > 0 && (!vUnknown_ref || !dvUnknown))
+        FAIL("%s: NULL array for %lu unknowns", fn, (unsigned long)nUnknown);
+    if (nKnown > 0 && (!vKnown_ref || !dvKnown))
+        FAIL("%s: NULL array for %lu knowns", fn, (unsigned long)nKnown);
+    /* check every reference before computing anything */
+    for (i = 0; i < nUnknown; i++) {
+        const gw_variable *v = find_var(m, vUnknown_ref[i]);
+        int row, xrow;
+        if (!v) FAIL("%s: unknown value reference %u (vUnknown_ref[%lu])", fn, vUnknown_ref[i],
+                     (unsigned long)i);
+        if (!dd_unknown(m, v, &row, &xrow))
+            FAIL("%s: unknown %s (vr=%u) is not a Real output, continuous state or state "
+                 "derivative", fn, v->name, v->vr);
+    }
+    for (j = 0; j < nKnown; j++) {
+        const gw_variable *v = find_var(m, vKnown_ref[j]);
+        if (!v) FAIL("%s: unknown value reference %u (vKnown_ref[%lu])", fn, vKnown_ref[j],
+                     (unsigned long)j);
+        if (dd_known(m, v) < 0)
+            FAIL("%s: known %s (vr=%u) is not a continuous state or a Real input", fn, v->name,
+                 v->vr);
+        if (!isfinite(dvKnown[j]))
+            FAIL("%s: seed dvKnown[%lu] for %s is not finite", fn, (unsigned long)j, v->name);
+    }
+    /* D at the current point (before initialisation ends: at x = init(s, p)) */
+    if (before_init_end(I) || !I->dir_valid) {
+        int k, n = nrow * (m->nx + m->nu);
+        if (before_init_end(I) && gw_eval_init(I, I->x) != 0)
+            FAIL("%s: evaluation of the initial state failed", fn);
+        I->dir_valid = 0;
+        if (gw_eval_dir(I, I->t, I->x, I->dir_D) != 0)
+            FAIL("%s: evaluation of the Jacobian failed at t=%.17g", fn, I->t);
+        for (k = 0; k < n; k++)
+            if (!isfinite(I->dir_D[k])) {
+                LOG_NONFINITE(I, "%s: Jacobian entry (%d, %d) is not finite at t=%.17g", fn,
+                              k % nrow, k / nrow, I->t);
+                status = nonfinite_status(I);
+                goto END;
+            }
+        I->dir_valid = !before_init_end(I);
+    }
+    for (i = 0; i < nUnknown; i++) {
+        const gw_variable *v = find_var(m, vUnknown_ref[i]);
+        double sum = 0.0;
+        int row, xrow;
+        dd_unknown(m, v, &row, &xrow);
+        for (j = 0; j < nKnown; j++) {
+            int col = dd_known(m, find_var(m, vKnown_ref[j]));
+            if (xrow >= 0)
+                sum += (col == xrow) ? dvKnown[j] : 0.0;
+            else
+                sum += I->dir_D[(size_t)row + (size_t)col * (size_t)nrow] * dvKnown[j];
+        }
+        dvUnknown[i] = sum;
+    }
     END_FUNCTION();
 }
 
-/* ---- Model Exchange: not supported --------------------------------------- */
+/* ---- Model Exchange -------------------------------------------------------------- */
 
-#define ME_NOT_SUPPORTED(fn)                                                                \
-    BEGIN(fn, MASK_NotSupported);                                                           \
-    FAIL("%s: Model Exchange is not supported by this FMU", fn);                            \
-    END_FUNCTION()
-
-fmi2Status fmi2EnterEventMode(fmi2Component c) { ME_NOT_SUPPORTED("fmi2EnterEventMode"); }
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    BEGIN_ME("fmi2EnterEventMode", MASK_EnterEventMode);
+    I->state = GW_ST_EVENT_MODE;
+    END_FUNCTION();
+}
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
-    (void)eventInfo;
-    ME_NOT_SUPPORTED("fmi2NewDiscreteStates");
+    const gw_model *m;
+    int i;
+    gw_ev_result r = GW_EV_NONE;
+    BEGIN_ME("fmi2NewDiscreteStates", MASK_NewDiscreteStates);
+    m = I->m;
+    if (!eventInfo) FAIL("fmi2NewDiscreteStates: eventInfo is NULL");
+    if (m->ne > 0) {
+        if (gw_eval_evt(I, I->t, I->x, I->e_me) != 0)
+            FAIL("fmi2NewDiscreteStates: evaluation of the event indicators failed at t=%.17g",
+                 I->t);
+        r = gw_events_me_update(I, I->e_me);
+    }
+    if (r == GW_EV_TERMINATE && !I->terminated) {
+        I->terminated = 1;
+        I->last_successful_time = I->t;
+        for (i = 0; i < m->ne; i++)
+            if (I->flags[i] && !(I->e[i] > 0.0) &&
+                !(m->event_actions && m->event_actions[i] == GW_EVENT_WARN) &&
+                gw_log_enabled(I, GW_LOG_EVENTS))
+                gw_log(I, fmi2OK, GW_LOG_EVENTS,
+                       "fmi2NewDiscreteStates: event %s: terminateSimulation = true at t=%.17g",
+                       m->event_names ? m->event_names[i] : "?", I->t);
+    }
+    eventInfo->newDiscreteStatesNeeded = fmi2False;
+    eventInfo->terminateSimulation = I->terminated ? fmi2True : fmi2False;
+    eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
+    eventInfo->valuesOfContinuousStatesChanged = fmi2False;
+    eventInfo->nextEventTimeDefined = fmi2False;
+    eventInfo->nextEventTime = 0.0;
+    END_FUNCTION();
 }
 
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
-    ME_NOT_SUPPORTED("fmi2EnterContinuousTimeMode");
+    BEGIN_ME("fmi2EnterContinuousTimeMode", MASK_EnterContinuousTimeMode);
+    if (I->terminated)
+        FAIL("fmi2EnterContinuousTimeMode: the simulation terminated at t=%.17g "
+             "(terminateSimulation = true); call fmi2Terminate or fmi2Reset",
+             I->last_successful_time);
+    I->state = GW_ST_CONT_TIME_MODE;
+    END_FUNCTION();
 }
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    BEGIN_ME("fmi2CompletedIntegratorStep", MASK_CompletedIntegratorStep);
     (void)noSetFMUStatePriorToCurrentPoint;
-    (void)enterEventMode;
-    (void)terminateSimulation;
-    ME_NOT_SUPPORTED("fmi2CompletedIntegratorStep");
+    if (!enterEventMode || !terminateSimulation)
+        FAIL("fmi2CompletedIntegratorStep: enterEventMode or terminateSimulation is NULL");
+    /* no step events: state events are located by the importer */
+    *enterEventMode = fmi2False;
+    *terminateSimulation = fmi2False;
+    END_FUNCTION();
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
-    (void)time;
-    ME_NOT_SUPPORTED("fmi2SetTime");
+    BEGIN_ME("fmi2SetTime", MASK_SetTime);
+    if (!isfinite(time)) FAIL("fmi2SetTime: time %g is not finite", time);
+    if (time != I->t) {
+        I->t = time;
+        point_changed(I);
+    }
+    END_FUNCTION();
 }
 
+/* nx of a state-vector call must be the model's */
+#define CHECK_NX(fn, arr, n)                                                                \
+    do {                                                                                    \
+        if ((n) != (size_t)I->m->nx)                                                        \
+            FAIL("%s: nx = %lu, the model has %d continuous states", fn, (unsigned long)(n), \
+                 I->m->nx);                                                                 \
+        if ((n) > 0 && !(arr)) FAIL("%s: array is NULL", fn);                              \
+    } while (0)
+
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
-    (void)x;
-    (void)nx;
-    ME_NOT_SUPPORTED("fmi2SetContinuousStates");
+    size_t i;
+    BEGIN_ME("fmi2SetContinuousStates", MASK_SetContinuousStates);
+    CHECK_NX("fmi2SetContinuousStates", x, nx);
+    for (i = 0; i < nx; i++)
+        if (!isfinite(x[i]))
+            FAIL("fmi2SetContinuousStates: state %s = %g is not finite",
+                 I->m->x_names ? I->m->x_names[i] : "?", x[i]);
+    if (nx > 0 && memcmp(I->x, x, nx * sizeof(double)) != 0) {
+        memcpy(I->x, x, nx * sizeof(double));
+        point_changed(I);
+    }
+    END_FUNCTION();
 }
 
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx) {
-    (void)derivatives;
-    (void)nx;
-    ME_NOT_SUPPORTED("fmi2GetDerivatives");
+    BEGIN_ME("fmi2GetDerivatives", MASK_GetDerivatives);
+    CHECK_NX("fmi2GetDerivatives", derivatives, nx);
+    CHECK(update_derivatives(I, "fmi2GetDerivatives"));
+    if (nx > 0) memcpy(derivatives, I->xdot, nx * sizeof(double));
+    END_FUNCTION();
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
-    (void)eventIndicators;
-    (void)ni;
-    ME_NOT_SUPPORTED("fmi2GetEventIndicators");
+    const gw_model *m;
+    int i;
+    BEGIN_ME("fmi2GetEventIndicators", MASK_GetEventIndicators);
+    m = I->m;
+    if (ni != (size_t)m->ne)
+        FAIL("fmi2GetEventIndicators: ni = %lu, the model has %d event indicators",
+             (unsigned long)ni, m->ne);
+    if (ni == 0) goto END;
+    if (!eventIndicators) FAIL("fmi2GetEventIndicators: array is NULL");
+    if (before_init_end(I) && gw_eval_init(I, I->x) != 0)
+        FAIL("fmi2GetEventIndicators: evaluation of the initial state failed");
+    if (gw_eval_evt(I, I->t, I->x, I->e_me) != 0)
+        FAIL("fmi2GetEventIndicators: evaluation of the event indicators failed at t=%.17g",
+             I->t);
+    for (i = 0; i < m->ne; i++)
+        if (!isfinite(I->e_me[i])) {
+            LOG_NONFINITE(I, "fmi2GetEventIndicators: event indicator %s is not finite (%g) "
+                          "at t=%.17g", m->event_names ? m->event_names[i] : "?", I->e_me[i],
+                          I->t);
+            status = nonfinite_status(I);
+            goto END;
+        }
+    memcpy(eventIndicators, I->e_me, ni * sizeof(double));
+    END_FUNCTION();
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
-    (void)x;
-    (void)nx;
-    ME_NOT_SUPPORTED("fmi2GetContinuousStates");
+    BEGIN_ME("fmi2GetContinuousStates", MASK_GetContinuousStates);
+    CHECK_NX("fmi2GetContinuousStates", x, nx);
+    if (before_init_end(I) && gw_eval_init(I, I->x) != 0)
+        FAIL("fmi2GetContinuousStates: evaluation of the initial state failed");
+    if (nx > 0) memcpy(x, I->x, nx * sizeof(double));
+    END_FUNCTION();
 }
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
-    (void)x_nominal;
-    (void)nx;
-    ME_NOT_SUPPORTED("fmi2GetNominalsOfContinuousStates");
+    size_t i;
+    BEGIN_ME("fmi2GetNominalsOfContinuousStates", MASK_GetNominals);
+    CHECK_NX("fmi2GetNominalsOfContinuousStates", x_nominal, nx);
+    if (nx == 0) goto END;
+    if (before_init_end(I)) { /* from the current parameters; 1 where not usable */
+        if (gw_eval_nom(I, x_nominal) != 0)
+            FAIL("fmi2GetNominalsOfContinuousStates: evaluation of the nominals failed");
+        for (i = 0; i < nx; i++)
+            if (!(x_nominal[i] > 0.0) || !isfinite(x_nominal[i])) x_nominal[i] = 1.0;
+    } else {
+        memcpy(x_nominal, I->nominal, nx * sizeof(double));
+    }
+    END_FUNCTION();
 }
 
 /* ---- Co-Simulation ------------------------------------------------------------ */
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {
-    BEGIN("fmi2SetRealInputDerivatives", MASK_NotSupported);
+    BEGIN_CS("fmi2SetRealInputDerivatives", MASK_NotSupported);
     (void)vr;
     (void)nvr;
     (void)order;
@@ -694,7 +1010,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[]) {
-    BEGIN("fmi2GetRealOutputDerivatives", MASK_NotSupported);
+    BEGIN_CS("fmi2GetRealOutputDerivatives", MASK_NotSupported);
     (void)vr;
     (void)nvr;
     (void)order;
@@ -726,7 +1042,7 @@ static void restore_step_start(gw_instance *I, double t0, double h0) {
     I->t = t0;
     I->h_adapt = h0;
     I->fcur_valid = 0;
-    I->y_valid = 0;
+    point_changed(I);
     gw_eval_out(I, I->t, I->x, I->y);
 }
 
@@ -741,6 +1057,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     gw_instance *I = (gw_instance *)c;
     fmi2Status status = fmi2OK;
     (void)noSetFMUStatePriorToCurrentCommunicationPoint;
+    if (!check_interface(I, "fmi2DoStep", fmi2CoSimulation)) return fmi2Error;
     if (I && I->terminated && (I->state == GW_ST_STEP_FAILED || I->state == GW_ST_TERMINATED)) {
         GW_ERROR(I, "fmi2DoStep: simulation terminated at t=%.17g; call fmi2Reset to restart",
                  I->last_successful_time);
@@ -773,7 +1090,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     acc0 = I->n_accepted;
     rej0 = I->n_rejected;
     I->t = tc;
-    I->y_valid = 0;
+    point_changed(I);
 
     r = gw_integrate(I, t_end);
     if (r != GW_INT_ERROR && update_outputs(I, "fmi2DoStep") != fmi2OK) r = GW_INT_ERROR;
@@ -799,7 +1116,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) {
-    BEGIN("fmi2CancelStep", MASK_NotSupported);
+    BEGIN_CS("fmi2CancelStep", MASK_NotSupported);
     FAIL("fmi2CancelStep: fmi2DoStep is never asynchronous (canRunAsynchronuously=false)");
     END_FUNCTION();
 }
@@ -807,7 +1124,7 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
 /* ---- status ------------------------------------------------------------------ */
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
-    BEGIN("fmi2GetStatus", MASK_Status);
+    BEGIN_CS("fmi2GetStatus", MASK_Status);
     if (!value) FAIL("fmi2GetStatus: value is NULL");
     if (s == fmi2DoStepStatus) {
         *value = (fmi2Status)I->last_dostep_status;
@@ -818,7 +1135,7 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
 }
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
-    BEGIN("fmi2GetRealStatus", MASK_Status);
+    BEGIN_CS("fmi2GetRealStatus", MASK_Status);
     if (!value) FAIL("fmi2GetRealStatus: value is NULL");
     if (s == fmi2LastSuccessfulTime)
         *value = I->last_successful_time;
@@ -828,7 +1145,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
-    BEGIN("fmi2GetIntegerStatus", MASK_Status);
+    BEGIN_CS("fmi2GetIntegerStatus", MASK_Status);
     (void)s;
     (void)value;
     status = fmi2Discard; /* no integer status kinds */
@@ -836,7 +1153,7 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-    BEGIN("fmi2GetBooleanStatus", MASK_Status);
+    BEGIN_CS("fmi2GetBooleanStatus", MASK_Status);
     if (!value) FAIL("fmi2GetBooleanStatus: value is NULL");
     if (s == fmi2Terminated)
         *value = I->terminated ? fmi2True : fmi2False;
@@ -846,7 +1163,7 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
-    BEGIN("fmi2GetStringStatus", MASK_Status);
+    BEGIN_CS("fmi2GetStringStatus", MASK_Status);
     (void)s;
     (void)value;
     status = fmi2Discard; /* fmi2PendingStatus: never pending */

@@ -33,6 +33,7 @@ const char *gw_solver_name(int solver) {
     case GW_SOLVER_RK4: return "rk4";
     case GW_SOLVER_DOPRI5: return "dopri5";
     case GW_SOLVER_ROSENBROCK: return "rosenbrock";
+    case GW_SOLVER_DOP853: return "dop853";
     default: return "unknown";
     }
 }
@@ -114,6 +115,7 @@ gw_instance *gw_instance_new(const gw_model *m, const char *name, const fmi2Call
     ALLOC_VEC(I->x_bak, double, nx);
     ALLOC_VEC(I->e_bak, double, ne);
     ALLOC_VEC(I->flags_bak, int, ne);
+    if (gw_solver_alloc(I)) goto fail;
 
     if (fun_alloc(I, &I->f_init, &m->init, 2, 1) || fun_alloc(I, &I->f_ode, &m->ode, 4, 1) ||
         fun_alloc(I, &I->f_out, &m->out, 4, 1) || fun_alloc(I, &I->f_evt, &m->evt, 4, 1) ||
@@ -156,6 +158,8 @@ void gw_instance_free(gw_instance *I) {
     fun_free(I, &I->f_chk);
     fun_free(I, &I->f_nom);
     fun_free(I, &I->f_jac);
+    gw_solver_free(I);
+    gw_instance_me_free(I);
     gw_free(I, I->x);
     gw_free(I, I->s);
     gw_free(I, I->u);
@@ -282,5 +286,45 @@ int gw_rhs(gw_instance *I, double t, const double *x, double *xdot) {
     I->n_rhs++;
     r = f->eval(f->arg, f->res, f->iw, f->w, 0);
     f->arg[0] = NULL; /* never leave a dangling pointer to the stack */
+    return r;
+}
+
+/* ---- Model Exchange and directional derivatives ------------------------------ */
+
+int gw_instance_me_alloc(gw_instance *I) {
+    const gw_model *m = I->m;
+    I->xdot = (double *)gw_alloc(I, (size_t)m->nx, sizeof(double));
+    I->e_me = (double *)gw_alloc(I, (size_t)m->ne, sizeof(double));
+    if (!I->xdot || !I->e_me) return -1;
+    if (m->dir.eval) {
+        if (fun_alloc(I, &I->f_dir, &m->dir, 4, 1)) return -1;
+        I->dir_D = (double *)gw_alloc(I, (size_t)(m->nx + m->ny) * (size_t)(m->nx + m->nu),
+                                      sizeof(double));
+        if (!I->dir_D) return -1;
+        I->f_dir.arg[2] = I->u;
+        I->f_dir.arg[3] = I->p;
+    }
+    I->xdot_valid = 0;
+    I->dir_valid = 0;
+    return 0;
+}
+
+void gw_instance_me_free(gw_instance *I) {
+    fun_free(I, &I->f_dir);
+    gw_free(I, I->xdot);
+    gw_free(I, I->e_me);
+    gw_free(I, I->dir_D);
+    I->xdot = I->e_me = I->dir_D = NULL;
+}
+
+int gw_eval_dir(gw_instance *I, double t, const double *x, double *D) {
+    double tt = t;
+    int r;
+    if (!I->f_dir.eval) return -1;
+    I->f_dir.arg[0] = &tt;
+    I->f_dir.arg[1] = x;
+    I->f_dir.res[0] = D;
+    r = call(&I->f_dir);
+    I->f_dir.arg[0] = NULL;
     return r;
 }

@@ -31,6 +31,8 @@ enum {
     GW_ST_ERROR = 1 << 5,
     GW_ST_FATAL = 1 << 6
 };
+/* Model Exchange states (Co-Simulation never enters them) */
+enum { GW_ST_EVENT_MODE = 1 << 7, GW_ST_CONT_TIME_MODE = 1 << 8 };
 
 /* ---- log categories (order = names in gw_log.c) -------------------------- */
 typedef enum {
@@ -112,6 +114,23 @@ typedef struct gw_instance {
 
     /* CasADi functions with per-instance buffers */
     gw_fun f_init, f_ode, f_out, f_evt, f_chk, f_nom, f_jac;
+
+    /* Model Exchange and directional derivatives (gw_fmi2.c, gw_instance_me_alloc) */
+    int fmu_type;       /* fmi2ModelExchange or fmi2CoSimulation, fixed at instantiation */
+    double *xdot;       /* nx: ode(t, x, u, p) at the current point, valid if xdot_valid */
+    int xdot_valid;
+    double *e_me;       /* ne: scratch for event indicators in Model Exchange */
+    gw_fun f_dir;       /* dir(t, x, u, p) -> D, only if GW_MODEL.dir.eval */
+    double *dir_D;      /* (nx+ny)*(nx+nu), column-major, valid if dir_valid */
+    int dir_valid;
+
+    /* DOP853 and Rosenbrock work memory (gw_solver.c, gw_solver_alloc at instantiation).
+     * Nothing here survives fmi2Get/SetFMUstate: it is recomputed in every step. */
+    double *kx[9]; /* extra stage vectors, nx each */
+    double *rcx;   /* 3*nx: DOP853 dense output coefficients beyond rcont */
+    double *jac;   /* nx*nx: d xdot / d x, column-major (Rosenbrock) */
+    double *lu;    /* nx*nx: LU factors of I/(gamma h) - J, column-major */
+    int *piv;      /* nx: pivot rows of lu */
 } gw_instance;
 
 /* ---- gw_instance.c ------------------------------------------------------- */
@@ -181,5 +200,21 @@ GW_INTERNAL fmi2Status gw_end(gw_instance *I, fmi2Status status);
 
 /* ---- utilities ------------------------------------------------------------- */
 static inline fmi2Status gw_worst(fmi2Status a, fmi2Status b) { return a > b ? a : b; }
+
+/* ---- Model Exchange / directional derivatives (gw_instance.c, gw_events.c) -- */
+/* allocates xdot, e_me and, if the model has `dir`, f_dir and dir_D; 0 on success */
+GW_INTERNAL int gw_instance_me_alloc(gw_instance *I);
+GW_INTERNAL void gw_instance_me_free(gw_instance *I);
+/* D = dir(t, x, u, p); 0 on success */
+GW_INTERNAL int gw_eval_dir(gw_instance *I, double t, const double *x, double *D);
+/* Model Exchange event update at the current point (fmi2NewDiscreteStates): e_now are
+ * the indicators now, I->e those of the previous event update.  An indicator that went
+ * from > 0 to <= 0 (or is <= 0 now and TERMINATE) fires: flag set, logged; I->e = e_now. */
+GW_INTERNAL gw_ev_result gw_events_me_update(gw_instance *I, const double *e_now);
+
+/* ---- gw_solver.c: solver work memory and the solvers gw_integrate implements ---- */
+GW_INTERNAL int gw_solver_alloc(gw_instance *I); /* 0 on success, -1: out of memory */
+GW_INTERNAL void gw_solver_free(gw_instance *I);
+GW_INTERNAL int gw_solver_available(int solver); /* 1 for a known gw_solver value */
 
 #endif /* GW_INSTANCE_H */

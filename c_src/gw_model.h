@@ -72,7 +72,8 @@ typedef enum {
     GW_SOLVER_EULER = 1,
     GW_SOLVER_RK4 = 2,
     GW_SOLVER_DOPRI5 = 3,
-    GW_SOLVER_ROSENBROCK = 4 /* reserved: not yet implemented */
+    GW_SOLVER_ROSENBROCK = 4, /* linearly implicit Rosenbrock RODAS4, uses jac */
+    GW_SOLVER_DOP853 = 5      /* Dormand-Prince 8(5,3) */
 } gw_solver;
 
 /* What happens when an event indicator crosses zero from above. */

@@ -11,8 +11,25 @@
  *   GW_SOLVER_DOPRI5  Dormand-Prince 5(4), error control (RMS norm of
  *                     err_i / (abs_tol*nominal_i + rel_tol*max(|x_i|,|xnew_i|))),
  *                     FSAL, step size bounded by max_step and carried between steps
- * Dense output: DOPRI5's 4th-order continuous extension; cubic Hermite for the fixed
- * step solvers (both in the same 5-coefficient form, see gw_dense_eval).
+ *   GW_SOLVER_DOP853  Dormand-Prince 8(5,3) (Hairer's DOP853): 12 stages + FSAL,
+ *                     Hairer's combined 5th/3rd-order error estimate with the same
+ *                     weights, for tight tolerances
+ *   GW_SOLVER_ROSENBROCK  RODAS4 (Hairer & Wanner): linearly implicit, 6 stages,
+ *                     order 4(3), stiffly accurate, L-stable, for stiff problems.
+ *                     Jacobian: the model's `jac` function; if the model has none,
+ *                     forward differences (nx RHS evaluations, increment
+ *                     sqrt(eps)*max(|x_j|, nominal_j)).  d f/d t by a forward difference
+ *                     (one RHS evaluation per step).  W = I/(gamma h) - J is LU-factored
+ *                     with partial pivoting (dense, in the instance's work arrays); J is
+ *                     evaluated once per accepted step, a rejected step only refactors.
+ *                     Error = weighted RMS norm of the embedded difference, same weights.
+ * All adaptive solvers land exactly on t_end, respect max_step, carry the step size
+ * between communication steps in I->h_adapt (the only solver memory kept between
+ * steps, serialised with the FMU state) and fail with "step size underflow" below
+ * gw_h_min.
+ * Dense output: DOPRI5's 4th-order continuous extension; DOP853's 7th-order one (3
+ * extra stages, evaluated only when an event needs them); RODAS4's 3rd-order one;
+ * cubic Hermite for the fixed step solvers (all in the nested form of gw_dense_eval).
  *
  * Declarations live in gw_instance.h (gw_integrate, gw_dense_prepare, gw_dense_eval);
  * this header only documents the module and the constants it uses.

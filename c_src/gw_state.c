@@ -25,6 +25,11 @@
  *           8*nx       double x nominal
  *           ne         uint8 event flags
  *
+ * The fmi state may also be a Model Exchange one (EventMode, ContinuousTimeMode); a
+ * state of one interface's own modes is refused by an instance of the other interface
+ * (the modes both share -- Instantiated, InitializationMode, Terminated, Error -- hold
+ * nothing interface-specific, so the layout needs no interface field).
+ *
  * Reading rejects a wrong magic, version, size, model sizes or token with
  * fmi2Error and a logged reason.  Logging settings are not part of the state.
  */
@@ -38,7 +43,7 @@
 
 #define MASK_FMUstate                                                                       \
     (GW_ST_INSTANTIATED | GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED |      \
-     GW_ST_TERMINATED | GW_ST_ERROR)
+     GW_ST_TERMINATED | GW_ST_ERROR | GW_ST_EVENT_MODE | GW_ST_CONT_TIME_MODE)
 
 typedef struct {
     size_t size;
@@ -214,7 +219,8 @@ static int check_header(gw_instance *I, const char *fn, const unsigned char *buf
 
 static int valid_fmi_state(int s) {
     return s == GW_ST_INSTANTIATED || s == GW_ST_INIT_MODE || s == GW_ST_STEP_COMPLETE ||
-           s == GW_ST_STEP_FAILED || s == GW_ST_TERMINATED || s == GW_ST_ERROR;
+           s == GW_ST_STEP_FAILED || s == GW_ST_TERMINATED || s == GW_ST_ERROR ||
+           s == GW_ST_EVENT_MODE || s == GW_ST_CONT_TIME_MODE;
 }
 
 /* Apply a validated state to the instance. */
@@ -228,6 +234,13 @@ static int apply_state(gw_instance *I, const char *fn, const unsigned char *buf,
     st = get_i32(&r);
     if (!valid_fmi_state(st)) {
         GW_ERROR(I, "%s: FMU state holds an invalid instance state %d", fn, st);
+        return 0;
+    }
+    if (((st & (GW_ST_EVENT_MODE | GW_ST_CONT_TIME_MODE)) && I->fmu_type != fmi2ModelExchange) ||
+        ((st & (GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED)) && I->fmu_type != fmi2CoSimulation)) {
+        GW_ERROR(I, "%s: FMU state of a %s instance cannot be set into a %s instance", fn,
+                 I->fmu_type == fmi2ModelExchange ? "Co-Simulation" : "Model Exchange",
+                 I->fmu_type == fmi2ModelExchange ? "Model Exchange" : "Co-Simulation");
         return 0;
     }
     I->state = st;
@@ -266,6 +279,8 @@ static int apply_state(gw_instance *I, const char *fn, const unsigned char *buf,
     I->fcur_valid = 0;
     I->k7_valid = 0;
     I->dense_ready = 0;
+    I->xdot_valid = 0;
+    I->dir_valid = 0;
     return 1;
 }
 

@@ -76,7 +76,8 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
         generated = {f"{FUNCTION_FILE}.c", DESC_FILE}
         compile_shared([src / c for c in c_files], generated, [src], root / "binaries" / PLATFORM /
                        f"{identifier}.so", build_dir / "obj")
-        xml = write_model_description(scene, table, identifier, guid, c_files, spec.description)
+        xml = write_model_description(scene, table, identifier, guid, c_files, spec.description,
+                                      model_exchange=True, directional=True)
         (root / "modelDescription.xml").write_text(xml)
         (root / "documentation").mkdir(exist_ok=True)
         (root / "documentation" / "index.html").write_text(write_index_html(scene, table, identifier, guid))

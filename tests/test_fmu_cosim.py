@@ -54,7 +54,7 @@ def test_interface_variables(md):
         assert v[name].unit == unit
     assert (v["fallen"].type, v["fallen"].variability, v["fallen"].initial) == ("Boolean", "discrete", "calculated")
     assert v["solver"].type == "Enumeration"
-    assert [i.name for i in v["solver"].declaredType.items] == ["euler", "rk4", "dopri5"]
+    assert [i.name for i in v["solver"].declaredType.items] == ["euler", "rk4", "dopri5", "rosenbrock", "dop853"]
     for name in ("rel_tol", "abs_tol", "max_step"):
         assert v[name].causality == "parameter"
     cs = md.coSimulation
@@ -250,9 +250,10 @@ def test_fixed_step_solvers_have_their_order(earth_fmu, reference_5s, solver, h,
     assert math.log2(coarse / fine) == pytest.approx(order, abs=0.3)
 
 
+@pytest.mark.parametrize("solver", [3, 4, 5])  # dopri5, rosenbrock, dop853
 @pytest.mark.parametrize("rel_tol,bound", [(1e-6, 1e-3), (1e-9, 1e-6), (1e-12, 1e-8)])
-def test_dopri5_error_follows_tolerance(earth_fmu, reference_5s, rel_tol, bound):
-    err = _final_error(earth_fmu, reference_5s, solver=3, rel_tol=rel_tol, abs_tol=rel_tol / 100, max_step=1.0)
+def test_adaptive_error_follows_tolerance(earth_fmu, reference_5s, solver, rel_tol, bound):
+    err = _final_error(earth_fmu, reference_5s, solver=solver, rel_tol=rel_tol, abs_tol=rel_tol / 100, max_step=1.0)
     assert err < bound
 
 

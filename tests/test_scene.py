@@ -43,7 +43,7 @@ def test_defaults_are_the_paper_scenario():
     ("[initial]\nbeta = 0.0", "[initial] beta: must lie in (0, pi)"),
     ("[initial]\nbeta = 1.0\nbeta_deg = 50", "given twice"),
     ("[initial]\nomega = 1", "[initial] omega: unknown key"),
-    ("[experiment]\nsolver = 'rk45'", "[experiment] solver: unknown solver 'rk45'; valid: euler, rk4, dopri5"),
+    ("[experiment]\nsolver = 'rk45'", "[experiment] solver: unknown solver 'rk45'; valid: euler, rk4, dopri5, rosenbrock, dop853"),
     ("[experiment]\nrel_tol = 0", "[experiment] rel_tol: must be > 0"),
     ("[experiment]\nstop_time = -1", "[experiment] stop_time: must be > 0"),
     ("[experiment]\nstart_time = 5\nstop_time = 2", "[experiment] stop_time: must be greater than start_time"),

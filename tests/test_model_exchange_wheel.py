@@ -3,14 +3,10 @@
 Part A drives the compiled binary through fmpy's low-level FMU2Model API
 (instantiate, setupExperiment, enter/exit initialization, newDiscreteStates,
 enterContinuousTimeMode, setTime, setContinuousStates, getDerivatives, ...) and
-compares with the CasADi model of the same scene.  It needs only the binary: the
-library exports the ME functions whatever modelDescription.xml declares, so it
-works with or without the <ModelExchange> element.
+compares with the CasADi model of the same scene.
 
-Part B (marked NEEDS_ME_ELEMENT) needs modelDescription.xml to declare
-<ModelExchange> (fmu_build/builder.py: write_model_description(model_exchange=True,
-directional=True)): fmpy.validate_fmu, fmpy.simulate_fmu(fmi_type="ModelExchange",
-solver="CVode") against Co-Simulation.  Without the element those tests skip.
+Part B checks the declared interface: the <ModelExchange> element validates, and
+fmpy.simulate_fmu(fmi_type="ModelExchange", solver="CVode") agrees with Co-Simulation.
 """
 
 from __future__ import annotations
@@ -252,13 +248,10 @@ def test_rk4_importer_until_the_wheel_falls(md, unzipped, earth_fmu):
         assert y_me[n] == pytest.approx(y_cs[n], rel=1e-6, abs=1e-6), n
 
 
-# ---- Part B: NEEDS_ME_ELEMENT -- modelDescription.xml must declare <ModelExchange> --------
+# ---- Part B: the declared Model Exchange interface ------------------------------------------
 
 def _need_me(md):
-    if md.modelExchange is None:
-        pytest.skip("NEEDS_ME_ELEMENT: modelDescription.xml declares no <ModelExchange> "
-                    "(fmu_build/builder.py: write_model_description(model_exchange=True, "
-                    "directional=True))")
+    assert md.modelExchange is not None, "modelDescription.xml must declare <ModelExchange>"
 
 
 def test_me_element_validates(md, earth_fmu):

@@ -13,10 +13,11 @@ from fmpy import read_model_description
 
 from fmu_build import build_fmu, parse_scene
 
+STATES = ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")
 BASE_VARIABLES = {
     "M", "R", "k_diam", "k_axial", "beta_min", "g", "solver", "rel_tol", "abs_tol", "max_step",
-    "x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot", "z", "vx", "vy", "energy", "fallen",
-}
+    *STATES, "z", "vx", "vy", "energy", "fallen",
+} | {f"der({s})" for s in STATES}  # state derivatives, for Model Exchange
 EFFECT_VARIABLES = {  # what each effect adds, by name (docs/effects.md)
     "slope": {"slope_angle", "slope_direction"},
     "rolling_resistance": {"c_rr", "rr_omega_eps", "rolling_resistance_torque", "lifted_off"},
@@ -26,7 +27,8 @@ EFFECT_VARIABLES = {  # what each effect adds, by name (docs/effects.md)
     "energy": {"kinetic_energy", "potential_energy", "contact_x", "contact_y"},
     "gyrover": {"m_fly", "L_pend", "I_fly_axial", "I_fly_diam", "flywheel_rate", "tilt_omega", "tilt_zeta",
                 "tilt_cmd", "drive_torque", "theta_p", "theta_p_dot", "tilt", "tilt_rate", "tilt_torque",
-                "flywheel_torque", "flywheel_momentum"},
+                "flywheel_torque", "flywheel_momentum",
+                "der(theta_p)", "der(theta_p_dot)", "der(tilt)", "der(tilt_rate)"},
 }
 
 

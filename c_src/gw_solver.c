@@ -162,6 +162,21 @@ static const double ros_d31 = -0.6762803392801253e+00, ros_d32 = 0.6087714651680
                     ros_d33 = 0.1643084320892478e+02, ros_d34 = 0.2476722511418386e+02,
                     ros_d35 = -0.6594389125716872e+01;
 
+/* Feasibility guard: once the step-size controller has settled (GW_SETTLE steps into a
+ * communication step), a remainder needing more than GW_MAX_STEPS_AHEAD internal steps is
+ * refused at once with a reason instead of running for hours (absurd rates, wrong solver). */
+#define GW_MAX_STEPS_AHEAD 1e9
+#define GW_SETTLE 20
+
+static int too_many_steps(gw_instance *I, double remaining, double h, unsigned long n_here) {
+    if (n_here <= GW_SETTLE || !(remaining > GW_MAX_STEPS_AHEAD * h)) return 0;
+    GW_ERROR(I, "at t=%.17g the remaining %g s of this communication step would need about %.3g "
+             "internal steps of h=%g (limit %.0e): the dynamics are far too fast for the tolerance "
+             "(huge rates?) or stiff (try solver rosenbrock)", I->t, remaining, remaining / h, h,
+             GW_MAX_STEPS_AHEAD);
+    return 1;
+}
+
 double gw_h_min(double t) {
     double at = fabs(t);
     return 16.0 * DBL_EPSILON * (at > 1.0 ? at : 1.0);
@@ -670,8 +685,10 @@ static gw_int_result integrate_fixed(gw_instance *I, double t_end) {
     unsigned long long n, i;
     int events = 0;
     if (nd < 1.0) nd = 1.0;
-    if (nd > 1e15) {
-        GW_ERROR(I, "communication step %g needs too many steps of max_step=%g", H, I->max_step);
+    if (nd > GW_MAX_STEPS_AHEAD) {
+        GW_ERROR(I, "communication step %g would need %.3g steps of max_step=%g (limit %.0e): "
+                 "raise max_step or shorten the communication step", H, nd, I->max_step,
+                 GW_MAX_STEPS_AHEAD);
         return GW_INT_ERROR;
     }
     n = (unsigned long long)nd;
@@ -730,6 +747,7 @@ static double initial_step(gw_instance *I, double hmax, double order) {
 
 static gw_int_result integrate_dopri5(gw_instance *I, double t_end) {
     int events = 0, rejected_last = 0;
+    unsigned long n_here = 0;
     const double hmax = I->max_step;
     if (ensure_f0(I)) return GW_INT_ERROR;
     if (!(I->h_adapt > 0.0)) I->h_adapt = initial_step(I, hmax, 5.0);
@@ -745,6 +763,7 @@ static gw_int_result integrate_dopri5(gw_instance *I, double t_end) {
             last = 1;
         }
         t1 = last ? t_end : I->t + h;
+        if (!last && too_many_steps(I, remaining, h, ++n_here)) return GW_INT_ERROR;
         if (!last && (h < gw_h_min(I->t) || !(t1 > I->t))) {
             /* the controller asks for steps that no longer advance time */
             GW_ERROR(I, "step size underflow at t=%.17g (h=%g)", I->t, h);
@@ -800,7 +819,7 @@ static gw_int_result integrate_adaptive(gw_instance *I, double t_end) {
     const double safety = 0.9, hmax = I->max_step;
     int events = 0, rejected_last = 0, jac_valid = 0;
     double lu_h = 0.0; /* step size of the factors in I->lu (0: none) */
-    unsigned long n_jac = 0, n_lu = 0, rhs_jac = 0;
+    unsigned long n_jac = 0, n_lu = 0, rhs_jac = 0, n_here = 0;
     const double t_begin = I->t;
     gw_int_result result = GW_INT_OK;
     if (ensure_f0(I)) return GW_INT_ERROR;
@@ -817,6 +836,7 @@ static gw_int_result integrate_adaptive(gw_instance *I, double t_end) {
             last = 1;
         }
         t1 = last ? t_end : I->t + h;
+        if (!last && too_many_steps(I, remaining, h, ++n_here)) return GW_INT_ERROR;
         if (!last && (h < gw_h_min(I->t) || !(t1 > I->t))) {
             GW_ERROR(I, "step size underflow at t=%.17g (h=%g, solver %s)", I->t, h,
                      gw_solver_name(I->solver));

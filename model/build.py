@@ -232,7 +232,7 @@ class _Assembler:
             ode_mech = ca.vertcat(qd_free, qdd_all[:nf])
             S0 = ca.substitute(S, q_free, q0)
             init = ca.vertcat(q0, ca.mtimes(S0, v0), e_start)
-            nominal_rates = [1.0] * nf
+            nominal_rates = [P["R"], P["R"]] + [1.0] * (nf - 2)  # x_dot, y_dot scale like R sqrt(g/R)
             extra_outputs = [
                 (Quantity("constraint_violation", "m/s", "|A(q) q_dot|, drift of the rolling constraint"),
                  ca.norm_2(violation)),
@@ -306,8 +306,11 @@ class _Assembler:
         ctx.check(ca.sin(beta0) - ca.sin(P["beta_min"]),
                   "initial lean beta must lie between beta_min and pi - beta_min (the wheel is already flat)")
         p = ca.vertcat(*[P[qq.name] for qq in ctx.parameters])
-        nominal = ca.vertcat(P["R"], P["R"], *([1.0] * (nf - 2)), *nominal_rates,
-                             *[1.0] * len(ctx.states))
+        # absolute tolerances scale with the wheel: positions with R, rates with sqrt(g/R),
+        # energies with M g R (angles and effect states of order 1 keep 1)
+        rate = ctx.natural_rate()
+        nominal = ca.vertcat(P["R"], P["R"], *([1.0] * (nf - 2)), *[rate * r for r in nominal_rates],
+                             *[st.nominal for st in ctx.states])
         return ModelSpec(
             name=name, description=description, t=ca.SX.sym("t"), x=x, x_names=x_names,
             s=s, starts=starts, u=ca.vertcat(*[sym for _, sym in ctx.inputs]) if ctx.inputs else ca.SX(0, 1),

@@ -42,6 +42,7 @@ class State:
     sym: ca.SX
     derivative: ca.SX | None = None
     output: bool = True
+    nominal: ca.SX | float = 1.0  # scale for the absolute tolerance
 
 
 @dataclass
@@ -112,6 +113,17 @@ class WheelContext:
         sym = ca.SX.sym(quantity.name)
         self.inputs.append((quantity, sym))
         return sym
+
+    def gravity_magnitude(self) -> ca.SX:
+        return ca.norm_2(self.gravity) if self.gravity is not None else ca.SX(0)
+
+    def natural_rate(self) -> ca.SX:
+        """sqrt(g / R), the wheel's own time scale, floored at g = 1e-3 m/s^2 (tolerance scaling)."""
+        return ca.sqrt(ca.fmax(self.gravity_magnitude(), 1e-3) / self.par["R"])
+
+    def energy_scale(self) -> ca.SX:
+        """M g R, floored at g = 1e-3 m/s^2 (tolerance scaling of energy states)."""
+        return self.par["M"] * self.par["R"] * ca.fmax(self.gravity_magnitude(), 1e-3)
 
     def state(self, quantity: Quantity, output: bool = True) -> State:
         st = State(quantity, ca.SX.sym(quantity.name), None, output)

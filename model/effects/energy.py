@@ -24,10 +24,10 @@ class Energy(Effect):
             ctx.output(Quantity("dissipated_power", "W", "power lost to dissipative effects (>= 0)"), late["P_diss"])
             st = ctx.state(Quantity("dissipated_energy", "J", "energy lost to dissipative effects since the start",
                                     0.0))
-            st.derivative = late["P_diss"]
+            st.derivative, st.nominal = late["P_diss"], ctx.energy_scale()
         if "actuator" in kinds:
             ctx.output(Quantity("actuator_power", "W", "power delivered by the actuators"), late["P_act"])
             st = ctx.state(Quantity("actuator_work", "J", "work done by the actuators since the start", 0.0))
-            st.derivative = late["P_act"]
+            st.derivative, st.nominal = late["P_act"], ctx.energy_scale()
         ctx.output(Quantity("contact_x", "m", "contact point x"), ctx.kin.contact[0])
         ctx.output(Quantity("contact_y", "m", "contact point y"), ctx.kin.contact[1])

@@ -165,7 +165,8 @@ static void test_nonfinite(void) {
     CHECK_NEAR(getr(c, VR_X), 2.0, 1e-8);
     log_clear();
     CHECK_STATUS(fmi2DoStep(c, 0.5, 1.0, fmi2True), fmi2Error);
-    CHECK(log_contains("step size underflow at t=") || log_contains("not finite"));
+    CHECK(log_contains("step size underflow at t=") || log_contains("not finite") ||
+          log_contains("internal steps of h="));
     CHECK_NEAR(getr(c, VR_X), 2.0, 1e-8); /* back at the start of the step */
     CHECK_STATUS(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t), fmi2OK);
     CHECK(t == 0.5);

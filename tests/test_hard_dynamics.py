@@ -1,0 +1,201 @@
+"""Hard cases, families 1-4: near flat, Euler's disk, fast spin, long horizon.
+
+Each asserts physics (energy, lean, located event time, agreement with a tight independent
+reference), not just "no exception". Longer runs (10^4 s) live in examples/hard_cases.py.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
+
+from conftest import PAPER, SCENES, CasadiWheel
+from fmi_helpers import Slave
+from fmu_build import build_fmu, load_scene, parse_scene
+
+STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
+TIGHT = dict(rel_tol=1e-12, abs_tol=1e-14)
+
+
+def _reference(wheel: CasadiWheel, x0, t_end, beta_min=None):
+    """scipy DOP853 at rtol 1e-13 on the CasADi model, with the fall as a terminal event."""
+    from scipy.integrate import solve_ivp
+    events = None
+    if beta_min is not None:
+        def fall(t, x):
+            return math.sin(x[3]) - math.sin(beta_min)
+        fall.terminal, fall.direction = True, -1
+        events = fall
+    sol = solve_ivp(wheel.rhs, (0.0, t_end), x0, method="DOP853", rtol=1e-13, atol=1e-15, events=events)
+    assert sol.status in (0, 1)
+    return sol
+
+
+def _run_until(fmu, stop, h, **start):
+    """Step with h until stop or the fall; returns (time, states, fallen, energy0, energy)."""
+    s = Slave(fmu)
+    try:
+        s.init(**start)
+        e0 = s.get("energy")
+        t, fallen = 0.0, False
+        while t < stop - 1e-12:
+            try:
+                s.slave.doStep(t, min(h, stop - t))
+                t = min(t + h, stop)
+            except FMICallException as exc:
+                assert exc.status == 2 and s.slave.getBooleanStatus(fmi2Terminated), s.log_text()
+                t, fallen = s.slave.getRealStatus(fmi2LastSuccessfulTime), True
+                break
+        values = np.array(s.get(*STATES))
+        assert np.all(np.isfinite(values))
+        return t, values, fallen, e0, s.get("energy")
+    finally:
+        s.free()
+
+
+# -- 1. near flat ----------------------------------------------------------------------
+
+def test_near_flat_without_spin_falls_at_the_reference_time(earth_fmu):
+    """2 deg above the ground, at rest: it falls; the event is located as the reference's."""
+    beta0 = math.radians(2.0)
+    wheel = CasadiWheel(**PAPER)
+    ref = _reference(wheel, wheel.x0(beta=beta0, gamma_dot=0.0), 5.0, beta_min=0.02)
+    t, x, fallen, e0, e = _run_until(earth_fmu, 5.0, 0.05, beta=beta0, gamma_dot=0.0, solver=5, **TIGHT)
+    assert fallen
+    assert t == pytest.approx(ref.t_events[0][0], abs=1e-9)
+    assert math.sin(x[3]) == pytest.approx(math.sin(0.02), abs=1e-12)
+    assert e == pytest.approx(e0, rel=1e-10)
+
+
+@pytest.mark.parametrize("solver", [3, 5])
+def test_near_flat_spinning_disc_precesses_without_blowing_up(earth_fmu, solver):
+    """2 deg above the ground, precessing about a fixed centre (eq. 52 with rho = 0): the
+    Euler-angle singularity at beta = 0 is near, alpha_dot = 81 rad/s; the motion stays steady
+    and matches the reference."""
+    beta0 = math.radians(2.0)
+    ad = math.sqrt(PAPER["g"] / (PAPER["k_diam"] * PAPER["R"] * math.sin(beta0)))
+    start = dict(beta=beta0, alpha_dot=ad, gamma_dot=-math.cos(beta0) * ad)
+    wheel = CasadiWheel(**PAPER)
+    ref = _reference(wheel, wheel.x0(**start), 2.0)
+    t, x, fallen, e0, e = _run_until(earth_fmu, 2.0, 0.1, solver=solver, **start, **TIGHT)
+    assert not fallen
+    np.testing.assert_allclose(x[3], beta0, atol=1e-8)  # the lean holds
+    np.testing.assert_allclose(x, ref.y[:, -1], rtol=1e-8, atol=1e-7)
+    assert e == pytest.approx(e0, rel=1e-10)
+
+
+# -- 2. Euler's disk ----------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def euler_disk(tmp_path_factory):
+    scene = load_scene(SCENES / "euler_disk.toml")
+    return build_fmu(scene, tmp_path_factory.mktemp("disk") / "euler_disk.fmu")
+
+
+def test_euler_disk_precession_grows_like_beta_to_the_minus_half(euler_disk):
+    from fmpy import simulate_fmu
+    r = simulate_fmu(str(euler_disk.fmu), output_interval=1e-3)
+    beta, ad = r["beta"], np.abs(r["alpha_dot"])
+    assert r["fallen"][-1]
+    steady = np.sqrt(9.81 / (0.25 * 0.0375 * np.sin(beta)))  # eq. 52 with rho = 0
+    ratio = ad / steady  # quasi-steady all the way down, lagging as dissipation lowers the lean
+    assert np.all((ratio > 0.8) & (ratio < 1.01))
+    late = (beta < 0.3) & (beta > 0.06)
+    slope = np.polyfit(np.log(np.sin(beta[late])), np.log(ad[late]), 1)[0]
+    assert slope == pytest.approx(-0.5, abs=0.08)
+    assert ad[-1] > 2.5 * ad[0]
+
+
+@pytest.mark.parametrize("solver,tol", [(5, 1e-12), (3, 1e-12), (4, 1e-10)])
+def test_euler_disk_fall_located_to_a_nanosecond(euler_disk, solver, tol):
+    """The fall of the dissipating disk, located on the dense output, agrees with scipy DOP853
+    at rtol 1e-13 with its own event location to 1e-9 s."""
+    spec = euler_disk.spec
+    from scipy.integrate import solve_ivp
+    f = spec.functions()
+    p = np.array([q.start for q in spec.parameters])
+    x0 = np.array(f["init"]([q.start for q in spec.starts], p)).ravel()
+
+    def fall(t, x):
+        return math.sin(x[3]) - math.sin(0.05)
+    fall.terminal, fall.direction = True, -1
+    ref = solve_ivp(lambda t, x: np.array(f["ode"](t, x, [], p)).ravel(), (0, 60), x0, method="DOP853",
+                    rtol=1e-13, atol=1e-15, events=fall)
+    t, x, fallen, _, _ = _run_until(euler_disk.fmu, 60.0, 1.0, solver=solver, rel_tol=tol, abs_tol=tol * 1e-2,
+                                    max_step=1.0)
+    assert fallen
+    assert t == pytest.approx(ref.t_events[0][0], abs=1e-9)
+
+
+# -- 3. fast spin ----------------------------------------------------------------------
+
+@pytest.mark.parametrize("solver", [3, 4, 5])
+def test_fast_spin_2000_rad_s_upright(earth_fmu, solver):
+    """gamma_dot = 2000 rad/s (rim at 340 m/s), lean perturbed by 1 mrad: gyroscopically stiff,
+    the lean stays within the perturbation, energy is conserved, the reference agrees."""
+    start = dict(beta=math.pi / 2 - 1e-3, gamma_dot=2000.0)
+    wheel = CasadiWheel(**PAPER)
+    ref = _reference(wheel, wheel.x0(**start), 0.2)
+    t, x, fallen, e0, e = _run_until(earth_fmu, 0.2, 0.01, solver=solver, rel_tol=1e-10, abs_tol=1e-12,
+                                     max_step=1.0, **start)
+    assert not fallen
+    assert abs(x[3] - math.pi / 2) < 2e-3
+    assert e == pytest.approx(e0, rel=1e-9)
+    np.testing.assert_allclose(x[3:], ref.y[3:, -1], atol=1e-6 * 2000)
+
+
+@pytest.fixture(scope="module")
+def fast_flywheel(tmp_path_factory):
+    text = (SCENES / "gyrover_steering.toml").read_text().replace("flywheel_rate = 400.0", "flywheel_rate = 1047.2")
+    return build_fmu(parse_scene(text, "fast_flywheel.toml"), tmp_path_factory.mktemp("fly") / "fast.fmu").fmu
+
+
+def _fast_flywheel_run(fmu, solver):
+    s = Slave(fmu)
+    try:
+        s.init(solver=solver, rel_tol=1e-10, abs_tol=1e-12, beta=math.pi / 2, gamma_dot=10.0)
+        e0 = s.get("energy")
+        s.set(tilt_cmd=0.2)
+        t = 0.0
+        for _ in range(100):
+            s.slave.doStep(t, 0.01)
+            t += 0.01
+        return e0, s.get("energy", "actuator_work"), np.array(s.get(*STATES))
+    finally:
+        s.free()
+
+
+def test_fast_flywheel_10000_rpm(fast_flywheel):
+    """Flywheel at 10^4 rpm, a tilt command step of 0.2 rad: the wheel leans (by ~0.05 rad) but
+    stays up, the motors' work balances the energy, and the explicit DOPRI5 and the implicit
+    Rosenbrock method (two independent integrators) agree."""
+    e0, (e, w), x_dopri = _fast_flywheel_run(fast_flywheel, 3)
+    _, _, x_ros = _fast_flywheel_run(fast_flywheel, 4)
+    assert e - e0 == pytest.approx(w, abs=1e-8 * e0)
+    assert 0.01 < abs(x_dopri[3] - math.pi / 2) < 0.2
+    np.testing.assert_allclose(x_ros, x_dopri, rtol=1e-6, atol=1e-6)
+
+
+# -- 4. long horizon -------------------------------------------------------------------
+
+@pytest.mark.parametrize("solver,settings,bound", [
+    (5, dict(rel_tol=1e-10, abs_tol=1e-12), 1e-10),
+    (3, dict(rel_tol=1e-10, abs_tol=1e-12), 1e-9),
+    (2, dict(max_step=2e-3), 1e-10),
+    (4, dict(rel_tol=1e-10, abs_tol=1e-12), 1e-9),
+])
+def test_long_horizon_energy_drift_is_bounded(earth_fmu, solver, settings, bound):
+    """300 s of conservative rolling (the paper wheel on the moon): relative energy drift bounded."""
+    s = Slave(earth_fmu)
+    try:
+        s.init(g=1.625, solver=solver, **{"max_step": 10.0, **settings})
+        e0 = s.get("energy")
+        s.slave.doStep(0.0, 300.0)
+        e, beta = s.get("energy", "beta")
+    finally:
+        s.free()
+    assert abs(e - e0) / e0 < bound
+    assert 0.02 < beta < math.pi - 0.02

@@ -2,11 +2,13 @@
  * gw_events.c -- state events.  After every accepted internal step the event
  * indicators are evaluated at the end of the step; every indicator that went from
  * > 0 to <= 0 is located on the dense output by the Illinois method (bracketing,
- * safeguarded by bisection) to |dt| <= 1e-12 max(1, |t|).  The earliest crossing
+ * safeguarded by bisection) to |dt| <= min(1e-12 max(1, |t|), 1e-9 of the step) (at
+ * least 4 ulps of t).  The earliest crossing
  * wins; the state at the event is the dense output at the located time, which is
  * the right end of the final bracket, so the indicator there is <= 0 and it
  * cannot fire again until it has become positive.
  */
+#include <float.h>
 #include <math.h>
 
 #include "gw_instance.h"
@@ -28,7 +30,12 @@ static int indicator(gw_instance *I, int i, double t, double *g) {
 /* Locate the crossing of indicator i in [a, b], fa > 0 >= fb.  Returns the right end
  * of the final bracket (g <= 0 there). */
 static int locate(gw_instance *I, int i, double a, double fa, double b, double fb, double *t_out) {
-    const double tol = 1e-12 * (fabs(b) > 1.0 ? fabs(b) : 1.0);
+    /* 1e-12 s (relative beyond |t| = 1), but never coarser than 1e-9 of the step: a step of
+     * 1e-10 s (beta_dot = 1e9 rad/s) needs its event to 1e-19 s, not 1e-12 s = 1e-3 rad */
+    const double t_abs = fabs(b) > fabs(a) ? fabs(b) : fabs(a);
+    const double tol_t = 1e-12 * (t_abs > 1.0 ? t_abs : 1.0), tol_w = 1e-9 * (b - a);
+    const double tol_eps = 4.0 * DBL_EPSILON * t_abs;
+    const double tol = tol_t < tol_w ? tol_t : (tol_w > tol_eps ? tol_w : tol_eps);
     double width = b - a;
     int side = 0, bisect = 0, it;
     for (it = 0; it < GW_EVENT_MAX_ITER && (b - a) > tol; it++) {

@@ -162,18 +162,33 @@ static const double ros_d31 = -0.6762803392801253e+00, ros_d32 = 0.6087714651680
                     ros_d33 = 0.1643084320892478e+02, ros_d34 = 0.2476722511418386e+02,
                     ros_d35 = -0.6594389125716872e+01;
 
-/* Feasibility guard: once the step-size controller has settled (GW_SETTLE steps into a
- * communication step), a remainder needing more than GW_MAX_STEPS_AHEAD internal steps is
- * refused at once with a reason instead of running for hours (absurd rates, wrong solver). */
+/* Feasibility guard: a communication step whose remainder would need more than
+ * GW_MAX_STEPS_AHEAD internal steps at the step size the controller has settled on is refused
+ * at once with a reason instead of running for hours (absurd rates, wrong solver).
+ * "Settled": GW_SETTLE consecutive attempts, each after an accepted step and not growing h by
+ * more than 2x, all projecting too many steps.  A transient (Rosenbrock at 1e9 rad/s resolves
+ * the nutation with h = 4e-9 s for a while, then damps it and takes 0.05 s steps) or a wall
+ * approached by accepted / rejected steps (a right-hand side turning NaN ends in the step size
+ * underflow error) breaks the run.  Steps the controller chose for accuracy (h < max_step) get
+ * the tighter limit GW_MAX_STEPS_CONTROLLED: DOP853 settles at h = 4.6e-9 s for gamma_dot =
+ * 1e9 rad/s (2e8 steps, minutes, for a 1 s step), DOPRI5 at 7.6e-10 s.  Steps held at max_step
+ * are the user's explicit choice and keep the limit of the fixed-step solvers. */
 #define GW_MAX_STEPS_AHEAD 1e9
-#define GW_SETTLE 20
+#define GW_MAX_STEPS_CONTROLLED 1e8
+#define GW_SETTLE 100
 
-static int too_many_steps(gw_instance *I, double remaining, double h, unsigned long n_here) {
-    if (n_here <= GW_SETTLE || !(remaining > GW_MAX_STEPS_AHEAD * h)) return 0;
+static int too_many_steps(gw_instance *I, double remaining, double h, double h_prev,
+                          int rejected_last, unsigned long *n_fast) {
+    const double limit = h < I->max_step ? GW_MAX_STEPS_CONTROLLED : GW_MAX_STEPS_AHEAD;
+    if (rejected_last || h > 2.0 * h_prev || !(remaining > limit * h)) {
+        *n_fast = 0;
+        return 0;
+    }
+    if (++(*n_fast) <= GW_SETTLE) return 0;
     GW_ERROR(I, "at t=%.17g the remaining %g s of this communication step would need about %.3g "
              "internal steps of h=%g (limit %.0e): the dynamics are far too fast for the tolerance "
-             "(huge rates?) or stiff (try solver rosenbrock)", I->t, remaining, remaining / h, h,
-             GW_MAX_STEPS_AHEAD);
+             "(huge rates?)%s", I->t, remaining, remaining / h, h, limit,
+             I->solver == GW_SOLVER_ROSENBROCK ? "" : " or stiff (try solver rosenbrock)");
     return 1;
 }
 
@@ -229,6 +244,38 @@ static int step_euler(gw_instance *I, double h) {
     return 0;
 }
 
+/* max_i |a_i - b_i| / nominal_i */
+static double scaled_diff(const gw_instance *I, const double *a, const double *b) {
+    int i;
+    double m = 0.0;
+    for (i = 0; i < I->m->nx; i++) {
+        double d = fabs(a[i] - b[i]) / I->nominal[i];
+        if (d > m || d != d) m = d;
+    }
+    return m;
+}
+
+/* Explicit fixed steps far beyond their stability limit produce garbage that can cross event
+ * indicators; refuse them. For f = lambda y the RK4 stages give |k3 - k2| / |k2 - k1| =
+ * h |lambda| / 2, which is O(h) for a resolved motion: above GW_RK4_UNSTABLE (h |lambda| > 20,
+ * RK4 is stable up to 2.8) the step means nothing. */
+#define GW_RK4_UNSTABLE 10.0
+
+static int rk4_unstable(gw_instance *I, double h) {
+    const double d21 = scaled_diff(I, I->k[1], I->k[0]), d32 = scaled_diff(I, I->k[2], I->k[1]);
+    double k1 = 0.0;
+    int i;
+    for (i = 0; i < I->m->nx; i++) {
+        double a = fabs(I->k[0][i]) / I->nominal[i];
+        if (a > k1) k1 = a;
+    }
+    if (!(d32 > GW_RK4_UNSTABLE * d21) || !(d32 > 1e-6 * k1)) return 0;
+    GW_ERROR(I, "rk4 is unstable at t=%.17g with max_step=%g: h |lambda| ~ %.3g (stable up to 2.8); "
+             "the dynamics are faster than the step: reduce max_step or use an adaptive solver",
+             I->t, h, d21 > 0.0 ? 2.0 * d32 / d21 : HUGE_VAL);
+    return 1;
+}
+
 static int step_rk4(gw_instance *I, double h, double t1) {
     int i, nx = I->m->nx;
     const double t = I->t, hh = 0.5 * h;
@@ -238,6 +285,7 @@ static int step_rk4(gw_instance *I, double h, double t1) {
     if (rhs(I, t + hh, xt, k2)) return -1;
     for (i = 0; i < nx; i++) xt[i] = x[i] + hh * k2[i];
     if (rhs(I, t + hh, xt, k3)) return -1;
+    if (rk4_unstable(I, h)) return -1;
     for (i = 0; i < nx; i++) xt[i] = x[i] + h * k3[i];
     if (rhs(I, t1, xt, k4)) return -1;
     for (i = 0; i < nx; i++)
@@ -683,7 +731,8 @@ static gw_int_result integrate_fixed(gw_instance *I, double t_end) {
     const double t0 = I->t, H = t_end - t0;
     double nd = ceil(H / I->max_step - 1e-12);
     unsigned long long n, i;
-    int events = 0;
+    int events = 0, growing;
+    double d_prev;
     if (nd < 1.0) nd = 1.0;
     if (nd > GW_MAX_STEPS_AHEAD) {
         GW_ERROR(I, "communication step %g would need %.3g steps of max_step=%g (limit %.0e): "
@@ -692,6 +741,8 @@ static gw_int_result integrate_fixed(gw_instance *I, double t_end) {
         return GW_INT_ERROR;
     }
     n = (unsigned long long)nd;
+    d_prev = 0.0;
+    growing = 0;
     for (i = 1; i <= n; i++) {
         /* deterministic grid: t_i = t0 + i*H/n, the last one exactly t_end */
         const double ti = (i == n) ? t_end : t0 + (double)i * H / (double)n;
@@ -700,7 +751,18 @@ static gw_int_result integrate_fixed(gw_instance *I, double t_end) {
             gw_int_result r;
             if (ensure_f0(I)) return GW_INT_ERROR;
             if (I->solver == GW_SOLVER_EULER) {
+                /* Euler's instability: increments that more than double, step after step */
+                double d;
                 step_euler(I, h);
+                d = scaled_diff(I, I->xnew, I->x);
+                growing = (d > 2.0 * d_prev && d_prev > 1e-12) ? growing + 1 : 0;
+                d_prev = d;
+                if (growing >= 4) {
+                    GW_ERROR(I, "euler is unstable at t=%.17g with max_step=%g: the increments grew "
+                             "more than x2 per step for 4 steps; reduce max_step or use another solver",
+                             I->t, h);
+                    return GW_INT_ERROR;
+                }
             } else if (step_rk4(I, h, ti)) {
                 return GW_INT_ERROR;
             }
@@ -747,7 +809,8 @@ static double initial_step(gw_instance *I, double hmax, double order) {
 
 static gw_int_result integrate_dopri5(gw_instance *I, double t_end) {
     int events = 0, rejected_last = 0;
-    unsigned long n_here = 0;
+    unsigned long n_fast = 0; /* attempts in a row projecting too many steps (guard) */
+    double h_prev = 0.0; /* the previous attempt's step size (growth test of the guard) */
     const double hmax = I->max_step;
     if (ensure_f0(I)) return GW_INT_ERROR;
     if (!(I->h_adapt > 0.0)) I->h_adapt = initial_step(I, hmax, 5.0);
@@ -763,7 +826,9 @@ static gw_int_result integrate_dopri5(gw_instance *I, double t_end) {
             last = 1;
         }
         t1 = last ? t_end : I->t + h;
-        if (!last && too_many_steps(I, remaining, h, ++n_here)) return GW_INT_ERROR;
+        if (!last && too_many_steps(I, remaining, h, h_prev, rejected_last, &n_fast))
+            return GW_INT_ERROR;
+        h_prev = h;
         if (!last && (h < gw_h_min(I->t) || !(t1 > I->t))) {
             /* the controller asks for steps that no longer advance time */
             GW_ERROR(I, "step size underflow at t=%.17g (h=%g)", I->t, h);
@@ -819,7 +884,8 @@ static gw_int_result integrate_adaptive(gw_instance *I, double t_end) {
     const double safety = 0.9, hmax = I->max_step;
     int events = 0, rejected_last = 0, jac_valid = 0;
     double lu_h = 0.0; /* step size of the factors in I->lu (0: none) */
-    unsigned long n_jac = 0, n_lu = 0, rhs_jac = 0, n_here = 0;
+    unsigned long n_jac = 0, n_lu = 0, rhs_jac = 0, n_fast = 0;
+    double h_prev = 0.0; /* the previous attempt's step size (growth test of the guard) */
     const double t_begin = I->t;
     gw_int_result result = GW_INT_OK;
     if (ensure_f0(I)) return GW_INT_ERROR;
@@ -836,7 +902,9 @@ static gw_int_result integrate_adaptive(gw_instance *I, double t_end) {
             last = 1;
         }
         t1 = last ? t_end : I->t + h;
-        if (!last && too_many_steps(I, remaining, h, ++n_here)) return GW_INT_ERROR;
+        if (!last && too_many_steps(I, remaining, h, h_prev, rejected_last, &n_fast))
+            return GW_INT_ERROR;
+        h_prev = h;
         if (!last && (h < gw_h_min(I->t) || !(t1 > I->t))) {
             GW_ERROR(I, "step size underflow at t=%.17g (h=%g, solver %s)", I->t, h,
                      gw_solver_name(I->solver));

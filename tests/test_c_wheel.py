@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from test_c_runtime import FMI_HEADERS, STRICT, TESTS_C, VALGRIND, run
+from c_programs import FMI_HEADERS, SANITIZER_ENV, STRICT, TESTS_C, VALGRIND, run
 
 
 @pytest.fixture(scope="module")
@@ -28,8 +28,7 @@ def _compile(sources: Path, out: Path, extra: list[str]) -> Path:
 def test_wheel_under_sanitizers(wheel_sources, tmp_path):
     exe = _compile(wheel_sources, tmp_path, ["-O1", "-g", "-fno-omit-frame-pointer",
                                              "-fsanitize=address,undefined", "-fno-sanitize-recover=all"])
-    run([str(exe)], env=dict(os.environ, ASAN_OPTIONS="detect_leaks=1",
-                             UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"))
+    run([str(exe)], env=dict(os.environ, **SANITIZER_ENV))
 
 
 def test_wheel_under_valgrind(wheel_sources, tmp_path):

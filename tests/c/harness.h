@@ -146,6 +146,26 @@ static int h_finish(const char *what) {
     return h_failures == 0 ? 0 : 1;
 }
 
+
+/* ---- one-variable get/set, as every driver needs them -------------------------- */
+static inline double getr(fmi2Component c, fmi2ValueReference vr) {
+    double v = NAN;
+    fmi2GetReal(c, &vr, 1, &v);
+    return v;
+}
+static inline fmi2Status setr(fmi2Component c, fmi2ValueReference vr, double v) {
+    return fmi2SetReal(c, &vr, 1, &v);
+}
+static inline fmi2Status seti(fmi2Component c, fmi2ValueReference vr, int v) {
+    fmi2Integer x = v;
+    return fmi2SetInteger(c, &vr, 1, &x);
+}
+static inline int getb(fmi2Component c, fmi2ValueReference vr) {
+    fmi2Boolean b = -1;
+    fmi2GetBoolean(c, &vr, 1, &b);
+    return b;
+}
+
 static inline fmi2Status gw_worst_test(fmi2Status a, fmi2Status b) { return a > b ? a : b; }
 
 #endif

@@ -6,11 +6,6 @@
 
 #define TOKEN "{decay-0000-0000-0000-000000000003}"
 
-static double getr(fmi2Component c, fmi2ValueReference vr) {
-    double v = NAN;
-    fmi2GetReal(c, &vr, 1, &v);
-    return v;
-}
 
 static void run(int solver, double max_step, double h, double tol) {
     fmi2Component c =

@@ -16,19 +16,6 @@ enum { VR_K = 0, VR_C = 1, VR_POS_LIM = 2, VR_VEL_LIM = 3, VR_USE_FORCE = 4, VR_
        VR_VEL = 11, VR_W = 12, VR_ENERGY = 20, VR_FORCE = 21, VR_WPOS = 22, VR_F = 30,
        VR_SOLVER = 40, VR_HIT = 50, VR_SLOW = 51, VR_DPOS = 60, VR_DVEL = 61, VR_DW = 62 };
 
-static double getr(fmi2Component c, fmi2ValueReference vr) {
-    double v = NAN;
-    fmi2GetReal(c, &vr, 1, &v);
-    return v;
-}
-static fmi2Status setr(fmi2Component c, fmi2ValueReference vr, double v) {
-    return fmi2SetReal(c, &vr, 1, &v);
-}
-static int getb(fmi2Component c, fmi2ValueReference vr) {
-    fmi2Boolean b = -1;
-    fmi2GetBoolean(c, &vr, 1, &b);
-    return b;
-}
 
 /* the error is returned, its reason logged; the instance is then in Error state */
 #define EXPECT_ERROR(call, msg)                                                              \

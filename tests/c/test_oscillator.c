@@ -15,23 +15,6 @@ static fmi2Component inst(const char *name) {
     return fmi2Instantiate(name, fmi2CoSimulation, TOKEN, "", &h_callbacks, fmi2False, fmi2False);
 }
 
-static double getr(fmi2Component c, fmi2ValueReference vr) {
-    double v = NAN;
-    fmi2GetReal(c, &vr, 1, &v);
-    return v;
-}
-static fmi2Status setr(fmi2Component c, fmi2ValueReference vr, double v) {
-    return fmi2SetReal(c, &vr, 1, &v);
-}
-static fmi2Status seti(fmi2Component c, fmi2ValueReference vr, int v) {
-    fmi2Integer x = v;
-    return fmi2SetInteger(c, &vr, 1, &x);
-}
-static int getb(fmi2Component c, fmi2ValueReference vr) {
-    fmi2Boolean b = -1;
-    fmi2GetBoolean(c, &vr, 1, &b);
-    return b;
-}
 
 /* instantiate, configure, initialise */
 static fmi2Component start(const char *name, int solver, double rtol, double atol, double max_step,

@@ -13,18 +13,6 @@ enum { VR_K = 0, VR_POS_LIM = 1, VR_POS = 10, VR_VEL = 11, VR_SOLVER = 40, VR_RE
        VR_ABS_TOL = 42, VR_MAX_STEP = 43, VR_HIT = 50 };
 enum { EULER = 1, RK4 = 2, DOPRI5 = 3, ROSENBROCK = 4, DOP853 = 5 };
 
-static double getr(fmi2Component c, fmi2ValueReference vr) {
-    double v = NAN;
-    fmi2GetReal(c, &vr, 1, &v);
-    return v;
-}
-static fmi2Status setr(fmi2Component c, fmi2ValueReference vr, double v) {
-    return fmi2SetReal(c, &vr, 1, &v);
-}
-static fmi2Status seti(fmi2Component c, fmi2ValueReference vr, int v) {
-    fmi2Integer x = v;
-    return fmi2SetInteger(c, &vr, 1, &x);
-}
 static double last_time(fmi2Component c) {
     double t = NAN;
     CHECK_STATUS(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t), fmi2OK);

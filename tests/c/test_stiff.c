@@ -16,18 +16,6 @@ typedef struct {
 } params;
 static const params DEFAULTS = {1.0, 1e5, 0.0, -10.0, 1e300};
 
-static double getr(fmi2Component c, fmi2ValueReference vr) {
-    double v = NAN;
-    fmi2GetReal(c, &vr, 1, &v);
-    return v;
-}
-static fmi2Status setr(fmi2Component c, fmi2ValueReference vr, double v) {
-    return fmi2SetReal(c, &vr, 1, &v);
-}
-static fmi2Status seti(fmi2Component c, fmi2ValueReference vr, int v) {
-    fmi2Integer x = v;
-    return fmi2SetInteger(c, &vr, 1, &x);
-}
 static double last_time(fmi2Component c) {
     double t = NAN;
     CHECK_STATUS(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t), fmi2OK);

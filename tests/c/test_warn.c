@@ -9,19 +9,6 @@
 enum { VR_TH = 0, VR_G = 1, VR_TH2 = 2, VR_X = 5, VR_X2 = 6, VR_U = 7, VR_SOLVER = 8,
        VR_REL_TOL = 9, VR_ABS_TOL = 10, VR_MAX_STEP = 11, VR_C1 = 12, VR_C2 = 13 };
 
-static double getr(fmi2Component c, fmi2ValueReference vr) {
-    double v = NAN;
-    fmi2GetReal(c, &vr, 1, &v);
-    return v;
-}
-static fmi2Status setr(fmi2Component c, fmi2ValueReference vr, double v) {
-    return fmi2SetReal(c, &vr, 1, &v);
-}
-static int getb(fmi2Component c, fmi2ValueReference vr) {
-    fmi2Boolean b = -1;
-    fmi2GetBoolean(c, &vr, 1, &b);
-    return b;
-}
 
 static fmi2Component start(int solver, double max_step, int logging, const char *category) {
     fmi2Component c =

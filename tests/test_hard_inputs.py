@@ -1,0 +1,205 @@
+"""Hard cases 10: inconsistent input gives a clear fmi2Error with a logged reason, never a hang or a NaN.
+
+Initial states on the wrong side of beta_min, NaN / Inf parameters and start values, absurd rates
+(gamma_dot = 1e9 rad/s: the rim would move at 1.7e8 m/s) and, for contrast, large but sane rates
+(2e4 rad/s) that must simply work.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import fmi2LastSuccessfulTime
+
+from fmi_helpers import Slave
+from fmu_build import build_fmu, parse_scene
+
+STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
+SCENE = """
+[model]
+name = "hard_inputs"
+[wheel]
+M = 2.0
+R = 0.17
+k_diam = 0.25
+k_axial = 0.4
+beta_min = 0.02
+[effects.gravity]
+g = 9.81
+[experiment]
+max_step = 0.05
+"""
+
+
+@pytest.fixture(scope="module")
+def fmu(tmp_path_factory):
+    root = tmp_path_factory.mktemp("hard_inputs")
+    return str(build_fmu(parse_scene(SCENE, "hard_inputs.toml"), root / "hard_inputs.fmu").fmu)
+
+
+@pytest.fixture
+def slave(fmu):
+    s = Slave(fmu)
+    yield s
+    s.free()
+
+
+def _error_logged(s: Slave) -> bool:
+    return any(status >= 3 for status, _, _ in s.messages)
+
+
+@pytest.mark.parametrize("values", [
+    {"beta": 0.01},                           # below beta_min
+    {"beta": math.pi - 0.01},                 # beyond pi - beta_min (flat on the other side)
+    {"beta": 0.02},                           # exactly at beta_min: the fall indicator is 0
+    {"beta": 0.3, "beta_min": 0.5},           # a larger beta_min puts a leaning start on the wrong side
+])
+def test_initial_state_on_the_wrong_side_of_beta_min(slave, values):
+    with pytest.raises(FMICallException) as exc:
+        slave.init(**values)
+    assert exc.value.status == 3  # fmi2Error
+    assert "initial lean beta must lie between beta_min and pi - beta_min" in slave.log_text()
+    assert _error_logged(slave)
+
+
+@pytest.mark.parametrize("values,fragment", [
+    ({"beta": -0.1}, "beta (initial lean) must be > 0"),
+    ({"beta": 3.2}, "beta (initial lean) must be < pi"),
+])
+def test_initial_lean_outside_0_pi(slave, values, fragment):
+    with pytest.raises(FMICallException):
+        slave.init(**values)
+    assert fragment in slave.log_text()
+
+
+@pytest.mark.parametrize("name", ["M", "R", "k_diam", "k_axial", "g", "beta_min", "rel_tol", "abs_tol", "max_step",
+                                  "x", "beta", "alpha_dot", "gamma_dot"])
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), float("-inf")])
+def test_non_finite_values_are_refused_when_set(slave, name, value):
+    """fmi2SetReal refuses NaN / Inf for every parameter and start value, naming the variable."""
+    slave.slave.setupExperiment(startTime=0.0)
+    with pytest.raises(FMICallException) as exc:
+        slave.set(**{name: value})
+    assert exc.value.status == 3
+    assert f"variable {name} " in slave.log_text() and "not finite" in slave.log_text()
+
+
+def test_overflowing_start_value_fails_at_initialisation(slave):
+    """gamma_dot = 1e300 is finite, but its energy is not: refused, not propagated as inf."""
+    with pytest.raises(FMICallException):
+        slave.init(gamma_dot=1e300)
+    assert "is not finite" in slave.log_text()
+
+
+@pytest.mark.parametrize("solver", [3, 5])  # dopri5, dop853
+@pytest.mark.parametrize("rate", ["gamma_dot", "alpha_dot"])
+def test_huge_rates_fail_fast_with_a_reason(slave, solver, rate):
+    """1e9 rad/s: fmi2Error within seconds (no hang), state restored to the step start, nothing NaN."""
+    slave.init(solver=solver, **{rate: 1e9})
+    t0 = time.perf_counter()
+    with pytest.raises(FMICallException) as exc:
+        slave.slave.doStep(0.0, 1.0)
+    elapsed = time.perf_counter() - t0
+    assert exc.value.status == 3
+    assert elapsed < 3.0, elapsed
+    log = slave.log_text()
+    assert "would need about" in log or "step size underflow" in log, log[-500:]
+    assert slave.slave.getRealStatus(fmi2LastSuccessfulTime) == 0.0
+    values = slave.get(*STATES)
+    assert all(math.isfinite(v) for v in values)
+    assert slave.get(rate) == 1e9  # back at the start of the step
+
+
+@pytest.mark.parametrize("solver", [3, 5])
+def test_huge_lean_rate_falls_within_nanoseconds(slave, solver):
+    """beta_dot = 1e9 rad/s is not too fast to simulate: the wheel swings through upright and lies
+    flat on the other side (beta = pi - beta_min) after (pi - beta_min - beta0) / 1e9 = 1.7 ns,
+    and the FMU says exactly that: a located fall, fmi2Discard, within a few seconds."""
+    slave.init(solver=solver, beta_dot=1e9)
+    t0 = time.perf_counter()
+    with pytest.raises(FMICallException) as exc:
+        slave.slave.doStep(0.0, 1.0)
+    assert time.perf_counter() - t0 < 3.0
+    assert exc.value.status == 2
+    t_fall = slave.slave.getRealStatus(fmi2LastSuccessfulTime)
+    assert t_fall == pytest.approx((math.pi - 0.02 - math.radians(80)) / 1e9, rel=1e-3)
+    assert slave.get("beta") == pytest.approx(math.pi - 0.02, abs=1e-9)
+    assert all(math.isfinite(v) for v in slave.get(*STATES))
+
+
+def test_huge_spin_guard_names_the_step_count(slave):
+    slave.init(solver=5, gamma_dot=1e9)
+    with pytest.raises(FMICallException):
+        slave.slave.doStep(0.0, 1.0)
+    assert "internal steps of h=" in slave.log_text()
+    assert "try solver rosenbrock" in slave.log_text()
+
+
+def test_huge_spin_with_rosenbrock_returns_fast(slave):
+    """Rosenbrock (L-stable) first resolves the 1e9 rad/s nutation with h ~ 4e-9 s, so the guard
+    refuses the step; if it ever damps the nutation instead, the slow motion must be right:
+    rolling along x at R gamma_dot, lean held by the gyroscopic stiffness, energy conserved."""
+    slave.init(solver=4, gamma_dot=1e9)
+    e0 = slave.get("energy")
+    t0 = time.perf_counter()
+    try:
+        slave.slave.doStep(0.0, 1.0)
+        status = 0
+    except FMICallException as exc:
+        status = exc.status
+    assert time.perf_counter() - t0 < 3.0
+    assert all(math.isfinite(v) for v in slave.get(*STATES))
+    if status:
+        assert status == 3 and "would need about" in slave.log_text()
+        assert "try solver rosenbrock" not in slave.log_text()
+        return
+    x, beta, gamma_dot, e = slave.get("x", "beta", "gamma_dot", "energy")
+    assert x == pytest.approx(0.17 * 1e9, rel=1e-9)
+    assert beta == pytest.approx(math.radians(80), abs=1e-9)
+    assert gamma_dot == pytest.approx(1e9, rel=1e-12)
+    assert e == pytest.approx(e0, rel=1e-9)
+
+
+@pytest.mark.parametrize("max_step", [0.01, 0.05])
+def test_huge_spin_with_a_fixed_step_solver_is_not_reported_as_a_fall(slave, max_step):
+    """RK4 at max_step 0.01 or 0.05 s is unstable at 1e9 rad/s (h |lambda| ~ 1e7). Whatever the runtime does,
+    it must not pass the blow-up off as a located fall with an absurd state: either a clear
+    fmi2Error with a reason, or a finite, physical state."""
+    slave.init(solver=2, gamma_dot=1e9, max_step=max_step)
+    try:
+        slave.slave.doStep(0.0, 1.0)
+        status = 0
+    except FMICallException as exc:
+        status = exc.status
+    values = slave.get(*STATES)
+    assert all(math.isfinite(v) for v in values)
+    if status == 3:
+        assert _error_logged(slave)
+        return
+    beta, alpha_dot = slave.get("beta", "alpha_dot")
+    assert 0.0 < beta < math.pi, f"status {status}, beta = {beta} rad:\n{slave.log_text()[-400:]}"
+    assert abs(alpha_dot) < 1e3, f"status {status}, alpha_dot = {alpha_dot} rad/s"
+
+
+@pytest.mark.parametrize("solver", [3, 4, 5])
+def test_large_but_sane_spin_simply_works(fmu, solver):
+    """gamma_dot = 2e4 rad/s (rim at 3.4 km/s): 1 s in one step, in well under a second of CPU,
+    energy conserved, rolling at R gamma_dot, lean held."""
+    s = Slave(fmu)
+    try:
+        s.init(solver=solver, gamma_dot=2e4, rel_tol=1e-10, abs_tol=1e-12, max_step=1.0)
+        e0 = s.get("energy")
+        t0 = time.perf_counter()
+        s.slave.doStep(0.0, 1.0)
+        elapsed = time.perf_counter() - t0
+        x, beta, gamma, e = s.get("x", "beta", "gamma", "energy")
+    finally:
+        s.free()
+    assert elapsed < 2.0
+    assert e == pytest.approx(e0, rel=1e-8)
+    assert x == pytest.approx(0.17 * 2e4, rel=1e-6)
+    assert gamma == pytest.approx(2e4, rel=1e-6)
+    assert beta == pytest.approx(math.radians(80), abs=1e-7)

@@ -51,12 +51,7 @@ SCENE = """
 [model]
 name = "{name}"
 
-[wheel]
-M = 2.0
-R = 0.17
-k_diam = 0.25
-k_axial = 0.4
-beta_min = 0.02
+# [wheel]: the defaults, the paper wheel (M 2 kg, R 0.17 m, k 0.25 / 0.4, beta_min 0.02)
 
 {effects}
 [initial]

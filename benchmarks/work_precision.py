@@ -36,20 +36,13 @@ from fmi_slave import FmuRunner  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
 
-WHEEL = """
-[wheel]
-M = 2.0
-R = 0.17
-k_diam = 0.25
-k_axial = 0.4
-beta_min = 0.02
-"""
+WHEEL = ""  # [wheel] at the scene defaults: the paper wheel (M 2 kg, R 0.17 m, k 0.25 / 0.4, beta_min 0.02)
 SCENARIOS = {
     "paper": (WHEEL + "[effects.gravity]\ng = 9.81\n[initial]\nbeta_deg = 80.0\ngamma_dot = 6.0\n", 20.0),
     "long": (WHEEL + "[effects.gravity]\ng = 9.81\n[initial]\nbeta_deg = 80.0\ngamma_dot = 6.0\n", 1000.0),
     "stiff": (WHEEL + "[effects.gravity]\ng = 9.81\n[effects.gyrover]\nflywheel_rate = 1047.2\n"
               "tilt_omega = 20000.0\n[initial]\nbeta_deg = 85.0\ngamma_dot = 8.0\ntilt = 0.2\n", 2.0),
-    "near_flat": (WHEEL.replace("k_axial = 0.4", "k_axial = 0.5") + "[effects.gravity]\ng = 9.81\n"
+    "near_flat": ("[wheel]\nk_axial = 0.5\n" + "[effects.gravity]\ng = 9.81\n"
                   "[initial]\nbeta_deg = 10.0\nalpha_dot = 24.5195\ngamma_dot = -24.1470\n", 5.0),
 }
 TARGETS = (1e-3, 1e-5, 1e-7, 1e-9)

@@ -12,10 +12,9 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 from fmpy.validation import validate_fmu
 
-from conftest import PAPER, CasadiWheel
+from conftest import CasadiWheel, PAPER, STATES
 from fmi_helpers import Slave
 
-STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
 
 
 @pytest.fixture(scope="module")

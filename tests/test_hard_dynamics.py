@@ -12,11 +12,10 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 
-from conftest import PAPER, SCENES, CasadiWheel
+from conftest import CasadiWheel, PAPER, SCENES, STATES
 from fmi_helpers import Slave
 from fmu_build import build_fmu, load_scene, parse_scene
 
-STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
 TIGHT = dict(rel_tol=1e-12, abs_tol=1e-14)
 
 

@@ -10,22 +10,16 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 from scipy.integrate import quad
 
-from conftest import critical_spin, steady_precession
+from conftest import STATES, critical_spin, steady_precession
 from fmi_helpers import Slave
 from fmu_build import build_fmu, parse_scene
 from fmu_build.analysis import fit_circle
 
 M, R, KD, KA, G = 2.0, 0.17, 0.25, 0.4, 9.81
-STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
 SCENE = """
 [model]
 name = "hard_equilibria"
-[wheel]
-M = 2.0
-R = 0.17
-k_diam = 0.25
-k_axial = 0.4
-beta_min = 0.02
+# [wheel]: the defaults, the paper wheel (M 2 kg, R 0.17 m, k 0.25 / 0.4, beta_min 0.02)
 [effects.gravity]
 g = 9.81
 [experiment]

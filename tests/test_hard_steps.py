@@ -9,11 +9,10 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 from scipy.integrate import solve_ivp
 
-from conftest import PAPER, CasadiWheel
+from conftest import CasadiWheel, PAPER, STATES
 from fmi_helpers import Slave
 from fmu_build import build_fmu, parse_scene
 
-STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
 SCENE = """
 [model]
 name = "hard_steps"

@@ -8,7 +8,7 @@ import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.build import build_platform_binary
 
-STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
+from conftest import STATES
 
 
 def test_rebuilt_from_sources_runs_and_agrees(earth_fmu, tmp_path):

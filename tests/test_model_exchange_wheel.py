@@ -21,12 +21,12 @@ from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi2 import FMU2Model, FMU2Slave, fmi2LastSuccessfulTime
 from fmpy.validation import validate_fmu
 
+from conftest import STATES
 from fmu_build import load_scene
 from fmu_build.builder import model_spec
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "examples" / "scenes" / "paper_earth.toml"
-STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
 
 
 @pytest.fixture(scope="module")

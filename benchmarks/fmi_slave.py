@@ -20,21 +20,12 @@ def _open(fmu: Path):
 
 def one_step_seconds(fmu: Path, stop: float, **values) -> float:
     """CPU time of fmi2DoStep(0, stop) alone (instantiation and set-up excluded)."""
-    md, unzipdir = _open(fmu)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    s = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier)
-    s.instantiate()
-    s.setupExperiment(startTime=0.0)
-    for name, value in values.items():
-        s.setReal([vr[name]], [value])
-    s.enterInitializationMode()
-    s.exitInitializationMode()
-    t0 = time.perf_counter()
-    s.doStep(0.0, stop)
-    dt = time.perf_counter() - t0
-    s.terminate()
-    s.freeInstance()
-    return dt
+    runner = FmuRunner(fmu)
+    try:
+        runner.one_step(stop, [], **values)
+        return runner.last_seconds
+    finally:
+        runner.free()
 
 
 def many_steps_seconds(fmu: Path, n_steps: int, h: float, read: tuple[str, ...] = (),
@@ -48,32 +39,27 @@ def many_steps_seconds(fmu: Path, n_steps: int, h: float, read: tuple[str, ...] 
     from fmpy.fmi1 import FMICallException
     from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 
-    md, unzipdir = _open(fmu)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    s = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier)
-    s.instantiate()
-    s.setupExperiment(startTime=0.0)
-    for name, value in values.items():
-        s.setReal([vr[name]], [value])
-    s.enterInitializationMode()
-    s.exitInitializationMode()
-    do_step, done = s.doStep, 0
-    t0 = time.perf_counter()
+    runner = FmuRunner(fmu)
     try:
-        for done in range(n_steps):
-            do_step(done * h, h)
-        done = n_steps
-    except FMICallException:
-        pass
-    dt = time.perf_counter() - t0
-    t = done * h
-    terminated = done < n_steps and s.getBooleanStatus(fmi2Terminated)
-    if terminated:
-        t = s.getRealStatus(fmi2LastSuccessfulTime)
-    finals = {name: s.getReal([vr[name]])[0] for name in read}
-    s.terminate()
-    s.freeInstance()
-    return dt, t, terminated, finals
+        runner.start(**values)
+        s = runner.slave
+        do_step, done = s.doStep, 0
+        t0 = time.perf_counter()
+        try:
+            for done in range(n_steps):
+                do_step(done * h, h)
+            done = n_steps
+        except FMICallException:
+            pass
+        dt = time.perf_counter() - t0
+        t = done * h
+        terminated = done < n_steps and s.getBooleanStatus(fmi2Terminated)
+        if terminated:
+            t = s.getRealStatus(fmi2LastSuccessfulTime)
+        finals = {name: s.getReal([runner.vr[name]])[0] for name in read}
+        return dt, t, terminated, finals
+    finally:
+        runner.free()
 
 
 class FmuRunner:
@@ -93,7 +79,8 @@ class FmuRunner:
         self.last_seconds = float("nan")
         self._fresh = True
 
-    def one_step(self, stop: float, names: list[str], **values) -> list[float]:
+    def start(self, **values) -> None:
+        """Reset (after the first run), set the values (by their FMI type) and initialise."""
         s = self.slave
         if not self._fresh:
             s.reset()
@@ -106,7 +93,13 @@ class FmuRunner:
                 s.setReal([self.vr[name]], [float(value)])
         s.enterInitializationMode()
         s.exitInitializationMode()
+
+    def one_step(self, stop: float, names: list[str], **values) -> list[float]:
+        self.start(**values)
         t0 = time.perf_counter()
-        s.doStep(0.0, stop)
+        self.slave.doStep(0.0, stop)
         self.last_seconds = time.perf_counter() - t0
-        return list(s.getReal([self.vr[n] for n in names]))
+        return list(self.slave.getReal([self.vr[n] for n in names]))
+
+    def free(self) -> None:
+        self.slave.freeInstance()

@@ -807,6 +807,30 @@ static double initial_step(gw_instance *I, double hmax, double order) {
     return h < hmax ? h : hmax;
 }
 
+/* The next attempt of an adaptive loop: the controller's h, bounded by max_step and shortened
+ * to land exactly on t_end (*last), refused by the feasibility guard or when it no longer
+ * advances time. Returns 0, or -1 with the reason logged. */
+static int next_attempt(gw_instance *I, double t_end, int rejected_last, double *h_prev,
+                        unsigned long *n_fast, double *h, double *t1, int *last) {
+    const double remaining = t_end - I->t;
+    *h = I->h_adapt < I->max_step ? I->h_adapt : I->max_step;
+    *last = 1.01 * *h >= remaining;
+    if (*last) *h = remaining;
+    *t1 = *last ? t_end : I->t + *h;
+    if (*last) {
+        *h_prev = *h;
+        return 0;
+    }
+    if (too_many_steps(I, remaining, *h, *h_prev, rejected_last, n_fast)) return -1;
+    *h_prev = *h;
+    if (*h < gw_h_min(I->t) || !(*t1 > I->t)) { /* steps that no longer advance time */
+        GW_ERROR(I, "step size underflow at t=%.17g (h=%g, solver %s)", I->t, *h,
+                 gw_solver_name(I->solver));
+        return -1;
+    }
+    return 0;
+}
+
 static gw_int_result integrate_dopri5(gw_instance *I, double t_end) {
     int events = 0, rejected_last = 0;
     unsigned long n_fast = 0; /* attempts in a row projecting too many steps (guard) */
@@ -816,24 +840,10 @@ static gw_int_result integrate_dopri5(gw_instance *I, double t_end) {
     if (!(I->h_adapt > 0.0)) I->h_adapt = initial_step(I, hmax, 5.0);
     if (I->h_adapt > hmax) I->h_adapt = hmax;
     while (I->t < t_end) {
-        const double remaining = t_end - I->t;
-        double h = I->h_adapt, err = 0.0, t1, fac;
-        int last = 0;
+        double h, err = 0.0, t1, fac;
+        int last;
         if (ensure_f0(I)) return GW_INT_ERROR;
-        if (h > hmax) h = hmax;
-        if (1.01 * h >= remaining) {
-            h = remaining;
-            last = 1;
-        }
-        t1 = last ? t_end : I->t + h;
-        if (!last && too_many_steps(I, remaining, h, h_prev, rejected_last, &n_fast))
-            return GW_INT_ERROR;
-        h_prev = h;
-        if (!last && (h < gw_h_min(I->t) || !(t1 > I->t))) {
-            /* the controller asks for steps that no longer advance time */
-            GW_ERROR(I, "step size underflow at t=%.17g (h=%g)", I->t, h);
-            return GW_INT_ERROR;
-        }
+        if (next_attempt(I, t_end, rejected_last, &h_prev, &n_fast, &h, &t1, &last)) return GW_INT_ERROR;
         if (step_dopri5(I, h, t1, &err)) return GW_INT_ERROR;
         if (err <= 1.0) {
             gw_int_result r;
@@ -892,24 +902,10 @@ static gw_int_result integrate_adaptive(gw_instance *I, double t_end) {
     if (!(I->h_adapt > 0.0)) I->h_adapt = initial_step(I, hmax, ros ? 4.0 : 8.0);
     if (I->h_adapt > hmax) I->h_adapt = hmax;
     while (I->t < t_end) {
-        const double remaining = t_end - I->t;
-        double h = I->h_adapt, err = 0.0, t1, fac;
-        int last = 0;
+        double h, err = 0.0, t1, fac;
+        int last;
         if (ensure_f0(I)) return GW_INT_ERROR;
-        if (h > hmax) h = hmax;
-        if (1.01 * h >= remaining) {
-            h = remaining;
-            last = 1;
-        }
-        t1 = last ? t_end : I->t + h;
-        if (!last && too_many_steps(I, remaining, h, h_prev, rejected_last, &n_fast))
-            return GW_INT_ERROR;
-        h_prev = h;
-        if (!last && (h < gw_h_min(I->t) || !(t1 > I->t))) {
-            GW_ERROR(I, "step size underflow at t=%.17g (h=%g, solver %s)", I->t, h,
-                     gw_solver_name(I->solver));
-            return GW_INT_ERROR;
-        }
+        if (next_attempt(I, t_end, rejected_last, &h_prev, &n_fast, &h, &t1, &last)) return GW_INT_ERROR;
         if (ros) {
             if (!jac_valid) {
                 unsigned long long r0 = I->n_rhs;

@@ -67,35 +67,29 @@ def write_model_description(scene: Scene, table: list[Variable], identifier: str
         "variableNamingConvention": "flat",
         "numberOfEventIndicators": "0",
     })
-    if model_exchange:
-        root.set("numberOfEventIndicators", str(sum(1 for v in table if v.kind == "event")))
-        me = ET.SubElement(root, "ModelExchange", {
-            "modelIdentifier": identifier,
-            "completedIntegratorStepNotNeeded": "true",
-            "canBeInstantiatedOnlyOncePerProcess": "false",
-            "canNotUseMemoryManagementFunctions": "false",
-            "canGetAndSetFMUstate": "true",
-            "canSerializeFMUstate": "true",
-            "providesDirectionalDerivative": "true" if directional else "false",
-        })
-        me_files = ET.SubElement(me, "SourceFiles")
-        for name in sources:
-            ET.SubElement(me_files, "File", {"name": name})
-    cs = ET.SubElement(root, "CoSimulation", {
+    common = {  # capabilities the runtime has in both interfaces
         "modelIdentifier": identifier,
-        "canHandleVariableCommunicationStepSize": "true",
-        "canInterpolateInputs": "false",
-        "maxOutputDerivativeOrder": "0",
-        "canRunAsynchronuously": "false",
         "canBeInstantiatedOnlyOncePerProcess": "false",
         "canNotUseMemoryManagementFunctions": "false",
         "canGetAndSetFMUstate": "true",
         "canSerializeFMUstate": "true",
         "providesDirectionalDerivative": "true" if directional else "false",
-    })
-    files = ET.SubElement(cs, "SourceFiles")
-    for name in sources:
-        ET.SubElement(files, "File", {"name": name})
+    }
+    interfaces = []
+    if model_exchange:
+        root.set("numberOfEventIndicators", str(sum(1 for v in table if v.kind == "event")))
+        interfaces.append(ET.SubElement(root, "ModelExchange", {**common, "completedIntegratorStepNotNeeded": "true"}))
+    interfaces.append(ET.SubElement(root, "CoSimulation", {
+        **common,
+        "canHandleVariableCommunicationStepSize": "true",
+        "canInterpolateInputs": "false",
+        "maxOutputDerivativeOrder": "0",
+        "canRunAsynchronuously": "false",
+    }))
+    for element in interfaces:
+        files = ET.SubElement(element, "SourceFiles")
+        for name in sources:
+            ET.SubElement(files, "File", {"name": name})
 
     used = sorted({u for v in table if (u := _unit_of(v))})
     unknown = [u for u in used if u not in UNITS]

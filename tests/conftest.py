@@ -38,12 +38,23 @@ class CasadiWheel:
         y = np.array(self.fns["out"](0.0, x, [], self.p)).ravel()
         return dict(zip(self.out_names, y))
 
-    def integrate(self, x0, t_end, rtol=1e-11, atol=1e-12, t_eval=None):
+    def integrate(self, x0, t_end, rtol=1e-11, atol=1e-12, t_eval=None, beta_min=None):
+        """scipy DOP853 on the CasADi model; with beta_min, the fall is a terminal event."""
         from scipy.integrate import solve_ivp
+        events = None
+        if beta_min is not None:
+            def fall(t, x):
+                return math.sin(x[3]) - math.sin(beta_min)
+            fall.terminal, fall.direction = True, -1
+            events = fall
         sol = solve_ivp(self.rhs, (0.0, t_end), x0, method="DOP853", rtol=rtol, atol=atol,
-                        t_eval=t_eval, dense_output=False)
+                        t_eval=t_eval, dense_output=False, events=events)
         assert sol.success, sol.message
         return sol
+
+    def fall_time(self, beta_min, rtol, atol, t_end=20.0, **start) -> float:
+        """Reference time of the fall from the start values, located by scipy's event finder."""
+        return float(self.integrate(self.x0(**start), t_end, rtol, atol, beta_min=beta_min).t_events[0][0])
 
 
 def steady_precession(beta: float, rho: float, M: float, R: float, k_diam: float, k_axial: float,

@@ -105,14 +105,7 @@ def test_against_independent_newton_euler_derivation(earth_fmu):
 
 
 def _reference_fall_time(beta_min: float, **start) -> float:
-    from scipy.integrate import solve_ivp
-    wheel = CasadiWheel(**PAPER, beta_min=beta_min)
-
-    def fall(t, x):
-        return math.sin(x[3]) - math.sin(beta_min)
-    fall.terminal, fall.direction = True, -1
-    ref = solve_ivp(wheel.rhs, (0, 20), wheel.x0(**start), method="DOP853", rtol=1e-12, atol=1e-13, events=fall)
-    return ref.t_events[0][0]
+    return CasadiWheel(**PAPER, beta_min=beta_min).fall_time(beta_min, 1e-12, 1e-13, **start)
 
 
 @pytest.mark.parametrize("beta_min,start", [

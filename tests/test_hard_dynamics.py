@@ -21,16 +21,7 @@ TIGHT = dict(rel_tol=1e-12, abs_tol=1e-14)
 
 def _reference(wheel: CasadiWheel, x0, t_end, beta_min=None):
     """scipy DOP853 at rtol 1e-13 on the CasADi model, with the fall as a terminal event."""
-    from scipy.integrate import solve_ivp
-    events = None
-    if beta_min is not None:
-        def fall(t, x):
-            return math.sin(x[3]) - math.sin(beta_min)
-        fall.terminal, fall.direction = True, -1
-        events = fall
-    sol = solve_ivp(wheel.rhs, (0.0, t_end), x0, method="DOP853", rtol=1e-13, atol=1e-15, events=events)
-    assert sol.status in (0, 1)
-    return sol
+    return wheel.integrate(x0, t_end, rtol=1e-13, atol=1e-15, beta_min=beta_min)
 
 
 def _run_until(fmu, stop, h, **start):

@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 import time
 
-import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
-from scipy.integrate import solve_ivp
 
 from conftest import CasadiWheel, PAPER, STATES
 from fmi_helpers import Slave
@@ -76,7 +75,8 @@ def test_one_100_s_step_equals_fine_stepping_and_the_reference(fmu, moon_100s, s
     tol = dict(rel_tol=1e-11, abs_tol=1e-13) if solver != 4 else dict(rel_tol=1e-9, abs_tol=1e-11)
     bound = 2e-6 if solver != 4 else 1e-3
     start = dict(g=1.625, solver=solver, **tol)
-    (t1, last1), one = _steps(fmu, [100.0], **start)[0][-1], _steps(fmu, [100.0], **start)[1]
+    one_times, one = _steps(fmu, [100.0], **start)
+    last1 = one_times[-1][1]
     mixed_hs = [1e-7, 1e-5, 1e-3, 0.1, 0.7777777, 3.0, 60.0]
     mixed_hs.append(100.0 - sum(mixed_hs))
     times, mixed = _steps(fmu, mixed_hs, **start)
@@ -93,13 +93,7 @@ def test_one_100_s_step_equals_fine_stepping_and_the_reference(fmu, moon_100s, s
 
 
 def _reference_fall_time(beta_min: float, **start) -> float:
-    wheel = CasadiWheel(**PAPER, beta_min=beta_min)
-
-    def fall(t, x):
-        return math.sin(x[3]) - math.sin(beta_min)
-    fall.terminal, fall.direction = True, -1
-    ref = solve_ivp(wheel.rhs, (0, 20), wheel.x0(**start), method="DOP853", rtol=1e-13, atol=1e-14, events=fall)
-    return ref.t_events[0][0]
+    return CasadiWheel(**PAPER, beta_min=beta_min).fall_time(beta_min, 1e-13, 1e-14, **start)
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,6 @@ from __future__ import annotations
 import shutil
 
 import numpy as np
-import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.build import build_platform_binary
 

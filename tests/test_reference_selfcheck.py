@@ -108,7 +108,7 @@ def test_energy_conserved_paper_scenario():
 def test_energy_definition():
     st = np.array([0.3, -0.2, 0.4, 1.1, 0.2, 0.7, -0.3, 5.0])
     M, R, kd, ka, g = PAPER
-    al, be, ad, bd, gd = st[2], st[3], st[5], st[6], st[7]
+    be, ad, bd, gd = st[3], st[5], st[6], st[7]
     v = ne.centre_velocity(st, PAPER)
     T = 0.5 * M * v @ v + 0.5 * (kd * M * R**2 * ((ad * math.sin(be)) ** 2 + bd**2)
                                  + ka * M * R**2 * (gd + ad * math.cos(be)) ** 2)

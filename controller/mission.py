@@ -39,7 +39,7 @@ def interpolate(t: ca.SX, ts: list[ca.SX], vs: list[ca.SX]) -> ca.SX:
     return value
 
 
-def standard(speed: float = 1.5, heading_step: float = math.radians(8.0)) -> Mission:
+def standard(speed: float = 1.5, heading_step: float = math.radians(1.0)) -> Mission:
     """The closed-loop mission of docs/system.md: settle, a turn, S-turns, a speed change, 60 s.
 
     Heading offsets stay inside what the actuation can hold (docs/system.md, controllability:
@@ -49,7 +49,7 @@ def standard(speed: float = 1.5, heading_step: float = math.radians(8.0)) -> Mis
     return Mission("standard", [
         (0.0, 0.0, speed), (10.0, 0.0, speed), (14.0, h, speed),          # the turn
         (22.0, h, speed), (26.0, -h, speed), (30.0, h, speed), (34.0, -h, speed), (38.0, 0.0, speed),  # S-turns
-        (44.0, 0.0, speed), (48.0, 0.0, speed + 0.5), (60.0, 0.0, speed + 0.5),  # speed change
+        (44.0, 0.0, speed), (52.0, 0.0, speed + 0.2), (60.0, 0.0, speed + 0.2),  # speed change
     ])
 
 

@@ -44,14 +44,16 @@ def run(config: str, system: SystemDescription, step: float, stop_time: float,
     n = int(round(stop_time * NS / h))
     if not execution.simulate_until(target_time=n * h):
         raise RuntimeError("libcosim stopped before the stop time")
+    steps = None
     columns = []
-    times = None
     for index, vr in series:
-        values, steps, t = observer.time_series_real_samples(index, vr, from_step=0, sample_count=n + 1)
-        columns.append(np.asarray(values, dtype=float))
-        times = np.asarray(t, dtype=float) / NS
-    data = np.zeros(len(times), dtype=[(nm, np.float64) for nm in names])
-    data["time"] = times
+        # libcosimpy returns (time points [ns], step numbers, values)
+        t_ns, numbers, values = observer.time_series_real_samples(index, vr, from_step=0, sample_count=n + 2)
+        by_step = dict(zip(numbers, values))
+        steps = sorted(by_step) if steps is None else [k for k in steps if k in by_step]
+        columns.append(by_step)
+    data = np.zeros(len(steps), dtype=[(nm, np.float64) for nm in names])
+    data["time"] = system.start_time + np.array(steps, dtype=float) * h / NS
     for nm, col in zip(names[1:], columns):
-        data[nm] = col
+        data[nm] = [col[k] for k in steps]
     return data

@@ -59,3 +59,13 @@ def test_masters_agree(earth_loop, tmp_path):
     osp = write_osp(system, tmp_path / "osp", 0.01)
     by_osp = libcosim_run.run(str(osp), system, 0.01, 5.0, COMPARED)
     print("OSP", _agree(ours, by_osp, 1e-8))
+
+
+def test_cli_system_run(earth_loop, tmp_path):
+    from fmu_build.cli import main
+    out = tmp_path / "run.csv"
+    assert main(["system", "run", str(earth_loop.ssp), "--step", "0.01", "--stop-time", "1", "-o", str(out)]) == 0
+    header = out.read_text().splitlines()[0]
+    assert "wheel.beta" in header and "controller.tilt_cmd" in header
+    assert main(["system", "run", str(tmp_path / "missing.ssp")]) == 2
+    assert main(["system", "run", str(earth_loop.ssp), "--step", "0.003", "--stop-time", "1"]) == 2

@@ -1,5 +1,6 @@
 # Two commands do all set-up on a fresh machine (a C compiler, python3 >= 3.11 assumed):
-#   make demo   builds the paper FMUs, runs earth/Mars/moon, writes CSV and a figure to results/
+#   make demo   builds the paper FMUs, runs earth/Mars/moon, writes CSV and a figure to results/;
+#               the Gyrover closed loop (earth, moon) to results/system/
 #   make test   installs what the tests need and runs them all
 #   make bench  the work-precision benchmark (results/bench/*.png, work_precision.md)
 PYTHON ?= python3
@@ -22,6 +23,7 @@ venv: $(STAMP)
 
 demo: $(STAMP)
 	$(PY) examples/paper_demo.py --out results
+	$(PY) examples/gyrover_control.py --out results/system
 
 test: $(STAMP)
 	$(PY) -m pytest -q

@@ -139,7 +139,18 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def cmd_animate(args) -> int:
+    from fmu_build.animate import AnimationError
+    from fmu_build.animate.command import run
+    try:
+        return run(args)
+    except AnimationError as exc:
+        raise CliError(str(exc)) from None
+
+
 def make_parser() -> argparse.ArgumentParser:
+    from fmu_build.animate.command import add_arguments as add_animate_arguments
+
     parser = argparse.ArgumentParser(prog="gyrowheel", description="Build and run FMI 2.0 FMUs of a rolling wheel.")
     sub = parser.add_subparsers(dest="command", required=True)
     b = sub.add_parser("build", help="build an FMU from a scene file")
@@ -160,6 +171,9 @@ def make_parser() -> argparse.ArgumentParser:
     w.add_argument("--scenarios", nargs="*", help="paper, long, stiff, near_flat (default: all)")
     w.add_argument("--out", default="results/bench", help="directory for the figures and the table")
     w.set_defaults(func=cmd_bench)
+    a = sub.add_parser("animate", help="animate a result CSV as .gif, .mp4 or an interactive .html")
+    add_animate_arguments(a)
+    a.set_defaults(func=cmd_animate)
     i = sub.add_parser("info", help="describe an FMU")
     i.add_argument("fmu")
     i.set_defaults(func=cmd_info)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib import rc_context
-from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
+from matplotlib.animation import FFMpegWriter, PillowWriter
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
@@ -68,11 +68,13 @@ class _Scene:
         inset = self.fig.add_axes((0.74, 0.64, 0.24, 0.26))
         inset.plot(tl.track[:, 0], tl.track[:, 1], color="#999999", lw=0.8)
         inset.set_aspect("equal", adjustable="datalim")
-        inset.tick_params(labelsize=6, length=2, pad=1)
-        inset.set_title("track (m)", fontsize=7, pad=2)
+        inset.set_xticks([])
+        inset.set_yticks([])
+        width = max(np.ptp(tl.track[:, 0]), np.ptp(tl.track[:, 1]))
+        inset.set_title(f"track, {width:.3g} m across", fontsize=7, pad=2)
         self.marker, = inset.plot([], [], "o", color=RIM_COLOURS[0], ms=3)
 
-    def update(self, k: int):
+    def update(self, k: int) -> None:
         tl, R, h = self.tl, self.tl.parameters.R, self.h
         p = tl.poses
         c, body = p.centre[k], p.body[k]
@@ -104,7 +106,6 @@ class _Scene:
             self.fly_axis.set_data_3d(ax_line[:, 0], ax_line[:, 1], ax_line[:, 2])
         self.text.set_text(tl.readout[k] + f"   ×{tl.options.speed:g}")
         self.marker.set_data([a[0]], [a[1]])
-        return []
 
 
 def _grid(cx: float, cy: float, h: float, spacing: float) -> list:
@@ -156,10 +157,13 @@ def render_video(tl: Timeline, path: str | Path) -> Path:
     else:
         raise AnimationError(f"{path}: unknown output format {path.suffix!r}: use .gif, .mp4 or .html")
     scene = _Scene(tl)
-    anim = FuncAnimation(scene.fig, scene.update, frames=len(tl.time), blit=False, repeat=False)
     with rc_context({"animation.ffmpeg_path": ffmpeg or "ffmpeg"}):
         if writer is None:
             writer = FFMpegWriter(fps=fps, codec="h264", bitrate=-1,
                                   extra_args=["-pix_fmt", "yuv420p", "-crf", "23", "-preset", "veryfast"])
-        anim.save(str(path), writer=writer, dpi=DPI)
+        # the writer's own loop (FuncAnimation.save would draw every frame twice on Agg)
+        with writer.saving(scene.fig, str(path), dpi=DPI):
+            for k in range(len(tl.time)):
+                scene.update(k)
+                writer.grab_frame()
     return path

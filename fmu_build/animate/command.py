@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     tl = animate(args.result, output, R=args.R, fmu=args.fmu, fps=args.fps, speed=args.speed, size=size,
                  trail=args.trail, start=args.start, stop=args.stop)
     t0, t1 = tl.time[0], tl.time[-1]
-    what = f"{len(tl.time)} frames at {args.fps:g} fps" + ("" if output.suffix.lower() == ".html"
+    what = f"{len(tl.time)} frame{'s' * (len(tl.time) != 1)} at {args.fps:g} fps" + ("" if output.suffix.lower() == ".html"
                                                            else f", {size[0]}x{size[1]}")
     print(f"wrote {output}: {what}, t = {t0:g} .. {t1:g} s at ×{args.speed:g} (R = {tl.parameters.R:g} m "
           f"from {tl.parameters.source['R']})")

@@ -165,7 +165,18 @@ def cmd_system_run(args) -> int:
     return 0
 
 
+def cmd_animate(args) -> int:
+    from fmu_build.animate import AnimationError
+    from fmu_build.animate.command import run
+    try:
+        return run(args)
+    except AnimationError as exc:
+        raise CliError(str(exc)) from None
+
+
 def make_parser() -> argparse.ArgumentParser:
+    from fmu_build.animate.command import add_arguments as add_animate_arguments
+
     parser = argparse.ArgumentParser(prog="gyrowheel", description="Build and run FMI 2.0 FMUs of a rolling wheel.")
     sub = parser.add_subparsers(dest="command", required=True)
     b = sub.add_parser("build", help="build an FMU from a scene file")
@@ -193,6 +204,9 @@ def make_parser() -> argparse.ArgumentParser:
     yr.add_argument("--stop-time", type=float, help="default: the .ssp's DefaultExperiment")
     yr.add_argument("-o", "--output", help="CSV file to write (<component>.<variable> columns)")
     yr.set_defaults(func=cmd_system_run)
+    a = sub.add_parser("animate", help="animate a result CSV as .gif, .mp4 or an interactive .html")
+    add_animate_arguments(a)
+    a.set_defaults(func=cmd_animate)
     i = sub.add_parser("info", help="describe an FMU")
     i.add_argument("fmu")
     i.set_defaults(func=cmd_info)

@@ -8,7 +8,12 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 SCENES := paper_earth paper_mars paper_moon
 
-.PHONY: demo test bench venv clean
+# Debian packages the C tests use: clang (the sources must build warning-free under gcc and
+# clang), cmake (fmpy's build of an FMU's sources), valgrind (memory checks).  Installed when
+# missing and we are root with apt-get (CI); otherwise named, and the tests needing them say so.
+C_TOOLS := clang cmake valgrind
+
+.PHONY: demo test bench venv clean c-tools
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -23,7 +28,15 @@ venv: $(STAMP)
 demo: $(STAMP)
 	$(PY) examples/paper_demo.py --out results
 
-test: $(STAMP)
+c-tools:
+	@missing=""; for t in $(C_TOOLS); do command -v $$t >/dev/null 2>&1 || missing="$$missing $$t"; done; \
+	if [ -n "$$missing" ]; then \
+	    if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	        echo "installing$$missing"; apt-get update -qq && apt-get install -y -qq $$missing >/dev/null; \
+	    else echo "make test: missing$$missing (Debian: apt-get install$$missing)"; fi; \
+	fi
+
+test: $(STAMP) c-tools
 	$(PY) -m pytest -q
 
 bench: $(STAMP)

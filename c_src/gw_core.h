@@ -15,15 +15,16 @@
  * into one program without clashes.  GW_API functions may go unused by a front end
  * (GW_MAYBE_UNUSED keeps -Wunused-function quiet for them, not for internal functions).
  *
- * Call sequence of a front end (see docs/runtime.md for the FMI mapping):
+ * Call sequence of a front end (docs/runtime.md maps it onto the fmi2 functions):
  *   I = gw_instance_new(&GW_MODEL, "name", &cb, logging_on);
- *   gw_value_set(I, gw_variable_find(m, vr), value) ...   parameters, start values, settings
+ *   gw_value_set(I, gw_variable_find(I->m, vr), value);   parameters, start values, settings
  *   gw_setup_experiment(I, fn, 0, 0.0, t0, 0, 0.0);
- *   gw_initialize(I, fn);                                 checks, x = init(s, p), outputs
- *   gw_advance(I, fn, t_end) ...                           GW_OK / GW_DISCARD (event) / GW_ERROR
- *   gw_update_outputs(I, fn); gw_value_get(I, v) ...      states, outputs, event flags
- *   gw_state_size / gw_state_write / gw_state_check / gw_state_apply   save and restore
+ *   gw_initialize(I, fn);                  checks, x = init(s, p), outputs, event indicators
+ *   gw_advance(I, fn, t_end);              GW_OK / GW_DISCARD (terminating event) / GW_ERROR
+ *   gw_update_outputs(I, fn); gw_value_get(I, v);          states, outputs, event flags
+ *   gw_state_size / _write / _check / _apply               save and restore
  *   gw_instance_free(I);
+ * fn is the name the front end's messages start with ("fmi2DoStep", "advance", ...).
  */
 #ifndef GW_CORE_H
 #define GW_CORE_H

@@ -190,7 +190,7 @@ GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last,
 /* ---- DOP853 and Rosenbrock: adaptive loop ---------------------------------------------
  * Same landing on t_end, max_step bound, step size carry-over (I->h_adapt) and
  * underflow rule as DOPRI5.  Controllers (Hairer's codes, without memory of earlier
- * steps, so nothing beyond h_adapt has to survive fmi2Get/SetFMUstate):
+ * steps, so nothing beyond h_adapt has to be part of a saved state):
  *   DOP853      h_new = h * clamp(0.9 err^(-1/8), 1/3, 6)
  *   Rosenbrock  h_new = h * clamp(0.9 err^(-1/4), 1/5, 6)
  * no increase right after a rejection.  Rosenbrock evaluates the Jacobian once per

@@ -14,20 +14,23 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include "gw_solver.h"
 
 /* ---- Dormand-Prince 5(4) coefficients (Hairer, Norsett, Wanner) ---------- */
-static const double dp5_c2 = 1.0 / 5.0, dp5_c3 = 3.0 / 10.0, dp5_c4 = 4.0 / 5.0, dp5_c5 = 8.0 / 9.0;
+static const double dp5_c2 = 1.0 / 5.0, dp5_c3 = 3.0 / 10.0, dp5_c4 = 4.0 / 5.0,
+                    dp5_c5 = 8.0 / 9.0;
 static const double dp5_a21 = 1.0 / 5.0;
 static const double dp5_a31 = 3.0 / 40.0, dp5_a32 = 9.0 / 40.0;
 static const double dp5_a41 = 44.0 / 45.0, dp5_a42 = -56.0 / 15.0, dp5_a43 = 32.0 / 9.0;
-static const double dp5_a51 = 19372.0 / 6561.0, dp5_a52 = -25360.0 / 2187.0, dp5_a53 = 64448.0 / 6561.0,
-                    dp5_a54 = -212.0 / 729.0;
+static const double dp5_a51 = 19372.0 / 6561.0, dp5_a52 = -25360.0 / 2187.0,
+                    dp5_a53 = 64448.0 / 6561.0, dp5_a54 = -212.0 / 729.0;
 static const double dp5_a61 = 9017.0 / 3168.0, dp5_a62 = -355.0 / 33.0, dp5_a63 = 46732.0 / 5247.0,
                     dp5_a64 = 49.0 / 176.0, dp5_a65 = -5103.0 / 18656.0;
 static const double dp5_a71 = 35.0 / 384.0, dp5_a73 = 500.0 / 1113.0, dp5_a74 = 125.0 / 192.0,
                     dp5_a75 = -2187.0 / 6784.0, dp5_a76 = 11.0 / 84.0;
 static const double dp5_e1 = 71.0 / 57600.0, dp5_e3 = -71.0 / 16695.0, dp5_e4 = 71.0 / 1920.0,
                     dp5_e5 = -17253.0 / 339200.0, dp5_e6 = 22.0 / 525.0, dp5_e7 = -1.0 / 40.0;
-static const double dp5_d1 = -12715105075.0 / 11282082432.0, dp5_d3 = 87487479700.0 / 32700410799.0,
-                    dp5_d4 = -10690763975.0 / 1880347072.0, dp5_d5 = 701980252875.0 / 199316789632.0,
+static const double dp5_d1 = -12715105075.0 / 11282082432.0,
+                    dp5_d3 = 87487479700.0 / 32700410799.0,
+                    dp5_d4 = -10690763975.0 / 1880347072.0,
+                    dp5_d5 = 701980252875.0 / 199316789632.0,
                     dp5_d6 = -1453857185.0 / 822651844.0, dp5_d7 = 69997945.0 / 29380423.0;
 
 /* DOPRI5 step; *err = weighted RMS error norm (NaN/inf when something overflowed). */
@@ -42,16 +45,19 @@ static int gw_dopri5_step(gw_instance *I, double h, double t1, double *err) {
     if (gw_rhs_checked(I, t + dp5_c2 * h, xt, k2)) return -1;
     for (i = 0; i < nx; i++) xt[i] = x[i] + h * (dp5_a31 * k1[i] + dp5_a32 * k2[i]);
     if (gw_rhs_checked(I, t + dp5_c3 * h, xt, k3)) return -1;
-    for (i = 0; i < nx; i++) xt[i] = x[i] + h * (dp5_a41 * k1[i] + dp5_a42 * k2[i] + dp5_a43 * k3[i]);
+    for (i = 0; i < nx; i++)
+        xt[i] = x[i] + h * (dp5_a41 * k1[i] + dp5_a42 * k2[i] + dp5_a43 * k3[i]);
     if (gw_rhs_checked(I, t + dp5_c4 * h, xt, k4)) return -1;
     for (i = 0; i < nx; i++)
         xt[i] = x[i] + h * (dp5_a51 * k1[i] + dp5_a52 * k2[i] + dp5_a53 * k3[i] + dp5_a54 * k4[i]);
     if (gw_rhs_checked(I, t + dp5_c5 * h, xt, k5)) return -1;
     for (i = 0; i < nx; i++)
-        xt[i] = x[i] + h * (dp5_a61 * k1[i] + dp5_a62 * k2[i] + dp5_a63 * k3[i] + dp5_a64 * k4[i] + dp5_a65 * k5[i]);
+        xt[i] = x[i] + h * (dp5_a61 * k1[i] + dp5_a62 * k2[i] + dp5_a63 * k3[i] + dp5_a64 * k4[i] +
+                            dp5_a65 * k5[i]);
     if (gw_rhs_checked(I, t1, xt, k6)) return -1;
     for (i = 0; i < nx; i++)
-        xn[i] = x[i] + h * (dp5_a71 * k1[i] + dp5_a73 * k3[i] + dp5_a74 * k4[i] + dp5_a75 * k5[i] + dp5_a76 * k6[i]);
+        xn[i] = x[i] + h * (dp5_a71 * k1[i] + dp5_a73 * k3[i] + dp5_a74 * k4[i] + dp5_a75 * k5[i] +
+                            dp5_a76 * k6[i]);
     if (gw_rhs_checked(I, t1, xn, k7)) return -1;
     I->k7_valid = 1;
     for (i = 0; i < nx; i++) {

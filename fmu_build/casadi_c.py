@@ -17,8 +17,8 @@ names (issue 8, section 9), and the body functions ignore some of the standard a
   * the whole file is guarded by GW_UNITY_BUILD, so that compiled on its own it is empty.
 Anything it does not recognise (a function definition of another shape, a global left over)
 raises CodegenFormatError naming the line: a new CasADi version fails the build loudly rather
-than shipping a global symbol.  The result is checked by the C tests (tests/test_c_symbols.py,
-tests/test_c_warnings.py).
+than shipping a global symbol.  The result is checked by tests/test_fmu_sources.py (strict
+gcc and clang builds, exported symbols, two FMUs in one process).
 """
 from __future__ import annotations
 

@@ -103,7 +103,7 @@ GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, d
         if (!(I->e[i] > 0.0 && !(I->enew[i] > 0.0))) continue;
         if (gw_event_locate(I, i, t0, I->e[i], t1, isfinite(I->enew[i]) ? I->enew[i] : -I->e[i], &te)) {
             GW_LOG_ERR(I, "evaluation of the event indicators failed while locating event %s",
-                     gw_event_name(I, i));
+                       gw_event_name(I, i));
             return GW_EV_ERROR;
         }
         if (winner < 0 || te < best) {

@@ -36,9 +36,9 @@ static int gw_too_many_steps(gw_instance *I, double remaining, double h, double 
     }
     if (++(*n_fast) <= GW_SETTLE) return 0;
     GW_LOG_ERR(I, "at t=%.17g the remaining %g s of this communication step would need about %.3g "
-             "internal steps of h=%g (limit %.0e): the dynamics are far too fast for the tolerance "
-             "(huge rates?)%s", I->t, remaining, remaining / h, h, limit,
-             I->solver == GW_SOLVER_ROSENBROCK ? "" : " or stiff (try solver rosenbrock)");
+               "internal steps of h=%g (limit %.0e): the dynamics are far too fast for the tolerance "
+               "(huge rates?)%s", I->t, remaining, remaining / h, h, limit,
+               I->solver == GW_SOLVER_ROSENBROCK ? "" : " or stiff (try solver rosenbrock)");
     return 1;
 }
 
@@ -68,7 +68,7 @@ GW_INTERNAL int gw_ensure_f0(gw_instance *I) {
     bad = gw_first_nonfinite(I->k[0], I->m->nx);
     if (bad >= 0) {
         GW_LOG_ERR(I, "derivative of state %s is not finite (%g) at t=%.17g", gw_x_name(I, bad),
-                 I->k[0][bad], I->t);
+                   I->k[0][bad], I->t);
         return -1;
     }
     I->fcur_valid = 1;
@@ -98,7 +98,7 @@ GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events)
     I->n_accepted++;
     if (bad >= 0) {
         GW_LOG_ERR(I, "state %s is not finite (%g) at t=%.17g (solver %s)", gw_x_name(I, bad),
-                 I->xnew[bad], t1, gw_solver_name(I->solver));
+                   I->xnew[bad], t1, gw_solver_name(I->solver));
         return GW_INT_ERROR;
     }
     I->dense_t0 = I->t;
@@ -126,7 +126,7 @@ GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events)
     if (ev == GW_EV_TERMINATE) return GW_INT_TERMINATED;
     if (++(*events) > GW_MAX_EVENTS_PER_STEP) {
         GW_LOG_ERR(I, "more than %d events in one communication step at t=%.17g",
-                 GW_MAX_EVENTS_PER_STEP, te);
+                   GW_MAX_EVENTS_PER_STEP, te);
         return GW_INT_ERROR;
     }
     return GW_INT_OK;
@@ -180,12 +180,11 @@ GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last,
     *h_prev = *h;
     if (*h < gw_h_min(I->t) || !(*t1 > I->t)) { /* steps that no longer advance time */
         GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, solver %s)", I->t, *h,
-                 gw_solver_name(I->solver));
+                   gw_solver_name(I->solver));
         return -1;
     }
     return 0;
 }
-
 
 /* ---- DOP853 and Rosenbrock: adaptive loop ---------------------------------------------
  * Same landing on t_end, max_step bound, step size carry-over (I->h_adapt) and
@@ -233,7 +232,7 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
                     rejected_last = 1;
                     if (I->h_adapt < gw_h_min(I->t)) {
                         GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g): the matrix "
-                                 "I/(gamma h) - J stays singular", I->t, I->h_adapt);
+                                   "I/(gamma h) - J stays singular", I->t, I->h_adapt);
                         return GW_INT_ERROR;
                     }
                     continue;
@@ -275,7 +274,7 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
             rejected_last = 1;
             if (I->h_adapt < gw_h_min(I->t)) {
                 GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, error norm %g, solver %s)",
-                         I->t, I->h_adapt, err, gw_solver_name(I->solver));
+                           I->t, I->h_adapt, err, gw_solver_name(I->solver));
                 return GW_INT_ERROR;
             }
         }

@@ -126,7 +126,7 @@ GW_INTERNAL gw_int_result gw_integrate_dopri5(gw_instance *I, double t_end) {
             rejected_last = 1;
             if (I->h_adapt < gw_h_min(I->t)) {
                 GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, error norm %g)", I->t,
-                         I->h_adapt, err);
+                           I->h_adapt, err);
                 return GW_INT_ERROR;
             }
         }

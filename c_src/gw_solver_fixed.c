@@ -50,8 +50,8 @@ static int gw_rk4_unstable(gw_instance *I, double h) {
     }
     if (!(d32 > GW_RK4_UNSTABLE * d21) || !(d32 > 1e-6 * k1)) return 0;
     GW_LOG_ERR(I, "rk4 is unstable at t=%.17g with max_step=%g: h |lambda| ~ %.3g (stable up to 2.8); "
-             "the dynamics are faster than the step: reduce max_step or use an adaptive solver",
-             I->t, h, d21 > 0.0 ? 2.0 * d32 / d21 : HUGE_VAL);
+               "the dynamics are faster than the step: reduce max_step or use an adaptive solver",
+               I->t, h, d21 > 0.0 ? 2.0 * d32 / d21 : HUGE_VAL);
     return 1;
 }
 
@@ -85,8 +85,8 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
     if (nd < 1.0) nd = 1.0;
     if (nd > GW_MAX_STEPS_AHEAD) {
         GW_LOG_ERR(I, "communication step %g would need %.3g steps of max_step=%g (limit %.0e): "
-                 "raise max_step or shorten the communication step", H, nd, I->max_step,
-                 GW_MAX_STEPS_AHEAD);
+                   "raise max_step or shorten the communication step", H, nd, I->max_step,
+                   GW_MAX_STEPS_AHEAD);
         return GW_INT_ERROR;
     }
     n = (unsigned long long)nd;
@@ -108,8 +108,8 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
                 d_prev = d;
                 if (growing >= 4) {
                     GW_LOG_ERR(I, "euler is unstable at t=%.17g with max_step=%g: the increments grew "
-                             "more than x2 per step for 4 steps; reduce max_step or use another solver",
-                             I->t, h);
+                               "more than x2 per step for 4 steps; reduce max_step or use another solver",
+                               I->t, h);
                     return GW_INT_ERROR;
                 }
             } else if (gw_rk4_step(I, h, ti)) {

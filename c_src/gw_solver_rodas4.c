@@ -80,7 +80,7 @@ GW_INTERNAL int gw_rodas4_linearise(gw_instance *I) {
     i = gw_first_nonfinite(J, nx * nx);
     if (i >= 0) {
         GW_LOG_ERR(I, "Jacobian entry d %s / d %s is not finite (%g) at t=%.17g", gw_x_name(I, i % nx),
-                 gw_x_name(I, i / nx), J[i], t);
+                   gw_x_name(I, i / nx), J[i], t);
         return -1;
     }
     /* d f / d t (zero for autonomous models, up to rounding); a backward difference

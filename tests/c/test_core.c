@@ -16,25 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int n_checks = 0, n_failures = 0;
-#define CHECK(cond)                                                                             \
-    do {                                                                                        \
-        n_checks++;                                                                             \
-        if (!(cond)) {                                                                          \
-            n_failures++;                                                                       \
-            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond);           \
-        }                                                                                       \
-    } while (0)
-#define CHECK_NEAR(a, b, tol)                                                                   \
-    do {                                                                                        \
-        double a_ = (a), b_ = (b);                                                              \
-        n_checks++;                                                                             \
-        if (!(fabs(a_ - b_) <= (tol))) {                                                        \
-            n_failures++;                                                                       \
-            fprintf(stderr, "%s:%d: %s = %.17g, expected %.17g (tol %g)\n", __FILE__,          \
-                    __LINE__, #a, a_, b_, (double)(tol));                                       \
-        }                                                                                       \
-    } while (0)
+#include "checks.h"
 
 /* ---- the user's allocator: counts, never zeroes, fails on request ------------------------- */
 typedef struct {
@@ -234,7 +216,7 @@ int main(void) {
     two_instances();
     out_of_memory();
     CHECK(live == 0);
-    fprintf(stderr, "test_core: %d checks, %d failures, %ld allocations\n", n_checks, n_failures,
+    fprintf(stderr, "test_core: %d checks, %d failures, %ld allocations\n", h_checks, h_failures,
             total);
-    return n_failures == 0 ? 0 : 1;
+    return h_failures == 0 ? 0 : 1;
 }

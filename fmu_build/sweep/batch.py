@@ -3,7 +3,8 @@
 This is the only code that runs on the workers, and the plain in-process loop calls the very
 same function, so a point's metrics do not depend on where or in which batch it ran: every point
 starts from fmi2Reset, gets the same values in the same order and the same communication grid
-t_i = t0 + i h (the last step shortened to land on the stop time).
+t_i = t0 + i h, steps t_(i+1) - t_i, the last one landing on the stop time (as fmpy.simulate_fmu
+steps, so a point gives what `gyrowheel simulate` gives, bit for bit).
 """
 from __future__ import annotations
 
@@ -44,15 +45,15 @@ def run_point(instance, values: dict, settings: Settings, metrics: MetricSet, in
     times[0] = t0
     instance.read(out[0])
     k, terminated = n + 1, False
+    t = t0
     for i in range(n):
-        t = t0 + i * h
-        step = settings.stop_time - t if i == n - 1 else h
-        event_time = instance.step(t, step)
+        t_next = settings.stop_time if i == n - 1 else t0 + (i + 1) * h  # fmpy's grid: no drift
+        event_time = instance.step(t, t_next - t)
         instance.read(out[i + 1])
         if event_time is not None:
             times[i + 1], k, terminated = event_time, i + 2, True
             break
-        times[i + 1] = t + step
+        times[i + 1] = t = t_next
     if not np.all(np.isfinite(out[:k])):  # the FMU promises never to output NaN; hold it to that
         raise PointFailure("non-finite output")
     run = Run(times[:k], out[:k], names, settings.stop_time, terminated, instance.flags() if terminated else [])

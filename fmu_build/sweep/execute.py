@@ -21,6 +21,10 @@ import uuid
 from fmu_build.sweep.batch import run_batch
 
 MAX_BATCH = 500
+# The workers' statistical profiler samples every thread's stack every 10 ms: ~4% of the CPU of
+# 1 ms points (benchmarks/sweep_scaling.py). Off for our LocalCluster; for a cluster of your own,
+# start the workers with DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False.
+LOCAL_CONFIG = {"distributed.worker.profile.enabled": False}
 TASKS_PER_THREAD = 4
 
 
@@ -91,13 +95,15 @@ def execute(plan, writer, *, workers: int | None = None, scheduler: str | None =
         return run_loop(plan, writer, batch_size, progress)
     if client is not None:
         return run_dask(plan, writer, client=client, batch_size=batch_size, progress=progress)
+    import dask
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
         with Client(scheduler, timeout="20s") as c:
             return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
     n = workers or os.cpu_count() or 1
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=":0") as cluster, \
+    with dask.config.set(LOCAL_CONFIG), \
+            LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                         dashboard_address=":0") as cluster, \
             Client(cluster) as c:
         return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)

@@ -167,6 +167,7 @@ def draw(rows, png: Path, rate: float) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), constrained_layout=True)
     for ax, kind, xlabel, ylabel in zip(axes, ("horizon [s]", "rel_tol", "points"),
@@ -176,6 +177,8 @@ def draw(rows, png: Path, rate: float) -> None:
         ys = [y for k, _, y in rows if k == kind]
         ax.loglog(xs, ys, "o-")
         ax.set(xlabel=xlabel, ylabel=ylabel)
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_title("linear in the horizon")
     axes[1].set_title("dopri5: about tol^(-1/5) per point")

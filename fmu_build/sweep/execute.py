@@ -14,8 +14,11 @@ the rows done so far are written.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import signal
+import threading
 import uuid
 
 from fmu_build.sweep.batch import run_batch
@@ -39,8 +42,12 @@ def auto_batch_size(n_points: int, n_threads: int) -> int:
 
 
 def _progress(total: int, enabled: bool):
+    """tqdm on stderr when asked for and stderr is a terminal (no bar spam in logs and CI)."""
+    import sys
+
     from tqdm import tqdm
-    return tqdm(total=total, unit="pt", disable=not enabled, smoothing=0.1, dynamic_ncols=True)
+    return tqdm(total=total, unit="pt", disable=not (enabled and sys.stderr.isatty()), smoothing=0.1,
+                dynamic_ncols=True)
 
 
 def _failed_rows(batch, exc) -> list[dict]:
@@ -88,6 +95,21 @@ def run_dask(plan, writer, *, client, batch_size: int | None = None, progress: b
         raise
 
 
+@contextlib.contextmanager
+def _children_ignore_sigint():
+    """Start worker processes with SIGINT ignored (inherited through exec; Python keeps an ignored
+    SIGINT ignored), so that Ctrl-C in a terminal, which reaches the whole process group, stops the
+    sweep here, cleanly, instead of killing the workers mid-batch with tracebacks of their own."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def execute(plan, writer, *, workers: int | None = None, scheduler: str | None = None, client=None,
             batch_size: int | None = None, progress: bool = False) -> None:
     """Run every point of `plan` and hand the rows to `writer` (see the module docstring)."""
@@ -102,8 +124,8 @@ def execute(plan, writer, *, workers: int | None = None, scheduler: str | None =
         with Client(scheduler, timeout="20s") as c:
             return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
     n = workers or os.cpu_count() or 1
-    with dask.config.set(LOCAL_CONFIG), \
-            LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                         dashboard_address=":0") as cluster, \
-            Client(cluster) as c:
+    with dask.config.set(LOCAL_CONFIG), _children_ignore_sigint():
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               dashboard_address=":0")
+    with cluster, Client(cluster) as c:
         return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)

@@ -51,7 +51,9 @@ def result_table(inputs: pd.DataFrame, rows: list[dict]) -> pd.DataFrame:
     results = pd.DataFrame(rows).set_index("point").sort_index()
     metric_cols = [c for c in results.columns if c not in TAIL]
     frame = inputs.loc[results.index].join(results[metric_cols + list(TAIL)])
-    frame["reason"] = frame["reason"].fillna("")
+    for text in ("reason", "event"):  # failed points have no event: '' rather than a missing value
+        if text in frame:
+            frame[text] = frame[text].fillna("")
     frame = _dtypes(frame.reset_index())
     return frame
 

@@ -16,7 +16,9 @@ import pytest
 
 from fmu_build.sweep import read_table, sweep
 
-DASK = Path(sys.executable).with_name("dask")
+# dask's own command line (`dask scheduler`, `dask worker`), from this interpreter's environment
+DASK = [str(Path(sys.executable).with_name("dask"))] if Path(sys.executable).with_name("dask").exists() \
+    else [sys.executable, "-m", "dask"]
 # falls (gamma_dot = 0), survivors, and refused points (M < 0), in batches that do not divide evenly
 POINTS = dict(grid={"beta_deg": "60:88:5", "gamma_dot": [0.0, 2.5, 7.0], "M": [2.0, -1.0]}, stop_time=1.5,
               output_interval=0.01)
@@ -39,11 +41,11 @@ def scheduler(tmp_path_factory):
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
     logs = tmp_path_factory.mktemp("dask")
-    procs = [subprocess.Popen([str(DASK), "scheduler", "--host", "127.0.0.1", "--port", str(port),
+    procs = [subprocess.Popen([*DASK, "scheduler", "--host", "127.0.0.1", "--port", str(port),
                                "--dashboard-address", f"127.0.0.1:{_free_port()}"],
                               stdout=subprocess.DEVNULL, stderr=open(logs / "scheduler.log", "w"))]
     for i in range(2):
-        procs.append(subprocess.Popen([str(DASK), "worker", address, "--nthreads", "1", "--no-nanny",
+        procs.append(subprocess.Popen([*DASK, "worker", address, "--nthreads", "1", "--no-nanny",
                                        "--host", "127.0.0.1", "--name", f"w{i}", "--no-dashboard"],
                                       stdout=subprocess.DEVNULL, stderr=open(logs / f"worker{i}.log", "w")))
     try:

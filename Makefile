@@ -1,6 +1,8 @@
 # Two commands do all set-up on a fresh machine (a C compiler, python3 >= 3.11 assumed):
-#   make demo   builds the paper FMUs, runs earth/Mars/moon, writes CSV and a figure to results/
-#   make test   installs what the tests need and runs them all
+#   make demo   builds the paper FMUs, runs earth/Mars/moon, writes CSV, a figure and the earth
+#               run's animation (GIF and interactive HTML) to results/; the Gyrover closed
+#               loop (earth, moon) to results/system/
+#   make test   installs what the tests need (Debian's chromium too, as root) and runs them all
 #   make bench  the work-precision benchmark (results/bench/*.png, work_precision.md)
 PYTHON ?= python3
 VENV   ?= .venv
@@ -8,7 +10,7 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 SCENES := paper_earth paper_mars paper_moon
 
-.PHONY: demo test bench venv clean
+.PHONY: demo test bench venv browser clean
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -22,8 +24,23 @@ venv: $(STAMP)
 
 demo: $(STAMP)
 	$(PY) examples/paper_demo.py --out results
+	$(PY) examples/gyrover_control.py --out results/system
+	$(PY) -m fmu_build animate results/paper_earth.csv --fmu results/fmus/paper_earth.fmu \
+	    -o results/paper_earth.gif --fps 12 --speed 2 --size 480x360 --trail 5
+	$(PY) -m fmu_build animate results/paper_earth.csv --fmu results/fmus/paper_earth.fmu \
+	    -o results/paper_earth.html --trail 5
 
-test: $(STAMP)
+# tests/test_animate_html.py drives a real headless browser: Debian's chromium
+browser:
+	@command -v chromium >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing Debian's chromium (headless browser for tests/test_animate_html.py)"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; \
+	  else \
+	    echo "chromium is missing and apt-get is not usable here: install Debian's chromium for tests/test_animate_html.py"; \
+	  fi; }
+
+test: $(STAMP) browser
 	$(PY) -m pytest -q
 
 bench: $(STAMP)

@@ -1,4 +1,8 @@
-"""Scene -> FMU: model, generated C, modelDescription.xml, compile, zip."""
+"""ModelSpec -> FMU: generated C, modelDescription.xml, compile, zip.
+
+build_spec_fmu serves every model (a wheel, a controller, any small CasADi system);
+build_fmu is the wheel's path: scene -> ModelSpec -> build_spec_fmu.
+"""
 from __future__ import annotations
 
 import hashlib
@@ -13,7 +17,7 @@ from fmu_build.codegen import DESC_FILE, FUNCTION_FILE, generate_functions, writ
 from fmu_build.compiler import compile_shared, fmi_headers_dir
 from fmu_build.documentation import write_index_html
 from fmu_build.model_description import write_model_description
-from fmu_build.scene import Scene
+from fmu_build.scene import Experiment, Scene
 from fmu_build.variables import build_table
 from model.build import build_model
 from model.spec import ModelSpec
@@ -48,7 +52,22 @@ def _guid(*parts: str) -> str:
 
 
 def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = None) -> BuildResult:
-    """Build the FMU of `scene` at `output`; sources stay in build_dir if given."""
+    """Build the FMU of `scene` at `output`: the wheel's ModelSpec through build_spec_fmu."""
+    return build_spec_fmu(model_spec(scene), output, scene.experiment, build_dir=build_dir,
+                          keep=scene.outputs, source=scene.source)
+
+
+def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment | None = None,
+                   build_dir: str | Path | None = None, keep: list[str] | None = None,
+                   source: str = "") -> BuildResult:
+    """Build the FMI 2.0 FMU of any ModelSpec (a wheel's, a controller's: model/system.py).
+
+    experiment: DefaultExperiment and the solver settings' defaults (Experiment() if None);
+    keep: the outputs to expose (None: all); source: text shipped in documentation/index.html
+    (the scene file, the gains). Sources stay in build_dir if given. Raises ValueError for a
+    bad table, CompileError if the C compiler fails.
+    """
+    experiment = experiment or Experiment()
     output = Path(output)
     tmp = None
     if build_dir is None:
@@ -60,9 +79,8 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
         shutil.rmtree(root)
     src = root / "sources"
     try:
-        spec = model_spec(scene)
-        table = build_table(spec, scene.experiment, scene.outputs)
-        identifier = scene.name
+        table = build_table(spec, experiment, keep)
+        identifier = spec.name
         fns = generate_functions(spec, src)
         for f in runtime_sources():
             shutil.copy2(f, src / f.name)
@@ -70,17 +88,18 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
             shutil.copy2(fmi_headers_dir() / h, src / h)
         funcs_c = (src / f"{FUNCTION_FILE}.c").read_text()
         guid = _guid(funcs_c, repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]),
-                     repr(scene.experiment), identifier)
-        write_model_desc(spec, table, scene.experiment, identifier, guid, fns, src)
+                     repr(experiment), identifier)
+        write_model_desc(spec, table, experiment, identifier, guid, fns, src)
         c_files = sorted(p.name for p in src.glob("*.c"))
         generated = {f"{FUNCTION_FILE}.c", DESC_FILE}
         compile_shared([src / c for c in c_files], generated, [src], root / "binaries" / PLATFORM /
                        f"{identifier}.so", build_dir / "obj")
-        xml = write_model_description(scene, table, identifier, guid, c_files, spec.description,
+        xml = write_model_description(spec.name, experiment, table, identifier, guid, c_files, spec.description,
                                       model_exchange=True, directional=True)
         (root / "modelDescription.xml").write_text(xml)
         (root / "documentation").mkdir(exist_ok=True)
-        (root / "documentation" / "index.html").write_text(write_index_html(scene, table, identifier, guid))
+        (root / "documentation" / "index.html").write_text(write_index_html(spec, experiment, table, identifier, guid,
+                                                                                   source))
         output.parent.mkdir(parents=True, exist_ok=True)
         _zip(root, output)
         return BuildResult(fmu=output, spec=spec, sources=src, identifier=identifier)

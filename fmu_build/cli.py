@@ -139,7 +139,44 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def cmd_system_run(args) -> int:
+    """Run an .ssp (SSP 1.0) with gyrowheel's own master on fmpy (cosim/master.py)."""
+    import tempfile
+
+    from fmpy.util import write_csv
+
+    from cosim.master import MasterError, run
+    from cosim.system import SystemFileError, read_ssp
+
+    if not args.step > 0:
+        raise CliError(f"--step must be > 0, got {args.step}")
+    with tempfile.TemporaryDirectory(prefix="gyrowheel-system-") as tmp:
+        try:
+            system = read_ssp(args.ssp, tmp)
+            result = run(system, args.step, args.stop_time)
+        except (SystemFileError, ValueError) as exc:
+            raise CliError(str(exc)) from None
+        except MasterError as exc:
+            raise CliError(str(exc), EXIT_FAILURE) from None
+    output = Path(args.output or Path(args.ssp).with_suffix(".csv").name)
+    write_csv(str(output), result.data)
+    ended = f", stopped by {result.stopped_by} at t = {result.data['time'][-1]:.6g} s" if result.stopped_by else ""
+    print(f"wrote {output}: {len(result.data)} rows{ended}")
+    return 0
+
+
+def cmd_animate(args) -> int:
+    from fmu_build.animate import AnimationError
+    from fmu_build.animate.command import run
+    try:
+        return run(args)
+    except AnimationError as exc:
+        raise CliError(str(exc)) from None
+
+
 def make_parser() -> argparse.ArgumentParser:
+    from fmu_build.animate.command import add_arguments as add_animate_arguments
+
     parser = argparse.ArgumentParser(prog="gyrowheel", description="Build and run FMI 2.0 FMUs of a rolling wheel.")
     sub = parser.add_subparsers(dest="command", required=True)
     b = sub.add_parser("build", help="build an FMU from a scene file")
@@ -160,6 +197,16 @@ def make_parser() -> argparse.ArgumentParser:
     w.add_argument("--scenarios", nargs="*", help="paper, long, stiff, near_flat (default: all)")
     w.add_argument("--out", default="results/bench", help="directory for the figures and the table")
     w.set_defaults(func=cmd_bench)
+    y = sub.add_parser("system", help="systems of FMUs (SSP 1.0)").add_subparsers(dest="system_command", required=True)
+    yr = y.add_parser("run", help="run an .ssp with gyrowheel's master (fixed communication step, fmpy)")
+    yr.add_argument("ssp")
+    yr.add_argument("--step", type=float, default=0.01, help="communication step [s] (default 0.01)")
+    yr.add_argument("--stop-time", type=float, help="default: the .ssp's DefaultExperiment")
+    yr.add_argument("-o", "--output", help="CSV file to write (<component>.<variable> columns)")
+    yr.set_defaults(func=cmd_system_run)
+    a = sub.add_parser("animate", help="animate a result CSV as .gif, .mp4 or an interactive .html")
+    add_animate_arguments(a)
+    a.set_defaults(func=cmd_animate)
     i = sub.add_parser("info", help="describe an FMU")
     i.add_argument("fmu")
     i.set_defaults(func=cmd_info)

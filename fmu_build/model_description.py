@@ -4,7 +4,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from datetime import datetime, timezone
 
-from fmu_build.scene import SOLVERS, Scene
+from fmu_build.scene import SOLVERS, Experiment
 from fmu_build.variables import Variable
 
 LOG_CATEGORIES = {  # must match c_src/gw_log.c
@@ -48,18 +48,17 @@ def _unit_of(v: Variable) -> str | None:
     return u if u and u != "1" else None
 
 
-def write_model_description(scene: Scene, table: list[Variable], identifier: str, guid: str,
-                            sources: list[str], description: str, model_exchange: bool = False,
+def write_model_description(model_name: str, exp: Experiment, table: list[Variable], identifier: str,
+                            guid: str, sources: list[str], description: str, model_exchange: bool = False,
                             directional: bool = False) -> str:
     """The XML text. `sources` are the C files listed under <SourceFiles>.
 
     model_exchange adds the ModelExchange interface (the runtime's fmi2GetDerivatives & co.),
     directional declares fmi2GetDirectionalDerivative (CasADi's exact Jacobian).
     """
-    exp = scene.experiment
     root = ET.Element("fmiModelDescription", {
         "fmiVersion": "2.0",
-        "modelName": scene.name,
+        "modelName": model_name,
         "guid": guid,
         "description": description,
         "generationTool": "gyrowheel",

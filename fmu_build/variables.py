@@ -133,6 +133,9 @@ def _states(spec: ModelSpec, rows: list[Variable], add) -> None:
 
 
 def _unit_of_state(spec: ModelSpec, name: str) -> str:
+    for q in spec.starts:  # a local state of a general system (model/system.py) keeps its unit
+        if q.name == name:
+            return q.unit
     if name.endswith("_dot"):
         return "m/s" if name in ("x_dot", "y_dot") else "rad/s"
     return "1"

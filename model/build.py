@@ -27,6 +27,12 @@ BODY_SPEEDS = ("omega_l", "omega_m", "omega_n")
 COORDINATES = ("x", "y", "alpha", "beta", "gamma")
 SPEEDS = ("alpha_dot", "beta_dot", "gamma_dot")
 DEPENDENT = [0, 1]  # x, y follow from the angle rates (rolling constraint)
+WHEEL_ABOUT = (
+    "A rigid wheel rolling without slip on flat ground (the Gyrover wheel of Nandy & Xu), equations "
+    "derived by CasADi from the Lagrangian with the rolling constraints eliminated (formulation: {}). "
+    "Angles: alpha precession (heading), beta lean (pi/2 upright), gamma spin; the centre velocity "
+    "(vx, vy) follows from the angle rates, so only positions, angles and angle rates are initial values. "
+    "When the wheel falls flat (beta reaches beta_min or pi - beta_min) the step stops at the located time.")
 
 
 def wheel_parameters() -> list[Quantity]:
@@ -316,7 +322,7 @@ class _Assembler:
             s=s, starts=starts, u=ca.vertcat(*[sym for _, sym in ctx.inputs]) if ctx.inputs else ca.SX(0, 1),
             inputs=[qq for qq, _ in ctx.inputs], p=p, parameters=ctx.parameters,
             init=init, ode=ode, outputs=outputs, events=events, checks=ctx.checks, nominal=nominal,
-            effects=effect_names, formulation=self.formulation)
+            effects=effect_names, formulation=self.formulation, about=WHEEL_ABOUT.format(self.formulation))
 
     def _late(self, expr):
         """The contact-force placeholder -> the back-substituted contact force."""

@@ -1,6 +1,7 @@
 """The symbolic model handed to code generation: one table of named quantities.
 
-A ModelSpec is everything fmu_build needs and nothing it must know about wheels:
+A ModelSpec is everything fmu_build needs and nothing it must know about wheels (the
+wheel's comes from model/build.py, any other system's from model/system.py):
 symbol vectors (t, x, s, u, p), the expressions of the generated functions
 (init, ode, out, evt, chk, nom) and the metadata (names, units, defaults,
 descriptions) of every FMI-visible quantity.
@@ -67,6 +68,7 @@ class ModelSpec:
     nominal: ca.SX | None = None  # x scale(p) for absolute tolerances
     effects: list[str] = field(default_factory=list)
     formulation: str = "reduced"
+    about: str = ""  # what the model is, one paragraph for the FMU's documentation/index.html
 
     def output_index(self, name: str) -> int:
         for i, (q, _) in enumerate(self.outputs):

@@ -87,3 +87,20 @@ def earth_fmu(fmu_dir) -> Path:
     """The paper's earth scene, built once (sources kept under fmu_dir/earth_build)."""
     scene = load_scene(SCENES / "paper_earth.toml")
     return build_fmu(scene, fmu_dir / "paper_earth.fmu", build_dir=fmu_dir / "earth_build").fmu
+
+
+@pytest.fixture(scope="session")
+def earth_loop(fmu_dir):
+    """The Gyrover closed loop on earth (wheel + controller FMUs, .ssp), built once."""
+    from controller.closed_loop import build_closed_loop
+    return build_closed_loop(load_scene(SCENES / "gyrover_mission_earth.toml"), fmu_dir / "closed_loop")
+
+
+@pytest.fixture(scope="session")
+def earth_design(earth_loop):
+    return earth_loop.design
+
+
+@pytest.fixture(scope="session")
+def controller_fmu(earth_loop):
+    return earth_loop.controller_fmu

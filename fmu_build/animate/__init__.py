@@ -1,0 +1,41 @@
+"""Animations of a wheel run: GIF and MP4 (matplotlib) and a standalone interactive HTML page (three.js).
+
+    from fmu_build.animate import animate
+    animate("paper_earth.csv", "paper_earth.gif", fps=12, speed=2)
+
+The poses come from the model's own kinematics (geometry.py); the result table is read by column
+name (table.py); timeline.py decides what each frame shows; render.py and html.py draw it.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from fmu_build.animate.table import AnimationError, Parameters, read_result, resolve_parameters
+from fmu_build.animate.timeline import Options, Timeline, build_timeline
+
+FORMATS = (".gif", ".mp4", ".html")
+
+__all__ = ["FORMATS", "AnimationError", "Options", "Parameters", "Timeline", "animate", "build_timeline",
+           "read_result", "resolve_parameters"]
+
+
+def animate(result: str | Path, output: str | Path, R: float | None = None, fmu: str | Path | None = None,
+            **options) -> Timeline:
+    """Write the animation of a result CSV to output (.gif, .mp4 or .html, by its extension).
+
+    R (m) or fmu (its start values) give the wheel's geometry when the CSV does not (see
+    resolve_parameters); options are those of Options (fps, speed, size, trail, start, stop).
+    Returns the Timeline drawn. Raises AnimationError for bad input, with a one-line message.
+    """
+    output = Path(output)
+    if output.suffix.lower() not in FORMATS:
+        raise AnimationError(f"{output}: unknown output format {output.suffix!r}: use .gif, .mp4 or .html")
+    table = read_result(result)
+    timeline = build_timeline(table, resolve_parameters(table, R=R, fmu=fmu), Options(**options))
+    if output.suffix.lower() == ".html":
+        from fmu_build.animate.html import write_html
+        write_html(timeline, output, title=f"gyrowheel: {Path(result).name}")
+    else:
+        from fmu_build.animate.render import render_video
+        render_video(timeline, output)
+    return timeline

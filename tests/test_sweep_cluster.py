@@ -89,6 +89,14 @@ def test_scheduler_address_equals_plain_loop(earth_fmu, scheduler, reference, tm
     assert not table.loc[table["gamma_dot"] == 0.0].query("status == 'ok'")["survived"].any()
 
 
+def test_system_through_scheduler_equals_plain_loop(earth_loop, scheduler):
+    """A system of two FMUs (.ssp: wheel + controller) travels to the workers and gives the same bits."""
+    kw = dict(grid={"M": [1.8, 2.2], "k_axial": [0.35, 0.45], "controller.gain_scale": [1.0, 3.0]},
+              fixed={"alpha_dot": -2.4}, stop_time=2.0, output_interval=0.01,
+              metrics=["survived", "max_lean", "final:beta", "final:controller.tilt_cmd"])
+    _same(sweep(earth_loop.ssp, workers=0, **kw), sweep(earth_loop.ssp, scheduler=scheduler, batch_size=3, **kw))
+
+
 def test_local_cluster_equals_plain_loop(earth_fmu, reference):
     table = sweep(earth_fmu, workers=2, batch_size=7, **POINTS)
     _same(reference, table)

@@ -25,7 +25,7 @@ from fmu_build.sweep.target import FmuTarget
 
 @contextlib.contextmanager
 def open_target(source, fmu_out: str | Path | None = None):
-    """A scene (.toml: built first), an FMU (.fmu) or a ready target object -> target."""
+    """A scene (.toml: built first), an FMU (.fmu), a system (.ssp) or a ready target object -> target."""
     if hasattr(source, "open") and hasattr(source, "variables"):
         yield source
         return
@@ -40,8 +40,17 @@ def open_target(source, fmu_out: str | Path | None = None):
             build_fmu(scene, fmu, build_dir=Path(tmp) / "build")
             yield FmuTarget(fmu)
         return
+    if path.suffix == ".ssp":
+        from cosim.system import SystemFileError
+
+        from fmu_build.sweep.system_target import SspTarget
+        try:
+            yield SspTarget(path)
+        except SystemFileError as exc:
+            raise SweepSpecError(str(exc)) from None
+        return
     if path.suffix != ".fmu":
-        raise SweepSpecError(f"{path}: expected a scene (.toml) or an FMU (.fmu)")
+        raise SweepSpecError(f"{path}: expected a scene (.toml), an FMU (.fmu) or a system (.ssp)")
     if not path.is_file():
         raise SweepSpecError(f"{path}: no such FMU file")
     try:
@@ -117,7 +126,8 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
           plot: str | Path | None = None, plot_metric: str | None = None, progress: bool = False) -> pd.DataFrame:
     """Run a parameter sweep or Monte Carlo study of a scene, an FMU or a target; returns the table.
 
-    source: scene (.toml, built first), FMU (.fmu) or a target (fmu_build.sweep.target).
+    source: scene (.toml, built first), FMU (.fmu), system of FMUs (.ssp: fmu_build.sweep.system_target)
+    or a target (fmu_build.sweep.target).
     grid: {name: 'START:STOP:N' | 'START:STOP:N:log' | [values] | value} (or --grid strings);
     random: {name: 'normal:MU:SIGMA' | 'uniform:A:B'} with samples (count) and seed;
     points: an explicit table of inputs instead of grid/random. Names: the unit's settable

@@ -11,7 +11,7 @@ import sys
 def add_parser(sub) -> None:
     s = sub.add_parser("sweep", help="parameter sweep / Monte Carlo of a scene or FMU (on Dask)",
                        description="Run many points of a scene or FMU; one row per point in a Parquet or CSV table.")
-    s.add_argument("source", help="scene (.toml, built first) or FMU (.fmu)")
+    s.add_argument("source", help="scene (.toml, built first), FMU (.fmu) or system of FMUs (.ssp)")
     g = s.add_argument_group("points")
     g.add_argument("--grid", action="append", metavar="NAME=SPEC",
                    help="START:STOP:N, START:STOP:N:log or V1,V2,... (repeatable; grids multiply); "

@@ -36,6 +36,20 @@ _UNPACKED: dict[str, str] = {}  # FMU digest -> extraction directory, per worker
 _LOCK = threading.Lock()  # fmpy's FMU2Slave() changes the working directory while loading
 
 
+# fmpy's logger proxy (it formats the FMU's variadic message) keeps ONE Python logger per process:
+# every instance registers the same dispatcher and tells itself apart by its componentEnvironment.
+_MESSAGES: dict[int, list] = {}
+_LOGGER = None
+_NEXT_ID = 0
+
+
+def _dispatch_log(env, instance, status, category, message):
+    if status >= 3:  # fmi2Error, fmi2Fatal: always logged by the FMU (docs/fmi.md)
+        messages = _MESSAGES.get(env or 0)
+        if messages is not None:
+            messages.append((message or b"").decode(errors="replace"))
+
+
 class PointFailure(Exception):
     """A point the unit refused or could not finish; str() is the reason recorded in the table."""
 
@@ -140,12 +154,20 @@ class FmuInstance:
                                fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
         from fmpy.logging import addLoggerProxy
 
+        global _LOGGER, _NEXT_ID
         self.target = target
         self.messages: list[str] = []
+        with _LOCK:
+            if _LOGGER is None:
+                _LOGGER = fmi2CallbackLoggerTYPE(_dispatch_log)
+            _NEXT_ID += 1
+            self._id = _NEXT_ID
+            _MESSAGES[self._id] = self.messages
         self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.logger = _LOGGER
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._callbacks.componentEnvironment = self._id
         addLoggerProxy(byref(self._callbacks))
         with _LOCK:
             self.slave = FMU2Slave(guid=target.guid, unzipDirectory=unzipdir,
@@ -165,10 +187,6 @@ class FmuInstance:
         self._vars = variables
         self._fresh = True
 
-    def _log(self, env, instance, status, category, message):
-        if status >= 3:  # fmi2Error, fmi2Fatal: always logged by the FMU (docs/fmi.md)
-            self.messages.append((message or b"").decode(errors="replace"))
-
     def _check(self, status: int, what: str) -> None:
         if status > 1:  # fmi2Discard and worse
             reason = "; ".join(self.messages) or f"{what} returned status {status}"
@@ -176,6 +194,11 @@ class FmuInstance:
 
     def start(self, values: dict[str, object], start_time: float) -> None:
         """fmi2Reset (after the first point), fmi2SetupExperiment, set `values`, initialise."""
+        self.enter_initialisation(values, start_time)
+        self.exit_initialisation()
+
+    def enter_initialisation(self, values: dict[str, object], start_time: float) -> None:
+        """fmi2Reset (after the first point), fmi2SetupExperiment, set `values`, fmi2EnterInitializationMode."""
         f, c = self._f, self._c
         self.messages.clear()
         if not self._fresh:
@@ -194,7 +217,15 @@ class FmuInstance:
                 val = (ctype * len(group))(*[g[1] for g in group])
                 self._check(f[setter](c, vr, len(group), val), setter)
         self._check(f["fmi2EnterInitializationMode"](c), "fmi2EnterInitializationMode")
-        self._check(f["fmi2ExitInitializationMode"](c), "fmi2ExitInitializationMode")
+
+    def exit_initialisation(self) -> None:
+        self._check(self._f["fmi2ExitInitializationMode"](self._c), "fmi2ExitInitializationMode")
+
+    def copy_real(self, vr: int, to: "FmuInstance", to_vr: int) -> None:
+        """One connection: this instance's Real output vr -> `to`'s input to_vr (fmi2GetReal, fmi2SetReal)."""
+        value, ref = c_double(0.0), c_uint(vr)
+        self._check(self._get_real(self._c, byref(ref), 1, byref(value)), "fmi2GetReal")
+        to._check(to._f["fmi2SetReal"](to._c, byref(c_uint(to_vr)), 1, byref(value)), "fmi2SetReal")
 
     def _reinstantiate(self) -> None:
         """After fmi2Fatal (or a refused fmi2Reset) the instance is gone: make a new one."""
@@ -236,3 +267,4 @@ class FmuInstance:
             self.slave.freeInstance()
         except Exception:
             pass
+        _MESSAGES.pop(self._id, None)

@@ -3,6 +3,7 @@
     spec     grids and random samples -> the table of points
     plan     names and values checked against the unit, converted to unit values
     target   the FMU (or any unit with the same interface) opened once per task on a worker
+    system_target  a system of FMUs (.ssp: the wheel and its controller) as one target
     batch    one task: a batch of points in one instance (reset, set, step)
     metrics  fall time, survived, lean extremes, final position, energy drift, user functions
     execute  plain loop, LocalCluster or a scheduler address; progress bar; Ctrl-C

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from model.build import FORMULATIONS, start_values, wheel_parameters
-from model.effects import CATALOGUE
+from model.effects import CATALOGUE, lift_off_conflict
 
 SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
@@ -161,6 +161,9 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
     if "gravity" not in effects:
         raise r.fail("effects", None, "[effects.gravity] is required: every FMU exposes g "
                      "(INTERFACE.md); use g = 0 for a weightless wheel")
+    conflict = lift_off_conflict(effects)
+    if conflict:
+        raise r.fail("effects.contact_forces", "on_lift_off", conflict)
     return effects
 
 
@@ -226,4 +229,6 @@ def load_scene(path: str | Path) -> Scene:
         raise SceneError(f"{path}: no such scene file") from None
     except OSError as exc:
         raise SceneError(f"{path}: cannot read: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"{path}: not a text file (TOML is UTF-8): {exc.reason} at byte {exc.start}") from None
     return parse_scene(text, str(path))

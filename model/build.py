@@ -15,7 +15,7 @@ import math
 import casadi as ca
 
 from model.context import Body, WheelContext
-from model.effects import CATALOGUE
+from model.effects import CATALOGUE, lift_off_conflict
 from model.kinematics import WheelKinematics
 from model.lagrangian import ConstrainedSystem
 from model.spec import Event, ModelSpec, Quantity
@@ -115,6 +115,9 @@ def build_model(wheel: dict[str, float] | None = None,
     for effect_name in effects:
         if effect_name not in CATALOGUE:
             raise ValueError(f"unknown effect {effect_name!r}; valid: {', '.join(CATALOGUE)}")
+    conflict = lift_off_conflict(effects)
+    if conflict:
+        raise ValueError(f"contact_forces on_lift_off: {conflict}")
     ctx = base_context(wheel or {})
     for effect_name, effect_cls in CATALOGUE.items():
         if effect_name in effects:
@@ -289,14 +292,16 @@ class _Assembler:
         outputs += [(st.quantity, st.sym) for st in ctx.states if st.output]
         outputs += [(Quantity(f"{c.name}_torque", "N.m", f"torque the motor of {c.name} supplies"),
                      bind(tau_driven[i])) for i, c in enumerate(self.driven)]
-        outputs += [(qq, bind(self._late(e))) for qq, e in ctx.outputs] + extra_outputs
+        outputs += [(qq, bind(self._late(e))) for qq, e in ctx.outputs]
+        outputs += [(qq, bind(e)) for qq, e in extra_outputs]  # lambda holds driven placeholders
 
         fallen = Quantity("fallen", "", "true once the wheel has fallen flat (beta <= beta_min or >= pi - beta_min)")
         events = [Event("fall", ca.sin(self.q[3]) - ca.sin(P["beta_min"]), "terminate", fallen)]
         events += [Event(n, bind(self._late(e)), a, f) for n, e, a, f in ctx.events]
         if ctx.uses_Fn and not any(ev.name == "lift_off" for ev in events):
             # load-proportional laws (rolling resistance, pivot friction) would push, not resist,
-            # with F_n < 0: the model ends there, so stop and say so (contact_forces may choose otherwise)
+            # with F_n < 0: the model ends there, so stop and say so (lift_off_conflict refuses any
+            # other on_lift_off policy for these laws)
             events.append(Event("lift_off", bind(self._late(ctx.Fc[2])), "terminate",
                                 Quantity("lifted_off", "", "true once the normal force has reached zero")))
 

@@ -22,6 +22,7 @@ from model.spec import Quantity
 
 class RollingResistance(Effect):
     name = "rolling_resistance"
+    uses_normal_load = True
     summary = "resistance c_rr F_n to the rolling of the rim (power -c_rr F_n R |gamma_dot|)"
 
     @classmethod

@@ -329,7 +329,8 @@ class _Assembler:
         for c in self.free[5:]:
             outputs += [(c.start, c.q), (c.rate_start, bind(c.qd))]
         outputs += [(st.quantity, st.sym) for st in ctx.states if st.output]
-        outputs += [(Quantity(f"{c.name}_torque", "N.m", f"torque the motor of {c.name} supplies"),
+        outputs += [(Quantity(f"{c.name}_torque", "N.m", f"torque the motor of {c.name} supplies (generalised "
+                              f"force on {c.name}, positive in the sense of increasing {c.name})"),
                      bind(tau_driven[i])) for i, c in enumerate(self.driven)]
         outputs += [(qq, bind(self._late(e))) for qq, e in ctx.outputs]
         outputs += [(qq, bind(e)) for qq, e in extra_outputs]  # lambda holds driven placeholders

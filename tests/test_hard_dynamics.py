@@ -149,7 +149,7 @@ def test_euler_disk_down_to_the_default_beta_min(euler_disk):
     fall.terminal, fall.direction = True, -1
     ref = solve_ivp(lambda t, x: np.array(f["ode"](t, x, [], p)).ravel(), (0, 60), x0, method="DOP853",
                     rtol=1e-10, atol=1e-12, events=fall)
-    assert ref.t_events[0][0] == pytest.approx(10.7596869, abs=1e-7)
+    assert ref.t_events[0][0] == pytest.approx(10.7596925, abs=1e-7)
     assert r["time"][-1] == pytest.approx(ref.t_events[0][0], abs=1e-8)
 
 

@@ -31,7 +31,14 @@ def cmd_build(args) -> int:
     from fmu_build.compiler import CompileError
     from fmu_build.scene import load_scene
 
-    scene = load_scene(args.scene)
+    from fmu_build.scene import SceneError
+    try:
+        scene = load_scene(args.scene)
+    except SceneError:
+        raise
+    except Exception as exc:  # a defect of the reader: still one line
+        raise CliError(f"{args.scene}: reading the scene failed ({type(exc).__name__}: {_one_line(exc)}); "
+                       "this is a gyrowheel defect, please report it with the scene", EXIT_FAILURE) from None
     output = Path(args.output or f"{scene.name}.fmu")
     try:  # before the build, not after a long compile
         output.parent.mkdir(parents=True, exist_ok=True)

@@ -188,7 +188,7 @@ def _experiment(r: _Reader, data: dict) -> Experiment:
     r.unknown("experiment", data, set(Experiment.__dataclass_fields__))
     for key, value in data.items():
         if key == "solver":
-            if value not in SOLVERS:
+            if not isinstance(value, str) or value not in SOLVERS:
                 raise r.fail("experiment", key, f"unknown solver {value!r}; valid: {', '.join(SOLVERS)}")
             exp.solver = value
         elif key == "start_time":

@@ -81,6 +81,35 @@ def _one_error_line(capsys) -> str:
     return lines[0]
 
 
+ODD_VALUES = ["[]", "{}", '"x"', "true", "1", "1.5", "-1", "0", "1e308", "inf", "nan", "1979-05-27", "[1, 2]",
+              '"touchdown"', '"ignore"', '"earth"']
+
+
+def test_reader_answers_every_odd_value_with_a_scene_error():
+    """Every key of every table with values of every TOML type: a SceneError or a scene, nothing else
+    (a list as solver used to escape as TypeError: unhashable type)."""
+    keys = {"model": ["name", "description", "formulation"],
+            "wheel": ["M", "R", "k_diam", "k_axial", "beta_min", "beta_min_deg"],
+            "initial": ["beta", "beta_deg", "gamma_dot", "x_dot"],
+            "experiment": ["start_time", "stop_time", "output_interval", "solver", "rel_tol", "abs_tol", "max_step"],
+            "outputs": ["keep"]}
+    keys.update({f"effects.{name}": [q.name for q in cls.parameters()] + list(cls.choices())
+                 for name, cls in CATALOGUE.items()})
+    escaped = []
+    for table, names in keys.items():
+        others = [t for t in ("effects.gravity", "effects.rolling_resistance") if t != table]
+        prefix = "".join(f"[{t}]\n" for t in others) if table.startswith("effects.") else ""
+        for key, value in itertools.product(names, ODD_VALUES):
+            text = f"{prefix}[{table}]\n{key} = {value}\n"
+            try:
+                parse_scene(text, "s.toml")
+            except SceneError:
+                pass
+            except Exception as exc:  # noqa: BLE001
+                escaped.append(f"[{table}] {key} = {value}: {type(exc).__name__}: {exc}")
+    assert not escaped, "\n".join(escaped)
+
+
 def test_unexpected_build_failure_is_one_line(tmp_path, capsys, monkeypatch):
     """Whatever escapes model building (a CasADi RuntimeError here) becomes one line and exit 1."""
     import fmu_build.builder

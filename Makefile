@@ -10,7 +10,12 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 SCENES := paper_earth paper_mars paper_moon
 
-.PHONY: demo test bench venv browser clean
+# Debian packages the C tests use: clang (the sources must build warning-free under gcc and
+# clang), cmake (fmpy's build of an FMU's sources), valgrind (memory checks).  Installed when
+# missing and we are root with apt-get (CI); otherwise named, and the tests needing them say so.
+C_TOOLS := clang cmake valgrind
+
+.PHONY: demo test bench venv browser clean c-tools
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -40,7 +45,15 @@ browser:
 	    echo "chromium is missing and apt-get is not usable here: install Debian's chromium for tests/test_animate_html.py"; \
 	  fi; }
 
-test: $(STAMP) browser
+c-tools:
+	@missing=""; for t in $(C_TOOLS); do command -v $$t >/dev/null 2>&1 || missing="$$missing $$t"; done; \
+	if [ -n "$$missing" ]; then \
+	    if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	        echo "installing$$missing"; apt-get update -qq && apt-get install -y -qq $$missing >/dev/null; \
+	    else echo "make test: missing$$missing (Debian: apt-get install$$missing)"; fi; \
+	fi
+
+test: $(STAMP) browser c-tools
 	$(PY) -m pytest -q
 
 bench: $(STAMP)

@@ -100,8 +100,8 @@ def fmpy_call_overhead_ns(fmu: Path) -> float:
 
 def rhs_exe(sources: Path, out: Path) -> Path:
     """benchmarks/rhs_bench.c linked against the kept sources, with the FMU's flags (as paper_cost.rhs_ns)."""
-    subprocess.run([compiler(), "-std=c99", *OPTIMISE, f"-I{sources}", str(sources / "gw_funcs.c"),
-                    str(sources / "model_desc.c"), str(HERE / "rhs_bench.c"), "-o", str(out), "-lm"], check=True)
+    subprocess.run([compiler(), "-std=c99", *OPTIMISE, f"-I{sources}", str(HERE / "rhs_bench.c"),
+                    str(HERE / "rhs_model.c"), "-o", str(out), "-lm"], check=True)
     return out
 
 

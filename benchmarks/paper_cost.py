@@ -36,8 +36,8 @@ def best_of(fn, repeat=5):
 
 def rhs_ns(sources: Path, work: Path) -> float:
     exe = work / "rhs_bench"
-    subprocess.run([compiler(), "-std=c99", *OPTIMISE, f"-I{sources}", str(sources / "gw_funcs.c"),
-                    str(sources / "model_desc.c"), str(ROOT / "benchmarks" / "rhs_bench.c"), "-o", str(exe), "-lm"],
+    subprocess.run([compiler(), "-std=c99", *OPTIMISE, f"-I{sources}", str(ROOT / "benchmarks" / "rhs_bench.c"),
+                    str(ROOT / "benchmarks" / "rhs_model.c"), "-o", str(exe), "-lm"],
                    check=True)
     return float(subprocess.run([str(exe), "2000000"], capture_output=True, text=True, check=True).stdout)
 

@@ -1,10 +1,13 @@
 /* Times one evaluation of the generated right-hand side gw_ode (ns per call).
- * Built by benchmarks/rhs_cost.py against a scene's generated gw_funcs.c. */
+ * Built by benchmarks/paper_cost.py and effect_costs.py against a scene's generated sources,
+ * with benchmarks/rhs_model.c (the model in a translation unit of its own). */
 #define _POSIX_C_SOURCE 199309L
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
 #include "gw_model.h"
+
+const gw_model *rhs_bench_model(void);
 
 static double now(void) {
     struct timespec ts;
@@ -13,7 +16,7 @@ static double now(void) {
 }
 
 int main(int argc, char **argv) {
-    const gw_model *m = &GW_MODEL;
+    const gw_model *m = rhs_bench_model();
     long n = argc > 1 ? atol(argv[1]) : 2000000L;
     gw_int sz_arg, sz_res, sz_iw, sz_w;
     double x0[64], xdot[64], t = 0.0, acc = 0.0, t0, best = 1e30;

@@ -7,7 +7,12 @@
  * wins; the state at the event is the dense output at the located time, which is
  * the right end of the final bracket, so the indicator there is <= 0 and it
  * cannot fire again until it has become positive.
+ * gw_event_update serves a front end that locates crossings itself (Model Exchange).
  */
+#ifndef GW_UNITY_BUILD
+typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
+#else
+
 #include <float.h>
 #include <math.h>
 
@@ -15,12 +20,12 @@
 
 #define GW_EVENT_MAX_ITER 200
 
-static const char *event_name(const gw_instance *I, int i) {
+static const char *gw_event_name(const gw_instance *I, int i) {
     return (I->m->event_names && I->m->event_names[i]) ? I->m->event_names[i] : "?";
 }
 
 /* g(t) = indicator i on the dense output; uses I->xtmp and I->eev as scratch. */
-static int indicator(gw_instance *I, int i, double t, double *g) {
+static int gw_event_indicator(gw_instance *I, int i, double t, double *g) {
     gw_dense_eval(I, t, I->xtmp);
     if (gw_eval_evt(I, t, I->xtmp, I->eev) != 0) return -1;
     *g = I->eev[i];
@@ -29,7 +34,7 @@ static int indicator(gw_instance *I, int i, double t, double *g) {
 
 /* Locate the crossing of indicator i in [a, b], fa > 0 >= fb.  Returns the right end
  * of the final bracket (g <= 0 there). */
-static int locate(gw_instance *I, int i, double a, double fa, double b, double fb, double *t_out) {
+static int gw_event_locate(gw_instance *I, int i, double a, double fa, double b, double fb, double *t_out) {
     /* 1e-12 s (relative beyond |t| = 1), but never coarser than 1e-9 of the step: a step of
      * 1e-10 s (beta_dot = 1e9 rad/s) needs its event to 1e-19 s, not 1e-12 s = 1e-3 rad */
     const double t_abs = fabs(b) > fabs(a) ? fabs(b) : fabs(a);
@@ -44,7 +49,7 @@ static int locate(gw_instance *I, int i, double a, double fa, double b, double f
         if (!(c > a && c < b)) c = 0.5 * (a + b);
         if (c - a < 0.25 * tol) c = a + 0.25 * tol; /* always make progress */
         if (b - c < 0.25 * tol) c = b - 0.25 * tol;
-        if (indicator(I, i, c, &fc) != 0) return -1;
+        if (gw_event_indicator(I, i, c, &fc) != 0) return -1;
         if (!(fc > 0.0)) { /* <= 0 or NaN: the crossing is at or before c */
             b = c;
             fb = isfinite(fc) ? fc : -fa;
@@ -65,27 +70,27 @@ static int locate(gw_instance *I, int i, double a, double fa, double b, double f
     return 0;
 }
 
-static void log_event(const gw_instance *I, int i, double te, int terminate) {
+static void gw_event_log(const gw_instance *I, int i, double te, int terminate) {
     if (terminate) {
         if (gw_log_enabled(I, GW_LOG_EVENTS))
-            gw_log(I, fmi2OK, GW_LOG_EVENTS,
-                   "event %s at t=%.17g: simulation terminated at t=%.17g", event_name(I, i),
+            gw_log(I, GW_OK, GW_LOG_EVENTS,
+                   "event %s at t=%.17g: simulation terminated at t=%.17g", gw_event_name(I, i),
                    te, te);
     } else if (gw_log_enabled(I, GW_LOG_EVENTS)) {
-        gw_log(I, fmi2Warning, GW_LOG_EVENTS, "warning: event %s at t=%.17g", event_name(I, i),
+        gw_log(I, GW_WARNING, GW_LOG_EVENTS, "warning: event %s at t=%.17g", gw_event_name(I, i),
                te);
     } else if (gw_log_enabled(I, GW_LOG_WARNING)) {
-        gw_log(I, fmi2Warning, GW_LOG_WARNING, "warning: event %s at t=%.17g", event_name(I, i),
+        gw_log(I, GW_WARNING, GW_LOG_WARNING, "warning: event %s at t=%.17g", gw_event_name(I, i),
                te);
     }
 }
 
-gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_event) {
+GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_event) {
     const gw_model *m = I->m;
     int i, ne = m->ne, winner = -1, terminate = 0;
     double best = t1;
     if (gw_eval_evt(I, t1, I->xnew, I->enew) != 0) {
-        GW_ERROR(I, "evaluation of the event indicators failed at t=%.17g", t1);
+        GW_LOG_ERR(I, "evaluation of the event indicators failed at t=%.17g", t1);
         return GW_EV_ERROR;
     }
     for (i = 0; i < ne; i++)
@@ -96,9 +101,9 @@ gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_eve
     for (; i < ne; i++) {
         double te;
         if (!(I->e[i] > 0.0 && !(I->enew[i] > 0.0))) continue;
-        if (locate(I, i, t0, I->e[i], t1, isfinite(I->enew[i]) ? I->enew[i] : -I->e[i], &te)) {
-            GW_ERROR(I, "evaluation of the event indicators failed while locating event %s",
-                     event_name(I, i));
+        if (gw_event_locate(I, i, t0, I->e[i], t1, isfinite(I->enew[i]) ? I->enew[i] : -I->e[i], &te)) {
+            GW_LOG_ERR(I, "evaluation of the event indicators failed while locating event %s",
+                       gw_event_name(I, i));
             return GW_EV_ERROR;
         }
         if (winner < 0 || te < best) {
@@ -109,7 +114,7 @@ gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_eve
     /* the state and the indicators at the event */
     gw_dense_eval(I, best, I->xev);
     if (gw_eval_evt(I, best, I->xev, I->eev) != 0) {
-        GW_ERROR(I, "evaluation of the event indicators failed at t=%.17g", best);
+        GW_LOG_ERR(I, "evaluation of the event indicators failed at t=%.17g", best);
         return GW_EV_ERROR;
     }
     for (i = 0; i < ne; i++) {
@@ -119,10 +124,10 @@ gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_eve
         I->flags[i] = 1;
         I->n_events++;
         if (m->event_actions && m->event_actions[i] == GW_EVENT_WARN) {
-            log_event(I, i, best, 0);
+            gw_event_log(I, i, best, 0);
         } else {
             terminate = 1;
-            log_event(I, i, best, 1);
+            gw_event_log(I, i, best, 1);
         }
     }
     *t_event = best;
@@ -134,9 +139,9 @@ gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_eve
 /* The importer has located the crossing and set t and x there; this only decides
  * which indicators fire.  A WARN indicator fires when it went from > 0 (at the
  * previous event update) to <= 0; a TERMINATE indicator fires when it is <= 0 now
- * (it cannot be <= 0 at the start: fmi2ExitInitializationMode refuses that) and has
+ * (it cannot be <= 0 at the start: gw_initialize refuses that) and has
  * not fired before.  A non-finite indicator counts as <= 0, as in gw_events_check. */
-gw_ev_result gw_events_me_update(gw_instance *I, const double *e_now) {
+GW_API gw_ev_result gw_event_update(gw_instance *I, const double *e_now) {
     const gw_model *m = I->m;
     int i, terminate = 0, warn = 0;
     for (i = 0; i < m->ne; i++) {
@@ -152,7 +157,7 @@ gw_ev_result gw_events_me_update(gw_instance *I, const double *e_now) {
         if (!fires) continue;
         I->flags[i] = 1;
         I->n_events++;
-        log_event(I, i, I->t, !is_warn);
+        gw_event_log(I, i, I->t, !is_warn);
         if (is_warn)
             warn = 1;
         else
@@ -161,3 +166,5 @@ gw_ev_result gw_events_me_update(gw_instance *I, const double *e_now) {
     if (terminate) return GW_EV_TERMINATE;
     return warn ? GW_EV_WARN : GW_EV_NONE;
 }
+
+#endif /* GW_UNITY_BUILD */

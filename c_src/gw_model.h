@@ -1,9 +1,13 @@
 /*
- * gw_model.h -- the contract between the generic FMI runtime (c_src/) and one
- * generated model (model_desc.c + CasADi-generated functions, written by fmu_build).
+ * gw_model.h -- the contract between the generic runtime (c_src/) and one generated
+ * model (model_desc.c + CasADi-generated functions gw_funcs.c, written by fmu_build).
  *
  * The runtime knows nothing of the wheel: every size, variable and function it
- * needs comes through the single constant `GW_MODEL` defined by generated code.
+ * needs comes through the single constant GW_MODEL, which the model defines as
+ *     static const gw_model GW_MODEL = { ... };
+ * ahead of the runtime in the same translation unit (gw_fmu.c): internal linkage, so two
+ * models never clash in one process.  The core takes a `const gw_model *`; only the front
+ * end names GW_MODEL.
  *
  * Vectors (all double):
  *   x  continuous state            (nx)   integrated by the runtime
@@ -29,7 +33,8 @@
  *   dir (t, x, u, p) -> D           dense d [xdot; y] / d [x; u], column-major
  *                                   (nx+ny) x (nx+nu), for fmi2GetDirectionalDerivative
  * Each instance allocates its own arg/res/iw/w buffers from the sizes f_work reports
- * (CasADi SX functions are reentrant then); mem is always 0.
+ * (CasADi SX functions are reentrant then); mem is always 0.  The generated functions
+ * are static too (fmu_build/codegen.py makes them so and keeps only what the runtime calls).
  */
 #ifndef GW_MODEL_H
 #define GW_MODEL_H
@@ -110,8 +115,5 @@ typedef struct {
     int default_solver;                /* gw_solver */
     double default_rel_tol, default_abs_tol, default_max_step;
 } gw_model;
-
-/* Defined by the generated model_desc.c. */
-extern const gw_model GW_MODEL;
 
 #endif /* GW_MODEL_H */

@@ -1,38 +1,36 @@
 /*
- * gw_solver.h -- one interface for all internal integrators of the runtime.
+ * gw_solver.h -- the integrators of the core: one step driver (gw_solver.c) and one file per
+ * solver family.  gw_integrate(I, t_end) integrates from (I->t, I->x) exactly to t_end with
+ * the solver selected in I->solver, locating events (gw_events.c) on the dense output of
+ * every accepted step.
  *
- *   gw_integrate(I, t_end)  integrates from (I->t, I->x) exactly to t_end with the
- *                           solver selected in I->solver, locating events (gw_events.c)
- *                           on the dense output of every accepted step.
- *
- * Solvers (gw_solver enumeration of gw_model.h):
- *   GW_SOLVER_EULER   explicit Euler, fixed step: n = ceil(h / max_step) equal substeps
- *   GW_SOLVER_RK4     classical Runge-Kutta 4, fixed step, same grid
- *   GW_SOLVER_DOPRI5  Dormand-Prince 5(4), error control (RMS norm of
- *                     err_i / (abs_tol*nominal_i + rel_tol*max(|x_i|,|xnew_i|))),
- *                     FSAL, step size bounded by max_step and carried between steps
- *   GW_SOLVER_DOP853  Dormand-Prince 8(5,3) (Hairer's DOP853): 12 stages + FSAL,
- *                     Hairer's combined 5th/3rd-order error estimate with the same
- *                     weights, for tight tolerances
- *   GW_SOLVER_ROSENBROCK  RODAS4 (Hairer & Wanner): linearly implicit, 6 stages,
- *                     order 4(3), stiffly accurate, L-stable, for stiff problems.
- *                     Jacobian: the model's `jac` function; if the model has none,
- *                     forward differences (nx RHS evaluations, increment
- *                     sqrt(eps)*max(|x_j|, nominal_j)).  d f/d t by a forward difference
- *                     (one RHS evaluation per step).  W = I/(gamma h) - J is LU-factored
- *                     with partial pivoting (dense, in the instance's work arrays); J is
- *                     evaluated once per accepted step, a rejected step only refactors.
- *                     Error = weighted RMS norm of the embedded difference, same weights.
- * All adaptive solvers land exactly on t_end, respect max_step, carry the step size
- * between communication steps in I->h_adapt (the only solver memory kept between
- * steps, serialised with the FMU state) and fail with "step size underflow" below
- * gw_h_min.
- * Dense output: DOPRI5's 4th-order continuous extension; DOP853's 7th-order one (3
- * extra stages, evaluated only when an event needs them); RODAS4's 3rd-order one;
- * cubic Hermite for the fixed step solvers (all in the nested form of gw_dense_eval).
- *
- * Declarations live in gw_instance.h (gw_integrate, gw_dense_prepare, gw_dense_eval);
- * this header only documents the module and the constants it uses.
+ * Files and solvers (gw_solver enumeration of gw_model.h):
+ *   gw_solver.c         step driver: dispatch, accepted steps and events, the step size
+ *                       guards, Hairer's initial step, the adaptive loop shared by DOP853 and
+ *                       RODAS4, dense output dispatch, work memory
+ *   gw_solver_fixed.c   GW_SOLVER_EULER / GW_SOLVER_RK4: explicit Euler and classical RK4,
+ *                       fixed step: n = ceil(h / max_step) equal substeps, with instability
+ *                       detection; cubic Hermite dense output (in gw_solver.c)
+ *   gw_solver_dopri5.c  GW_SOLVER_DOPRI5: Dormand-Prince 5(4), error control (RMS norm of
+ *                       err_i / (abs_tol*nominal_i + rel_tol*max(|x_i|,|xnew_i|))), FSAL,
+ *                       its own loop; 4th-order continuous extension
+ *   gw_solver_dop853.c  GW_SOLVER_DOP853: Dormand-Prince 8(5,3) (Hairer's DOP853): 12 stages +
+ *                       FSAL, Hairer's combined 5th/3rd-order error estimate with the same
+ *                       weights, for tight tolerances; 7th-order dense output (3 extra stages,
+ *                       evaluated only when an event needs them)
+ *   gw_solver_rodas4.c  GW_SOLVER_ROSENBROCK: RODAS4 (Hairer & Wanner): linearly implicit, 6
+ *                       stages, order 4(3), stiffly accurate, L-stable, for stiff problems.
+ *                       Jacobian: the model's `jac` function; if the model has none, forward
+ *                       differences (nx RHS evaluations, increment sqrt(eps)*max(|x_j|,
+ *                       nominal_j)).  d f/d t by a forward difference (one RHS evaluation per
+ *                       step).  W = I/(gamma h) - J is LU-factored with partial pivoting
+ *                       (dense, in the instance's work arrays); J is evaluated once per
+ *                       accepted step, a rejected step only refactors.  Error = weighted RMS
+ *                       norm of the embedded difference, same weights.  3rd-order dense output.
+ * All adaptive solvers land exactly on t_end, respect max_step, carry the step size between
+ * communication steps in I->h_adapt (the only solver memory kept between steps, part of a
+ * saved state) and fail with "step size underflow" below gw_h_min.  Dense output: all in the
+ * nested form of gw_dense_eval.  No memory is allocated while integrating.
  */
 #ifndef GW_SOLVER_H
 #define GW_SOLVER_H
@@ -44,7 +42,59 @@
 #define GW_DOPRI5_FAC_MAX 10.0 /* largest increase of h per step */
 #define GW_MAX_EVENTS_PER_STEP 1000
 
+/* Feasibility guard: a communication step whose remainder would need more than
+ * GW_MAX_STEPS_AHEAD internal steps at the step size the controller has settled on is refused
+ * at once with a reason instead of running for hours (gw_solver.c, gw_too_many_steps; the
+ * fixed-step solvers refuse more than GW_MAX_STEPS_AHEAD substeps up front). */
+#define GW_MAX_STEPS_AHEAD 1e9
+#define GW_MAX_STEPS_CONTROLLED 1e8
+#define GW_SETTLE 100
+
+/* ---- gw_solver.c: the step driver's helpers, shared by the families ----------------------- */
 /* smallest step size allowed at time t before "step size underflow" */
 GW_INTERNAL double gw_h_min(double t);
+GW_INTERNAL const char *gw_x_name(const gw_instance *I, int i);
+GW_INTERNAL int gw_first_nonfinite(const double *v, int n); /* index, or -1 */
+/* Make k[0] = f(t, x) (reused across steps: FSAL / end-point derivative); 0 or -1 logged. */
+GW_INTERNAL int gw_ensure_f0(gw_instance *I);
+/* gw_rhs with a logged error; 0 or -1 */
+GW_INTERNAL int gw_rhs_checked(gw_instance *I, double t, const double *x, double *xdot);
+/* Accepted step (I->t, I->x) -> (t1, I->xnew): finiteness, events, commit.
+ * *events counts events in this communication step (loop guard). */
+GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events);
+/* weighted RMS norm of v with the error weights at x */
+GW_INTERNAL double gw_rms_weighted(const gw_instance *I, const double *v, const double *x);
+/* Hairer's initial step size estimate (one extra RHS evaluation). */
+GW_INTERNAL double gw_initial_step(gw_instance *I, double hmax, double order);
+/* The next attempt of an adaptive loop: the controller's h, bounded by max_step and shortened
+ * to land exactly on t_end (*last), refused by the feasibility guard or when it no longer
+ * advances time. Returns 0, or -1 with the reason logged. */
+GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last, double *h_prev,
+                                unsigned long *n_fast, double *h, double *t1, int *last);
+
+/* ---- gw_solver_fixed.c ------------------------------------------------------------------------ */
+GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end);
+
+/* ---- gw_solver_dopri5.c ----------------------------------------------------------------------- */
+GW_INTERNAL gw_int_result gw_integrate_dopri5(gw_instance *I, double t_end);
+/* rcont[4] of the last accepted step (the rest is the cubic Hermite base) */
+GW_INTERNAL void gw_dopri5_dense(gw_instance *I);
+
+/* ---- gw_solver_dop853.c ----------------------------------------------------------------------- */
+/* One step of size h to t1 into I->xnew; *err = error norm.  f(t1, xnew) not evaluated. */
+GW_INTERNAL int gw_dop853_step(gw_instance *I, double h, double t1, double *err);
+/* rcont[4] and rcx of the last accepted step (3 more stages) */
+GW_INTERNAL void gw_dop853_dense(gw_instance *I);
+/* x_out at th in [0, 1) of the step, th1 = 1 - th */
+GW_INTERNAL void gw_dop853_dense_eval(const gw_instance *I, double th, double th1, double *x_out);
+
+/* ---- gw_solver_rodas4.c ----------------------------------------------------------------------- */
+/* I->jac and d f / d t (I->kx[2]) at (I->t, I->x); needs k[0] = f(t, x).  0 or -1 logged. */
+GW_INTERNAL int gw_rodas4_linearise(gw_instance *I);
+/* LU factors of W = I/(gamma h) - J; 0, or 1 if W is singular to working precision */
+GW_INTERNAL int gw_rodas4_factor(gw_instance *I, double h);
+GW_INTERNAL int gw_rodas4_step(gw_instance *I, double h, double t1, double *err);
+/* rcont of the last accepted step (order 3) */
+GW_INTERNAL void gw_rodas4_dense(gw_instance *I);
 
 #endif /* GW_SOLVER_H */

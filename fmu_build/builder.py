@@ -13,8 +13,8 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from fmu_build.codegen import DESC_FILE, FUNCTION_FILE, generate_functions, write_model_desc
-from fmu_build.compiler import compile_shared, fmi_headers_dir
+from fmu_build.codegen import FUNCTION_FILE, generate_functions, write_model_desc
+from fmu_build.compiler import UNITY_SOURCE, compile_shared, fmi_headers_dir
 from fmu_build.documentation import write_index_html
 from fmu_build.model_description import write_model_description
 from fmu_build.scene import Experiment, Scene
@@ -36,6 +36,7 @@ class BuildResult:
 
 
 def runtime_sources() -> list[Path]:
+    """Every file of the C runtime (copied into sources/; gw_fmu.c includes the .c files)."""
     if not RUNTIME_DIR.is_dir():
         raise FileNotFoundError(f"C runtime not found at {RUNTIME_DIR}; install gyrowheel from its source tree")
     return sorted(RUNTIME_DIR.glob("*.c")) + sorted(RUNTIME_DIR.glob("*.h"))
@@ -90,11 +91,9 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         guid = _guid(funcs_c, repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]),
                      repr(experiment), identifier)
         write_model_desc(spec, table, experiment, identifier, guid, fns, src)
-        c_files = sorted(p.name for p in src.glob("*.c"))
-        generated = {f"{FUNCTION_FILE}.c", DESC_FILE}
-        compile_shared([src / c for c in c_files], generated, [src], root / "binaries" / PLATFORM /
-                       f"{identifier}.so", build_dir / "obj")
-        xml = write_model_description(spec.name, experiment, table, identifier, guid, c_files, spec.description,
+        # one translation unit: only fmi2* symbols are global, whatever flags an importer uses
+        compile_shared(src / UNITY_SOURCE, [src], root / "binaries" / PLATFORM / f"{identifier}.so")
+        xml = write_model_description(spec.name, experiment, table, identifier, guid, [UNITY_SOURCE], spec.description,
                                       model_exchange=True, directional=True)
         (root / "modelDescription.xml").write_text(xml)
         (root / "documentation").mkdir(exist_ok=True)

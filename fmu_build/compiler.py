@@ -1,9 +1,10 @@
 """Compile the FMU's C sources into binaries/linux64/<identifier>.so.
 
-Portable flags only (no -march=native). Hand-written runtime code is held to
--Wall -Wextra -Werror; CasADi's generated files additionally get
--Wno-unused-parameter (its functions ignore some of the standard arguments).
-Only fmi2* symbols are exported (-fvisibility=hidden plus FMI2_Export).
+The FMU is one translation unit (c_src/gw_fmu.c includes the generated model, the core and
+the FMI layer), so the build is a single compiler call with the flags a strict user would
+use: C99, -Wall -Wextra -Wpedantic -Werror, portable optimisation (no -march=native).  No
+flag hides symbols: every internal function is static, and only the fmi2* functions (default
+visibility through FMI2_Export) are exported.
 """
 from __future__ import annotations
 
@@ -14,9 +15,10 @@ from pathlib import Path
 
 import fmpy
 
-WARNINGS = ["-Wall", "-Wextra", "-Werror"]
-GENERATED_EXTRA = ["-Wno-unused-parameter"]
+STANDARD = ["-std=c99"]
+WARNINGS = ["-Wall", "-Wextra", "-Wpedantic", "-Werror"]
 OPTIMISE = ["-O2", "-fno-math-errno"]
+UNITY_SOURCE = "gw_fmu.c"  # the FMU's only <SourceFiles> entry
 
 
 class CompileError(RuntimeError):
@@ -41,20 +43,12 @@ def _run(cmd: list[str]) -> None:
         raise CompileError(f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
 
 
-def compile_shared(sources: list[Path], generated: set[str], include_dirs: list[Path],
-                   output: Path, build_dir: Path, extra_flags: list[str] | None = None) -> Path:
-    """Compile each source to an object, link a shared library with hidden symbols."""
+def compile_shared(source: Path, include_dirs: list[Path], output: Path,
+                   extra_flags: list[str] | None = None) -> Path:
+    """Compile the unity source (gw_fmu.c) into the shared library `output`."""
     cc = compiler()
-    build_dir.mkdir(parents=True, exist_ok=True)
     output.parent.mkdir(parents=True, exist_ok=True)
     includes = [f"-I{d}" for d in include_dirs]
-    objects = []
-    for src in sources:
-        obj = build_dir / (src.stem + ".o")
-        flags = WARNINGS + (GENERATED_EXTRA if src.name in generated else [])
-        _run([cc, "-std=c99", "-c", "-fPIC", "-fvisibility=hidden", *OPTIMISE, *flags,
-              *(extra_flags or []), *includes, str(src), "-o", str(obj)])
-        objects.append(str(obj))
-    _run([cc, "-shared", "-fPIC", "-fvisibility=hidden", *(extra_flags or []), *objects,
-          "-o", str(output), "-lm", "-static-libgcc"])
+    _run([cc, *STANDARD, "-shared", "-fPIC", *OPTIMISE, *WARNINGS, *(extra_flags or []), *includes,
+          str(source), "-o", str(output), "-lm", "-static-libgcc"])
     return output

@@ -1,12 +1,15 @@
 """Build and run the C test programs of tests/c/: the runtime + a toy model + a driver.
 
-Each program is built with the project's strict flags, with AddressSanitizer and
-UndefinedBehaviorSanitizer, or for valgrind; `run` asserts a clean exit and the
-harness's "0 failures" line (tests/c/harness.h).
+The runtime and the toy model form one translation unit, exactly as in an FMU: c_src/gw_fmu.c
+with GW_MODEL_SOURCE naming the toy (docs/runtime.md); the driver is a second translation unit
+that sees only the fmi2* functions.  Each program is built with the project's strict flags
+(no flag hiding symbols), with AddressSanitizer and UndefinedBehaviorSanitizer, or for
+valgrind; `run` asserts a clean exit and the harness's "0 failures" line (tests/c/harness.h).
 """
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -20,6 +23,7 @@ FMI_HEADERS = Path(fmpy.__file__).resolve().parent / "c-code"
 VALGRIND = shutil.which("valgrind") or "/usr/bin/valgrind"
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
+UNITY = C_SRC / "gw_fmu.c"
 MODES = ("strict", "sanitizers", "valgrind")
 MODE_FLAGS = {
     "strict": ["-O2", "-g"],
@@ -31,15 +35,44 @@ SANITIZER_ENV = {"ASAN_OPTIONS": "detect_leaks=1:abort_on_error=0",
                  "UBSAN_OPTIONS": "print_stacktrace=1:halt_on_error=1"}
 
 
-def compile_program(driver: str, toy: str, out: Path, extra: list[str]) -> Path:
-    """tests/c/test_<driver>.c + tests/c/toy_<toy>.c + every c_src/*.c -> an executable."""
+def unity_flags(toy: str) -> list[str]:
+    """Flags that make c_src/gw_fmu.c the runtime with tests/c/toy_<toy>.c as its model."""
+    return [f"-I{FMI_HEADERS}", f"-I{C_SRC}", f"-I{TESTS_C}", f'-DGW_MODEL_SOURCE="toy_{toy}.c"']
+
+
+def compile_program(driver: str, toy: str | None, out: Path, extra: list[str]) -> Path:
+    """tests/c/test_<driver>.c + c_src/gw_fmu.c with tests/c/toy_<toy>.c -> an executable.
+
+    toy None: the driver is a whole program by itself (test_core.c includes its model and the
+    core), built without the FMI headers on the include path."""
     exe = out / f"test_{driver}"
-    cmd = ["gcc", *STRICT, *extra, f"-I{FMI_HEADERS}", f"-I{C_SRC}", "-fvisibility=hidden",
-           *map(str, sorted(C_SRC.glob("*.c"))), str(TESTS_C / f"toy_{toy}.c"),
-           str(TESTS_C / f"test_{driver}.c"), "-lm", "-o", str(exe)]
+    if toy is None:
+        sources, flags = [TESTS_C / f"test_{driver}.c"], [f"-I{C_SRC}", f"-I{TESTS_C}"]
+    else:
+        sources, flags = [UNITY, TESTS_C / f"test_{driver}.c"], unity_flags(toy)
+    cmd = ["gcc", *STRICT, *extra, *flags, *map(str, sources), "-lm", "-o", str(exe)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     assert r.returncode == 0, f"compile failed:\n{' '.join(cmd)}\n{r.stdout}{r.stderr}"
     return exe
+
+
+def writable_symbols(obj: Path) -> list[str]:
+    """Symbols of an object file in writable data sections (.data, .bss, common, TLS).
+
+    Constant tables holding pointers sit in .data.rel.ro (read-only once relocated), which
+    `nm` also reports as 'd': the section, not the letter, tells what is mutable."""
+    r = subprocess.run(["objdump", "-t", str(obj)], capture_output=True, text=True, check=True)
+    found = []
+    for line in r.stdout.splitlines():
+        m = re.match(r"^[0-9a-f]+\s.{7}\s(\S+)\s+[0-9a-f]+\s+(.*)$", line)
+        if not m:
+            continue
+        section, name = m.groups()
+        if section.startswith(".data.rel.ro"):
+            continue
+        if section in (".data", ".bss", "*COM*", ".tdata", ".tbss") or section.startswith((".data.", ".bss.")):
+            found.append(f"{name} ({section})")
+    return found
 
 
 def run(cmd: list[str], timeout: float = 900, env: dict | None = None) -> subprocess.CompletedProcess:
@@ -49,7 +82,7 @@ def run(cmd: list[str], timeout: float = 900, env: dict | None = None) -> subpro
     return r
 
 
-def run_program(driver: str, toy: str, out: Path, mode: str) -> subprocess.CompletedProcess:
+def run_program(driver: str, toy: str | None, out: Path, mode: str) -> subprocess.CompletedProcess:
     """Build in `mode` (strict | sanitizers | valgrind) and run; returns the finished process."""
     exe = compile_program(driver, toy, out, MODE_FLAGS[mode])
     if mode == "sanitizers":

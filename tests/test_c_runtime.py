@@ -1,8 +1,9 @@
 """Tests of the generic C runtime (c_src/) with hand-written toy models (tests/c/).
 
 Each C test program links the runtime with one toy model satisfying c_src/gw_model.h
-(no CasADi, nothing loaded dynamically) and calls the fmi2* functions like an
-importer, with counting allocators and a capturing logger.  Every program is built
+(no CasADi, nothing loaded dynamically; both in the one translation unit c_src/gw_fmu.c)
+and calls the fmi2* functions like an importer, with counting allocators and a capturing
+logger.  Every program is built
 with the strict flags of the project and, separately, with AddressSanitizer and
 UndefinedBehaviorSanitizer, and run under valgrind.  Everything is built in tmp_path.
 """
@@ -16,13 +17,10 @@ from pathlib import Path
 
 import pytest
 
-from c_programs import C_SRC, FMI_HEADERS, MODES, STRICT, TESTS_C, run_program
+from c_programs import (C_SRC, FMI_HEADERS, MODES, STRICT, TESTS_C, UNITY, run_program, unity_flags,
+                        writable_symbols)
 
 PROGRAMS = {"oscillator": "oscillator", "warn": "warn", "decay": "decay"}  # driver -> toy model
-
-
-def runtime_sources() -> list[Path]:
-    return sorted(C_SRC.glob("*.c"))
 
 
 @pytest.mark.parametrize("mode", MODES)
@@ -39,10 +37,10 @@ def fmi2_function_names() -> set[str]:
 
 
 def build_shared(tmp_path: Path) -> Path:
+    """The toy oscillator FMU's library, default visibility (no -fvisibility flag)."""
     lib = tmp_path / "oscillator.so"
-    cmd = ["gcc", *STRICT, "-O2", "-fPIC", "-shared", "-fvisibility=hidden",
-           f"-I{FMI_HEADERS}", f"-I{C_SRC}", *map(str, runtime_sources()),
-           str(TESTS_C / "toy_oscillator.c"), "-lm", "-o", str(lib)]
+    cmd = ["gcc", *STRICT, "-O2", "-fPIC", "-shared", *unity_flags("oscillator"), str(UNITY),
+           "-lm", "-o", str(lib)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     return lib
@@ -64,16 +62,13 @@ def test_exports_exactly_the_fmi2_functions(tmp_path):
 
 
 def test_no_global_mutable_state(tmp_path):
-    """The runtime's object files hold no writable data (no .data / .bss symbols)."""
-    for src in runtime_sources():
+    """The runtime's object file holds no writable data (no .data / .bss symbols)."""
+    for src in [UNITY]:  # the whole runtime (and a toy model) in its one translation unit
         obj = tmp_path / (src.stem + ".o")
-        r = subprocess.run(["gcc", *STRICT, "-O2", "-c", "-fvisibility=hidden",
-                            f"-I{FMI_HEADERS}", f"-I{C_SRC}", str(src), "-o", str(obj)],
-                           capture_output=True, text=True)
+        r = subprocess.run(["gcc", *STRICT, "-O2", "-c", *unity_flags("oscillator"), str(src),
+                            "-o", str(obj)], capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
-        r = subprocess.run(["nm", str(obj)], capture_output=True, text=True)
-        writable = [line for line in r.stdout.splitlines()
-                    if len(line.split()) == 3 and line.split()[1] in "BbDdCGgSs"]
+        writable = writable_symbols(obj)
         assert not writable, f"{src.name}: writable globals {writable}"
         # and the section sizes agree: nothing in .data or .bss
         r = subprocess.run(["size", "-A", str(obj)], capture_output=True, text=True)
@@ -89,4 +84,7 @@ def test_sources_are_clean():
         text = path.read_text()
         assert "#define FMI2_FUNCTION_PREFIX" not in text, path
     assert not list(C_SRC.glob("fmi2*.h")), "FMI headers must come from fmpy, not a copy"
-    assert "extern const gw_model GW_MODEL;" in (C_SRC / "gw_model.h").read_text()
+    # the model defines GW_MODEL with internal linkage in the unit (no extern object anywhere)
+    assert "static const gw_model GW_MODEL = { ... };" in (C_SRC / "gw_model.h").read_text()
+    for path in list(C_SRC.glob("*.[ch]")):
+        assert "extern const gw_model" not in path.read_text(), path

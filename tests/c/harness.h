@@ -11,18 +11,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "checks.h"
 #include "fmi2Functions.h"
 
-static int h_failures = 0, h_checks = 0;
-
-#define CHECK(cond)                                                                          \
-    do {                                                                                     \
-        h_checks++;                                                                          \
-        if (!(cond)) {                                                                       \
-            h_failures++;                                                                    \
-            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond);        \
-        }                                                                                    \
-    } while (0)
 #define CHECK_STATUS(call, expected)                                                         \
     do {                                                                                     \
         fmi2Status s_ = (call);                                                              \
@@ -31,16 +22,6 @@ static int h_failures = 0, h_checks = 0;
             h_failures++;                                                                    \
             fprintf(stderr, "%s:%d: %s returned %d, expected %d\n", __FILE__, __LINE__,     \
                     #call, (int)s_, (int)(expected));                                        \
-        }                                                                                    \
-    } while (0)
-#define CHECK_NEAR(a, b, tol)                                                                \
-    do {                                                                                     \
-        double a_ = (a), b_ = (b);                                                           \
-        h_checks++;                                                                          \
-        if (!(fabs(a_ - b_) <= (tol))) {                                                     \
-            h_failures++;                                                                    \
-            fprintf(stderr, "%s:%d: %s = %.17g, expected %.17g (tol %g, diff %g)\n",        \
-                    __FILE__, __LINE__, #a, a_, b_, (double)(tol), fabs(a_ - b_));           \
         }                                                                                    \
     } while (0)
 #define CHECK_LOG(substr)                                                                    \

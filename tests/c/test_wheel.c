@@ -3,8 +3,10 @@
  * runtime, driven like an importer: two instances side by side, a long run, the fall
  * event, FMU state round trips, a bad parameter, reset. Built under ASan/UBSan and
  * valgrind by tests/test_c_wheel.py; allocation balance checked by the harness.
+ * The FMU's unity file is included (GW_MODEL has internal linkage): one translation unit.
  */
-#include "gw_model.h"
+#include "gw_fmu.c"
+
 #include "harness.h"
 
 static fmi2ValueReference vr_of(const char *name) {

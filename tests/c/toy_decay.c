@@ -34,7 +34,7 @@ static const gw_variable vars[] = {
 
 static const char *const x_names[] = {"x"};
 
-const gw_model GW_MODEL = {
+static const gw_model GW_MODEL = {
     "decay",
     "{decay-0000-0000-0000-000000000003}",
     1, 1, 0, 0, 1, 0, 0,

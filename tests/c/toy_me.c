@@ -167,7 +167,7 @@ static const char *const event_names[] = {"hit", "slow"};
 static const int event_actions[] = {GW_EVENT_TERMINATE, GW_EVENT_WARN};
 static const char *const check_messages[] = {"k must be > 0"};
 
-const gw_model GW_MODEL = {
+static const gw_model GW_MODEL = {
     "toy_me",
     "{70y0-me00-0000-0000-000000000004}",
     3, 2, 1, 5, 5, 2, 1,

@@ -108,7 +108,7 @@ static const char *const event_names[] = {"hit"};
 static const int event_actions[] = {GW_EVENT_TERMINATE};
 static const char *const check_messages[] = {"k must be > 0"};
 
-const gw_model GW_MODEL = {
+static const gw_model GW_MODEL = {
     "oscillator",
     "{0sc1-11a7-0r00-0000-000000000001}",
     2, 2, 1, 4, 4, 1, 1,

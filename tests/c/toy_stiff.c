@@ -119,7 +119,7 @@ static const char *const event_names[] = {"low"};
 static const int event_actions[] = {GW_EVENT_TERMINATE};
 static const char *const check_messages[] = {"k_fast must be > 0"};
 
-const gw_model GW_MODEL = {
+static const gw_model GW_MODEL = {
     "stiff",
     "{st1ff-0000-0000-0000-000000000004}",
     2, 2, 0, 5, 2, 1, 1,

@@ -74,7 +74,7 @@ static const char *const event_names[] = {"crossed1", "crossed2"};
 static const int event_actions[] = {GW_EVENT_WARN, GW_EVENT_WARN};
 static const char *const check_messages[] = {"x_thresh must be > 0"};
 
-const gw_model GW_MODEL = {
+static const gw_model GW_MODEL = {
     "warner",
     "{3a7b-warn-0000-0000-000000000002}",
     1, 1, 1, 3, 2, 2, 1,

@@ -1,0 +1,181 @@
+/*
+ * gw_fmi2_me.c -- FMI 2.0 Model Exchange: the importer integrates.  Event and
+ * continuous-time modes, time and states set by the importer, derivatives, event indicators
+ * (the importer locates their crossings; gw_event_update decides what fired), nominals.
+ */
+#ifndef GW_UNITY_BUILD
+typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
+#else
+
+#include <math.h>
+#include <string.h>
+
+#include "gw_fmi2.h"
+
+#define GW_MASK_EnterEventMode GW_ST_ME
+#define GW_MASK_NewDiscreteStates GW_ST_EVENT_MODE
+#define GW_MASK_EnterContinuousTimeMode GW_ST_EVENT_MODE
+#define GW_MASK_CompletedIntegratorStep GW_ST_CONT_TIME_MODE
+#define GW_MASK_SetTime GW_ST_ME
+#define GW_MASK_SetContinuousStates GW_ST_CONT_TIME_MODE
+#define GW_MASK_GetDerivatives (GW_ST_INIT_MODE | GW_ST_ME | GW_ST_TERMINATED | GW_ST_ERROR)
+#define GW_MASK_GetEventIndicators GW_MASK_GetDerivatives
+#define GW_MASK_GetContinuousStates GW_MASK_GetDerivatives
+#define GW_MASK_GetNominals (GW_ST_INSTANTIATED | GW_ST_ME | GW_ST_TERMINATED | GW_ST_ERROR)
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    GW_BEGIN_ME("fmi2EnterEventMode", GW_MASK_EnterEventMode);
+    gw_fmi2_set_state(F, GW_ST_EVENT_MODE);
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
+    const gw_model *m;
+    int i;
+    gw_ev_result r = GW_EV_NONE;
+    GW_BEGIN_ME("fmi2NewDiscreteStates", GW_MASK_NewDiscreteStates);
+    m = I->m;
+    if (!eventInfo) GW_FAIL("fmi2NewDiscreteStates: eventInfo is NULL");
+    if (m->ne > 0) {
+        if (gw_eval_evt(I, I->t, I->x, I->e_me) != 0)
+            GW_FAIL("fmi2NewDiscreteStates: evaluation of the event indicators failed at "
+                    "t=%.17g", I->t);
+        r = gw_event_update(I, I->e_me);
+    }
+    if (r == GW_EV_TERMINATE && !I->terminated) {
+        I->terminated = 1;
+        I->last_successful_time = I->t;
+        for (i = 0; i < m->ne; i++)
+            if (I->flags[i] && !(I->e[i] > 0.0) &&
+                !(m->event_actions && m->event_actions[i] == GW_EVENT_WARN) &&
+                gw_log_enabled(I, GW_LOG_EVENTS))
+                gw_log(I, GW_OK, GW_LOG_EVENTS,
+                       "fmi2NewDiscreteStates: event %s: terminateSimulation = true at t=%.17g",
+                       m->event_names ? m->event_names[i] : "?", I->t);
+    }
+    eventInfo->newDiscreteStatesNeeded = fmi2False;
+    eventInfo->terminateSimulation = I->terminated ? fmi2True : fmi2False;
+    eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
+    eventInfo->valuesOfContinuousStatesChanged = fmi2False;
+    eventInfo->nextEventTimeDefined = fmi2False;
+    eventInfo->nextEventTime = 0.0;
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    GW_BEGIN_ME("fmi2EnterContinuousTimeMode", GW_MASK_EnterContinuousTimeMode);
+    if (I->terminated)
+        GW_FAIL("fmi2EnterContinuousTimeMode: the simulation terminated at t=%.17g "
+                "(terminateSimulation = true); call fmi2Terminate or fmi2Reset",
+                I->last_successful_time);
+    gw_fmi2_set_state(F, GW_ST_CONT_TIME_MODE);
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    GW_BEGIN_ME("fmi2CompletedIntegratorStep", GW_MASK_CompletedIntegratorStep);
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (!enterEventMode || !terminateSimulation)
+        GW_FAIL("fmi2CompletedIntegratorStep: enterEventMode or terminateSimulation is NULL");
+    /* no step events: state events are located by the importer */
+    *enterEventMode = fmi2False;
+    *terminateSimulation = fmi2False;
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    GW_BEGIN_ME("fmi2SetTime", GW_MASK_SetTime);
+    if (!isfinite(time)) GW_FAIL("fmi2SetTime: time %g is not finite", time);
+    if (time != I->t) {
+        I->t = time;
+        gw_point_changed(I);
+    }
+    GW_END_FUNCTION();
+}
+
+/* nx of a state-vector call must be the model's */
+#define GW_CHECK_NX(fn, arr, n)                                                                 \
+    do {                                                                                        \
+        if ((n) != (size_t)I->m->nx)                                                            \
+            GW_FAIL("%s: nx = %lu, the model has %d continuous states", fn, (unsigned long)(n), \
+                    I->m->nx);                                                                  \
+        if ((n) > 0 && !(arr)) GW_FAIL("%s: array is NULL", fn);                               \
+    } while (0)
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    size_t i;
+    GW_BEGIN_ME("fmi2SetContinuousStates", GW_MASK_SetContinuousStates);
+    GW_CHECK_NX("fmi2SetContinuousStates", x, nx);
+    for (i = 0; i < nx; i++)
+        if (!isfinite(x[i]))
+            GW_FAIL("fmi2SetContinuousStates: state %s = %g is not finite",
+                    I->m->x_names ? I->m->x_names[i] : "?", x[i]);
+    if (nx > 0 && memcmp(I->x, x, nx * sizeof(double)) != 0) {
+        memcpy(I->x, x, nx * sizeof(double));
+        gw_point_changed(I);
+    }
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx) {
+    GW_BEGIN_ME("fmi2GetDerivatives", GW_MASK_GetDerivatives);
+    GW_CHECK_NX("fmi2GetDerivatives", derivatives, nx);
+    GW_TRY(gw_update_derivatives(I, "fmi2GetDerivatives"));
+    if (nx > 0) memcpy(derivatives, I->xdot, nx * sizeof(double));
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
+    const gw_model *m;
+    int i;
+    GW_BEGIN_ME("fmi2GetEventIndicators", GW_MASK_GetEventIndicators);
+    m = I->m;
+    if (ni != (size_t)m->ne)
+        GW_FAIL("fmi2GetEventIndicators: ni = %lu, the model has %d event indicators",
+                (unsigned long)ni, m->ne);
+    if (ni == 0) goto END;
+    if (!eventIndicators) GW_FAIL("fmi2GetEventIndicators: array is NULL");
+    if (I->in_setup && gw_eval_init(I, I->x) != 0)
+        GW_FAIL("fmi2GetEventIndicators: evaluation of the initial state failed");
+    if (gw_eval_evt(I, I->t, I->x, I->e_me) != 0)
+        GW_FAIL("fmi2GetEventIndicators: evaluation of the event indicators failed at t=%.17g",
+                I->t);
+    for (i = 0; i < m->ne; i++)
+        if (!isfinite(I->e_me[i])) {
+            GW_LOG_NONFINITE(I, "fmi2GetEventIndicators: event indicator %s is not finite (%g) "
+                             "at t=%.17g", m->event_names ? m->event_names[i] : "?", I->e_me[i],
+                             I->t);
+            status = gw_fmi2_status(I->nonfinite_status);
+            goto END;
+        }
+    memcpy(eventIndicators, I->e_me, ni * sizeof(double));
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    GW_BEGIN_ME("fmi2GetContinuousStates", GW_MASK_GetContinuousStates);
+    GW_CHECK_NX("fmi2GetContinuousStates", x, nx);
+    if (I->in_setup && gw_eval_init(I, I->x) != 0)
+        GW_FAIL("fmi2GetContinuousStates: evaluation of the initial state failed");
+    if (nx > 0) memcpy(x, I->x, nx * sizeof(double));
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
+    size_t i;
+    GW_BEGIN_ME("fmi2GetNominalsOfContinuousStates", GW_MASK_GetNominals);
+    GW_CHECK_NX("fmi2GetNominalsOfContinuousStates", x_nominal, nx);
+    if (nx == 0) goto END;
+    if (I->in_setup) { /* from the current parameters; 1 where not usable */
+        if (gw_eval_nom(I, x_nominal) != 0)
+            GW_FAIL("fmi2GetNominalsOfContinuousStates: evaluation of the nominals failed");
+        for (i = 0; i < nx; i++)
+            if (!(x_nominal[i] > 0.0) || !isfinite(x_nominal[i])) x_nominal[i] = 1.0;
+    } else {
+        memcpy(x_nominal, I->nominal, nx * sizeof(double));
+    }
+    GW_END_FUNCTION();
+}
+
+#endif /* GW_UNITY_BUILD */

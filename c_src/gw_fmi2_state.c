@@ -1,0 +1,152 @@
+/*
+ * gw_fmi2_state.c -- fmi2Get/Set/FreeFMUstate and fmi2(De)SerializeFMUstate.  An fmi2FMUstate
+ * is one blob holding the core's serialised state (gw_state.c, layout there) with the FMI
+ * state and the last fmi2DoStep status as the front end's two ints, so get/set and
+ * (de)serialise share one code path.
+ *
+ * The fmi state may also be a Model Exchange one (EventMode, ContinuousTimeMode); a state of
+ * one interface's own modes is refused by an instance of the other interface (the modes both
+ * share -- Instantiated, InitializationMode, Terminated, Error -- hold nothing
+ * interface-specific, so the layout needs no interface field).
+ */
+#ifndef GW_UNITY_BUILD
+typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
+#else
+
+#include <string.h>
+
+#include "gw_fmi2.h"
+
+#define GW_MASK_FMUstate                                                                        \
+    (GW_ST_INSTANTIATED | GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED |           \
+     GW_ST_TERMINATED | GW_ST_ERROR | GW_ST_EVENT_MODE | GW_ST_CONT_TIME_MODE)
+
+typedef struct {
+    size_t size;
+    unsigned char data[]; /* size bytes */
+} gw_blob;
+
+static int gw_fmi2_valid_state(int s) {
+    return s == GW_ST_INSTANTIATED || s == GW_ST_INIT_MODE || s == GW_ST_STEP_COMPLETE ||
+           s == GW_ST_STEP_FAILED || s == GW_ST_TERMINATED || s == GW_ST_ERROR ||
+           s == GW_ST_EVENT_MODE || s == GW_ST_CONT_TIME_MODE;
+}
+
+/* Apply a state whose header gw_state_check accepted; 0 (reason logged) if its FMI state
+ * is invalid or of the other interface. */
+static int gw_fmi2_apply_state(gw_fmu *F, const char *fn, const unsigned char *buf) {
+    gw_instance *I = F->I;
+    int front[2], st;
+    gw_state_front(I, buf, front);
+    st = front[0];
+    if (!gw_fmi2_valid_state(st)) {
+        GW_LOG_ERR(I, "%s: FMU state holds an invalid instance state %d", fn, st);
+        return 0;
+    }
+    if (((st & GW_ST_ME) && F->fmu_type != fmi2ModelExchange) ||
+        ((st & (GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED)) && F->fmu_type != fmi2CoSimulation)) {
+        GW_LOG_ERR(I, "%s: FMU state of a %s instance cannot be set into a %s instance", fn,
+                   gw_fmi2_is_me(F) ? "Co-Simulation" : "Model Exchange",
+                   gw_fmi2_is_me(F) ? "Model Exchange" : "Co-Simulation");
+        return 0;
+    }
+    gw_fmi2_set_state(F, st);
+    F->last_dostep_status = (fmi2Status)front[1];
+    gw_state_apply(I, buf);
+    return 1;
+}
+
+/* The blob *FMUstate if it has the right size, else a new one (the old one freed). */
+static gw_blob *gw_fmi2_blob(gw_instance *I, const char *fn, fmi2FMUstate *FMUstate, size_t size) {
+    gw_blob *b = (gw_blob *)*FMUstate;
+    if (b && b->size != size) {
+        gw_free(I, b);
+        b = NULL;
+        *FMUstate = NULL;
+    }
+    if (!b) {
+        b = (gw_blob *)gw_alloc(I, 1, sizeof(gw_blob) + size);
+        if (b) b->size = size;
+    }
+    if (!b) GW_LOG_ERR(I, "%s: out of memory", fn);
+    return b;
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    gw_blob *b;
+    int front[2];
+    GW_BEGIN("fmi2GetFMUstate", GW_MASK_FMUstate);
+    if (!FMUstate) GW_FAIL("fmi2GetFMUstate: FMUstate is NULL");
+    b = gw_fmi2_blob(I, "fmi2GetFMUstate", FMUstate, gw_state_size(I));
+    if (!b) {
+        status = fmi2Error;
+        goto END;
+    }
+    front[0] = F->state;
+    front[1] = (int)F->last_dostep_status;
+    gw_state_write(I, front, b->data);
+    *FMUstate = (fmi2FMUstate)b;
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+    const gw_blob *b = (const gw_blob *)FMUstate;
+    GW_BEGIN("fmi2SetFMUstate", GW_MASK_FMUstate);
+    if (!b) GW_FAIL("fmi2SetFMUstate: FMUstate is NULL");
+    if (!gw_state_check(I, "fmi2SetFMUstate", b->data, b->size) ||
+        !gw_fmi2_apply_state(F, "fmi2SetFMUstate", b->data))
+        status = fmi2Error;
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    GW_BEGIN("fmi2FreeFMUstate", GW_MASK_FMUstate);
+    if (FMUstate && *FMUstate) {
+        gw_free(I, *FMUstate);
+        *FMUstate = NULL;
+    }
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+    const gw_blob *b = (const gw_blob *)FMUstate;
+    GW_BEGIN("fmi2SerializedFMUstateSize", GW_MASK_FMUstate);
+    if (!b || !size) GW_FAIL("fmi2SerializedFMUstateSize: FMUstate or size is NULL");
+    *size = b->size;
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[],
+                                 size_t size) {
+    const gw_blob *b = (const gw_blob *)FMUstate;
+    GW_BEGIN("fmi2SerializeFMUstate", GW_MASK_FMUstate);
+    if (!b || !serializedState)
+        GW_FAIL("fmi2SerializeFMUstate: FMUstate or serializedState is NULL");
+    if (size < b->size)
+        GW_FAIL("fmi2SerializeFMUstate: buffer of %lu bytes, %lu needed", (unsigned long)size,
+                (unsigned long)b->size);
+    memcpy(serializedState, b->data, b->size);
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate *FMUstate) {
+    gw_blob *b;
+    GW_BEGIN("fmi2DeSerializeFMUstate", GW_MASK_FMUstate);
+    if (!FMUstate) GW_FAIL("fmi2DeSerializeFMUstate: FMUstate is NULL");
+    if (!gw_state_check(I, "fmi2DeSerializeFMUstate", (const unsigned char *)serializedState,
+                        size)) {
+        status = fmi2Error;
+        goto END;
+    }
+    b = gw_fmi2_blob(I, "fmi2DeSerializeFMUstate", FMUstate, size);
+    if (!b) {
+        status = fmi2Error;
+        goto END;
+    }
+    memcpy(b->data, serializedState, size);
+    *FMUstate = (fmi2FMUstate)b;
+    GW_END_FUNCTION();
+}
+
+#endif /* GW_UNITY_BUILD */

@@ -1,0 +1,230 @@
+/*
+ * gw_fmi2_variables.c -- fmi2Get/Set Real, Integer, Boolean, String: value references
+ * looked up in GW_MODEL.vars, checked against the base type and against what FMI 2.0 allows
+ * to be set in the current state; values read and stored by the core (gw_values.c).
+ */
+#ifndef GW_UNITY_BUILD
+typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
+#else
+
+#include <math.h>
+
+#include "gw_fmi2.h"
+
+#define GW_MASK_Get GW_ST_ANY
+
+static const char *gw_fmi2_type_name(int type) {
+    switch (type) {
+    case GW_REAL: return "Real";
+    case GW_INTEGER: return "Integer";
+    case GW_BOOLEAN: return "Boolean";
+    case GW_ENUM: return "Enumeration";
+    default: return "?";
+    }
+}
+
+/* Look up vr and check that it is accessed through the right fmi2Get/SetXXX. */
+static const gw_variable *gw_fmi2_lookup(gw_instance *I, const char *fn, fmi2ValueReference vr,
+                                         int want_type) {
+    const gw_variable *v = gw_variable_find(I->m, vr);
+    int ok;
+    if (!v) {
+        GW_LOG_ERR(I, "%s: unknown value reference %u", fn, vr);
+        return NULL;
+    }
+    ok = want_type == GW_INTEGER ? (v->type == GW_INTEGER || v->type == GW_ENUM)
+                                 : (int)v->type == want_type;
+    if (!ok) {
+        GW_LOG_ERR(I, "%s: variable %s (vr=%u) is of type %s", fn, v->name, vr,
+                   gw_fmi2_type_name(v->type));
+        return NULL;
+    }
+    return v;
+}
+
+static int gw_fmi2_needs_derivatives(const gw_instance *I, const fmi2ValueReference vr[],
+                                     size_t nvr) {
+    size_t k;
+    for (k = 0; k < nvr; k++) {
+        const gw_variable *v = gw_variable_find(I->m, vr[k]);
+        if (v && v->kind == GW_VAR_DERIVATIVE) return 1;
+    }
+    return 0;
+}
+
+static int gw_fmi2_needs_outputs(const gw_instance *I, const fmi2ValueReference vr[],
+                                 size_t nvr) {
+    size_t k;
+    for (k = 0; k < nvr; k++) {
+        const gw_variable *v = gw_variable_find(I->m, vr[k]);
+        if (!v) continue;
+        if (v->kind == GW_VAR_OUTPUT) return 1;
+        if (v->kind == GW_VAR_START && v->out_index >= 0 && !I->in_setup) return 1;
+        if (v->kind == GW_VAR_STATE && I->in_setup) return 1; /* x = init(s, p) */
+    }
+    return 0;
+}
+
+/* Check that v may be set now; the value is already known to be valid. */
+static int gw_fmi2_settable(gw_fmu *F, const char *fn, const gw_variable *v) {
+    gw_instance *I = F->I;
+    int ok;
+    switch (v->kind) {
+    case GW_VAR_PARAM: /* tunable: in Model Exchange only in Event Mode, not in CT Mode */
+        ok = v->tunable ? (F->state & GW_MASK_Set & ~GW_ST_CONT_TIME_MODE) != 0 : I->in_setup;
+        break;
+    case GW_VAR_STATE:
+        GW_LOG_ERR(I, "%s: variable %s (vr=%u) is a continuous state and cannot be set%s", fn,
+                   v->name, v->vr, gw_fmi2_is_me(F) ? " (use fmi2SetContinuousStates)" : "");
+        return 0;
+    case GW_VAR_DERIVATIVE:
+        GW_LOG_ERR(I, "%s: variable %s (vr=%u) is a state derivative and cannot be set", fn,
+                   v->name, v->vr);
+        return 0;
+    case GW_VAR_START:
+    case GW_VAR_SETTING: ok = I->in_setup; break;
+    case GW_VAR_INPUT: ok = (F->state & GW_MASK_Set) != 0; break;
+    default:
+        GW_LOG_ERR(I, "%s: variable %s (vr=%u) is read-only", fn, v->name, v->vr);
+        return 0;
+    }
+    if (!ok)
+        GW_LOG_ERR(I, "%s: variable %s (vr=%u) cannot be set in state %s", fn, v->name, v->vr,
+                   gw_fmi2_state_name(F->state));
+    return ok;
+}
+
+#define GW_CHECK_ARRAYS(fn, vr, nvr, value)                                                     \
+    if ((nvr) > 0 && (!(vr) || !(value)))                                                       \
+    GW_FAIL("%s: NULL array for %lu values", fn, (unsigned long)(nvr))
+
+/* ---- getting values ------------------------------------------------------------------------ */
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                       fmi2Real value[]) {
+    size_t k;
+    GW_BEGIN("fmi2GetReal", GW_MASK_Get);
+    GW_CHECK_ARRAYS("fmi2GetReal", vr, nvr, value);
+    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, "fmi2GetReal"));
+    if (gw_fmi2_needs_derivatives(I, vr, nvr)) GW_TRY(gw_update_derivatives(I, "fmi2GetReal"));
+    for (k = 0; k < nvr; k++) {
+        const gw_variable *v = gw_fmi2_lookup(I, "fmi2GetReal", vr[k], GW_REAL);
+        if (!v) {
+            status = fmi2Error;
+            goto END;
+        }
+        value[k] = gw_value_get(I, v);
+    }
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          fmi2Integer value[]) {
+    size_t k;
+    GW_BEGIN("fmi2GetInteger", GW_MASK_Get);
+    GW_CHECK_ARRAYS("fmi2GetInteger", vr, nvr, value);
+    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, "fmi2GetInteger"));
+    for (k = 0; k < nvr; k++) {
+        const gw_variable *v = gw_fmi2_lookup(I, "fmi2GetInteger", vr[k], GW_INTEGER);
+        double d;
+        if (!v) {
+            status = fmi2Error;
+            goto END;
+        }
+        d = gw_value_get(I, v);
+        value[k] = isfinite(d) ? (fmi2Integer)floor(d + 0.5) : 0;
+    }
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          fmi2Boolean value[]) {
+    size_t k;
+    GW_BEGIN("fmi2GetBoolean", GW_MASK_Get);
+    GW_CHECK_ARRAYS("fmi2GetBoolean", vr, nvr, value);
+    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, "fmi2GetBoolean"));
+    for (k = 0; k < nvr; k++) {
+        const gw_variable *v = gw_fmi2_lookup(I, "fmi2GetBoolean", vr[k], GW_BOOLEAN);
+        if (!v) {
+            status = fmi2Error;
+            goto END;
+        }
+        value[k] = gw_value_get(I, v) != 0.0 ? fmi2True : fmi2False;
+    }
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                         fmi2String value[]) {
+    GW_BEGIN("fmi2GetString", GW_MASK_Get);
+    (void)value;
+    if (nvr > 0)
+        GW_FAIL("fmi2GetString: unknown value reference %u (the model has no String variables)",
+                vr ? vr[0] : 0u);
+    GW_END_FUNCTION();
+}
+
+/* ---- setting values ------------------------------------------------------------------------ */
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                       const fmi2Real value[]) {
+    size_t k;
+    GW_BEGIN("fmi2SetReal", GW_MASK_Set);
+    GW_CHECK_ARRAYS("fmi2SetReal", vr, nvr, value);
+    for (k = 0; k < nvr; k++) {
+        const gw_variable *v = gw_fmi2_lookup(I, "fmi2SetReal", vr[k], GW_REAL);
+        if (!v || !gw_fmi2_settable(F, "fmi2SetReal", v)) {
+            status = fmi2Error;
+            goto END;
+        }
+        if (!isfinite(value[k]))
+            GW_FAIL("fmi2SetReal: value %g for variable %s (vr=%u) is not finite", value[k],
+                    v->name, v->vr);
+        gw_value_set(I, v, value[k]);
+    }
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Integer value[]) {
+    size_t k;
+    GW_BEGIN("fmi2SetInteger", GW_MASK_Set);
+    GW_CHECK_ARRAYS("fmi2SetInteger", vr, nvr, value);
+    for (k = 0; k < nvr; k++) {
+        const gw_variable *v = gw_fmi2_lookup(I, "fmi2SetInteger", vr[k], GW_INTEGER);
+        if (!v || !gw_fmi2_settable(F, "fmi2SetInteger", v)) {
+            status = fmi2Error;
+            goto END;
+        }
+        gw_value_set(I, v, (double)value[k]);
+    }
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Boolean value[]) {
+    size_t k;
+    GW_BEGIN("fmi2SetBoolean", GW_MASK_Set);
+    GW_CHECK_ARRAYS("fmi2SetBoolean", vr, nvr, value);
+    for (k = 0; k < nvr; k++) {
+        const gw_variable *v = gw_fmi2_lookup(I, "fmi2SetBoolean", vr[k], GW_BOOLEAN);
+        if (!v || !gw_fmi2_settable(F, "fmi2SetBoolean", v)) {
+            status = fmi2Error;
+            goto END;
+        }
+        gw_value_set(I, v, value[k] ? 1.0 : 0.0);
+    }
+    GW_END_FUNCTION();
+}
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                         const fmi2String value[]) {
+    GW_BEGIN("fmi2SetString", GW_MASK_Set);
+    (void)value;
+    if (nvr > 0)
+        GW_FAIL("fmi2SetString: unknown value reference %u (the model has no String variables)",
+                vr ? vr[0] : 0u);
+    GW_END_FUNCTION();
+}
+
+#endif /* GW_UNITY_BUILD */

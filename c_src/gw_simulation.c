@@ -1,0 +1,252 @@
+/*
+ * gw_simulation.c -- the simulation's phases: experiment set-up, initialisation (every
+ * check of parameters, settings and the model's validity conditions, then the consistent
+ * initial point), advancing in time with recovery on failure, and the outputs and state
+ * derivatives at the current point.
+ */
+#ifndef GW_UNITY_BUILD
+typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
+#else
+
+#include <math.h>
+#include <string.h>
+
+#include "gw_instance.h"
+
+#define GW_SIM_FAIL(...)                                                                      \
+    do {                                                                                      \
+        GW_LOG_ERR(I, __VA_ARGS__);                                                           \
+        return GW_ERROR;                                                                      \
+    } while (0)
+
+GW_API gw_status gw_setup_experiment(gw_instance *I, const char *fn, int tolerance_defined,
+                                     double tolerance, double start_time, int stop_time_defined,
+                                     double stop_time) {
+    if (!isfinite(start_time)) GW_SIM_FAIL("%s: startTime is not finite", fn);
+    if (tolerance_defined) {
+        if (!(tolerance > 0.0) || !isfinite(tolerance))
+            GW_SIM_FAIL("%s: tolerance %g must be finite and > 0", fn, tolerance);
+        /* overrides rel_tol, also when rel_tol is set later (applied at initialisation) */
+        I->rel_tol = tolerance;
+        I->tol_defined = 1;
+        I->tolerance = tolerance;
+    }
+    if (stop_time_defined) {
+        if (!isfinite(stop_time) || stop_time < start_time)
+            GW_SIM_FAIL("%s: stopTime %g must be finite and >= startTime %g", fn, stop_time,
+                        start_time);
+    }
+    I->t_start = start_time;
+    I->t = start_time;
+    if (!tolerance_defined) I->tol_defined = 0;
+    I->stop_defined = stop_time_defined ? 1 : 0;
+    I->t_stop = stop_time_defined ? stop_time : 0.0;
+    return GW_OK;
+}
+
+/* ---- outputs and derivatives at the current point ------------------------------------------ */
+
+GW_API gw_status gw_update_outputs(gw_instance *I, const char *fn) {
+    const gw_model *m = I->m;
+    int i;
+    if (I->in_setup) {
+        if (gw_eval_init(I, I->x) != 0 || gw_eval_out(I, I->t, I->x, I->y) != 0) {
+            GW_LOG_ERR(I, "%s: evaluation of the initial outputs failed", fn);
+            return GW_ERROR;
+        }
+        for (i = 0; i < m->ny; i++)
+            if (!isfinite(I->y[i])) {
+                const char *nm = gw_variable_name(m, GW_VAR_OUTPUT, i);
+                gw_log(I, GW_WARNING, GW_LOG_WARNING,
+                       "%s: initial value of output %s is not finite (check the parameters)",
+                       fn, nm ? nm : "?");
+                return GW_WARNING;
+            }
+        return GW_OK;
+    }
+    if (I->y_valid) return GW_OK;
+    if (gw_eval_out(I, I->t, I->x, I->y) != 0) {
+        GW_LOG_ERR(I, "%s: evaluation of the outputs failed at t=%.17g", fn, I->t);
+        return GW_ERROR;
+    }
+    for (i = 0; i < m->ny; i++)
+        if (!isfinite(I->y[i])) {
+            const char *nm = gw_variable_name(m, GW_VAR_OUTPUT, i);
+            GW_LOG_NONFINITE(I, "%s: output %s is not finite (%g) at t=%.17g", fn,
+                             nm ? nm : "?", I->y[i], I->t);
+            return I->nonfinite_status;
+        }
+    I->y_valid = 1;
+    return GW_OK;
+}
+
+GW_API gw_status gw_update_derivatives(gw_instance *I, const char *fn) {
+    const gw_model *m = I->m;
+    int i, pre = I->in_setup;
+    if (!pre && I->xdot_valid) return GW_OK;
+    if (pre && gw_eval_init(I, I->x) != 0) {
+        GW_LOG_ERR(I, "%s: evaluation of the initial state failed", fn);
+        return GW_ERROR;
+    }
+    if (gw_rhs(I, I->t, I->x, I->xdot) != 0) {
+        GW_LOG_ERR(I, "%s: evaluation of the right-hand side failed at t=%.17g", fn, I->t);
+        return GW_ERROR;
+    }
+    for (i = 0; i < m->nx; i++)
+        if (!isfinite(I->xdot[i])) {
+            if (pre) { /* as for the initial outputs: the parameters may still change */
+                gw_log(I, GW_WARNING, GW_LOG_WARNING,
+                       "%s: initial derivative of state %s is not finite (check the "
+                       "parameters)", fn, m->x_names ? m->x_names[i] : "?");
+                return GW_WARNING;
+            }
+            GW_LOG_NONFINITE(I, "%s: derivative of state %s is not finite (%g) at t=%.17g", fn,
+                             m->x_names ? m->x_names[i] : "?", I->xdot[i], I->t);
+            return I->nonfinite_status;
+        }
+    I->xdot_valid = !pre;
+    return GW_OK;
+}
+
+/* ---- initialisation -------------------------------------------------------------------------- */
+
+static int gw_check_finite_vec(gw_instance *I, const char *fn, const double *v, int n, int kind,
+                               const char *what) {
+    int i, ok = 1;
+    for (i = 0; i < n; i++)
+        if (!isfinite(v[i])) {
+            const char *nm = gw_variable_name(I->m, kind, i);
+            GW_LOG_ERR(I, "%s: %s %s is not finite (%g)", fn, what, nm ? nm : "?", v[i]);
+            ok = 0;
+        }
+    return ok;
+}
+
+/* settings and the model's validity checks c(s, p) > 0 */
+static gw_status gw_check_setup(gw_instance *I, const char *fn) {
+    const gw_model *m = I->m;
+    int i, ok;
+    ok = gw_check_finite_vec(I, fn, I->p, m->np, GW_VAR_PARAM, "parameter");
+    ok &= gw_check_finite_vec(I, fn, I->s, m->ns, GW_VAR_START, "start value");
+    ok &= gw_check_finite_vec(I, fn, I->u, m->nu, GW_VAR_INPUT, "input");
+    if (!ok) GW_SIM_FAIL("%s: non-finite values", fn);
+    if (I->tol_defined) I->rel_tol = I->tolerance;
+    if (!gw_solver_available(I->solver)) GW_SIM_FAIL("%s: unknown solver %d", fn, I->solver);
+    if (!(I->rel_tol > 0.0) || !isfinite(I->rel_tol))
+        GW_SIM_FAIL("%s: rel_tol = %g must be finite and > 0", fn, I->rel_tol);
+    if (!(I->abs_tol > 0.0) || !isfinite(I->abs_tol))
+        GW_SIM_FAIL("%s: abs_tol = %g must be finite and > 0", fn, I->abs_tol);
+    if (!(I->max_step > 0.0) || !isfinite(I->max_step))
+        GW_SIM_FAIL("%s: max_step = %g must be finite and > 0", fn, I->max_step);
+    if (m->nc > 0) {
+        if (gw_eval_chk(I, I->c) != 0)
+            GW_SIM_FAIL("%s: evaluation of the validity checks failed", fn);
+        ok = 1;
+        for (i = 0; i < m->nc; i++)
+            if (!(I->c[i] > 0.0)) {
+                GW_LOG_ERR(I, "%s: %s (check value %g)", fn,
+                           (m->check_messages && m->check_messages[i]) ? m->check_messages[i]
+                                                                       : "validity check failed",
+                           I->c[i]);
+                ok = 0;
+            }
+        if (!ok) return GW_ERROR;
+    }
+    return GW_OK;
+}
+
+GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
+    const gw_model *m = I->m;
+    gw_status status;
+    int i;
+    gw_point_changed(I);
+    if (gw_check_setup(I, fn) != GW_OK) return GW_ERROR;
+    /* nominal values, initial state, outputs, event indicators */
+    if (gw_eval_nom(I, I->nominal) != 0)
+        GW_SIM_FAIL("%s: evaluation of the state nominals failed", fn);
+    for (i = 0; i < m->nx; i++)
+        if (!(I->nominal[i] > 0.0) || !isfinite(I->nominal[i]))
+            GW_SIM_FAIL("%s: nominal of state %s is %g (must be finite, > 0)", fn,
+                        m->x_names ? m->x_names[i] : "?", I->nominal[i]);
+    if (gw_eval_init(I, I->x) != 0) GW_SIM_FAIL("%s: evaluation of the initial state failed", fn);
+    for (i = 0; i < m->nx; i++)
+        if (!isfinite(I->x[i]))
+            GW_SIM_FAIL("%s: initial state %s is not finite (%g)", fn,
+                        m->x_names ? m->x_names[i] : "?", I->x[i]);
+    /* from here on y is the simulation's output */
+    I->in_setup = 0;
+    I->y_valid = 0;
+    status = gw_update_outputs(I, fn);
+    if (status > GW_WARNING) return status;
+    if (gw_rhs(I, I->t, I->x, I->k[0]) != 0)
+        GW_SIM_FAIL("%s: evaluation of the right-hand side failed", fn);
+    for (i = 0; i < m->nx; i++)
+        if (!isfinite(I->k[0][i]))
+            GW_SIM_FAIL("%s: derivative of state %s is not finite (%g)", fn,
+                        m->x_names ? m->x_names[i] : "?", I->k[0][i]);
+    I->fcur_valid = 1;
+    memcpy(I->xdot, I->k[0], (size_t)m->nx * sizeof(double));
+    I->xdot_valid = 1;
+    if (m->ne > 0 && gw_eval_evt(I, I->t, I->x, I->e) != 0)
+        GW_SIM_FAIL("%s: evaluation of the event indicators failed", fn);
+    /* An event whose condition holds already at the start cannot be crossed later:
+     * a terminating one means an invalid initial state, a warning one is flagged now. */
+    for (i = 0; i < m->ne; i++) {
+        I->flags[i] = 0;
+        if (I->e[i] > 0.0) continue;
+        if (m->event_actions && m->event_actions[i] == GW_EVENT_WARN) {
+            I->flags[i] = 1;
+            gw_log(I, GW_WARNING, GW_LOG_EVENTS,
+                   "warning: event %s holds already at the start t=%.17g",
+                   m->event_names ? m->event_names[i] : "?", I->t);
+        } else {
+            GW_SIM_FAIL("%s: the initial state already triggers event %s (indicator %g <= 0)",
+                        fn, m->event_names ? m->event_names[i] : "?", I->e[i]);
+        }
+    }
+    I->terminated = 0;
+    I->h_adapt = 0.0;
+    I->last_successful_time = I->t;
+    I->n_rhs = I->n_accepted = I->n_rejected = I->n_evt = I->n_events = 0;
+    return status;
+}
+
+/* ---- advancing in time ------------------------------------------------------------------------ */
+
+/* Back to the state at the start of gw_advance. */
+static void gw_restore_step_start(gw_instance *I, double t0, double h0) {
+    const gw_model *m = I->m;
+    memcpy(I->x, I->x_bak, (size_t)m->nx * sizeof(double));
+    if (m->ne > 0) {
+        memcpy(I->e, I->e_bak, (size_t)m->ne * sizeof(double));
+        memcpy(I->flags, I->flags_bak, (size_t)m->ne * sizeof(int));
+    }
+    I->t = t0;
+    I->h_adapt = h0;
+    I->fcur_valid = 0;
+    gw_point_changed(I);
+    gw_eval_out(I, I->t, I->x, I->y);
+}
+
+GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end) {
+    const gw_model *m = I->m;
+    const double t0 = I->t, h0 = I->h_adapt;
+    gw_int_result r;
+    memcpy(I->x_bak, I->x, (size_t)m->nx * sizeof(double));
+    if (m->ne > 0) {
+        memcpy(I->e_bak, I->e, (size_t)m->ne * sizeof(double));
+        memcpy(I->flags_bak, I->flags, (size_t)m->ne * sizeof(int));
+    }
+    gw_point_changed(I);
+    r = gw_integrate(I, t_end);
+    if (r != GW_INT_ERROR && gw_update_outputs(I, fn) != GW_OK) r = GW_INT_ERROR;
+    if (r == GW_INT_ERROR) {
+        gw_restore_step_start(I, t0, h0);
+        return GW_ERROR;
+    }
+    if (r == GW_INT_TERMINATED) I->terminated = 1;
+    I->last_successful_time = I->t;
+    return r == GW_INT_TERMINATED ? GW_DISCARD : GW_OK;
+}
+
+#endif /* GW_UNITY_BUILD */

@@ -1,0 +1,126 @@
+/*
+ * gw_solver_fixed.c -- explicit Euler and classical Runge-Kutta 4 with a fixed step: a
+ * communication step h is cut into n = ceil(h / max_step) equal substeps on a deterministic
+ * grid (t_i = t0 + i h / n, the last one exactly t_end).  Both refuse to go on when the step
+ * is far beyond their stability limit (the increments grow or the RK4 stages diverge), since
+ * such garbage can cross event indicators.  Dense output: the cubic Hermite of gw_solver.c.
+ */
+#ifndef GW_UNITY_BUILD
+typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
+#else
+
+#include <math.h>
+
+#include "gw_solver.h"
+
+/* ---- single steps from (I->t, I->x) to t1 = I->t + h: result in I->xnew ---- */
+
+static int gw_euler_step(gw_instance *I, double h) {
+    int i, nx = I->m->nx;
+    const double *x = I->x, *k1 = I->k[0];
+    for (i = 0; i < nx; i++) I->xnew[i] = x[i] + h * k1[i];
+    I->k7_valid = 0;
+    return 0;
+}
+
+/* max_i |a_i - b_i| / nominal_i */
+static double gw_scaled_diff(const gw_instance *I, const double *a, const double *b) {
+    int i;
+    double m = 0.0;
+    for (i = 0; i < I->m->nx; i++) {
+        double d = fabs(a[i] - b[i]) / I->nominal[i];
+        if (d > m || d != d) m = d;
+    }
+    return m;
+}
+
+/* Explicit fixed steps far beyond their stability limit produce garbage that can cross event
+ * indicators; refuse them. For f = lambda y the RK4 stages give |k3 - k2| / |k2 - k1| =
+ * h |lambda| / 2, which is O(h) for a resolved motion: above GW_RK4_UNSTABLE (h |lambda| > 20,
+ * RK4 is stable up to 2.8) the step means nothing. */
+#define GW_RK4_UNSTABLE 10.0
+
+static int gw_rk4_unstable(gw_instance *I, double h) {
+    const double d21 = gw_scaled_diff(I, I->k[1], I->k[0]), d32 = gw_scaled_diff(I, I->k[2], I->k[1]);
+    double k1 = 0.0;
+    int i;
+    for (i = 0; i < I->m->nx; i++) {
+        double a = fabs(I->k[0][i]) / I->nominal[i];
+        if (a > k1) k1 = a;
+    }
+    if (!(d32 > GW_RK4_UNSTABLE * d21) || !(d32 > 1e-6 * k1)) return 0;
+    GW_LOG_ERR(I, "rk4 is unstable at t=%.17g with max_step=%g: h |lambda| ~ %.3g (stable up to 2.8); "
+               "the dynamics are faster than the step: reduce max_step or use an adaptive solver",
+               I->t, h, d21 > 0.0 ? 2.0 * d32 / d21 : HUGE_VAL);
+    return 1;
+}
+
+static int gw_rk4_step(gw_instance *I, double h, double t1) {
+    int i, nx = I->m->nx;
+    const double t = I->t, hh = 0.5 * h;
+    const double *x = I->x;
+    double *k1 = I->k[0], *k2 = I->k[1], *k3 = I->k[2], *k4 = I->k[3], *xt = I->xtmp;
+    for (i = 0; i < nx; i++) xt[i] = x[i] + hh * k1[i];
+    if (gw_rhs_checked(I, t + hh, xt, k2)) return -1;
+    for (i = 0; i < nx; i++) xt[i] = x[i] + hh * k2[i];
+    if (gw_rhs_checked(I, t + hh, xt, k3)) return -1;
+    if (gw_rk4_unstable(I, h)) return -1;
+    for (i = 0; i < nx; i++) xt[i] = x[i] + h * k3[i];
+    if (gw_rhs_checked(I, t1, xt, k4)) return -1;
+    for (i = 0; i < nx; i++)
+        I->xnew[i] = x[i] + (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+    I->k7_valid = 0;
+    return 0;
+}
+
+
+/* ---- the fixed-step loop ------------------------------------------------------ */
+
+GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
+    const double t0 = I->t, H = t_end - t0;
+    double nd = ceil(H / I->max_step - 1e-12);
+    unsigned long long n, i;
+    int events = 0, growing;
+    double d_prev;
+    if (nd < 1.0) nd = 1.0;
+    if (nd > GW_MAX_STEPS_AHEAD) {
+        GW_LOG_ERR(I, "communication step %g would need %.3g steps of max_step=%g (limit %.0e): "
+                   "raise max_step or shorten the communication step", H, nd, I->max_step,
+                   GW_MAX_STEPS_AHEAD);
+        return GW_INT_ERROR;
+    }
+    n = (unsigned long long)nd;
+    d_prev = 0.0;
+    growing = 0;
+    for (i = 1; i <= n; i++) {
+        /* deterministic grid: t_i = t0 + i*H/n, the last one exactly t_end */
+        const double ti = (i == n) ? t_end : t0 + (double)i * H / (double)n;
+        while (I->t < ti) {
+            const double h = ti - I->t;
+            gw_int_result r;
+            if (gw_ensure_f0(I)) return GW_INT_ERROR;
+            if (I->solver == GW_SOLVER_EULER) {
+                /* Euler's instability: increments that more than double, step after step */
+                double d;
+                gw_euler_step(I, h);
+                d = gw_scaled_diff(I, I->xnew, I->x);
+                growing = (d > 2.0 * d_prev && d_prev > 1e-12) ? growing + 1 : 0;
+                d_prev = d;
+                if (growing >= 4) {
+                    GW_LOG_ERR(I, "euler is unstable at t=%.17g with max_step=%g: the increments grew "
+                               "more than x2 per step for 4 steps; reduce max_step or use another solver",
+                               I->t, h);
+                    return GW_INT_ERROR;
+                }
+            } else if (gw_rk4_step(I, h, ti)) {
+                return GW_INT_ERROR;
+            }
+            r = gw_accept_step(I, ti, &events);
+            if (r != GW_INT_OK) return r;
+        }
+    }
+    I->t = t_end;
+    return GW_INT_OK;
+}
+
+#endif /* GW_UNITY_BUILD */

@@ -1,0 +1,93 @@
+/*
+ * gw_values.c -- variable values: the model's variable table (GW_MODEL.vars, sorted by
+ * value reference) mapped onto the instance's vectors p, s, u, y, x, xdot, the event flags
+ * and the runtime settings.  Which variable may be set when is the front end's rule.
+ */
+#ifndef GW_UNITY_BUILD
+typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
+#else
+
+#include "gw_instance.h"
+
+GW_API const gw_variable *gw_variable_find(const gw_model *m, unsigned int vr) {
+    int lo = 0, hi = m->n_vars - 1;
+    while (lo <= hi) {
+        int mid = lo + (hi - lo) / 2;
+        unsigned int v = m->vars[mid].vr;
+        if (v == vr) return &m->vars[mid];
+        if (v < vr)
+            lo = mid + 1;
+        else
+            hi = mid - 1;
+    }
+    return NULL;
+}
+
+GW_API const char *gw_variable_name(const gw_model *m, int kind, int index) {
+    int i;
+    for (i = 0; i < m->n_vars; i++)
+        if ((int)m->vars[i].kind == kind && m->vars[i].index == index) return m->vars[i].name;
+    return NULL;
+}
+
+GW_API void gw_point_changed(gw_instance *I) {
+    I->y_valid = 0;
+    I->xdot_valid = 0;
+    I->dir_valid = 0;
+}
+
+static double gw_setting_value(const gw_instance *I, int index) {
+    switch (index) {
+    case GW_SET_SOLVER: return (double)I->solver;
+    case GW_SET_REL_TOL: return I->rel_tol;
+    case GW_SET_ABS_TOL: return I->abs_tol;
+    case GW_SET_MAX_STEP: return I->max_step;
+    default: return 0.0;
+    }
+}
+
+GW_API double gw_value_get(const gw_instance *I, const gw_variable *v) {
+    switch (v->kind) {
+    case GW_VAR_PARAM: return I->p[v->index];
+    case GW_VAR_START:
+        return (I->in_setup || v->out_index < 0) ? I->s[v->index] : I->y[v->out_index];
+    case GW_VAR_INPUT: return I->u[v->index];
+    case GW_VAR_OUTPUT: return I->y[v->index];
+    case GW_VAR_SETTING: return gw_setting_value(I, v->index);
+    case GW_VAR_EVENT: return I->flags[v->index] ? 1.0 : 0.0;
+    case GW_VAR_STATE: return I->x[v->index];
+    case GW_VAR_DERIVATIVE: return I->xdot[v->index];
+    default: return 0.0;
+    }
+}
+
+GW_API void gw_value_set(gw_instance *I, const gw_variable *v, double value) {
+    switch (v->kind) {
+    case GW_VAR_PARAM:
+        I->p[v->index] = value;
+        if (!I->in_setup) { /* tunable parameter during the simulation */
+            gw_point_changed(I);
+            I->fcur_valid = 0;
+            gw_eval_nom(I, I->nominal);
+        }
+        break;
+    case GW_VAR_START: I->s[v->index] = value; break;
+    case GW_VAR_INPUT:
+        I->u[v->index] = value;
+        gw_point_changed(I);
+        I->fcur_valid = 0;
+        break;
+    case GW_VAR_SETTING:
+        switch (v->index) {
+        case GW_SET_SOLVER: I->solver = (int)value; break;
+        case GW_SET_REL_TOL: I->rel_tol = value; break;
+        case GW_SET_ABS_TOL: I->abs_tol = value; break;
+        case GW_SET_MAX_STEP: I->max_step = value; break;
+        default: break;
+        }
+        break;
+    default: break;
+    }
+}
+
+#endif /* GW_UNITY_BUILD */

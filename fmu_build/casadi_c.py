@@ -1,0 +1,118 @@
+"""CasADi's generated C made part of the FMU's single translation unit (c_src/gw_fmu.c).
+
+casadi.CodeGenerator writes, per function, the evaluation entry point plus an API of a dozen
+helpers (checkout, release, incref, n_in, name_in, sparsity_out, work_bytes, ...) and a few
+file-level helpers (casadi_sq, ..._casadi_version), all with external linkage whatever the
+options (CasADi 3.6-3.8: with_export only adds CASADI_SYMBOL_EXPORT to the API, not to
+casadi_sq & co.).  Compiled as it comes, every FMU would export ~120 symbols with the same
+names (issue 8, section 9), and the body functions ignore some of the standard arguments
+(32 -Wunused-parameter warnings).
+
+`make_internal` rewrites the file so that it can only be part of the unity build:
+  * every function the runtime calls (the `keep` names: <name> and <name>_work per slot) and
+    every casadi_* helper becomes `static`; the rest of the API, unused by the runtime, is
+    dropped, together with the sparsity patterns only it referred to;
+  * each body function (casadi_f<N>) marks the standard arguments it ignores as used
+    ((void)iw; ...), so the file is clean under -Wall -Wextra -Wpedantic;
+  * the whole file is guarded by GW_UNITY_BUILD, so that compiled on its own it is empty.
+Anything it does not recognise (a function definition of another shape, a global left over)
+raises CodegenFormatError naming the line: a new CasADi version fails the build loudly rather
+than shipping a global symbol.  The result is checked by tests/test_fmu_sources.py (strict
+gcc and clang builds, exported symbols, two FMUs in one process).
+"""
+from __future__ import annotations
+
+import re
+
+__all__ = ["CodegenFormatError", "make_internal", "UNITY_GUARD_OPEN", "UNITY_GUARD_CLOSE"]
+
+UNITY_GUARD_OPEN = ("#ifndef GW_UNITY_BUILD\n"
+                    "typedef int gw_unity_build_part; /* compiled on its own this file is empty: "
+                    "see gw_fmu.c */\n#else\n")
+UNITY_GUARD_CLOSE = "#endif /* GW_UNITY_BUILD */\n"
+
+# a function definition head at column 0: return type, name, parameters, opening brace
+_HEAD = re.compile(r"^(?P<static>static\s+)?(?P<type>[A-Za-z_][\w\s\*]*?[\s\*])(?P<name>[A-Za-z_]\w*)"
+                   r"\((?P<params>[^;{}]*)\)\s*\{")
+_SPARSITY = re.compile(r"^static const casadi_int (casadi_s\d+)\[\d+\] = \{[^;]*\};$")
+_BODY = re.compile(r"casadi_f\d+")
+_STANDARD_ARGS = ("arg", "res", "iw", "w", "mem")
+
+
+class CodegenFormatError(RuntimeError):
+    """The CasADi output has a shape make_internal does not know."""
+
+
+def _functions(lines: list[str]) -> list[tuple[int, int, re.Match]]:
+    """(first line, last line, head match) of every top-level function definition."""
+    found = []
+    i = 0
+    while i < len(lines):
+        m = _HEAD.match(lines[i])
+        if m and not lines[i].startswith((" ", "\t", "#")):
+            depth = lines[i].count("{") - lines[i].count("}")
+            j = i
+            while depth > 0:
+                j += 1
+                if j >= len(lines):
+                    raise CodegenFormatError(f"unterminated function {m['name']!r}")
+                depth += lines[j].count("{") - lines[j].count("}")
+            found.append((i, j, m))
+            i = j + 1
+        else:
+            i += 1
+    return found
+
+
+def make_internal(text: str, keep: set[str]) -> str:
+    """The generated C with internal linkage only, warning-clean, guarded for the unity build.
+
+    text: the .c file casadi.CodeGenerator wrote (with_header=False, with_export=False).
+    keep: names of the non-static functions the runtime references (gw_model.h slots).
+    Raises CodegenFormatError if a kept name is missing or an unknown global remains.
+    """
+    lines = text.split("\n")
+    drop: set[int] = set()
+    seen: set[str] = set()
+    for first, last, m in _functions(lines):
+        name = m["name"]
+        if m["static"]:
+            if _BODY.fullmatch(name):
+                body = "\n".join(lines[first + 1:last + 1])
+                unused = [a for a in _STANDARD_ARGS
+                          if re.search(rf"\b{a}\b", m["params"]) and not re.search(rf"\b{a}\b", body)]
+                if unused:
+                    lines[first] += "\n  " + " ".join(f"(void){a};" for a in unused)
+            continue
+        if name in keep or name.startswith("casadi_"):
+            lines[first] = "static " + lines[first]
+            seen.add(name)
+        else:  # API the runtime never calls
+            drop.update(range(first, last + 1))
+            if last + 1 < len(lines) and lines[last + 1] == "":
+                drop.add(last + 1)
+    missing = keep - seen
+    if missing:
+        raise CodegenFormatError(f"generated C lacks the functions {sorted(missing)}")
+    kept = [line for k, line in enumerate(lines) if k not in drop]
+    # sparsity patterns referred to only by the dropped API
+    code = "\n".join(kept)
+    result = []
+    for line in kept:
+        sp = _SPARSITY.match(line)
+        if sp and len(re.findall(rf"\b{sp.group(1)}\b", code)) <= 2:  # the #define and itself
+            continue
+        result.append(line)
+    _check_no_globals(result)
+    body = "\n".join(result).rstrip("\n") + "\n"
+    return UNITY_GUARD_OPEN + "\n" + body + "\n" + UNITY_GUARD_CLOSE
+
+
+def _check_no_globals(lines: list[str]) -> None:
+    """Every top-level definition left must be static (or a preprocessor line, comment...)."""
+    for first, _, m in _functions(lines):
+        if not m["static"] and not lines[first].startswith("static "):
+            raise CodegenFormatError(f"non-static function left: {lines[first]!r}")
+    for line in lines:
+        if re.match(r"^(const\s+)?(casadi_int|casadi_real|double|int|long)\b[^(]*=", line):
+            raise CodegenFormatError(f"non-static object left: {line!r}")

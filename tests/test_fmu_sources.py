@@ -1,0 +1,210 @@
+"""A built FMU's sources/ as an importer builds them (issue 8, sections 4 and 9).
+
+  test_every_source_file_is_warning_clean   each .c of sources/ alone and the unity file, with
+                                            -std=c99 -Wall -Wextra -Wpedantic -Werror, gcc and
+                                            clang (clang skipped only where it is not installed;
+                                            `make test` and CI install it)
+  test_plain_cc_build_exports_only_fmi2     `cc -shared -fPIC` with no visibility flag, of the
+                                            listed source and of every .c file: nm -D lists
+                                            exactly the fmi2 functions; nothing writable
+  test_two_fmus_with_rtld_global            paper_earth and euler_disk built that way, loaded with
+                                            RTLD_GLOBAL into one process: both instantiate and
+                                            reproduce their own FMU's results
+  test_fmpy_build_platform_binary_strict    fmpy's CMake build (only the listed <SourceFiles>)
+                                            with all warnings as errors, then simulated
+  test_make_internal_*                      fmu_build.casadi_c on CasADi-shaped input
+"""
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description, simulate_fmu
+
+from c_programs import FMI_HEADERS, writable_symbols
+from conftest import SCENES
+from fmu_build import build_fmu, load_scene
+from fmu_build.casadi_c import CodegenFormatError, make_internal
+
+STRICT_C99 = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror"]
+STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
+
+
+def fmi2_function_names() -> set[str]:
+    import re
+    names = set(re.findall(r"FMI2_Export\s+fmi2\w+TYPE\s+(fmi2\w+)\s*;",
+                           (FMI_HEADERS / "fmi2Functions.h").read_text()))
+    assert len(names) >= 40
+    return names
+
+
+@pytest.fixture(scope="module")
+def disk_fmu(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("disk_sources")
+    return build_fmu(load_scene(SCENES / "euler_disk.toml"), root / "euler_disk.fmu").fmu
+
+
+def _unzip(fmu: Path, where: Path) -> Path:
+    extract(str(fmu), str(where))
+    return where
+
+
+def _plain_cc(sources: list[Path], include: Path, out: Path) -> Path:
+    cmd = ["cc", "-shared", "-fPIC", "-O1", f"-I{include}", *map(str, sources), "-o", str(out), "-lm"]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, f"{' '.join(cmd)}\n{r.stderr}"
+    return out
+
+
+def _exports(lib: Path) -> set[str]:
+    nm = subprocess.run(["nm", "-D", "--defined-only", str(lib)], capture_output=True, text=True, check=True)
+    return {line.split()[-1] for line in nm.stdout.splitlines() if line.strip()}
+
+
+@pytest.mark.parametrize("cc", ["gcc", "clang"])
+def test_every_source_file_is_warning_clean(cc, earth_fmu, tmp_path):
+    if shutil.which(cc) is None:
+        pytest.skip(f"{cc} is not installed (make test installs it: Debian package {cc})")
+    src = _unzip(earth_fmu, tmp_path / "fmu") / "sources"
+    files = sorted(src.glob("*.c"))
+    assert len(files) >= 20 and (src / "gw_funcs.c") in files and (src / "gw_fmu.c") in files
+    for path in files:
+        r = subprocess.run([cc, *STRICT_C99, "-c", f"-I{src}", str(path), "-o", str(tmp_path / "x.o")],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, f"{cc} {path.name}:\n{r.stderr}"
+    # the library itself, optimised as importers do (more warnings appear with optimisation)
+    r = subprocess.run([cc, *STRICT_C99, "-O2", "-shared", "-fPIC", f"-I{src}", str(src / "gw_fmu.c"),
+                        "-o", str(tmp_path / "lib.so"), "-lm"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+
+
+@pytest.mark.parametrize("which", ["listed", "every_c_file"])
+def test_plain_cc_build_exports_only_fmi2(which, earth_fmu, tmp_path):
+    root = _unzip(earth_fmu, tmp_path / "fmu")
+    src = root / "sources"
+    listed = read_model_description(str(root)).buildConfigurations[0].sourceFileSets[0].sourceFiles
+    assert listed == ["gw_fmu.c"]
+    files = [src / n for n in listed] if which == "listed" else sorted(src.glob("*.c"))
+    lib = _plain_cc(files, src, tmp_path / "paper_earth.so")
+    assert _exports(lib) == fmi2_function_names()
+    obj = tmp_path / "gw_fmu.o"
+    subprocess.run(["cc", "-c", "-O2", f"-I{src}", str(src / "gw_fmu.c"), "-o", str(obj)], check=True)
+    assert writable_symbols(obj) == []
+
+
+CHILD = textwrap.dedent("""
+    import ctypes, json, sys
+    from fmpy import simulate_fmu
+    dirs, libs = sys.argv[1:3], sys.argv[3:5]
+    for lib in libs:  # as an importer that loads every FMU with RTLD_GLOBAL
+        ctypes.CDLL(lib, mode=ctypes.RTLD_GLOBAL)
+    out = []
+    for d in dirs:
+        r = simulate_fmu(d, stop_time=0.5, output_interval=0.05, validate=False)
+        out.append([float(r[n][-1]) for n in r.dtype.names])
+    print(json.dumps(out))
+""")
+
+
+def test_two_fmus_with_rtld_global(earth_fmu, disk_fmu, tmp_path):
+    dirs, libs, expected = [], [], []
+    for fmu in (earth_fmu, disk_fmu):
+        r = simulate_fmu(str(fmu), stop_time=0.5, output_interval=0.05)  # the FMU as built
+        expected.append([float(r[n][-1]) for n in r.dtype.names])
+        root = _unzip(fmu, tmp_path / fmu.stem)
+        ident = read_model_description(str(root)).coSimulation.modelIdentifier
+        lib = root / "binaries" / "linux64" / f"{ident}.so"
+        _plain_cc([root / "sources" / "gw_fmu.c"], root / "sources", lib)  # replaces the binary
+        dirs.append(str(root))
+        libs.append(str(lib))
+    assert expected[0] != expected[1]
+    p = subprocess.run([sys.executable, "-c", CHILD, *dirs, *libs], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    got = json.loads(p.stdout.strip().splitlines()[-1])
+    for g, e in zip(got, expected):
+        np.testing.assert_allclose(g, e, rtol=1e-9, atol=1e-12)
+
+
+def test_fmpy_build_platform_binary_strict(earth_fmu, tmp_path):
+    if shutil.which("cmake") is None:
+        pytest.skip("cmake is not installed (make test installs it: Debian package cmake)")
+    from fmpy.build import build_platform_binary
+    root = _unzip(earth_fmu, tmp_path / "fmu")
+    lib = root / "binaries" / "linux64" / "paper_earth.so"
+    lib.unlink()
+    (tmp_path / "build").mkdir()
+    build_platform_binary(root, build_dir=tmp_path / "build", all_warnings=True,
+                          cmake_options={"CMAKE_COMPILE_WARNING_AS_ERROR:BOOL": "ON"})
+    assert lib.exists() and _exports(lib) == fmi2_function_names()
+    got = simulate_fmu(str(root), stop_time=1.0, output_interval=0.1)
+    ref = simulate_fmu(str(earth_fmu), stop_time=1.0, output_interval=0.1)
+    for name in STATES:
+        np.testing.assert_allclose(got[name], ref[name], rtol=1e-9, atol=1e-12)
+
+
+# ---- fmu_build.casadi_c -------------------------------------------------------------------------
+
+GENERATED = """\
+#define casadi_f0 CASADI_PREFIX(f0)
+#define casadi_s0 CASADI_PREFIX(s0)
+#define casadi_s1 CASADI_PREFIX(s1)
+#define casadi_sq CASADI_PREFIX(sq)
+
+casadi_real casadi_sq(casadi_real x) { return x*x;}
+
+void m_casadi_version(int* major, int* minor, int* patch) {
+  *major = 3;
+}
+
+static const casadi_int casadi_s0[3] = {1, 1, 1};
+static const casadi_int casadi_s1[3] = {2, 1, 1};
+
+static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real a0;
+  a0=arg[0]? arg[0][0] : 0;
+  if (res[0]!=0) res[0][0]=casadi_sq(a0);
+  return 0;
+}
+
+int gw_ode(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f0(arg, res, iw, w, mem);
+}
+
+void gw_ode_release(int mem) {
+}
+
+const casadi_int* gw_ode_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    default: return 0;
+  }
+}
+
+int gw_ode_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1;
+  return 0;
+}
+"""
+
+
+def test_make_internal_keeps_what_the_runtime_calls_static():
+    out = make_internal(GENERATED, {"gw_ode", "gw_ode_work"})
+    assert out.startswith("#ifndef GW_UNITY_BUILD") and out.rstrip().endswith("#endif /* GW_UNITY_BUILD */")
+    assert "static int gw_ode(" in out and "static int gw_ode_work(" in out
+    assert "static casadi_real casadi_sq(" in out
+    assert "  (void)iw; (void)w; (void)mem;" in out  # the body ignores them
+    for gone in ("gw_ode_release", "gw_ode_sparsity_in", "m_casadi_version", "casadi_s0[3]", "casadi_s1[3]"):
+        assert gone not in out, gone
+
+
+def test_make_internal_refuses_what_it_does_not_know():
+    with pytest.raises(CodegenFormatError, match="lacks the functions"):
+        make_internal(GENERATED, {"gw_ode", "gw_ode_work", "gw_out"})
+    with pytest.raises(CodegenFormatError, match="non-static object"):
+        make_internal(GENERATED + "\ncasadi_int gw_counter = 0;\n", {"gw_ode", "gw_ode_work"})

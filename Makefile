@@ -1,7 +1,8 @@
 # Two commands do all set-up on a fresh machine (a C compiler, python3 >= 3.11 assumed):
 #   make demo   builds the paper FMUs, runs earth/Mars/moon, writes CSV, a figure and the earth
 #               run's animation (GIF and interactive HTML) to results/; the Gyrover closed
-#               loop (earth, moon) to results/system/
+#               loop (earth, moon: turn and figure eight) with its plots and animations to
+#               results/system/
 #   make test   installs what the tests need (Debian's chromium too, as root) and runs them all
 #   make bench  the work-precision benchmark (results/bench/*.png, work_precision.md)
 PYTHON ?= python3
@@ -15,7 +16,7 @@ SCENES := paper_earth paper_mars paper_moon
 # missing and we are root with apt-get (CI); otherwise named, and the tests needing them say so.
 C_TOOLS := clang cmake valgrind
 
-.PHONY: demo test bench venv browser clean c-tools
+.PHONY: demo test bench venv browser tbb clean c-tools
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -30,6 +31,10 @@ venv: $(STAMP)
 demo: $(STAMP)
 	$(PY) examples/paper_demo.py --out results
 	$(PY) examples/gyrover_control.py --out results/system
+	$(PY) -m fmu_build animate results/system/closed_loop_earth_wheel.csv --fmu results/system/earth/gyrover_earth.fmu \
+	    -o results/system/closed_loop_earth.gif --fps 10 --speed 4 --size 480x360 --trail 30
+	$(PY) -m fmu_build animate results/system/closed_loop_moon_wheel.csv --fmu results/system/moon/gyrover_moon.fmu \
+	    -o results/system/closed_loop_moon.gif --fps 10 --speed 8 --size 480x360 --trail 60
 	$(PY) -m fmu_build animate results/paper_earth.csv --fmu results/fmus/paper_earth.fmu \
 	    -o results/paper_earth.gif --fps 12 --speed 2 --size 480x360 --trail 5
 	$(PY) -m fmu_build animate results/paper_earth.csv --fmu results/fmus/paper_earth.fmu \
@@ -53,7 +58,17 @@ c-tools:
 	    else echo "make test: missing$$missing (Debian: apt-get install$$missing)"; fi; \
 	fi
 
-test: $(STAMP) browser c-tools
+# tests/test_system_masters.py runs ecos (ecospy), which links Debian's libtbb12
+tbb:
+	@ldconfig -p 2>/dev/null | grep -q libtbb.so.12 || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing Debian's libtbb12 (for ecospy)"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libtbb12 >/dev/null; \
+	  else \
+	    echo "libtbb12 is missing and apt-get is not usable here: install Debian's libtbb12 for ecospy"; \
+	  fi; }
+
+test: $(STAMP) browser tbb c-tools
 	$(PY) -m pytest -q
 
 bench: $(STAMP)

@@ -47,7 +47,7 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
-from scipy.linalg import orth, solve_continuous_are
+from scipy.linalg import expm, orth, solve_continuous_are
 
 from controller.operating_point import MEASUREMENTS, measurement_exprs, steady_turn
 from controller.operating_point import plant_model as _plant_model
@@ -266,14 +266,49 @@ def yaw_momentum(d: Design, deviation: dict[str, float]) -> float:
 
 
 def closed_loop_matrix(d: Design, plant: LinearModel | None = None, gain_scale: float = 1.0) -> np.ndarray:
-    """The linear closed loop [x; x_hat] of a plant model (default: the design's) with the compensator.
+    """The linear closed loop [x; x_hat] of the compensator with a plant model (default: the design's).
 
-    x' = A_p x + B_p u,  x_hat' = A x_hat + B u + L (C_p x - C x_hat),  u = -K_eff x_hat
+    x' = A_p x + B_p u,  x_hat' = A_p x_hat + B_p u + L (C_p x - C_p x_hat),  u = -K_eff x_hat
     (references zero, no saturation, continuous time: the loop the co-simulation approaches as
-    its step -> 0). K_eff: Design.feedback_gain.
+    its step -> 0). The observer runs the wheel's own equations (controller/compensator.py), so
+    its linear model is the plant's wherever the plant is; K_eff: Design.feedback_gain.
     """
     m = d.matrices()
-    A, B, C, L = m["A"], m["B"], m["C"], m["L"]
-    K = d.feedback_gain(gain_scale)
-    Ap, Bp, Cp = (A, B, C) if plant is None else (plant.A, plant.B, plant.C)
-    return np.block([[Ap, -Bp @ K], [L @ Cp, A - B @ K - L @ C]])
+    A, B, C = (m["A"], m["B"], m["C"]) if plant is None else (plant.A, plant.B, plant.C)
+    K, L = d.feedback_gain(gain_scale), m["L"]
+    return np.block([[A, -B @ K], [L @ C, A - B @ K - L @ C]])
+
+
+def sampled_closed_loop(d: Design, step: float, plant: LinearModel | None = None, gain_scale: float = 1.0) -> np.ndarray:
+    """Phi: [x; x_hat](t + h) = Phi [x; x_hat](t) for the loop co-simulated with step h (Jacobi).
+
+    Each FMU integrates exactly over [t, t + h] with its inputs held: the plant sees the command
+    u(t) = -K_eff x_hat(t); the controller sees y(t) = C x(t), and its own command follows its
+    state continuously. So Phi = [[e^(A h), -G_B(h) K_eff], [G_L(h), e^(A_c h)]] with
+    A_c = A - B K_eff - L C, G_B(h) = int_0^h e^(A s) ds B, G_L(h) = int_0^h e^(A_c s) ds L C
+    (A, B, C: the plant model's, as in closed_loop_matrix). Stable iff its spectral radius
+    (without the conserved direction's 1) is < 1: the linear prediction of the longest step.
+    """
+    m = d.matrices()
+    A, B, C = (m["A"], m["B"], m["C"]) if plant is None else (plant.A, plant.B, plant.C)
+    K, L = d.feedback_gain(gain_scale), m["L"]
+    n = len(A)
+
+    def exp_and_integral(M: np.ndarray, N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(e^(M h), int_0^h e^(M s) ds N) from one matrix exponential (Van Loan)."""
+        k = N.shape[1]
+        big = np.zeros((n + k, n + k))
+        big[:n, :n], big[:n, n:] = M, N
+        E = expm(big * step)
+        return E[:n, :n], E[:n, n:]
+
+    Pp, Gp = exp_and_integral(A, B)
+    Pc, Gc = exp_and_integral(A - B @ K - L @ C, L @ C)
+    return np.block([[Pp, -Gp @ K], [Gc, Pc]])
+
+
+def sampled_spectral_radius(d: Design, step: float, plant: LinearModel | None = None, gain_scale: float = 1.0) -> float:
+    """Spectral radius of sampled_closed_loop without the conserved direction (its eigenvalue 1,
+    the one nearest to 1 is dropped): < 1 iff the co-simulated linear loop is stable at `step`."""
+    z = np.linalg.eigvals(sampled_closed_loop(d, step, plant, gain_scale))
+    return float(np.abs(np.delete(z, np.argmin(np.abs(z - 1.0)))).max())

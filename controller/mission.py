@@ -99,3 +99,16 @@ def standard(speed: float = 1.5, radius: float = 3.0, settle: float = 4.0, strai
 def straight(speed: float = 1.5, duration: float = 60.0) -> Mission:
     """Straight rolling at constant heading and speed."""
     return Mission("straight", [(0.0, 0.0, speed), (duration, 0.0, speed)])
+
+
+# The course per world (docs/system.md): circles as tight as the world allows with the tilt
+# inside its stop. A turn of rate r needs the lean of r (M v h + H) / (M g h) roughly (h the
+# height of the centre of mass, H the spin momenta), six times more on the moon than on earth.
+COURSES = {"earth": {"radius": 3.0, "ramp": 1.0}, "moon": {"radius": 10.0, "ramp": 3.0}}
+
+
+def course(world: str, speed: float = 1.5) -> Mission:
+    """The standard mission on the world's course (COURSES)."""
+    if world not in COURSES:
+        raise ValueError(f"no course for {world!r}; worlds: {', '.join(COURSES)}")
+    return standard(speed, **COURSES[world])

@@ -304,21 +304,28 @@ def test_actuator_work_balances_energy(build):
 
 
 def test_tilt_torque_sign(build):
-    """tilt_torque is the torque the tilt motor applies to the flywheel about +l_p, positive in the
-    sense of increasing tilt. Upright, at rest, flywheel not spinning, tilt_cmd = 0.2 rad: the servo
-    starts with tilt_ddot = tilt_omega^2 0.2 = 80 rad/s^2 about l_p = -k; the reaction turns the
-    wheel the other way about the vertical (angular momentum about k is conserved), so the motor
-    supplies I_f I_w / (I_f + I_w) tilt_ddot with I_f = I_fly_diam, I_w = k_diam M R^2."""
+    """tilt_torque is the torque the tilt motor applies to the flywheel about +m_p (the tilt axis),
+    positive in the sense of increasing tilt. Upright, at rest, flywheel not spinning, tilt_cmd =
+    0.2 rad: the servo starts with tilt_ddot = tilt_omega^2 0.2 = 80 rad/s^2 about m_p = m, the
+    horizontal roll axis; the reaction rolls the wheel the other way about the contact line (no
+    moment of gravity or of the ground about it, upright), so the motor supplies
+    I_f I_roll / (I_f + I_roll) tilt_ddot with I_f = I_fly_diam and the roll inertia about the
+    contact line I_roll = k_diam M R^2 + M R^2 + m_fly (R - L_pend)^2, and the lean accelerates
+    at beta_ddot = -I_f tilt_ddot / (I_f + I_roll)."""
     fmu = build(GYROVER, "gyrover")
     s = Slave(fmu)
     try:
-        s.init(flywheel_rate=0.0, beta=math.pi / 2, gamma_dot=0.0, tilt_cmd=0.2)
+        s.init(flywheel_rate=0.0, beta=math.pi / 2, gamma_dot=0.0, tilt_cmd=0.2, rel_tol=1e-12, abs_tol=1e-14)
         tau = s.get("tilt_torque")
+        h = 1e-4
+        s.slave.doStep(0.0, h)
+        lean_acc = 2 * (s.get("beta") - math.pi / 2) / h**2
     finally:
         s.free()
-    I_f, I_w = 2.5e-4, KD * M * R**2
-    assert tau == pytest.approx(I_f * I_w / (I_f + I_w) * 20.0**2 * 0.2, rel=1e-9)
+    I_f, I_roll = 2.5e-4, KD * M * R**2 + M * R**2 + 0.4 * (R - 0.03) ** 2
+    assert tau == pytest.approx(I_f * I_roll / (I_f + I_roll) * 20.0**2 * 0.2, rel=1e-9)
     assert tau > 0
+    assert lean_acc == pytest.approx(-I_f * 80.0 / (I_f + I_roll), rel=2e-3)
 
 
 def _max_swing(fmu, torque, ramp: float, seconds: float) -> float:

@@ -10,7 +10,7 @@ import pytest
 from cosim.master import run
 from fmu_build.sweep import SweepSpecError, sweep
 
-DISTURBED = -2.3983435979786334  # alpha_dot of the mission's 5 deg push (controller.design.zero_yaw_momentum_rate)
+DISTURBED = -2.3983435979786334  # alpha_dot [rad/s] of a disturbed start (any start does: sweep and master must agree)
 
 
 def test_closed_loop_sweep_equals_the_master(earth_loop):

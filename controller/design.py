@@ -1,7 +1,8 @@
-"""Observer-based LQR for the Gyrover about straight upright rolling (an LQG compensator).
+"""Observer-based LQR for the Gyrover about one steady turn (an LQG compensator; the gain schedule
+of controller/schedule.py designs one per grid point; rate 0, tilt 0 is straight upright rolling).
 
 The plant model is the wheel FMU's own: model/linearise.py linearises the ModelSpec a scene
-builds, about upright rolling at the design speed, with the measurements the controller gets:
+builds, at the steady turn (controller/operating_point.py), with the measurements the controller gets:
 
     lean = beta - pi/2, lean_rate = beta_dot, heading = alpha, heading_rate = alpha_dot,
     speed = vx cos(alpha) + vy sin(alpha), tilt
@@ -33,6 +34,8 @@ and keeps the states these see (alpha, beta, theta_p, the rates, tilt, tilt_rate
   DRIVE_STEP_LIMIT = 0.7246 m_fly g L_pend; 0.5 leaves room for a pendulum already swinging).
 - Gains per world: design() is called with the scene's own g (earth, moon); the weights are the
   same, the gains and so the closed-loop poles differ.
+- Communication step: sampled_closed_loop() gives the loop as co-simulated with a fixed step (a
+  linear map per step), whose spectral radius predicts the longest step that works.
 
 Separation principle: the closed-loop eigenvalues are eig(A - B K) on the controllable subspace
 with eig(A - L C), plus the conserved direction at 0; closed_loop_matrix() gives the loop
@@ -61,7 +64,6 @@ MAX_DEVIATION = {"alpha": 0.05, "beta": 0.03, "theta_p": 0.5, "alpha_dot": 0.2, 
                  "gamma_dot": 0.1 / 0.17, "theta_p_dot": 5.0, "tilt": 0.3, "tilt_rate": 1.0}
 # Kalman filter: sensor noise (standard deviation) of each measurement, in its unit
 SENSOR_NOISE = {"lean": 1e-3, "lean_rate": 1e-2, "heading": 1e-3, "heading_rate": 1e-1, "speed": 1e-2, "tilt": 1e-2}
-PROCESS_NOISE = {}  # extra process noise (rad/s2 etc.) on states by name
 YAW_MOMENTUM_NOISE = 0.03  # N m s / sqrt(s): process noise on c (its nonlinear drift)
 TILT_MAX = math.radians(45.0)
 TILT_WEIGHT = 0.05  # rad: Bryson's largest tilt_cmd deviation; keeps the servo's loop below ~35 rad/s
@@ -243,7 +245,7 @@ def design(spec: ModelSpec, speed: float = 1.5, values: dict[str, float] | None 
     # it the filter would trust its initial c for ever (the initial lean's c is 0.035 N m s)
     v = w / (w @ w)
     W = (B @ np.diag([(0.1 * tilt_max) ** 2, (0.1 * drive_max) ** 2]) @ B.T + 1e-6 * np.eye(len(A))
-         + yaw_momentum_noise**2 * np.outer(v, v) + np.diag([PROCESS_NOISE.get(n, 0.0) ** 2 for n in lm.x_names]))
+         + yaw_momentum_noise**2 * np.outer(v, v))
     noise = {**SENSOR_NOISE, **(sensor_noise or {})}
     V = np.diag([noise[n] ** 2 for n in lm.y_names])
     S = solve_continuous_are(A.T, C.T, W, V)
@@ -258,11 +260,6 @@ def design(spec: ModelSpec, speed: float = 1.5, values: dict[str, float] | None 
         eig_observer=_complex_list(np.linalg.eigvals(A - L @ C)))
     d.eig_regulator = _complex_list(np.linalg.eigvals(A - B @ d.feedback_gain()))
     return d
-
-
-def yaw_momentum(d: Design, deviation: dict[str, float]) -> float:
-    """c = w x [N m s] of a deviation from the operating point given by state name (others 0)."""
-    return float(sum(d.w[d.x_names.index(k)] * v for k, v in deviation.items()))
 
 
 def closed_loop_matrix(d: Design, plant: LinearModel | None = None, gain_scale: float = 1.0) -> np.ndarray:

@@ -43,6 +43,7 @@ STATE_UNITS = {"alpha": "rad", "beta": "rad", "theta_p": "rad", "tilt": "rad", "
                "beta_dot": "rad/s", "gamma_dot": "rad/s", "theta_p_dot": "rad/s", "tilt_rate": "rad/s"}
 HEADING_ERROR_MAX = 0.3  # rad
 LOST_MARGIN = math.radians(10.0)  # rad from flat
+LOST_RATES = {"alpha_dot": 20.0, "theta_p_dot": 60.0, "tilt_rate": 60.0}  # rad/s
 EXPERIMENT = Experiment(stop_time=60.0, output_interval=0.01, solver="dopri5", rel_tol=1e-8,
                         abs_tol=1e-10, max_step=0.01)
 
@@ -138,8 +139,15 @@ def controller_system(schedule: Schedule, mission: Mission, wheel: ModelSpec,
     sys.output("yaw_momentum", c, "N.m.s", "yaw momentum c beyond the scheduled operating point's")
     # the estimated lean within LOST_MARGIN of flat: the wheel is down (or the estimate is lost) and
     # the observer's model nears its singular flat pose: stop the run cleanly, as the wheel's fall does
-    sys.event("lost", ca.sin(xhat[x_names.index("beta")]) - math.sin(LOST_MARGIN), "terminate", "lost",
-              "true once the estimated lean is within 10 deg of flat (the controller has lost the wheel)")
+    # ... or a rate has run away (a diverging loop spins the pendulum or the tilt: the observer's
+    # equations would get stiff long before the lean is flat)
+    rates = [(x_names.index(n), limit) for n, limit in LOST_RATES.items()]
+    margin = ca.sin(xhat[x_names.index("beta")]) - math.sin(LOST_MARGIN)
+    for i, limit in rates:
+        margin = ca.fmin(margin, 1.0 - ca.fabs(xhat[i]) / limit)
+    sys.event("lost", margin, "terminate", "lost",
+              "true once the estimated lean is within 10 deg of flat or a rate beyond LOST_RATES "
+              "(the controller has lost the wheel)")
     sys.output("saturated", ca.if_else(ca.logic_or(ca.fabs(u_raw[0]) > tilt_max, ca.fabs(u_raw[1]) > drive_max), 1, 0),
                "1", "1 while a command is at its limit")
     return sys

@@ -110,7 +110,7 @@ def test_closed_loop_follows_the_linear_closed_loop(earth_loop):
 def test_the_sampled_linear_loop_predicts_the_step_that_fails(earth_loop):
     """The co-simulated loop at step h is linear map Phi(h) per step (controller/design.py,
     sampled_closed_loop): spectral radius < 1 at 20 ms, > 1 at 50 ms; the co-simulation agrees
-    (up for 10 s at 20 ms, fallen or lost within 10 s at 50 ms)."""
+    (up for 10 s at 20 ms, fallen or lost within 10 s at 50 ms: the `lost` event ends it)."""
     d = earth_loop.design
     assert sampled_spectral_radius(d, 0.02) < 1.0 < sampled_spectral_radius(d, 0.05)
     ok = run(earth_loop.system, 0.02, stop_time=10.0)

@@ -10,9 +10,12 @@ from __future__ import annotations
 import numpy as np
 
 
-def run(ssp: str, step: float, stop_time: float, variables: dict[str, list[str]]) -> np.ndarray:
+def run(ssp: str, step: float, stop_time: float, variables: dict[str, list[str]],
+        parameter_set: str | None = None) -> np.ndarray:
     """Simulate the .ssp with ecos at fixed step `step` [s] to stop_time and sample `variables`
-    ({component: [names]}). Raises RuntimeError if ecos refuses the file or a step."""
+    ({component: [names]}). ecos applies parameter bindings only of the set named at
+    initialisation: parameter_set (the files cosim.system.write_ssp writes name every set
+    cosim.system.PARAMETER_SET, "start"). Raises RuntimeError if ecos refuses the file or a step."""
     from ecospy import EcosSimulation
 
     names = [(c, v) for c, vs in variables.items() for v in vs]
@@ -20,7 +23,7 @@ def run(ssp: str, step: float, stop_time: float, variables: dict[str, list[str]]
     rows = []
     try:
         with EcosSimulation(step_size=step, ssp_path=str(ssp)) as sim:
-            if sim.init() is False:
+            if sim.init(parameter_set=parameter_set) is False:
                 raise RuntimeError("ecos could not initialise the system")
 
             def sample():

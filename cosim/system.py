@@ -131,6 +131,9 @@ def write_ssp(system: SystemDescription, path: str | Path) -> Path:
 
 
 BINDABLE = ("parameter", "input")
+# one name for every component's set: ecos applies the sets of the one name given at init,
+# libcosim a component's first set (and any by its name), gyrowheel's master all of them
+PARAMETER_SET = "start"
 
 
 def check_bindings(component: Component, where: str = "") -> None:
@@ -160,7 +163,7 @@ def _add_parameter_bindings(ssd_path: Path, system: SystemDescription) -> None:
 
     pyssp-standard 0.9 writes bindings only as external .ssv references; the values belong in
     the .ssd itself here, so they are added to the written tree in schema order. Only parameters
-    and inputs are bound (check_bindings).
+    and inputs are bound (check_bindings); every component's set is named PARAMETER_SET.
     """
     if not any(c.start_values for c in system.components):
         return
@@ -174,7 +177,7 @@ def _add_parameter_bindings(ssd_path: Path, system: SystemDescription) -> None:
             continue
         bindings = ET.Element(f"{{{SSD_NS}}}ParameterBindings")
         values = ET.SubElement(ET.SubElement(bindings, f"{{{SSD_NS}}}ParameterBinding"), f"{{{SSD_NS}}}ParameterValues")
-        pset = ET.SubElement(values, f"{{{SSV_NS}}}ParameterSet", {"version": "1.0", "name": f"{comp.name}_start"})
+        pset = ET.SubElement(values, f"{{{SSV_NS}}}ParameterSet", {"version": "1.0", "name": PARAMETER_SET})
         params = ET.SubElement(pset, f"{{{SSV_NS}}}Parameters")
         for name, value in comp.start_values.items():
             ET.SubElement(ET.SubElement(params, f"{{{SSV_NS}}}Parameter", {"name": name}), f"{{{SSV_NS}}}Real",

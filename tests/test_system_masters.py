@@ -12,7 +12,7 @@ import xmlschema
 
 from cosim import ecos_run, libcosim_run
 from cosim.master import run
-from cosim.system import SystemFileError, read_ssp, write_osp, write_ssp
+from cosim.system import PARAMETER_SET, SystemFileError, read_ssp, write_osp, write_ssp
 
 SCHEMAS = Path(__file__).resolve().parent / "schemas" / "ssp1"
 COMPARED = {"wheel": ["beta", "alpha", "x", "y", "tilt"], "controller": ["tilt_cmd", "drive_torque"]}
@@ -87,7 +87,7 @@ def test_ecos_reads_our_ssp_and_agrees(earth_loop, tmp_path):
     system.components[1].start_values = {"gain_scale": 1.2}
     bound = write_ssp(system, tmp_path / "bound.ssp")
     ours = run(read_ssp(bound, tmp_path / "bound"), 0.01, stop_time=5.0).data
-    by_ecos = ecos_run.run(str(bound), 0.01, 5.0, COMPARED)
+    by_ecos = ecos_run.run(str(bound), 0.01, 5.0, COMPARED, parameter_set=PARAMETER_SET)
     print("ecos", _agree(ours, by_ecos, 1e-8))
 
 

@@ -22,6 +22,8 @@
                                           euler is not (the claims of docs/c_api.md, shortened)
   test_cli_bad_input[...]                 one line `gyrowheel: error: ...`, exit 2
   test_reexport_replaces_previous         a previous export's files go, the user's stay
+  test_docs_worked_example                docs/c_api.md's worked example compiles strictly and
+                                          prints what the page shows
 """
 from __future__ import annotations
 
@@ -269,3 +271,16 @@ def test_reexport_replaces_previous(earth, tmp_path):
     assert not (out / "paper_earth.h").exists() and not (out / "paper_earth.c").exists()
     assert (out / "other_wheel.h").is_file() and (out / "notes.txt").read_text() == "mine"
     assert "other_wheel_create" in (out / "other_wheel.h").read_text()
+
+
+def test_docs_worked_example(earth, earth_gcc, tmp_path):
+    text = (ROOT / "docs" / "c_api.md").read_text()
+    section = text[text.index("## Worked example"):]
+    code = re.search(r"```c\n(.*?)```", section, re.S).group(1)
+    shown = re.search(r"```text\n(.*?)```", section, re.S).group(1)
+    (tmp_path / "coin.c").write_text(code)
+    diagnostics = cc("gcc", *STRICT, "-O2", f"-I{earth}", tmp_path / "coin.c", earth_gcc["obj"], "-lm",
+                     "-o", tmp_path / "coin").stderr
+    assert diagnostics == ""
+    r = subprocess.run([str(tmp_path / "coin")], capture_output=True, text=True)
+    assert r.returncode == 0 and r.stdout == shown, r.stdout + r.stderr

@@ -47,6 +47,7 @@ typedef struct {
                             reads, ~50 ns) */
     long done;           /* steps run (fewer if the run ended) */
     double energy_drift; /* max |E - E0| / |E0| (NaN without an energy output) */
+    double violation;    /* max |constraint_violation| (the multipliers formulation; else NaN) */
     double err_20, err_end; /* max |x - x_ref| over the states at 20 s and at the end */
     double rhs_per_step;
     double max_late_ns;  /* paced: worst wake-up latency */
@@ -130,6 +131,7 @@ static double state_error(const double *a, const double *b) {
 static int run_loop(const loop_config *c, const double *ref, long ref_seconds, loop_result *r) {
     const double period = 1.0 / c->rate;
     const int i_energy = @model@_index(GYROWHEEL_KIND_OUTPUT, "energy");
+    const int i_violation = @model@_index(GYROWHEEL_KIND_OUTPUT, "constraint_violation");
     const long per_second = (long)floor(c->rate + 0.5);
     double y[@MODEL@_NY + 1], x[@MODEL@_NX + 1], t0, e0 = 0.0, release = 0.0;
     gyrowheel_statistics stats;
@@ -142,6 +144,7 @@ static int run_loop(const loop_config *c, const double *ref, long ref_seconds, l
     r->cpu_ns = cpus;
     r->err_20 = r->err_end = NAN;
     r->energy_drift = NAN;
+    r->violation = i_violation >= 0 ? 0.0 : NAN;
     if (make(&w, c->solver, period, 0.0, 0.0)) return 1;
     t0 = @model@_time(w);
     @model@_get_outputs(w, y);
@@ -176,6 +179,8 @@ static int run_loop(const loop_config *c, const double *ref, long ref_seconds, l
         }
         if (i_energy >= 0 && fabs(y[i_energy] - e0) > r->energy_drift * fabs(e0))
             r->energy_drift = fabs(y[i_energy] - e0) / (e0 != 0.0 ? fabs(e0) : 1.0);
+        if (i_violation >= 0 && fabs(y[i_violation]) > r->violation)
+            r->violation = fabs(y[i_violation]);
         if (k % per_second == 0 && k / per_second <= ref_seconds) { /* a whole second */
             const long j = k / per_second;
             @model@_get_states(w, x);
@@ -250,16 +255,17 @@ static void report(const loop_config *c, loop_result *r) {
            "%.2e%s\n",
            solver_label(c->solver), c->rate, n, r->rhs_per_step, r->energy_drift, r->err_20,
            r->err_end, r->terminated ? " (the run ended at an event)" : "");
+    if (!isnan(r->violation)) printf("   constraint violation |A q_dot| up to %.2e m/s\n", r->violation);
     printf("   cost per step [us]  wall: mean %.3f p50 %.3f p99 %.3f p99.9 %.3f max %.3f\n"
            "                        cpu: mean %.3f p50 %.3f p99 %.3f p99.9 %.3f max %.3f\n",
            wall.mean, wall.p50, wall.p99, wall.p999, wall.max, cpu.mean, cpu.p50, cpu.p99,
            cpu.p999, cpu.max);
     printf("RESULT solver=%s rate=%.17g steps=%ld rhs_per_step=%.17g energy_drift=%.6g "
-           "err_20=%.6g err_end=%.6g terminated=%d wall_mean_us=%.6g wall_p50_us=%.6g "
+           "err_20=%.6g err_end=%.6g terminated=%d violation=%.6g wall_mean_us=%.6g wall_p50_us=%.6g "
            "wall_p99_us=%.6g wall_p999_us=%.6g wall_max_us=%.6g cpu_mean_us=%.6g cpu_p50_us=%.6g "
            "cpu_p99_us=%.6g cpu_p999_us=%.6g cpu_max_us=%.6g",
            solver_label(c->solver), c->rate, n, r->rhs_per_step, r->energy_drift, r->err_20,
-           r->err_end, r->terminated, wall.mean, wall.p50, wall.p99, wall.p999, wall.max,
+           r->err_end, r->terminated, r->violation, wall.mean, wall.p50, wall.p99, wall.p999, wall.max,
            cpu.mean, cpu.p50, cpu.p99, cpu.p999, cpu.max);
     if (c->paced) printf(" max_wake_late_us=%.6g misses=%ld", r->max_late_ns * 1e-3, r->misses);
     printf("\n");

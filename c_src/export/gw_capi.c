@@ -22,11 +22,10 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include "gw_capi.h"
 
 /* the API's solver codes are the core's */
-typedef char gwc_solver_codes_match[((int)GYROWHEEL_SOLVER_EULER == (int)GW_SOLVER_EULER &&
-                                     (int)GYROWHEEL_SOLVER_RK4 == (int)GW_SOLVER_RK4 &&
-                                     (int)GYROWHEEL_SOLVER_DOPRI5 == (int)GW_SOLVER_DOPRI5 &&
-                                     (int)GYROWHEEL_SOLVER_ROSENBROCK == (int)GW_SOLVER_ROSENBROCK &&
-                                     (int)GYROWHEEL_SOLVER_DOP853 == (int)GW_SOLVER_DOP853)
+#define GWC_SAME(a, b) ((int)GYROWHEEL_SOLVER_##a == (int)GW_SOLVER_##b)
+typedef char gwc_solver_codes_match[(GWC_SAME(EULER, EULER) && GWC_SAME(RK4, RK4) &&
+                                     GWC_SAME(DOPRI5, DOPRI5) && GWC_SAME(ROSENBROCK, ROSENBROCK) &&
+                                     GWC_SAME(DOP853, DOP853))
                                         ? 1
                                         : -1];
 
@@ -42,6 +41,10 @@ static gyrowheel_status gwc_fail(const struct GWC_T *w, gyrowheel_status code, c
     vsnprintf(mw->last_error, sizeof(mw->last_error), fmt, ap);
     va_end(ap);
     return code;
+}
+
+static gyrowheel_status gwc_null(const struct GWC_T *w, const char *fn, const char *what) {
+    return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: %s is NULL", fn, what);
 }
 
 static void gwc_begin(struct GWC_T *w) {
@@ -388,7 +391,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(set_input_by_name)(GWC_T *w, const char *n
                                                          double value) {
     int i;
     GWC_REQUIRE_READY(w, GWC_FN(set_input_by_name));
-    if (!name) return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: name is NULL", GWC_FN(set_input_by_name));
+    if (!name) return gwc_null(w, GWC_FN(set_input_by_name), "name");
     i = GWC(index)(GYROWHEEL_KIND_INPUT, name);
     if (i < 0) {
         char valid[400];
@@ -404,7 +407,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(set_inputs)(GWC_T *w, const double *inputs
     gyrowheel_status r;
     GWC_REQUIRE_READY(w, GWC_FN(set_inputs));
     if (GWC_TABLE.count[GYROWHEEL_KIND_INPUT] == 0) return GYROWHEEL_OK;
-    if (!inputs) return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: inputs is NULL", GWC_FN(set_inputs));
+    if (!inputs) return gwc_null(w, GWC_FN(set_inputs), "inputs");
     if ((r = gwc_check_values(w, GWC_FN(set_inputs), GYROWHEEL_KIND_INPUT, inputs, "input")) < 0)
         return r;
     for (i = 0; i < GWC_TABLE.count[GYROWHEEL_KIND_INPUT]; i++)
@@ -434,8 +437,9 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(advance)(GWC_T *w, double t) {
                         "%s: the run ended at t=%.17g (%s); reset or restore a saved state",
                         GWC_FN(advance), I->t, gwc_fired_terminating(I));
     if (t < I->t)
-        return gwc_fail(w, GYROWHEEL_ERR_TIME, "%s: cannot advance backwards, from t=%.17g to %.17g",
-                        GWC_FN(advance), I->t, t);
+        return gwc_fail(w, GYROWHEEL_ERR_TIME,
+                        "%s: cannot advance backwards, from t=%.17g to %.17g", GWC_FN(advance),
+                        I->t, t);
     if (t == I->t) return GYROWHEEL_OK;
     events = I->n_events;
     r = gw_advance(I, GWC_FN(advance), t);
@@ -452,7 +456,7 @@ GYROWHEEL_EXPORT int GWC(terminated)(const GWC_T *w) { return (w && w->I->termin
 
 GYROWHEEL_EXPORT gyrowheel_status GWC(get_states)(const GWC_T *w, double *states) {
     GWC_REQUIRE_READY(w, GWC_FN(get_states));
-    if (!states) return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: states is NULL", GWC_FN(get_states));
+    if (!states) return gwc_null(w, GWC_FN(get_states), "states");
     if (w->I->m->nx > 0) memcpy(states, w->I->x, (size_t)w->I->m->nx * sizeof(double));
     return GYROWHEEL_OK;
 }
@@ -469,7 +473,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(get_outputs)(GWC_T *w, double *outputs) {
     gyrowheel_status r;
     int i;
     GWC_REQUIRE_READY(w, GWC_FN(get_outputs));
-    if (!outputs) return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: outputs is NULL", GWC_FN(get_outputs));
+    if (!outputs) return gwc_null(w, GWC_FN(get_outputs), "outputs");
     if ((r = gwc_outputs_current(w, GWC_FN(get_outputs))) < 0) return r;
     for (i = 0; i < GWC_TABLE.count[GYROWHEEL_KIND_OUTPUT]; i++)
         outputs[i] = w->I->y[GWC_TABLE.output_y[i]];
@@ -498,8 +502,9 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(get)(GWC_T *w, gyrowheel_kind kind, int in
                                            double *value) {
     const int n = GWC(count)(kind);
     GWC_REQUIRE_READY(w, GWC_FN(get));
-    if (!value) return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: value is NULL", GWC_FN(get));
-    if (n < 0) return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: unknown kind %d", GWC_FN(get), (int)kind);
+    if (!value) return gwc_null(w, GWC_FN(get), "value");
+    if (n < 0)
+        return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: unknown kind %d", GWC_FN(get), (int)kind);
     if (index < 0 || index >= n)
         return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: index %d out of range 0..%d for kind %d",
                         GWC_FN(get), index, n - 1, (int)kind);
@@ -513,7 +518,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(get_by_name)(GWC_T *w, const char *name, d
     int k;
     GWC_REQUIRE_READY(w, GWC_FN(get_by_name));
     if (!name || !value)
-        return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: name or value is NULL", GWC_FN(get_by_name));
+        return gwc_null(w, GWC_FN(get_by_name), "name or value");
     for (k = 0; k < 5; k++) {
         int i = GWC(index)(order[k], name);
         if (i >= 0) return gwc_get(w, GWC_FN(get_by_name), order[k], i, value);
@@ -541,7 +546,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(get_statistics)(const GWC_T *w,
                                                       gyrowheel_statistics *statistics) {
     if (!w) return GYROWHEEL_ERR_ARGUMENT;
     if (!statistics)
-        return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: statistics is NULL", GWC_FN(get_statistics));
+        return gwc_null(w, GWC_FN(get_statistics), "statistics");
     statistics->rhs_evaluations = w->I->n_rhs;
     statistics->steps_accepted = w->I->n_accepted;
     statistics->steps_rejected = w->I->n_rejected;

@@ -14,7 +14,8 @@
 
 #include "gw_instance.h"
 
-/* GWC(create) -> paper_earth_create; GWC_T -> paper_earth; GWC_FN(create) -> "paper_earth_create" */
+/* GWC(create) -> paper_earth_create; GWC_T -> paper_earth;
+ * GWC_FN(create) -> "paper_earth_create" (for messages) */
 #define GWC_CAT_(a, b) a##_##b
 #define GWC_CAT(a, b) GWC_CAT_(a, b)
 #define GWC(fn) GWC_CAT(GW_CAPI_MODEL, fn)
@@ -52,6 +53,8 @@ struct GWC_T {
 /* Set last_error (printf-style) and return code; const instances too (the one field written). */
 static gyrowheel_status gwc_fail(const struct GWC_T *w, gyrowheel_status code, const char *fmt, ...)
     GW_PRINTF(3, 4);
+/* GYROWHEEL_ERR_ARGUMENT, "fn: what is NULL" */
+static gyrowheel_status gwc_null(const struct GWC_T *w, const char *fn, const char *what);
 /* Start of a call: forget the core messages of the previous one. */
 static void gwc_begin(struct GWC_T *w);
 /* last_error from the core's messages of this call (or `fallback` if it logged none). */

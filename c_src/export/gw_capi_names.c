@@ -69,7 +69,7 @@ GYROWHEEL_EXPORT const char *GWC(status_string)(gyrowheel_status status) {
     case GYROWHEEL_ERR_INVALID: return "value refused by the model or solver";
     case GYROWHEEL_ERR_TIME: return "time before the current time or not finite";
     case GYROWHEEL_ERR_TERMINATED: return "the run has ended (reset or restore a state)";
-    case GYROWHEEL_ERR_NOT_READY: return "instance not initialised (its last create or reset failed)";
+    case GYROWHEEL_ERR_NOT_READY: return "instance not initialised (its last create/reset failed)";
     case GYROWHEEL_ERR_SIMULATION: return "the simulation failed (instance back where it was)";
     case GYROWHEEL_ERR_STATE: return "saved state refused (corrupt, truncated or another model's)";
     case GYROWHEEL_ERR_BUFFER: return "buffer too small";

@@ -63,7 +63,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(save_state)(const GWC_T *w, void *buffer, 
     uint64_t sum;
     GWC_REQUIRE_READY(w, GWC_FN(save_state));
     need = GWC(state_size)(w);
-    if (!buffer) return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: buffer is NULL", GWC_FN(save_state));
+    if (!buffer) return gwc_null(w, GWC_FN(save_state), "buffer");
     if (size < need)
         return gwc_fail(w, GYROWHEEL_ERR_BUFFER, "%s: buffer of %lu bytes, a state needs %lu (%s)",
                         GWC_FN(save_state), (unsigned long)size, (unsigned long)need,
@@ -86,6 +86,8 @@ static int gwc_all_finite(const double *v, int n) {
     return 1;
 }
 
+static int gwc_positive(double v) { return v > 0.0 && isfinite(v); }
+
 /* the values of a state just applied: NULL if usable, else what is wrong */
 static const char *gwc_state_values_bad(const gw_instance *I) {
     const gw_model *m = I->m;
@@ -96,8 +98,7 @@ static const char *gwc_state_values_bad(const gw_instance *I) {
     if (!gwc_all_finite(I->u, m->nu)) return "an input is not finite";
     if (!gwc_all_finite(I->t_events, m->ne)) return "an event time is not finite";
     if (!gw_solver_available(I->solver)) return "unknown solver";
-    if (!(I->rel_tol > 0.0 && isfinite(I->rel_tol)) || !(I->abs_tol > 0.0 && isfinite(I->abs_tol)) ||
-        !(I->max_step > 0.0 && isfinite(I->max_step)))
+    if (!gwc_positive(I->rel_tol) || !gwc_positive(I->abs_tol) || !gwc_positive(I->max_step))
         return "a tolerance or max_step is not finite and > 0";
     if (!(I->h_adapt >= 0.0 && isfinite(I->h_adapt))) return "the step size is not finite";
     return NULL;
@@ -114,7 +115,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(restore_state)(GWC_T *w, const void *buffe
     if (!w) return GYROWHEEL_ERR_ARGUMENT;
     gwc_begin(w);
     I = w->I;
-    if (!buffer) return gwc_fail(w, GYROWHEEL_ERR_ARGUMENT, "%s: buffer is NULL", fn);
+    if (!buffer) return gwc_null(w, fn, "buffer");
     need = GWC(state_size)(w);
     ev_bytes = gwc_events_bytes(w);
     if (size < GWC_STATE_HEADER)

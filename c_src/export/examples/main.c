@@ -81,7 +81,8 @@ int main(int argc, char **argv) {
         if (is_stop || strcmp(argv[a], "--output-interval") == 0) {
             double v;
             if (a + 1 >= argc) return bad_argument(argv[a], "needs a value");
-            if (!parse_number(argv[a + 1], &v)) return bad_argument(argv[a], "needs a finite number");
+            if (!parse_number(argv[a + 1], &v))
+                return bad_argument(argv[a], "needs a finite number");
             if (is_stop) {
                 stop = v;
             } else {
@@ -100,7 +101,8 @@ int main(int argc, char **argv) {
             names[n] = name_text[n];
             n++;
         } else {
-            return bad_argument(argv[a], "expected --stop-time T, --output-interval DT or NAME=VALUE");
+            return bad_argument(argv[a],
+                                "expected --stop-time T, --output-interval DT or NAME=VALUE");
         }
     }
 

@@ -255,26 +255,30 @@ static void report(const loop_config *c, loop_result *r) {
            "%.2e%s\n",
            solver_label(c->solver), c->rate, n, r->rhs_per_step, r->energy_drift, r->err_20,
            r->err_end, r->terminated ? " (the run ended at an event)" : "");
-    if (!isnan(r->violation)) printf("   constraint violation |A q_dot| up to %.2e m/s\n", r->violation);
+    if (!isnan(r->violation))
+        printf("   constraint violation |A q_dot| up to %.2e m/s\n", r->violation);
     printf("   cost per step [us]  wall: mean %.3f p50 %.3f p99 %.3f p99.9 %.3f max %.3f\n"
            "                        cpu: mean %.3f p50 %.3f p99 %.3f p99.9 %.3f max %.3f\n",
            wall.mean, wall.p50, wall.p99, wall.p999, wall.max, cpu.mean, cpu.p50, cpu.p99,
            cpu.p999, cpu.max);
     printf("RESULT solver=%s rate=%.17g steps=%ld rhs_per_step=%.17g energy_drift=%.6g "
-           "err_20=%.6g err_end=%.6g terminated=%d violation=%.6g wall_mean_us=%.6g wall_p50_us=%.6g "
+           "err_20=%.6g err_end=%.6g terminated=%d violation=%.6g wall_mean_us=%.6g "
+           "wall_p50_us=%.6g "
            "wall_p99_us=%.6g wall_p999_us=%.6g wall_max_us=%.6g cpu_mean_us=%.6g cpu_p50_us=%.6g "
            "cpu_p99_us=%.6g cpu_p999_us=%.6g cpu_max_us=%.6g",
            solver_label(c->solver), c->rate, n, r->rhs_per_step, r->energy_drift, r->err_20,
-           r->err_end, r->terminated, r->violation, wall.mean, wall.p50, wall.p99, wall.p999, wall.max,
-           cpu.mean, cpu.p50, cpu.p99, cpu.p999, cpu.max);
+           r->err_end, r->terminated, r->violation, wall.mean, wall.p50, wall.p99, wall.p999,
+           wall.max, cpu.mean, cpu.p50, cpu.p99, cpu.p999, cpu.max);
     if (c->paced) printf(" max_wake_late_us=%.6g misses=%ld", r->max_late_ns * 1e-3, r->misses);
     printf("\n");
 }
 
 static int usage(const char *arg, const char *why) {
     fprintf(stderr, "%s: %s: %s\n", prog, arg, why);
-    fprintf(stderr, "usage: %s [--steps N] [--rate HZ] [--solver euler|rk4|dopri5|dop853|rosenbrock] "
-                    "[--compare] [--paced] [--mlock]\n", prog);
+    fprintf(stderr,
+            "usage: %s [--steps N] [--rate HZ] [--solver euler|rk4|dopri5|dop853|rosenbrock] "
+            "[--compare] [--paced] [--mlock]\n",
+            prog);
     return 2;
 }
 

@@ -264,7 +264,8 @@ def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: 
     rows = api_table(spec, table)
     (src / "capi_desc.c").write_text(capi_desc(rows, scene, model))
     values = {"model": model, "MODEL": model.upper(), "guid": guid,
-              "scene_file": scene_file or f"scene {model!r}", "description": _comment(spec.description),
+              "scene_file": scene_file or f"scene {model!r}",
+              "description": _comment(spec.description).rstrip(".") + ".",
               "macros": header_macros(model, rows, scene)}
     outputs = {f"{model}.h": "model.h.in", f"{model}.c": "model.c.in", "CMakeLists.txt": "CMakeLists.txt.in",
                "examples/main.c": "examples/main.c", "examples/realtime.c": "examples/realtime.c",

@@ -6,7 +6,8 @@
  *   (NaN / infinite / refused values, unknown names, advancing backwards, NULL pointers, indices
  *   out of range) with the right code and message; the instance after a failed create;
  *   save/restore bit for bit, and every corrupt state buffer refused (each single bit flip,
- *   truncation, a NaN with a valid checksum) with the instance unchanged; the fall as a
+ *   truncation, a NaN or another model's guid with a valid checksum) with the instance
+ *   unchanged; the fall as a
  *   terminating event with its time; the logger; a user allocator with a context pointer (no
  *   allocation while advancing, out of memory at every allocation); one RK4 step per 1 ms
  *   advance at t = 1000 s; two threads with one instance each, bit-identical to one thread.
@@ -271,6 +272,19 @@ static void save_restore(void) {
         CHECK_MSG(w, "the state holds invalid values: a state is not finite");
         CHECK(paper_earth_get_states(w, x) == GYROWHEEL_OK && paper_earth_time(w) == 3.0);
         CHECK(!isnan(x[PAPER_EARTH_X_beta]));
+    }
+    /* another model of the same sizes (another guid), with a valid checksum */
+    memcpy(bad, buf, size);
+    for (i = 24; i + 8 <= size; i++)
+        if (memcmp(bad + i, PAPER_EARTH_GUID, 8) == 0) break;
+    CHECK(i + 8 <= size);
+    if (i + 8 <= size) {
+        bad[i + 1] = bad[i + 1] == 'f' ? 'e' : 'f';
+        sum = fnv1a(bad + 24, size - 24);
+        memcpy(bad + 16, &sum, 8);
+        CHECK(paper_earth_restore_state(w, bad, size) == GYROWHEEL_ERR_STATE);
+        CHECK_MSG(w, "belongs to another model (token mismatch");
+        CHECK(paper_earth_time(w) == 3.0);
     }
     CHECK(paper_earth_restore_state(w, NULL, size) == GYROWHEEL_ERR_ARGUMENT);
     /* a state brings a failed instance back */

@@ -131,11 +131,12 @@ static void bad_values(void) {
     CHECK(paper_earth_reset(w, NULL, NULL, NULL) == GYROWHEEL_OK);
     CHECK(paper_earth_advance(w, 0.1) == GYROWHEEL_OK);
 
+    paper_earth_default_parameters(p);
     paper_earth_default_initial(s);
     s[PAPER_EARTH_I_beta] = INFINITY;
     CHECK(paper_earth_reset(w, NULL, s, NULL) == GYROWHEEL_ERR_NOT_FINITE);
     CHECK_MSG(w, "initial value beta is not finite (inf)");
-    s[PAPER_EARTH_I_beta] = 0.01; /* below beta_min = 0.02: already flat */
+    s[PAPER_EARTH_I_beta] = 0.5 * p[PAPER_EARTH_P_beta_min]; /* below beta_min: already flat */
     CHECK(paper_earth_reset(w, NULL, s, NULL) == GYROWHEEL_ERR_INVALID);
     CHECK_MSG(w, "already flat");
 
@@ -316,7 +317,7 @@ static void fall(void) {
     static const char *const names[] = {"gamma_dot"};
     const double slow[] = {0.0}; /* no spin: it falls like a coin */
     paper_earth *w = NULL;
-    double y[PAPER_EARTH_NY], te = 0.0, t;
+    double y[PAPER_EARTH_NY], te = 0.0, t, beta_min = 0.0;
     int fired = 0, k;
     gyrowheel_status st = GYROWHEEL_OK;
     CHECK(paper_earth_create_named(1, names, slow, NULL, &w) == GYROWHEEL_OK);
@@ -328,7 +329,8 @@ static void fall(void) {
     CHECK(paper_earth_get_event(w, PAPER_EARTH_E_fallen, &fired, &te) == GYROWHEEL_OK);
     CHECK(fired == 1 && te == t);
     CHECK(paper_earth_get_outputs(w, y) == GYROWHEEL_OK);
-    CHECK_NEAR(sin(y[PAPER_EARTH_Y_beta]), sin(0.02), 1e-9); /* at beta_min */
+    CHECK(paper_earth_get(w, GYROWHEEL_KIND_PARAMETER, PAPER_EARTH_P_beta_min, &beta_min) == 0);
+    CHECK_NEAR(sin(y[PAPER_EARTH_Y_beta]), sin(beta_min), 1e-9); /* at beta_min */
     CHECK(strstr(log_text, "event fall at t=") != NULL);
     CHECK(paper_earth_advance(w, 30.0) == GYROWHEEL_ERR_TERMINATED);
     CHECK_MSG(w, "paper_earth_advance: the run ended at t=");

@@ -62,15 +62,27 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     if (!gw_fmi2_interface(F, "fmi2DoStep", fmi2CoSimulation)) return fmi2Error;
     I = F->I;
     if (I->terminated && (F->state == GW_ST_STEP_FAILED || F->state == GW_ST_TERMINATED)) {
-        GW_LOG_ERR(I, "fmi2DoStep: simulation terminated at t=%.17g; call fmi2Reset to restart",
-                   I->last_successful_time);
-        gw_fmi2_set_state(F, GW_ST_ERROR);
-        return fmi2Error;
+        /* After a terminating event: masters such as ecospy ignore fmi2Discard and keep
+         * stepping to their stop time.  Strictly a call outside StepComplete (FMI 2.0.4
+         * section 4.2.4); answered truthfully instead: no part of the step can be computed
+         * (fmi2Discard, "only a subinterval", here empty), the instance stays where it is,
+         * fmi2LastSuccessfulTime and fmi2Terminated keep saying so.  The message is the same
+         * for every such call, so a run of them is logged once and counted. */
+        gw_log(I, GW_DISCARD, GW_LOG_DISCARD,
+               "fmi2DoStep: the simulation terminated at t=%.17g (%s); no further step is "
+               "computed (fmi2Discard until fmi2Reset)", I->last_successful_time,
+               gw_fmi2_stop_reason(I));
+        F->last_dostep_status = fmi2Discard;
+        return fmi2Discard;
     }
     if (!gw_fmi2_begin(F, "fmi2DoStep", GW_MASK_DoStep)) return fmi2Error;
     if (!isfinite(h) || !(h > 0.0))
         GW_FAIL("fmi2DoStep: communication step size %g must be finite and > 0", h);
     if (!isfinite(tc)) GW_FAIL("fmi2DoStep: currentCommunicationPoint is not finite");
+    if (tc + h == tc)
+        GW_FAIL("fmi2DoStep: communication step size %g is below the resolution of "
+                "currentCommunicationPoint %.17g (t + h == t): the step would not advance time",
+                h, tc);
     tol = 1e-9 * (fabs(tc) > 1.0 ? fabs(tc) : 1.0);
     if (fabs(tc - I->t) > tol)
         GW_FAIL("fmi2DoStep: currentCommunicationPoint %.17g does not match the FMU time %.17g",
@@ -87,7 +99,13 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     I->t = tc; /* the communication point, not the FMU's rounding of it */
 
     r = gw_advance(I, "fmi2DoStep", t_end);
-    if (r == GW_DISCARD) gw_fmi2_set_state(F, GW_ST_STEP_FAILED); /* a terminating event */
+    if (r == GW_DISCARD) { /* a terminating event; its reason is logged whatever the settings */
+        gw_fmi2_set_state(F, GW_ST_STEP_FAILED);
+        gw_log(I, GW_DISCARD, GW_LOG_DISCARD,
+               "fmi2DoStep: %s at t=%.17g: the simulation terminated inside the step to "
+               "t=%.17g (fmi2Terminated = true, fmi2LastSuccessfulTime = %.17g)",
+               gw_fmi2_stop_reason(I), I->t, t_end, I->t);
+    }
     status = gw_fmi2_status(r);
     if (gw_log_enabled(I, GW_LOG_SOLVER))
         gw_log(I, GW_OK, GW_LOG_SOLVER,

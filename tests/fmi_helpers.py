@@ -61,6 +61,13 @@ class _Instance:
     def slave(self):  # the name the Co-Simulation tests use
         return self.fmu2
 
+    def raw(self, function: str, *args) -> int:
+        """Call an fmi2 function of the shared library directly (fmpy's wrappers raise on a
+        status above fmi2Warning); the component is passed first. Returns the fmi2Status."""
+        f = getattr(self.fmu2.dll, function)
+        f.restype = ctypes.c_int
+        return f(ctypes.c_void_p(self.fmu2.component), *args)
+
     def log_text(self) -> str:
         return "\n".join(m for _, _, m in self.messages)
 

@@ -125,14 +125,22 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
 
 /* ---- status ------------------------------------------------------------------------------- */
 
+/* A status kind this function cannot report: fmi2Discard (FMI 2.0.4 section 4.2.3), logged. */
+static fmi2Status gw_fmi2_no_status(gw_instance *I, const char *fn, int kind) {
+    static const char *const kinds[] = {"fmi2DoStepStatus", "fmi2PendingStatus",
+                                        "fmi2LastSuccessfulTime", "fmi2Terminated"};
+    gw_log(I, GW_DISCARD, GW_LOG_DISCARD, "%s: status kind %s is not provided by this function",
+           fn, kind >= 0 && kind < 4 ? kinds[kind] : "(unknown)");
+    return fmi2Discard;
+}
+
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
     GW_BEGIN_CS("fmi2GetStatus", GW_MASK_Status);
     if (!value) GW_FAIL("fmi2GetStatus: value is NULL");
-    if (s == fmi2DoStepStatus) {
+    if (s == fmi2DoStepStatus)
         *value = F->last_dostep_status;
-    } else {
-        status = fmi2Discard; /* status kind not provided */
-    }
+    else
+        status = gw_fmi2_no_status(I, "fmi2GetStatus", s);
     GW_END_FUNCTION();
 }
 
@@ -142,15 +150,14 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
     if (s == fmi2LastSuccessfulTime)
         *value = I->last_successful_time;
     else
-        status = fmi2Discard;
+        status = gw_fmi2_no_status(I, "fmi2GetRealStatus", s);
     GW_END_FUNCTION();
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
     GW_BEGIN_CS("fmi2GetIntegerStatus", GW_MASK_Status);
-    (void)s;
     (void)value;
-    status = fmi2Discard; /* no integer status kinds */
+    status = gw_fmi2_no_status(I, "fmi2GetIntegerStatus", s);
     GW_END_FUNCTION();
 }
 
@@ -160,15 +167,14 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
     if (s == fmi2Terminated)
         *value = I->terminated ? fmi2True : fmi2False;
     else
-        status = fmi2Discard;
+        status = gw_fmi2_no_status(I, "fmi2GetBooleanStatus", s);
     GW_END_FUNCTION();
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
     GW_BEGIN_CS("fmi2GetStringStatus", GW_MASK_Status);
-    (void)s;
     (void)value;
-    status = fmi2Discard; /* fmi2PendingStatus: never pending */
+    status = gw_fmi2_no_status(I, "fmi2GetStringStatus", s); /* never pending */
     GW_END_FUNCTION();
 }
 

@@ -2,7 +2,7 @@
 truthful and never turns their habits into errors (docs/fmi.md, "After the simulation terminated").
 
 Each importer's pattern is reproduced exactly as a call sequence on fmpy's FMU2Model/FMU2Slave
-(paper_earth without spin: the wheel falls flat at t = 0.431 s):
+(paper_earth without spin: the wheel falls flat at t = 0.433 s):
   OMSimulator 3.0, FMU Compliance Checker (ME)  fmi2NewDiscreteStates -> terminateSimulation,
                                                 then fmi2EnterContinuousTimeMode once more
       before: fmi2Error, Error state, fmi2Terminate refused ("illegal call in state Error")
@@ -26,8 +26,8 @@ from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 from conftest import STATES
 from fmi_helpers import Model, Slave
 
-NO_SPIN = {"gamma_dot": 0.0}  # falls flat at t = 0.4315 s
-BETA_MIN = 0.02
+NO_SPIN = {"gamma_dot": 0.0}  # falls flat (beta = beta_min) at t = 0.4335 s
+T_FALL = 0.4335
 
 
 def _errors(inst) -> list[str]:
@@ -67,8 +67,8 @@ def test_me_enter_continuous_time_mode_after_terminate_simulation(earth_fmu):
         enter, term = m.fmu2.completedIntegratorStep()
         assert term and not enter  # still terminated, truthfully
         assert m.get("fallen") is True
-        beta = m.get("beta")
-        assert math.isfinite(beta) and beta == pytest.approx(BETA_MIN, abs=1e-3)
+        beta = m.get("beta")  # where this importer's Euler step (0.1 ms) crossed beta_min
+        assert math.isfinite(beta) and 0.0 < beta <= m.get("beta_min")
         m.fmu2.terminate()  # before: "fmi2Terminate: illegal call in state Error"
         assert all(math.isfinite(v) for v in m.get(*STATES))
         assert _errors(m) == []
@@ -94,9 +94,9 @@ def test_cs_steps_after_the_fall_are_discarded_and_logged_once(earth_fmu):
         n_after = len(statuses) - statuses.index(2) - 1
         assert n_after > 950 and set(statuses[statuses.index(2):]) == {2}  # before: fmi2Error
         t_fall = s.slave.getRealStatus(fmi2LastSuccessfulTime)
-        assert t_fall == pytest.approx(0.4315, abs=1e-3)
+        assert t_fall == pytest.approx(T_FALL, abs=1e-3)
         assert s.slave.getBooleanStatus(fmi2Terminated)
-        assert s.get("beta") == pytest.approx(BETA_MIN, abs=1e-9)
+        assert s.get("beta") == pytest.approx(s.get("beta_min"), abs=1e-9)
         # the fall's reason and the refused steps, each logged once whatever the logging
         # settings (before: the fall not at all, then 950 "illegal call in state Error")
         assert len(s.messages) == 2, s.messages
@@ -105,7 +105,7 @@ def test_cs_steps_after_the_fall_are_discarded_and_logged_once(earth_fmu):
         s.slave.terminate()
         assert s.messages[2][2] == f"(the previous message was repeated {n_after - 1} more times)"
         assert _errors(s) == []
-        assert s.get("beta") == pytest.approx(BETA_MIN, abs=1e-9)
+        assert s.get("beta") == pytest.approx(s.get("beta_min"), abs=1e-9)
     finally:
         s.free()
 

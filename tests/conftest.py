@@ -74,11 +74,11 @@ def critical_spin(M, R, k_diam, k_axial, g) -> float:
 
 @pytest.fixture(autouse=True)
 def _fmpy_logger_alive():
-    """After every test, fmpy's process-global logger proxy points at a living callback
-    (fmu_build.simulate.restore_fmpy_logger; a test's own logger dies with it)."""
+    """After every test, fmpy's process-global logger proxy points at a living callback: the
+    process-lived dispatcher of tests/fmi_helpers.py (a test's own logger dies with it)."""
     yield
-    from fmu_build.simulate import restore_fmpy_logger
-    restore_fmpy_logger()
+    from fmi_helpers import reproxy
+    reproxy()
 
 
 @pytest.fixture(scope="session")

@@ -34,6 +34,14 @@ def _dispatch(env, instance, status, category, message):
 _LOGGER = fmi2CallbackLoggerTYPE(_dispatch)  # alive as long as the process
 
 
+def reproxy() -> None:
+    """Point fmpy's global logger proxy at the dispatcher again (after a simulate_fmu(logger=...)
+    whose callback is gone); instances keep receiving their own messages."""
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = _LOGGER
+    addLoggerProxy(byref(callbacks))
+
+
 class _Instance:
     """One FMU instance of either interface with named access to its variables."""
 

@@ -5,6 +5,7 @@
 #               results/system/
 #   make test   installs what the tests need (Debian's chromium too, as root) and runs them all
 #   make bench  the work-precision benchmark (results/bench/*.png, work_precision.md)
+#   make realtime  the exported C in a 1 kHz fixed-step loop (results/c/realtime.md, docs/c_api.md)
 PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
@@ -16,7 +17,7 @@ SCENES := paper_earth paper_mars paper_moon
 # missing and we are root with apt-get (CI); otherwise named, and the tests needing them say so.
 C_TOOLS := clang cmake valgrind
 
-.PHONY: demo test bench venv browser tbb clean c-tools
+.PHONY: demo test bench realtime venv browser clean c-tools tbb
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -58,21 +59,25 @@ c-tools:
 	    else echo "make test: missing$$missing (Debian: apt-get install$$missing)"; fi; \
 	fi
 
-# tests/test_system_masters.py runs ecos (ecospy), which links Debian's libtbb12
+# ecospy (tests/test_importers.py, a co-simulation master) links Debian's libtbb12
 tbb:
-	@ldconfig -p 2>/dev/null | grep -q libtbb.so.12 || { \
+	@ldconfig -p 2>/dev/null | grep -q 'libtbb\.so\.12' || { \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
 	    echo "installing Debian's libtbb12 (for ecospy)"; \
 	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libtbb12 >/dev/null; \
 	  else \
-	    echo "libtbb12 is missing and apt-get is not usable here: install Debian's libtbb12 for ecospy"; \
+	    echo "libtbb12 is missing and apt-get is not usable here: install Debian's libtbb12 for ecospy (tests/test_importers.py)"; \
 	  fi; }
 
-test: $(STAMP) browser tbb c-tools
+test: $(STAMP) browser c-tools tbb
 	$(PY) -m pytest -q
 
 bench: $(STAMP)
 	$(PY) benchmarks/work_precision.py --out results/bench
+
+# the real-time figures of docs/c_api.md: the exported C in a fixed-step 1 kHz loop (a few minutes)
+realtime: $(STAMP)
+	$(PY) examples/c_realtime.py --out results/c
 
 clean:
 	rm -rf results build .pytest_cache

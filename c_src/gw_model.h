@@ -32,6 +32,12 @@
  *   jac (t, x, u, p) -> J           dense d xdot / d x, column-major nx*nx (NULL if absent)
  *   dir (t, x, u, p) -> D           dense d [xdot; y] / d [x; u], column-major
  *                                   (nx+ny) x (nx+nu), for fmi2GetDirectionalDerivative
+ *                                   after initialisation (knowns: states, inputs)
+ *   dini(t, s, u, p) -> D0          dense d v / d [s; p; u] at x = init(s, p), column-major
+ *                                   n_init_rows x (ns+np+nu): v are the Real InitialUnknowns
+ *                                   of modelDescription.xml (row init_rows[k] for vars[k],
+ *                                   -1 if not one), the knowns of Initialization Mode
+ *                                   (FMI 2.0.4 section 2.2.8); NULL if absent
  * Each instance allocates its own arg/res/iw/w buffers from the sizes f_work reports
  * (CasADi SX functions are reentrant then); mem is always 0.  The generated functions
  * are static too (fmu_build/codegen.py makes them so and keeps only what the runtime calls).
@@ -113,7 +119,12 @@ typedef struct {
     const int *event_actions;          /* ne, gw_event_action */
     const char *const *check_messages; /* nc, e.g. "M must be > 0" */
     int default_solver;                /* gw_solver */
+    /* default_rel_tol is also DefaultExperiment's tolerance in modelDescription.xml */
     double default_rel_tol, default_abs_tol, default_max_step;
+    /* partial derivatives in Initialization Mode (see dini above); all zero if absent */
+    gw_function dini;
+    int n_init_rows;
+    const int *init_rows; /* n_vars: row of vars[k] in dini's result, or -1 */
 } gw_model;
 
 #endif /* GW_MODEL_H */

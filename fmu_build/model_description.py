@@ -11,6 +11,7 @@ LOG_CATEGORIES = {  # must match c_src/gw_log.c
     "logEvents": "events: fall, warnings at located event times",
     "logSolver": "integrator statistics per communication step",
     "logStatusWarning": "messages with status fmi2Warning",
+    "logStatusDiscard": "messages with status fmi2Discard",
     "logStatusError": "messages with status fmi2Error",
     "logStatusFatal": "messages with status fmi2Fatal",
     "logAll": "everything",
@@ -112,12 +113,12 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
     for name, desc in LOG_CATEGORIES.items():
         ET.SubElement(cats, "Category", {"name": name, "description": desc})
 
-    # No tolerance attribute on purpose: importers (fmpy among them) pass DefaultExperiment's
-    # tolerance to fmi2SetupExperiment, which overrides rel_tol (INTERFACE.md), so a user's
-    # rel_tol would be silently ignored. The scene's rel_tol is the parameter's start value.
+    # The scene's tolerance: importers that forward DefaultExperiment's tolerance to
+    # fmi2SetupExperiment (PyFMI, OMSimulator, fmpy) get the scene's accuracy; without it they
+    # forward their own 1e-4. A rel_tol set explicitly still wins (docs/fmi.md, "Tolerances").
     ET.SubElement(root, "DefaultExperiment", {
         "startTime": _fmt(exp.start_time), "stopTime": _fmt(exp.stop_time),
-        "stepSize": _fmt(exp.output_interval),
+        "tolerance": _fmt(exp.rel_tol), "stepSize": _fmt(exp.output_interval),
     })
 
     mvs = ET.SubElement(root, "ModelVariables")

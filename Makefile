@@ -57,6 +57,7 @@ test: $(STAMP) browser c-tools
 	$(PY) -m pytest -q
 
 bench: $(STAMP)
+	$(PY) -m pip install --quiet -e ".[bench]"
 	$(PY) benchmarks/work_precision.py --out results/bench
 
 clean:

@@ -67,6 +67,11 @@ GW_API gw_instance *gw_instance_new(const gw_model *m, const char *name, const g
     GW_ALLOC_VEC(I->enew, double, ne);
     GW_ALLOC_VEC(I->eev, double, ne);
     GW_ALLOC_VEC(I->x_bak, double, nx);
+    GW_ALLOC_VEC(I->xc_bak, double, nx);
+    GW_ALLOC_VEC(I->xc, double, nx);
+    GW_ALLOC_VEC(I->xcnew, double, nx);
+    GW_ALLOC_VEC(I->xc_x, double, nx);
+    GW_ALLOC_VEC(I->dx, double, nx);
     GW_ALLOC_VEC(I->e_bak, double, ne);
     GW_ALLOC_VEC(I->flags_bak, int, ne);
     if (gw_solver_alloc(I)) goto fail;
@@ -125,6 +130,11 @@ GW_API void gw_instance_free(gw_instance *I) {
     gw_free(I, I->enew);
     gw_free(I, I->eev);
     gw_free(I, I->x_bak);
+    gw_free(I, I->xc_bak);
+    gw_free(I, I->xc);
+    gw_free(I, I->xcnew);
+    gw_free(I, I->xc_x);
+    gw_free(I, I->dx);
     gw_free(I, I->e_bak);
     gw_free(I, I->flags_bak);
     gw_free(I, I->name);
@@ -141,6 +151,10 @@ GW_API void gw_instance_reset(gw_instance *I) {
     I->rel_tol = m->default_rel_tol;
     I->abs_tol = m->default_abs_tol;
     I->max_step = m->default_max_step;
+    I->max_internal_steps = m->default_max_internal_steps > 0.0 ? m->default_max_internal_steps
+                                                                : GW_DEFAULT_MAX_INTERNAL_STEPS;
+    I->atol_eff = I->abs_tol;
+    I->err_old = 0.0;
     I->t_start = 0.0;
     I->t_stop = 0.0;
     I->stop_defined = 0;
@@ -152,6 +166,8 @@ GW_API void gw_instance_reset(gw_instance *I) {
     for (i = 0; i < m->np; i++) I->p[i] = m->p_start ? m->p_start[i] : 0.0;
     for (i = 0; i < m->nx; i++) {
         I->x[i] = 0.0;
+        I->xc[i] = 0.0;
+        I->xc_x[i] = 0.0;
         I->nominal[i] = 1.0;
     }
     for (i = 0; i < m->ny; i++) I->y[i] = 0.0;

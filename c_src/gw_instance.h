@@ -37,6 +37,8 @@ struct gw_instance {
     /* settings */
     int solver;
     double rel_tol, abs_tol, max_step;
+    double max_internal_steps; /* budget of internal steps of one gw_advance */
+    double atol_eff;           /* abs_tol in force: abs_tol, or rel_tol when abs_tol == 0 */
 
     /* experiment */
     double t_start, t_stop;
@@ -63,9 +65,16 @@ struct gw_instance {
     int k7_valid;                      /* k[6] == ode(t0 + h, xnew) */
     int dense_ready;                   /* rcont holds the dense output of that step */
     double *enew, *eev;                /* ne */
+    /* compensated summation of the state (TwoSum): x + xc is the state to twice the working
+     * precision; xcnew goes with xnew; xc_x is the x that xc belongs to (a front end that
+     * writes x makes xc stale) */
+    double *xc, *xcnew, *xc_x, *dx;
+    double err_old;                 /* PI controller: error norm of the last accepted step (0: none) */
+    unsigned long long n_call_steps; /* internal steps (accepted + rejected) of this gw_advance */
+    double t_call;                   /* where this gw_advance started */
 
     /* backup at the start of gw_advance */
-    double *x_bak, *e_bak;
+    double *x_bak, *e_bak, *xc_bak;
     int *flags_bak;
 
     /* counters (cumulative since initialisation) */

@@ -17,6 +17,8 @@
  *   y  outputs                     (ny)   everything readable that is computed from x
  *   e  event indicators            (ne)   an event happens when e_i goes from > 0 to <= 0
  *   c  validity checks             (nc)   each c_i must be > 0 at initialisation
+ * abs_tol = 0 (a model default or a user's value) means "follow rel_tol": the absolute
+ * tolerance of state i is then rel_tol * nominal_i.
  *
  * Generated functions (CasADi calling convention, see CodeGenerator docs):
  *   int f(const double **arg, double **res, gw_int *iw, double *w, int mem);
@@ -69,8 +71,16 @@ typedef enum {
     GW_SET_SOLVER = 0,   /* Enumeration, values gw_solver */
     GW_SET_REL_TOL = 1,  /* Real */
     GW_SET_ABS_TOL = 2,  /* Real */
-    GW_SET_MAX_STEP = 3  /* Real, s: bound of internal steps; the fixed step of euler/rk4 */
+    GW_SET_MAX_STEP = 3, /* Real, s: bound of internal steps; the fixed step of euler/rk4 */
+    GW_SET_MAX_INTERNAL_STEPS = 4 /* Integer: budget of internal steps (accepted + rejected)
+                                     of one call that advances time */
 } gw_setting;
+
+/* Default budget of internal steps per call when the model gives none (0): about 1 s of CPU
+ * for the base wheel with DOP853 (docs/fmi.md, "Bounded calls"). */
+#define GW_DEFAULT_MAX_INTERNAL_STEPS 1000000.0
+/* Largest budget accepted (an fmi2Integer). */
+#define GW_MAX_MAX_INTERNAL_STEPS 2147483647.0
 
 /* Enumeration values of the `solver` parameter (modelDescription.xml uses the same). */
 typedef enum {
@@ -114,6 +124,7 @@ typedef struct {
     const char *const *check_messages; /* nc, e.g. "M must be > 0" */
     int default_solver;                /* gw_solver */
     double default_rel_tol, default_abs_tol, default_max_step;
+    double default_max_internal_steps; /* 0: GW_DEFAULT_MAX_INTERNAL_STEPS */
 } gw_model;
 
 #endif /* GW_MODEL_H */

@@ -134,10 +134,17 @@ static gw_status gw_check_setup(gw_instance *I, const char *fn) {
     if (!gw_solver_available(I->solver)) GW_SIM_FAIL("%s: unknown solver %d", fn, I->solver);
     if (!(I->rel_tol > 0.0) || !isfinite(I->rel_tol))
         GW_SIM_FAIL("%s: rel_tol = %g must be finite and > 0", fn, I->rel_tol);
-    if (!(I->abs_tol > 0.0) || !isfinite(I->abs_tol))
-        GW_SIM_FAIL("%s: abs_tol = %g must be finite and > 0", fn, I->abs_tol);
+    if (!(I->abs_tol >= 0.0) || !isfinite(I->abs_tol))
+        GW_SIM_FAIL("%s: abs_tol = %g must be finite and > 0 (or 0: follow rel_tol)", fn,
+                    I->abs_tol);
     if (!(I->max_step > 0.0) || !isfinite(I->max_step))
         GW_SIM_FAIL("%s: max_step = %g must be finite and > 0", fn, I->max_step);
+    if (!(I->max_internal_steps >= 1.0) || !(I->max_internal_steps <= GW_MAX_MAX_INTERNAL_STEPS) ||
+        I->max_internal_steps != floor(I->max_internal_steps))
+        GW_SIM_FAIL("%s: max_internal_steps = %g must be a whole number from 1 to %.0f", fn,
+                    I->max_internal_steps, GW_MAX_MAX_INTERNAL_STEPS);
+    /* abs_tol = 0 follows rel_tol: no fixed absolute floor under a tolerance-only run */
+    I->atol_eff = I->abs_tol > 0.0 ? I->abs_tol : I->rel_tol;
     if (m->nc > 0) {
         if (gw_eval_chk(I, I->c) != 0)
             GW_SIM_FAIL("%s: evaluation of the validity checks failed", fn);
@@ -206,6 +213,9 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
     }
     I->terminated = 0;
     I->h_adapt = 0.0;
+    I->err_old = 0.0;
+    memset(I->xc, 0, (size_t)m->nx * sizeof(double));
+    memcpy(I->xc_x, I->x, (size_t)m->nx * sizeof(double));
     I->last_successful_time = I->t;
     I->n_rhs = I->n_accepted = I->n_rejected = I->n_evt = I->n_events = 0;
     return status;
@@ -214,9 +224,12 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
 /* ---- advancing in time ------------------------------------------------------------------------ */
 
 /* Back to the state at the start of gw_advance. */
-static void gw_restore_step_start(gw_instance *I, double t0, double h0) {
+static void gw_restore_step_start(gw_instance *I, double t0, double h0, double err0) {
     const gw_model *m = I->m;
     memcpy(I->x, I->x_bak, (size_t)m->nx * sizeof(double));
+    memcpy(I->xc, I->xc_bak, (size_t)m->nx * sizeof(double));
+    memcpy(I->xc_x, I->x_bak, (size_t)m->nx * sizeof(double));
+    I->err_old = err0;
     if (m->ne > 0) {
         memcpy(I->e, I->e_bak, (size_t)m->ne * sizeof(double));
         memcpy(I->flags, I->flags_bak, (size_t)m->ne * sizeof(int));
@@ -230,9 +243,16 @@ static void gw_restore_step_start(gw_instance *I, double t0, double h0) {
 
 GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end) {
     const gw_model *m = I->m;
-    const double t0 = I->t, h0 = I->h_adapt;
+    const double t0 = I->t, h0 = I->h_adapt, err0 = I->err_old;
+    const size_t nxb = (size_t)m->nx * sizeof(double);
     gw_int_result r;
-    memcpy(I->x_bak, I->x, (size_t)m->nx * sizeof(double));
+    /* the compensation belongs to the x the solver left; a front end that wrote x since
+     * (Model Exchange, fmi2SetReal of a state) made it stale */
+    if (memcmp(I->x, I->xc_x, nxb) != 0) memset(I->xc, 0, nxb);
+    memcpy(I->x_bak, I->x, nxb);
+    memcpy(I->xc_bak, I->xc, nxb);
+    I->n_call_steps = 0;
+    I->t_call = t0;
     if (m->ne > 0) {
         memcpy(I->e_bak, I->e, (size_t)m->ne * sizeof(double));
         memcpy(I->flags_bak, I->flags, (size_t)m->ne * sizeof(int));
@@ -241,9 +261,10 @@ GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end) {
     r = gw_integrate(I, t_end);
     if (r != GW_INT_ERROR && gw_update_outputs(I, fn) != GW_OK) r = GW_INT_ERROR;
     if (r == GW_INT_ERROR) {
-        gw_restore_step_start(I, t0, h0);
+        gw_restore_step_start(I, t0, h0, err0);
         return GW_ERROR;
     }
+    memcpy(I->xc_x, I->x, nxb);
     if (r == GW_INT_TERMINATED) I->terminated = 1;
     I->last_successful_time = I->t;
     return r == GW_INT_TERMINATED ? GW_DISCARD : GW_OK;

@@ -41,8 +41,8 @@ static void gw_dop853_arg(const gw_instance *I, double *const K[16], int s, doub
 GW_INTERNAL int gw_dop853_step(gw_instance *I, double h, double t1, double *err) {
     int i, j, s, nx = I->m->nx;
     const double t = I->t, *x = I->x, *nom = I->nominal;
-    const double rtol = I->rel_tol, atol = I->abs_tol;
-    double *K[16], *xt = I->xtmp, *xn = I->xnew;
+    const double rtol = I->rel_tol, atol = I->atol_eff;
+    double *K[16], *xt = I->xtmp;
     double err5 = 0.0, err3 = 0.0, deno;
     gw_dop853_stages(I, K);
     I->k7_valid = 0;
@@ -56,14 +56,15 @@ GW_INTERNAL int gw_dop853_step(gw_instance *I, double h, double t1, double *err)
             if (dop_b[j] != 0.0) incr += dop_b[j] * K[j][i];
             if (dop_e5[j] != 0.0) e5 += dop_e5[j] * K[j][i];
         }
-        xn[i] = x[i] + h * incr;
+        I->dx[i] = h * incr;
         e3 = incr - dop_bhh0 * K[0][i] - dop_bhh8 * K[8][i] - dop_bhh11 * K[11][i];
         ax = fabs(x[i]);
-        an = fabs(xn[i]);
+        an = fabs(x[i] + I->dx[i]);
         sk = atol * nom[i] + rtol * (ax > an ? ax : an);
         err5 += (e5 / sk) * (e5 / sk);
         err3 += (e3 / sk) * (e3 / sk);
     }
+    gw_sum_update(I); /* xn = x + dx, compensated */
     deno = err5 + 0.01 * err3;
     if (deno <= 0.0) deno = 1.0;
     *err = nx > 0 ? fabs(h) * err5 * sqrt(1.0 / ((double)nx * deno)) : 0.0;

@@ -18,7 +18,9 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 static int gw_euler_step(gw_instance *I, double h) {
     int i, nx = I->m->nx;
     const double *x = I->x, *k1 = I->k[0];
-    for (i = 0; i < nx; i++) I->xnew[i] = x[i] + h * k1[i];
+    for (i = 0; i < nx; i++) I->dx[i] = h * k1[i];
+    (void)x;
+    gw_sum_update(I);
     I->k7_valid = 0;
     return 0;
 }
@@ -67,8 +69,8 @@ static int gw_rk4_step(gw_instance *I, double h, double t1) {
     if (gw_rk4_unstable(I, h)) return -1;
     for (i = 0; i < nx; i++) xt[i] = x[i] + h * k3[i];
     if (gw_rhs_checked(I, t1, xt, k4)) return -1;
-    for (i = 0; i < nx; i++)
-        I->xnew[i] = x[i] + (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+    for (i = 0; i < nx; i++) I->dx[i] = (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+    gw_sum_update(I);
     I->k7_valid = 0;
     return 0;
 }
@@ -82,13 +84,7 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
     unsigned long long n, i;
     int events = 0, growing;
     double d_prev;
-    if (nd < 1.0) nd = 1.0;
-    if (nd > GW_MAX_STEPS_AHEAD) {
-        GW_LOG_ERR(I, "communication step %g would need %.3g steps of max_step=%g (limit %.0e): "
-                   "raise max_step or shorten the communication step", H, nd, I->max_step,
-                   GW_MAX_STEPS_AHEAD);
-        return GW_INT_ERROR;
-    }
+    if (nd < 1.0) nd = 1.0; /* the budget was checked up front (gw_integrate) */
     n = (unsigned long long)nd;
     d_prev = 0.0;
     growing = 0;
@@ -98,6 +94,11 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
         while (I->t < ti) {
             const double h = ti - I->t;
             gw_int_result r;
+            if ((double)I->n_call_steps >= I->max_internal_steps) { /* events restart substeps */
+                gw_budget_message(I, "the budget of internal steps is spent", t_end - I->t, h);
+                return GW_INT_ERROR;
+            }
+            I->n_call_steps++;
             if (gw_ensure_f0(I)) return GW_INT_ERROR;
             if (I->solver == GW_SOLVER_EULER) {
                 /* Euler's instability: increments that more than double, step after step */

@@ -1,7 +1,7 @@
 /*
  * gw_state.c -- saving and restoring an instance: one serialised blob, so that a saved
  * state and its serialised form share one code path (the FMI layer's fmi2Get/SetFMUstate
- * and fmi2(De)SerializeFMUstate both use it).  Byte layout, version 1, native byte order,
+ * and fmi2(De)SerializeFMUstate both use it).  Byte layout, version 2, native byte order,
  * no padding:
  *
  *   offset  size       field
@@ -24,6 +24,8 @@
  *           8*ne       double e (event indicators at t)
  *           8*nx       double x nominal
  *           ne         uint8 event flags
+ *           2*8        double max_internal_steps, err_old (the PI controller's memory)
+ *           8*nx       double xc (compensation of the state's summation)
  *
  * The two front-end ints are the front end's to give meaning to and to validate (the set-up
  * phase flag I->in_setup follows from them there).  Reading rejects a wrong magic, version,
@@ -39,7 +41,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include "gw_instance.h"
 
 #define GW_STATE_MAGIC "GWST"
-#define GW_STATE_VERSION 1u
+#define GW_STATE_VERSION 2u
 #define GW_STATE_HEADER 44 /* bytes before the model token */
 
 /* ---- writer / reader ------------------------------------------------------------ */
@@ -115,6 +117,9 @@ static void gw_write_state(const gw_instance *I, const int front[2], gw_writer *
         unsigned char f = I->flags[i] ? 1 : 0;
         gw_put(w, &f, 1);
     }
+    gw_put_f64(w, I->max_internal_steps);
+    gw_put_f64(w, I->err_old);
+    gw_put_vec(w, I->xc, m->nx);
 }
 
 GW_API size_t gw_state_size(const gw_instance *I) {
@@ -269,6 +274,11 @@ GW_API void gw_state_apply(gw_instance *I, const unsigned char *buf) {
         gw_get(&r, &f, 1);
         I->flags[i] = f ? 1 : 0;
     }
+    I->max_internal_steps = gw_get_f64(&r);
+    I->err_old = gw_get_f64(&r);
+    gw_get_vec(&r, I->xc, m->nx);
+    memcpy(I->xc_x, I->x, (size_t)m->nx * sizeof(double));
+    I->atol_eff = I->abs_tol > 0.0 ? I->abs_tol : I->rel_tol;
     I->fcur_valid = 0;
     I->k7_valid = 0;
     I->dense_ready = 0;

@@ -42,6 +42,7 @@ static double gw_setting_value(const gw_instance *I, int index) {
     case GW_SET_REL_TOL: return I->rel_tol;
     case GW_SET_ABS_TOL: return I->abs_tol;
     case GW_SET_MAX_STEP: return I->max_step;
+    case GW_SET_MAX_INTERNAL_STEPS: return I->max_internal_steps;
     default: return 0.0;
     }
 }
@@ -83,6 +84,7 @@ GW_API void gw_value_set(gw_instance *I, const gw_variable *v, double value) {
         case GW_SET_REL_TOL: I->rel_tol = value; break;
         case GW_SET_ABS_TOL: I->abs_tol = value; break;
         case GW_SET_MAX_STEP: I->max_step = value; break;
+        case GW_SET_MAX_INTERNAL_STEPS: I->max_internal_steps = value; break;
         default: break;
         }
         break;

@@ -115,6 +115,7 @@ static const gw_model GW_MODEL = {{
     .default_rel_tol = {exp.rel_tol!r},
     .default_abs_tol = {exp.abs_tol!r},
     .default_max_step = {exp.max_step!r},
+    .default_max_internal_steps = {float(exp.max_internal_steps)!r},
 }};
 
 {UNITY_GUARD_CLOSE}"""

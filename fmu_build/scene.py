@@ -5,7 +5,8 @@
     [effects.X]   one table per effect X, its parameters (see model.effects)
     [initial]     x, y, alpha, beta, gamma, alpha_dot, beta_dot, gamma_dot
                   (angles also as <name>_deg); never x_dot/y_dot: rolling fixes them
-    [experiment]  start_time, stop_time, output_interval, solver, rel_tol, abs_tol, max_step
+    [experiment]  start_time, stop_time, output_interval, solver, rel_tol, abs_tol, max_step,
+                  max_internal_steps
     [outputs]     keep = [...] to expose only some outputs (optional)
 
 Every error names the file, the table and the key, and lists the valid choices.
@@ -37,6 +38,7 @@ class Experiment:
     rel_tol: float = 1e-8
     abs_tol: float = 1e-10
     max_step: float = 0.01
+    max_internal_steps: int = 1_000_000  # budget of internal steps of one fmi2DoStep (docs/fmi.md)
 
 
 @dataclass
@@ -174,6 +176,15 @@ def _experiment(r: _Reader, data: dict) -> Experiment:
             exp.solver = value
         elif key == "start_time":
             exp.start_time = r.number("experiment", key, value)
+        elif key == "max_internal_steps":
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 2**31 - 1:
+                raise r.fail("experiment", key, f"must be a whole number from 1 to {2**31 - 1}, got {value!r}")
+            exp.max_internal_steps = value
+        elif key == "abs_tol":
+            v = r.number("experiment", key, value)
+            if v < 0:
+                raise r.fail("experiment", key, f"must be >= 0 (0: follow rel_tol), got {v!r}")
+            exp.abs_tol = v
         else:
             setattr(exp, key, r.positive("experiment", key, value))
     if exp.stop_time <= exp.start_time:

@@ -140,4 +140,5 @@ static const gw_model GW_MODEL = {
     check_messages,
     GW_SOLVER_ROSENBROCK,
     1e-6, 1e-8, 10.0,
+    0.0, /* default_max_internal_steps: the runtime's default */
 };

@@ -210,6 +210,8 @@ def make_parser() -> argparse.ArgumentParser:
     i = sub.add_parser("info", help="describe an FMU")
     i.add_argument("fmu")
     i.set_defaults(func=cmd_info)
+    from fmu_build.sweep.cli import add_parser as add_sweep_parser  # no Dask import until it runs
+    add_sweep_parser(sub)
     return parser
 
 

@@ -10,7 +10,6 @@ Every number is printed next to a peer measured in the same run:
 """
 from __future__ import annotations
 
-import subprocess
 import tempfile
 import time
 from pathlib import Path
@@ -20,7 +19,6 @@ import numpy as np
 from fmpy import simulate_fmu
 
 from fmu_build import build_fmu, load_scene
-from fmu_build.compiler import OPTIMISE, compiler
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -35,11 +33,8 @@ def best_of(fn, repeat=5):
 
 
 def rhs_ns(sources: Path, work: Path) -> float:
-    exe = work / "rhs_bench"
-    subprocess.run([compiler(), "-std=c99", *OPTIMISE, f"-I{sources}", str(ROOT / "benchmarks" / "rhs_bench.c"),
-                    str(ROOT / "benchmarks" / "rhs_model.c"), "-o", str(exe), "-lm"],
-                   check=True)
-    return float(subprocess.run([str(exe), "2000000"], capture_output=True, text=True, check=True).stdout)
+    import rhs_timing
+    return rhs_timing.run(rhs_timing.build(sources, work / "rhs_bench"))[0]
 
 
 def main() -> None:

@@ -227,13 +227,14 @@ GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last,
     return 0;
 }
 
-/* Hairer's step size controller with step size stabilisation (PI, Gustafsson; dopri5.f /
- * dop853.f with BETA): fac = err^(1/q - 0.75 beta) / err_old^beta, h_new = h * safety / fac
- * within [fac_min, fac_max]; no increase right after a rejection; a rejected step uses the
- * integral part alone.  err_old (I->err_old, part of a saved state) is the error norm of the
- * last accepted step, floored at 1e-4 (0: none yet, plain integral control). */
-GW_INTERNAL double gw_step_factor(gw_instance *I, double err, double q, double beta, double fac_min,
-                                  double fac_max, int accepted, int rejected_last) {
+/* Hairer's step size controller with step size stabilisation (PI, Gustafsson; dopri5.f and
+ * dop853.f with BETA): fac = err^-expo / err_old^-beta with expo = 1/q - w beta (Hairer's
+ * weights w: 0.75 for DOPRI5, 0.2 for DOP853), h_new = h * safety * fac within [fac_min,
+ * fac_max]; no increase right after a rejection; a rejected step uses err^(-1/q) alone.
+ * err_old (I->err_old, part of a saved state) is the error norm of the last accepted step,
+ * floored at 1e-4 (0: none yet, integral control alone). */
+GW_INTERNAL double gw_step_factor(gw_instance *I, double err, double q, double beta, double w,
+                                  double fac_min, double fac_max, int accepted, int rejected_last) {
     const double safety = 0.9;
     double fac;
     if (!isfinite(err)) return fac_min;
@@ -242,8 +243,9 @@ GW_INTERNAL double gw_step_factor(gw_instance *I, double err, double q, double b
         fac = safety * pow(err, -1.0 / q);
         return fac < fac_min ? fac_min : (fac > 1.0 ? 1.0 : fac);
     }
-    fac = I->err_old > 0.0 ? safety * pow(err, -(1.0 / q - 0.75 * beta)) * pow(I->err_old, beta)
-                           : safety * pow(err, -1.0 / q);
+    fac = (beta > 0.0 && I->err_old > 0.0)
+              ? safety * pow(err, -(1.0 / q - w * beta)) * pow(I->err_old, beta)
+              : safety * pow(err, -1.0 / q);
     I->err_old = err > 1e-4 ? err : 1e-4;
     if (fac > fac_max) fac = fac_max;
     if (fac < fac_min) fac = fac_min;
@@ -329,8 +331,9 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
                 if (gw_rhs_checked(I, t1, I->xnew, I->k[6])) return GW_INT_ERROR;
                 I->k7_valid = 1;
             }
-            fac = ros ? gw_step_factor(I, err, 4.0, 0.0, fac_min, fac_max, 1, rejected_last)
-                      : gw_step_factor(I, err, 8.0, GW_DOP853_BETA, fac_min, fac_max, 1, rejected_last);
+            fac = ros ? gw_step_factor(I, err, 4.0, 0.0, 0.0, fac_min, fac_max, 1, rejected_last)
+                      : gw_step_factor(I, err, 8.0, GW_DOP853_BETA, 0.2, fac_min, fac_max, 1,
+                                       rejected_last);
             hnew = h * fac;
             /* a step shortened to land on t_end says little about the step size */
             if (last && h < I->h_adapt && hnew >= h && hnew < I->h_adapt) hnew = I->h_adapt;
@@ -344,7 +347,7 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
             }
         } else {
             I->n_rejected++;
-            fac = gw_step_factor(I, err, ros ? 4.0 : 8.0, 0.0, fac_min, fac_max, 0, rejected_last);
+            fac = gw_step_factor(I, err, ros ? 4.0 : 8.0, 0.0, 0.0, fac_min, fac_max, 0, rejected_last);
             I->h_adapt = h * fac;
             rejected_last = 1;
             if (I->h_adapt < gw_h_min(I->t)) {

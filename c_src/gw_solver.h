@@ -48,8 +48,8 @@
 #define GW_PROJECTION_MARGIN 100.0
 /* step size stabilisation of DOP853 and DOPRI5 (Hairer's BETA; benchmarks/work_precision.py
  * measures the rejected-step fraction) */
-#define GW_DOP853_BETA 0.0
-#define GW_DOPRI5_BETA 0.04
+#define GW_DOP853_BETA 0.04
+#define GW_DOPRI5_BETA 0.0
 
 /* ---- gw_solver.c: the step driver's helpers, shared by the families ----------------------- */
 /* log that the budget of internal steps refuses the rest of the call (what: why now) */
@@ -67,10 +67,10 @@ GW_INTERNAL int gw_rhs_checked(gw_instance *I, double t, const double *x, double
 GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events);
 /* weighted RMS norm of v with the error weights at x */
 GW_INTERNAL double gw_rms_weighted(const gw_instance *I, const double *v, const double *x);
-/* Step size factor h_new / h of Hairer's controller with stabilisation beta (PI); order q;
+/* Step size factor h_new / h of Hairer's controller with stabilisation beta and weight w (PI);
  * updates I->err_old on accepted steps. */
-GW_INTERNAL double gw_step_factor(gw_instance *I, double err, double q, double beta, double fac_min,
-                                  double fac_max, int accepted, int rejected_last);
+GW_INTERNAL double gw_step_factor(gw_instance *I, double err, double q, double beta, double w,
+                                  double fac_min, double fac_max, int accepted, int rejected_last);
 /* I->xnew, I->xcnew = I->x + I->dx with compensated summation (TwoSum) */
 GW_INTERNAL void gw_sum_update(gw_instance *I);
 /* Hairer's initial step size estimate (one extra RHS evaluation). */

@@ -104,8 +104,8 @@ GW_INTERNAL gw_int_result gw_integrate_dopri5(gw_instance *I, double t_end) {
         if (gw_dopri5_step(I, h, t1, &err)) return GW_INT_ERROR;
         if (err <= 1.0) {
             gw_int_result r;
-            fac = gw_step_factor(I, err, 5.0, GW_DOPRI5_BETA, GW_DOPRI5_FAC_MIN, GW_DOPRI5_FAC_MAX, 1,
-                                 rejected_last);
+            fac = gw_step_factor(I, err, 5.0, GW_DOPRI5_BETA, 0.75, GW_DOPRI5_FAC_MIN,
+                                 GW_DOPRI5_FAC_MAX, 1, rejected_last);
             {
                 double hnew = h * fac;
                 /* a step shortened to land on t_end says little about the step size */
@@ -119,7 +119,7 @@ GW_INTERNAL gw_int_result gw_integrate_dopri5(gw_instance *I, double t_end) {
             if (r != GW_INT_OK) return r;
         } else {
             I->n_rejected++;
-            fac = gw_step_factor(I, err, 5.0, 0.0, GW_DOPRI5_FAC_MIN, GW_DOPRI5_FAC_MAX, 0,
+            fac = gw_step_factor(I, err, 5.0, 0.0, 0.0, GW_DOPRI5_FAC_MIN, GW_DOPRI5_FAC_MAX, 0,
                                  rejected_last);
             I->h_adapt = h * fac;
             rejected_last = 1;

@@ -76,7 +76,10 @@ GW_API gw_instance *gw_instance_new(const gw_model *m, const char *name, const g
     GW_ALLOC_VEC(I->flags_bak, int, ne);
     if (gw_solver_alloc(I)) goto fail;
 
-    if (gw_fun_alloc(I, &I->f_init, &m->init, 2, 1) || gw_fun_alloc(I, &I->f_ode, &m->ode, 4, 1) ||
+    GW_ALLOC_VEC(I->pre_c, double, m->n_pre);
+    if (gw_fun_alloc(I, &I->f_pre, &m->ode_pre, 1, 1)) goto fail;
+    if (gw_fun_alloc(I, &I->f_init, &m->init, 2, 1) ||
+        gw_fun_alloc(I, &I->f_ode, &m->ode, m->ode_pre.eval ? 5 : 4, 1) ||
         gw_fun_alloc(I, &I->f_out, &m->out, 4, 1) || gw_fun_alloc(I, &I->f_evt, &m->evt, 4, 1) ||
         gw_fun_alloc(I, &I->f_chk, &m->chk, 2, 1) || gw_fun_alloc(I, &I->f_nom, &m->nom, 1, 1) ||
         gw_fun_alloc(I, &I->f_jac, &m->jac, 4, 1))
@@ -109,6 +112,8 @@ GW_API void gw_instance_free(gw_instance *I) {
     gw_fun_free(I, &I->f_nom);
     gw_fun_free(I, &I->f_jac);
     gw_fun_free(I, &I->f_dir);
+    gw_fun_free(I, &I->f_pre);
+    gw_free(I, I->pre_c);
     gw_solver_free(I);
     gw_free(I, I->xdot);
     gw_free(I, I->e_me);
@@ -178,6 +183,7 @@ GW_API void gw_instance_reset(gw_instance *I) {
     I->terminated = 0;
     I->last_successful_time = 0.0;
     I->y_valid = 0;
+    I->pre_valid = 0;
     I->fcur_valid = 0;
     I->xdot_valid = 0;
     I->dir_valid = 0;

@@ -26,7 +26,7 @@
  * Their inputs and outputs, in this order (all dense column vectors; an input of
  * size 0 may be passed as NULL):
  *   init(s, p)       -> x0          consistent initial state from the start values
- *   ode (t, x, u, p) -> xdot        right-hand side
+ *   ode (t, x, u, p) -> xdot        right-hand side (ode(t, x, u, p, c) with ode_pre, below)
  *   out (t, x, u, p) -> y           outputs
  *   evt (t, x, u, p) -> e           event indicators          (NULL eval if ne == 0)
  *   chk (s, p)       -> c           validity checks           (NULL eval if nc == 0)
@@ -125,6 +125,11 @@ typedef struct {
     int default_solver;                /* gw_solver */
     double default_rel_tol, default_abs_tol, default_max_step;
     double default_max_internal_steps; /* 0: GW_DEFAULT_MAX_INTERNAL_STEPS */
+    /* Optional: ode_pre(p) -> c (n_pre values), the subexpressions of ode that depend on the
+     * parameters alone (model/hoist.py), computed by the runtime when p changes.  When present,
+     * ode takes c as a fifth argument: ode(t, x, u, p, c) -> xdot. */
+    gw_function ode_pre;
+    int n_pre;
 } gw_model;
 
 #endif /* GW_MODEL_H */

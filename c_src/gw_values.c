@@ -66,6 +66,7 @@ GW_API void gw_value_set(gw_instance *I, const gw_variable *v, double value) {
     switch (v->kind) {
     case GW_VAR_PARAM:
         I->p[v->index] = value;
+        I->pre_valid = 0;
         if (!I->in_setup) { /* tunable parameter during the simulation */
             gw_point_changed(I);
             I->fcur_valid = 0;

@@ -16,11 +16,12 @@ import casadi as ca
 from fmu_build.casadi_c import UNITY_GUARD_CLOSE, UNITY_GUARD_OPEN, make_internal
 from fmu_build.scene import SOLVERS, Experiment
 from fmu_build.variables import KIND, TYPE, Variable
+from model.hoist import split_parameters
 from model.spec import ModelSpec
 
 FUNCTION_FILE = "gw_funcs"
 DESC_FILE = "model_desc.c"
-SLOTS = ("init", "ode", "out", "evt", "chk", "nom", "jac", "dir")
+SLOTS = ("init", "ode", "out", "evt", "chk", "nom", "jac", "dir", "ode_pre")
 EVENT_ACTION = {"terminate": "GW_EVENT_TERMINATE", "warn": "GW_EVENT_WARN"}
 
 
@@ -31,9 +32,21 @@ def optimised(fn: ca.Function) -> ca.Function:
     return ca.Function(fn.name(), ins, outs, fn.name_in(), fn.name_out())
 
 
+def hoisted(spec: ModelSpec) -> dict[str, ca.Function]:
+    """spec.functions() with the parameter-only subexpressions of ode moved to ode_pre(p) -> c
+    (model/hoist.py): ode(t, x, u, p, c), evaluated by the runtime once per parameter change."""
+    fns = spec.functions()
+    c, ode_c, c_sym = split_parameters(ca.cse(spec.ode), [spec.t, spec.x, spec.u], spec.p)
+    if c.numel() > 0:
+        fns["ode"] = ca.Function("gw_ode", [spec.t, spec.x, spec.u, spec.p, c_sym], [ode_c],
+                                 ["t", "x", "u", "p", "c"], ["xdot"])
+        fns["ode_pre"] = ca.Function("gw_ode_pre", [spec.p], [c], ["p"], ["c"])
+    return fns
+
+
 def generate_functions(spec: ModelSpec, out_dir: Path) -> dict[str, ca.Function]:
     """Write gw_funcs.c (static functions only); return the functions by slot name."""
-    fns = {slot: optimised(f) for slot, f in spec.functions().items()}
+    fns = {slot: optimised(f) for slot, f in hoisted(spec).items()}
     cwd = Path.cwd()
     out_dir.mkdir(parents=True, exist_ok=True)
     try:  # CodeGenerator writes into the working directory
@@ -116,6 +129,7 @@ static const gw_model GW_MODEL = {{
     .default_abs_tol = {exp.abs_tol!r},
     .default_max_step = {exp.max_step!r},
     .default_max_internal_steps = {float(exp.max_internal_steps)!r},
+    .n_pre = {fns["ode_pre"].numel_out(0) if "ode_pre" in fns else 0},
 }};
 
 {UNITY_GUARD_CLOSE}"""

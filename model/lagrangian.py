@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from model.polynomial import solve_linear
+from model.polynomial import simplify, solve_linear
 
 
 def prune_identically_zero(A: ca.SX, trials: int = 6, seed: int = 20261122) -> ca.SX:
@@ -106,6 +106,7 @@ class ConstrainedSystem:
     A: ca.SX
     Q_nc: ca.SX | None = None
     unknowns: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
+    parameters: list[str] = field(default_factory=list)  # names of the parameter symbols (hoisting)
 
     @property
     def n(self) -> int:
@@ -170,7 +171,7 @@ class ConstrainedSystem:
             A = ca.substitute(A, ca.vertcat(*cyclic), zero)
             b = ca.substitute(b, ca.vertcat(*cyclic), zero)
             candidates.append(ca.solve(A, -b))
-        candidates.append(solve_linear(A, -b, max_block=4))
+        candidates.append(solve_linear(A, -b, max_block=4, params=self.parameters))
         return min(candidates, key=evaluation_cost)
 
     def _unknowns(self):
@@ -189,6 +190,9 @@ class ConstrainedSystem:
         nf = self.n_free
         qf = self.q[:nf]
         qd_free = ca.mtimes(S, v)
+        simpler = simplify(qd_free, params=self.parameters)  # sin^2 + cos^2 = 1 in the kinematics
+        if evaluation_cost(simpler) < evaluation_cost(qd_free):
+            qd_free = simpler
         qd_all = ca.vertcat(qd_free, qd_driven)
         S_dot_v = ca.jtimes(qd_free, qf, qd_free)  # d(S v)/dq q_dot with v held fixed
         qdd_all = ca.vertcat(ca.mtimes(S, v_dot) + S_dot_v, qdd_driven)

@@ -47,8 +47,10 @@ def _mul_mono(a: Monomial, b: Monomial) -> Monomial:
 class Normaliser:
     """Polynomial normal form over atoms; one instance shares atoms between the expressions it sees."""
 
-    def __init__(self, max_terms: int = 300):
+    def __init__(self, max_terms: int = 300, params=()):
         self.max_terms = max_terms
+        self.params = set(params)  # names of the symbols that are parameters (coefficients)
+        self._param_atom: dict[int, bool] = {}
         self.atoms: list[ca.SX] = []  # the SX node of each atom
         self.keys: dict = {}  # canonical key -> atom index
         self.trig: dict[int, tuple[str, object]] = {}  # atom index -> ("sin"|"cos", argument key)
@@ -200,36 +202,73 @@ class Normaliser:
         return p
 
     # -- back to CasADi ----------------------------------------------------------------------
+    def is_param_atom(self, k: int) -> bool:
+        """Atom k depends on parameters alone (its value is fixed during a simulation)."""
+        if k not in self._param_atom:
+            self._param_atom[k] = bool(self.params) and all(
+                v.name() in self.params for v in ca.symvar(self.atoms[k]))
+        return self._param_atom[k]
+
     def emit(self, p: Poly) -> ca.SX:
-        """A greedy multivariate Horner form of p."""
-        if not p:
+        """p as an SX expression: a greedy multivariate Horner form.  With parameters declared, the
+        monomials are grouped by their part in the other atoms and each group's coefficient, a
+        polynomial of the parameters alone, is emitted as one subexpression (hoisted out of the
+        right-hand side by model/hoist.py): k_a alpha_dot cos(beta) - 2 k_d alpha_dot cos(beta)
+        becomes (k_a - 2 k_d) alpha_dot cos(beta)."""
+        if not self.params:
+            return self._horner({m: ca.SX(float(c)) for m, c in p.items()}, {m: c for m, c in p.items()})
+        groups: dict[Monomial, Poly] = {}
+        for m, c in p.items():
+            var = tuple((k, v) for k, v in m if not self.is_param_atom(k))
+            par = tuple((k, v) for k, v in m if self.is_param_atom(k))
+            groups.setdefault(var, {})[par] = c
+        coeffs = {}
+        for var, poly in groups.items():
+            const = Normaliser._const(poly)
+            coeffs[var] = const if const is not None else self._horner(
+                {m: ca.SX(float(c)) for m, c in poly.items()}, poly)
+        return self._horner({m: (ca.SX(float(c)) if isinstance(c, Fraction) else c) for m, c in coeffs.items()},
+                            {m: c for m, c in coeffs.items() if isinstance(c, Fraction)})
+
+    def _horner(self, terms: dict, exact: dict) -> ca.SX:
+        """sum of coefficient * monomial; terms: monomial -> SX coefficient, exact: the coefficients
+        known as numbers (1 and -1 need no multiplication)."""
+        if not terms:
             return ca.SX(0)
-        const = p.get((), Fraction(0))
-        rest = {m: c for m, c in p.items() if m}
+        const = terms.get(())
+        rest = {m: c for m, c in terms.items() if m}
         if not rest:
-            return ca.SX(float(const))
+            return const
         count = Counter(k for m in rest for k, _ in m)
         atom, n = count.most_common(1)[0]
-        if n == 1 and len(rest) > 1 or n == 0:
-            terms = [self._emit_mono(m, c) for m, c in rest.items()]
-            out = terms[0]
-            for t in terms[1:]:
-                out = out + t
+        if n == 1 and len(rest) > 1:
+            out = None
+            for m, c in rest.items():
+                t = self._emit_mono(m, exact.get(m), c)
+                out = t if out is None else out + t
         else:
             with_a, without = {}, {}
+            ex_a, ex_wo = {}, {}
             for m, c in rest.items():
                 d = dict(m)
                 if atom in d:
                     d[atom] -= 1
-                    with_a[tuple(sorted((k, v) for k, v in d.items() if v))] = c
+                    key = tuple(sorted((k, v) for k, v in d.items() if v))
+                    with_a[key] = c
+                    if m in exact:
+                        ex_a[key] = exact[m]
                 else:
                     without[m] = c
-            out = self.atoms[atom] * self.emit(with_a)
+                    if m in exact:
+                        ex_wo[m] = exact[m]
+            out = self.atoms[atom] * self._horner(with_a, ex_a)
             if without:
-                out = out + self.emit(without)
-        return out + float(const) if const else out
+                out = out + self._horner(without, ex_wo)
+        if const is None or (() in exact and exact[()] == 0):
+            return out
+        return out + const
 
-    def _emit_mono(self, m: Monomial, c: Fraction) -> ca.SX:
+    def _emit_mono(self, m: Monomial, c, coeff: ca.SX) -> ca.SX:
         out = None
         for k, pw in m:
             f = self.atoms[k] if pw == 1 else (ca.SX.unary(ca.OP_SQ, self.atoms[k]) if pw == 2 else self.atoms[k] ** pw)
@@ -238,15 +277,16 @@ class Normaliser:
             return out
         if c == -1:
             return -out
-        return float(c) * out
+        return coeff * out
 
 
-def simplify(expr: ca.SX, max_terms: int = 300, normaliser: Normaliser | None = None) -> ca.SX:
-    """expr in the polynomial normal form, or unchanged if an expansion grows past max_terms."""
+def simplify(expr: ca.SX, max_terms: int = 300, normaliser: Normaliser | None = None, params=()) -> ca.SX:
+    """expr in the polynomial normal form, or unchanged if an expansion grows past max_terms.
+    params: names of the parameter symbols (coefficients grouped, Normaliser.emit)."""
     expr = ca.SX(expr)
     if expr.numel() == 0:
         return expr
-    norm = normaliser or Normaliser(max_terms)
+    norm = normaliser or Normaliser(max_terms, params)
     try:
         polys = norm.polys(expr)
     except TooLarge:
@@ -320,7 +360,7 @@ def _blocks(A: ca.SX) -> list[list[int]]:
     return blocks
 
 
-def solve_linear(A: ca.SX, b: ca.SX, max_block: int = 4, max_terms: int = 300) -> ca.SX:
+def solve_linear(A: ca.SX, b: ca.SX, max_block: int = 4, max_terms: int = 300, params=()) -> ca.SX:
     """x with A x = b, A square: block by block (the connected components of A's sparsity); a block
     of size <= max_block by Cramer's rule in exact polynomial arithmetic: each equation is first
     divided by the monomial common to all its terms (M R^2, ...), the numerators and the
@@ -328,10 +368,12 @@ def solve_linear(A: ca.SX, b: ca.SX, max_block: int = 4, max_terms: int = 300) -
     the whole system: with block determinants d_k and D = prod d_k, x = num (D / d_k) r with the
     shared reciprocal r = 1 / D, written 2 / (2 D) so that CasADi does not turn y * (1 / D) back
     into one division per use (exact: the factor 2 is a power of two).
+    A determinant of the parameters alone gets its own reciprocal (hoisted by model/hoist.py).
+    params: names of the parameter symbols (Normaliser.emit).
     Larger blocks, or expansions past max_terms, use CasADi's symbolic solve."""
     A, b = ca.SX(A), ca.SX(b)
     x = ca.SX.zeros(A.size1())
-    norm = Normaliser(max_terms)
+    norm = Normaliser(max_terms, params)
     solved = []  # (block, numerators, determinant) of the blocks done by Cramer
     for blk in _blocks(A):
         Ab, bb = A[blk, blk], b[blk]
@@ -357,7 +399,10 @@ def solve_linear(A: ca.SX, b: ca.SX, max_block: int = 4, max_terms: int = 300) -
             solved.append((blk, [_divide(p, g) for p in nums], _divide(det, g)))
         except TooLarge:
             x[blk] = ca.solve(Ab, bb)
-    varying = [k for k, (_, _, det) in enumerate(solved) if Normaliser._const(det) is None]
+    def fixed(det: Poly) -> bool:  # a determinant of the parameters alone
+        return all(norm.is_param_atom(k) for m in det for k, _ in m)
+
+    varying = [k for k, (_, _, det) in enumerate(solved) if Normaliser._const(det) is None and not fixed(det)]
     # r = 1 / D written 2 / (2 D): CasADi rewrites y * (1 / D) into y / D (a division per use)
     r = 2 / (2 * _product([norm.emit(solved[k][2]) for k in varying])) if varying else None
     for k, (blk, nums, det) in enumerate(solved):
@@ -365,6 +410,11 @@ def solve_linear(A: ca.SX, b: ca.SX, max_block: int = 4, max_terms: int = 300) -
         if c is not None:
             for i, num in zip(blk, nums):
                 x[i] = norm.emit({m: v / c for m, v in num.items()})
+            continue
+        if fixed(det):
+            inv_fixed = 2 / (2 * norm.emit(det))
+            for i, num in zip(blk, nums):
+                x[i] = norm.emit(num) * inv_fixed
             continue
         others = [norm.emit(solved[j][2]) for j in varying if j != k]
         inv = _product(others) * r if others else r  # 1 / d_k

@@ -38,7 +38,7 @@ struct gw_instance {
     int solver;
     double rel_tol, abs_tol, max_step;
     double max_internal_steps; /* budget of internal steps of one gw_advance */
-    double atol_eff;           /* abs_tol in force: abs_tol, or rel_tol when abs_tol == 0 */
+    double atol_eff;           /* abs_tol in force: abs_tol, or rel_tol / 100 when abs_tol == 0 */
 
     /* experiment */
     double t_start, t_stop;
@@ -97,6 +97,7 @@ struct gw_instance {
     /* DOP853 and Rosenbrock work memory (gw_solver_alloc).  Nothing here survives a saved
      * state: it is recomputed in every step. */
     double *kx[9]; /* extra stage vectors, nx each */
+    double *sacc;  /* nx: DOP853's stage sums */
     double *rcx;   /* 3*nx: DOP853 dense output coefficients beyond rcont */
     double *jac;   /* nx*nx: d xdot / d x, column-major (Rosenbrock) */
     double *lu;    /* nx*nx: LU factors of I/(gamma h) - J, column-major */

@@ -17,8 +17,8 @@
  *   y  outputs                     (ny)   everything readable that is computed from x
  *   e  event indicators            (ne)   an event happens when e_i goes from > 0 to <= 0
  *   c  validity checks             (nc)   each c_i must be > 0 at initialisation
- * abs_tol = 0 (a model default or a user's value) means "follow rel_tol": the absolute
- * tolerance of state i is then rel_tol * nominal_i.
+ * abs_tol = 0 (the scenes' default, or a user's value) means "follow rel_tol": the absolute
+ * tolerance of state i is then GW_ATOL_PER_RTOL * rel_tol * nominal_i.
  *
  * Generated functions (CasADi calling convention, see CodeGenerator docs):
  *   int f(const double **arg, double **res, gw_int *iw, double *w, int mem);
@@ -79,6 +79,8 @@ typedef enum {
 /* Default budget of internal steps per call when the model gives none (0): about 1 s of CPU
  * for the base wheel with DOP853 (docs/fmi.md, "Bounded calls"). */
 #define GW_DEFAULT_MAX_INTERNAL_STEPS 1000000.0
+/* abs_tol = 0: abs_tol follows rel_tol as rel_tol / 100 (the old fixed 1e-10 at rel_tol 1e-8) */
+#define GW_ATOL_PER_RTOL 1e-2
 /* Largest budget accepted (an fmi2Integer). */
 #define GW_MAX_MAX_INTERNAL_STEPS 2147483647.0
 

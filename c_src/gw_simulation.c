@@ -144,7 +144,7 @@ static gw_status gw_check_setup(gw_instance *I, const char *fn) {
         GW_SIM_FAIL("%s: max_internal_steps = %g must be a whole number from 1 to %.0f", fn,
                     I->max_internal_steps, GW_MAX_MAX_INTERNAL_STEPS);
     /* abs_tol = 0 follows rel_tol: no fixed absolute floor under a tolerance-only run */
-    I->atol_eff = I->abs_tol > 0.0 ? I->abs_tol : I->rel_tol;
+    I->atol_eff = I->abs_tol > 0.0 ? I->abs_tol : GW_ATOL_PER_RTOL * I->rel_tol;
     if (m->nc > 0) {
         if (gw_eval_chk(I, I->c) != 0)
             GW_SIM_FAIL("%s: evaluation of the validity checks failed", fn);

@@ -453,6 +453,8 @@ GW_INTERNAL int gw_solver_alloc(gw_instance *I) {
         if (!I->kx[i]) return -1;
     }
     I->rcx = (double *)gw_alloc(I, 3 * nx, sizeof(double));
+    I->sacc = (double *)gw_alloc(I, nx, sizeof(double));
+    if (!I->sacc) return -1;
     I->jac = (double *)gw_alloc(I, nx * nx, sizeof(double));
     I->lu = (double *)gw_alloc(I, nx * nx, sizeof(double));
     I->piv = (int *)gw_alloc(I, nx, sizeof(int));
@@ -466,6 +468,8 @@ GW_INTERNAL void gw_solver_free(gw_instance *I) {
         I->kx[i] = NULL;
     }
     gw_free(I, I->rcx);
+    gw_free(I, I->sacc);
+    I->sacc = NULL;
     gw_free(I, I->jac);
     gw_free(I, I->lu);
     gw_free(I, I->piv);

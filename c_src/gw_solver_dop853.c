@@ -27,13 +27,16 @@ static void gw_dop853_stages(const gw_instance *I, double *K[16]) {
 /* xt = x + h * sum_{j<s} dop_a[s][j] K[j] */
 static void gw_dop853_arg(const gw_instance *I, double *const K[16], int s, double h, double *xt) {
     int i, j, nx = I->m->nx;
-    const double *a = dop_a[s];
-    for (i = 0; i < nx; i++) {
-        double acc = 0.0;
-        for (j = 0; j < s; j++)
-            if (a[j] != 0.0) acc += a[j] * K[j][i];
-        xt[i] = I->x[i] + h * acc;
-    }
+    const double *a = dop_a[s], *restrict x = I->x, *restrict K0 = K[0];
+    double *restrict acc = I->sacc; /* stage by stage over the state (vectorisable), the sum kept
+                                       apart from x */
+    for (i = 0; i < nx; i++) acc[i] = a[0] * K0[i];
+    for (j = 1; j < s; j++)
+        if (a[j] != 0.0) {
+            const double aj = a[j], *restrict Kj = K[j];
+            for (i = 0; i < nx; i++) acc[i] += aj * Kj[i];
+        }
+    for (i = 0; i < nx; i++) xt[i] = x[i] + h * acc[i];
 }
 
 /* DOP853 step (12 stages); *err = Hairer's combined 5th/3rd-order error norm with the
@@ -50,12 +53,23 @@ GW_INTERNAL int gw_dop853_step(gw_instance *I, double h, double t1, double *err)
         gw_dop853_arg(I, K, s, h, xt);
         if (gw_rhs_checked(I, s == 11 ? t1 : t + dop_c[s] * h, xt, K[s])) return -1;
     }
-    for (i = 0; i < nx; i++) {
-        double incr = 0.0, e5 = 0.0, e3, sk, ax, an;
-        for (j = 0; j < 12; j++) {
-            if (dop_b[j] != 0.0) incr += dop_b[j] * K[j][i];
-            if (dop_e5[j] != 0.0) e5 += dop_e5[j] * K[j][i];
+    { /* the 8th-order increment (in sacc) and the 5th-order error estimate (in xt), stage by stage */
+        double *incr = I->sacc, *e5v = xt;
+        for (i = 0; i < nx; i++) {
+            incr[i] = dop_b[0] * K[0][i];
+            e5v[i] = dop_e5[0] * K[0][i];
         }
+        for (j = 5; j < 12; j++) {
+            const double bj = dop_b[j], ej = dop_e5[j], *Kj = K[j];
+            for (i = 0; i < nx; i++) {
+                incr[i] += bj * Kj[i];
+                e5v[i] += ej * Kj[i];
+            }
+        }
+    }
+    for (i = 0; i < nx; i++) {
+        const double incr = I->sacc[i], e5 = xt[i];
+        double e3, sk, ax, an;
         I->dx[i] = h * incr;
         e3 = incr - dop_bhh0 * K[0][i] - dop_bhh8 * K[8][i] - dop_bhh11 * K[11][i];
         ax = fabs(x[i]);

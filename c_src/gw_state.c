@@ -278,7 +278,7 @@ GW_API void gw_state_apply(gw_instance *I, const unsigned char *buf) {
     I->err_old = gw_get_f64(&r);
     gw_get_vec(&r, I->xc, m->nx);
     memcpy(I->xc_x, I->x, (size_t)m->nx * sizeof(double));
-    I->atol_eff = I->abs_tol > 0.0 ? I->abs_tol : I->rel_tol;
+    I->atol_eff = I->abs_tol > 0.0 ? I->abs_tol : GW_ATOL_PER_RTOL * I->rel_tol;
     I->pre_valid = 0; /* p came from the state */
     I->fcur_valid = 0;
     I->k7_valid = 0;

@@ -36,7 +36,7 @@ class Experiment:
     output_interval: float = 0.01
     solver: str = "dopri5"
     rel_tol: float = 1e-8
-    abs_tol: float = 1e-10
+    abs_tol: float = 0.0  # 0: follow rel_tol (rel_tol / 100, so a tolerance-only run has no floor)
     max_step: float = 0.01
     max_internal_steps: int = 1_000_000  # budget of internal steps of one fmi2DoStep (docs/fmi.md)
 

@@ -59,7 +59,7 @@ def solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
         (Quantity("rel_tol", "1", "relative error tolerance of adaptive solvers "
                   "(overridden by fmi2SetupExperiment's tolerance)", exp.rel_tol), "Real", None),
         (Quantity("abs_tol", "1", "absolute error tolerance of adaptive solvers "
-                  "(scaled by each state's nominal value; 0: follow rel_tol)", exp.abs_tol), "Real", None),
+                  "(scaled by each state's nominal value; 0: rel_tol / 100)", exp.abs_tol), "Real", None),
         (Quantity("max_step", "s", "upper bound of internal steps; the fixed step of euler and rk4",
                   exp.max_step), "Real", None),
         (Quantity("max_internal_steps", "", "budget of internal steps (accepted and rejected) of one "

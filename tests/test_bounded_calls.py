@@ -22,20 +22,7 @@ from fmi_helpers import Slave
 from fmu_build import build_fmu, load_scene, parse_scene
 from fmu_build.scene import SceneError
 
-SCENE = """
-[model]
-name = "bounded"
-[effects.gravity]
-g = 9.81
-[experiment]
-max_step = 0.05
-"""
-
-
-@pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
-    root = tmp_path_factory.mktemp("bounded")
-    return str(build_fmu(parse_scene(SCENE, "bounded.toml"), root / "bounded.fmu").fmu)
+SCENE = "[model]\nname = 'bounded'\n[effects.gravity]\ng = 9.81\n[experiment]\nmax_step = 0.05\n"
 
 
 @pytest.fixture(scope="module")
@@ -45,8 +32,9 @@ def euler_disk(tmp_path_factory):
 
 
 @pytest.fixture
-def slave(fmu):
-    s = Slave(fmu)
+def slave(earth_fmu):
+    """the paper's earth wheel (examples/scenes/paper_earth.toml: dopri5, max_step 0.05 s)"""
+    s = Slave(earth_fmu)
     yield s
     s.free()
 

@@ -33,6 +33,8 @@ from fmu_build import build_fmu, parse_scene
 SCENE = """
 [model]
 name = "upright"
+[wheel]
+beta_min = 0.02
 [effects.gravity]
 g = 9.81
 """

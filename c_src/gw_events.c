@@ -122,6 +122,7 @@ GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, d
         if (!fires) continue;
         if (I->eev[i] > 0.0) I->eev[i] = 0.0; /* the winner is at its crossing */
         I->flags[i] = 1;
+        I->t_events[i] = best;
         I->n_events++;
         if (m->event_actions && m->event_actions[i] == GW_EVENT_WARN) {
             gw_event_log(I, i, best, 0);
@@ -156,6 +157,7 @@ GW_API gw_ev_result gw_event_update(gw_instance *I, const double *e_now) {
         I->e[i] = e_now[i];
         if (!fires) continue;
         I->flags[i] = 1;
+        I->t_events[i] = I->t;
         I->n_events++;
         gw_event_log(I, i, I->t, !is_warn);
         if (is_warn)

@@ -47,9 +47,7 @@ GW_INTERNAL void gw_budget_message(gw_instance *I, const char *what, double rema
 
 /* check 1; 0 or -1 logged */
 static int gw_budget_upfront(gw_instance *I, double t_end) {
-    const double H = t_end - I->t;
-    double n_min = ceil(H / I->max_step - 1e-12);
-    if (n_min < 1.0) n_min = 1.0;
+    const double H = t_end - I->t, n_min = gw_fixed_substeps(I, t_end);
     if (!(n_min > I->max_internal_steps)) return 0;
     GW_LOG_ERR(I, "communication step %g s from t=%.17g would need %s%.3g internal steps of "
                "max_step=%g, more than max_internal_steps = %.0f: raise max_internal_steps or "

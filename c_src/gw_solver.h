@@ -82,6 +82,9 @@ GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last,
                                 unsigned long *n_fast, double *h, double *t1, int *last);
 
 /* ---- gw_solver_fixed.c ------------------------------------------------------------------------ */
+/* ceil((t_end - I->t) / max_step) less the rounding of t (>= 1): the fixed-step solvers' exact
+ * substep count, a lower bound for the adaptive ones */
+GW_INTERNAL double gw_fixed_substeps(const gw_instance *I, double t_end);
 GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end);
 
 /* ---- gw_solver_dopri5.c ----------------------------------------------------------------------- */

@@ -79,19 +79,24 @@ static int gw_rk4_step(gw_instance *I, double h, double t1) {
 
 /* ---- the fixed-step loop ------------------------------------------------------ */
 
+/* Substeps of max_step that cover [I->t, t_end] (at least 1).  A communication step meant to be
+ * k max_step long (t_k = t0 + k h in the caller) comes out longer by the rounding of t: 1e-13 s
+ * at t = 1000 s, 1e-10 of a 1 ms step.  That excess must not add a substep (twice the cost of a
+ * real-time step, at random): up to 8 ulps of t are absorbed into the substeps.  Also the lower
+ * bound of every solver's step count that the budget checks up front (gw_solver.c). */
+GW_INTERNAL double gw_fixed_substeps(const gw_instance *I, double t_end) {
+    const double t0 = I->t, H = t_end - t0;
+    const double slack = 1e-12 * I->max_step + 8.0 * DBL_EPSILON * fmax(fabs(t0), fabs(t_end));
+    const double nd = ceil((H - slack) / I->max_step);
+    return nd < 1.0 ? 1.0 : nd;
+}
+
 GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
     const double t0 = I->t, H = t_end - t0;
-    /* A communication step meant to be k max_step long (t_k = t0 + k h in the caller) comes out
-     * longer by the rounding of t: 1e-13 s at t = 1000 s, 1e-10 of a 1 ms step.  That excess must
-     * not add a substep (twice the cost of a real-time step, at random): up to 8 ulps of t are
-     * absorbed into the substeps. */
-    const double slack = 1e-12 * I->max_step + 8.0 * DBL_EPSILON * fmax(fabs(t0), fabs(t_end));
-    double nd = ceil((H - slack) / I->max_step);
     unsigned long long n, i;
     int events = 0, growing;
     double d_prev;
-    if (nd < 1.0) nd = 1.0; /* the budget was checked up front (gw_integrate) */
-    n = (unsigned long long)nd;
+    n = (unsigned long long)gw_fixed_substeps(I, t_end); /* within the budget (gw_integrate) */
     d_prev = 0.0;
     growing = 0;
     for (i = 1; i <= n; i++) {

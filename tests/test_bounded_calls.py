@@ -171,9 +171,14 @@ def test_rejected_steps_count_against_the_budget(slave):
 
 @pytest.mark.parametrize("value", [0, -5])
 def test_budget_must_be_positive(slave, value):
-    with pytest.raises(FMICallException):
-        slave.init(max_internal_steps=value)
-    assert f"max_internal_steps = {value} must be a whole number from 1 to 2147483647" in slave.log_text()
+    """Refused at the call, fmi2SetInteger itself, like every setting (fmi-robust's rule; before the
+    merge: only at fmi2ExitInitializationMode)."""
+    slave.slave.setupExperiment(startTime=0.0)
+    with pytest.raises(FMICallException) as exc:
+        slave.set(max_internal_steps=value)
+    assert exc.value.status == 3
+    assert f"fmi2SetInteger: max_internal_steps = {value} must be a whole number from 1 to 2147483647" \
+        in slave.log_text()
 
 
 def test_budget_is_a_scene_setting(tmp_path):

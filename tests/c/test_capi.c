@@ -148,7 +148,15 @@ static void bad_values(void) {
     st.rel_tol = -1.0;
     CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_ERR_INVALID);
     CHECK_MSG(w, "rel_tol = -1 must be > 0");
+    st.rel_tol = 2.0; /* > 0, but outside the core's range: refused by the initialisation */
+    CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_ERR_INVALID);
+    CHECK_MSG(w, "rel_tol = 2 is outside its valid range [2.22e-15, 1]");
     st.rel_tol = 1e-8;
+    st.abs_tol = 1e-40;
+    CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_ERR_INVALID);
+    CHECK_MSG(w, "abs_tol = 1e-40 is outside its valid range [1e-30, 1] or 0");
+    st.abs_tol = 0.0; /* valid: follows rel_tol (rel_tol / 100) */
+    CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_OK);
     st.max_step = NAN;
     CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_ERR_NOT_FINITE);
     CHECK_MSG(w, "max_step is not finite");
@@ -278,6 +286,21 @@ static void save_restore(void) {
         CHECK_MSG(w, "FMU state holds an invalid x[");
         CHECK(paper_earth_get_states(w, x) == GYROWHEEL_OK && paper_earth_time(w) == 3.0);
         CHECK(!isnan(x[PAPER_EARTH_X_beta]));
+    }
+    /* a budget of internal steps no run can have (the default 1e6 made 0.5), valid checksum */
+    memcpy(bad, buf, size);
+    {
+        const double budget = 1e6, half = 0.5;
+        for (i = 24; i + 8 <= size; i++)
+            if (memcmp(bad + i, &budget, 8) == 0) break;
+        CHECK(i + 8 <= size);
+        if (i + 8 <= size) {
+            memcpy(bad + i, &half, 8);
+            seal(bad, size);
+            CHECK(paper_earth_restore_state(w, bad, size) == GYROWHEEL_ERR_STATE);
+            CHECK_MSG(w, "max_internal_steps = 0.5 must be a whole number from 1 to 2147483647");
+            CHECK(paper_earth_time(w) == 3.0);
+        }
     }
     /* another model of the same sizes (another guid), with a valid checksum */
     memcpy(bad, buf, size);

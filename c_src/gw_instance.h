@@ -89,6 +89,13 @@ struct gw_instance {
     double *jac;   /* nx*nx: d xdot / d x, column-major (Rosenbrock) */
     double *lu;    /* nx*nx: LU factors of I/(gamma h) - J, column-major */
     int *piv;      /* nx: pivot rows of lu */
+
+    /* Taylor work memory (gw_taylor_alloc; only if the model has a Taylor kernel): the series
+     * of the last step (dense output), the constants, the compensation of the state sum */
+    double *tl_w;    /* n_var * (GW_TAYLOR_MAX_ORDER + 1) */
+    double *tl_c;    /* n_cst */
+    double *tl_comp; /* nx: Kahan compensation of x within one gw_integrate call */
+    int tl_order;    /* order of the series in tl_w */
 };
 
 /* ---- gw_instance.c ------------------------------------------------------------------------ */

@@ -132,6 +132,9 @@ static gw_status gw_check_setup(gw_instance *I, const char *fn) {
     if (!ok) GW_SIM_FAIL("%s: non-finite values", fn);
     if (I->tol_defined) I->rel_tol = I->tolerance;
     if (!gw_solver_available(I->solver)) GW_SIM_FAIL("%s: unknown solver %d", fn, I->solver);
+    if (I->solver == GW_SOLVER_TAYLOR && !m->taylor.jet)
+        GW_SIM_FAIL("%s: solver taylor is not available in this model: %s", fn,
+                    m->taylor.why_absent ? m->taylor.why_absent : "built without a Taylor kernel");
     if (!(I->rel_tol > 0.0) || !isfinite(I->rel_tol))
         GW_SIM_FAIL("%s: rel_tol = %g must be finite and > 0", fn, I->rel_tol);
     if (!(I->abs_tol > 0.0) || !isfinite(I->abs_tol))

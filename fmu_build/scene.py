@@ -20,7 +20,7 @@ from pathlib import Path
 from model.build import FORMULATIONS, start_values, wheel_parameters
 from model.effects import CATALOGUE
 
-SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5}
+SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
 
 

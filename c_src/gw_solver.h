@@ -110,6 +110,17 @@ GW_INTERNAL double gw_taylor_step(const gw_instance *I, const double *X, int ord
 /* xnew = x + sum_{k>=1} X_k h^k, compensated (comp updated) */
 GW_INTERNAL void gw_taylor_update(const double *X, int order, int lanes, int lane, int nx,
                                   double h, const double *x, double *comp, double *xnew);
+/* The bookkeeping of one integration call (feasibility guard, event count, steps). */
+typedef struct {
+    int events;
+    unsigned long n_fast, steps;
+    double h_prev;
+} gw_taylor_run;
+/* Start an integration call: kernel present, order from rel_tol, compensation cleared. */
+GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run);
+/* One step from (I->t, I->x) with the series already in I->tl_w: step size, update, events
+ * (gw_accept_step).  Shared by gw_integrate_taylor and the ensemble path (gw_ensemble.c). */
+GW_INTERNAL gw_int_result gw_taylor_step_once(gw_instance *I, double t_end, gw_taylor_run *run);
 GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end);
 /* the Taylor polynomial of the last step at t */
 GW_INTERNAL void gw_taylor_dense_eval(const gw_instance *I, double t, double *x_out);

@@ -100,58 +100,67 @@ GW_INTERNAL void gw_taylor_dense_eval(const gw_instance *I, double t, double *x_
     }
 }
 
-GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end) {
+GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run) {
     const gw_taylor_kernel *tk = &I->m->taylor;
-    const int nx = I->m->nx, p = gw_taylor_order(I->rel_tol);
-    int events = 0, bad, i;
-    unsigned long n_fast = 0, steps = 0;
-    double h_prev = 0.0;
-    const double t_begin = I->t;
-    gw_int_result result = GW_INT_OK;
     if (!tk->jet || !I->tl_w) {
         GW_LOG_ERR(I, "solver taylor is not available in this model: %s",
                    tk->why_absent ? tk->why_absent : "it was built without a Taylor kernel");
-        return GW_INT_ERROR;
+        return -1;
     }
-    if (tk->cst) tk->cst(I->u, I->p, I->tl_c);
-    memset(I->tl_comp, 0, (size_t)nx * sizeof(double));
-    I->tl_order = p;
-    while (I->t < t_end) {
-        double h, t1, tt = I->t;
-        int last;
-        gw_int_result r;
-        tk->jet(p, &tt, I->x, I->tl_c, I->tl_w);
-        I->n_rhs++;
-        for (i = 0; i < nx; i++) {
-            const double f = I->tl_w[(size_t)i * (size_t)(p + 1) + 1];
-            if (!isfinite(f)) {
-                GW_LOG_ERR(I, "derivative of state %s is not finite (%g) at t=%.17g",
-                           gw_x_name(I, i), f, I->t);
-                return GW_INT_ERROR;
-            }
-        }
-        h = gw_taylor_step(I, I->tl_w, p, 1, 0, &bad);
-        if (bad) {
-            GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g (the "
-                       "solution's series diverges: a singularity of the right-hand side?)",
-                       bad, I->t);
+    memset(I->tl_comp, 0, (size_t)I->m->nx * sizeof(double));
+    memset(run, 0, sizeof *run);
+    I->tl_order = gw_taylor_order(I->rel_tol);
+    return 0;
+}
+
+GW_INTERNAL gw_int_result gw_taylor_step_once(gw_instance *I, double t_end, gw_taylor_run *run) {
+    const int nx = I->m->nx, p = I->tl_order;
+    double h, t1;
+    int last, bad, i;
+    gw_int_result r;
+    I->n_rhs++;
+    for (i = 0; i < nx; i++) {
+        const double f = I->tl_w[(size_t)i * (size_t)(p + 1) + 1];
+        if (!isfinite(f)) {
+            GW_LOG_ERR(I, "derivative of state %s is not finite (%g) at t=%.17g", gw_x_name(I, i),
+                       f, I->t);
             return GW_INT_ERROR;
         }
-        I->h_adapt = h < I->max_step ? h : I->max_step;
-        if (gw_next_attempt(I, t_end, 0, &h_prev, &n_fast, &h, &t1, &last)) return GW_INT_ERROR;
-        gw_taylor_update(I->tl_w, p, 1, 0, nx, h, I->x, I->tl_comp, I->xnew);
-        steps++;
-        r = gw_accept_step(I, t1, &events);
-        if (r != GW_INT_OK) {
-            result = r;
-            break;
-        }
-        if (I->t != t1) memset(I->tl_comp, 0, (size_t)nx * sizeof(double)); /* event: restart */
+    }
+    h = gw_taylor_step(I, I->tl_w, p, 1, 0, &bad);
+    if (bad) {
+        GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g (the solution's "
+                   "series diverges: a singularity of the right-hand side?)", bad, I->t);
+        return GW_INT_ERROR;
+    }
+    I->h_adapt = h < I->max_step ? h : I->max_step;
+    if (gw_next_attempt(I, t_end, 0, &run->h_prev, &run->n_fast, &h, &t1, &last))
+        return GW_INT_ERROR;
+    gw_taylor_update(I->tl_w, p, 1, 0, nx, h, I->x, I->tl_comp, I->xnew);
+    run->steps++;
+    r = gw_accept_step(I, t1, &run->events);
+    if (r == GW_INT_OK && I->t != t1) /* an event moved the state: restart the compensation */
+        memset(I->tl_comp, 0, (size_t)nx * sizeof(double));
+    return r;
+}
+
+GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end) {
+    const gw_taylor_kernel *tk = &I->m->taylor;
+    gw_taylor_run run;
+    gw_int_result result = GW_INT_OK;
+    const double t_begin = I->t;
+    if (gw_taylor_begin(I, &run)) return GW_INT_ERROR;
+    if (tk->cst) tk->cst(I->u, I->p, I->tl_c);
+    while (I->t < t_end) {
+        double tt = I->t;
+        tk->jet(I->tl_order, &tt, I->x, I->tl_c, I->tl_w);
+        result = gw_taylor_step_once(I, t_end, &run);
+        if (result != GW_INT_OK) break;
     }
     if (result == GW_INT_OK) I->t = t_end;
     if (gw_log_enabled(I, GW_LOG_SOLVER))
         gw_log(I, GW_OK, GW_LOG_SOLVER, "taylor t=%.17g -> t=%.17g order=%d steps=%lu", t_begin,
-               I->t, p, steps);
+               I->t, I->tl_order, run.steps);
     return result;
 }
 

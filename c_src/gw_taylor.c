@@ -14,11 +14,16 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include "gw_core.h"
 
+#if defined(__GNUC__) /* the helpers inline into the kernel: no call per node and order */
+#define GW_TL_INNER static inline __attribute__((always_inline, unused))
+#endif
 #define GW_TL_W 1
 #define GW_TL(name) gw_tl1_##name
 #include "gw_taylor_ops.h"
 #include "gw_taylor_model.h"
 #undef GW_TL
 #undef GW_TL_W
+#undef GW_TL_INNER
+#undef GW_TL_STATIC
 
 #endif /* GW_UNITY_BUILD */

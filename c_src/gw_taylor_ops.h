@@ -28,30 +28,53 @@
  * Before including: GW_TL_W (lanes) and GW_TL(name) (the name prefix of this instance).
  * Checked against CasADi's own derivatives: tests/test_taylor.py.
  */
+/* GW_TL_INNER: how the helpers below are declared (a model may need only some of them);
+ * GW_TL_STATIC: the model's cst and jet (gw_taylor_model.h) */
+#ifndef GW_TL_INNER
+#define GW_TL_INNER static GW_MAYBE_UNUSED
+#endif
 #ifndef GW_TL_STATIC
-#define GW_TL_STATIC static GW_MAYBE_UNUSED /* a model may need only some of them */
+#define GW_TL_STATIC static GW_MAYBE_UNUSED
 #endif
 #define GW_TLK(v, j) ((v) + (size_t)(j) * GW_TL_W) /* coefficient j of a series */
 
-GW_TL_STATIC void GW_TL(mul)(double *out, const double *a, const double *b, int k) {
-    double acc[GW_TL_W];
+/* acc = sum_{j=lo..hi} a_j b_{m-j} per lane; one lane: four interleaved partial sums, since
+ * the chain of dependent additions bounds the loop (as heyoka's pairwise sums avoid) */
+GW_TL_INNER void GW_TL(conv)(double *acc, const double *a, const double *b, int lo, int hi,
+                             int m) {
     int j, l;
-    for (l = 0; l < GW_TL_W; l++) acc[l] = a[l] * GW_TLK(b, k)[l];
-    for (j = 1; j <= k; j++) {
-        const double *aj = GW_TLK(a, j), *bj = GW_TLK(b, k - j);
+#if GW_TL_W == 1
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    for (j = lo; j + 3 <= hi; j += 4) {
+        s0 += a[j] * b[m - j];
+        s1 += a[j + 1] * b[m - j - 1];
+        s2 += a[j + 2] * b[m - j - 2];
+        s3 += a[j + 3] * b[m - j - 3];
+    }
+    for (; j <= hi; j++) s0 += a[j] * b[m - j];
+    acc[0] = (s0 + s1) + (s2 + s3);
+    (void)l;
+#else /* the lanes are the independent sums */
+    for (l = 0; l < GW_TL_W; l++) acc[l] = 0.0;
+    for (j = lo; j <= hi; j++) {
+        const double *aj = GW_TLK(a, j), *bj = GW_TLK(b, m - j);
         for (l = 0; l < GW_TL_W; l++) acc[l] += aj[l] * bj[l];
     }
-    for (l = 0; l < GW_TL_W; l++) out[l] = acc[l];
+#endif
 }
 
-/* sum_{j=lo..k-lo} a_j b_{k-j} over the symmetric half: 2 sum_{j<k/2} + the middle term */
-GW_TL_STATIC void GW_TL(sym)(double *acc, const double *a, int k, int lo) {
-    int j, l;
-    for (l = 0; l < GW_TL_W; l++) acc[l] = 0.0;
-    for (j = lo; 2 * j < k; j++) {
-        const double *aj = GW_TLK(a, j), *ak = GW_TLK(a, k - j);
-        for (l = 0; l < GW_TL_W; l++) acc[l] += aj[l] * ak[l];
-    }
+GW_TL_INNER void GW_TL(mul)(double *out, const double *a, const double *b, int k) {
+    GW_TL(conv)(out, a, b, 0, k, k);
+}
+
+/* sum_{j=lo..k-lo} a_j a_{k-j}: twice the sum below the middle, plus the middle term */
+GW_TL_INNER void GW_TL(sym)(double *acc, const double *a, int k, int lo) {
+    int l;
+    const int hi = (k - 1) / 2;
+    if (hi >= lo)
+        GW_TL(conv)(acc, a, a, lo, hi, k);
+    else
+        for (l = 0; l < GW_TL_W; l++) acc[l] = 0.0;
     for (l = 0; l < GW_TL_W; l++) acc[l] *= 2.0;
     if (k % 2 == 0) {
         const double *am = GW_TLK(a, k / 2);
@@ -59,26 +82,19 @@ GW_TL_STATIC void GW_TL(sym)(double *acc, const double *a, int k, int lo) {
     }
 }
 
-GW_TL_STATIC void GW_TL(sq)(double *out, const double *a, int k) {
-    double acc[GW_TL_W];
-    int l;
-    GW_TL(sym)(acc, a, k, 0);
-    for (l = 0; l < GW_TL_W; l++) out[l] = acc[l];
+GW_TL_INNER void GW_TL(sq)(double *out, const double *a, int k) {
+    GW_TL(sym)(out, a, k, 0);
 }
 
 /* v = a / b; a_k given (a constant numerator: 0 for k >= 1) */
-GW_TL_STATIC void GW_TL(div)(double *v, const double *ak, const double *b, int k) {
+GW_TL_INNER void GW_TL(div)(double *v, const double *ak, const double *b, int k) {
     double acc[GW_TL_W];
-    int j, l;
-    for (l = 0; l < GW_TL_W; l++) acc[l] = ak ? ak[l] : 0.0;
-    for (j = 1; j <= k; j++) {
-        const double *bj = GW_TLK(b, j), *vj = GW_TLK(v, k - j);
-        for (l = 0; l < GW_TL_W; l++) acc[l] -= bj[l] * vj[l];
-    }
-    for (l = 0; l < GW_TL_W; l++) GW_TLK(v, k)[l] = acc[l] / b[l];
+    int l;
+    GW_TL(conv)(acc, b, v, 1, k, k);
+    for (l = 0; l < GW_TL_W; l++) GW_TLK(v, k)[l] = ((ak ? ak[l] : 0.0) - acc[l]) / b[l];
 }
 
-GW_TL_STATIC void GW_TL(sqrt)(double *v, const double *ak, int k) {
+GW_TL_INNER void GW_TL(sqrt)(double *v, const double *ak, int k) {
     double acc[GW_TL_W];
     int l;
     GW_TL(sym)(acc, v, k, 1);
@@ -86,7 +102,7 @@ GW_TL_STATIC void GW_TL(sqrt)(double *v, const double *ak, int k) {
 }
 
 /* sign = -1: sin/cos; +1: sinh/cosh */
-GW_TL_STATIC void GW_TL(pair)(double *s, double *c, const double *a, int k, double sign) {
+GW_TL_INNER void GW_TL(pair)(double *s, double *c, const double *a, int k, double sign) {
     double as[GW_TL_W], ac[GW_TL_W];
     const double rk = 1.0 / k;
     int j, l;
@@ -106,7 +122,7 @@ GW_TL_STATIC void GW_TL(pair)(double *s, double *c, const double *a, int k, doub
 }
 
 /* k v_k = sum_{j=1..k} j a_j q_{k-j} (exp: q = v; tan, tanh: q their aux series) */
-GW_TL_STATIC void GW_TL(dexp)(double *v, const double *a, const double *q, int k) {
+GW_TL_INNER void GW_TL(dexp)(double *v, const double *a, const double *q, int k) {
     double acc[GW_TL_W];
     const double rk = 1.0 / k;
     int j, l;
@@ -119,7 +135,7 @@ GW_TL_STATIC void GW_TL(dexp)(double *v, const double *a, const double *q, int k
 }
 
 /* tan (sign +1) and tanh (sign -1): v then q = 1 + sign v^2 */
-GW_TL_STATIC void GW_TL(tan)(double *v, double *q, const double *a, int k, double sign) {
+GW_TL_INNER void GW_TL(tan)(double *v, double *q, const double *a, int k, double sign) {
     double acc[GW_TL_W];
     int l;
     GW_TL(dexp)(v, a, q, k);
@@ -128,7 +144,7 @@ GW_TL_STATIC void GW_TL(tan)(double *v, double *q, const double *a, int k, doubl
 }
 
 /* k r_0 v_k = k n_k - sum_{j=1..k-1} j v_j r_{k-j} (+ extra_k: atan2's numerator) */
-GW_TL_STATIC void GW_TL(dq)(double *v, const double *nk, const double *r, const double *extra, int k) {
+GW_TL_INNER void GW_TL(dq)(double *v, const double *nk, const double *r, const double *extra, int k) {
     double acc[GW_TL_W];
     int j, l;
     for (l = 0; l < GW_TL_W; l++) acc[l] = extra ? extra[l] : k * nk[l];
@@ -139,11 +155,11 @@ GW_TL_STATIC void GW_TL(dq)(double *v, const double *nk, const double *r, const 
     for (l = 0; l < GW_TL_W; l++) GW_TLK(v, k)[l] = acc[l] / (k * r[l]);
 }
 
-GW_TL_STATIC void GW_TL(log)(double *v, const double *a, int k) {
+GW_TL_INNER void GW_TL(log)(double *v, const double *a, int k) {
     GW_TL(dq)(v, GW_TLK(a, k), a, NULL, k);
 }
 
-GW_TL_STATIC void GW_TL(atan2)(double *v, const double *a, const double *b, const double *r, int k) {
+GW_TL_INNER void GW_TL(atan2)(double *v, const double *a, const double *b, const double *r, int k) {
     double num[GW_TL_W];
     int j, l;
     for (l = 0; l < GW_TL_W; l++) num[l] = 0.0;
@@ -156,7 +172,7 @@ GW_TL_STATIC void GW_TL(atan2)(double *v, const double *a, const double *b, cons
 }
 
 /* v = a^e, e constant per lane */
-GW_TL_STATIC void GW_TL(pow)(double *v, const double *a, const double *e, int k) {
+GW_TL_INNER void GW_TL(pow)(double *v, const double *a, const double *e, int k) {
     double acc[GW_TL_W];
     int j, l;
     for (l = 0; l < GW_TL_W; l++) acc[l] = 0.0;

@@ -22,6 +22,7 @@ from model.spec import Quantity
 
 class RollingResistance(Effect):
     name = "rolling_resistance"
+    uses_normal_load = True
     summary = "resistance c_rr F_n to the rolling of the rim (power -c_rr F_n R |gamma_dot|)"
 
     @classmethod
@@ -37,5 +38,6 @@ class RollingResistance(Effect):
         gamma_dot = ctx.qd[4]
         tau = -p["c_rr"] * ctx.par["R"] * ctx.Fn * ca.tanh(gamma_dot / p["rr_omega_eps"])
         ctx.force(tau, gamma_dot, "dissipative")
-        ctx.output(Quantity("rolling_resistance_torque", "N.m", "rolling-resistance torque on the rim's rolling"),
+        ctx.output(Quantity("rolling_resistance_torque", "N.m",
+                            "generalised force on the spin coordinate gamma (N.m per rad), not a torque about an axis"),
                    tau)

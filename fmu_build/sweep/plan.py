@@ -1,0 +1,148 @@
+"""From what the user asked to what the workers run: FMU values for every point.
+
+Input names are the unit's settable variables (parameters, start values, inputs), angles also
+as <name>_deg (degrees, as the scenes write them: beta_deg), gravity presets by name (g=moon)
+and enumeration items by name (solver=rk4). Names the unit does not have are allowed only with a
+derive function, which turns a point's inputs into unit values (e.g. rho -> the steady
+precession rates of eq. 52); it runs on the client, once per point.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import pandas as pd
+
+from fmu_build.sweep.batch import Settings
+from fmu_build.sweep.metrics import MetricSet, UserFunction
+from fmu_build.sweep.spec import SweepSpecError
+
+
+def _presets() -> dict[str, dict[str, float]]:
+    from model.effects import CATALOGUE
+    out: dict[str, dict[str, float]] = {}
+    for cls in CATALOGUE.values():
+        for name, table in cls.presets().items():
+            out.setdefault(name, {}).update(table)
+    return out
+
+
+class Resolver:
+    """Maps one input (name, value) to (unit variable, typed value), or explains why not."""
+
+    def __init__(self, variables: dict):
+        self.variables = variables
+        self.presets = _presets()
+
+    def settable(self) -> list[str]:
+        return sorted(n for n, v in self.variables.items() if v.settable)
+
+    def known(self, name: str) -> bool:
+        return self.target_name(name) is not None
+
+    def target_name(self, name: str) -> str | None:
+        v = self.variables.get(name)
+        if v is not None:
+            return name
+        if name.endswith("_deg"):
+            base = self.variables.get(name[:-4])
+            if base is not None and base.unit == "rad":
+                return base.name
+        return None
+
+    def resolve(self, name: str, value, where: str) -> tuple[str, object]:
+        base = self.target_name(name)
+        if base is None:
+            raise SweepSpecError(f"{where}: unknown variable {name!r}; settable: {', '.join(self.settable())} "
+                                 "(angles also as NAME_deg)")
+        v = self.variables[base]
+        if not v.settable:
+            raise SweepSpecError(f"{where}: {name!r} is a calculated {v.causality} and cannot be set")
+        if isinstance(value, str):
+            if v.type == "Enumeration" and value in v.items:
+                return base, v.items[value]
+            if value in self.presets.get(base, {}):
+                return base, float(self.presets[base][value])
+            if v.type == "Boolean" and value.lower() in ("true", "false"):
+                return base, value.lower() == "true"
+            choices = list(v.items) or list(self.presets.get(base, {}))
+            extra = f"; valid: {', '.join(choices)} or a number" if choices else ""
+            raise SweepSpecError(f"{where}: value {value!r} for {name!r} is not a number{extra}")
+        value = float(value)
+        if name != base:
+            value = math.radians(value)
+        if v.type in ("Integer", "Enumeration"):
+            if value != int(value):
+                raise SweepSpecError(f"{where}: {name!r} is an {v.type} and {value!r} is not an integer")
+            value = int(value)
+            if v.type == "Enumeration" and v.items and value not in v.items.values():
+                raise SweepSpecError(f"{where}: {value} is not an item of {name!r}; valid: "
+                                     + ", ".join(f"{k}={i}" for k, i in v.items.items()))
+        elif v.type == "Boolean":
+            value = bool(value)
+        return base, value
+
+
+@dataclass
+class Plan:
+    """Everything a sweep runs: the target, its settings and metrics, and the points."""
+
+    target: object
+    settings: Settings
+    metrics: MetricSet
+    inputs: pd.DataFrame  # one row per point, the inputs as given (index: point number)
+    values: list  # per point: {unit variable: value}
+
+    def tasks(self, batch_size: int) -> list[list]:
+        """Batches of (point, values, inputs) in point order."""
+        records = self.inputs.to_dict("records")
+        items = [(int(p), v, r) for p, v, r in zip(self.inputs.index, self.values, records)]
+        return [items[i:i + batch_size] for i in range(0, len(items), batch_size)]
+
+
+def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, derive=None,
+              stop_time: float | None = None, output_interval: float | None = None, start_time: float = 0.0,
+              metrics=None, metric_functions=()) -> Plan:
+    """Check every name and value against the unit and convert the points to unit values."""
+    variables = target.variables()
+    res = Resolver(variables)
+    derive_fn = UserFunction.parse(derive, "--derive") if derive is not None else None
+    fixed_values = dict(res.resolve(n, v, f"--set {n}") for n, v in (fixed or {}).items())
+    direct = [c for c in inputs.columns if res.known(c)]
+    unknown = [c for c in inputs.columns if not res.known(c)]
+    if unknown and derive_fn is None:
+        res.resolve(unknown[0], 0.0, f"input {unknown[0]!r}")  # raises: unknown variable
+    targets = [res.target_name(c) for c in direct]
+    for name in set(targets):
+        if targets.count(name) > 1:
+            raise SweepSpecError(f"{name!r} is swept twice (in rad and in deg)")
+        if name in fixed_values:
+            raise SweepSpecError(f"{name!r} is both swept and fixed with --set")
+    starts = {n: v.start for n, v in variables.items() if v.start is not None and v.type != "String"}
+    values = []
+    for point, row in inputs.iterrows():
+        own = dict(res.resolve(c, row[c], f"point {point}: {c}") for c in direct)
+        if derive_fn is not None:
+            seen = {**starts, **fixed_values, **own}
+            try:
+                extra = derive_fn.call(row.to_dict(), seen)
+            except Exception as exc:
+                raise SweepSpecError(f"--derive {derive_fn.ref}: point {point}: {type(exc).__name__}: {exc}") from None
+            if not isinstance(extra, Mapping):
+                raise SweepSpecError(f"--derive {derive_fn.ref}: must return a dict of unit values, got {extra!r}")
+            own.update(res.resolve(n, v, f"--derive {derive_fn.ref}: point {point}: {n}") for n, v in extra.items())
+        values.append(own)
+    stop = stop_time if stop_time is not None else getattr(target, "default_stop_time", None)
+    if stop is None:
+        raise SweepSpecError("no stop time: give --stop-time (the unit declares none)")
+    interval = output_interval if output_interval is not None else getattr(target, "default_step", None)
+    interval = interval or (stop - start_time)
+    if not stop > start_time:
+        raise SweepSpecError(f"--stop-time must be greater than the start time {start_time:g}, got {stop:g}")
+    if not interval > 0:
+        raise SweepSpecError(f"--output-interval must be > 0, got {interval:g}")
+    settings = Settings(stop_time=float(stop), output_interval=float(min(interval, stop - start_time)),
+                        start_time=float(start_time), fixed=fixed_values)
+    metric_set = MetricSet.parse(metrics, metric_functions, outputs=list(target.outputs))
+    return Plan(target, settings, metric_set, inputs, values)

@@ -198,11 +198,12 @@ def test_ensemble_equals_single_runs(paper, tmp_path):
     ens = Ensemble(built.fmu, cache=tmp_path)
     g = np.array([9.81, 3.721, 1.625, 9.81, 9.81, 0.0, 9.81, 5.0, 9.81, 2.0])
     spin = np.array([6.0, 6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 4.0, 0.2, 6.0])
-    res = ens.run(20.0, parameters={"g": g}, starts={"gamma_dot": spin}, rel_tol=1e-10)
+    res = ens.run(20.0, parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-10)
     assert set(res.status) <= {STATUS_OK, STATUS_TERMINATED} and res.terminated.any()
     from fmpy.fmi2 import fmi2LastSuccessfulTime
     for j in range(len(g)):
-        runner.start(solver=TAYLOR, rel_tol=1e-10, abs_tol=1e-12, max_step=20.0, g=g[j], gamma_dot=spin[j])
+        runner.start(solver=TAYLOR, rel_tol=1e-10, abs_tol=1e-12, max_step=20.0, g=g[j], gamma_dot=spin[j],
+                     beta_min=0.1)
         try:
             runner.slave.doStep(0.0, 20.0)
             t = 20.0

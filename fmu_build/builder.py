@@ -13,7 +13,7 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from fmu_build.codegen import FUNCTION_FILE, generate_functions, write_model_desc
+from fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
 from fmu_build.compiler import UNITY_SOURCE, compile_shared, fmi_headers_dir
 from fmu_build.documentation import write_index_html
 from fmu_build.model_description import write_model_description
@@ -83,6 +83,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         table = build_table(spec, experiment, keep)
         identifier = spec.name
         fns = generate_functions(spec, src, table)
+        taylor = generate_taylor(fns, spec.name, src, required=experiment.solver == "taylor")
         for f in runtime_sources():
             shutil.copy2(f, src / f.name)
         for h in FMI_HEADERS:
@@ -90,7 +91,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         funcs_c = (src / f"{FUNCTION_FILE}.c").read_text()
         guid = _guid(funcs_c, repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]),
                      repr(experiment), identifier)
-        write_model_desc(spec, table, experiment, identifier, guid, fns, src)
+        write_model_desc(spec, table, experiment, identifier, guid, fns, src, taylor)
         # one translation unit: only fmi2* symbols are global, whatever flags an importer uses
         compile_shared(src / UNITY_SOURCE, [src], root / "binaries" / PLATFORM / f"{identifier}.so")
         xml = write_model_description(spec.name, experiment, table, identifier, guid, [UNITY_SOURCE], spec.description,

@@ -83,7 +83,7 @@ def run(name: str, work: Path, repeat: int, batch: int) -> list[str]:
     import heyoka as hy
     text, stop = SCENARIOS[name]
     built = build_fmu(parse_scene(f'[model]\nname = "tl_{name}"\n' + text, f"{name}.toml"),
-                      work / f"{name}.fmu", build_dir=work / name)
+                      work / f"{name}.fmu", build_dir=work / name, taylor=True)
     fns = built.spec.functions()
     p = [q.start for q in built.spec.parameters]
     s0 = [q.start for q in built.spec.starts]

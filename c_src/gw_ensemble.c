@@ -38,8 +38,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #endif
 #define GW_TL_W GW_ENSEMBLE_LANES
 #define GW_TL(name) gw_tlb_##name
-#include "gw_taylor_ops.h"
-#include "gw_taylor_model.h"
+#include "gw_taylor_model.h" /* with its recurrences, gw_taylor_ops.h */
 #undef GW_TL
 #undef GW_TL_W
 #undef GW_TL_STATIC

@@ -14,11 +14,13 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include "gw_core.h"
 
-/* helpers: plain static functions, inlined as the compiler sees fit (forcing them inline
- * makes the kernel ~25% faster but the build of a large model minutes long) */
+/* gw_taylor_model.h includes the recurrences (gw_taylor_ops.h: plain static functions, inlined
+ * as the compiler sees fit; forcing them inline makes the kernel ~25% faster but the build of a
+ * large model minutes long).  A model built without a kernel (the default: only a scene with
+ * solver = "taylor" or the build option asks for one) has a gw_taylor_model.h of one comment,
+ * and this file compiles to nothing. */
 #define GW_TL_W 1
 #define GW_TL(name) gw_tl1_##name
-#include "gw_taylor_ops.h"
 #include "gw_taylor_model.h"
 #undef GW_TL
 #undef GW_TL_W

@@ -52,21 +52,28 @@ def _guid(*parts: str) -> str:
     return "{" + str(uuid.UUID(bytes=digest[:16], version=5)) + "}"
 
 
-def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = None) -> BuildResult:
-    """Build the FMU of `scene` at `output`: the wheel's ModelSpec through build_spec_fmu."""
+def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = None,
+              taylor: bool = False) -> BuildResult:
+    """Build the FMU of `scene` at `output`: the wheel's ModelSpec through build_spec_fmu.
+
+    taylor: also generate the Taylor kernel (solver taylor, the ensemble path) when the scene's
+    solver is not taylor already."""
     return build_spec_fmu(model_spec(scene), output, scene.experiment, build_dir=build_dir,
-                          keep=scene.outputs, source=scene.source)
+                          keep=scene.outputs, source=scene.source, taylor=taylor)
 
 
 def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment | None = None,
                    build_dir: str | Path | None = None, keep: list[str] | None = None,
-                   source: str = "") -> BuildResult:
+                   source: str = "", taylor: bool = False) -> BuildResult:
     """Build the FMI 2.0 FMU of any ModelSpec (a wheel's, a controller's: model/system.py).
 
     experiment: DefaultExperiment and the solver settings' defaults (Experiment() if None);
     keep: the outputs to expose (None: all); source: text shipped in documentation/index.html
-    (the scene file, the gains). Sources stay in build_dir if given. Raises ValueError for a
-    bad table, CompileError if the C compiler fails.
+    (the scene file, the gains); taylor: generate the Taylor kernel of solver taylor and the
+    ensemble path even if experiment.solver is not "taylor" (only those FMUs carry it).
+    Sources stay in build_dir if given. Raises ValueError for a bad table,
+    fmu_build.taylor_graph.TaylorUnsupportedError (a ValueError) for a kernel the ode's
+    operations do not allow, CompileError if the C compiler fails.
     """
     experiment = experiment or Experiment()
     output = Path(output)
@@ -83,7 +90,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         table = build_table(spec, experiment, keep)
         identifier = spec.name
         fns = generate_functions(spec, src, table)
-        taylor = generate_taylor(fns, spec.name, src, required=experiment.solver == "taylor")
+        kernel = generate_taylor(fns, spec.name, src, wanted=taylor or experiment.solver == "taylor")
         for f in runtime_sources():
             shutil.copy2(f, src / f.name)
         for h in FMI_HEADERS:
@@ -91,11 +98,12 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         funcs_c = (src / f"{FUNCTION_FILE}.c").read_text()
         guid = _guid(funcs_c, repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]),
                      repr(experiment), identifier)
-        write_model_desc(spec, table, experiment, identifier, guid, fns, src, taylor)
+        write_model_desc(spec, table, experiment, identifier, guid, fns, src, kernel)
         # one translation unit: only fmi2* symbols are global, whatever flags an importer uses
         compile_shared(src / UNITY_SOURCE, [src], root / "binaries" / PLATFORM / f"{identifier}.so")
         xml = write_model_description(spec.name, experiment, table, identifier, guid, [UNITY_SOURCE], spec.description,
-                                      model_exchange=True, directional=True)
+                                      model_exchange=True, directional=True,
+                                      taylor=not isinstance(kernel, str))
         (root / "modelDescription.xml").write_text(xml)
         (root / "documentation").mkdir(exist_ok=True)
         (root / "documentation" / "index.html").write_text(write_index_html(spec, experiment, table, identifier, guid,

@@ -16,7 +16,6 @@ import casadi as ca
 from fmu_build.casadi_c import UNITY_GUARD_CLOSE, UNITY_GUARD_OPEN, make_internal
 from fmu_build.scene import SOLVERS, Experiment
 from fmu_build.taylor_c import KERNEL_FILE, TaylorKernel, write_taylor_kernel
-from fmu_build.taylor_graph import TaylorUnsupportedError
 from fmu_build.variables import KIND, TYPE, Variable
 from model.hoist import split_parameters
 from model.spec import ModelSpec
@@ -122,22 +121,24 @@ def taylor_ode(fns: dict[str, ca.Function]) -> ca.Function:
     return ca.Function("gw_ode_whole", [t, x, u, p], [ca.cse(xdot)], ["t", "x", "u", "p"], ["xdot"])
 
 
+NO_KERNEL = ("built without a Taylor kernel (build it from a scene with solver = \"taylor\", "
+             "or with the Taylor kernel: gyrowheel build --taylor, build_fmu(..., taylor=True))")
+
+
 def generate_taylor(fns: dict[str, ca.Function], model: str, out_dir: Path,
-                    required: bool) -> TaylorKernel | str:
+                    wanted: bool) -> TaylorKernel | str:
     """Write gw_taylor_model.h (solver `taylor`); the kernel, or why the model has none.
 
-    Every FMU gets the kernel when its ode has Taylor recurrences for all its operations
-    (docs/taylor.md: it adds a few percent to the binary).  If an operation has none, the FMU
-    is built without it and solver taylor is refused at initialisation with that reason;
-    required=True (the scene's solver is taylor) raises TaylorUnsupportedError instead.
+    Only an FMU that asks for it gets the kernel (wanted: the scene's solver is taylor, or the
+    build option for the ensemble path): it doubles the C to compile (docs/taylor.md, build
+    time), so every other FMU builds as fast as without solver taylor and carries a
+    gw_taylor_model.h of one comment.  wanted and an operation without a recurrence raises
+    TaylorUnsupportedError naming it.
     """
-    try:
-        return write_taylor_kernel(taylor_ode(fns), model, out_dir)
-    except TaylorUnsupportedError as exc:
-        if required:
-            raise
-        (out_dir / KERNEL_FILE).write_text(f"/* no Taylor kernel: {exc} */\n")
-        return str(exc)
+    if not wanted:
+        (out_dir / KERNEL_FILE).write_text(f"/* no Taylor kernel: {NO_KERNEL} */\n")
+        return NO_KERNEL
+    return write_taylor_kernel(taylor_ode(fns), model, out_dir)
 
 
 def _c_string(text: str) -> str:
@@ -155,7 +156,7 @@ def _c_strings(values) -> str:
 def _taylor_slot(taylor: TaylorKernel | str | None) -> str:
     if isinstance(taylor, TaylorKernel):
         return (f"    .taylor = {{gw_tl1_jet, gw_tl1_cst, {taylor.n_var}, {taylor.n_cst}, 0}},")
-    why = taylor if isinstance(taylor, str) else "built without a Taylor kernel"
+    why = taylor if isinstance(taylor, str) else NO_KERNEL
     return f"    .taylor = {{0, 0, 0, 0, {_c_string(why)}}},"
 
 

@@ -171,6 +171,12 @@ class Ensemble:
         lib = root / digest / "libensemble.so"
         with tempfile.TemporaryDirectory(prefix="gyrowheel-ens-") as tmp:
             src, self.identifier, self.guid = _sources(fmu, Path(tmp))
+            kernel = src / "gw_taylor_model.h"
+            if not kernel.is_file() or "GW_TL_NVAR" not in kernel.read_text():
+                raise EnsembleError(f"{fmu}: the FMU has no Taylor kernel (solver taylor), which the "
+                                    "ensemble path needs: build it from a scene with solver = "
+                                    "\"taylor\", or with gyrowheel build --taylor "
+                                    "(build_fmu(..., taylor=True))")
             if not lib.exists():
                 unity = src / f"{self.identifier}_ensemble.c"
                 unity.write_text(_UNITY.format(id=self.identifier, lanes=int(lanes)))

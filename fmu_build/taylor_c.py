@@ -180,6 +180,7 @@ def taylor_source(dec: Decomposition, model: str) -> str:
  * (W lanes) with GW_TL_W and GW_TL(name) defined.  {dec.n_var} var nodes ({dec.nx} states
  * first{', t at ' + str(dec.t_node) if dec.t_node is not None else ''}), {dec.n_cst} constants.
  * var ops: {ops} */
+#include "gw_taylor_ops.h" /* the recurrences, instantiated for these GW_TL_W lanes */
 #define GW_TL_NVAR {dec.n_var}
 #define GW_TL_NCST {dec.n_cst}
 #define GW_TL_HAS_T {1 if dec.t_node is not None else 0}

@@ -15,6 +15,8 @@ import ctypes
 import math
 import subprocess
 import sys
+import tempfile
+import zipfile
 from pathlib import Path
 
 import casadi as ca
@@ -26,7 +28,7 @@ from fmu_build import build_fmu, load_scene, parse_scene
 from fmu_build.builder import model_spec
 from fmu_build.codegen import optimised
 from fmu_build.compiler import compiler
-from fmu_build.ensemble import STATUS_OK, STATUS_TERMINATED, Ensemble
+from fmu_build.ensemble import STATUS_OK, STATUS_TERMINATED, Ensemble, EnsembleError
 from fmu_build.taylor_c import taylor_source
 from fmu_build.taylor_graph import TaylorUnsupportedError, decompose
 
@@ -61,7 +63,7 @@ def _jet_library(f: ca.Function, tmp: Path) -> ctypes.CDLL:
     (tmp / "gw_taylor_model.h").write_text(taylor_source(decompose(optimised(f)), "ops"))
     (tmp / "jet.c").write_text(
         '#include <math.h>\n#include <stddef.h>\n#define GW_MAYBE_UNUSED __attribute__((unused))\n#define GW_TL_W 1\n'
-        '#define GW_TL(name) gw_tl1_##name\n#include "gw_taylor_ops.h"\n#include "gw_taylor_model.h"\n'
+        '#define GW_TL(name) gw_tl1_##name\n#include "gw_taylor_model.h"\n'
         "void jet(int order, const double *t, const double *x, const double *p, double *w);\n"
         "void jet(int order, const double *t, const double *x, const double *p, double *w) {\n"
         "    double c[GW_TL_NCST + 1];\n    gw_tl1_cst(NULL, p, c);\n    gw_tl1_jet(order, t, x, c, w);\n}\n")
@@ -120,7 +122,7 @@ def paper(tmp_path_factory):
     from fmi_slave import FmuRunner
     work = tmp_path_factory.mktemp("taylor")
     scene = load_scene(SCENES / "paper_earth.toml")
-    built = build_fmu(scene, work / "paper_earth.fmu", build_dir=work / "build")
+    built = build_fmu(scene, work / "paper_earth.fmu", build_dir=work / "build", taylor=True)
     return built, FmuRunner(built.fmu)
 
 
@@ -162,11 +164,32 @@ def test_fall_located_like_dop853(paper):
     assert abs(times[5] - times[TAYLOR]) < 1e-9, times
 
 
-def test_taylor_refused_without_kernel_and_in_unknown_models(paper):
-    """A model without a kernel refuses solver taylor at initialisation, with the reason."""
-    built, _ = paper
-    text = (built.sources / "model_desc.c").read_text()
-    assert ".taylor = {gw_tl1_jet, gw_tl1_cst" in text
+def _kernel_in(fmu: Path) -> dict[str, bool]:
+    """Whether an FMU carries the Taylor kernel: its source, its slot, its compiled code."""
+    with zipfile.ZipFile(fmu) as zf:
+        source = zf.read("sources/gw_taylor_model.h").decode()
+        desc = zf.read("sources/model_desc.c").decode()
+        binary = [n for n in zf.namelist() if n.startswith("binaries/") and n.endswith(".so")][0]
+        with tempfile.TemporaryDirectory() as tmp:
+            so = Path(zf.extract(binary, tmp))
+            symbols = subprocess.run(["nm", str(so)], capture_output=True, text=True).stdout
+        xml = zf.read("modelDescription.xml").decode()
+    return {"source": "GW_TL_NVAR" in source, "slot": ".taylor = {gw_tl1_jet, gw_tl1_cst" in desc,
+            "code": "gw_tl1_jet" in symbols, "item": '<Item name="taylor" value="6"' in xml}
+
+
+def test_default_fmu_has_no_kernel_and_refuses_taylor(earth_fmu, paper):
+    """Only an FMU that asks for it carries the Taylor kernel (build time: docs/taylor.md); a
+    default one refuses solver 6 at the call, with the reason and how to get the kernel."""
+    from fmi_slave import FmuRunner
+    from fmpy.fmi1 import FMICallException
+    assert _kernel_in(earth_fmu) == {"source": False, "slot": False, "code": False, "item": False}
+    assert _kernel_in(paper[0].fmu) == {"source": True, "slot": True, "code": True, "item": True}  # taylor=True
+    runner = FmuRunner(earth_fmu)
+    with pytest.raises(FMICallException):
+        runner.start(solver=TAYLOR)
+    with pytest.raises(EnsembleError, match="no Taylor kernel.*gyrowheel build --taylor"):
+        Ensemble(earth_fmu)
 
 
 @pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.stem)
@@ -180,10 +203,17 @@ def test_every_example_scene_supported(path):
 @pytest.mark.parametrize("name", ["lunar_rover", "euler_disk"])
 def test_scenes_run_briefly_with_taylor(name, tmp_path):
     """Scenes with contact forces, drag, rolling resistance and slope simulate with taylor like
-    DOP853 for 0.5 s (the Gyrover scenes: their decomposition above; their FMU build is slow)."""
+    DOP853 for 0.5 s (the Gyrover scenes: their decomposition above; their FMU build is slow).
+    euler_disk's scene names solver = "taylor" (its FMU gets the kernel from that alone),
+    lunar_rover's does not (built with taylor=True)."""
     from fmi_slave import FmuRunner
     text = (SCENES / f"{name}.toml").read_text()
-    built = build_fmu(parse_scene(text, f"{name}.toml"), tmp_path / f"{name}.fmu", build_dir=tmp_path / "b")
+    if name == "euler_disk":
+        assert 'solver = "dopri5"' in text
+        text = text.replace('solver = "dopri5"', 'solver = "taylor"')
+    built = build_fmu(parse_scene(text, f"{name}.toml"), tmp_path / f"{name}.fmu", build_dir=tmp_path / "b",
+                      taylor=name == "lunar_rover")
+    assert _kernel_in(built.fmu) == {"source": True, "slot": True, "code": True, "item": True}
     runner = FmuRunner(built.fmu)
     a = _run(runner, 0.5, STATES, solver=TAYLOR, rel_tol=1e-10, abs_tol=1e-12)
     b = _run(runner, 0.5, STATES, solver=5, rel_tol=1e-10, abs_tol=1e-12)

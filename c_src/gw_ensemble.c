@@ -32,7 +32,8 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && !defined(GW_NO_CLONES) &&   \
     ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && __GNUC__ >= 8))
-#define GW_TL_STATIC static GW_MAYBE_UNUSED __attribute__((target_clones("arch=x86-64-v3", "default")))
+/* used below, so no GW_MAYBE_UNUSED (clang refuses it beside target_clones) */
+#define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define GW_TL_STATIC static GW_MAYBE_UNUSED
 #endif
@@ -48,6 +49,8 @@ typedef struct {
     gw_instance *I;
     long traj;
     gw_taylor_run run;
+    int gi;          /* next communication point (job->t_grid), if the job has a grid */
+    unsigned long steps; /* Taylor steps of this trajectory */
 } gw_lane;
 
 enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
@@ -74,8 +77,39 @@ static void gw_ens_finish(gw_ensemble *E, gw_lane *L, gw_status status) {
     if (job->y_final)
         for (i = 0; i < m->ny; i++)
             job->y_final[(size_t)j * m->ny + i] = status == GW_ERROR ? NAN : I->y[i];
-    if (job->steps) job->steps[j] = L->run.steps;
+    if (job->steps) job->steps[j] = L->steps;
+    if (job->flags)
+        for (i = 0; i < m->ne; i++) job->flags[(size_t)j * m->ne + i] = I->flags[i] != 0;
     L->traj = -1;
+}
+
+/* the lane's target of this call: the next communication point, or t_end */
+static double gw_ens_target(const gw_ensemble *E, const gw_lane *L) {
+    return E->job->n_grid > 0 ? E->job->t_grid[L->gi] : E->job->t_end;
+}
+
+/* outputs of lane L as row `row` of its trajectory in y_grid; 0, or -1 (failure logged) */
+static int gw_ens_record(gw_ensemble *E, gw_lane *L, long row) {
+    const gw_ensemble_job *job = E->job;
+    const int ny = E->m->ny;
+    int i;
+    if (!job->y_grid) return 0;
+    if (gw_update_outputs(L->I, "ensemble") > GW_DISCARD) return -1;
+    for (i = 0; i < ny; i++)
+        job->y_grid[((size_t)L->traj * (size_t)(job->n_grid + 1) + (size_t)row) * (size_t)ny + i] =
+            L->I->y[i];
+    job->n_rows[L->traj] = row + 1;
+    return 0;
+}
+
+/* A new call as gw_advance starts one: the budget, the event count, the guard's window. */
+static void gw_ens_new_call(gw_lane *L) {
+    L->I->n_call_steps = 0;
+    L->I->t_call = L->I->t;
+    L->run.events = 0;
+    L->run.n_fast = 0;
+    L->run.h_prev = 0.0;
+    gw_point_changed(L->I);
 }
 
 /* Start trajectories in lane L until one initialises (or none is left). */
@@ -96,15 +130,21 @@ static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
         I->abs_tol = job->abs_tol;
         I->max_step = job->max_step;
         L->traj = j;
-        L->run.steps = 0;
+        L->gi = 0;
+        L->steps = 0;
+        if (job->n_rows) job->n_rows[j] = 0;
         if (gw_setup_experiment(I, fn, 0, 0.0, job->t_start, 1, job->t_end) != GW_OK ||
             gw_initialize(I, fn) > GW_WARNING || gw_taylor_begin(I, &L->run)) {
             gw_ens_finish(E, L, GW_ERROR);
             continue;
         }
-        /* the whole trajectory is one call: the budget max_internal_steps covers t_start .. t_end */
-        I->n_call_steps = 0;
-        I->t_call = I->t;
+        /* one call per communication step (without a grid: the whole trajectory is one call,
+         * the budget max_internal_steps covers t_start .. t_end) */
+        gw_ens_new_call(L);
+        if (gw_ens_record(E, L, 0)) {
+            gw_ens_finish(E, L, GW_ERROR);
+            continue;
+        }
         if (m->taylor.n_cst > 0) { /* this lane's constants (the kernel computes all lanes) */
             const int l = (int)(L - E->lane);
             for (i = 0; i < m->np; i++) E->p[(size_t)i * GW_ENS_LANES + l] = I->p[i];
@@ -135,19 +175,30 @@ static int gw_ens_step(gw_ensemble *E, int order) {
     for (l = 0; l < GW_ENS_LANES; l++) {
         gw_lane *L = &E->lane[l];
         gw_int_result r;
+        double target;
         if (L->traj < 0) continue;
         n_active++;
         for (i = 0; i < m->nx; i++) /* this lane's polynomials: its dense output */
             for (k = 0; k <= order; k++)
                 L->I->tl_w[(size_t)i * (size_t)(order + 1) + k] = E->w[i * S + (size_t)k * GW_ENS_LANES + l];
-        r = gw_taylor_step_once(L->I, E->job->t_end, &L->run);
+        target = gw_ens_target(E, L);
+        r = gw_taylor_step_once(L->I, target, &L->run);
+        L->steps = L->run.steps;
         if (r == GW_INT_ERROR)
             gw_ens_finish(E, L, GW_ERROR);
         else if (r == GW_INT_TERMINATED)
-            gw_ens_finish(E, L, GW_DISCARD);
-        else if (!(L->I->t < E->job->t_end)) {
-            L->I->t = E->job->t_end;
-            gw_ens_finish(E, L, GW_OK);
+            gw_ens_finish(E, L, gw_ens_record(E, L, L->gi + 1) ? GW_ERROR : GW_DISCARD);
+        else if (!(L->I->t < target)) { /* a communication point (or t_end) reached */
+            L->I->t = target;
+            gw_point_changed(L->I);
+            if (gw_ens_record(E, L, L->gi + 1))
+                gw_ens_finish(E, L, GW_ERROR);
+            else if (!(target < E->job->t_end))
+                gw_ens_finish(E, L, GW_OK);
+            else {
+                L->gi++;
+                gw_ens_new_call(L);
+            }
         }
         if (L->traj < 0) gw_ens_fill(E, L);
     }
@@ -167,13 +218,18 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
     gw_status st = GW_OK;
     int l, order;
     long j;
+    int bad_grid = job->n_grid < 0 || (job->n_grid > 0 && (!job->t_grid || !job->n_rows ||
+                                                           job->t_grid[job->n_grid - 1] != job->t_end));
+    for (j = 0; !bad_grid && j < job->n_grid; j++)
+        bad_grid = !(job->t_grid[j] > (j > 0 ? job->t_grid[j - 1] : job->t_start));
     if (!m->taylor.jet || job->n < 0 || !job->status || !(job->t_end > job->t_start) ||
-        !(job->rel_tol > 0.0) || !(job->abs_tol >= 0.0) || !(job->max_step > 0.0)) {
+        !(job->rel_tol > 0.0) || !(job->abs_tol >= 0.0) || !(job->max_step > 0.0) || bad_grid) {
         if (cb->logger)
             cb->logger(cb->env, "ensemble", GW_ERROR, "logStatusError",
                        !m->taylor.jet ? "ensemble: the model has no Taylor kernel"
                                       : "ensemble: bad job (n >= 0, status, t_end > t_start, "
-                                        "rel_tol, max_step > 0, abs_tol >= 0 required)");
+                                        "rel_tol, max_step > 0, abs_tol >= 0, an increasing grid "
+                                        "ending at t_end with n_rows required)");
         return GW_ERROR;
     }
     memset(&E, 0, sizeof E);

@@ -23,6 +23,17 @@ typedef struct {
     double *x_final;        /* n x nx: states at t_final */
     double *y_final;        /* n x ny: outputs at t_final (NaN after an error) */
     unsigned long *steps;   /* n: Taylor steps taken */
+    /* Optional communication grid (n_grid = 0: none).  Each trajectory then advances from
+     * point to point as through fmi2DoStep(t_k, t_(k+1) - t_k) (the budget, the event count and
+     * the step size guard start anew at each point; each step lands on it) and records its
+     * outputs there: the sweep engine's path (fmu_build/sweep/ensemble_path.py). */
+    int n_grid;             /* communication points after t_start */
+    const double *t_grid;   /* n_grid: increasing, in (t_start, t_end], the last == t_end */
+    double *y_grid;         /* n x (n_grid + 1) x ny: outputs at t_start and at each point
+                               reached; a terminating event in step k writes row k + 1 at the
+                               event time, and no rows after it */
+    long *n_rows;           /* n: rows of y_grid written */
+    int *flags;             /* n x ne (may be NULL): 1 where event i has fired by t_final */
 } gw_ensemble_job;
 
 /* Run a job.  GW_OK when every trajectory was attempted (see job->status for each);

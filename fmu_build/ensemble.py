@@ -35,7 +35,7 @@ __all__ = ["Ensemble", "EnsembleResult", "EnsembleError", "STATUS_OK", "STATUS_T
 
 STATUS_OK, STATUS_TERMINATED, STATUS_ERROR = 0, 2, 3  # gw_status values
 LANES = 8  # trajectories advanced together (GW_ENSEMBLE_LANES)
-KIND_PARAM, KIND_START, KIND_OUTPUT = 0, 1, 3  # gw_kind
+KIND_PARAM, KIND_START, KIND_OUTPUT, KIND_EVENT = 0, 1, 3, 5  # gw_kind
 FLAGS = ["-O3", "-ffp-contract=fast"]  # portable: the x86-64-v3 kernel is a target clone
 
 _LOGGER = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
@@ -65,12 +65,19 @@ GW_EXPORT int {id}_ensemble_sizes(int *out);
 GW_EXPORT int {id}_ensemble_sizes(int *out) {{
     out[0] = GW_MODEL.nx; out[1] = GW_MODEL.ns; out[2] = GW_MODEL.nu; out[3] = GW_MODEL.np;
     out[4] = GW_MODEL.ny; out[5] = GW_ENSEMBLE_LANES; out[6] = GW_MODEL.taylor.jet != 0;
+    out[7] = GW_MODEL.ne;
     return 0;
 }}
 
 GW_EXPORT const char *{id}_ensemble_name(int kind, int index);
 GW_EXPORT const char *{id}_ensemble_name(int kind, int index) {{
+    int i;
     if (kind < 0) return index >= 0 && index < GW_MODEL.nx ? GW_MODEL.x_names[index] : NULL;
+    if (kind == GW_VAR_OUTPUT) /* y[index]: an output, or a start value's quantity after init */
+        for (i = 0; i < GW_MODEL.n_vars; i++)
+            if (GW_MODEL.vars[i].kind == GW_VAR_START && GW_MODEL.vars[i].out_index == index &&
+                !gw_variable_name(&GW_MODEL, kind, index))
+                return GW_MODEL.vars[i].name;
     return gw_variable_name(&GW_MODEL, kind, index);
 }}
 
@@ -83,10 +90,14 @@ GW_EXPORT void {id}_ensemble_defaults(double *p, double *s) {{
 
 GW_EXPORT int {id}_ensemble_run(long n, const double *p, const double *s, const double *span,
                                 const double *tol, int *status, double *t_final, double *x_final,
-                                double *y_final, unsigned long *steps, gw_logger_fn logger);
+                                double *y_final, unsigned long *steps, gw_logger_fn logger,
+                                int n_grid, const double *t_grid, double *y_grid, long *n_rows,
+                                int *flags);
 GW_EXPORT int {id}_ensemble_run(long n, const double *p, const double *s, const double *span,
                                 const double *tol, int *status, double *t_final, double *x_final,
-                                double *y_final, unsigned long *steps, gw_logger_fn logger) {{
+                                double *y_final, unsigned long *steps, gw_logger_fn logger,
+                                int n_grid, const double *t_grid, double *y_grid, long *n_rows,
+                                int *flags) {{
     gw_callbacks cb;
     gw_ensemble_job job;
     cb.logger = logger;
@@ -97,6 +108,8 @@ GW_EXPORT int {id}_ensemble_run(long n, const double *p, const double *s, const 
     job.rel_tol = tol[0]; job.abs_tol = tol[1]; job.max_step = tol[2];
     job.status = status; job.t_final = t_final; job.x_final = x_final; job.y_final = y_final;
     job.steps = steps;
+    job.n_grid = n_grid; job.t_grid = t_grid; job.y_grid = y_grid; job.n_rows = n_rows;
+    job.flags = flags;
     return (int)gw_ensemble_run(&GW_MODEL, &cb, &job);
 }}
 """
@@ -118,6 +131,13 @@ class EnsembleResult:
     output_names: list[str]
     state_names: list[str]
     messages: list[str] = field(default_factory=list)  # errors, "ensemble trajectory <j>: ..."
+    # with a communication grid (run(..., grid=...)): times (n_grid + 1,), outputs there
+    # (N, n_grid + 1, ny; rows past n_rows[j] are NaN), rows written (N,), fired events (N, ne)
+    grid: np.ndarray | None = None
+    y_grid: np.ndarray | None = None
+    n_rows: np.ndarray | None = None
+    flags: np.ndarray | None = None
+    event_names: list[str] = field(default_factory=list)
 
     def output(self, name: str) -> np.ndarray:
         """(N,) values of one output at t_final; KeyError lists the names."""
@@ -165,7 +185,7 @@ class Ensemble:
 
     def __init__(self, fmu: str | Path, lanes: int = LANES, cache: str | Path | None = None):
         fmu = Path(fmu)
-        digest = hashlib.sha256(fmu.read_bytes() + str(lanes).encode()
+        digest = hashlib.sha256(fmu.read_bytes() + str(lanes).encode() + _UNITY.encode()
                                 + " ".join(FLAGS).encode()).hexdigest()[:20]
         root = Path(cache) if cache else _cache_dir()
         lib = root / digest / "libensemble.so"
@@ -186,9 +206,9 @@ class Ensemble:
         self.library = lib
         self._lib = ctypes.CDLL(str(lib))
         fn = lambda name: getattr(self._lib, f"{self.identifier}_ensemble_{name}")  # noqa: E731
-        sizes = (ctypes.c_int * 7)()
+        sizes = (ctypes.c_int * 8)()
         fn("sizes")(sizes)
-        self.nx, self.ns, self.nu, self.np, self.ny, self.lanes, has_taylor = list(sizes)
+        self.nx, self.ns, self.nu, self.np, self.ny, self.lanes, has_taylor, self.ne = list(sizes)
         if not has_taylor:
             raise EnsembleError(f"{fmu}: the model has no Taylor kernel (solver taylor), which "
                                 "the ensemble path needs")
@@ -200,6 +220,7 @@ class Ensemble:
         self.parameter_names = names(KIND_PARAM, self.np)
         self.start_names = names(KIND_START, self.ns)
         self.output_names = names(KIND_OUTPUT, self.ny)
+        self.event_names = names(KIND_EVENT, self.ne)  # the Boolean outputs (flags), e.g. fallen
         self.state_names = names(-1, self.nx)
         p0, s0 = np.zeros(max(self.np, 1)), np.zeros(max(self.ns, 1))
         fn("defaults")(p0.ctypes.data_as(_D), s0.ctypes.data_as(_D))
@@ -232,12 +253,15 @@ class Ensemble:
 
     def run(self, t_end: float, parameters=None, starts=None, *, t_start: float = 0.0,
             rel_tol: float = 1e-10, abs_tol: float | None = None,
-            max_step: float | None = None) -> EnsembleResult:
+            max_step: float | None = None, grid=None) -> EnsembleResult:
         """Integrate every trajectory from t_start to t_end (s) with solver taylor.
 
         parameters: (N, np) array in `parameter_names` order, or {name: value or (N,) values}
         over the defaults; starts likewise ((N, ns), `start_names`).  N is taken from them
         (1 if both are None).  abs_tol defaults to rel_tol * 1e-2, max_step to the span.
+        grid: communication points (s) after t_start, increasing, the last == t_end: each
+        trajectory then advances as through fmi2DoStep from point to point and the result holds
+        the outputs at t_start and at every point reached (y_grid, n_rows) and the fired events.
         Raises ValueError / KeyError naming a bad shape or name, EnsembleError for a refused job.
         """
         P = self._table("parameter", parameters, self.parameter_names, self.default_parameters, None)
@@ -259,6 +283,10 @@ class Ensemble:
         y_final = np.full((n, self.ny), np.nan)
         steps = np.zeros(n, dtype=np.uint64 if ctypes.sizeof(ctypes.c_ulong) == 8 else np.uint32)
         messages: list[str] = []
+        g = np.ascontiguousarray(np.asarray([] if grid is None else grid, dtype=float).ravel())
+        y_grid = np.full((n, g.size + 1, self.ny), np.nan) if g.size else None
+        n_rows = np.zeros(n, dtype=np.int_ if ctypes.sizeof(ctypes.c_long) == 8 else np.int32)
+        flags = np.zeros((n, max(self.ne, 1)), dtype=np.intc)
 
         @_LOGGER
         def logger(env, instance, st, category, message):
@@ -267,10 +295,17 @@ class Ensemble:
                        span.ctypes.data_as(_D), tol.ctypes.data_as(_D),
                        status.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), t_final.ctypes.data_as(_D),
                        x_final.ctypes.data_as(_D), y_final.ctypes.data_as(_D),
-                       steps.ctypes.data_as(ctypes.c_void_p), logger)
+                       steps.ctypes.data_as(ctypes.c_void_p), logger, ctypes.c_int(g.size),
+                       g.ctypes.data_as(_D) if g.size else None,
+                       y_grid.ctypes.data_as(_D) if g.size else None,
+                       n_rows.ctypes.data_as(ctypes.c_void_p) if g.size else None,
+                       flags.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
         if rc >= STATUS_ERROR:
             raise EnsembleError("; ".join(messages) or f"ensemble run failed (status {rc})")
         return EnsembleResult(status=status.astype(int), t_final=t_final, x_final=x_final,
                               y_final=y_final, steps=steps.astype(np.int64),
                               output_names=self.output_names, state_names=self.state_names,
-                              messages=messages)
+                              messages=messages,
+                              grid=np.concatenate([[t_start], g]) if g.size else None,
+                              y_grid=y_grid, n_rows=n_rows.astype(np.int64) if g.size else None,
+                              flags=flags[:, : self.ne].astype(bool), event_names=self.event_names)

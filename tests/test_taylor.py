@@ -252,6 +252,24 @@ def test_solver_loop_contract_state_budget_and_steps(paper):
     assert np.array_equal(x0, np.array(s.getReal(vrs)))
 
 
+@pytest.mark.parametrize("cc", ["gcc", "clang"])
+def test_kernel_and_ensemble_sources_warning_clean(cc, paper, tmp_path):
+    """An FMU with the kernel and its ensemble library build under -std=c99 -Wall -Wextra
+    -Wpedantic -Werror with gcc and clang (the target_clones kernel included)."""
+    import shutil
+    from fmu_build.ensemble import _UNITY
+    if shutil.which(cc) is None:
+        pytest.skip(f"{cc} is not installed (make test installs it: Debian package {cc})")
+    src = paper[0].sources
+    strict = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-shared", "-fPIC", f"-I{src}"]
+    unity = tmp_path / "ens.c"
+    unity.write_text(_UNITY.format(id=paper[0].identifier, lanes=8))
+    for source in (src / "gw_fmu.c", unity):
+        r = subprocess.run([cc, *strict, str(source), "-o", str(tmp_path / "x.so"), "-lm"],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, f"{cc} {source.name}:\n{r.stderr}"
+
+
 # ---- ensemble ----------------------------------------------------------------------------------
 
 def test_ensemble_equals_single_runs(paper, tmp_path):

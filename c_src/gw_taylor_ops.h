@@ -54,12 +54,16 @@ GW_TL_INNER void GW_TL(conv)(double *acc, const double *a, const double *b, int 
     for (; j <= hi; j++) s0 += a[j] * b[m - j];
     acc[0] = (s0 + s1) + (s2 + s3);
     (void)l;
-#else /* the lanes are the independent sums */
-    for (l = 0; l < GW_TL_W; l++) acc[l] = 0.0;
+#else /* the lanes are the independent sums, kept in a local array: acc may point into the
+       * series themselves (the result's coefficient k), so sums kept in acc would be stored
+       * and reloaded at every j (measured: the 8-lane kernel 1.8x slower) */
+    double s[GW_TL_W];
+    for (l = 0; l < GW_TL_W; l++) s[l] = 0.0;
     for (j = lo; j <= hi; j++) {
         const double *aj = GW_TLK(a, j), *bj = GW_TLK(b, m - j);
-        for (l = 0; l < GW_TL_W; l++) acc[l] += aj[l] * bj[l];
+        for (l = 0; l < GW_TL_W; l++) s[l] += aj[l] * bj[l];
     }
+    for (l = 0; l < GW_TL_W; l++) acc[l] = s[l];
 #endif
 }
 

@@ -31,6 +31,7 @@ sys.path.insert(0, str(HERE.parent))
 
 from fmi_slave import FmuRunner  # noqa: E402
 from work_precision import SCENARIOS  # noqa: E402
+from work_precision import best_time as best  # noqa: E402  (thread CPU time, as fmi_slave's)
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
 from fmu_build.codegen import optimised  # noqa: E402
@@ -63,17 +64,6 @@ def to_heyoka(f, xs, p, fp=float):
         else:
             work[o[0]] = bi[op](work[i[0]], work[i[1]])
     return out
-
-
-def best(fn, repeat):
-    """best CPU time of the calling thread (time.thread_time, as fmi_slave times fmi2DoStep: the
-    load of other processes does not count, and every row of the table is measured alike)"""
-    t_best, res = float("inf"), None
-    for _ in range(repeat):
-        t0 = time.thread_time()
-        res = fn()
-        t_best = min(t_best, time.thread_time() - t0)
-    return t_best, res
 
 
 def cheapest(points, target):

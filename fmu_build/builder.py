@@ -42,6 +42,12 @@ def runtime_sources() -> list[Path]:
     return sorted(RUNTIME_DIR.glob("*.c")) + sorted(RUNTIME_DIR.glob("*.h"))
 
 
+# runtime files only an FMU with the Taylor kernel carries: the recurrences the kernel includes,
+# and the ensemble path's sources (fmu_build.ensemble builds them from the FMU's sources/; not part
+# of the FMU's unity build, compiled on their own they are empty)
+TAYLOR_ONLY = {"gw_taylor_ops.h", "gw_ensemble.c", "gw_ensemble.h"}
+
+
 def model_spec(scene: Scene) -> ModelSpec:
     return build_model(wheel=scene.wheel, initial=scene.initial, effects=scene.effects,
                        formulation=scene.formulation, name=scene.name, description=scene.description)
@@ -92,6 +98,8 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         fns = generate_functions(spec, src, table)
         kernel = generate_taylor(fns, spec.name, src, wanted=taylor or experiment.solver == "taylor")
         for f in runtime_sources():
+            if f.name in TAYLOR_ONLY and isinstance(kernel, str):
+                continue  # no kernel: nothing of solver taylor beyond the one-comment model file
             shutil.copy2(f, src / f.name)
         for h in FMI_HEADERS:
             shutil.copy2(fmi_headers_dir() / h, src / h)

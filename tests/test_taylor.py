@@ -184,6 +184,8 @@ def test_default_fmu_has_no_kernel_and_refuses_taylor(earth_fmu, paper):
     from fmi_slave import FmuRunner
     from fmpy.fmi1 import FMICallException
     assert _kernel_in(earth_fmu) == {"source": False, "slot": False, "code": False, "item": False}
+    with zipfile.ZipFile(earth_fmu) as zf:  # nor the recurrences and the ensemble's sources
+        assert not {"sources/gw_taylor_ops.h", "sources/gw_ensemble.c"} & set(zf.namelist())
     assert _kernel_in(paper[0].fmu) == {"source": True, "slot": True, "code": True, "item": True}  # taylor=True
     runner = FmuRunner(earth_fmu)
     with pytest.raises(FMICallException):

@@ -65,7 +65,7 @@ def read_result(path: str | Path, component: str | None = None) -> ResultTable:
     header = [h.strip() for h in rows[0]]
     if len(set(header)) != len(header):
         raise AnimationError(f"{path}: repeated column {next(h for h in header if header.count(h) > 1)!r}")
-    names = _component_columns(path, header, component)
+    names, component = _component_columns(path, header, component)
     body = rows[1:]
     if not body:
         raise AnimationError(f"{path}: a header but no rows")
@@ -76,14 +76,15 @@ def read_result(path: str | Path, component: str | None = None) -> ResultTable:
                        component)
 
 
-def _component_columns(path: Path, header: list[str], component: str | None) -> list[str | None]:
-    """The name each column is read as: its own, or for a system result the chosen component's
-    columns without the "<component>." prefix (other components' columns: None, not read)."""
+def _component_columns(path: Path, header: list[str], component: str | None) -> tuple[list, str | None]:
+    """(the name each column is read as, the component): a column's own name, or for a system
+    result the chosen component's columns without the "<component>." prefix (other components'
+    columns: None, not read)."""
     systems = sorted({h.split(".", 1)[0] for h in header if "." in h})
     has = [c for c in systems if all(f"{c}.{n}" in header for n in REQUIRED[1:])]
     if component is None:
         if all(c in header for c in REQUIRED):
-            return list(header)
+            return list(header), None
         if len(has) > 1:
             raise AnimationError(f"{path}: components {', '.join(has)} all have the wheel's columns: "
                                  "choose one with --component")
@@ -99,7 +100,7 @@ def _component_columns(path: Path, header: list[str], component: str | None) -> 
     if "time" not in header:
         raise AnimationError(f"{path}: missing column time")
     prefix = f"{component}."
-    return ["time" if h == "time" else h[len(prefix):] if h.startswith(prefix) else None for h in header]
+    return ["time" if h == "time" else h[len(prefix):] if h.startswith(prefix) else None for h in header], component
 
 
 @dataclass

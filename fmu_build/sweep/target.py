@@ -200,6 +200,18 @@ class FmuInstance:
         self._check(self._get_real(self._c, byref(ref), 1, byref(value)), "fmi2GetReal")
         to._check(to._f["fmi2SetReal"](to._c, byref(c_uint(to_vr)), 1, byref(value)), "fmi2SetReal")
 
+    def copy(self, vr: int, fmi_type: str, to: "FmuInstance", to_vr: int) -> None:
+        """One connection of any FMI 2.0 type but String (both ends of one type: SystemDescription.check;
+        an Enumeration travels as an Integer)."""
+        if fmi_type == "Real":
+            return self.copy_real(vr, to, to_vr)
+        if fmi_type == "String":
+            raise PointFailure("String connections are not supported by the sweep's master")
+        kind = "Boolean" if fmi_type == "Boolean" else "Integer"
+        value = c_int(0)
+        self._check(self._f[f"fmi2Get{kind}"](self._c, byref(c_uint(vr)), 1, byref(value)), f"fmi2Get{kind}")
+        to._check(to._f[f"fmi2Set{kind}"](to._c, byref(c_uint(to_vr)), 1, byref(value)), f"fmi2Set{kind}")
+
     def _reinstantiate(self) -> None:
         """After fmi2Fatal (or a refused fmi2Reset) the instance is gone: make a new one."""
         try:

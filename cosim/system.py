@@ -190,14 +190,14 @@ def check_bindings(component: Component, where: str = "") -> dict:
     for variable wheel:beta"), so a binding of a state's start value (an output with
     initial="exact", e.g. the wheel's beta) would make masters disagree. Set such start values
     in the scene's [initial] (the FMU's default start) or through a master's own start values.
-    Values: a Real takes a number, an Integer a whole number, an Enumeration an item's name or
-    value, a Boolean true/false (or 1/0), a String text; anything else raises SystemFileError
-    naming <component>.<variable>. Returns {name: float | int | bool | str}.
+    Enumeration variables (the wheel's solver) are refused too: libcosim and ecos leave them out
+    and would ignore the binding. Values: a Real takes a number, an Integer a whole number, a
+    Boolean true/false (or 1/0), a String text; anything else raises SystemFileError naming
+    <component>.<variable>. Returns {name: float | int | bool | str}.
     """
     if not component.start_values:
         return {}
     variables = fmu_variables(component.fmu, component.name)
-    enums = _enumerations(component.fmu)
     out = {}
     for name, value in component.start_values.items():
         v = variables.get(name)
@@ -207,18 +207,17 @@ def check_bindings(component: Component, where: str = "") -> dict:
                 f"{where}{component.name}.{name}: an SSP parameter binding sets a parameter or an input, "
                 f"this is {'an ' + got if got else 'not a variable'} (SSP masters such as libcosim ignore it): "
                 f"give it as the FMU's start value (a scene's [initial]) or as a master's start value")
-        out[name] = _coerce(v, value, enums, f"{where}{component.name}.{name}")
+        if v.type == "Enumeration":
+            raise SystemFileError(
+                f"{where}{component.name}.{name}: an Enumeration; libcosim and ecos leave FMI 2.0 Enumeration "
+                f"variables out (\"Enumeration variable type not supported\") and ignore the binding, so masters "
+                f"would disagree: set it in the FMU (a scene's [experiment]) or as a master's start value")
+        out[name] = _coerce(v, value, f"{where}{component.name}.{name}")
     return out
 
 
-def _enumerations(fmu) -> dict[str, dict[str, int]]:
-    md = read_model_description(str(fmu), validate=False)
-    return {t.name: {i.name: int(i.value) for i in t.items} for t in md.typeDefinitions if t.items}
-
-
-def _coerce(v, value, enums: dict, where: str):
+def _coerce(v, value, where: str):
     """value (a number, or the text of an SSV value attribute) as the type of FMU variable v."""
-    items = enums.get(v.declaredType.name, {}) if v.type == "Enumeration" and v.declaredType else {}
     text = value.strip() if isinstance(value, str) else value
     try:
         if v.type == "Real":
@@ -235,30 +234,21 @@ def _coerce(v, value, enums: dict, where: str):
             return bool(text)
         if v.type == "String":
             return str(value)
-        if v.type == "Enumeration" and isinstance(text, str) and text in items:
-            return items[text]
         number = float(text)
         if isinstance(text, bool) or not number.is_integer():
             raise ValueError
-        number = int(number)
-        if v.type == "Enumeration" and items and number not in items.values():
-            raise ValueError
-        return number
+        return int(number)
     except (TypeError, ValueError):
-        choices = f" (one of {', '.join(items)})" if items else ""
-        raise SystemFileError(f"{where}: {value!r} is not a valid {v.type}{choices}") from None
+        raise SystemFileError(f"{where}: {value!r} is not a valid {v.type}") from None
 
 
-def _ssv_element(v, value, enums: dict) -> tuple[str, str]:
-    """(SSV element name, value attribute) of a binding of FMU variable v (SSP 1.0 ssv:TParameter)."""
+def _ssv_element(v, value) -> tuple[str, str]:
+    """(SSV element name, value attribute) of a binding of FMU variable v (SSP 1.0 ssv:TParameter;
+    never ssv:Enumeration, which libcosim's SSP parser (0.0.6) aborts the process on)."""
     if v.type == "Real":
         return "Real", repr(float(value))
     if v.type == "Boolean":
         return "Boolean", "true" if value else "false"
-    if v.type == "Enumeration":
-        items = enums.get(v.declaredType.name, {}) if v.declaredType else {}
-        names = {number: name for name, number in items.items()}
-        return ("Enumeration", names[value]) if value in names else ("Integer", str(value))
     if v.type == "String":
         return "String", str(value)
     return "Integer", str(int(value))
@@ -269,8 +259,8 @@ def _add_parameter_bindings(ssd_path: Path, system: SystemDescription) -> None:
 
     pyssp-standard 0.9 writes bindings only as external .ssv references; the values belong in
     the .ssd itself here, so they are added to the written tree in schema order. Only parameters
-    and inputs are bound (check_bindings), each as its variable's SSV type (an Enumeration by its
-    item's name); every component's set is named PARAMETER_SET.
+    and inputs are bound (check_bindings), each as its variable's SSV type (_ssv_element); every
+    component's set is named PARAMETER_SET.
     """
     if not any(c.start_values for c in system.components):
         return
@@ -283,13 +273,13 @@ def _add_parameter_bindings(ssd_path: Path, system: SystemDescription) -> None:
         if not comp.start_values:
             continue
         values_of = check_bindings(comp)
-        variables, enums = fmu_variables(comp.fmu, comp.name), _enumerations(comp.fmu)
+        variables = fmu_variables(comp.fmu, comp.name)
         bindings = ET.Element(f"{{{SSD_NS}}}ParameterBindings")
         values = ET.SubElement(ET.SubElement(bindings, f"{{{SSD_NS}}}ParameterBinding"), f"{{{SSD_NS}}}ParameterValues")
         pset = ET.SubElement(values, f"{{{SSV_NS}}}ParameterSet", {"version": "1.0", "name": PARAMETER_SET})
         params = ET.SubElement(pset, f"{{{SSV_NS}}}Parameters")
         for name, value in values_of.items():
-            kind, text = _ssv_element(variables[name], value, enums)
+            kind, text = _ssv_element(variables[name], value)
             ET.SubElement(ET.SubElement(params, f"{{{SSV_NS}}}Parameter", {"name": name}), f"{{{SSV_NS}}}{kind}",
                           {"value": text})
         children = list(elem)

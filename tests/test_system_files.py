@@ -224,3 +224,14 @@ def test_animate_a_system_run_with_the_ssp_as_geometry(earth_loop, tmp_path):
     p = resolve_parameters(table, fmu=bound)
     assert (p.R, p.L_pend, p.m_fly) == (0.17, 0.05, 0.4)
     assert np.isfinite(table.number("tilt")).all()
+
+
+def test_controller_tilt_stop_is_at_most_a_right_angle(controller_fmu, tmp_path):
+    """tilt_max (the gimbal stop) used to take any value >= 0, e.g. 10 rad; past pi/2 the spin axis
+    would turn through the link (docs/system.md): refused at initialisation, with the reason."""
+    r = gyrowheel("simulate", controller_fmu, "--stop-time", "0.05", "--set", "tilt_max=2", "-o", tmp_path / "c.csv",
+                  cwd=tmp_path)
+    assert r.returncode == 1 and "tilt_max must be <= 1.5708 (check value 2)" in r.stderr, r.stderr
+    r = gyrowheel("simulate", controller_fmu, "--stop-time", "0.05", "--set", "tilt_max=1.5", "-o", tmp_path / "c.csv",
+                  cwd=tmp_path)
+    assert r.returncode == 0, r.stderr

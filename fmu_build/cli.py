@@ -204,10 +204,12 @@ def cmd_system_run(args) -> int:
     if args.stop_time is not None and not args.stop_time > 0:
         raise CliError(f"--stop-time must be > 0, got {args.stop_time}")
     output = output_file(args.output or Path(args.ssp).with_suffix(".csv").name)
+    sets = _parse_sets(args.set)
     with tempfile.TemporaryDirectory(prefix="gyrowheel-system-") as tmp:
         try:
             system = read_ssp(args.ssp, tmp)
-            result = run(system, args.step, args.stop_time)
+            starts = _system_start_values(system, sets)
+            result = run(system, args.step, args.stop_time, start_values=starts)
         except (SystemFileError, ValueError) as exc:
             raise CliError(str(exc)) from None
         except MasterError as exc:
@@ -216,6 +218,27 @@ def cmd_system_run(args) -> int:
     ended = f", stopped by {result.stopped_by} at t = {result.data['time'][-1]:.6g} s" if result.stopped_by else ""
     print(f"wrote {output}: {len(result.data)} rows{ended}")
     return 0
+
+
+def _system_start_values(system, sets: dict[str, str]) -> dict[str, dict[str, object]]:
+    """--set COMPONENT.VARIABLE=VALUE -> {component: {variable: typed value}} (as `simulate --set`
+    checks them against each component's FMU: name, settable, type). Raises CliError."""
+    from fmu_build.simulate import SimulationError, coerce_start_values
+    names = [c.name for c in system.components]
+    by_component: dict[str, dict[str, str]] = {}
+    for key, text in sets.items():
+        component, _, variable = key.partition(".")
+        if component not in names or not variable:
+            raise CliError(f"--set {key}={text}: expected COMPONENT.VARIABLE=VALUE with a component of "
+                           f"{', '.join(names)}")
+        by_component.setdefault(component, {})[variable] = text
+    out = {}
+    for c, values in by_component.items():
+        try:
+            out[c] = coerce_start_values(system.component(c).fmu, values)
+        except SimulationError as exc:
+            raise CliError(f"--set, component {c}: {exc}") from None
+    return out
 
 
 def cmd_export_c(args) -> int:
@@ -278,6 +301,8 @@ def make_parser() -> argparse.ArgumentParser:
     yr.add_argument("ssp")
     yr.add_argument("--step", type=finite_float, default=0.01, help="communication step [s] (default 0.01)")
     yr.add_argument("--stop-time", type=finite_float, help="default: the .ssp's DefaultExperiment")
+    yr.add_argument("--set", action="append", metavar="COMPONENT.NAME=VALUE",
+                    help="start value of a component's variable, e.g. wheel.M=2.1 (repeatable)")
     yr.add_argument("-o", "--output", help="CSV file to write (<component>.<variable> columns)")
     yr.set_defaults(func=cmd_system_run)
     x = sub.add_parser("export-c", help="write the scene's model as plain C with a C API (no FMI)")

@@ -235,3 +235,21 @@ def test_controller_tilt_stop_is_at_most_a_right_angle(controller_fmu, tmp_path)
     r = gyrowheel("simulate", controller_fmu, "--stop-time", "0.05", "--set", "tilt_max=1.5", "-o", tmp_path / "c.csv",
                   cwd=tmp_path)
     assert r.returncode == 0, r.stderr
+
+
+def test_cli_system_run_set(earth_loop, tmp_path):
+    """`system run --set COMPONENT.VARIABLE=VALUE`, checked as `simulate --set` checks (name,
+    settable, type): the run equals the master's with those start values."""
+    out = tmp_path / "set.csv"
+    r = gyrowheel("system", "run", earth_loop.ssp, "--stop-time", "0.5", "-o", out, "--set", "wheel.beta=1.55",
+                  "--set", "controller.gain_scale=0.5", "--set", "wheel.solver=rk4", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    ours = np.genfromtxt(out, delimiter=",", names=True)
+    direct = run(read_ssp(earth_loop.ssp, tmp_path / "u"), 0.01, stop_time=0.5, start_values={
+        "wheel": {"beta": 1.55, "solver": 2}, "controller": {"gain_scale": 0.5}}).data
+    assert ours["wheelbeta"][0] == 1.55 and np.array_equal(ours["wheelbeta"], direct["wheel.beta"])
+    for args, fragment in ((("--set", "M=2"), "expected COMPONENT.VARIABLE=VALUE with a component of wheel, controller"),
+                           (("--set", "wheel.colour=3"), "--set, component wheel: unknown variable 'colour'"),
+                           (("--set", "wheel.solver=rk45"), "not a valid Enumeration; valid: euler, rk4")):
+        r = gyrowheel("system", "run", earth_loop.ssp, "--stop-time", "0.1", "-o", out, *args, cwd=tmp_path)
+        assert r.returncode == 2 and r.stderr.count("\n") == 1 and fragment in r.stderr, r.stderr

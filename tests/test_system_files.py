@@ -231,7 +231,7 @@ def test_controller_tilt_stop_is_at_most_a_right_angle(controller_fmu, tmp_path)
     would turn through the link (docs/system.md): refused at initialisation, with the reason."""
     r = gyrowheel("simulate", controller_fmu, "--stop-time", "0.05", "--set", "tilt_max=2", "-o", tmp_path / "c.csv",
                   cwd=tmp_path)
-    assert r.returncode == 1 and "tilt_max must be <= 1.5708 (check value 2)" in r.stderr, r.stderr
+    assert r.returncode == 1 and "tilt_max must be <= 1.5708" in r.stderr, r.stderr
     r = gyrowheel("simulate", controller_fmu, "--stop-time", "0.05", "--set", "tilt_max=1.5", "-o", tmp_path / "c.csv",
                   cwd=tmp_path)
     assert r.returncode == 0, r.stderr

@@ -11,6 +11,7 @@ as "<component>.<variable>", sampled at the communication points.
 from __future__ import annotations
 
 import math
+import os
 import shutil
 import time as _time
 from dataclasses import dataclass, field
@@ -78,14 +79,22 @@ def _set(unit: _Unit, name: str, value) -> None:
     unit.put(v.valueReference, v.type, value)
 
 
+def _physical_memory() -> int:
+    """Bytes of physical memory (0 where the platform does not say)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return 0
+
+
 def run(system: SystemDescription, step: float, stop_time: float | None = None,
         start_values: dict[str, dict[str, float]] | None = None) -> RunResult:
     """Run the system with communication step `step` [s] to stop_time (default: the system's).
 
     start_values: {component: {variable: value}} on top of the system's own. Raises
     MasterError if a component fails (fmi2Error; the message carries the FMU's logged reason),
-    ValueError for a bad step or stop time, SystemFileError (a ValueError) for a system whose
-    connections do not fit its FMUs.
+    ValueError for a bad step or stop time (or a result that would not fit in half the machine's
+    memory), SystemFileError (a ValueError) for a system whose connections do not fit its FMUs.
     """
     if not (step > 0 and math.isfinite(step)):
         raise ValueError(f"step must be a positive number of seconds, got {step!r}")
@@ -103,6 +112,13 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
         raise ValueError(f"stop time {stop:.12g} is not a whole number (>= 1) of steps {step:g} from {t0:g}: "
                          f"stop at {near}, or choose a step that divides {stop - t0:.12g} s")
     system.check()
+    columns = 1 + sum(sum(v.causality == "output" for v in read_model_description(str(c.fmu)).modelVariables)
+                      for c in system.components)
+    need, have = (n_steps + 1) * columns * 8, _physical_memory()
+    if have and need > have / 2:
+        raise ValueError(f"{n_steps + 1} communication points of {columns} columns would take "
+                         f"{need / 2**30:.3g} GiB, more than half of this machine's {have / 2**30:.3g} GiB: "
+                         f"choose a longer step or a shorter stop time")
     units = []
     try:
         for c in system.components:
@@ -135,15 +151,18 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
         for u in units:
             u.slave.exitInitializationMode()
         names = ["time"] + [f"{u.name}.{o}" for u in units for o in u.outputs]
-        rows = []
+        data = np.zeros(n_steps + 1, dtype=[(n, np.float64) for n in names])  # every point, filled as it runs
+        count = 0
 
         def record(t):
+            nonlocal count
             row = [t]
             for u in units:
                 for o in u.outputs:
                     v = u.vars[o]
                     row.append(float(u.get(v.valueReference, v.type)) if v.type != "String" else math.nan)
-            rows.append(row)
+            data[count] = tuple(row)
+            count += 1
 
         record(t0)
         stopped_by = None
@@ -166,8 +185,7 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
         wall = _time.perf_counter() - wall
         for u in units:
             u.slave.terminate()
-        data = np.array([tuple(r) for r in rows], dtype=[(n, np.float64) for n in names])
-        return RunResult(data, stopped_by, wall)
+        return RunResult(data[:count].copy(), stopped_by, wall)
     except MasterError:
         raise
     except Exception as exc:  # fmpy raises FMICallException (fmi2Error) and plain Exceptions

@@ -179,12 +179,15 @@ def test_a_failing_component_says_why(unpacked, tmp_path):
     (("--stop-time", "0.333"), 2, "stop at 0.33 or 0.34, or choose a step that divides 0.333 s"),
     (("--stop-time", "-1"), 2, "--stop-time must be > 0, got -1.0"),
     (("--step", "0"), 2, "--step must be > 0"),
+    # 6e10 points used to be attempted (a list per point: the machine's memory, then a kill)
+    (("--step", "1e-9"), 2, "60000000001 communication points of 39 columns would take"),
     (("--stop-time", "1", "-o", "{file}/x.csv"), 2, "is not a directory"),
     (("--stop-time", "1", "-o", "{dir}"), 2, "is a directory; give a file name"),
 ])
 def test_cli_system_run_bad_options(earth_loop, tmp_path, args, code, fragment):
     """One line, the right exit, before the run. `--stop-time 1e-9` used to run zero steps and write
-    one row; an unwritable -o raised a traceback after the whole run."""
+    one row; an unwritable -o raised a traceback after the whole run; a result larger than half the
+    machine's memory is refused with its size."""
     (tmp_path / "file").write_text("")
     args = [a.format(file=tmp_path / "file", dir=tmp_path) for a in args]
     r = gyrowheel("system", "run", earth_loop.ssp, *args, cwd=tmp_path)

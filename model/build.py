@@ -16,7 +16,7 @@ import casadi as ca
 
 from model.context import Body, WheelContext
 from model.effects import CATALOGUE, lift_off_conflict
-from model.kinematics import WheelKinematics
+from model.kinematics import WheelKinematics, norm
 from model.lagrangian import ConstrainedSystem
 from model.spec import Event, ModelSpec, Quantity
 
@@ -281,14 +281,11 @@ class _Assembler:
             S0 = ca.substitute(S, q_free, q0)
             init = ca.vertcat(q0, ca.mtimes(S0, v0), e_start)
             nominal_rates = [P["R"], P["R"]] + [1.0] * (nf - 2)  # x_dot, y_dot scale like R sqrt(g/R)
-            # |A q_dot| written as vv / sqrt(vv + 1e-200), vv = |A q_dot|^2: the same value (exactly
-            # 0 at 0, |A q_dot| to rounding above 1e-100 m/s) with a derivative defined at 0, where
-            # every initial state lies; norm_2's v / |v| is 0/0 there, which made every partial of
-            # Initialization Mode NaN (fmi2GetDirectionalDerivative refused them all)
-            vv = ca.dot(violation, violation)
+            # kinematics.norm: its derivative is defined at 0, where every initial state lies
+            # (norm_2's 0/0 there made every partial of Initialization Mode NaN)
             extra_outputs = [
                 (Quantity("constraint_violation", "m/s", "|A(q) q_dot|, drift of the rolling constraint"),
-                 vv / ca.sqrt(vv + 1e-200)),
+                 norm(violation)),
                 (Quantity("lambda_x", "N", "constraint multiplier: contact force along x"), lam[0]),
                 (Quantity("lambda_y", "N", "constraint multiplier: contact force along y"), lam[1]),
             ]

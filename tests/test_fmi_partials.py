@@ -37,6 +37,16 @@ def disk_fmu(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
+def rest_fmu(tmp_path_factory):
+    """A wheel at rest (no spin) with air drag and contact forces: drag_force and the tangential
+    contact force are magnitudes of vectors that are 0 at the start."""
+    from fmu_build.scene import parse_scene
+    text = ('[model]\nname = "drag_at_rest"\n[effects.gravity]\n[effects.air_drag]\nc_lin = 0.1\n'
+            '[effects.contact_forces]\n[initial]\nbeta_deg = 80.0\ngamma_dot = 0.0\n')
+    return build_fmu(parse_scene(text, "drag_at_rest.toml"),
+                     tmp_path_factory.mktemp("rest_partials") / "drag_at_rest.fmu").fmu
+
+@pytest.fixture(scope="module")
 def mult_fmu(tmp_path_factory):
     """paper_earth in the multipliers formulation (outputs constraint_violation, lambda_x, lambda_y)."""
     from fmu_build.scene import parse_scene
@@ -81,7 +91,7 @@ def _mismatch(f, x0: float, d: float) -> tuple[float, float]:
     return best
 
 
-@pytest.mark.parametrize("fixture", ["earth_fmu", "disk_fmu", "mult_fmu"])
+@pytest.mark.parametrize("fixture", ["earth_fmu", "disk_fmu", "mult_fmu", "rest_fmu"])
 def test_every_initial_unknown_partial_is_answered_and_right(fixture, request):
     fmu = request.getfixturevalue(fixture)
     s = Slave(fmu)
@@ -261,6 +271,30 @@ def test_constraint_violation_partials_at_the_start_are_zero(mult_fmu):
         s.slave.doStep(0.0, 1.0)
         assert 0.0 < s.get("constraint_violation") < 1e-6  # the stabilised drift
         assert math.isfinite(s.slave.getDirectionalDerivative([cv], [s.vr("beta")], [1.0])[0])
+        assert [m for m in s.messages if m[0] >= 2] == []
+    finally:
+        s.free()
+
+
+def test_magnitudes_of_zero_vectors_have_partials_at_rest(rest_fmu):
+    """Review of issue 8, section 3: at rest the drag force F = -(c_lin + ...) v is 0 for every
+    drag parameter, so d drag_force / d (c_lin, rho_air, cd_area) = 0 exactly; with respect to a
+    rate the magnitude has a symmetric kink, answered 0 like fabs (sign(0) = 0) and like central
+    differences. Before: norm_2's 0/0 made these entries NaN and one NaN refused every partial
+    of the model in Initialization Mode."""
+    s = Slave(rest_fmu)
+    try:
+        s.slave.setupExperiment(startTime=0.0)
+        s.slave.enterInitializationMode()
+        assert s.get("drag_force") == 0.0
+        f = s.vr("drag_force")
+        for k in ("c_lin", "rho_air", "cd_area", "gamma_dot", "alpha_dot"):
+            assert s.slave.getDirectionalDerivative([f], [s.vr(k)], [1.0]) == [0.0], k
+        s.slave.exitInitializationMode()
+        s.slave.doStep(0.0, 0.05)  # falling: v > 0, the smooth partials
+        assert s.get("drag_force") > 0.0
+        d = s.slave.getDirectionalDerivative([f, s.vr("friction_use")], [s.vr("beta_dot")], [1.0])
+        assert all(math.isfinite(x) for x in d) and d[0] != 0.0
         assert [m for m in s.messages if m[0] >= 2] == []
     finally:
         s.free()

@@ -56,7 +56,9 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = I->terminated ? fmi2True : fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
-    eventInfo->valuesOfContinuousStatesChanged = fmi2False;
+    /* an update event (or the initial settling of the model's modes) changed the states */
+    eventInfo->valuesOfContinuousStatesChanged = I->x_jumped ? fmi2True : fmi2False;
+    I->x_jumped = 0;
     eventInfo->nextEventTimeDefined = fmi2False;
     eventInfo->nextEventTime = 0.0;
     GW_END_FUNCTION();
@@ -150,6 +152,7 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], s
             goto END;
         }
     memcpy(eventIndicators, I->e_me, ni * sizeof(double));
+    if (!I->in_setup) gw_event_observe(I, I->e_me); /* positive values arm their events */
     GW_END_FUNCTION();
 }
 

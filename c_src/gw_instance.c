@@ -84,6 +84,11 @@ GW_API gw_instance *gw_instance_new(const gw_model *m, const char *name, const g
         if (gw_fun_alloc(I, &I->f_dir, &m->dir, 4, 1)) goto fail;
         GW_ALLOC_VEC(I->dir_D, double, (size_t)(m->nx + m->ny) * (size_t)(m->nx + m->nu));
     }
+    /* event instants with state updates */
+    if (gw_fun_alloc(I, &I->f_upd, &m->upd, 5, 1)) goto fail;
+    GW_ALLOC_VEC(I->x_upd, double, nx);
+    GW_ALLOC_VEC(I->e_upd, double, ne);
+    GW_ALLOC_VEC(I->ev_fired, int, ne);
     gw_fun_bind(I);
     gw_instance_reset(I);
     return I;
@@ -104,6 +109,10 @@ GW_API void gw_instance_free(gw_instance *I) {
     gw_fun_free(I, &I->f_nom);
     gw_fun_free(I, &I->f_jac);
     gw_fun_free(I, &I->f_dir);
+    gw_fun_free(I, &I->f_upd);
+    gw_free(I, I->x_upd);
+    gw_free(I, I->e_upd);
+    gw_free(I, I->ev_fired);
     gw_solver_free(I);
     gw_free(I, I->xdot);
     gw_free(I, I->e_me);
@@ -160,6 +169,7 @@ GW_API void gw_instance_reset(gw_instance *I) {
         I->flags[i] = 0;
     }
     I->terminated = 0;
+    I->x_jumped = 0;
     I->last_successful_time = 0.0;
     I->y_valid = 0;
     I->fcur_valid = 0;

@@ -32,6 +32,9 @@
  *   jac (t, x, u, p) -> J           dense d xdot / d x, column-major nx*nx (NULL if absent)
  *   dir (t, x, u, p) -> D           dense d [xdot; y] / d [x; u], column-major
  *                                   (nx+ny) x (nx+nu), for fmi2GetDirectionalDerivative
+ *   upd (t, x, u, p, k) -> x_new    the state after the update of event k (k, an event index
+ *                                   passed as a double, has action GW_EVENT_UPDATE); only in
+ *                                   models with such events (NULL otherwise)
  * Each instance allocates its own arg/res/iw/w buffers from the sizes f_work reports
  * (CasADi SX functions are reentrant then); mem is always 0.  The generated functions
  * are static too (fmu_build/codegen.py makes them so and keeps only what the runtime calls).
@@ -84,7 +87,9 @@ typedef enum {
 /* What happens when an event indicator crosses zero from above. */
 typedef enum {
     GW_EVENT_TERMINATE = 0, /* stop at the located time: fmi2Discard + fmi2Terminated */
-    GW_EVENT_WARN = 1       /* log a warning at the located time, set the flag, go on */
+    GW_EVENT_WARN = 1,      /* log a warning at the located time, set the flag, go on */
+    GW_EVENT_UPDATE = 2     /* the state jumps to upd(t, x, u, p, k) at the located time (a
+                               discrete mode switch; no flag) and the integration restarts */
 } gw_event_action;
 
 typedef struct {
@@ -114,6 +119,7 @@ typedef struct {
     const char *const *check_messages; /* nc, e.g. "M must be > 0" */
     int default_solver;                /* gw_solver */
     double default_rel_tol, default_abs_tol, default_max_step;
+    gw_function upd; /* state update of GW_EVENT_UPDATE events ({NULL, NULL}: none) */
 } gw_model;
 
 #endif /* GW_MODEL_H */

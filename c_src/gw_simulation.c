@@ -173,6 +173,12 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
         if (!isfinite(I->x[i]))
             GW_SIM_FAIL("%s: initial state %s is not finite (%g)", fn,
                         m->x_names ? m->x_names[i] : "?", I->x[i]);
+    /* the model's discrete state (stiction modes) is settled at the start: update events whose
+     * indicator is <= 0 there fire now (gw_events_initial), before outputs and derivatives */
+    I->x_jumped = 0;
+    if (m->ne > 0 && gw_eval_evt(I, I->t, I->x, I->e) != 0)
+        GW_SIM_FAIL("%s: evaluation of the event indicators failed", fn);
+    if (m->ne > 0 && gw_events_initial(I, fn) != 0) return GW_ERROR;
     /* from here on y is the simulation's output */
     I->in_setup = 0;
     I->y_valid = 0;
@@ -187,13 +193,12 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
     I->fcur_valid = 1;
     memcpy(I->xdot, I->k[0], (size_t)m->nx * sizeof(double));
     I->xdot_valid = 1;
-    if (m->ne > 0 && gw_eval_evt(I, I->t, I->x, I->e) != 0)
-        GW_SIM_FAIL("%s: evaluation of the event indicators failed", fn);
     /* An event whose condition holds already at the start cannot be crossed later:
-     * a terminating one means an invalid initial state, a warning one is flagged now. */
+     * a terminating one means an invalid initial state, a warning one is flagged now
+     * (update events were settled above). */
     for (i = 0; i < m->ne; i++) {
         I->flags[i] = 0;
-        if (I->e[i] > 0.0) continue;
+        if (I->e[i] > 0.0 || (m->event_actions && m->event_actions[i] == GW_EVENT_UPDATE)) continue;
         if (m->event_actions && m->event_actions[i] == GW_EVENT_WARN) {
             I->flags[i] = 1;
             gw_log(I, GW_WARNING, GW_LOG_EVENTS,

@@ -55,4 +55,5 @@ static const gw_model GW_MODEL = {
     NULL,
     GW_SOLVER_DOPRI5,
     1e-8, 1e-10, 0.1,
+    {NULL, NULL}, /* upd: no update events */
 };

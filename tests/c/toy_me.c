@@ -188,4 +188,5 @@ static const gw_model GW_MODEL = {
     check_messages,
     GW_SOLVER_DOPRI5,
     1e-8, 1e-10, 0.01,
+    {NULL, NULL}, /* upd: no update events */
 };

@@ -129,4 +129,5 @@ static const gw_model GW_MODEL = {
     check_messages,
     GW_SOLVER_DOPRI5,
     1e-6, 1e-8, 0.01,
+    {NULL, NULL}, /* upd: no update events */
 };

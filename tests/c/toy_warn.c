@@ -95,4 +95,5 @@ static const gw_model GW_MODEL = {
     check_messages,
     GW_SOLVER_RK4,
     1e-6, 1e-9, 0.01,
+    {NULL, NULL}, /* upd: no update events */
 };

@@ -20,8 +20,8 @@ from model.spec import ModelSpec
 
 FUNCTION_FILE = "gw_funcs"
 DESC_FILE = "model_desc.c"
-SLOTS = ("init", "ode", "out", "evt", "chk", "nom", "jac", "dir")
-EVENT_ACTION = {"terminate": "GW_EVENT_TERMINATE", "warn": "GW_EVENT_WARN"}
+SLOTS = ("init", "ode", "out", "evt", "chk", "nom", "jac", "dir", "upd")
+EVENT_ACTION = {"terminate": "GW_EVENT_TERMINATE", "warn": "GW_EVENT_WARN", "update": "GW_EVENT_UPDATE"}
 
 
 def optimised(fn: ca.Function) -> ca.Function:

@@ -50,8 +50,11 @@ def _unit_of(v: Variable) -> str | None:
 
 def write_model_description(model_name: str, exp: Experiment, table: list[Variable], identifier: str,
                             guid: str, sources: list[str], description: str, model_exchange: bool = False,
-                            directional: bool = False) -> str:
+                            directional: bool = False, event_indicators: int | None = None) -> str:
     """The XML text. `sources` are the C files listed under <SourceFiles>.
+
+    event_indicators: how many the model has (default: one per event flag of the table; events
+    that update the state have no flag).
 
     model_exchange adds the ModelExchange interface (the runtime's fmi2GetDerivatives & co.),
     directional declares fmi2GetDirectionalDerivative (CasADi's exact Jacobian).
@@ -76,7 +79,9 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
     }
     interfaces = []
     if model_exchange:
-        root.set("numberOfEventIndicators", str(sum(1 for v in table if v.kind == "event")))
+        if event_indicators is None:
+            event_indicators = sum(1 for v in table if v.kind == "event")
+        root.set("numberOfEventIndicators", str(event_indicators))
         interfaces.append(ET.SubElement(root, "ModelExchange", {**common, "completedIntegratorStepNotNeeded": "true"}))
     interfaces.append(ET.SubElement(root, "CoSimulation", {
         **common,

@@ -104,8 +104,9 @@ def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None)
             add(quantity=q, type="Real", causality="output", variability="continuous",
                 initial="calculated", kind="output", index=j)
     for k, ev in enumerate(spec.events):
-        add(quantity=ev.flag, type="Boolean", causality="output", variability="discrete",
-            initial="calculated", kind="event", index=k)
+        if ev.flag is not None:  # update events (mode switches) have no flag
+            add(quantity=ev.flag, type="Boolean", causality="output", variability="discrete",
+                initial="calculated", kind="event", index=k)
     _states(spec, rows, add)
     _structure(spec, rows)
     return rows

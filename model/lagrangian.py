@@ -23,6 +23,9 @@ Two extensions the effects need:
 * extra unknowns: Q_nc may depend on quantities that are themselves affine in the
   accelerations (the normal load on a rolling-resistance torque). Their defining
   equations are appended and everything is solved as one linear system.
+* conditions: extra unknowns defined by a residual row instead of an explicit
+  expression, e.g. the holding force H of a stiction law, s r_dot + (1 - s) H = 0
+  (the multiplier of the constraint r_dot = 0 while stuck, zero while sliding).
 
 All expressions are written in placeholder symbols (q, q_dot, q_ddot of every
 coordinate); `formulate_*` return the accelerations as expressions of the state.
@@ -67,7 +70,9 @@ class ConstrainedSystem:
     n_free: how many are free; T, V: energies in (q, qd); A: constraint matrix
     (m x n_free) in q; Q_nc: generalised forces (n, one per coordinate) in
     (q, qd, unknowns); unknowns: extra unknown symbols with their defining
-    expressions (unknown = expr(q, qd, qdd)), e.g. the normal force.
+    expressions (unknown = expr(q, qd, qdd)), e.g. the normal force; conditions: extra
+    unknown symbols with a residual row (residual(q, qd, qdd, unknowns) = 0, affine), solved
+    after the unknowns in the same system.
     """
 
     q: ca.SX
@@ -79,6 +84,7 @@ class ConstrainedSystem:
     A: ca.SX
     Q_nc: ca.SX | None = None
     unknowns: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
+    conditions: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
 
     @property
     def n(self) -> int:
@@ -127,11 +133,12 @@ class ConstrainedSystem:
         return ca.solve(prune_identically_zero(A), -b)
 
     def _unknowns(self):
-        if not self.unknowns:
+        """Symbols of the extra unknowns and their rows (unknowns, then conditions)."""
+        rows = [s - e for s, e in self.unknowns] + [r for _, r in self.conditions]
+        if not rows:
             return ca.SX(0, 1), ca.SX(0, 1)
-        syms = ca.vertcat(*[s for s, _ in self.unknowns])
-        exprs = ca.vertcat(*[e for _, e in self.unknowns])
-        return syms, exprs
+        syms = ca.vertcat(*[s for s, _ in self.unknowns], *[s for s, _ in self.conditions])
+        return syms, ca.vertcat(*rows)
 
     def reduced(self, S: ca.SX, v: ca.SX, v_dot: ca.SX, qd_driven: ca.SX, qdd_driven: ca.SX):
         """Kane-Maggi form. Returns (q_dot, q_ddot, v_dot solved, unknowns solved) as expressions.
@@ -147,8 +154,8 @@ class ConstrainedSystem:
         qdd_all = ca.vertcat(ca.mtimes(S, v_dot) + S_dot_v, qdd_driven)
         M, c, Q = self.terms()
         eq = ca.mtimes(S.T, (ca.mtimes(M, self.qdd) + c - Q)[:nf])
-        x_syms, x_exprs = self._unknowns()
-        residual = ca.vertcat(eq, x_syms - x_exprs)
+        x_syms, x_rows = self._unknowns()
+        residual = ca.vertcat(eq, x_rows)
         residual = ca.substitute(residual, ca.vertcat(self.qd, self.qdd), ca.vertcat(qd_all, qdd_all))
         w = ca.vertcat(v_dot, x_syms)
         sol = self._solve(residual, w)
@@ -172,8 +179,8 @@ class ConstrainedSystem:
         A_dot_qd = ca.jtimes(Aqd, qf, qd_free)
         dyn = (ca.mtimes(M, self.qdd) + c - Q)[:nf] - ca.mtimes(self.A.T, lam)
         con = ca.mtimes(self.A, qdd_free) + A_dot_qd + k_stab * Aqd
-        x_syms, x_exprs = self._unknowns()
-        residual = ca.vertcat(dyn, con, x_syms - x_exprs)
+        x_syms, x_rows = self._unknowns()
+        residual = ca.vertcat(dyn, con, x_rows)
         residual = ca.substitute(residual, ca.vertcat(self.qd, self.qdd), ca.vertcat(qd_all, qdd_all))
         w = ca.vertcat(qdd_free, lam, x_syms)
         sol = self._solve(residual, w)

@@ -31,16 +31,38 @@ def cmd_build(args) -> int:
     from fmu_build.compiler import CompileError
     from fmu_build.scene import load_scene
 
-    scene = load_scene(args.scene)
+    from fmu_build.scene import SceneError
+    try:
+        scene = load_scene(args.scene)
+    except SceneError:
+        raise
+    except Exception as exc:  # a defect of the reader: still one line
+        raise CliError(f"{args.scene}: reading the scene failed ({type(exc).__name__}: {_one_line(exc)}); "
+                       "this is a gyrowheel defect, please report it with the scene", EXIT_FAILURE) from None
     output = Path(args.output or f"{scene.name}.fmu")
+    try:  # before the build, not after a long compile
+        output.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CliError(f"{output}: cannot write: {exc.strerror or exc}", EXIT_FAILURE) from None
     try:
         result = build_fmu(scene, output, build_dir=args.keep_build)
     except CompileError as exc:
         raise CliError(f"compiling the FMU failed: {exc}", EXIT_FAILURE) from None
-    except ValueError as exc:
-        raise CliError(f"{args.scene}: {exc}") from None
+    except ValueError as exc:  # a combination the model refuses (its message names the key)
+        raise CliError(f"{args.scene}: {_one_line(exc)}") from None
+    except OSError as exc:
+        raise CliError(f"{exc.filename or output}: cannot write: {exc.strerror or exc}", EXIT_FAILURE) from None
+    except Exception as exc:  # CasADi or a defect of gyrowheel: still one line, never a traceback
+        raise CliError(f"{args.scene}: building the model failed ({type(exc).__name__}: {_one_line(exc)}); "
+                       "this is a gyrowheel defect, please report it with the scene", EXIT_FAILURE) from None
     print(f"built {result.fmu} (model {result.identifier}, effects: {', '.join(result.spec.effects) or 'none'})")
     return 0
+
+
+def _one_line(exc: BaseException) -> str:
+    """The last non-empty line of an exception's message (CasADi puts the reason there)."""
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    return lines[-1] if lines else type(exc).__name__
 
 
 def _parse_sets(items: list[str]) -> dict[str, str]:

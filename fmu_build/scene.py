@@ -17,11 +17,12 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from model.build import FORMULATIONS, start_values, wheel_parameters
-from model.effects import CATALOGUE
+from model.build import BETA_MIN_DEFAULT, FORMULATIONS, start_values, touchdown_lean, wheel_parameters
+from model.effects import CATALOGUE, lift_off_conflict
 
 SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
+TOUCHDOWN = "touchdown"  # [wheel] beta_min preset: the lean at which the body must touch the ground
 
 
 class SceneError(ValueError):
@@ -101,10 +102,25 @@ def _numbers_with_degrees(r: _Reader, table: str, data: dict, names: list[str],
 
 
 def _wheel(r: _Reader, data: dict) -> dict[str, float]:
+    data = dict(data)
+    touchdown = data.get("beta_min") == TOUCHDOWN
+    if touchdown:
+        del data["beta_min"]
+    elif isinstance(data.get("beta_min"), str):
+        raise r.fail("wheel", "beta_min", f"unknown preset {data['beta_min']!r}; valid: {TOUCHDOWN} or a number")
     wheel = _numbers_with_degrees(r, "wheel", data, [q.name for q in wheel_parameters()])
     for key in ("M", "R", "k_diam", "k_axial", "beta_min"):
         if key in wheel and wheel[key] <= 0:
             raise r.fail("wheel", key, f"must be > 0, got {wheel[key]!r}")
+    if touchdown:
+        if "beta_min_deg" in data:
+            raise r.fail("wheel", "beta_min_deg", "beta_min given twice (as a preset and in deg)")
+        defaults = {q.name: q.start for q in wheel_parameters()}
+        try:  # where the body touches the ground (model.build.touchdown_lean), not below the default
+            lean = touchdown_lean(wheel.get("k_diam", defaults["k_diam"]), wheel.get("k_axial", defaults["k_axial"]))
+        except ValueError as exc:
+            raise r.fail("wheel", "beta_min", str(exc)) from None
+        wheel["beta_min"] = max(lean, BETA_MIN_DEFAULT)
     if wheel.get("beta_min", 0.0) >= math.pi / 2:
         raise r.fail("wheel", "beta_min", "must be < pi/2 (90 deg)")
     return wheel
@@ -161,6 +177,9 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
     if "gravity" not in effects:
         raise r.fail("effects", None, "[effects.gravity] is required: every FMU exposes g "
                      "(INTERFACE.md); use g = 0 for a weightless wheel")
+    conflict = lift_off_conflict(effects)
+    if conflict:
+        raise r.fail("effects.contact_forces", "on_lift_off", conflict)
     return effects
 
 
@@ -169,7 +188,7 @@ def _experiment(r: _Reader, data: dict) -> Experiment:
     r.unknown("experiment", data, set(Experiment.__dataclass_fields__))
     for key, value in data.items():
         if key == "solver":
-            if value not in SOLVERS:
+            if not isinstance(value, str) or value not in SOLVERS:
                 raise r.fail("experiment", key, f"unknown solver {value!r}; valid: {', '.join(SOLVERS)}")
             exp.solver = value
         elif key == "start_time":
@@ -226,4 +245,6 @@ def load_scene(path: str | Path) -> Scene:
         raise SceneError(f"{path}: no such scene file") from None
     except OSError as exc:
         raise SceneError(f"{path}: cannot read: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"{path}: not a text file (TOML is UTF-8): {exc.reason} at byte {exc.start}") from None
     return parse_scene(text, str(path))

@@ -15,7 +15,7 @@ import math
 import casadi as ca
 
 from model.context import Body, WheelContext
-from model.effects import CATALOGUE
+from model.effects import CATALOGUE, lift_off_conflict
 from model.kinematics import WheelKinematics
 from model.lagrangian import ConstrainedSystem
 from model.spec import Event, ModelSpec, Quantity
@@ -36,6 +36,44 @@ WHEEL_ABOUT = (
     "When the wheel falls flat (beta reaches beta_min or pi - beta_min) the step stops at the located time.")
 
 
+# Default fall lean (docs/model.md, "When the wheel has fallen"). The model's wheel touches the
+# plane with its rim only, so it lies flat at beta = 0, and a rolling wheel can dip arbitrarily
+# close to that and come back (the hoop of tests/test_fall_criterion.py dips to 0.0135 rad, and
+# the dip shrinks in proportion to its spin). What ends first is the description in the paper's
+# Euler angles, singular at
+# beta = 0: the accelerations carry a round-off of about 10 eps / sin^2(beta) (measured against a
+# 40-digit evaluation of the independent derivation). 1e-3 rad is the lowest decade at which it
+# stays below a quarter of the default rel_tol (2.4e-9 < 1e-8 / 4); the centre is then 1e-3 R
+# above the ground, less than the width of the rim of any real wheel.
+BETA_MIN_DEFAULT = 1e-3
+
+
+def touchdown_lean(k_diam: float, k_axial: float) -> float:
+    """Lean [rad] below which every wheel with these inertias touches the ground beside its rim.
+
+    For a body of revolution symmetric about its mid-plane, with the rim (radius R, in the
+    mid-plane) its outermost circle, a mass element at axle distance rho <= R and axial offset
+    zeta on the lower side stays above the ground while |zeta| < (R - rho) tan(beta). Integrating
+    zeta^2 over the lower half, with int zeta^2 dm = I_diam - I_axial / 2 and
+    int (R - rho)^2 dm <= M R^2 - I_axial (since rho <= R), gives: nothing but the rim touches only if
+        tan^2(beta) > (2 k_diam - k_axial) / (2 (1 - k_axial)).
+    The bound is tight (a rim ring plus masses on the axle at +-h touch at tan(beta) = h / R).
+    0 for thin wheels (2 k_diam = k_axial: disc, hoop). Raises ValueError when the inertias leave
+    no lean at which such a body stands on its rim (k_axial = 1 with width: a drum), or describe
+    no rigid body.
+    """
+    width, room = 2 * k_diam - k_axial, 2 * (1 - k_axial)
+    if width < 0 or room < 0:
+        raise ValueError(f"k_diam = {k_diam:g}, k_axial = {k_axial:g}: no rigid body of revolution "
+                         "(k_axial must be <= 2 k_diam and <= 1)")
+    if width == 0:
+        return 0.0
+    if room <= 0:
+        raise ValueError(f"k_diam = {k_diam:g}, k_axial = {k_axial:g}: all mass at the rim but axial width "
+                         "(a drum): such a wheel touches the ground with its edge at any lean")
+    return math.atan(math.sqrt(width / room))
+
+
 def wheel_parameters() -> list[Quantity]:
     """Parameters of the base wheel (INTERFACE.md), with their defaults."""
     return [
@@ -43,8 +81,9 @@ def wheel_parameters() -> list[Quantity]:
         Quantity("R", "m", "wheel (rolling) radius", 0.17),
         Quantity("k_diam", "1", "diametral inertia I_diam = k_diam M R^2", 0.25),
         Quantity("k_axial", "1", "axial (spin-axis) inertia I_axial = k_axial M R^2", 0.4),
-        Quantity("beta_min", "rad", "lean at which the wheel counts as fallen flat", 0.02,
-                 display_unit="deg"),
+        Quantity("beta_min", "rad", "lean at which the wheel counts as fallen flat "
+                 "(default: as near flat as the Euler angles keep their accuracy, docs/model.md)",
+                 BETA_MIN_DEFAULT, display_unit="deg"),
     ]
 
 
@@ -122,6 +161,9 @@ def build_model(wheel: dict[str, float] | None = None,
     for effect_name in effects:
         if effect_name not in CATALOGUE:
             raise ValueError(f"unknown effect {effect_name!r}; valid: {', '.join(CATALOGUE)}")
+    conflict = lift_off_conflict(effects)
+    if conflict:
+        raise ValueError(f"contact_forces on_lift_off: {conflict}")
     ctx = base_context(wheel or {})
     for effect_name, effect_cls in CATALOGUE.items():
         if effect_name in effects:
@@ -309,9 +351,11 @@ class _Assembler:
         for c in self.free[5:]:
             outputs += [(c.start, c.q), (c.rate_start, bind(c.qd))]
         outputs += [(st.quantity, st.sym) for st in ctx.states if st.output]
-        outputs += [(Quantity(f"{c.name}_torque", "N.m", f"torque the motor of {c.name} supplies"),
+        outputs += [(Quantity(f"{c.name}_torque", "N.m", f"torque the motor of {c.name} supplies (generalised "
+                              f"force on {c.name}, positive in the sense of increasing {c.name})"),
                      bind(tau_driven[i])) for i, c in enumerate(self.driven)]
-        outputs += [(qq, bind(self._late(e))) for qq, e in ctx.outputs] + extra_outputs
+        outputs += [(qq, bind(self._late(e))) for qq, e in ctx.outputs]
+        outputs += [(qq, bind(e)) for qq, e in extra_outputs]  # lambda holds driven placeholders
 
         fallen = Quantity("fallen", "", "true once the wheel has fallen flat (beta <= beta_min or >= pi - beta_min)")
         events = [Event("fall", ca.sin(self.q[3]) - ca.sin(P["beta_min"]), "terminate", fallen)]
@@ -323,7 +367,8 @@ class _Assembler:
                                 law_update(law, x, bind, mode_row, speed_rows, speeds_now, to_state)))
         if ctx.uses_Fn and not any(ev.name == "lift_off" for ev in events):
             # load-proportional laws (rolling resistance, pivot friction) would push, not resist,
-            # with F_n < 0: the model ends there, so stop and say so (contact_forces may choose otherwise)
+            # with F_n < 0: the model ends there, so stop and say so (lift_off_conflict refuses any
+            # other on_lift_off policy for these laws)
             events.append(Event("lift_off", bind(self._late(ctx.Fc[2])), "terminate",
                                 Quantity("lifted_off", "", "true once the normal force has reached zero")))
 

@@ -258,6 +258,56 @@ def test_actuator_work_balances_energy(build):
     assert e - e0 == pytest.approx(w, abs=1e-7 * e0)
 
 
+def test_tilt_torque_sign(build):
+    """tilt_torque is the torque the tilt motor applies to the flywheel about +l_p, positive in the
+    sense of increasing tilt. Upright, at rest, flywheel not spinning, tilt_cmd = 0.2 rad: the servo
+    starts with tilt_ddot = tilt_omega^2 0.2 = 80 rad/s^2 about l_p = -k; the reaction turns the
+    wheel the other way about the vertical (angular momentum about k is conserved), so the motor
+    supplies I_f I_w / (I_f + I_w) tilt_ddot with I_f = I_fly_diam, I_w = k_diam M R^2."""
+    fmu = build(GYROVER, "gyrover")
+    s = Slave(fmu)
+    try:
+        s.init(flywheel_rate=0.0, beta=math.pi / 2, gamma_dot=0.0, tilt_cmd=0.2)
+        tau = s.get("tilt_torque")
+    finally:
+        s.free()
+    I_f, I_w = 2.5e-4, KD * M * R**2
+    assert tau == pytest.approx(I_f * I_w / (I_f + I_w) * 20.0**2 * 0.2, rel=1e-9)
+    assert tau > 0
+
+
+def _max_swing(fmu, torque, ramp: float, seconds: float) -> float:
+    """Largest |theta_p| while drive_torque rises linearly over `ramp` s (0: a step) to `torque`."""
+    s = Slave(fmu)
+    try:
+        s.init(beta=math.pi / 2, gamma_dot=10.0)
+        t, h, swing = 0.0, 5e-3, 0.0
+        while t < seconds - 1e-9:
+            s.set(drive_torque=torque * min(1.0, (t + h) / ramp) if ramp else torque)
+            s.slave.doStep(t, h)
+            t += h
+            swing = max(swing, abs(s.get("theta_p")))
+        return swing
+    finally:
+        s.free()
+
+
+def test_pendulum_static_and_dynamic_limits(build):
+    """docs/effects.md, gyrover: a drive torque applied slowly is held up to m_fly g L_pend
+    (0.118 N.m: the assembly settles at asin(tau / (m g L))); a step from rest swings the assembly
+    over the top already above 0.7246 m_fly g L_pend (0.0853 N.m), where the energy
+    tau theta - m g L (1 - cos theta) stays positive up to the unstable equilibrium."""
+    fmu = build(GYROVER, "gyrover")
+    mgl = 0.4 * G * 0.03
+    s_dyn = 0.7246113537767085  # s (pi - asin s) = 1 + sqrt(1 - s^2)
+    assert s_dyn * (math.pi - math.asin(s_dyn)) == pytest.approx(1 + math.sqrt(1 - s_dyn**2), abs=1e-12)
+    assert _max_swing(fmu, 0.98 * s_dyn * mgl, 0.0, 2.0) < math.pi - 0.8  # turns back below the top
+    assert _max_swing(fmu, 1.02 * s_dyn * mgl, 0.0, 2.0) > math.pi      # over the top
+    held = _max_swing(fmu, 0.97 * mgl, 4.0, 6.0)  # quasi-static ramp, then held for 2 s
+    assert math.asin(0.97) - 0.2 < held < math.pi / 2 + 0.2
+    assert _max_swing(fmu, 1.03 * mgl, 4.0, 6.0) > math.pi
+
+
 # -- only what a scene asks for --------------------------------------------------------
 
 def test_every_example_scene_builds_validates_and_simulates(tmp_path):

@@ -14,6 +14,7 @@ from fmpy.validation import validate_fmu
 
 from conftest import CasadiWheel, PAPER, STATES
 from fmi_helpers import Slave
+from model.build import BETA_MIN_DEFAULT
 
 
 
@@ -38,7 +39,7 @@ def test_interface_variables(md):
     """INTERFACE.md: names, causality, variability, initial, units and defaults."""
     v = {x.name: x for x in md.modelVariables}
     for name, unit, start in [("M", "kg", 2.0), ("R", "m", 0.17), ("k_diam", None, 0.25),
-                              ("k_axial", None, 0.4), ("g", "m/s2", 9.81), ("beta_min", "rad", 0.02)]:
+                              ("k_axial", None, 0.4), ("g", "m/s2", 9.81), ("beta_min", "rad", BETA_MIN_DEFAULT)]:
         assert (v[name].causality, v[name].variability, v[name].initial) == ("parameter", "fixed", "exact")
         assert v[name].unit == unit
         assert float(v[name].start) == pytest.approx(start)
@@ -158,7 +159,7 @@ def test_simulate_fmu_stops_at_the_fall(earth_fmu):
     ({"M": -1.0}, "M (mass) must be > 0"),
     ({"R": 0.0}, "R (radius) must be > 0"),
     ({"k_axial": 0.9, "k_diam": 0.25}, "k_axial must be <= 2 k_diam"),
-    ({"beta": 0.01}, "initial lean beta must lie between beta_min and pi - beta_min"),
+    ({"beta": 5e-4}, "initial lean beta must lie between beta_min and pi - beta_min"),
     ({"beta": 3.2}, "beta (initial lean) must be < pi"),
     ({"beta_min": 2.0}, "beta_min must be < pi/2"),
     ({"g": -9.81}, "g must be >= 0"),

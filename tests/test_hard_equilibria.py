@@ -14,12 +14,13 @@ from conftest import STATES, critical_spin, steady_precession
 from fmi_helpers import Slave
 from fmu_build import build_fmu, parse_scene
 from fmu_build.analysis import fit_circle
+from model.build import BETA_MIN_DEFAULT
 
 M, R, KD, KA, G = 2.0, 0.17, 0.25, 0.4, 9.81
 SCENE = """
 [model]
 name = "hard_equilibria"
-# [wheel]: the defaults, the paper wheel (M 2 kg, R 0.17 m, k 0.25 / 0.4, beta_min 0.02)
+# [wheel]: the defaults, the paper wheel (M 2 kg, R 0.17 m, k 0.25 / 0.4, beta_min 1e-3)
 [effects.gravity]
 g = 9.81
 [experiment]
@@ -84,13 +85,13 @@ def test_exactly_upright_without_spin_falls_from_the_round_off_of_pi_over_2(fmu,
     (1.1e-16) and are rounded away until h beta_dot exceeds it (at t ~ 0.04 / h s: the step size
     matters, see the report of this test)."""
     e0_offset = math.cos(math.pi / 2)
-    t_star = planar_fall_time(e0_offset, 0.02)
-    assert t_star == pytest.approx(5.6687, abs=1e-3)
+    t_star = planar_fall_time(e0_offset, BETA_MIN_DEFAULT)
+    assert t_star == pytest.approx(5.6707, abs=1e-3)
     status, t_fall, trace, final, log = _run(fmu, 60.0, 0.5, solver=solver, beta=math.pi / 2, gamma_dot=0.0,
                                              max_step=max_step)
     assert status == 2 and final["fallen"] and final["all_finite"]
     assert "fall" in log
-    assert final["beta"] == pytest.approx(0.02, abs=1e-9)  # the beta -> 0 side, at beta_min
+    assert final["beta"] == pytest.approx(BETA_MIN_DEFAULT, abs=1e-9)  # the beta -> 0 side, at beta_min
     assert final["beta_dot"] < -9.0                          # falling fast (energy: 9.51 rad/s)
     assert final["alpha_dot"] == 0.0 and final["gamma_dot"] == 0.0
     energy = trace[:, 2]
@@ -113,7 +114,7 @@ def test_small_lean_from_upright_falls_at_the_exact_time(fmu, phi0):
                                            rel_tol=1e-12, abs_tol=1e-14)
     assert status == 2 and final["fallen"]
     conditioning = (4 + 32) * 2.0**-52 * (math.pi / 2) / (LAMBDA * phi0)
-    assert t_fall == pytest.approx(planar_fall_time(phi0, 0.02), abs=1e-7 + conditioning)
+    assert t_fall == pytest.approx(planar_fall_time(phi0, BETA_MIN_DEFAULT), abs=1e-7 + conditioning)
 
 
 def _max_lean(fmu, factor, stop=10.0):

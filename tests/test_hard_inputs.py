@@ -16,11 +16,12 @@ from fmpy.fmi2 import fmi2LastSuccessfulTime
 from conftest import STATES
 from fmi_helpers import Slave
 from fmu_build import build_fmu, parse_scene
+from model.build import BETA_MIN_DEFAULT
 
 SCENE = """
 [model]
 name = "hard_inputs"
-# [wheel]: the defaults, the paper wheel (M 2 kg, R 0.17 m, k 0.25 / 0.4, beta_min 0.02)
+# [wheel]: the defaults, the paper wheel (M 2 kg, R 0.17 m, k 0.25 / 0.4, beta_min 1e-3)
 [effects.gravity]
 g = 9.81
 [experiment]
@@ -46,9 +47,9 @@ def _error_logged(s: Slave) -> bool:
 
 
 @pytest.mark.parametrize("values", [
-    {"beta": 0.01},                           # below beta_min
-    {"beta": math.pi - 0.01},                 # beyond pi - beta_min (flat on the other side)
-    {"beta": 0.02},                           # exactly at beta_min: the fall indicator is 0
+    {"beta": 5e-4},                           # below beta_min
+    {"beta": math.pi - 5e-4},                 # beyond pi - beta_min (flat on the other side)
+    {"beta": BETA_MIN_DEFAULT},               # exactly at beta_min: the fall indicator is 0
     {"beta": 0.3, "beta_min": 0.5},           # a larger beta_min puts a leaning start on the wrong side
 ])
 def test_initial_state_on_the_wrong_side_of_beta_min(slave, values):
@@ -107,20 +108,26 @@ def test_huge_rates_fail_fast_with_a_reason(slave, solver, rate):
     assert slave.get(rate) == 1e9  # back at the start of the step
 
 
+BETA_MIN = 0.02
+
+
 @pytest.mark.parametrize("solver", [3, 5])
 def test_huge_lean_rate_falls_within_nanoseconds(slave, solver):
     """beta_dot = 1e9 rad/s is not too fast to simulate: the wheel swings through upright and lies
     flat on the other side (beta = pi - beta_min) after (pi - beta_min - beta0) / 1e9 = 1.7 ns,
-    and the FMU says exactly that: a located fall, fmi2Discard, within a few seconds."""
-    slave.init(solver=solver, beta_dot=1e9)
+    and the FMU says exactly that: a located fall, fmi2Discard, within a few seconds.
+    beta_min = 0.02 (not the default 1e-3): below 0.01 rad from flat at 1e9 rad/s, beta_ddot ~ 1e16
+    forces steps of 5e-13 s, and DOPRI5's step budget, which extrapolates that step over the whole
+    remaining 1 s, refuses (fmi2Error with the estimate) 1e-11 s before the fall."""
+    slave.init(solver=solver, beta_dot=1e9, beta_min=BETA_MIN)
     t0 = time.perf_counter()
     with pytest.raises(FMICallException) as exc:
         slave.slave.doStep(0.0, 1.0)
     assert time.perf_counter() - t0 < 3.0
     assert exc.value.status == 2
     t_fall = slave.slave.getRealStatus(fmi2LastSuccessfulTime)
-    assert t_fall == pytest.approx((math.pi - 0.02 - math.radians(80)) / 1e9, rel=1e-3)
-    assert slave.get("beta") == pytest.approx(math.pi - 0.02, abs=1e-9)
+    assert t_fall == pytest.approx((math.pi - BETA_MIN - math.radians(80)) / 1e9, rel=1e-3)
+    assert slave.get("beta") == pytest.approx(math.pi - BETA_MIN, abs=1e-9)
     assert all(math.isfinite(v) for v in slave.get(*STATES))
 
 

@@ -24,6 +24,7 @@ from fmpy.validation import validate_fmu
 from conftest import STATES
 from fmu_build import load_scene
 from fmu_build.builder import model_spec
+from model.build import BETA_MIN_DEFAULT
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "examples" / "scenes" / "paper_earth.toml"
@@ -292,4 +293,4 @@ def test_simulate_model_exchange_terminates_when_the_wheel_falls(md, earth_fmu):
                       start_values=dict(start, rel_tol=1e-12, abs_tol=1e-14), output=["beta"])
     print(f"fall time ModelExchange/CVode {me['time'][-1]:.12f}, CoSimulation {cs['time'][-1]:.12f}")
     assert me["time"][-1] == pytest.approx(cs["time"][-1], abs=1e-6)
-    assert me["beta"][-1] == pytest.approx(0.02, abs=1e-6)
+    assert me["beta"][-1] == pytest.approx(BETA_MIN_DEFAULT, abs=1e-6)

@@ -16,7 +16,7 @@ def test_paper_scenes(name, g):
     assert scene.effects == {"gravity": {"g": g}}
     assert scene.initial["beta"] == pytest.approx(math.radians(80))
     assert scene.initial["gamma_dot"] == 6.0
-    assert scene.wheel == {"M": 2.0, "R": 0.17, "k_diam": 0.25, "k_axial": 0.4, "beta_min": 0.02}
+    assert scene.wheel == {"M": 2.0, "R": 0.17, "k_diam": 0.25, "k_axial": 0.4}  # beta_min: the default
     assert scene.experiment.stop_time == 20.0
 
 

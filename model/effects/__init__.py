@@ -21,4 +21,22 @@ from model.effects.spin_friction import SpinFriction
 CATALOGUE: dict[str, type[Effect]] = {e.name: e for e in (
     Gravity, Slope, Gyrover, RollingResistance, SpinFriction, AirDrag, ContactForces, Energy)}
 
-__all__ = ["CATALOGUE", "Effect"]
+
+
+def lift_off_conflict(effects: dict[str, dict]) -> str | None:
+    """Why contact_forces' on_lift_off cannot be honoured with these effects, or None.
+
+    A law proportional to the normal load (rolling resistance, pivot friction) would push
+    instead of resisting once F_n < 0, so it cannot go on past lift-off: a scene with such a
+    law must stop there (on_lift_off = "terminate", also the default without contact_forces).
+    """
+    policy = effects.get("contact_forces", {}).get("on_lift_off", ContactForces.choices()["on_lift_off"][0])
+    laws = [name for name, cls in CATALOGUE.items() if name in effects and cls.uses_normal_load]
+    if policy == "terminate" or not laws:
+        return None
+    return (f"{policy!r} is not possible with {' and '.join(laws)}: a law proportional to the normal "
+            f"force would push instead of resisting once F_n < 0, so the run must stop at lift-off; "
+            f"use \"terminate\" (the default) or leave out {' and '.join(laws)}")
+
+
+__all__ = ["CATALOGUE", "Effect", "lift_off_conflict"]

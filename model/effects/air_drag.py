@@ -35,4 +35,5 @@ class AirDrag(Effect):
         w_z = ca.dot(ctx.kin.omega, ctx.kin.n)
         tau = -0.5 * p["rho_air"] * p["cm_spin"] * ctx.par["R"] ** 5 * ca.fabs(w_z) * w_z
         ctx.force(tau, w_z, "dissipative")
-        ctx.output(Quantity("drag_force", "N", "magnitude of the drag force on the centre"), ca.norm_2(F))
+        ctx.output(Quantity("drag_force", "N", "magnitude of the drag force on the centre (law with the smoothed "
+                            "speed sqrt(v.v + (1e-6 m/s)^2))"), ca.norm_2(F))

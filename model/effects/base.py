@@ -15,6 +15,7 @@ class Effect:
 
     name: str = ""
     summary: str = ""
+    uses_normal_load: bool = False  # a law proportional to F_n: meaningless past lift-off (F_n < 0)
 
     def __init__(self, options: dict | None = None):
         self.options = dict(options or {})

@@ -6,7 +6,9 @@ Outputs: normal force F_n, longitudinal F_long (along the heading (cos a, sin a)
 lateral F_lat (in the ground plane, to the left of the heading), and the friction use
 |F_t| / F_n (-1 while F_n <= 0: friction is undefined off the ground).
 Events: lift-off (F_n reaches 0) and slip (|F_t| reaches mu F_n), each "terminate",
-"warn" or "ignore"; rolling without slip and point contact stop being valid there.
+"warn" or "ignore" (no event, no flag); rolling without slip and point contact stop being
+valid there. A load-proportional law cannot go on past lift-off: with one, on_lift_off must be
+"terminate" (model.effects.lift_off_conflict; the scene reader refuses the others).
 """
 from __future__ import annotations
 

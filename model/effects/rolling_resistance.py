@@ -30,6 +30,7 @@ LAWS = ("stiction", "smoothed")
 
 class RollingResistance(Effect):
     name = "rolling_resistance"
+    uses_normal_load = True
     summary = "resistance c_rr F_n to the rolling of the rim, with true stiction (power -c_rr F_n R |gamma_dot|)"
 
     @classmethod
@@ -57,4 +58,5 @@ class RollingResistance(Effect):
             tau = ctx.stiction("rolling", gamma_dot, limit, "rolling resistance").force
         ctx.force(tau, gamma_dot, "dissipative")
         ctx.output(Quantity("rolling_resistance_torque", "N.m",
-                            "rolling-resistance generalised force on gamma (the holding torque while stuck)"), tau)
+                            "generalised force on the spin coordinate gamma (N.m per rad), not a torque about an "
+                            "axis; the holding force while stuck"), tau)

@@ -20,6 +20,7 @@ from model.spec import Quantity
 
 class SpinFriction(Effect):
     name = "spin_friction"
+    uses_normal_load = True
     summary = "torque about the contact normal opposing the pivot rate alpha_dot + gamma_dot cos(beta), with stiction"
 
     @classmethod

@@ -1,0 +1,190 @@
+"""Issue 8, section 5: every scene either builds or is refused in one line; lift-off policies hold.
+
+- formulation "multipliers" with the Gyrover failed with a CasADi traceback ("variables [tilt] are
+  free": the multipliers of a system with driven coordinates were left in placeholder symbols).
+  Now every formulation x effect combination builds, and the multiplier form of the Gyrover follows
+  the reduced form with the tilt input driven.
+- on_lift_off = "ignore" was overridden by the lift-off stop that load-proportional laws add; now
+  "ignore" means no event and no flag, and a law that cannot go on past lift-off makes the scene
+  reader refuse the policy, naming the key.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from fmpy import read_model_description, simulate_fmu
+from scipy.integrate import solve_ivp
+
+from fmu_build import build_fmu, parse_scene
+from fmu_build.cli import main
+from fmu_build.scene import SceneError
+from model import build_model
+from model.build import FORMULATIONS
+from model.effects import CATALOGUE
+
+OPTIONAL = [name for name in CATALOGUE if name != "gravity"]
+COMBINATIONS = [()] + [(e,) for e in OPTIONAL] + list(itertools.combinations(OPTIONAL, 2)) + [tuple(OPTIONAL)]
+
+
+@pytest.mark.parametrize("formulation", FORMULATIONS)
+def test_every_formulation_and_effect_combination_builds(formulation):
+    """Gravity plus none, one, any two or all effects: the model and its generated Functions build."""
+    failures = []
+    for combo in COMBINATIONS:
+        effects = {"gravity": {}, **{name: {} for name in combo}}
+        try:
+            build_model(effects=effects, formulation=formulation).functions()
+        except Exception as exc:  # noqa: BLE001 - collect every kind of failure
+            failures.append(f"{'+'.join(combo) or 'gravity'}: {type(exc).__name__}: {str(exc).splitlines()[-1]}")
+    assert not failures, "\n".join(failures)
+
+
+def _trajectory(formulation: str, t_eval: np.ndarray) -> dict[str, np.ndarray]:
+    spec = build_model(effects={"gravity": {}, "gyrover": {}}, formulation=formulation)
+    fns = spec.functions()
+    p = np.array([q.start for q in spec.parameters], dtype=float)
+    start = {"beta": 1.45, "gamma_dot": 8.0, "theta_p": 0.1}
+    x0 = np.array(fns["init"]([start.get(q.name, q.start) for q in spec.starts], p)).ravel()
+
+    def u(t):  # tilt_cmd, drive_torque: the servo is driven all the time
+        return [0.3 * math.sin(4.0 * t), 0.02]
+
+    sol = solve_ivp(lambda t, x: np.array(fns["ode"](t, x, u(t), p)).ravel(), (0.0, t_eval[-1]), x0,
+                    method="DOP853", rtol=1e-11, atol=1e-12, t_eval=t_eval)
+    assert sol.success, sol.message
+    names = [q.name for q, _ in spec.outputs]
+    y = np.array([np.array(fns["out"](t, x, u(t), p)).ravel() for t, x in zip(sol.t, sol.y.T)])
+    return {name: y[:, i] for i, name in enumerate(names)}
+
+
+def test_gyrover_multiplier_form_follows_the_reduced_form():
+    """3 s with tilt_cmd = 0.3 sin(4 t) and a drive torque: every common output agrees to 1e-8 relative."""
+    t = np.linspace(0.0, 3.0, 31)
+    reduced, multipliers = _trajectory("reduced", t), _trajectory("multipliers", t)
+    assert np.ptp(reduced["tilt"]) > 0.4 and np.ptp(reduced["beta"]) > 0.01  # the input really acts
+    for name, values in reduced.items():
+        scale = max(np.abs(values).max(), 1e-3)
+        assert np.abs(multipliers[name] - values).max() < 1e-8 * scale, name
+    assert multipliers["constraint_violation"].max() < 1e-10
+
+
+# -- no traceback, whatever the scene -------------------------------------------------------
+
+def _one_error_line(capsys) -> str:
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("gyrowheel: error: "), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+ODD_VALUES = ["[]", "{}", '"x"', "true", "1", "1.5", "-1", "0", "1e308", "inf", "nan", "1979-05-27", "[1, 2]",
+              '"touchdown"', '"ignore"', '"earth"']
+
+
+def test_reader_answers_every_odd_value_with_a_scene_error():
+    """Every key of every table with values of every TOML type: a SceneError or a scene, nothing else
+    (a list as solver used to escape as TypeError: unhashable type)."""
+    keys = {"model": ["name", "description", "formulation"],
+            "wheel": ["M", "R", "k_diam", "k_axial", "beta_min", "beta_min_deg"],
+            "initial": ["beta", "beta_deg", "gamma_dot", "x_dot"],
+            "experiment": ["start_time", "stop_time", "output_interval", "solver", "rel_tol", "abs_tol", "max_step"],
+            "outputs": ["keep"]}
+    keys.update({f"effects.{name}": [q.name for q in cls.parameters()] + list(cls.choices())
+                 for name, cls in CATALOGUE.items()})
+    escaped = []
+    for table, names in keys.items():
+        others = [t for t in ("effects.gravity", "effects.rolling_resistance") if t != table]
+        prefix = "".join(f"[{t}]\n" for t in others) if table.startswith("effects.") else ""
+        for key, value in itertools.product(names, ODD_VALUES):
+            text = f"{prefix}[{table}]\n{key} = {value}\n"
+            try:
+                parse_scene(text, "s.toml")
+            except SceneError:
+                pass
+            except Exception as exc:  # noqa: BLE001
+                escaped.append(f"[{table}] {key} = {value}: {type(exc).__name__}: {exc}")
+    assert not escaped, "\n".join(escaped)
+
+
+def test_unexpected_build_failure_is_one_line(tmp_path, capsys, monkeypatch):
+    """Whatever escapes model building (a CasADi RuntimeError here) becomes one line and exit 1."""
+    import fmu_build.builder
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("Error in Function::Function for 'gw_out' [SXFunction]\n...\n"
+                           "gw_out::init: Initialization failed since variables [tilt] are free.")
+    monkeypatch.setattr(fmu_build.builder, "build_fmu", broken)
+    scene = tmp_path / "s.toml"
+    scene.write_text("[effects.gravity]\n")
+    assert main(["build", str(scene), "-o", str(tmp_path / "s.fmu")]) == 1
+    line = _one_error_line(capsys)
+    assert "variables [tilt] are free" in line and "RuntimeError" in line
+
+
+@pytest.mark.parametrize("setup,fragment", [
+    (lambda p: p.write_bytes(b"\xd0\xcf\x11\xe0 binary"), "not a text file"),
+    (lambda p: p.mkdir(), "cannot read"),
+])
+def test_unreadable_scene_is_one_line(tmp_path, capsys, setup, fragment):
+    scene = tmp_path / "s.toml"
+    setup(scene)
+    assert main(["build", str(scene)]) == 2
+    assert fragment in _one_error_line(capsys)
+
+
+def test_unwritable_output_is_one_line(tmp_path, capsys):
+    scene = tmp_path / "s.toml"
+    scene.write_text("[effects.gravity]\n")
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert main(["build", str(scene), "-o", str(blocker / "s.fmu")]) == 1
+    assert "cannot write" in _one_error_line(capsys)
+
+
+# -- lift-off ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("law", ["rolling_resistance", "spin_friction"])
+@pytest.mark.parametrize("policy", ["ignore", "warn"])
+def test_load_proportional_law_refuses_going_on_past_lift_off(law, policy):
+    """The reader names the key; the Python API refuses the same combination."""
+    text = f'[effects.gravity]\n[effects.{law}]\n[effects.contact_forces]\non_lift_off = "{policy}"\n'
+    with pytest.raises(SceneError) as err:
+        parse_scene(text, "s.toml")
+    message = str(err.value)
+    assert "\n" not in message
+    assert message.startswith(f"s.toml: [effects.contact_forces] on_lift_off: '{policy}' is not possible with {law}")
+    with pytest.raises(ValueError, match="on_lift_off"):
+        build_model(effects={"gravity": {}, law: {}, "contact_forces": {"on_lift_off": policy}})
+
+
+@pytest.mark.parametrize("policy,events", [
+    ("terminate", {"fall": "terminate", "lift_off": "terminate", "slip": "warn"}),
+    ("warn", {"fall": "terminate", "lift_off": "warn", "slip": "warn"}),
+    ("ignore", {"fall": "terminate", "slip": "warn"}),
+])
+def test_lift_off_policy_decides_the_event(policy, events):
+    spec = build_model(effects={"gravity": {}, "contact_forces": {"on_lift_off": policy}})
+    assert {ev.name: ev.action for ev in spec.events} == events
+
+
+def test_load_proportional_law_alone_stops_at_lift_off():
+    spec = build_model(effects={"gravity": {}, "rolling_resistance": {}})
+    assert {ev.name: ev.action for ev in spec.events} == {"fall": "terminate", "lift_off": "terminate"}
+
+
+def test_ignored_lift_off_runs_on(tmp_path):
+    """An upright wheel tipped over at 6 rad/s: F_n reaches 0 at about 0.094 s. With "ignore" the FMU
+    has no lifted_off flag and runs on (bilateral contact, F_n < 0) until the fall event."""
+    scene = parse_scene('[model]\nname = "ignore_lift"\n[effects.gravity]\n[effects.contact_forces]\n'
+                        'on_lift_off = "ignore"\n', "ignore_lift.toml")
+    fmu = build_fmu(scene, tmp_path / "ignore_lift.fmu").fmu
+    assert "lifted_off" not in {v.name for v in read_model_description(str(fmu)).modelVariables}
+    r = simulate_fmu(str(fmu), stop_time=1.0, output_interval=1e-3,
+                     start_values={"beta": math.pi / 2, "beta_dot": 6.0, "gamma_dot": 0.0})
+    lifted = np.flatnonzero(r["F_n"] < 0)
+    assert lifted.size and r["time"][lifted[0]] == pytest.approx(0.094, abs=2e-3)
+    assert r["fallen"][-1] and r["time"][-1] > r["time"][lifted[0]] + 0.05  # went on past lift-off

@@ -104,18 +104,21 @@ static int gw_event_apply_update(gw_instance *I, int i, double t, double *x) {
     const int nx = I->m->nx;
     int j;
     if (gw_eval_upd(I, t, x, i, I->x_upd) != 0) {
-        GW_LOG_ERR(I, "evaluation of the update of event %s failed at t=%.17g", gw_event_name(I, i), t);
+        GW_LOG_ERR(I, "evaluation of the update of event %s failed at t=%.17g", gw_event_name(I, i),
+                   t);
         return -1;
     }
     for (j = 0; j < nx; j++)
         if (!isfinite(I->x_upd[j])) {
-            GW_LOG_ERR(I, "the update of event %s at t=%.17g gives state %s = %g", gw_event_name(I, i),
-                       t, (I->m->x_names && I->m->x_names[j]) ? I->m->x_names[j] : "?", I->x_upd[j]);
+            GW_LOG_ERR(I, "the update of event %s at t=%.17g gives state %s = %g",
+                       gw_event_name(I, i), t,
+                       (I->m->x_names && I->m->x_names[j]) ? I->m->x_names[j] : "?", I->x_upd[j]);
             return -1;
         }
     memcpy(x, I->x_upd, (size_t)nx * sizeof(double));
     if (gw_log_enabled(I, GW_LOG_EVENTS))
-        gw_log(I, GW_OK, GW_LOG_EVENTS, "event %s at t=%.17g: state updated", gw_event_name(I, i), t);
+        gw_log(I, GW_OK, GW_LOG_EVENTS, "event %s at t=%.17g: state updated", gw_event_name(I, i),
+               t);
     return 0;
 }
 
@@ -126,8 +129,8 @@ static int gw_event_apply_update(gw_instance *I, int i, double t, double *x) {
  * pass (only update events when only_updates: initialisation checks the others itself).
  * e: in, the indicators at (t, x); out, those at the final state.  *jumped: x changed.
  * Returns TERMINATE, else UPDATE (x changed), else WARN or NONE; ERROR logged. */
-static gw_ev_result gw_event_instant(gw_instance *I, double t, double *x, double *e, int only_updates,
-                                     int *jumped) {
+static gw_ev_result gw_event_instant(gw_instance *I, double t, double *x, double *e,
+                                     int only_updates, int *jumped) {
     const int ne = I->m->ne;
     int i, pass, terminate = 0, warn = 0;
     *jumped = 0;

@@ -133,9 +133,47 @@ def test_stuck_mode_holds_with_exactly_the_force_it_reports():
         np.testing.assert_allclose(xdot2[:8], xdot[:8], rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.parametrize("mode", [0.0, 1.0, -1.0])
+def test_formulations_agree_in_every_mode(mode):
+    """Reduced (angle rates), reduced (body speeds) and multipliers: the same angle accelerations and
+    the same update (both laws) at a state in each mode."""
+    effects = {"gravity": {}, "slope": {"slope_angle": 0.05}, "rolling_resistance": {"c_rr": C_RR},
+               "spin_friction": {"c_pivot": 0.01}}
+    start = {"beta": 1.3, "alpha_dot": 0.4 if mode else 0.0, "beta_dot": -0.2, "gamma_dot": 0.0}
+    results = []
+    for kw in ({}, {"speeds": "body"}, {"formulation": "multipliers"}):
+        spec = build_model(effects=effects, initial=start, **kw)
+        fns = spec.functions()
+        p = np.array([q.start for q in spec.parameters])
+        x = np.array(fns["init"]([q.start for q in spec.starts], p)).ravel()
+        x[-2] = mode  # rolling_mode (gamma_dot = 0: sliding into the mode's direction from rest)
+        names = [q.name for q, _ in spec.outputs]
+
+        def angles(xx):
+            y = np.array(fns["out"](0, xx, [], p)).ravel()
+            rates = [y[names.index(n)] for n in ("alpha_dot", "beta_dot", "gamma_dot")]
+            h = 1e-6  # accelerations of the angle rates by a central difference of the exact flow
+            yp = np.array(fns["out"](0, xx + h * np.array(fns["ode"](0, xx, [], p)).ravel(), [], p)).ravel()
+            ym = np.array(fns["out"](0, xx - h * np.array(fns["ode"](0, xx, [], p)).ravel(), [], p)).ravel()
+            acc = [(yp[names.index(n)] - ym[names.index(n)]) / (2 * h) for n in ("alpha_dot", "beta_dot", "gamma_dot")]
+            return np.array(rates + acc + [y[names.index("rolling_resistance_torque")], y[names.index("pivot_torque")]])
+        k = [e.name for e in spec.events].index("rolling_stiction")
+        results.append((angles(x), angles(np.array(fns["upd"](0, x, [], p, k)).ravel())))
+    for other in results[1:]:
+        np.testing.assert_allclose(other[0], results[0][0], rtol=1e-7, atol=1e-9)
+        np.testing.assert_allclose(other[1], results[0][1], rtol=1e-7, atol=1e-9)
+
+
 def test_law_is_a_checked_scene_choice():
-    with pytest.raises(SceneError, match="law"):
+    with pytest.raises(SceneError, match="law: unknown choice 'sticky'; valid: stiction, smoothed"):
         parse_scene(WHEEL + '[effects.rolling_resistance]\nlaw = "sticky"\n', "bad.toml")
+    # a smoothing parameter with the stiction law is refused, not silently ignored
+    for effect, key in (("rolling_resistance", "rr_omega_eps"), ("spin_friction", "pivot_omega_eps")):
+        with pytest.raises(SceneError, match=rf"\[effects.{effect}\] {key}: belongs to law = \"smoothed\""):
+            parse_scene(WHEEL + f"[effects.{effect}]\n{key} = 0.1\n", "bad.toml")
+        with pytest.raises(ValueError, match=key):
+            build_model(effects={"gravity": {}, effect: {key: 0.1}})
+        parse_scene(WHEEL + f'[effects.{effect}]\nlaw = "smoothed"\n{key} = 0.1\n', "good.toml")
 
 
 # -- a wheel on a slope ------------------------------------------------------------------------

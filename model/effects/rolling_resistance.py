@@ -28,6 +28,14 @@ from model.spec import Quantity
 LAWS = ("stiction", "smoothed")
 
 
+def smoothing_conflict(options: dict, parameter: str) -> tuple[str, str] | None:
+    """The smoothing parameter given with the stiction law: refused rather than ignored."""
+    if options.get("law", LAWS[0]) == "stiction" and parameter in options:
+        return parameter, ('belongs to law = "smoothed" (the tanh regularisation); law = "stiction" (the '
+                           'default) sticks exactly and has no such parameter: remove it or set law = "smoothed"')
+    return None
+
+
 class RollingResistance(Effect):
     name = "rolling_resistance"
     uses_normal_load = True
@@ -44,6 +52,10 @@ class RollingResistance(Effect):
     @classmethod
     def choices(cls) -> dict[str, tuple[str, ...]]:
         return {"law": LAWS}
+
+    @classmethod
+    def option_conflict(cls, options: dict) -> tuple[str, str] | None:
+        return smoothing_conflict(options, "rr_omega_eps")
 
     def apply(self, ctx: WheelContext) -> None:
         law = self.choice("law")

@@ -14,7 +14,7 @@ import casadi as ca
 
 from model.context import WheelContext
 from model.effects.base import Effect
-from model.effects.rolling_resistance import LAWS
+from model.effects.rolling_resistance import LAWS, smoothing_conflict
 from model.spec import Quantity
 
 
@@ -35,6 +35,10 @@ class SpinFriction(Effect):
     @classmethod
     def choices(cls) -> dict[str, tuple[str, ...]]:
         return {"law": LAWS}
+
+    @classmethod
+    def option_conflict(cls, options: dict) -> tuple[str, str] | None:
+        return smoothing_conflict(options, "pivot_omega_eps")
 
     def apply(self, ctx: WheelContext) -> None:
         law = self.choice("law")

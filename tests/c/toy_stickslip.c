@@ -71,10 +71,11 @@ static int evt_f(const double **arg, double **res, gw_int *iw, double *w, int me
 static int upd_f(const double **arg, double **res, gw_int *iw, double *w, int mem) {
     const double t = arg[0][0], *x = arg[1], *p = arg[3], k = arg[4][0];
     const double H = -p[0] * sin(t);
+    const int holds = H * H < p[1] * BREAK * p[1] * BREAK;
     (void)iw; (void)w; (void)mem;
     res[0][0] = x[0];
     res[0][1] = k == 0.0 ? 0.0 : x[1];
-    res[0][2] = k == 0.0 ? (H * H < p[1] * BREAK * p[1] * BREAK ? 0.0 : (H > 0.0 ? -1.0 : 1.0)) : x[2];
+    res[0][2] = k == 0.0 ? (holds ? 0.0 : (H > 0.0 ? -1.0 : 1.0)) : x[2];
     return 0;
 }
 static int chk_f(const double **arg, double **res, gw_int *iw, double *w, int mem) {

@@ -4,6 +4,7 @@
 #               loop (earth, moon) to results/system/
 #   make test   installs what the tests need (Debian's chromium too, as root) and runs them all
 #   make bench  the work-precision benchmark (results/bench/*.png, work_precision.md)
+#   make realtime  the exported C in a 1 kHz fixed-step loop (results/c/realtime.md, docs/c_api.md)
 PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
@@ -15,7 +16,7 @@ SCENES := paper_earth paper_mars paper_moon
 # missing and we are root with apt-get (CI); otherwise named, and the tests needing them say so.
 C_TOOLS := clang cmake valgrind
 
-.PHONY: demo test bench venv browser clean c-tools
+.PHONY: demo test bench realtime venv browser clean c-tools
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -58,6 +59,10 @@ test: $(STAMP) browser c-tools
 
 bench: $(STAMP)
 	$(PY) benchmarks/work_precision.py --out results/bench
+
+# the real-time figures of docs/c_api.md: the exported C in a fixed-step 1 kHz loop (a few minutes)
+realtime: $(STAMP)
+	$(PY) examples/c_realtime.py --out results/c
 
 clean:
 	rm -rf results build .pytest_cache

@@ -68,6 +68,14 @@ typedef struct {
     void *env;               /* handed to logger unchanged */
 } gw_callbacks;
 
+/* An allocator with a context pointer (a plain C front end's: an arena per instance needs no
+ * global state).  Given to gw_instance_new_with, it replaces gw_callbacks.allocate / .free. */
+typedef struct {
+    void *(*allocate)(void *ctx, size_t n, size_t size); /* n * size bytes; need not be zeroed */
+    void (*free)(void *ctx, void *ptr);
+    void *ctx; /* handed to allocate and free unchanged */
+} gw_allocator;
+
 /* Log categories (names: gw_log_category_name; modelDescription.xml <LogCategories>).
  * GW_ERROR / GW_FATAL messages always reach the logger; the others only when logging is on
  * and their category (or GW_LOG_ALL) is enabled. */
@@ -90,6 +98,11 @@ typedef struct gw_instance gw_instance;
  * name is copied.  cb is copied; cb->allocate and cb->free must not be NULL. */
 GW_API gw_instance *gw_instance_new(const gw_model *m, const char *name, const gw_callbacks *cb,
                                     int logging_on);
+/* The same with every allocation (the instance itself included) through alloc, whose
+ * allocate and free must not be NULL; cb->allocate and cb->free are then not used. */
+GW_API gw_instance *gw_instance_new_with(const gw_model *m, const char *name,
+                                         const gw_callbacks *cb, const gw_allocator *alloc,
+                                         int logging_on);
 GW_API void gw_instance_free(gw_instance *I);
 /* Back to the state right after gw_instance_new (set-up phase, default values). */
 GW_API void gw_instance_reset(gw_instance *I);

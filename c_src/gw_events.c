@@ -146,6 +146,7 @@ static gw_ev_result gw_event_instant(gw_instance *I, double t, double *x, double
             if (I->ev_fired[i] != 1 || action == GW_EVENT_UPDATE) continue;
             I->ev_fired[i] = 2;
             I->flags[i] = 1;
+            I->t_events[i] = t;
             I->n_events++;
             if (action == GW_EVENT_WARN)
                 warn = 1;

@@ -13,13 +13,17 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 GW_INTERNAL void *gw_alloc(const gw_instance *I, size_t n, size_t size) {
     void *ptr;
     if (n == 0) n = 1; /* never hand out NULL for empty vectors */
-    ptr = I->cb.allocate(n, size);
+    ptr = I->alloc.allocate ? I->alloc.allocate(I->alloc.ctx, n, size) : I->cb.allocate(n, size);
     if (ptr) memset(ptr, 0, n * size); /* calloc-like, whatever the front end does */
     return ptr;
 }
 
 GW_INTERNAL void gw_free(const gw_instance *I, void *ptr) {
-    if (ptr) I->cb.free(ptr);
+    if (!ptr) return;
+    if (I->alloc.free)
+        I->alloc.free(I->alloc.ctx, ptr);
+    else
+        I->cb.free(ptr);
 }
 
 static char *gw_str_dup(const gw_instance *I, const char *s) {
@@ -35,15 +39,18 @@ static char *gw_str_dup(const gw_instance *I, const char *s) {
         if (!(ptr)) goto fail;                                                                \
     } while (0)
 
-GW_API gw_instance *gw_instance_new(const gw_model *m, const char *name, const gw_callbacks *cb,
-                                    int logging_on) {
+GW_API gw_instance *gw_instance_new_with(const gw_model *m, const char *name,
+                                         const gw_callbacks *cb, const gw_allocator *alloc,
+                                         int logging_on) {
     gw_instance *I;
     int i, nx = m->nx, ne = m->ne;
-    I = (gw_instance *)cb->allocate(1, sizeof(gw_instance));
+    I = (gw_instance *)(alloc ? alloc->allocate(alloc->ctx, 1, sizeof(gw_instance))
+                              : cb->allocate(1, sizeof(gw_instance)));
     if (!I) return NULL;
     memset(I, 0, sizeof(*I));
     I->m = m;
     I->cb = *cb;
+    if (alloc) I->alloc = *alloc;
     I->logging_on = logging_on ? 1 : 0;
     I->log_mask = logging_on ? ((1u << GW_LOG_N) - 1u) : 0u;
     I->nonfinite_status = GW_ERROR;
@@ -59,6 +66,7 @@ GW_API gw_instance *gw_instance_new(const gw_model *m, const char *name, const g
     GW_ALLOC_VEC(I->c, double, m->nc);
     GW_ALLOC_VEC(I->nominal, double, nx);
     GW_ALLOC_VEC(I->flags, int, ne);
+    GW_ALLOC_VEC(I->t_events, double, ne);
     for (i = 0; i < 7; i++) GW_ALLOC_VEC(I->k[i], double, nx);
     GW_ALLOC_VEC(I->xnew, double, nx);
     GW_ALLOC_VEC(I->xtmp, double, nx);
@@ -69,6 +77,7 @@ GW_API gw_instance *gw_instance_new(const gw_model *m, const char *name, const g
     GW_ALLOC_VEC(I->x_bak, double, nx);
     GW_ALLOC_VEC(I->e_bak, double, ne);
     GW_ALLOC_VEC(I->flags_bak, int, ne);
+    GW_ALLOC_VEC(I->t_events_bak, double, ne);
     if (gw_solver_alloc(I)) goto fail;
 
     if (gw_fun_alloc(I, &I->f_init, &m->init, 2, 1) || gw_fun_alloc(I, &I->f_ode, &m->ode, 4, 1) ||
@@ -95,6 +104,11 @@ GW_API gw_instance *gw_instance_new(const gw_model *m, const char *name, const g
 fail:
     gw_instance_free(I);
     return NULL;
+}
+
+GW_API gw_instance *gw_instance_new(const gw_model *m, const char *name, const gw_callbacks *cb,
+                                    int logging_on) {
+    return gw_instance_new_with(m, name, cb, NULL, logging_on);
 }
 
 GW_API void gw_instance_free(gw_instance *I) {
@@ -126,6 +140,7 @@ GW_API void gw_instance_free(gw_instance *I) {
     gw_free(I, I->c);
     gw_free(I, I->nominal);
     gw_free(I, I->flags);
+    gw_free(I, I->t_events);
     for (i = 0; i < 7; i++) gw_free(I, I->k[i]);
     gw_free(I, I->xnew);
     gw_free(I, I->xtmp);
@@ -136,7 +151,13 @@ GW_API void gw_instance_free(gw_instance *I) {
     gw_free(I, I->x_bak);
     gw_free(I, I->e_bak);
     gw_free(I, I->flags_bak);
+    gw_free(I, I->t_events_bak);
     gw_free(I, I->name);
+    if (I->alloc.free) {
+        gw_allocator alloc = I->alloc;
+        alloc.free(alloc.ctx, I);
+        return;
+    }
     free_fn = I->cb.free;
     free_fn(I);
 }
@@ -167,6 +188,7 @@ GW_API void gw_instance_reset(gw_instance *I) {
     for (i = 0; i < m->ne; i++) {
         I->e[i] = 0.0;
         I->flags[i] = 0;
+        I->t_events[i] = 0.0;
     }
     I->terminated = 0;
     I->x_jumped = 0;

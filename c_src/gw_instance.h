@@ -24,6 +24,7 @@ typedef struct {
 struct gw_instance {
     const gw_model *m;
     gw_callbacks cb; /* copy of the front end's callbacks */
+    gw_allocator alloc; /* allocate == NULL: allocation through cb.allocate / cb.free */
     char *name;      /* instance name (copied) */
 
     int logging_on;
@@ -48,6 +49,8 @@ struct gw_instance {
     double t;
     double *x, *s, *u, *p, *y, *e, *c, *nominal;
     int *flags; /* ne: event has fired */
+    double *t_events; /* ne: time of the event's last firing (valid where flags[i] is set);
+                         not part of gw_state's blob: a front end exposing it saves it */
     int terminated;
     double last_successful_time;
 
@@ -72,7 +75,7 @@ struct gw_instance {
     int x_jumped;      /* front end: an update changed x since the front end last cleared it */
 
     /* backup at the start of gw_advance */
-    double *x_bak, *e_bak;
+    double *x_bak, *e_bak, *t_events_bak;
     int *flags_bak;
 
     /* counters (cumulative since initialisation) */

@@ -198,9 +198,11 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
      * (update events were settled above). */
     for (i = 0; i < m->ne; i++) {
         I->flags[i] = 0;
+        I->t_events[i] = 0.0;
         if (I->e[i] > 0.0 || (m->event_actions && m->event_actions[i] == GW_EVENT_UPDATE)) continue;
         if (m->event_actions && m->event_actions[i] == GW_EVENT_WARN) {
             I->flags[i] = 1;
+            I->t_events[i] = I->t;
             gw_log(I, GW_WARNING, GW_LOG_EVENTS,
                    "warning: event %s holds already at the start t=%.17g",
                    m->event_names ? m->event_names[i] : "?", I->t);
@@ -225,6 +227,7 @@ static void gw_restore_step_start(gw_instance *I, double t0, double h0) {
     if (m->ne > 0) {
         memcpy(I->e, I->e_bak, (size_t)m->ne * sizeof(double));
         memcpy(I->flags, I->flags_bak, (size_t)m->ne * sizeof(int));
+        memcpy(I->t_events, I->t_events_bak, (size_t)m->ne * sizeof(double));
     }
     I->t = t0;
     I->h_adapt = h0;
@@ -241,6 +244,7 @@ GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end) {
     if (m->ne > 0) {
         memcpy(I->e_bak, I->e, (size_t)m->ne * sizeof(double));
         memcpy(I->flags_bak, I->flags, (size_t)m->ne * sizeof(int));
+        memcpy(I->t_events_bak, I->t_events, (size_t)m->ne * sizeof(double));
     }
     gw_point_changed(I);
     r = gw_integrate(I, t_end);

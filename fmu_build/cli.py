@@ -187,6 +187,25 @@ def cmd_system_run(args) -> int:
     return 0
 
 
+def cmd_export_c(args) -> int:
+    """Write the scene's model as plain C with the C API (fmu_build/export_c.py, docs/c_api.md)."""
+    from fmu_build.compiler import CompileError
+    from fmu_build.export_c import ExportError, export_c
+    from fmu_build.scene import load_scene
+
+    scene = load_scene(args.scene)
+    out = Path(args.output or f"{scene.name}_c")
+    try:
+        result = export_c(scene, out, check=not args.no_compile, scene_file=Path(args.scene).name)
+    except CompileError as exc:
+        raise CliError(f"compiling the export failed: {exc}", EXIT_FAILURE) from None
+    except (ExportError, ValueError) as exc:
+        raise CliError(f"{args.scene}: {exc}") from None
+    print(f"wrote {out}/ (model {result.identifier}: {result.identifier}.h, {result.identifier}.c, "
+          f"CMakeLists.txt, examples/; {len(result.files)} files)")
+    return 0
+
+
 def cmd_animate(args) -> int:
     from fmu_build.animate import AnimationError
     from fmu_build.animate.command import run
@@ -226,6 +245,11 @@ def make_parser() -> argparse.ArgumentParser:
     yr.add_argument("--stop-time", type=float, help="default: the .ssp's DefaultExperiment")
     yr.add_argument("-o", "--output", help="CSV file to write (<component>.<variable> columns)")
     yr.set_defaults(func=cmd_system_run)
+    x = sub.add_parser("export-c", help="write the scene's model as plain C with a C API (no FMI)")
+    x.add_argument("scene", help="scene file (TOML)")
+    x.add_argument("-o", "--output", metavar="DIR", help="directory to write (default: <scene name>_c)")
+    x.add_argument("--no-compile", action="store_true", help="skip the strict test compilation of the export")
+    x.set_defaults(func=cmd_export_c)
     a = sub.add_parser("animate", help="animate a result CSV as .gif, .mp4 or an interactive .html")
     add_animate_arguments(a)
     a.set_defaults(func=cmd_animate)

@@ -84,11 +84,17 @@ def run(cmd: list[str], timeout: float = 900, env: dict | None = None) -> subpro
 
 def run_program(driver: str, toy: str | None, out: Path, mode: str) -> subprocess.CompletedProcess:
     """Build in `mode` (strict | sanitizers | valgrind) and run; returns the finished process."""
-    exe = compile_program(driver, toy, out, MODE_FLAGS[mode])
+    return run_built(compile_program(driver, toy, out, MODE_FLAGS[mode]), mode)
+
+
+def run_built(exe: Path, mode: str, args: list[str] | None = None) -> subprocess.CompletedProcess:
+    """Run a test program built with MODE_FLAGS[mode]: as is, with the sanitizers' options, or
+    under valgrind (every error and leak fails); asserts exit 0 and "0 failures"."""
+    cmd = [str(exe), *(args or [])]
     if mode == "sanitizers":
-        return run([str(exe)], env=dict(os.environ, **SANITIZER_ENV))
+        return run(cmd, env=dict(os.environ, **SANITIZER_ENV))
     if mode == "valgrind":
         assert os.path.exists(VALGRIND), "valgrind is required for this test"
         return run([VALGRIND, "-q", "--error-exitcode=1", "--leak-check=full", "--errors-for-leak-kinds=all",
-                    str(exe)])
-    return run([str(exe)])
+                    *cmd])
+    return run(cmd)

@@ -14,6 +14,7 @@ from fmpy import simulate_fmu
 from fmu_build.cli import main
 from fmu_build.sweep import SweepSpecError, read_table, sweep
 from fmu_build.sweep.steady import precession_rates
+from model.build import BETA_MIN_DEFAULT
 
 PAPER = dict(M=2.0, R=0.17, k_diam=0.25, k_axial=0.4, g=9.81)
 
@@ -36,9 +37,9 @@ def test_fall_time_matches_scipy_reference(earth_fmu, paper_model):
                   output_interval=0.1, workers=0)
     assert (table["status"] == "ok").all() and not table["survived"].any()
     assert (table["event"] == "fallen").all() and (table["end_time"] == table["fall_time"]).all()
-    assert table["min_beta"].tolist() == pytest.approx([0.02, 0.02], abs=1e-9)
+    assert table["min_beta"].tolist() == pytest.approx([BETA_MIN_DEFAULT] * 2, abs=1e-9)
     for _, row in table.iterrows():
-        ref = paper_model.fall_time(0.02, 1e-11, 1e-12, t_end=3.0, beta=math.radians(row["beta_deg"]),
+        ref = paper_model.fall_time(BETA_MIN_DEFAULT, 1e-11, 1e-12, t_end=3.0, beta=math.radians(row["beta_deg"]),
                                     gamma_dot=0.0, alpha_dot=0.0)
         assert row["fall_time"] == pytest.approx(ref, rel=1e-6)
 

@@ -33,13 +33,13 @@ def test_closed_loop_sweep_equals_the_master(earth_loop):
 def test_closed_loop_fall_is_a_metric(earth_loop):
     """A wheel standing still at 60 deg is beyond the controller (no rolling, no gyroscopic authority):
     its fall ends the run as a result; a negative mass is refused by the wheel as a failed row."""
-    table = sweep(earth_loop.ssp, points=[{"beta_deg": 60.0, "gamma_dot": 0.0, "M": 2.0},
-                                          {"beta_deg": 85.0, "gamma_dot": 8.8, "M": -1.0}],
+    table = sweep(earth_loop.ssp, points=[{"beta_deg": 60.0, "gamma_dot": 0.0, "M": 2.0, "beta_min": 0.02},
+                                          {"beta_deg": 85.0, "gamma_dot": 8.8, "M": -1.0, "beta_min": 0.02}],
                   stop_time=5.0, output_interval=0.01, workers=0)
     fell, refused = table.iloc[0], table.iloc[1]
     assert fell["status"] == "ok" and not fell["survived"] and fell["event"] == "fallen"
     assert 0 < fell["fall_time"] < 5.0 and fell["fall_time"] == fell["end_time"]
-    assert refused["status"] == "error" and "mass" in refused["reason"]
+    assert refused["status"] == "error" and "mass" in refused["reason"], refused["reason"]
 
 
 def test_system_names_are_checked(earth_loop):

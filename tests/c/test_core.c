@@ -155,6 +155,7 @@ static void terminating_event(void) {
     CHECK_NEAR(I->t, te, 1e-9);
     CHECK_NEAR(I->last_successful_time, te, 1e-9);
     CHECK(get(I, VR_HIT) == 1.0);
+    CHECK(I->flags[0] && I->t_events[0] == I->t); /* the event's time */
     CHECK_NEAR(get(I, VR_POS), 0.5, 1e-8);
     CHECK(logged("event hit at t="));
     gw_instance_free(I);
@@ -208,6 +209,35 @@ static void out_of_memory(void) {
     CHECK(ok && k > 10);
 }
 
+/* gw_instance_new_with: every allocation through an allocator with a context pointer */
+typedef struct {
+    long live, total;
+} arena_counts;
+static void *ctx_allocate(void *ctx, size_t n, size_t size) {
+    ((arena_counts *)ctx)->live++;
+    ((arena_counts *)ctx)->total++;
+    return malloc(n * size);
+}
+static void ctx_free(void *ctx, void *p) {
+    ((arena_counts *)ctx)->live--;
+    free(p);
+}
+static void allocator_with_context(void) {
+    arena_counts counts = {0, 0};
+    const gw_allocator alloc = {ctx_allocate, ctx_free, &counts};
+    const gw_callbacks no_alloc = {user_logger, NULL, NULL, &env_token};
+    const long before = total;
+    gw_instance *I = gw_instance_new_with(&GW_MODEL, "ctx", &no_alloc, &alloc, 0);
+    CHECK(I != NULL);
+    if (!I) return;
+    CHECK(counts.total > 10 && counts.live == counts.total && total == before);
+    CHECK(gw_initialize(I, "initialize") == GW_OK);
+    CHECK(gw_advance(I, "advance", 0.5) == GW_OK);
+    CHECK(counts.total == counts.live); /* nothing allocated while integrating */
+    gw_instance_free(I);
+    CHECK(counts.live == 0);
+}
+
 int main(void) {
     exact_solution();
     save_and_restore();
@@ -215,6 +245,7 @@ int main(void) {
     errors();
     two_instances();
     out_of_memory();
+    allocator_with_context();
     CHECK(live == 0);
     fprintf(stderr, "test_core: %d checks, %d failures, %ld allocations\n", h_checks, h_failures,
             total);

@@ -1,0 +1,285 @@
+"""`gyrowheel export-c`: a scene's model as plain C with a documented C API (docs/c_api.md).
+
+The export is the FMU's C without the FMI layer: the CasADi-generated model (gw_funcs.c,
+model_desc.c: the same files an FMU of the scene holds), the simulation core (c_src/ minus
+gw_fmi2_*), and the C API (c_src/export/): a header <model>.h whose functions are all prefixed
+with the model's name, one translation unit <model>.c, a CMakeLists.txt and two examples
+(the scene's experiment as CSV; a fixed-step real-time loop).  Layout of DIR:
+
+    <model>.h  gyrowheel_api.h  <model>.c  CMakeLists.txt  README.md
+    src/        the model, the core and the API implementation (parts of <model>.c)
+    examples/   main.c, realtime.c
+
+Only <model>_* functions are external, so two exported models link into one program.
+"""
+from __future__ import annotations
+
+import json
+import keyword
+import re
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from fmu_build.builder import RUNTIME_DIR, _guid, model_spec
+from fmu_build.codegen import FUNCTION_FILE, generate_functions, write_model_desc
+from fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
+from fmu_build.scene import Scene
+from fmu_build.variables import Variable, build_table
+from model.spec import ModelSpec
+
+EXPORT_DIR = RUNTIME_DIR / "export"
+API_SOURCES = ("gw_capi.h", "gw_capi.c", "gw_capi_names.c", "gw_capi_state.c")
+MARKER = ".gyrowheel-export"
+KINDS = ("PARAMETER", "INITIAL", "INPUT", "STATE", "OUTPUT", "EVENT")  # gyrowheel_kind order
+MACRO_LETTER = {"PARAMETER": "P", "INITIAL": "I", "INPUT": "U", "STATE": "X", "OUTPUT": "Y", "EVENT": "E"}
+C_KEYWORDS = set("""auto break case char const continue default do double else enum extern float for
+goto if inline int long register restrict return short signed sizeof static struct switch typedef
+union unsigned void volatile while _Bool _Complex _Imaginary main""".split())
+
+
+class ExportError(ValueError):
+    """The scene or the output directory cannot be exported to; the message says why."""
+
+
+@dataclass
+class ExportResult:
+    directory: Path
+    identifier: str
+    files: list[str]  # relative to directory
+    spec: ModelSpec
+
+
+@dataclass
+class Row:
+    """One row of the C API's names/units table."""
+
+    name: str
+    unit: str
+    description: str
+    default: float | None = None
+    y_index: int = -1  # outputs: the index in the model's y
+
+
+def check_identifier(name: str) -> str:
+    """The model name as the prefix of C names: an ASCII C identifier, not reserved."""
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
+        raise ExportError(f"model name {name!r} is not an ASCII C identifier (letters, digits, _)")
+    if name in C_KEYWORDS or keyword.iskeyword(name):
+        raise ExportError(f"model name {name!r} is a C keyword; rename the model in [model] name")
+    if re.match(r"(?i)(gw_|gwc_|gyrowheel)", name):
+        raise ExportError(f"model name {name!r} starts with a prefix the runtime reserves (gw_, gwc_, gyrowheel)")
+    return name
+
+
+def core_sources() -> list[Path]:
+    """The simulation core: every c_src file but the FMI 2.0 layer (gw_fmi2_*, gw_fmu.c)."""
+    files = sorted(RUNTIME_DIR.glob("*.c")) + sorted(RUNTIME_DIR.glob("*.h"))
+    return [f for f in files if not f.name.startswith("gw_fmi2") and f.name != "gw_fmu.c"]
+
+
+def api_table(spec: ModelSpec, table: list[Variable]) -> dict[str, list[Row]]:
+    """The C API's rows per kind, in index order (inputs, parameters, ... as in the model's
+    vectors; outputs as the scene exposes them, in the FMU's order)."""
+    units = {v.state_index: v.quantity for v in table if v.state_index >= 0}
+
+    def rows(quantities):
+        return [Row(q.name, q.unit, q.description, q.start) for q in quantities]
+
+    outputs = [Row(v.name, v.quantity.unit, v.quantity.description,
+                   y_index=v.out_index if v.kind == "start" else v.index)
+               for v in table if v.kind in ("start", "output")]
+    return {
+        "PARAMETER": rows(spec.parameters),
+        "INITIAL": rows(spec.starts),
+        "INPUT": rows(spec.inputs),
+        "STATE": [Row(name, units[i].unit if i in units else "1",
+                      units[i].description if i in units else "internal continuous state")
+                  for i, name in enumerate(spec.x_names)],
+        "OUTPUT": outputs,
+        "EVENT": [Row(e.flag.name, "", f"{e.flag.description} (event {e.name}: "
+                  f"{'ends the run' if e.action == 'terminate' else 'flagged, the run goes on'})")
+                  if e.flag is not None else  # an update event (a stiction law's mode switch) has no flag
+                  Row(e.name, "", f"event {e.name}: switches a mode state of the model, the run goes on "
+                      "(no flag: reads 0)")
+                  for e in spec.events],
+    }
+
+
+def c_string(text: str) -> str:
+    """A C string literal: printable ASCII as is, everything else as octal UTF-8 bytes."""
+    out = []
+    for byte in text.encode("utf-8"):
+        ch = chr(byte)
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif 32 <= byte < 127:
+            out.append(ch)
+        else:
+            out.append(f"\\{byte:03o}")
+    return '"' + "".join(out) + '"'
+
+
+def _comment(text: str) -> str:
+    return " ".join(text.replace("*/", "* /").split())
+
+
+def _macro_name(name: str) -> str:
+    return re.sub(r"\W", "_", name)
+
+
+def header_macros(model: str, rows: dict[str, list[Row]], scene: Scene) -> str:
+    """Sizes, the scene's experiment and one index macro per variable (<MODEL>_<letter>_<name>)."""
+    M = model.upper()
+    exp = scene.experiment
+    lines = [f"#define {M}_NP {len(rows['PARAMETER'])} /* parameters */",
+             f"#define {M}_NI {len(rows['INITIAL'])} /* initial values */",
+             f"#define {M}_NU {len(rows['INPUT'])} /* inputs */",
+             f"#define {M}_NX {len(rows['STATE'])} /* continuous states */",
+             f"#define {M}_NY {len(rows['OUTPUT'])} /* outputs */",
+             f"#define {M}_NE {len(rows['EVENT'])} /* events */",
+             "",
+             "/* the scene's experiment [s] (the examples run it) */",
+             f"#define {M}_START_TIME {exp.start_time!r}",
+             f"#define {M}_STOP_TIME {exp.stop_time!r}",
+             f"#define {M}_OUTPUT_INTERVAL {exp.output_interval!r}"]
+    titles = {"PARAMETER": "parameters: index, [unit] description (scene's value)",
+              "INITIAL": "initial values: index, [unit] description (scene's value)",
+              "INPUT": "inputs: index, [unit] description (default)",
+              "STATE": "continuous states: index, [unit]",
+              "OUTPUT": "outputs: index, [unit] description",
+              "EVENT": "events: index, description"}
+    for kind in KINDS:
+        if not rows[kind]:
+            continue
+        lines += ["", f"/* {titles[kind]} */"]
+        seen: set[str] = set()
+        for i, row in enumerate(rows[kind]):
+            macro = f"{M}_{MACRO_LETTER[kind]}_{_macro_name(row.name)}"
+            if macro in seen:
+                raise ExportError(f"two {kind.lower()} names give the same C macro {macro}")
+            seen.add(macro)
+            unit = f"[{row.unit}] " if row.unit else ""
+            default = f" ({row.default!r})" if row.default is not None and kind != "STATE" else ""
+            lines.append(f"#define {macro} {i} /* {_comment(unit + row.description + default)} */")
+    return "\n".join(lines)
+
+
+def capi_desc(rows: dict[str, list[Row]], scene: Scene, model: str) -> str:
+    """src/capi_desc.c: GWC_TABLE (c_src/export/gw_capi.h) and the scene's start time."""
+    arrays = []
+    names = {kind: f"gwc_rows_{kind.lower()}" for kind in KINDS}
+    for kind in KINDS:
+        body = ",\n".join(f"    {{{c_string(r.name)}, {c_string(r.unit)}, {c_string(r.description)}}}"
+                          for r in rows[kind]) or '    {"", "", ""}'
+        arrays.append(f"static const gyrowheel_variable {names[kind]}[] = {{\n{body}\n}};")
+    ys = ", ".join(str(r.y_index) for r in rows["OUTPUT"]) or "0"
+    counts = ", ".join(str(len(rows[k])) for k in KINDS)
+    return f"""/* Generated by gyrowheel export-c from model {model!r}; do not edit.
+ * The C API's names/units table; part of the single translation unit {model}.c. */
+#ifndef GW_UNITY_BUILD
+typedef int gw_unity_build_part; /* compiled on its own this file is empty: see {model}.c */
+#else
+
+#include "gw_capi.h"
+
+#define GWC_START_TIME {scene.experiment.start_time!r}
+
+{chr(10).join(arrays)}
+
+static const int gwc_output_y[] = {{{ys}}};
+
+static const gwc_table GWC_TABLE = {{
+    {{{", ".join(names[k] for k in KINDS)}}},
+    {{{counts}}},
+    gwc_output_y,
+}};
+
+#endif /* GW_UNITY_BUILD */
+"""
+
+
+def render(template: str, values: dict[str, str]) -> str:
+    """@key@ placeholders (as CMake's configure_file); an unknown one left over is an error."""
+    for key, value in values.items():
+        template = template.replace(f"@{key}@", value)
+    left = re.findall(r"@[A-Za-z_]+@", template)
+    if left:
+        raise ExportError(f"template placeholder {left[0]} has no value")
+    return template
+
+
+def _prepare(out_dir: Path) -> None:
+    """An empty or new directory, or a previous export (its files are removed first)."""
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ExportError(f"{out_dir}: exists and is not a directory")
+    if out_dir.is_dir() and any(out_dir.iterdir()):
+        marker = out_dir / MARKER
+        if not marker.is_file():
+            raise ExportError(f"{out_dir}: not empty and not a gyrowheel export; choose a new or empty directory")
+        try:
+            previous = json.loads(marker.read_text())["files"]
+        except (ValueError, KeyError, TypeError):
+            raise ExportError(f"{out_dir}/{MARKER}: unreadable; remove the directory to export into it") from None
+        for rel in previous:
+            path = (out_dir / rel).resolve()
+            if out_dir.resolve() in path.parents and path.is_file():
+                path.unlink()
+        for sub in ("src", "examples"):
+            if (out_dir / sub).is_dir() and not any((out_dir / sub).iterdir()):
+                (out_dir / sub).rmdir()
+    out_dir.mkdir(parents=True, exist_ok=True)
+
+
+def compile_check(unity: Path) -> None:
+    """Compile <model>.c as a user would, strictly (C99, all warnings as errors)."""
+    with tempfile.TemporaryDirectory(prefix="gyrowheel-export-") as tmp:
+        cmd = [compiler(), *STANDARD, *WARNINGS, *OPTIMISE, "-c", str(unity), "-o", str(Path(tmp) / "model.o")]
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise CompileError(f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
+
+
+def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: str = "") -> ExportResult:
+    """Write the C export of `scene` into out_dir (see the module docstring).
+
+    check: compile <model>.c strictly afterwards (CompileError if it fails).
+    Raises ExportError (bad model name, unusable directory), ValueError (bad output table),
+    CompileError.
+    """
+    model = check_identifier(scene.name)
+    out_dir = Path(out_dir)
+    _prepare(out_dir)
+    spec = model_spec(scene)
+    exp = scene.experiment
+    table = build_table(spec, exp, scene.outputs)
+    src = out_dir / "src"
+    fns = generate_functions(spec, src)
+    guid = _guid((src / f"{FUNCTION_FILE}.c").read_text(),
+                 repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]), repr(exp), model)
+    write_model_desc(spec, table, exp, model, guid, fns, src)
+    for f in core_sources():
+        shutil.copy2(f, src / f.name)
+    for name in API_SOURCES:
+        shutil.copy2(EXPORT_DIR / name, src / name)
+    rows = api_table(spec, table)
+    (src / "capi_desc.c").write_text(capi_desc(rows, scene, model))
+    values = {"model": model, "MODEL": model.upper(), "guid": guid,
+              "scene_file": scene_file or f"scene {model!r}",
+              "description": _comment(spec.description).rstrip(".") + ".",
+              "macros": header_macros(model, rows, scene)}
+    outputs = {f"{model}.h": "model.h.in", f"{model}.c": "model.c.in", "CMakeLists.txt": "CMakeLists.txt.in",
+               "examples/main.c": "examples/main.c", "examples/realtime.c": "examples/realtime.c",
+               "README.md": "README.md.in"}
+    for target, template in outputs.items():
+        path = out_dir / target
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(render((EXPORT_DIR / template).read_text(), values))
+    shutil.copy2(EXPORT_DIR / "gyrowheel_api.h", out_dir / "gyrowheel_api.h")
+    files = sorted(p.relative_to(out_dir).as_posix() for p in out_dir.rglob("*") if p.is_file() and p.name != MARKER)
+    (out_dir / MARKER).write_text(json.dumps({"model": model, "files": files}, indent=1) + "\n")
+    if check:
+        compile_check(out_dir / f"{model}.c")
+    return ExportResult(directory=out_dir, identifier=model, files=files, spec=spec)

@@ -1,0 +1,286 @@
+"""`gyrowheel export-c` and the C API it writes (docs/c_api.md).
+
+  test_export_layout                      the files; no FMI layer or header; every part of src/
+                                          alone compiles (strict) to an empty object
+  test_strict_build_zero_warnings[cc]     library, example and real-time example with -std=c99
+                                          -Wall -Wextra -Wpedantic -Werror, gcc and clang: no
+                                          diagnostic at all
+  test_only_prefixed_symbols              the object exports paper_earth_* only, nothing writable
+  test_example_matches_fmu[cc|cmake]      examples/main.c built by plain cc and by the export's
+                                          CMakeLists.txt (strict) runs the paper scenario; its CSV
+                                          equals fmpy's simulation of the FMU of the same scene and
+                                          settings to 1e-12 (measured: 0, bit for bit)
+  test_capi[strict|sanitizers|valgrind]   tests/c/test_capi.c: table, create, bad input through
+                                          the API with code and message, save/restore and corrupt
+                                          buffers, the fall and its time, allocator, threads
+  test_two_models_side_by_side            paper_earth and lunar_rover objects linked into one
+                                          program (tests/c/test_capi_two.c), run interleaved: both
+                                          equal their FMUs bit for bit; the slip event's time; a
+                                          state of one refused by the other
+  test_realtime_example                   examples/realtime.c, short: rk4 takes 4 evaluations a
+                                          1 ms step, conserves energy to 1e-10, is accurate to 1e-7;
+                                          euler is not (the claims of docs/c_api.md, shortened)
+  test_cli_bad_input[...]                 one line `gyrowheel: error: ...`, exit 2
+  test_reexport_replaces_previous         a previous export's files go, the user's stay
+  test_docs_worked_example                docs/c_api.md's worked example compiles strictly and
+                                          prints what the page shows
+"""
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+
+from c_programs import MODE_FLAGS, MODES, TESTS_C, run_built, writable_symbols
+from conftest import ROOT, SCENES
+from fmu_build import build_fmu, load_scene
+from fmu_build.export_c import MARKER, export_c
+
+STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror"]
+
+
+def gyrowheel(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "fmu_build", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd or ROOT)
+
+
+def cc(compiler: str, *args) -> subprocess.CompletedProcess:
+    r = subprocess.run([compiler, *map(str, args)], capture_output=True, text=True)
+    assert r.returncode == 0, f"{compiler} {' '.join(map(str, args))}\n{r.stderr}"
+    return r
+
+
+@pytest.fixture(scope="module")
+def earth(tmp_path_factory) -> Path:
+    """paper_earth exported through the command line (with its strict compile check)."""
+    out = tmp_path_factory.mktemp("export") / "paper_earth"
+    r = gyrowheel("export-c", SCENES / "paper_earth.toml", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith(f"wrote {out}/") and r.stderr == ""
+    return out
+
+
+@pytest.fixture(scope="module")
+def earth_gcc(earth, tmp_path_factory) -> dict:
+    """The library object and both examples, gcc -O2, strict; and what gcc printed."""
+    out = tmp_path_factory.mktemp("earth_gcc")
+    built = {"obj": out / "paper_earth.o", "example": out / "example", "realtime": out / "realtime"}
+    diagnostics = cc("gcc", *STRICT, "-O2", "-c", earth / "paper_earth.c", "-o", built["obj"]).stderr
+    for name in ("example", "realtime"):
+        src = earth / "examples" / ("main.c" if name == "example" else "realtime.c")
+        diagnostics += cc("gcc", *STRICT, "-O2", f"-I{earth}", src, built["obj"], "-lm", "-o", built[name]).stderr
+    built["diagnostics"] = diagnostics
+    return built
+
+
+@pytest.fixture(scope="module")
+def earth_reference(earth_fmu):
+    """fmpy's run of the FMU of the same scene at the scene's output interval."""
+    return simulate_fmu(str(earth_fmu), output_interval=0.01)
+
+
+def read_csv(path_or_text) -> np.ndarray:
+    return np.genfromtxt(path_or_text, delimiter=",", names=True)
+
+
+def max_difference(result, fmu_result) -> float:
+    assert result.dtype.names == fmu_result.dtype.names and len(result) == len(fmu_result)
+    return max(float(np.max(np.abs(result[n] - fmu_result[n].astype(float)))) for n in result.dtype.names)
+
+
+def test_export_layout(earth, tmp_path):
+    files = json.loads((earth / MARKER).read_text())["files"]
+    for name in ("paper_earth.h", "paper_earth.c", "gyrowheel_api.h", "CMakeLists.txt", "README.md",
+                 "examples/main.c", "examples/realtime.c", "src/gw_funcs.c", "src/model_desc.c",
+                 "src/capi_desc.c", "src/gw_core.c", "src/gw_capi.c", "src/gw_solver_rodas4.c"):
+        assert name in files and (earth / name).is_file(), name
+    assert sorted(p.relative_to(earth).as_posix() for p in earth.rglob("*") if p.name != MARKER) \
+        == sorted(files + ["examples", "src"])
+    for path in earth.rglob("*.[ch]"):
+        text = path.read_text()
+        assert "fmi2" not in path.name and not re.search(r'#\s*include\s+"fmi2', text), path
+    parts = sorted((earth / "src").glob("*.c"))
+    assert len(parts) >= 18
+    for src in parts:  # the unity build's parts are empty on their own
+        obj = tmp_path / (src.stem + ".o")
+        cc("gcc", *STRICT, "-c", src, "-o", obj)
+        nm = subprocess.run(["nm", str(obj)], capture_output=True, text=True, check=True).stdout
+        assert nm.strip() == "", f"{src.name} defines symbols on its own:\n{nm}"
+
+
+@pytest.mark.parametrize("compiler", ["gcc", "clang"])
+def test_strict_build_zero_warnings(compiler, earth, earth_gcc, tmp_path):
+    if shutil.which(compiler) is None:
+        pytest.skip(f"{compiler} is not installed (make test installs it: Debian package {compiler})")
+    if compiler == "gcc":  # the fixture's build
+        diagnostics = earth_gcc["diagnostics"]
+    else:
+        obj = tmp_path / "paper_earth.o"
+        diagnostics = cc(compiler, *STRICT, "-O2", "-c", earth / "paper_earth.c", "-o", obj).stderr
+        for src in ("main.c", "realtime.c"):
+            diagnostics += cc(compiler, *STRICT, "-O2", f"-I{earth}", earth / "examples" / src, obj, "-lm",
+                              "-o", tmp_path / src[:-2]).stderr
+    assert diagnostics == "", diagnostics  # zero warnings
+
+
+def test_only_prefixed_symbols(earth_gcc):
+    nm = subprocess.run(["nm", "--defined-only", "-g", str(earth_gcc["obj"])], capture_output=True, text=True,
+                        check=True).stdout
+    names = {line.split()[-1] for line in nm.splitlines() if line.strip()}
+    assert len(names) >= 30 and all(n.startswith("paper_earth_") for n in names), sorted(names)
+    assert {"paper_earth_create", "paper_earth_advance", "paper_earth_restore_state"} <= names
+    assert writable_symbols(earth_gcc["obj"]) == []
+
+
+@pytest.mark.parametrize("build", ["cc", "cmake"])
+def test_example_matches_fmu(build, earth, earth_gcc, earth_reference, tmp_path):
+    if build == "cc":
+        example = earth_gcc["example"]
+    else:
+        if shutil.which("cmake") is None:
+            pytest.skip("cmake is not installed (make test installs it: Debian package cmake)")
+        b = tmp_path / "build"
+        r = subprocess.run(["cmake", "-S", str(earth), "-B", str(b), "-DCMAKE_BUILD_TYPE=Release",
+                            "-DPAPER_EARTH_STRICT=ON"], capture_output=True, text=True)
+        assert r.returncode == 0, r.stdout + r.stderr
+        r = subprocess.run(["cmake", "--build", str(b)], capture_output=True, text=True)
+        assert r.returncode == 0 and "warning" not in r.stdout + r.stderr, r.stdout + r.stderr
+        example = b / "paper_earth_example"
+        assert (b / "paper_earth_realtime").is_file() and any(b.glob("libpaper_earth.*"))
+    r = subprocess.run([str(example)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    result = read_csv(r.stdout.splitlines())
+    assert len(result) == 2001 and result["time"][-1] == 20.0
+    assert max_difference(result, earth_reference) <= 1e-12
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_capi(mode, earth, earth_gcc, tmp_path):
+    exe = tmp_path / "test_capi"
+    # the library as built for users (gcc -O2), except under the sanitizers (instrumented)
+    library = earth / "paper_earth.c" if mode == "sanitizers" else earth_gcc["obj"]
+    cc("gcc", *STRICT, *MODE_FLAGS[mode], f"-I{earth}", f"-I{TESTS_C}", TESTS_C / "test_capi.c",
+       library, "-lm", "-pthread", "-o", exe)
+    r = run_built(exe, mode)
+    assert re.search(r"test_capi: (\d{4,}) checks, 0 failures", r.stderr), r.stderr
+
+
+@pytest.fixture(scope="module")
+def lunar(tmp_path_factory) -> tuple[Path, Path]:
+    """lunar_rover (slip: a warning event; lift-off and fall: terminating) as export and FMU."""
+    out = tmp_path_factory.mktemp("lunar")
+    scene = load_scene(SCENES / "lunar_rover.toml")
+    export_c(scene, out / "lunar_rover", check=False)
+    return out / "lunar_rover", build_fmu(scene, out / "lunar_rover.fmu").fmu
+
+
+def test_two_models_side_by_side(earth, earth_gcc, earth_reference, lunar, tmp_path):
+    lunar_dir, lunar_fmu = lunar
+    objs = [earth_gcc["obj"], tmp_path / "lunar_rover.o"]
+    cc("gcc", *STRICT, "-O2", "-c", lunar_dir / "lunar_rover.c", "-o", objs[1])
+    exe = tmp_path / "two"
+    cc("gcc", *STRICT, "-O2", f"-I{earth}", f"-I{lunar_dir}", f"-I{TESTS_C}", TESTS_C / "test_capi_two.c",
+       *objs, "-lm", "-o", exe)
+    csvs = [tmp_path / "earth.csv", tmp_path / "lunar.csv"]
+    r = run_built(exe, "strict", [str(c) for c in csvs])
+    info = dict(line.split(" ", 1) for line in r.stdout.splitlines())
+    assert max_difference(read_csv(csvs[0]), earth_reference) <= 1e-12
+    lunar_reference = simulate_fmu(str(lunar_fmu), output_interval=0.02)
+    lunar_result = read_csv(csvs[1])
+    assert max_difference(lunar_result, lunar_reference) <= 1e-12
+    # the fall ends both runs at the same time; slipping turned true within the API's event time's step
+    t_fall, t_slip = float(info["fall_time"]), float(info["slip_time"])
+    assert lunar_result["time"][-1] == t_fall and lunar_result["fallen"][-1] == 1
+    first = int(np.argmax(lunar_reference["slipping"]))
+    assert lunar_reference["time"][first - 1] < t_slip <= lunar_reference["time"][first]
+    assert "a state of another model" in info["cross_restore"]
+
+
+def results(stdout: str) -> dict[str, dict[str, float]]:
+    out = {}
+    for line in stdout.splitlines():
+        if line.startswith("RESULT solver="):
+            fields = dict(kv.split("=") for kv in line.split()[1:])
+            solver = fields.pop("solver")
+            out[solver] = {k: float(v) for k, v in fields.items()}
+    return out
+
+
+def test_realtime_example(earth_gcc):
+    r = subprocess.run([str(earth_gcc["realtime"]), "--steps", "21000", "--compare"], capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    res = results(r.stdout)
+    assert set(res) == {"euler", "rk4", "dopri5", "dop853"}
+    rk4 = res["rk4"]
+    assert rk4["steps"] == 21000 and rk4["terminated"] == 0
+    assert 3.999 < rk4["rhs_per_step"] <= 4.0  # one RK4 step per 1 ms period, always
+    assert rk4["energy_drift"] < 1e-10 and rk4["err_20"] < 1e-7
+    assert res["euler"]["terminated"] == 1 or res["euler"]["err_20"] > 1e-2  # not accurate enough
+    assert res["dopri5"]["rhs_per_step"] >= 6.0 and res["dop853"]["rhs_per_step"] >= 12.0
+    for solver in res.values():
+        assert 0 < solver["wall_p50_us"] <= solver["wall_p999_us"] <= solver["wall_max_us"]
+        assert 0 < solver["cpu_p50_us"] <= solver["cpu_p999_us"] <= solver["cpu_max_us"]
+
+
+def _scene(tmp_path: Path, name: str) -> Path:
+    text = (SCENES / "paper_earth.toml").read_text().replace('name = "paper_earth"', f'name = "{name}"')
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("case,fragment", [
+    ("missing", "missing.toml: no such scene file"),
+    ("file", "exists and is not a directory"),
+    ("not_empty", "not empty and not a gyrowheel export"),
+    ("keyword", "model name 'double' is a C keyword"),
+    ("reserved", "model name 'gw_wheel' starts with a prefix the runtime reserves"),
+])
+def test_cli_bad_input(case, fragment, tmp_path):
+    scene, out = SCENES / "paper_earth.toml", tmp_path / "out"
+    if case == "missing":
+        scene = tmp_path / "missing.toml"
+    elif case == "file":
+        out.write_text("a file")
+    elif case == "not_empty":
+        out.mkdir()
+        (out / "CMakeLists.txt").write_text("# the user's own\n")
+    else:
+        scene = _scene(tmp_path, "double" if case == "keyword" else "gw_wheel")
+    r = gyrowheel("export-c", scene, "-o", out)
+    assert r.returncode == 2
+    assert r.stderr.count("\n") == 1 and r.stderr.startswith("gyrowheel: error: ") and fragment in r.stderr, r.stderr
+    if case == "not_empty":
+        assert (out / "CMakeLists.txt").read_text() == "# the user's own\n"
+
+
+def test_reexport_replaces_previous(earth, tmp_path):
+    out = tmp_path / "export"
+    shutil.copytree(earth, out)
+    (out / "notes.txt").write_text("mine")
+    result = export_c(load_scene(_scene(tmp_path, "other_wheel")), out, check=False)
+    assert result.identifier == "other_wheel"
+    assert not (out / "paper_earth.h").exists() and not (out / "paper_earth.c").exists()
+    assert (out / "other_wheel.h").is_file() and (out / "notes.txt").read_text() == "mine"
+    assert "other_wheel_create" in (out / "other_wheel.h").read_text()
+
+
+def test_docs_worked_example(earth, earth_gcc, tmp_path):
+    text = (ROOT / "docs" / "c_api.md").read_text()
+    section = text[text.index("## Worked example"):]
+    code = re.search(r"```c\n(.*?)```", section, re.S).group(1)
+    shown = re.search(r"```text\n(.*?)```", section, re.S).group(1)
+    (tmp_path / "coin.c").write_text(code)
+    diagnostics = cc("gcc", *STRICT, "-O2", f"-I{earth}", tmp_path / "coin.c", earth_gcc["obj"], "-lm",
+                     "-o", tmp_path / "coin").stderr
+    assert diagnostics == ""
+    r = subprocess.run([str(tmp_path / "coin")], capture_output=True, text=True)
+    assert r.returncode == 0 and r.stdout == shown, r.stdout + r.stderr

@@ -124,7 +124,7 @@ static int gw_event_apply_update(gw_instance *I, int i, double t, double *x) {
 
 /* One event instant at (t, x) (see the file comment).  The events with I->ev_fired[i] == 1
  * fire: terminating and warning ones set their flag and are logged; unless one terminates,
- * the updates are applied to x in index order.  After a jump the indicators are evaluated
+ * the updates are applied to x in index order (their flags set too: switched at least once).  After a jump the indicators are evaluated
  * again; one that went from > 0 to <= 0 and has not fired in this instant fires in the next
  * pass (only update events when only_updates: initialisation checks the others itself).
  * e: in, the indicators at (t, x); out, those at the final state.  *jumped: x changed.
@@ -159,6 +159,8 @@ static gw_ev_result gw_event_instant(gw_instance *I, double t, double *x, double
             I->ev_fired[i] = 2;
             I->n_events++;
             if (terminate) continue;
+            I->flags[i] = 1; /* an update event's flag: it has switched at least once */
+            I->t_events[i] = t;
             if (gw_event_apply_update(I, i, t, x)) return GW_EV_ERROR;
             updated = 1;
         }

@@ -89,7 +89,8 @@ typedef enum {
     GW_EVENT_TERMINATE = 0, /* stop at the located time: fmi2Discard + fmi2Terminated */
     GW_EVENT_WARN = 1,      /* log a warning at the located time, set the flag, go on */
     GW_EVENT_UPDATE = 2     /* the state jumps to upd(t, x, u, p, k) at the located time (a
-                               discrete mode switch; no flag) and the integration restarts */
+                               discrete mode switch; the flag: switched at least once) and
+                               the integration restarts */
 } gw_event_action;
 
 typedef struct {

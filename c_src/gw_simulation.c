@@ -176,6 +176,10 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
     /* the model's discrete state (stiction modes) is settled at the start: update events whose
      * indicator is <= 0 there fire now (gw_events_initial), before outputs and derivatives */
     I->x_jumped = 0;
+    for (i = 0; i < m->ne; i++) {
+        I->flags[i] = 0;
+        I->t_events[i] = 0.0;
+    }
     if (m->ne > 0 && gw_eval_evt(I, I->t, I->x, I->e) != 0)
         GW_SIM_FAIL("%s: evaluation of the event indicators failed", fn);
     if (m->ne > 0 && gw_events_initial(I, fn) != 0) return GW_ERROR;
@@ -197,8 +201,6 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
      * a terminating one means an invalid initial state, a warning one is flagged now
      * (update events were settled above). */
     for (i = 0; i < m->ne; i++) {
-        I->flags[i] = 0;
-        I->t_events[i] = 0.0;
         if (I->e[i] > 0.0 || (m->event_actions && m->event_actions[i] == GW_EVENT_UPDATE)) continue;
         if (m->event_actions && m->event_actions[i] == GW_EVENT_WARN) {
             I->flags[i] = 1;

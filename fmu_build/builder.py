@@ -94,7 +94,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         # one translation unit: only fmi2* symbols are global, whatever flags an importer uses
         compile_shared(src / UNITY_SOURCE, [src], root / "binaries" / PLATFORM / f"{identifier}.so")
         xml = write_model_description(spec.name, experiment, table, identifier, guid, [UNITY_SOURCE], spec.description,
-                                      model_exchange=True, directional=True, event_indicators=len(spec.events))
+                                      model_exchange=True, directional=True)
         (root / "modelDescription.xml").write_text(xml)
         (root / "documentation").mkdir(exist_ok=True)
         (root / "documentation" / "index.html").write_text(write_index_html(spec, experiment, table, identifier, guid,

@@ -101,9 +101,6 @@ def api_table(spec: ModelSpec, table: list[Variable]) -> dict[str, list[Row]]:
         "OUTPUT": outputs,
         "EVENT": [Row(e.flag.name, "", f"{e.flag.description} (event {e.name}: "
                   f"{'ends the run' if e.action == 'terminate' else 'flagged, the run goes on'})")
-                  if e.flag is not None else  # an update event (a stiction law's mode switch) has no flag
-                  Row(e.name, "", f"event {e.name}: switches a mode state of the model, the run goes on "
-                      "(no flag: reads 0)")
                   for e in spec.events],
     }
 

@@ -11,6 +11,7 @@ LOG_CATEGORIES = {  # must match c_src/gw_log.c
     "logEvents": "events: fall, warnings at located event times",
     "logSolver": "integrator statistics per communication step",
     "logStatusWarning": "messages with status fmi2Warning",
+    "logStatusDiscard": "messages with status fmi2Discard",
     "logStatusError": "messages with status fmi2Error",
     "logStatusFatal": "messages with status fmi2Fatal",
     "logAll": "everything",
@@ -50,11 +51,8 @@ def _unit_of(v: Variable) -> str | None:
 
 def write_model_description(model_name: str, exp: Experiment, table: list[Variable], identifier: str,
                             guid: str, sources: list[str], description: str, model_exchange: bool = False,
-                            directional: bool = False, event_indicators: int | None = None) -> str:
+                            directional: bool = False) -> str:
     """The XML text. `sources` are the C files listed under <SourceFiles>.
-
-    event_indicators: how many the model has (default: one per event flag of the table; events
-    that update the state have no flag).
 
     model_exchange adds the ModelExchange interface (the runtime's fmi2GetDerivatives & co.),
     directional declares fmi2GetDirectionalDerivative (CasADi's exact Jacobian).
@@ -79,9 +77,7 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
     }
     interfaces = []
     if model_exchange:
-        if event_indicators is None:
-            event_indicators = sum(1 for v in table if v.kind == "event")
-        root.set("numberOfEventIndicators", str(event_indicators))
+        root.set("numberOfEventIndicators", str(sum(1 for v in table if v.kind == "event")))
         interfaces.append(ET.SubElement(root, "ModelExchange", {**common, "completedIntegratorStepNotNeeded": "true"}))
     interfaces.append(ET.SubElement(root, "CoSimulation", {
         **common,
@@ -117,12 +113,12 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
     for name, desc in LOG_CATEGORIES.items():
         ET.SubElement(cats, "Category", {"name": name, "description": desc})
 
-    # No tolerance attribute on purpose: importers (fmpy among them) pass DefaultExperiment's
-    # tolerance to fmi2SetupExperiment, which overrides rel_tol (INTERFACE.md), so a user's
-    # rel_tol would be silently ignored. The scene's rel_tol is the parameter's start value.
+    # The scene's tolerance: importers that forward DefaultExperiment's tolerance to
+    # fmi2SetupExperiment (PyFMI, OMSimulator, fmpy) get the scene's accuracy; without it they
+    # forward their own 1e-4. A rel_tol set explicitly still wins (docs/fmi.md, "Tolerances").
     ET.SubElement(root, "DefaultExperiment", {
         "startTime": _fmt(exp.start_time), "stopTime": _fmt(exp.stop_time),
-        "stepSize": _fmt(exp.output_interval),
+        "tolerance": _fmt(exp.rel_tol), "stepSize": _fmt(exp.output_interval),
     })
 
     mvs = ET.SubElement(root, "ModelVariables")

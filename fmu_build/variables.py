@@ -56,10 +56,12 @@ def solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
     """The runtime's own parameters (INTERFACE.md, solver settings)."""
     return [
         (Quantity("solver", "", "internal Co-Simulation integrator", SOLVERS[exp.solver]), "Enumeration", "Solver"),
-        (Quantity("rel_tol", "1", "relative error tolerance of adaptive solvers "
-                  "(overridden by fmi2SetupExperiment's tolerance)", exp.rel_tol), "Real", None),
-        (Quantity("abs_tol", "1", "absolute error tolerance of adaptive solvers "
-                  "(scaled by each state's nominal value)", exp.abs_tol), "Real", None),
+        (Quantity("rel_tol", "1", "relative error tolerance of adaptive solvers, in [2.2e-15, 1]; "
+                  "when not set, a tolerance passed to fmi2SetupExperiment replaces it",
+                  exp.rel_tol), "Real", None),
+        (Quantity("abs_tol", "1", "absolute error tolerance of adaptive solvers, in [1e-30, 1], "
+                  "scaled by each state's nominal value; when not set, scaled with a tolerance "
+                  "passed to fmi2SetupExperiment", exp.abs_tol), "Real", None),
         (Quantity("max_step", "s", "upper bound of internal steps; the fixed step of euler and rk4",
                   exp.max_step), "Real", None),
     ]
@@ -104,9 +106,8 @@ def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None)
             add(quantity=q, type="Real", causality="output", variability="continuous",
                 initial="calculated", kind="output", index=j)
     for k, ev in enumerate(spec.events):
-        if ev.flag is not None:  # update events (mode switches) have no flag
-            add(quantity=ev.flag, type="Boolean", causality="output", variability="discrete",
-                initial="calculated", kind="event", index=k)
+        add(quantity=ev.flag, type="Boolean", causality="output", variability="discrete",
+            initial="calculated", kind="event", index=k)
     _states(spec, rows, add)
     _structure(spec, rows)
     return rows
@@ -147,10 +148,13 @@ def _per_second(unit: str) -> str:
 
 
 def _structure(spec: ModelSpec, rows: list[Variable]) -> None:
-    """Exact ModelStructure dependencies from CasADi's sparsity.
+    """Exact ModelStructure dependencies from CasADi's sparsity (FMI 2.0.4 section 2.2.8).
 
-    Outputs depend directly only on inputs (Co-Simulation); initial unknowns on
-    the exact start values, parameters and inputs they are computed from.
+    Outputs and Derivatives: the knowns of Event/Continuous-Time Mode and of communication
+    points, i.e. continuous states and inputs. InitialUnknowns: the knowns of Initialization
+    Mode, i.e. the variables with initial = "exact" (start values, parameters) and inputs, on
+    which the unknown depends once x is replaced by init(s, p); a calculated state is an
+    unknown there, never a known. Every list is sorted and without repeats.
     """
     by_kind_index = {(r.kind, r.index): i + 1 for i, r in enumerate(rows)}
     state_var = {r.state_index: i + 1 for i, r in enumerate(rows) if r.state_index >= 0}
@@ -168,13 +172,13 @@ def _structure(spec: ModelSpec, rows: list[Variable]) -> None:
         else:
             expr = y[row.out_index if row.kind == "start" else row.index]
         # knowns: inputs (Co-Simulation and Model Exchange) and continuous states (Model Exchange)
-        deps = [state_var[i] for i, d in enumerate(_depends(expr, spec.x)) if d and row.kind != "state"]
-        deps += [by_kind_index[("input", i)] for i, d in enumerate(_depends(expr, spec.u)) if d]
+        deps = {state_var[i] for i, d in enumerate(_depends(expr, spec.x)) if d and row.kind != "state"}
+        deps |= {by_kind_index[("input", i)] for i, d in enumerate(_depends(expr, spec.u)) if d}
         row.dependencies = tuple(sorted(deps))
         if row.initial == "calculated":
             at_start = ca.substitute(expr, spec.x, x0)
-            deps = [by_kind_index[("start", i)] for i, d in enumerate(_depends(at_start, spec.s))
-                    if d and ("start", i) in by_kind_index]
-            deps += [by_kind_index[("param", i)] for i, d in enumerate(_depends(at_start, spec.p)) if d]
-            deps += list(row.dependencies)
+            deps = {by_kind_index[("start", i)] for i, d in enumerate(_depends(at_start, spec.s))
+                    if d and ("start", i) in by_kind_index}
+            deps |= {by_kind_index[("param", i)] for i, d in enumerate(_depends(at_start, spec.p)) if d}
+            deps |= {by_kind_index[("input", i)] for i, d in enumerate(_depends(at_start, spec.u)) if d}
             row.initial_dependencies = tuple(sorted(deps))

@@ -363,7 +363,9 @@ class _Assembler:
         n_mech = x.numel() - len(ctx.states)
         for law in ctx.stick_slip:
             mode_row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)
-            events.append(Event(f"{law.name}_stiction", bind(law.indicator()), "update", None,
+            switched = Quantity(f"{law.name}_switched", "", f"true once the {law.what} has switched mode (stuck, "
+                                "sliding again or turned back)")
+            events.append(Event(f"{law.name}_stiction", bind(law.indicator()), "update", switched,
                                 law_update(law, x, bind, mode_row, speed_rows, speeds_now, to_state)))
         if ctx.uses_Fn and not any(ev.name == "lift_off" for ev in events):
             # load-proportional laws (rolling resistance, pivot friction) would push, not resist,

@@ -89,6 +89,7 @@ class StickSlip:
     limit: ca.SX
     mode: "State"
     hold: ca.SX
+    what: str = "law"  # for descriptions: "rolling resistance", "pivot friction"
 
     @property
     def stuck(self) -> ca.SX:
@@ -192,7 +193,7 @@ class WheelContext:
         mode = State(Quantity(f"{name}_mode", "1", f"{what}: +1 / -1 sliding forwards / backwards, 0 stuck"),
                      ca.SX.sym(f"{name}_mode"), ca.SX(0), output=False, start_expr=ca.sign(rate))
         self.states.append(mode)
-        law = StickSlip(name, ca.SX(rate), ca.SX(limit), mode, ca.SX.sym(f"{name}_hold"))
+        law = StickSlip(name, ca.SX(rate), ca.SX(limit), mode, ca.SX.sym(f"{name}_hold"), what)
         self.stick_slip.append(law)
         return law
 

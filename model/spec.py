@@ -31,15 +31,16 @@ class Quantity:
 class Event:
     """An event indicator: fires when expr goes from > 0 to <= 0.
 
-    action "terminate" / "warn": the Boolean output `flag` turns true when it fires;
-    "update": the state jumps to `update`, an expression of (t, x, u, p) (a discrete mode
-    switch, e.g. a stiction law sticking), and there is no flag.
+    action "terminate" (stop there) or "warn" (log, go on); "update": the state jumps to
+    `update`, an expression of (t, x, u, p) (a discrete mode switch, e.g. a stiction law
+    sticking), and the integration goes on. The Boolean output `flag` turns true when it
+    first fires.
     """
 
     name: str
     expr: ca.SX
     action: str  # "terminate", "warn" or "update"
-    flag: Quantity | None  # the Boolean output that turns true when it fires (None for "update")
+    flag: Quantity  # the Boolean output that turns true when it fires
     update: ca.SX | None = None  # "update": the new state x+(t, x, u, p)
 
 

@@ -16,7 +16,7 @@ SCENES := paper_earth paper_mars paper_moon
 # missing and we are root with apt-get (CI); otherwise named, and the tests needing them say so.
 C_TOOLS := clang cmake valgrind
 
-.PHONY: demo test bench realtime venv browser clean c-tools
+.PHONY: demo test bench realtime venv browser clean c-tools tbb
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -54,7 +54,17 @@ c-tools:
 	    else echo "make test: missing$$missing (Debian: apt-get install$$missing)"; fi; \
 	fi
 
-test: $(STAMP) browser c-tools
+# ecospy (tests/test_importers.py, a co-simulation master) links Debian's libtbb12
+tbb:
+	@ldconfig -p 2>/dev/null | grep -q 'libtbb\.so\.12' || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing Debian's libtbb12 (for ecospy)"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libtbb12 >/dev/null; \
+	  else \
+	    echo "libtbb12 is missing and apt-get is not usable here: install Debian's libtbb12 for ecospy (tests/test_importers.py)"; \
+	  fi; }
+
+test: $(STAMP) browser c-tools tbb
 	$(PY) -m pytest -q
 
 bench: $(STAMP)

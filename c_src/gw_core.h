@@ -76,9 +76,11 @@ typedef struct {
     void *ctx; /* handed to allocate and free unchanged */
 } gw_allocator;
 
-/* Log categories (names: gw_log_category_name; modelDescription.xml <LogCategories>).
- * GW_ERROR / GW_FATAL messages always reach the logger; the others only when logging is on
- * and their category (or GW_LOG_ALL) is enabled. */
+/* Log categories (names: gw_log_category_name; modelDescription.xml <LogCategories>, the
+ * names of FMI 2.0.4 section 2.2.4).  A message with any status but GW_OK (the reason of a
+ * warning, discard, error or fatal status) always reaches the logger; GW_OK messages
+ * (events, solver statistics) only when logging is on and their category (or GW_LOG_ALL)
+ * is enabled. */
 typedef enum {
     GW_LOG_EVENTS = 0,
     GW_LOG_SOLVER = 1,
@@ -86,7 +88,8 @@ typedef enum {
     GW_LOG_ERROR = 3,
     GW_LOG_FATAL = 4,
     GW_LOG_ALL = 5,
-    GW_LOG_N = 6
+    GW_LOG_DISCARD = 6,
+    GW_LOG_N = 7
 } gw_log_category;
 
 /* One simulation: model data, settings, solver memory (gw_instance.h has the fields). */
@@ -129,25 +132,48 @@ GW_API const char *gw_variable_name(const gw_model *m, int kind, int index);
 /* Current value of v as a double (Integer, Enumeration and Boolean included).  Outputs and
  * state derivatives are only current after gw_update_outputs / gw_update_derivatives. */
 GW_API double gw_value_get(const gw_instance *I, const gw_variable *v);
+/* Valid ranges of the settings (docs/fmi.md, "Settings"): tolerances are fractions of the
+ * states' nominal scales, so neither exceeds 1; rel_tol below 10 machine epsilons cannot be
+ * met in double precision (Hairer's DOPRI5 refuses it alike); an abs_tol below 1e-30
+ * nominals underflows the error weights. */
+#define GW_REL_TOL_MIN 2.220446049250313e-15 /* 10 * DBL_EPSILON */
+#define GW_REL_TOL_MAX 1.0
+#define GW_ABS_TOL_MIN 1e-30
+#define GW_ABS_TOL_MAX 1.0
+/* Is `value` valid for v?  Every value must be finite; a setting must lie in its range
+ * (solver: a known gw_solver; rel_tol, abs_tol as above; max_step > 0); a Boolean is 0 or
+ * 1.  GW_OK, or GW_ERROR with the reason logged (messages start with fn).  The front end
+ * calls it before gw_value_set; restoring a saved state applies the same checks. */
+GW_API gw_status gw_value_check(gw_instance *I, const char *fn, const gw_variable *v,
+                                double value);
 /* Store a value (parameter, start value, input, setting) without any check: the front end
- * decides what may be set when (the FMI layer: gw_fmi2_variables.c).  A tunable parameter
- * or an input invalidates the caches; a parameter after initialisation recomputes the
- * state nominals. */
+ * decides what may be set when (the FMI layer: gw_fmi2_variables.c) and checks it with
+ * gw_value_check.  A tunable parameter or an input invalidates the caches; a parameter
+ * after initialisation recomputes the state nominals.  Setting rel_tol or abs_tol marks it
+ * explicit: a tolerance from gw_setup_experiment no longer replaces it. */
 GW_API void gw_value_set(gw_instance *I, const gw_variable *v, double value);
 /* t, x, u or p changed behind the core's back (Model Exchange): cached values are stale. */
 GW_API void gw_point_changed(gw_instance *I);
 
 /* ---- simulation (gw_simulation.c) --------------------------------------------------------- */
 
-/* Start time, optional stop time, optional tolerance (overrides rel_tol at initialisation).
- * GW_ERROR for a non-finite start, a bad tolerance or stop time (reason logged). */
+/* Start time, optional stop time, optional tolerance.  The tolerance precedence (applied at
+ * initialisation, whatever the order of the calls; docs/fmi.md "Tolerances"):
+ *   rel_tol set explicitly (gw_value_set)        -> that rel_tol
+ *   else a tolerance defined here                -> rel_tol = tolerance, and abs_tol (unless
+ *        set explicitly) scaled alike: default_abs_tol * tolerance / default_rel_tol, so
+ *        the declared default tolerance (= default_rel_tol) gives the scene's accuracy
+ *   else                                         -> the scene's rel_tol and abs_tol.
+ * GW_ERROR for a non-finite start, a tolerance outside rel_tol's range or a bad stop time
+ * (reason logged). */
 GW_API gw_status gw_setup_experiment(gw_instance *I, const char *fn, int tolerance_defined,
                                      double tolerance, double start_time, int stop_time_defined,
                                      double stop_time);
 /* End of the set-up phase: checks parameters, start values, inputs, settings and the model's
  * validity checks; x = init(s, p), nominals, outputs, derivatives, event indicators.  Leaves
- * the set-up phase as soon as the state is consistent (I->in_setup = 0).  GW_ERROR with every
- * reason logged; GW_DISCARD for non-finite outputs when I->nonfinite_status says so. */
+ * the set-up phase only if everything is consistent (I->in_setup = 0); otherwise GW_ERROR
+ * with every reason logged (also for non-finite values: nothing to retry here) and the
+ * instance still in its set-up phase. */
 GW_API gw_status gw_initialize(gw_instance *I, const char *fn);
 /* Integrate from I->t to t_end (> I->t) with the selected solver, locating events.
  * GW_OK: I->t == t_end.  GW_DISCARD: a terminating event; I->t is the event time,
@@ -167,6 +193,8 @@ GW_API int gw_eval_evt(gw_instance *I, double t, const double *x, double *e_out)
 GW_API int gw_eval_chk(gw_instance *I, double *c_out);
 GW_API int gw_eval_nom(gw_instance *I, double *nom_out);
 GW_API int gw_eval_dir(gw_instance *I, double t, const double *x, double *D);
+/* D0 = dini(t, s, u, p) (gw_model.h), n_init_rows x (ns+np+nu); -1 if the model has none */
+GW_API int gw_eval_dini(gw_instance *I, double t, double *D0);
 /* the right-hand side; counts evaluations in I->n_rhs */
 GW_API int gw_rhs(gw_instance *I, double t, const double *x, double *xdot);
 

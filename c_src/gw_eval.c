@@ -110,6 +110,20 @@ GW_API int gw_eval_dir(gw_instance *I, double t, const double *x, double *D) {
     return gw_fun_call_txup(&I->f_dir, t, x, D);
 }
 
+GW_API int gw_eval_dini(gw_instance *I, double t, double *D0) {
+    double tt = t;
+    int r;
+    if (!I->f_dini.eval) return -1;
+    I->f_dini.arg[0] = &tt;
+    I->f_dini.arg[1] = I->s;
+    I->f_dini.arg[2] = I->u;
+    I->f_dini.arg[3] = I->p;
+    I->f_dini.res[0] = D0;
+    r = gw_fun_call(&I->f_dini);
+    I->f_dini.arg[0] = NULL;
+    return r;
+}
+
 GW_INTERNAL int gw_eval_jac(gw_instance *I, double t, const double *x, double *J) {
     if (!I->f_jac.eval) return -1;
     return gw_fun_call_txup(&I->f_jac, t, x, J);

@@ -8,6 +8,15 @@
  *   ME: Instantiated -> InitializationMode -> EventMode <-> ContinuousTimeMode -> Terminated
  * A function of the other interface fails with fmi2Error and a logged reason.
  *
+ * After the simulation terminated (a terminating event: fmi2DoStep's fmi2Discard, Model
+ * Exchange's terminateSimulation) the instance stays terminated and truthful; the calls
+ * importers habitually make then are answered without an error (docs/fmi.md "After the
+ * simulation terminated"): another fmi2DoStep is fmi2Discard, fmi2EnterContinuousTimeMode is
+ * accepted (fmi2CompletedIntegratorStep keeps saying terminateSimulation), a second
+ * fmi2Terminate is fmi2Warning.  Every status other than fmi2OK comes with one logged reason
+ * (always, whatever the debug-logging settings); a run of identical messages is logged once
+ * and counted ("repeated N more times").
+ *
  * Files: gw_fmi2_common.c (life cycle), gw_fmi2_variables.c (fmi2Get/Set*),
  * gw_fmi2_cs.c (Co-Simulation), gw_fmi2_me.c (Model Exchange), gw_fmi2_dirder.c
  * (fmi2GetDirectionalDerivative), gw_fmi2_state.c (FMU states).
@@ -38,7 +47,13 @@ enum { GW_ST_EVENT_MODE = 1 << 7, GW_ST_CONT_TIME_MODE = 1 << 8 };
      GW_ST_TERMINATED | GW_ST_ERROR | GW_ST_ME)
 /* the core's set-up phase (I->in_setup) */
 #define GW_ST_BEFORE_INIT_END (GW_ST_INSTANTIATED | GW_ST_INIT_MODE)
-#define GW_MASK_Set (GW_ST_INSTANTIATED | GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE | GW_ST_ME)
+/* fmi2SetReal (FMI 2.0.4 tables of sections 3.2.3 and 4.2.4); which variable may be set
+ * when is gw_fmi2_settable's rule.  StepFailed: inputs after a terminating event (stored,
+ * harmless: the instance never steps again) */
+#define GW_MASK_Set                                                                             \
+    (GW_ST_INSTANTIATED | GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED | GW_ST_ME)
+/* fmi2SetInteger, fmi2SetBoolean, fmi2SetString: not in Continuous-Time Mode */
+#define GW_MASK_SetDiscrete (GW_MASK_Set & ~GW_ST_CONT_TIME_MODE)
 #define GW_MASK_NotSupported GW_ST_ANY
 
 /* ---- the component ---------------------------------------------------------------------- */
@@ -47,6 +62,13 @@ typedef struct {
     int state;                     /* one GW_ST_* bit; set only by gw_fmi2_set_state */
     int fmu_type;                  /* fmi2ModelExchange or fmi2CoSimulation */
     fmi2Status last_dostep_status; /* of the last fmi2DoStep */
+    int initialized; /* fmi2ExitInitializationMode succeeded since instantiation or reset */
+    /* the last message with a status other than fmi2OK (hash) and how often it repeated
+     * since: a run of identical reasons is logged once, then counted */
+    unsigned long long log_last_hash;
+    unsigned long log_repeats;
+    fmi2Status log_last_status;
+    const char *log_last_category;
     /* the importer's callbacks (the FMI 2.0.0 headers declare the fields of
      * fmi2CallbackFunctions const, which forbids copying the struct) */
     fmi2CallbackLogger logger;
@@ -64,8 +86,23 @@ GW_INTERNAL void gw_fmi2_set_state(gw_fmu *F, int state);
 GW_INTERNAL int gw_fmi2_begin(gw_fmu *F, const char *fn, int mask);
 /* 1 if F was instantiated for `type`; else logs, enters Error, returns 0 */
 GW_INTERNAL int gw_fmi2_interface(gw_fmu *F, const char *fn, int type);
-/* the function's final status; fmi2Error / fmi2Fatal enter the Error / Fatal state */
+/* the function's final status; fmi2Error / fmi2Fatal enter the Error / Fatal state; the
+ * answer to non-finite values returns to fmi2Error (gw_fmi2_allow_discard) */
 GW_INTERNAL fmi2Status gw_fmi2_end(gw_fmu *F, fmi2Status status);
+/* Model Exchange functions that FMI 2.0.4 (section 2.1.3) lets answer fmi2Discard: the core
+ * answers non-finite values with GW_DISCARD in Event and Continuous-Time Mode (the importer
+ * may retry with a smaller step), with GW_ERROR otherwise (Initialization Mode: bad input) */
+GW_INTERNAL void gw_fmi2_allow_discard(gw_fmu *F);
+/* log "(the previous message was repeated N more times)" if a run of repeats is pending */
+GW_INTERNAL void gw_fmi2_flush_log(gw_fmu *F);
+/* name of the terminating event that stopped the simulation, or "a terminating event" */
+GW_INTERNAL const char *gw_fmi2_stop_reason(const gw_instance *I);
+/* copy n values to the caller's array only if every one is finite; else leaves dst untouched,
+ * logs which value is not (names[i] or what) and returns the answer to non-finite values
+ * (a gw_status, for GW_TRY) */
+GW_INTERNAL gw_status gw_fmi2_copy_finite(gw_fmu *F, const char *fn, double *dst,
+                                          const double *src, size_t n, const char *what,
+                                          const char *const *names);
 
 static inline int gw_fmi2_is_me(const gw_fmu *F) { return F->fmu_type == fmi2ModelExchange; }
 

@@ -7,6 +7,7 @@
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
 #else
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -18,7 +19,11 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #define GW_MASK_SetupExperiment GW_ST_INSTANTIATED
 #define GW_MASK_EnterInitializationMode GW_ST_INSTANTIATED
 #define GW_MASK_ExitInitializationMode GW_ST_INIT_MODE
-#define GW_MASK_Terminate (GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED | GW_ST_ME)
+/* FMI 2.0.4 allows fmi2Terminate in StepComplete, StepFailed (CS), Event and Continuous-Time
+ * Mode (ME); after an initialisation it is also answered in Terminated (a repeat: ignored)
+ * and Error (the last consistent state is kept): see fmi2Terminate */
+#define GW_MASK_Terminate                                                                       \
+    (GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED | GW_ST_ME | GW_ST_TERMINATED | GW_ST_ERROR)
 
 /* ---- statuses, states, logging ---------------------------------------------------------- */
 
@@ -81,11 +86,41 @@ GW_INTERNAL int gw_fmi2_interface(gw_fmu *F, const char *fn, int type) {
 }
 
 GW_INTERNAL fmi2Status gw_fmi2_end(gw_fmu *F, fmi2Status status) {
+    F->I->nonfinite_status = GW_ERROR;
     if (status == fmi2Fatal)
         gw_fmi2_set_state(F, GW_ST_FATAL);
     else if (status == fmi2Error)
         gw_fmi2_set_state(F, GW_ST_ERROR);
     return status;
+}
+
+GW_INTERNAL void gw_fmi2_allow_discard(gw_fmu *F) {
+    F->I->nonfinite_status = (gw_fmi2_is_me(F) && (F->state & GW_ST_ME)) ? GW_DISCARD : GW_ERROR;
+}
+
+GW_INTERNAL const char *gw_fmi2_stop_reason(const gw_instance *I) {
+    const gw_model *m = I->m;
+    int i;
+    for (i = 0; i < m->ne; i++)
+        if (I->flags[i] && !(m->event_actions && m->event_actions[i] == GW_EVENT_WARN) &&
+            m->event_names && m->event_names[i])
+            return m->event_names[i];
+    return "a terminating event";
+}
+
+GW_INTERNAL gw_status gw_fmi2_copy_finite(gw_fmu *F, const char *fn, double *dst,
+                                          const double *src, size_t n, const char *what,
+                                          const char *const *names) {
+    gw_instance *I = F->I;
+    size_t i;
+    for (i = 0; i < n; i++)
+        if (!isfinite(src[i])) {
+            GW_LOG_NONFINITE(I, "%s: %s %s is not finite (%g) at t=%.17g; nothing returned", fn,
+                             what, names && names[i] ? names[i] : "", src[i], I->t);
+            return I->nonfinite_status;
+        }
+    if (n > 0) memcpy(dst, src, n * sizeof(double));
+    return GW_OK;
 }
 
 /* Escape '%': importers may treat the message as a printf format. */
@@ -98,13 +133,53 @@ static void gw_fmi2_escape(char *buf, size_t size, const char *raw) {
     buf[j] = '\0';
 }
 
-/* the core's logger: env is the gw_fmu */
+/* FNV-1a, 64 bit, of a message and its status */
+static unsigned long long gw_fmi2_hash(const char *text, int status) {
+    unsigned long long h = 14695981039346656037ULL ^ (unsigned long long)(unsigned)status;
+    for (; *text; text++) {
+        h ^= (unsigned char)*text;
+        h *= 1099511628211ULL;
+    }
+    return h;
+}
+
+GW_INTERNAL void gw_fmi2_flush_log(gw_fmu *F) {
+    char buf[128];
+    if (F->log_repeats == 0 || !F->logger) return;
+    snprintf(buf, sizeof(buf), "(the previous message was repeated %lu more time%s)",
+             F->log_repeats, F->log_repeats == 1 ? "" : "s");
+    F->log_repeats = 0;
+    F->logger(F->env, F->I->name ? F->I->name : "", F->log_last_status, F->log_last_category,
+              buf);
+}
+
+/* the core's logger: env is the gw_fmu.  A message with a status other than fmi2OK that
+ * repeats the previous such message is counted, not passed on (an importer that ignores a
+ * status and keeps calling gets one line, not one per call). */
 static void gw_fmi2_logger(void *env, const char *name, gw_status status, const char *category,
                            const char *message) {
-    const gw_fmu *F = (const gw_fmu *)env;
+    gw_fmu *F = (gw_fmu *)env;
     char buf[2048];
+    if (status != GW_OK) {
+        unsigned long long h = gw_fmi2_hash(message, (int)status);
+        if (F->log_last_category && h == F->log_last_hash) {
+            F->log_repeats++;
+            return;
+        }
+        gw_fmi2_flush_log(F);
+        F->log_last_hash = h;
+        F->log_last_status = gw_fmi2_status(status);
+        F->log_last_category = category;
+    }
     gw_fmi2_escape(buf, sizeof(buf), message);
     F->logger(F->env, name, gw_fmi2_status(status), category, buf);
+}
+
+/* a new run: the next message is logged whatever it repeats */
+static void gw_fmi2_forget_log(gw_fmu *F) {
+    gw_fmi2_flush_log(F);
+    F->log_last_category = NULL;
+    F->log_last_hash = 0;
 }
 
 /* an error before there is an instance to log through */
@@ -200,9 +275,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     F->fmu_type = (int)fmuType;
     F->last_dostep_status = fmi2OK;
-    /* non-finite values: ME answers fmi2Discard (the importer may retry with a smaller step,
-     * FMI 2.0 section 2.1.3), Co-Simulation fmi2Error */
-    F->I->nonfinite_status = fmuType == fmi2ModelExchange ? GW_DISCARD : GW_ERROR;
+    /* non-finite values: fmi2Error, but fmi2Discard where a Model Exchange function may say
+     * so (gw_fmi2_allow_discard) */
+    F->I->nonfinite_status = GW_ERROR;
     gw_fmi2_set_state(F, GW_ST_INSTANTIATED);
     return (fmi2Component)F;
 }
@@ -211,6 +286,7 @@ void fmi2FreeInstance(fmi2Component c) {
     gw_fmu *F = (gw_fmu *)c;
     fmi2CallbackFreeMemory free_memory;
     if (!F) return;
+    gw_fmi2_flush_log(F);
     gw_instance_free(F->I);
     free_memory = F->free_memory;
     free_memory(F);
@@ -236,27 +312,54 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     gw_status st;
     GW_BEGIN("fmi2ExitInitializationMode", GW_MASK_ExitInitializationMode);
+    /* CS and ME alike: every check first; a refusal is fmi2Error with its reasons and the
+     * instance not half-initialised (fmi2Discard is not an answer of this function) */
     st = gw_initialize(I, "fmi2ExitInitializationMode");
-    /* once the state is consistent the instance has left Initialization Mode;
-     * ME continues in Event Mode */
-    if (!I->in_setup)
-        gw_fmi2_set_state(F, gw_fmi2_is_me(F) ? GW_ST_EVENT_MODE : GW_ST_STEP_COMPLETE);
+    if (st > GW_WARNING) {
+        status = fmi2Error;
+        goto END;
+    }
+    /* ME continues in Event Mode */
+    gw_fmi2_set_state(F, gw_fmi2_is_me(F) ? GW_ST_EVENT_MODE : GW_ST_STEP_COMPLETE);
+    F->initialized = 1;
+    F->last_dostep_status = fmi2OK;
     status = gw_fmi2_status(st);
-    if (status <= fmi2Warning) F->last_dostep_status = fmi2OK;
     GW_END_FUNCTION();
 }
 
+/* Terminated, also as the answer to two habits of importers (FMI 2.0.4 section 2.1.6 lists
+ * neither): a second fmi2Terminate is ignored, and one after an fmi2Error keeps the last
+ * consistent state (every failed call restores it) readable.  Both say so (fmi2Warning). */
 fmi2Status fmi2Terminate(fmi2Component c) {
-    GW_BEGIN("fmi2Terminate", GW_MASK_Terminate);
+    static const char fn[] = "fmi2Terminate";
+    GW_BEGIN(fn, GW_MASK_Terminate);
+    gw_fmi2_flush_log(F);
+    if (F->state == GW_ST_TERMINATED) {
+        gw_log(I, GW_WARNING, GW_LOG_WARNING, "%s: already terminated; the call is ignored", fn);
+        status = fmi2Warning;
+        goto END;
+    }
+    if (F->state == GW_ST_ERROR) {
+        if (!F->initialized) {
+            GW_FAIL("%s: the instance failed before its initialisation ended; there is no "
+                    "simulation to terminate (call fmi2Reset or fmi2FreeInstance)", fn);
+        }
+        gw_log(I, GW_WARNING, GW_LOG_WARNING,
+               "%s: called after an fmi2Error (FMI 2.0.4 section 2.1.6 does not allow it): "
+               "terminated at t=%.17g with the last consistent state", fn, I->t);
+        status = fmi2Warning;
+    }
     gw_fmi2_set_state(F, GW_ST_TERMINATED);
     GW_END_FUNCTION();
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
     GW_BEGIN("fmi2Reset", GW_MASK_Reset);
+    gw_fmi2_forget_log(F);
     gw_instance_reset(I);
     gw_fmi2_set_state(F, GW_ST_INSTANTIATED);
     F->last_dostep_status = fmi2OK;
+    F->initialized = 0;
     GW_END_FUNCTION();
 }
 

@@ -62,15 +62,27 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     if (!gw_fmi2_interface(F, "fmi2DoStep", fmi2CoSimulation)) return fmi2Error;
     I = F->I;
     if (I->terminated && (F->state == GW_ST_STEP_FAILED || F->state == GW_ST_TERMINATED)) {
-        GW_LOG_ERR(I, "fmi2DoStep: simulation terminated at t=%.17g; call fmi2Reset to restart",
-                   I->last_successful_time);
-        gw_fmi2_set_state(F, GW_ST_ERROR);
-        return fmi2Error;
+        /* After a terminating event: masters such as ecospy ignore fmi2Discard and keep
+         * stepping to their stop time.  Strictly a call outside StepComplete (FMI 2.0.4
+         * section 4.2.4); answered truthfully instead: no part of the step can be computed
+         * (fmi2Discard, "only a subinterval", here empty), the instance stays where it is,
+         * fmi2LastSuccessfulTime and fmi2Terminated keep saying so.  The message is the same
+         * for every such call, so a run of them is logged once and counted. */
+        gw_log(I, GW_DISCARD, GW_LOG_DISCARD,
+               "fmi2DoStep: the simulation terminated at t=%.17g (%s); no further step is "
+               "computed (fmi2Discard until fmi2Reset)", I->last_successful_time,
+               gw_fmi2_stop_reason(I));
+        F->last_dostep_status = fmi2Discard;
+        return fmi2Discard;
     }
     if (!gw_fmi2_begin(F, "fmi2DoStep", GW_MASK_DoStep)) return fmi2Error;
     if (!isfinite(h) || !(h > 0.0))
         GW_FAIL("fmi2DoStep: communication step size %g must be finite and > 0", h);
     if (!isfinite(tc)) GW_FAIL("fmi2DoStep: currentCommunicationPoint is not finite");
+    if (tc + h == tc)
+        GW_FAIL("fmi2DoStep: communication step size %g is below the resolution of "
+                "currentCommunicationPoint %.17g (t + h == t): the step would not advance time",
+                h, tc);
     tol = 1e-9 * (fabs(tc) > 1.0 ? fabs(tc) : 1.0);
     if (fabs(tc - I->t) > tol)
         GW_FAIL("fmi2DoStep: currentCommunicationPoint %.17g does not match the FMU time %.17g",
@@ -87,7 +99,13 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     I->t = tc; /* the communication point, not the FMU's rounding of it */
 
     r = gw_advance(I, "fmi2DoStep", t_end);
-    if (r == GW_DISCARD) gw_fmi2_set_state(F, GW_ST_STEP_FAILED); /* a terminating event */
+    if (r == GW_DISCARD) { /* a terminating event; its reason is logged whatever the settings */
+        gw_fmi2_set_state(F, GW_ST_STEP_FAILED);
+        gw_log(I, GW_DISCARD, GW_LOG_DISCARD,
+               "fmi2DoStep: %s at t=%.17g: the simulation terminated inside the step to "
+               "t=%.17g (fmi2Terminated = true, fmi2LastSuccessfulTime = %.17g)",
+               gw_fmi2_stop_reason(I), I->t, t_end, I->t);
+    }
     status = gw_fmi2_status(r);
     if (gw_log_enabled(I, GW_LOG_SOLVER))
         gw_log(I, GW_OK, GW_LOG_SOLVER,
@@ -107,14 +125,22 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
 
 /* ---- status ------------------------------------------------------------------------------- */
 
+/* A status kind this function cannot report: fmi2Discard (FMI 2.0.4 section 4.2.3), logged. */
+static fmi2Status gw_fmi2_no_status(gw_instance *I, const char *fn, int kind) {
+    static const char *const kinds[] = {"fmi2DoStepStatus", "fmi2PendingStatus",
+                                        "fmi2LastSuccessfulTime", "fmi2Terminated"};
+    gw_log(I, GW_DISCARD, GW_LOG_DISCARD, "%s: status kind %s is not provided by this function",
+           fn, kind >= 0 && kind < 4 ? kinds[kind] : "(unknown)");
+    return fmi2Discard;
+}
+
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
     GW_BEGIN_CS("fmi2GetStatus", GW_MASK_Status);
     if (!value) GW_FAIL("fmi2GetStatus: value is NULL");
-    if (s == fmi2DoStepStatus) {
+    if (s == fmi2DoStepStatus)
         *value = F->last_dostep_status;
-    } else {
-        status = fmi2Discard; /* status kind not provided */
-    }
+    else
+        status = gw_fmi2_no_status(I, "fmi2GetStatus", s);
     GW_END_FUNCTION();
 }
 
@@ -124,15 +150,14 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
     if (s == fmi2LastSuccessfulTime)
         *value = I->last_successful_time;
     else
-        status = fmi2Discard;
+        status = gw_fmi2_no_status(I, "fmi2GetRealStatus", s);
     GW_END_FUNCTION();
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
     GW_BEGIN_CS("fmi2GetIntegerStatus", GW_MASK_Status);
-    (void)s;
     (void)value;
-    status = fmi2Discard; /* no integer status kinds */
+    status = gw_fmi2_no_status(I, "fmi2GetIntegerStatus", s);
     GW_END_FUNCTION();
 }
 
@@ -142,15 +167,14 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
     if (s == fmi2Terminated)
         *value = I->terminated ? fmi2True : fmi2False;
     else
-        status = fmi2Discard;
+        status = gw_fmi2_no_status(I, "fmi2GetBooleanStatus", s);
     GW_END_FUNCTION();
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
     GW_BEGIN_CS("fmi2GetStringStatus", GW_MASK_Status);
-    (void)s;
     (void)value;
-    status = fmi2Discard; /* fmi2PendingStatus: never pending */
+    status = gw_fmi2_no_status(I, "fmi2GetStringStatus", s); /* never pending */
     GW_END_FUNCTION();
 }
 

@@ -1,8 +1,20 @@
 /*
  * gw_fmi2_dirder.c -- fmi2GetDirectionalDerivative (Co-Simulation and Model Exchange): exact
- * partial derivatives of state derivatives and outputs with respect to continuous states and
- * Real inputs, from the model's generated `dir` function, D = d [xdot; y] / d [x; u]
- * (column-major, cached at the current point).
+ * partial derivatives from the model's generated functions, in every state where FMI 2.0.4
+ * allows the call (tables of sections 3.2.3 and 4.2.4).  The knowns and unknowns depend on
+ * the mode (section 2.1.9 and the `dependencies` of section 2.2.8):
+ *
+ *   Initialization Mode   unknowns: the Real InitialUnknowns (calculated outputs, states and
+ *                         state derivatives); knowns: variables with initial = "exact"
+ *                         (parameters, start values, settings) and inputs.
+ *                         D0 = dini(t, s, u, p) = d v / d [s; p; u] at x = init(s, p).
+ *   after it              unknowns: outputs, state derivatives (and states, the identity);
+ *                         knowns: continuous states and inputs.
+ *                         D = dir(t, x, u, p) = d [xdot; y] / d [x; u] (cached at the point).
+ *
+ * A known or unknown outside its mode's set is refused with fmi2Error and the reason.  The
+ * result is checked before it is written: a product that overflows (a huge seed) is refused
+ * too, and the caller's array never receives a non-finite value.
  */
 #ifndef GW_UNITY_BUILD
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
@@ -16,37 +28,125 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
     (GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED | GW_ST_TERMINATED |             \
      GW_ST_ERROR | GW_ST_ME)
 
-/* Row of D for an unknown: 0..nx-1 xdot, nx.. y; or *xrow >= 0 for the identity row of
- * a continuous state.  0 if v is no output, state or derivative. */
-static int gw_dd_unknown(const gw_model *m, const gw_variable *v, int *row, int *xrow) {
-    *row = -1;
-    *xrow = -1;
+/* Where a variable sits in the matrix of the current mode: a row (unknown) or a column
+ * (known), or the identity of a known with itself.  -1: not part of this mode's set. */
+typedef struct {
+    int row;   /* row of D or D0 */
+    int ident; /* unknown that is itself a known: its column (dv/dv = 1) */
+} gw_dd_unknown_at;
+
+/* Unknown in Initialization Mode: a row of D0, or a start value / input (a known: identity) */
+static int gw_dd_unknown_init(const gw_model *m, const gw_variable *v, gw_dd_unknown_at *at) {
+    int k = (int)(v - m->vars);
+    at->row = at->ident = -1;
+    if (v->type != GW_REAL) return 0;
+    if (m->init_rows[k] >= 0) {
+        at->row = m->init_rows[k];
+        return 1;
+    }
+    if (v->kind == GW_VAR_START) at->ident = v->index;
+    else if (v->kind == GW_VAR_PARAM) at->ident = m->ns + v->index;
+    else if (v->kind == GW_VAR_INPUT) at->ident = m->ns + m->np + v->index;
+    return at->ident >= 0;
+}
+
+/* Known in Initialization Mode: a column of D0; settings are knowns nothing depends on
+ * (*zero = 1). */
+static int gw_dd_known_init(const gw_model *m, const gw_variable *v, int *zero) {
+    *zero = 0;
+    if (v->type != GW_REAL) return -1;
+    switch (v->kind) {
+    case GW_VAR_START: return v->index;
+    case GW_VAR_PARAM: return m->ns + v->index;
+    case GW_VAR_INPUT: return m->ns + m->np + v->index;
+    case GW_VAR_SETTING: *zero = 1; return 0;
+    default: return -1;
+    }
+}
+
+/* Unknown after initialisation: a row of D (0..nx-1 xdot, nx.. y), or a state (identity) */
+static int gw_dd_unknown_sim(const gw_model *m, const gw_variable *v, gw_dd_unknown_at *at) {
+    at->row = at->ident = -1;
     if (v->type != GW_REAL) return 0;
     switch (v->kind) {
-    case GW_VAR_OUTPUT: *row = m->nx + v->index; return 1;
-    case GW_VAR_DERIVATIVE: *row = v->index; return 1;
-    case GW_VAR_STATE: *xrow = v->state_index >= 0 ? v->state_index : v->index; return 1;
+    case GW_VAR_OUTPUT: at->row = m->nx + v->index; return 1;
+    case GW_VAR_DERIVATIVE: at->row = v->index; return 1;
+    case GW_VAR_STATE: at->ident = v->state_index >= 0 ? v->state_index : v->index; return 1;
     case GW_VAR_START:
-        if (v->state_index >= 0) {
-            *xrow = v->state_index;
-            return 1;
-        }
-        if (v->out_index >= 0) {
-            *row = m->nx + v->out_index;
-            return 1;
-        }
-        return 0;
+        if (v->state_index >= 0) at->ident = v->state_index;
+        else if (v->out_index >= 0) at->row = m->nx + v->out_index;
+        return at->row >= 0 || at->ident >= 0;
     default: return 0;
     }
 }
 
-/* Column of D for a known: 0..nx-1 x, nx.. u.  -1 if v is no state or input. */
-static int gw_dd_known(const gw_model *m, const gw_variable *v) {
+/* Known after initialisation: a column of D (0..nx-1 x, nx.. u), or -1 */
+static int gw_dd_known_sim(const gw_model *m, const gw_variable *v) {
     if (v->type != GW_REAL) return -1;
     if (v->kind == GW_VAR_INPUT) return m->nx + v->index;
     if (v->kind == GW_VAR_STATE) return v->state_index >= 0 ? v->state_index : v->index;
     if (v->kind == GW_VAR_START && v->state_index >= 0) return v->state_index;
     return -1;
+}
+
+/* dvUnknown[i] = sum_j dv_i/dknown_j dvKnown[j] for one unknown (0 if not finite-able) */
+static double gw_dd_sum(const gw_instance *I, int init_mode, const gw_dd_unknown_at *at,
+                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
+                        const fmi2Real dvKnown[]) {
+    const gw_model *m = I->m;
+    size_t j;
+    double sum = 0.0;
+    for (j = 0; j < nKnown; j++) {
+        const gw_variable *v = gw_variable_find(m, vKnown_ref[j]);
+        int zero = 0, col;
+        col = init_mode ? gw_dd_known_init(m, v, &zero) : gw_dd_known_sim(m, v);
+        if (zero) continue;
+        if (at->ident >= 0)
+            sum += (col == at->ident) ? dvKnown[j] : 0.0;
+        else if (init_mode)
+            sum += I->dini_D[(size_t)at->row + (size_t)col * (size_t)m->n_init_rows] * dvKnown[j];
+        else
+            sum += I->dir_D[(size_t)at->row + (size_t)col * (size_t)(m->nx + m->ny)] * dvKnown[j];
+    }
+    return sum;
+}
+
+/* the matrix of the current mode at the current point; 0 or reason logged */
+static int gw_dd_matrix(gw_instance *I, const char *fn, int init_mode) {
+    const gw_model *m = I->m;
+    int k, n, nrow;
+    const double *D;
+    if (init_mode) {
+        nrow = m->n_init_rows;
+        n = nrow * (m->ns + m->np + m->nu);
+        if (gw_eval_dini(I, I->t, I->dini_D) != 0) {
+            GW_LOG_ERR(I, "%s: evaluation of the initial partial derivatives failed", fn);
+            return -1;
+        }
+        D = I->dini_D;
+    } else {
+        nrow = m->nx + m->ny;
+        n = nrow * (m->nx + m->nu);
+        if (I->dir_valid) return 0;
+        if (I->in_setup && gw_eval_init(I, I->x) != 0) {
+            GW_LOG_ERR(I, "%s: evaluation of the initial state failed", fn);
+            return -1;
+        }
+        if (gw_eval_dir(I, I->t, I->x, I->dir_D) != 0) {
+            GW_LOG_ERR(I, "%s: evaluation of the Jacobian failed at t=%.17g", fn, I->t);
+            return -1;
+        }
+        D = I->dir_D;
+    }
+    for (k = 0; k < n; k++)
+        if (!isfinite(D[k])) {
+            GW_LOG_ERR(I, "%s: partial derivative (%d, %d) is not finite at t=%.17g%s", fn,
+                       k % nrow, k / nrow, I->t,
+                       init_mode ? " (check the parameters and start values)" : "");
+            return -1;
+        }
+    if (!init_mode) I->dir_valid = !I->in_setup;
+    return 0;
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
@@ -56,7 +156,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     static const char fn[] = "fmi2GetDirectionalDerivative";
     const gw_model *m;
     size_t i, j;
-    int nrow;
+    int init_mode;
     gw_fmu *F = (gw_fmu *)c;
     gw_instance *I;
     fmi2Status status = fmi2OK;
@@ -69,7 +169,9 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     if (!gw_fmi2_begin(F, fn, GW_MASK_GetDirectionalDerivative)) return fmi2Error;
     I = F->I;
     m = I->m;
-    nrow = m->nx + m->ny;
+    /* Initialization Mode has its own knowns (FMI 2.0.4 section 2.2.8) when the model
+     * generated their derivatives; a model without `dini` keeps the states as knowns there */
+    init_mode = F->state == GW_ST_INIT_MODE && I->f_dini.eval != NULL;
     if (nUnknown > 0 && (!vUnknown_ref || !dvUnknown))
         GW_FAIL("%s: NULL array for %lu unknowns", fn, (unsigned long)nUnknown);
     if (nKnown > 0 && (!vKnown_ref || !dvKnown))
@@ -77,53 +179,51 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     /* check every reference before computing anything */
     for (i = 0; i < nUnknown; i++) {
         const gw_variable *v = gw_variable_find(m, vUnknown_ref[i]);
-        int row, xrow;
+        gw_dd_unknown_at at;
         if (!v) GW_FAIL("%s: unknown value reference %u (vUnknown_ref[%lu])", fn, vUnknown_ref[i],
-                     (unsigned long)i);
-        if (!gw_dd_unknown(m, v, &row, &xrow))
-            GW_FAIL("%s: unknown %s (vr=%u) is not a Real output, continuous state or state "
-                 "derivative", fn, v->name, v->vr);
+                        (unsigned long)i);
+        if (init_mode ? !gw_dd_unknown_init(m, v, &at) : !gw_dd_unknown_sim(m, v, &at))
+            GW_FAIL("%s: %s (vr=%u) is not an unknown %s", fn, v->name, v->vr,
+                    init_mode ? "of Initialization Mode (a Real InitialUnknown, FMI 2.0.4 "
+                                "section 2.2.8)"
+                              : "(a Real output, continuous state or state derivative)");
     }
     for (j = 0; j < nKnown; j++) {
         const gw_variable *v = gw_variable_find(m, vKnown_ref[j]);
+        int zero;
         if (!v) GW_FAIL("%s: unknown value reference %u (vKnown_ref[%lu])", fn, vKnown_ref[j],
-                     (unsigned long)j);
-        if (gw_dd_known(m, v) < 0)
-            GW_FAIL("%s: known %s (vr=%u) is not a continuous state or a Real input", fn, v->name,
-                 v->vr);
+                        (unsigned long)j);
+        if ((init_mode ? gw_dd_known_init(m, v, &zero) : gw_dd_known_sim(m, v)) < 0)
+            GW_FAIL("%s: known %s (vr=%u) is not %s", fn, v->name, v->vr,
+                    init_mode ? "a known of Initialization Mode (a Real parameter, start value "
+                                "or input)"
+                              : "a continuous state or a Real input (parameters are knowns "
+                                "only in Initialization Mode, FMI 2.0.4 section 2.2.8)");
         if (!isfinite(dvKnown[j]))
             GW_FAIL("%s: seed dvKnown[%lu] for %s is not finite", fn, (unsigned long)j, v->name);
     }
-    /* D at the current point (before initialisation ends: at x = init(s, p)) */
-    if (I->in_setup || !I->dir_valid) {
-        int k, n = nrow * (m->nx + m->nu);
-        if (I->in_setup && gw_eval_init(I, I->x) != 0)
-            GW_FAIL("%s: evaluation of the initial state failed", fn);
-        I->dir_valid = 0;
-        if (gw_eval_dir(I, I->t, I->x, I->dir_D) != 0)
-            GW_FAIL("%s: evaluation of the Jacobian failed at t=%.17g", fn, I->t);
-        for (k = 0; k < n; k++)
-            if (!isfinite(I->dir_D[k])) {
-                GW_LOG_NONFINITE(I, "%s: Jacobian entry (%d, %d) is not finite at t=%.17g", fn,
-                              k % nrow, k / nrow, I->t);
-                status = gw_fmi2_status(I->nonfinite_status);
-                goto END;
-            }
-        I->dir_valid = !I->in_setup;
+    if (gw_dd_matrix(I, fn, init_mode) != 0) {
+        status = fmi2Error;
+        goto END;
+    }
+    /* every result checked before any is written (a huge seed may overflow) */
+    for (i = 0; i < nUnknown; i++) {
+        gw_dd_unknown_at at;
+        const gw_variable *v = gw_variable_find(m, vUnknown_ref[i]);
+        double d;
+        if (init_mode) gw_dd_unknown_init(m, v, &at);
+        else gw_dd_unknown_sim(m, v, &at);
+        d = gw_dd_sum(I, init_mode, &at, vKnown_ref, nKnown, dvKnown);
+        if (!isfinite(d))
+            GW_FAIL("%s: the directional derivative of %s is not finite (%g): the seed is too "
+                    "large; nothing returned", fn, v->name, d);
     }
     for (i = 0; i < nUnknown; i++) {
+        gw_dd_unknown_at at;
         const gw_variable *v = gw_variable_find(m, vUnknown_ref[i]);
-        double sum = 0.0;
-        int row, xrow;
-        gw_dd_unknown(m, v, &row, &xrow);
-        for (j = 0; j < nKnown; j++) {
-            int col = gw_dd_known(m, gw_variable_find(m, vKnown_ref[j]));
-            if (xrow >= 0)
-                sum += (col == xrow) ? dvKnown[j] : 0.0;
-            else
-                sum += I->dir_D[(size_t)row + (size_t)col * (size_t)nrow] * dvKnown[j];
-        }
-        dvUnknown[i] = sum;
+        if (init_mode) gw_dd_unknown_init(m, v, &at);
+        else gw_dd_unknown_sim(m, v, &at);
+        dvUnknown[i] = gw_dd_sum(I, init_mode, &at, vKnown_ref, nKnown, dvKnown);
     }
     GW_END_FUNCTION();
 }

@@ -64,12 +64,17 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
     GW_END_FUNCTION();
 }
 
+/* Also after terminateSimulation: OMSimulator and the FMU Compliance Checker call it once more
+ * before they look at the flag.  The transition is legal (FMI 2.0.4 section 3.2.3, Event Mode),
+ * so it is made; the instance stays terminated (fmi2CompletedIntegratorStep and
+ * fmi2NewDiscreteStates keep saying terminateSimulation) and fmi2Terminate works. */
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
     GW_BEGIN_ME("fmi2EnterContinuousTimeMode", GW_MASK_EnterContinuousTimeMode);
-    if (I->terminated)
-        GW_FAIL("fmi2EnterContinuousTimeMode: the simulation terminated at t=%.17g "
-                "(terminateSimulation = true); call fmi2Terminate or fmi2Reset",
-                I->last_successful_time);
+    if (I->terminated && gw_log_enabled(I, GW_LOG_EVENTS))
+        gw_log(I, GW_OK, GW_LOG_EVENTS,
+               "fmi2EnterContinuousTimeMode: the simulation terminated at t=%.17g (%s); "
+               "terminateSimulation stays true: call fmi2Terminate",
+               I->last_successful_time, gw_fmi2_stop_reason(I));
     gw_fmi2_set_state(F, GW_ST_CONT_TIME_MODE);
     GW_END_FUNCTION();
 }
@@ -80,9 +85,10 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!enterEventMode || !terminateSimulation)
         GW_FAIL("fmi2CompletedIntegratorStep: enterEventMode or terminateSimulation is NULL");
-    /* no step events: state events are located by the importer */
+    /* no step events: state events are located by the importer; a terminated simulation
+     * keeps asking to terminate */
     *enterEventMode = fmi2False;
-    *terminateSimulation = fmi2False;
+    *terminateSimulation = I->terminated ? fmi2True : fmi2False;
     GW_END_FUNCTION();
 }
 
@@ -122,9 +128,11 @@ fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n
 
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx) {
     GW_BEGIN_ME("fmi2GetDerivatives", GW_MASK_GetDerivatives);
+    gw_fmi2_allow_discard(F);
     GW_CHECK_NX("fmi2GetDerivatives", derivatives, nx);
     GW_TRY(gw_update_derivatives(I, "fmi2GetDerivatives"));
-    if (nx > 0) memcpy(derivatives, I->xdot, nx * sizeof(double));
+    GW_TRY(gw_fmi2_copy_finite(F, "fmi2GetDerivatives", derivatives, I->xdot, nx,
+                               "derivative of state", I->m->x_names));
     GW_END_FUNCTION();
 }
 
@@ -132,6 +140,7 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], s
     const gw_model *m;
     int i;
     GW_BEGIN_ME("fmi2GetEventIndicators", GW_MASK_GetEventIndicators);
+    gw_fmi2_allow_discard(F);
     m = I->m;
     if (ni != (size_t)m->ne)
         GW_FAIL("fmi2GetEventIndicators: ni = %lu, the model has %d event indicators",
@@ -161,7 +170,10 @@ fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
     GW_CHECK_NX("fmi2GetContinuousStates", x, nx);
     if (I->in_setup && gw_eval_init(I, I->x) != 0)
         GW_FAIL("fmi2GetContinuousStates: evaluation of the initial state failed");
-    if (nx > 0) memcpy(x, I->x, nx * sizeof(double));
+    /* the states are finite after initialisation (checked wherever they are set); the
+     * initial state from init(s, p) may not be: bad start values, fmi2Error */
+    GW_TRY(gw_fmi2_copy_finite(F, "fmi2GetContinuousStates", x, I->x, nx, "state",
+                               I->m->x_names));
     GW_END_FUNCTION();
 }
 

@@ -8,6 +8,11 @@
  * one interface's own modes is refused by an instance of the other interface (the modes both
  * share -- Instantiated, InitializationMode, Terminated, Error -- hold nothing
  * interface-specific, so the layout needs no interface field).
+ *
+ * front[1] packs the last fmi2DoStep status (bits 0-3, fmi2OK..fmi2Fatal) and whether the
+ * instance had been initialised (bit 4).  Both front ints are validated on
+ * fmi2DeSerializeFMUstate and fmi2SetFMUstate, after the core's checksum and range checks
+ * (gw_state.c): a corrupt state is refused with its reason, never applied.
  */
 #ifndef GW_UNITY_BUILD
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
@@ -32,15 +37,24 @@ static int gw_fmi2_valid_state(int s) {
            s == GW_ST_EVENT_MODE || s == GW_ST_CONT_TIME_MODE;
 }
 
-/* Apply a state whose header gw_state_check accepted; 0 (reason logged) if its FMI state
- * is invalid or of the other interface. */
-static int gw_fmi2_apply_state(gw_fmu *F, const char *fn, const unsigned char *buf) {
+#define GW_FRONT_STATUS_MASK 0xF
+#define GW_FRONT_INITIALIZED 0x10
+
+/* 1 if the core accepts the blob and its front ints are valid for this instance; else the
+ * reason is logged */
+static int gw_fmi2_check_state(gw_fmu *F, const char *fn, const unsigned char *buf, size_t size) {
     gw_instance *I = F->I;
-    int front[2], st;
+    int front[2], st, last;
+    if (!gw_state_check(I, fn, buf, size)) return 0;
     gw_state_front(I, buf, front);
     st = front[0];
+    last = front[1] & GW_FRONT_STATUS_MASK;
     if (!gw_fmi2_valid_state(st)) {
         GW_LOG_ERR(I, "%s: FMU state holds an invalid instance state %d", fn, st);
+        return 0;
+    }
+    if ((front[1] & ~(GW_FRONT_STATUS_MASK | GW_FRONT_INITIALIZED)) != 0 || last > fmi2Fatal) {
+        GW_LOG_ERR(I, "%s: FMU state holds an invalid status word %d", fn, front[1]);
         return 0;
     }
     if (((st & GW_ST_ME) && F->fmu_type != fmi2ModelExchange) ||
@@ -50,10 +64,18 @@ static int gw_fmi2_apply_state(gw_fmu *F, const char *fn, const unsigned char *b
                    gw_fmi2_is_me(F) ? "Model Exchange" : "Co-Simulation");
         return 0;
     }
-    gw_fmi2_set_state(F, st);
-    F->last_dostep_status = (fmi2Status)front[1];
-    gw_state_apply(I, buf);
     return 1;
+}
+
+/* Apply a state that gw_fmi2_check_state accepted. */
+static void gw_fmi2_apply_state(gw_fmu *F, const unsigned char *buf) {
+    gw_instance *I = F->I;
+    int front[2];
+    gw_state_front(I, buf, front);
+    gw_fmi2_set_state(F, front[0]);
+    F->last_dostep_status = (fmi2Status)(front[1] & GW_FRONT_STATUS_MASK);
+    F->initialized = (front[1] & GW_FRONT_INITIALIZED) != 0;
+    gw_state_apply(I, buf);
 }
 
 /* The blob *FMUstate if it has the right size, else a new one (the old one freed). */
@@ -83,7 +105,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
         goto END;
     }
     front[0] = F->state;
-    front[1] = (int)F->last_dostep_status;
+    front[1] = (int)F->last_dostep_status | (F->initialized ? GW_FRONT_INITIALIZED : 0);
     gw_state_write(I, front, b->data);
     *FMUstate = (fmi2FMUstate)b;
     GW_END_FUNCTION();
@@ -93,8 +115,9 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     const gw_blob *b = (const gw_blob *)FMUstate;
     GW_BEGIN("fmi2SetFMUstate", GW_MASK_FMUstate);
     if (!b) GW_FAIL("fmi2SetFMUstate: FMUstate is NULL");
-    if (!gw_state_check(I, "fmi2SetFMUstate", b->data, b->size) ||
-        !gw_fmi2_apply_state(F, "fmi2SetFMUstate", b->data))
+    if (gw_fmi2_check_state(F, "fmi2SetFMUstate", b->data, b->size))
+        gw_fmi2_apply_state(F, b->data);
+    else
         status = fmi2Error;
     GW_END_FUNCTION();
 }
@@ -134,8 +157,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     gw_blob *b;
     GW_BEGIN("fmi2DeSerializeFMUstate", GW_MASK_FMUstate);
     if (!FMUstate) GW_FAIL("fmi2DeSerializeFMUstate: FMUstate is NULL");
-    if (!gw_state_check(I, "fmi2DeSerializeFMUstate", (const unsigned char *)serializedState,
-                        size)) {
+    if (!gw_fmi2_check_state(F, "fmi2DeSerializeFMUstate",
+                             (const unsigned char *)serializedState, size)) {
         status = fmi2Error;
         goto END;
     }

@@ -104,17 +104,28 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
                        fmi2Real value[]) {
     size_t k;
     GW_BEGIN("fmi2GetReal", GW_MASK_Get);
+    gw_fmi2_allow_discard(F);
     GW_CHECK_ARRAYS("fmi2GetReal", vr, nvr, value);
     if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, "fmi2GetReal"));
     if (gw_fmi2_needs_derivatives(I, vr, nvr)) GW_TRY(gw_update_derivatives(I, "fmi2GetReal"));
+    /* every reference and value checked before anything is written: the caller's array
+     * never receives a non-finite value, nor a partial answer */
     for (k = 0; k < nvr; k++) {
         const gw_variable *v = gw_fmi2_lookup(I, "fmi2GetReal", vr[k], GW_REAL);
+        double d;
         if (!v) {
             status = fmi2Error;
             goto END;
         }
-        value[k] = gw_value_get(I, v);
+        d = gw_value_get(I, v);
+        if (!isfinite(d)) {
+            GW_LOG_NONFINITE(I, "fmi2GetReal: variable %s (vr=%u) is not finite (%g) at t=%.17g; "
+                             "nothing returned", v->name, v->vr, d, I->t);
+            status = gw_fmi2_status(I->nonfinite_status);
+            goto END;
+        }
     }
+    for (k = 0; k < nvr; k++) value[k] = gw_value_get(I, gw_variable_find(I->m, vr[k]));
     GW_END_FUNCTION();
 }
 
@@ -177,9 +188,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
             status = fmi2Error;
             goto END;
         }
-        if (!isfinite(value[k]))
-            GW_FAIL("fmi2SetReal: value %g for variable %s (vr=%u) is not finite", value[k],
-                    v->name, v->vr);
+        GW_TRY(gw_value_check(I, "fmi2SetReal", v, value[k]));
         gw_value_set(I, v, value[k]);
     }
     GW_END_FUNCTION();
@@ -188,7 +197,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[]) {
     size_t k;
-    GW_BEGIN("fmi2SetInteger", GW_MASK_Set);
+    GW_BEGIN("fmi2SetInteger", GW_MASK_SetDiscrete);
     GW_CHECK_ARRAYS("fmi2SetInteger", vr, nvr, value);
     for (k = 0; k < nvr; k++) {
         const gw_variable *v = gw_fmi2_lookup(I, "fmi2SetInteger", vr[k], GW_INTEGER);
@@ -196,6 +205,7 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
             status = fmi2Error;
             goto END;
         }
+        GW_TRY(gw_value_check(I, "fmi2SetInteger", v, (double)value[k]));
         gw_value_set(I, v, (double)value[k]);
     }
     GW_END_FUNCTION();
@@ -204,7 +214,7 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Boolean value[]) {
     size_t k;
-    GW_BEGIN("fmi2SetBoolean", GW_MASK_Set);
+    GW_BEGIN("fmi2SetBoolean", GW_MASK_SetDiscrete);
     GW_CHECK_ARRAYS("fmi2SetBoolean", vr, nvr, value);
     for (k = 0; k < nvr; k++) {
         const gw_variable *v = gw_fmi2_lookup(I, "fmi2SetBoolean", vr[k], GW_BOOLEAN);
@@ -219,7 +229,7 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          const fmi2String value[]) {
-    GW_BEGIN("fmi2SetString", GW_MASK_Set);
+    GW_BEGIN("fmi2SetString", GW_MASK_SetDiscrete);
     (void)value;
     if (nvr > 0)
         GW_FAIL("fmi2SetString: unknown value reference %u (the model has no String variables)",

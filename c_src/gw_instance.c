@@ -93,6 +93,11 @@ GW_API gw_instance *gw_instance_new_with(const gw_model *m, const char *name,
         if (gw_fun_alloc(I, &I->f_dir, &m->dir, 4, 1)) goto fail;
         GW_ALLOC_VEC(I->dir_D, double, (size_t)(m->nx + m->ny) * (size_t)(m->nx + m->nu));
     }
+    if (m->dini.eval && m->init_rows && m->n_init_rows > 0) {
+        if (gw_fun_alloc(I, &I->f_dini, &m->dini, 4, 1)) goto fail;
+        GW_ALLOC_VEC(I->dini_D, double,
+                     (size_t)m->n_init_rows * (size_t)(m->ns + m->np + m->nu));
+    }
     /* event instants with state updates */
     if (gw_fun_alloc(I, &I->f_upd, &m->upd, 5, 1)) goto fail;
     GW_ALLOC_VEC(I->x_upd, double, nx);
@@ -123,6 +128,8 @@ GW_API void gw_instance_free(gw_instance *I) {
     gw_fun_free(I, &I->f_nom);
     gw_fun_free(I, &I->f_jac);
     gw_fun_free(I, &I->f_dir);
+    gw_fun_free(I, &I->f_dini);
+    gw_free(I, I->dini_D);
     gw_fun_free(I, &I->f_upd);
     gw_free(I, I->x_upd);
     gw_free(I, I->e_upd);
@@ -171,6 +178,8 @@ GW_API void gw_instance_reset(gw_instance *I) {
     I->rel_tol = m->default_rel_tol;
     I->abs_tol = m->default_abs_tol;
     I->max_step = m->default_max_step;
+    I->rel_tol_set = 0;
+    I->abs_tol_set = 0;
     I->t_start = 0.0;
     I->t_stop = 0.0;
     I->stop_defined = 0;

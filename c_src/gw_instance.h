@@ -38,11 +38,12 @@ struct gw_instance {
     /* settings */
     int solver;
     double rel_tol, abs_tol, max_step;
+    int rel_tol_set, abs_tol_set; /* set explicitly: a set-up tolerance does not replace them */
 
     /* experiment */
     double t_start, t_stop;
     int stop_defined;
-    int tol_defined; /* gw_setup_experiment tolerance: overrides rel_tol at initialisation */
+    int tol_defined; /* gw_setup_experiment tolerance: applied at initialisation (gw_core.h) */
     double tolerance;
 
     /* model data (front end) */
@@ -91,6 +92,8 @@ struct gw_instance {
     gw_fun f_dir;  /* dir(t, x, u, p) -> D, only if the model has `dir` */
     double *dir_D; /* (nx+ny)*(nx+nu), column-major, valid if dir_valid */
     int dir_valid;
+    gw_fun f_dini;  /* dini(t, s, u, p) -> D0, only if the model has `dini` */
+    double *dini_D; /* n_init_rows*(ns+np+nu), column-major */
 
     /* DOP853 and Rosenbrock work memory (gw_solver_alloc).  Nothing here survives a saved
      * state: it is recomputed in every step. */
@@ -120,7 +123,7 @@ GW_INTERNAL int gw_eval_upd(gw_instance *I, double t, const double *x, int k, do
 /* ---- gw_simulation.c: logging a non-finite model value with the front end's status ---------- */
 #define GW_LOG_NONFINITE(I, ...)                                                                \
     gw_log((I), (I)->nonfinite_status,                                                          \
-           (I)->nonfinite_status >= GW_ERROR ? GW_LOG_ERROR : GW_LOG_WARNING, __VA_ARGS__)
+           (I)->nonfinite_status >= GW_ERROR ? GW_LOG_ERROR : GW_LOG_DISCARD, __VA_ARGS__)
 
 /* ---- gw_solver.c: the integrator behind gw_advance -------------------------------------------- */
 typedef enum {

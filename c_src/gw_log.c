@@ -1,11 +1,13 @@
 /*
  * gw_log.c -- logging through the front end's logger callback.
  *
- * Categories (modelDescription.xml <LogCategories>): logEvents, logSolver,
- * logStatusWarning, logStatusError, logStatusFatal, logAll.
- * Rule: GW_ERROR / GW_FATAL messages always reach the logger (if there is one);
- * every other message only when logging is on and its category (or logAll)
- * is enabled.  Callers test gw_log_enabled() before formatting expensive messages.
+ * Categories (modelDescription.xml <LogCategories>, FMI 2.0.4 section 2.2.4): logEvents,
+ * logSolver, logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll.
+ * Rule: a message with a status other than GW_OK is the reason of that status and always
+ * reaches the logger (if there is one), whatever the debug-logging settings (every
+ * fmi2Warning, fmi2Discard, fmi2Error comes with its reason); GW_OK messages only when
+ * logging is on and their category (or logAll) is enabled.  Callers test gw_log_enabled()
+ * before formatting expensive messages.
  * The logger receives the formatted text; the FMI layer escapes it for importers
  * that treat the message as a format string.
  */
@@ -26,6 +28,7 @@ GW_API const char *gw_log_category_name(int cat) {
     case GW_LOG_WARNING: return "logStatusWarning";
     case GW_LOG_ERROR: return "logStatusError";
     case GW_LOG_FATAL: return "logStatusFatal";
+    case GW_LOG_DISCARD: return "logStatusDiscard";
     default: return "logAll";
     }
 }
@@ -39,7 +42,7 @@ GW_API void gw_log(const gw_instance *I, gw_status status, gw_log_category cat, 
                    ...) {
     va_list ap;
     char message[1024];
-    int always = (status == GW_ERROR || status == GW_FATAL);
+    int always = status != GW_OK;
     if (!I || !I->cb.logger) return;
     if (!always && !gw_log_enabled(I, cat)) return;
     if (status == GW_FATAL) cat = GW_LOG_FATAL;

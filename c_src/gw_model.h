@@ -32,6 +32,12 @@
  *   jac (t, x, u, p) -> J           dense d xdot / d x, column-major nx*nx (NULL if absent)
  *   dir (t, x, u, p) -> D           dense d [xdot; y] / d [x; u], column-major
  *                                   (nx+ny) x (nx+nu), for fmi2GetDirectionalDerivative
+ *                                   after initialisation (knowns: states, inputs)
+ *   dini(t, s, u, p) -> D0          dense d v / d [s; p; u] at x = init(s, p), column-major
+ *                                   n_init_rows x (ns+np+nu): v are the Real InitialUnknowns
+ *                                   of modelDescription.xml (row init_rows[k] for vars[k],
+ *                                   -1 if not one), the knowns of Initialization Mode
+ *                                   (FMI 2.0.4 section 2.2.8); NULL if absent
  *   upd (t, x, u, p, k) -> x_new    the state after the update of event k (k, an event index
  *                                   passed as a double, has action GW_EVENT_UPDATE); only in
  *                                   models with such events (NULL otherwise)
@@ -119,7 +125,12 @@ typedef struct {
     const int *event_actions;          /* ne, gw_event_action */
     const char *const *check_messages; /* nc, e.g. "M must be > 0" */
     int default_solver;                /* gw_solver */
+    /* default_rel_tol is also DefaultExperiment's tolerance in modelDescription.xml */
     double default_rel_tol, default_abs_tol, default_max_step;
+    /* partial derivatives in Initialization Mode (see dini above); all zero if absent */
+    gw_function dini;
+    int n_init_rows;
+    const int *init_rows; /* n_vars: row of vars[k] in dini's result, or -1 */
     gw_function upd; /* state update of GW_EVENT_UPDATE events ({NULL, NULL}: none) */
 } gw_model;
 

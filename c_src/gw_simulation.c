@@ -9,6 +9,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #else
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "gw_instance.h"
@@ -23,25 +24,54 @@ GW_API gw_status gw_setup_experiment(gw_instance *I, const char *fn, int toleran
                                      double tolerance, double start_time, int stop_time_defined,
                                      double stop_time) {
     if (!isfinite(start_time)) GW_SIM_FAIL("%s: startTime is not finite", fn);
-    if (tolerance_defined) {
-        if (!(tolerance > 0.0) || !isfinite(tolerance))
-            GW_SIM_FAIL("%s: tolerance %g must be finite and > 0", fn, tolerance);
-        /* overrides rel_tol, also when rel_tol is set later (applied at initialisation) */
-        I->rel_tol = tolerance;
-        I->tol_defined = 1;
-        I->tolerance = tolerance;
-    }
+    if (tolerance_defined &&
+        !(tolerance >= GW_REL_TOL_MIN && tolerance <= GW_REL_TOL_MAX))
+        GW_SIM_FAIL("%s: tolerance %g is outside the valid range of a relative tolerance "
+                    "[%.3g, %g]", fn, tolerance, GW_REL_TOL_MIN, GW_REL_TOL_MAX);
     if (stop_time_defined) {
         if (!isfinite(stop_time) || stop_time < start_time)
             GW_SIM_FAIL("%s: stopTime %g must be finite and >= startTime %g", fn, stop_time,
                         start_time);
     }
+    /* the tolerance is resolved against rel_tol at initialisation (gw_resolve_tolerances),
+     * so the order of this call and of setting rel_tol does not matter */
+    I->tol_defined = tolerance_defined ? 1 : 0;
+    I->tolerance = tolerance_defined ? tolerance : 0.0;
     I->t_start = start_time;
     I->t = start_time;
-    if (!tolerance_defined) I->tol_defined = 0;
     I->stop_defined = stop_time_defined ? 1 : 0;
     I->t_stop = stop_time_defined ? stop_time : 0.0;
     return GW_OK;
+}
+
+/* The model's validity checks c(s, p) > 0 that fail, as one message ("M must be > 0; ..."),
+ * or "" if all hold or they cannot be evaluated. */
+static const char *gw_failed_checks(gw_instance *I, char *buf, size_t size) {
+    const gw_model *m = I->m;
+    size_t used = 0;
+    int i;
+    buf[0] = '\0';
+    if (m->nc == 0 || gw_eval_chk(I, I->c) != 0) return buf;
+    for (i = 0; i < m->nc && used + 3 < size; i++) {
+        const char *msg = (m->check_messages && m->check_messages[i]) ? m->check_messages[i]
+                                                                      : "a validity check";
+        int n;
+        if (I->c[i] > 0.0) continue;
+        n = snprintf(buf + used, size - used, "%s%s", used ? "; " : "", msg);
+        if (n < 0) break;
+        used += (size_t)n < size - used ? (size_t)n : size - used - 1;
+    }
+    return buf;
+}
+
+/* Reason of a non-finite value in the set-up phase: the parameters or start values. */
+static void gw_log_initial_nonfinite(gw_instance *I, const char *fn, const char *what,
+                                     const char *name, double value) {
+    char checks[512];
+    gw_failed_checks(I, checks, sizeof(checks));
+    GW_LOG_ERR(I, "%s: initial value of %s %s is not finite (%g) with the current parameters "
+               "and start values%s%s", fn, what, name ? name : "?", value,
+               checks[0] ? ": " : "", checks);
 }
 
 /* ---- outputs and derivatives at the current point ------------------------------------------ */
@@ -56,11 +86,9 @@ GW_API gw_status gw_update_outputs(gw_instance *I, const char *fn) {
         }
         for (i = 0; i < m->ny; i++)
             if (!isfinite(I->y[i])) {
-                const char *nm = gw_variable_name(m, GW_VAR_OUTPUT, i);
-                gw_log(I, GW_WARNING, GW_LOG_WARNING,
-                       "%s: initial value of output %s is not finite (check the parameters)",
-                       fn, nm ? nm : "?");
-                return GW_WARNING;
+                gw_log_initial_nonfinite(I, fn, "output", gw_variable_name(m, GW_VAR_OUTPUT, i),
+                                         I->y[i]);
+                return GW_ERROR; /* bad input, not a step to retry: never GW_DISCARD */
             }
         return GW_OK;
     }
@@ -94,11 +122,10 @@ GW_API gw_status gw_update_derivatives(gw_instance *I, const char *fn) {
     }
     for (i = 0; i < m->nx; i++)
         if (!isfinite(I->xdot[i])) {
-            if (pre) { /* as for the initial outputs: the parameters may still change */
-                gw_log(I, GW_WARNING, GW_LOG_WARNING,
-                       "%s: initial derivative of state %s is not finite (check the "
-                       "parameters)", fn, m->x_names ? m->x_names[i] : "?");
-                return GW_WARNING;
+            if (pre) { /* as for the initial outputs */
+                gw_log_initial_nonfinite(I, fn, "the derivative of state",
+                                         m->x_names ? m->x_names[i] : "?", I->xdot[i]);
+                return GW_ERROR;
             }
             GW_LOG_NONFINITE(I, "%s: derivative of state %s is not finite (%g) at t=%.17g", fn,
                              m->x_names ? m->x_names[i] : "?", I->xdot[i], I->t);
@@ -122,6 +149,17 @@ static int gw_check_finite_vec(gw_instance *I, const char *fn, const double *v, 
     return ok;
 }
 
+/* The tolerance precedence of gw_core.h (gw_setup_experiment): an explicit rel_tol wins; a
+ * set-up tolerance replaces the scene's rel_tol and scales its abs_tol alike (unless set);
+ * the declared default tolerance (= default_rel_tol) thus leaves the scene's accuracy. */
+static void gw_resolve_tolerances(gw_instance *I) {
+    const gw_model *m = I->m;
+    if (!I->tol_defined || I->rel_tol_set) return;
+    I->rel_tol = I->tolerance;
+    if (!I->abs_tol_set && m->default_rel_tol > 0.0)
+        I->abs_tol = m->default_abs_tol * (I->tolerance / m->default_rel_tol);
+}
+
 /* settings and the model's validity checks c(s, p) > 0 */
 static gw_status gw_check_setup(gw_instance *I, const char *fn) {
     const gw_model *m = I->m;
@@ -130,14 +168,12 @@ static gw_status gw_check_setup(gw_instance *I, const char *fn) {
     ok &= gw_check_finite_vec(I, fn, I->s, m->ns, GW_VAR_START, "start value");
     ok &= gw_check_finite_vec(I, fn, I->u, m->nu, GW_VAR_INPUT, "input");
     if (!ok) GW_SIM_FAIL("%s: non-finite values", fn);
-    if (I->tol_defined) I->rel_tol = I->tolerance;
-    if (!gw_solver_available(I->solver)) GW_SIM_FAIL("%s: unknown solver %d", fn, I->solver);
-    if (!(I->rel_tol > 0.0) || !isfinite(I->rel_tol))
-        GW_SIM_FAIL("%s: rel_tol = %g must be finite and > 0", fn, I->rel_tol);
-    if (!(I->abs_tol > 0.0) || !isfinite(I->abs_tol))
-        GW_SIM_FAIL("%s: abs_tol = %g must be finite and > 0", fn, I->abs_tol);
-    if (!(I->max_step > 0.0) || !isfinite(I->max_step))
-        GW_SIM_FAIL("%s: max_step = %g must be finite and > 0", fn, I->max_step);
+    gw_resolve_tolerances(I);
+    /* the settings were checked when set; checked again for front ends that store directly */
+    for (i = 0; i < m->n_vars; i++)
+        if (m->vars[i].kind == GW_VAR_SETTING &&
+            gw_value_check(I, fn, &m->vars[i], gw_value_get(I, &m->vars[i])) != GW_OK)
+            return GW_ERROR;
     if (m->nc > 0) {
         if (gw_eval_chk(I, I->c) != 0)
             GW_SIM_FAIL("%s: evaluation of the validity checks failed", fn);
@@ -155,12 +191,10 @@ static gw_status gw_check_setup(gw_instance *I, const char *fn) {
     return GW_OK;
 }
 
-GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
+/* The consistent initial point (gw_initialize after its checks); GW_ERROR on failure. */
+static gw_status gw_initial_point(gw_instance *I, const char *fn) {
     const gw_model *m = I->m;
-    gw_status status;
     int i;
-    gw_point_changed(I);
-    if (gw_check_setup(I, fn) != GW_OK) return GW_ERROR;
     /* nominal values, initial state, outputs, event indicators */
     if (gw_eval_nom(I, I->nominal) != 0)
         GW_SIM_FAIL("%s: evaluation of the state nominals failed", fn);
@@ -183,41 +217,73 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
     if (m->ne > 0 && gw_eval_evt(I, I->t, I->x, I->e) != 0)
         GW_SIM_FAIL("%s: evaluation of the event indicators failed", fn);
     if (m->ne > 0 && gw_events_initial(I, fn) != 0) return GW_ERROR;
-    /* from here on y is the simulation's output */
-    I->in_setup = 0;
-    I->y_valid = 0;
-    status = gw_update_outputs(I, fn);
-    if (status > GW_WARNING) return status;
+    if (gw_eval_out(I, I->t, I->x, I->y) != 0)
+        GW_SIM_FAIL("%s: evaluation of the initial outputs failed", fn);
+    for (i = 0; i < m->ny; i++)
+        if (!isfinite(I->y[i])) {
+            gw_log_initial_nonfinite(I, fn, "output", gw_variable_name(m, GW_VAR_OUTPUT, i),
+                                     I->y[i]);
+            return GW_ERROR;
+        }
     if (gw_rhs(I, I->t, I->x, I->k[0]) != 0)
         GW_SIM_FAIL("%s: evaluation of the right-hand side failed", fn);
     for (i = 0; i < m->nx; i++)
-        if (!isfinite(I->k[0][i]))
-            GW_SIM_FAIL("%s: derivative of state %s is not finite (%g)", fn,
-                        m->x_names ? m->x_names[i] : "?", I->k[0][i]);
+        if (!isfinite(I->k[0][i])) {
+            gw_log_initial_nonfinite(I, fn, "the derivative of state",
+                                     m->x_names ? m->x_names[i] : "?", I->k[0][i]);
+            return GW_ERROR;
+        }
+    if (m->ne > 0 && gw_eval_evt(I, I->t, I->x, I->e) != 0)
+        GW_SIM_FAIL("%s: evaluation of the event indicators failed", fn);
+    for (i = 0; i < m->ne; i++)
+        if (!isfinite(I->e[i]))
+            GW_SIM_FAIL("%s: initial event indicator %s is not finite (%g)", fn,
+                        m->event_names ? m->event_names[i] : "?", I->e[i]);
+    /* An event whose condition holds already at the start cannot be crossed later:
+     * a terminating one means an invalid initial state, a warning one is flagged now (update
+     * events were settled above; one may be left at 0, a law starting to slide from rest). */
+    for (i = 0; i < m->ne; i++)
+        if (!(I->e[i] > 0.0) && !(m->event_actions && (m->event_actions[i] == GW_EVENT_WARN ||
+                                                       m->event_actions[i] == GW_EVENT_UPDATE)))
+            GW_SIM_FAIL("%s: the initial state already triggers event %s (indicator %g <= 0)",
+                        fn, m->event_names ? m->event_names[i] : "?", I->e[i]);
+    return GW_OK;
+}
+
+GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
+    const gw_model *m = I->m;
+    int i;
+    gw_point_changed(I);
+    /* every check first: a refusal leaves the instance in its set-up phase, untouched but for
+     * the values the set-up phase recomputes anyway (x = init(s, p), y, the caches) */
+    if (gw_check_setup(I, fn) != GW_OK || gw_initial_point(I, fn) != GW_OK) {
+        I->in_setup = 1;
+        gw_point_changed(I);
+        I->fcur_valid = 0;
+        return GW_ERROR;
+    }
+    /* from here on y is the simulation's output */
+    I->in_setup = 0;
+    I->y_valid = 1;
     I->fcur_valid = 1;
     memcpy(I->xdot, I->k[0], (size_t)m->nx * sizeof(double));
     I->xdot_valid = 1;
-    /* An event whose condition holds already at the start cannot be crossed later:
-     * a terminating one means an invalid initial state, a warning one is flagged now
-     * (update events were settled above). */
     for (i = 0; i < m->ne; i++) {
-        if (I->e[i] > 0.0 || (m->event_actions && m->event_actions[i] == GW_EVENT_UPDATE)) continue;
-        if (m->event_actions && m->event_actions[i] == GW_EVENT_WARN) {
-            I->flags[i] = 1;
-            I->t_events[i] = I->t;
-            gw_log(I, GW_WARNING, GW_LOG_EVENTS,
-                   "warning: event %s holds already at the start t=%.17g",
+        if (m->event_actions && m->event_actions[i] == GW_EVENT_UPDATE) continue; /* settled */
+        I->flags[i] = 0;
+        I->t_events[i] = 0.0;
+        if (I->e[i] > 0.0) continue;
+        I->flags[i] = 1; /* a warning event that holds already at the start */
+        I->t_events[i] = I->t;
+        if (gw_log_enabled(I, GW_LOG_EVENTS))
+            gw_log(I, GW_OK, GW_LOG_EVENTS, "warning: event %s holds already at the start t=%.17g",
                    m->event_names ? m->event_names[i] : "?", I->t);
-        } else {
-            GW_SIM_FAIL("%s: the initial state already triggers event %s (indicator %g <= 0)",
-                        fn, m->event_names ? m->event_names[i] : "?", I->e[i]);
-        }
     }
     I->terminated = 0;
     I->h_adapt = 0.0;
     I->last_successful_time = I->t;
     I->n_rhs = I->n_accepted = I->n_rejected = I->n_evt = I->n_events = 0;
-    return status;
+    return GW_OK;
 }
 
 /* ---- advancing in time ------------------------------------------------------------------------ */

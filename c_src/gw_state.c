@@ -1,7 +1,7 @@
 /*
  * gw_state.c -- saving and restoring an instance: one serialised blob, so that a saved
  * state and its serialised form share one code path (the FMI layer's fmi2Get/SetFMUstate
- * and fmi2(De)SerializeFMUstate both use it).  Byte layout, version 1, native byte order,
+ * and fmi2(De)SerializeFMUstate both use it).  Byte layout, version 2, native byte order,
  * no padding:
  *
  *   offset  size       field
@@ -11,8 +11,9 @@
  *   12      7*4        int32 nx, ns, nu, np, ny, ne, nc
  *   40      4          uint32 L = strlen(model token)
  *   44      L          model token (GUID), no terminating NUL
- *   then    7*4        int32 front[0] (FMI: its state), solver, stop_defined, tol_defined,
- *                            terminated, front[1] (FMI: last fmi2DoStep status), y_valid
+ *   then    9*4        int32 front[0] (FMI: its state), solver, stop_defined, tol_defined,
+ *                            terminated, front[1] (FMI: last fmi2DoStep status and more),
+ *                            y_valid, rel_tol_set, abs_tol_set
  *           9*8        double t, t_start, t_stop, tolerance, last_successful_time,
  *                             rel_tol, abs_tol, max_step, h_adapt (adaptive step size)
  *           5*8        uint64 n_rhs, n_accepted, n_rejected, n_evt, n_events
@@ -23,26 +24,108 @@
  *           8*ny       double y
  *           8*ne       double e (event indicators at t)
  *           8*nx       double x nominal
+ *           8*ne       double t_events (time of each event's last firing)
  *           ne         uint8 event flags
+ *           4          uint32 CRC-32 (IEEE 802.3, as zlib's crc32) of every byte before it
  *
- * The two front-end ints are the front end's to give meaning to and to validate (the set-up
- * phase flag I->in_setup follows from them there).  Reading rejects a wrong magic, version,
- * size, model sizes or token with a logged reason.  Logging settings are not part of it.
+ * Reading (gw_state_check) refuses, with the reason logged: a wrong magic, version, size,
+ * model sizes or token; a checksum that does not match (every single-bit and burst error
+ * up to 32 bits in the blob is caught); and any field outside the range that fmi2Set* and
+ * the core accept: non-finite numbers, a solver that does not exist, tolerances or max_step
+ * outside their ranges (gw_core.h), flags that are neither 0 nor 1, non-positive nominals.
+ * So a restored state is one the instance could have reached itself.  The two front-end
+ * ints are the front end's to give meaning to and to validate.  Logging settings are not
+ * part of a state.
  */
 #ifndef GW_UNITY_BUILD
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
 #else
 
+#include <math.h>
 #include <stdint.h>
 #include <string.h>
 
 #include "gw_instance.h"
 
 #define GW_STATE_MAGIC "GWST"
-#define GW_STATE_VERSION 1u
+#define GW_STATE_VERSION 2u
 #define GW_STATE_HEADER 44 /* bytes before the model token */
+#define GW_STATE_NINT 9
+#define GW_STATE_NDBL 9
+#define GW_STATE_NU64 5
 
-/* ---- writer / reader ------------------------------------------------------------ */
+/* ---- CRC-32 (reflected polynomial 0xEDB88320), bitwise: the blobs are small ------------ */
+
+static uint32_t gw_crc32(const unsigned char *buf, size_t n) {
+    uint32_t crc = 0xFFFFFFFFu;
+    size_t i;
+    int k;
+    for (i = 0; i < n; i++) {
+        crc ^= buf[i];
+        for (k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    return crc ^ 0xFFFFFFFFu;
+}
+
+/* ---- the fields after the token, in layout order ---------------------------------------- */
+
+/* The scalar fields as arrays: ints (front[0] and front[1] at 0 and 5), doubles, counters. */
+typedef struct {
+    int ints[GW_STATE_NINT];
+    double dbl[GW_STATE_NDBL];
+    unsigned long long u64[GW_STATE_NU64];
+} gw_state_scalars;
+
+enum { GW_SI_FRONT0, GW_SI_SOLVER, GW_SI_STOP_DEF, GW_SI_TOL_DEF, GW_SI_TERMINATED,
+       GW_SI_FRONT1, GW_SI_Y_VALID, GW_SI_REL_SET, GW_SI_ABS_SET };
+enum { GW_SD_T, GW_SD_T_START, GW_SD_T_STOP, GW_SD_TOLERANCE, GW_SD_LAST_TIME, GW_SD_REL_TOL,
+       GW_SD_ABS_TOL, GW_SD_MAX_STEP, GW_SD_H };
+
+static void gw_scalars_of(const gw_instance *I, const int front[2], gw_state_scalars *sc) {
+    sc->ints[GW_SI_FRONT0] = front[0];
+    sc->ints[GW_SI_SOLVER] = I->solver;
+    sc->ints[GW_SI_STOP_DEF] = I->stop_defined;
+    sc->ints[GW_SI_TOL_DEF] = I->tol_defined;
+    sc->ints[GW_SI_TERMINATED] = I->terminated;
+    sc->ints[GW_SI_FRONT1] = front[1];
+    sc->ints[GW_SI_Y_VALID] = I->y_valid;
+    sc->ints[GW_SI_REL_SET] = I->rel_tol_set;
+    sc->ints[GW_SI_ABS_SET] = I->abs_tol_set;
+    sc->dbl[GW_SD_T] = I->t;
+    sc->dbl[GW_SD_T_START] = I->t_start;
+    sc->dbl[GW_SD_T_STOP] = I->t_stop;
+    sc->dbl[GW_SD_TOLERANCE] = I->tolerance;
+    sc->dbl[GW_SD_LAST_TIME] = I->last_successful_time;
+    sc->dbl[GW_SD_REL_TOL] = I->rel_tol;
+    sc->dbl[GW_SD_ABS_TOL] = I->abs_tol;
+    sc->dbl[GW_SD_MAX_STEP] = I->max_step;
+    sc->dbl[GW_SD_H] = I->h_adapt;
+    sc->u64[0] = I->n_rhs;
+    sc->u64[1] = I->n_accepted;
+    sc->u64[2] = I->n_rejected;
+    sc->u64[3] = I->n_evt;
+    sc->u64[4] = I->n_events;
+}
+
+/* the vectors of the layout, in order: x, s, u, p, y, e, nominal, t_events */
+#define GW_STATE_NVEC 8
+#define GW_STATE_VEC_NOMINAL 6
+static const char *const gw_vec_names[GW_STATE_NVEC] = {"x", "s", "u", "p", "y", "e", "nominal",
+                                                        "t_events"};
+
+static void gw_vectors_of(const gw_instance *I, double *vec[GW_STATE_NVEC], int len[GW_STATE_NVEC]) {
+    const gw_model *m = I->m;
+    vec[0] = I->x, len[0] = m->nx;
+    vec[1] = I->s, len[1] = m->ns;
+    vec[2] = I->u, len[2] = m->nu;
+    vec[3] = I->p, len[3] = m->np;
+    vec[4] = I->y, len[4] = m->ny;
+    vec[5] = I->e, len[5] = m->ne;
+    vec[6] = I->nominal, len[6] = m->nx;
+    vec[7] = I->t_events, len[7] = m->ne;
+}
+
+/* ---- writer -------------------------------------------------------------------------------- */
 
 typedef struct {
     unsigned char *buf; /* NULL: only count */
@@ -58,19 +141,13 @@ static void gw_put_i32(gw_writer *w, int v) {
     int32_t x = (int32_t)v;
     gw_put(w, &x, 4);
 }
-static void gw_put_u64(gw_writer *w, unsigned long long v) {
-    uint64_t x = (uint64_t)v;
-    gw_put(w, &x, 8);
-}
-static void gw_put_f64(gw_writer *w, double v) { gw_put(w, &v, 8); }
-static void gw_put_vec(gw_writer *w, const double *v, int n) {
-    gw_put(w, v, (size_t)n * sizeof(double));
-}
 
 static void gw_write_state(const gw_instance *I, const int front[2], gw_writer *w, size_t total) {
     const gw_model *m = I->m;
     uint32_t L = (uint32_t)strlen(m->token);
-    int i;
+    gw_state_scalars sc;
+    double *vec[GW_STATE_NVEC];
+    int len[GW_STATE_NVEC], i;
     gw_put(w, GW_STATE_MAGIC, 4);
     gw_put_u32(w, GW_STATE_VERSION);
     gw_put_u32(w, (uint32_t)total);
@@ -83,37 +160,24 @@ static void gw_write_state(const gw_instance *I, const int front[2], gw_writer *
     gw_put_i32(w, m->nc);
     gw_put_u32(w, L);
     gw_put(w, m->token, L);
-    gw_put_i32(w, front[0]);
-    gw_put_i32(w, I->solver);
-    gw_put_i32(w, I->stop_defined);
-    gw_put_i32(w, I->tol_defined);
-    gw_put_i32(w, I->terminated);
-    gw_put_i32(w, front[1]);
-    gw_put_i32(w, I->y_valid);
-    gw_put_f64(w, I->t);
-    gw_put_f64(w, I->t_start);
-    gw_put_f64(w, I->t_stop);
-    gw_put_f64(w, I->tolerance);
-    gw_put_f64(w, I->last_successful_time);
-    gw_put_f64(w, I->rel_tol);
-    gw_put_f64(w, I->abs_tol);
-    gw_put_f64(w, I->max_step);
-    gw_put_f64(w, I->h_adapt);
-    gw_put_u64(w, I->n_rhs);
-    gw_put_u64(w, I->n_accepted);
-    gw_put_u64(w, I->n_rejected);
-    gw_put_u64(w, I->n_evt);
-    gw_put_u64(w, I->n_events);
-    gw_put_vec(w, I->x, m->nx);
-    gw_put_vec(w, I->s, m->ns);
-    gw_put_vec(w, I->u, m->nu);
-    gw_put_vec(w, I->p, m->np);
-    gw_put_vec(w, I->y, m->ny);
-    gw_put_vec(w, I->e, m->ne);
-    gw_put_vec(w, I->nominal, m->nx);
+    gw_scalars_of(I, front, &sc);
+    for (i = 0; i < GW_STATE_NINT; i++) gw_put_i32(w, sc.ints[i]);
+    gw_put(w, sc.dbl, sizeof(sc.dbl));
+    for (i = 0; i < GW_STATE_NU64; i++) {
+        uint64_t x = (uint64_t)sc.u64[i];
+        gw_put(w, &x, 8);
+    }
+    gw_vectors_of(I, vec, len);
+    for (i = 0; i < GW_STATE_NVEC; i++) gw_put(w, vec[i], (size_t)len[i] * sizeof(double));
     for (i = 0; i < m->ne; i++) {
         unsigned char f = I->flags[i] ? 1 : 0;
         gw_put(w, &f, 1);
+    }
+    if (w->buf) {
+        uint32_t crc = gw_crc32(w->buf, w->pos);
+        gw_put_u32(w, crc);
+    } else {
+        w->pos += 4;
     }
 }
 
@@ -130,6 +194,8 @@ GW_API void gw_state_write(const gw_instance *I, const int front[2], unsigned ch
     w.pos = 0;
     gw_write_state(I, front, &w, gw_state_size(I));
 }
+
+/* ---- reader -------------------------------------------------------------------------------- */
 
 typedef struct {
     const unsigned char *buf;
@@ -150,23 +216,34 @@ static int gw_get_i32(gw_reader *r) {
     gw_get(r, &v, 4);
     return (int)v;
 }
-static unsigned long long gw_get_u64(gw_reader *r) {
-    uint64_t v;
-    gw_get(r, &v, 8);
-    return (unsigned long long)v;
-}
-static double gw_get_f64(gw_reader *r) {
-    double v;
-    gw_get(r, &v, 8);
-    return v;
-}
-static void gw_get_vec(gw_reader *r, double *v, int n) { gw_get(r, v, (size_t)n * sizeof(double)); }
 
-GW_API int gw_state_check(gw_instance *I, const char *fn, const unsigned char *buf, size_t size) {
+/* a reader at the first field after the model token */
+static gw_reader gw_state_body(const gw_instance *I, const unsigned char *buf) {
+    gw_reader r;
+    r.buf = buf;
+    r.pos = GW_STATE_HEADER + strlen(I->m->token);
+    return r;
+}
+
+/* the scalar fields of a blob whose header was checked; r is left at the first vector */
+static void gw_read_scalars(gw_reader *r, gw_state_scalars *sc) {
+    int i;
+    for (i = 0; i < GW_STATE_NINT; i++) sc->ints[i] = gw_get_i32(r);
+    gw_get(r, sc->dbl, sizeof(sc->dbl));
+    for (i = 0; i < GW_STATE_NU64; i++) {
+        uint64_t x;
+        gw_get(r, &x, 8);
+        sc->u64[i] = (unsigned long long)x;
+    }
+}
+
+/* header: magic, version, sizes, token, total size, checksum; 1 or reason logged */
+static int gw_state_check_header(gw_instance *I, const char *fn, const unsigned char *buf,
+                                 size_t size) {
     const gw_model *m = I->m;
     const size_t expected = gw_state_size(I);
     gw_reader r;
-    uint32_t version, total, L;
+    uint32_t version, total, L, crc;
     int sizes[7], want[7], i;
     if (!buf) {
         GW_LOG_ERR(I, "%s: serialized state is NULL", fn);
@@ -214,56 +291,144 @@ GW_API int gw_state_check(gw_instance *I, const char *fn, const unsigned char *b
                    (unsigned long)size, (unsigned long)total, (unsigned long)expected);
         return 0;
     }
+    memcpy(&crc, buf + size - 4, 4);
+    if (crc != gw_crc32(buf, size - 4)) {
+        GW_LOG_ERR(I, "%s: FMU state is corrupt: its CRC-32 checksum does not match its content",
+                   fn);
+        return 0;
+    }
     return 1;
 }
 
-/* a reader at the first field after the model token */
-static gw_reader gw_state_body(const gw_instance *I, const unsigned char *buf) {
-    gw_reader r;
-    r.buf = buf;
-    r.pos = GW_STATE_HEADER + strlen(I->m->token);
-    return r;
+/* the setting ranges of gw_value_check, for the settings stored in a state */
+static int gw_state_check_settings(gw_instance *I, const char *fn, const gw_state_scalars *sc) {
+    static const struct {
+        int setting, field;
+        const char *name;
+    } settings[] = {{GW_SET_REL_TOL, GW_SD_REL_TOL, "rel_tol"},
+                    {GW_SET_ABS_TOL, GW_SD_ABS_TOL, "abs_tol"},
+                    {GW_SET_MAX_STEP, GW_SD_MAX_STEP, "max_step"}};
+    gw_variable v;
+    size_t k;
+    memset(&v, 0, sizeof(v));
+    v.kind = GW_VAR_SETTING;
+    v.type = GW_ENUM;
+    v.index = GW_SET_SOLVER;
+    v.name = "solver";
+    if (gw_value_check(I, fn, &v, (double)sc->ints[GW_SI_SOLVER]) != GW_OK) return 0;
+    v.type = GW_REAL;
+    for (k = 0; k < sizeof(settings) / sizeof(settings[0]); k++) {
+        v.index = settings[k].setting;
+        v.name = settings[k].name;
+        if (gw_value_check(I, fn, &v, sc->dbl[settings[k].field]) != GW_OK) return 0;
+    }
+    if (sc->ints[GW_SI_TOL_DEF] &&
+        !(sc->dbl[GW_SD_TOLERANCE] >= GW_REL_TOL_MIN && sc->dbl[GW_SD_TOLERANCE] <= GW_REL_TOL_MAX)) {
+        GW_LOG_ERR(I, "%s: FMU state holds an invalid set-up tolerance %g", fn,
+                   sc->dbl[GW_SD_TOLERANCE]);
+        return 0;
+    }
+    return 1;
+}
+
+/* every field within the range fmi2Set* and the core accept; 1 or reason logged */
+static int gw_state_check_fields(gw_instance *I, const char *fn, const unsigned char *buf) {
+    static const int flags01[] = {GW_SI_STOP_DEF, GW_SI_TOL_DEF, GW_SI_TERMINATED, GW_SI_Y_VALID,
+                                  GW_SI_REL_SET, GW_SI_ABS_SET};
+    static const char *const flag_names[] = {"stop_defined", "tol_defined", "terminated",
+                                             "y_valid", "rel_tol_set", "abs_tol_set"};
+    static const char *const dbl_names[GW_STATE_NDBL] = {
+        "t", "t_start", "t_stop", "tolerance", "last_successful_time", "rel_tol", "abs_tol",
+        "max_step", "h_adapt"};
+    const gw_model *m = I->m;
+    gw_reader r = gw_state_body(I, buf);
+    gw_state_scalars sc;
+    double *vec[GW_STATE_NVEC];
+    int len[GW_STATE_NVEC], i, k;
+    size_t j;
+    gw_read_scalars(&r, &sc);
+    for (j = 0; j < sizeof(flags01) / sizeof(flags01[0]); j++)
+        if (sc.ints[flags01[j]] != 0 && sc.ints[flags01[j]] != 1) {
+            GW_LOG_ERR(I, "%s: FMU state holds %s = %d (must be 0 or 1)", fn, flag_names[j],
+                       sc.ints[flags01[j]]);
+            return 0;
+        }
+    for (k = 0; k < GW_STATE_NDBL; k++)
+        if (!isfinite(sc.dbl[k])) {
+            GW_LOG_ERR(I, "%s: FMU state holds a non-finite %s (%g)", fn, dbl_names[k], sc.dbl[k]);
+            return 0;
+        }
+    if (sc.dbl[GW_SD_H] < 0.0) {
+        GW_LOG_ERR(I, "%s: FMU state holds a negative step size %g", fn, sc.dbl[GW_SD_H]);
+        return 0;
+    }
+    if (!gw_state_check_settings(I, fn, &sc)) return 0;
+    gw_vectors_of(I, vec, len);
+    for (k = 0; k < GW_STATE_NVEC; k++)
+        for (i = 0; i < len[k]; i++) {
+            double d;
+            gw_get(&r, &d, 8);
+            if (!isfinite(d) || (k == GW_STATE_VEC_NOMINAL && !(d > 0.0))) {
+                GW_LOG_ERR(I, "%s: FMU state holds an invalid %s[%d] = %g (%s)", fn, gw_vec_names[k],
+                           i, d, k == GW_STATE_VEC_NOMINAL ? "a nominal must be finite and > 0"
+                                                           : "not finite");
+                return 0;
+            }
+        }
+    for (i = 0; i < m->ne; i++) {
+        unsigned char f;
+        gw_get(&r, &f, 1);
+        if (f > 1) {
+            GW_LOG_ERR(I, "%s: FMU state holds event flag %d = %u (must be 0 or 1)", fn, i,
+                       (unsigned)f);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+GW_API int gw_state_check(gw_instance *I, const char *fn, const unsigned char *buf, size_t size) {
+    return gw_state_check_header(I, fn, buf, size) && gw_state_check_fields(I, fn, buf);
 }
 
 GW_API void gw_state_front(const gw_instance *I, const unsigned char *buf, int front[2]) {
     gw_reader r = gw_state_body(I, buf);
-    front[0] = gw_get_i32(&r);
-    r.pos += 4 * 4; /* solver, stop_defined, tol_defined, terminated */
-    front[1] = gw_get_i32(&r);
+    gw_state_scalars sc;
+    gw_read_scalars(&r, &sc);
+    front[0] = sc.ints[GW_SI_FRONT0];
+    front[1] = sc.ints[GW_SI_FRONT1];
 }
 
 GW_API void gw_state_apply(gw_instance *I, const unsigned char *buf) {
     const gw_model *m = I->m;
     gw_reader r = gw_state_body(I, buf);
-    int i;
-    (void)gw_get_i32(&r); /* front[0] */
-    I->solver = gw_get_i32(&r);
-    I->stop_defined = gw_get_i32(&r);
-    I->tol_defined = gw_get_i32(&r);
-    I->terminated = gw_get_i32(&r);
-    (void)gw_get_i32(&r); /* front[1] */
-    I->y_valid = gw_get_i32(&r);
-    I->t = gw_get_f64(&r);
-    I->t_start = gw_get_f64(&r);
-    I->t_stop = gw_get_f64(&r);
-    I->tolerance = gw_get_f64(&r);
-    I->last_successful_time = gw_get_f64(&r);
-    I->rel_tol = gw_get_f64(&r);
-    I->abs_tol = gw_get_f64(&r);
-    I->max_step = gw_get_f64(&r);
-    I->h_adapt = gw_get_f64(&r);
-    I->n_rhs = gw_get_u64(&r);
-    I->n_accepted = gw_get_u64(&r);
-    I->n_rejected = gw_get_u64(&r);
-    I->n_evt = gw_get_u64(&r);
-    I->n_events = gw_get_u64(&r);
-    gw_get_vec(&r, I->x, m->nx);
-    gw_get_vec(&r, I->s, m->ns);
-    gw_get_vec(&r, I->u, m->nu);
-    gw_get_vec(&r, I->p, m->np);
-    gw_get_vec(&r, I->y, m->ny);
-    gw_get_vec(&r, I->e, m->ne);
-    gw_get_vec(&r, I->nominal, m->nx);
+    gw_state_scalars sc;
+    double *vec[GW_STATE_NVEC];
+    int len[GW_STATE_NVEC], i;
+    gw_read_scalars(&r, &sc);
+    I->solver = sc.ints[GW_SI_SOLVER];
+    I->stop_defined = sc.ints[GW_SI_STOP_DEF];
+    I->tol_defined = sc.ints[GW_SI_TOL_DEF];
+    I->terminated = sc.ints[GW_SI_TERMINATED];
+    I->y_valid = sc.ints[GW_SI_Y_VALID];
+    I->rel_tol_set = sc.ints[GW_SI_REL_SET];
+    I->abs_tol_set = sc.ints[GW_SI_ABS_SET];
+    I->t = sc.dbl[GW_SD_T];
+    I->t_start = sc.dbl[GW_SD_T_START];
+    I->t_stop = sc.dbl[GW_SD_T_STOP];
+    I->tolerance = sc.dbl[GW_SD_TOLERANCE];
+    I->last_successful_time = sc.dbl[GW_SD_LAST_TIME];
+    I->rel_tol = sc.dbl[GW_SD_REL_TOL];
+    I->abs_tol = sc.dbl[GW_SD_ABS_TOL];
+    I->max_step = sc.dbl[GW_SD_MAX_STEP];
+    I->h_adapt = sc.dbl[GW_SD_H];
+    I->n_rhs = sc.u64[0];
+    I->n_accepted = sc.u64[1];
+    I->n_rejected = sc.u64[2];
+    I->n_evt = sc.u64[3];
+    I->n_events = sc.u64[4];
+    gw_vectors_of(I, vec, len);
+    for (i = 0; i < GW_STATE_NVEC; i++) gw_get(&r, vec[i], (size_t)len[i] * sizeof(double));
     for (i = 0; i < m->ne; i++) {
         unsigned char f;
         gw_get(&r, &f, 1);

@@ -7,6 +7,8 @@
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
 #else
 
+#include <math.h>
+
 #include "gw_instance.h"
 
 GW_API const gw_variable *gw_variable_find(const gw_model *m, unsigned int vr) {
@@ -61,6 +63,52 @@ GW_API double gw_value_get(const gw_instance *I, const gw_variable *v) {
     }
 }
 
+/* the valid range of a setting (gw_core.h); 1 if value lies in it, else logs why */
+static int gw_setting_in_range(gw_instance *I, const char *fn, const gw_variable *v,
+                               double value) {
+    switch (v->index) {
+    case GW_SET_SOLVER:
+        if (value == floor(value) && fabs(value) < 1e9 && gw_solver_available((int)value))
+            return 1;
+        GW_LOG_ERR(I, "%s: %s = %.17g is not a solver: valid are 1 (euler), 2 (rk4), 3 (dopri5), "
+                   "4 (rosenbrock), 5 (dop853)", fn, v->name, value);
+        return 0;
+    case GW_SET_REL_TOL:
+        if (value >= GW_REL_TOL_MIN && value <= GW_REL_TOL_MAX) return 1;
+        GW_LOG_ERR(I, "%s: %s = %g is outside its valid range [%.3g, %g] (a relative error "
+                   "tolerance: at most 1, at least 10 machine epsilons)", fn, v->name, value,
+                   GW_REL_TOL_MIN, GW_REL_TOL_MAX);
+        return 0;
+    case GW_SET_ABS_TOL:
+        if (value >= GW_ABS_TOL_MIN && value <= GW_ABS_TOL_MAX) return 1;
+        GW_LOG_ERR(I, "%s: %s = %g is outside its valid range [%g, %g] (an absolute error "
+                   "tolerance in units of each state's nominal value)", fn, v->name, value,
+                   GW_ABS_TOL_MIN, GW_ABS_TOL_MAX);
+        return 0;
+    case GW_SET_MAX_STEP:
+        if (value > 0.0) return 1;
+        GW_LOG_ERR(I, "%s: %s = %g must be > 0 (s)", fn, v->name, value);
+        return 0;
+    default: return 1;
+    }
+}
+
+GW_API gw_status gw_value_check(gw_instance *I, const char *fn, const gw_variable *v,
+                                double value) {
+    if (!isfinite(value)) {
+        GW_LOG_ERR(I, "%s: value %g for variable %s (vr=%u) is not finite", fn, value, v->name,
+                   v->vr);
+        return GW_ERROR;
+    }
+    if (v->kind == GW_VAR_SETTING && !gw_setting_in_range(I, fn, v, value)) return GW_ERROR;
+    if (v->type == GW_BOOLEAN && value != 0.0 && value != 1.0) {
+        GW_LOG_ERR(I, "%s: value %g for Boolean variable %s (vr=%u) is neither 0 nor 1", fn,
+                   value, v->name, v->vr);
+        return GW_ERROR;
+    }
+    return GW_OK;
+}
+
 GW_API void gw_value_set(gw_instance *I, const gw_variable *v, double value) {
     switch (v->kind) {
     case GW_VAR_PARAM:
@@ -80,8 +128,14 @@ GW_API void gw_value_set(gw_instance *I, const gw_variable *v, double value) {
     case GW_VAR_SETTING:
         switch (v->index) {
         case GW_SET_SOLVER: I->solver = (int)value; break;
-        case GW_SET_REL_TOL: I->rel_tol = value; break;
-        case GW_SET_ABS_TOL: I->abs_tol = value; break;
+        case GW_SET_REL_TOL:
+            I->rel_tol = value;
+            I->rel_tol_set = 1; /* explicit: wins over a set-up tolerance */
+            break;
+        case GW_SET_ABS_TOL:
+            I->abs_tol = value;
+            I->abs_tol_set = 1;
+            break;
         case GW_SET_MAX_STEP: I->max_step = value; break;
         default: break;
         }

@@ -82,7 +82,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     try:
         table = build_table(spec, experiment, keep)
         identifier = spec.name
-        fns = generate_functions(spec, src)
+        fns = generate_functions(spec, src, table)
         for f in runtime_sources():
             shutil.copy2(f, src / f.name)
         for h in FMI_HEADERS:

@@ -186,6 +186,10 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
     return effects
 
 
+# valid ranges of the FMU's tolerance settings (c_src/gw_core.h GW_REL_TOL_MIN ...)
+TOLERANCE_RANGES = {"rel_tol": (2.220446049250313e-15, 1.0), "abs_tol": (1e-30, 1.0)}
+
+
 def _experiment(r: _Reader, data: dict) -> Experiment:
     exp = Experiment()
     r.unknown("experiment", data, set(Experiment.__dataclass_fields__))
@@ -200,6 +204,9 @@ def _experiment(r: _Reader, data: dict) -> Experiment:
             setattr(exp, key, r.positive("experiment", key, value))
     if exp.stop_time <= exp.start_time:
         raise r.fail("experiment", "stop_time", "must be greater than start_time")
+    for key, (low, high) in TOLERANCE_RANGES.items():  # the FMU refuses others (docs/fmi.md)
+        if not low <= getattr(exp, key) <= high:
+            raise r.fail("experiment", key, f"must lie in [{low:.3g}, {high:g}], got {getattr(exp, key)!r}")
     return exp
 
 

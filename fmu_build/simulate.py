@@ -4,9 +4,28 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ctypes import byref
+
 import numpy as np
 from fmpy import read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
+
+# fmpy 0.3.32 forwards every FMU message through ONE process-global logger (the last one given
+# to fmpy.logging.addLoggerProxy). simulate_fmu(logger=...) proxies a callback that dies when it
+# returns; the next FMU instantiated with fmpy's default callbacks would then call freed memory
+# as soon as it logs (this FMU logs the reason of every non-OK status, e.g. the fall's
+# fmi2Discard). restore_fmpy_logger points the proxy back at a printer that lives as long as the
+# process; call it after any simulate_fmu(logger=...).
+_PRINTER = fmi2CallbackLoggerTYPE(printLogMessage)
+
+
+def restore_fmpy_logger() -> None:
+    """Point fmpy's global logger proxy at a process-lived printer (see above)."""
+    from fmpy.logging import addLoggerProxy
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = _PRINTER
+    addLoggerProxy(byref(callbacks))
 
 
 class SimulationError(RuntimeError):
@@ -83,3 +102,5 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
     except FMICallException as exc:
         reason = "; ".join(messages.errors()) or str(exc)
         raise SimulationError(f"the FMU reported an error: {reason}") from None
+    finally:
+        restore_fmpy_logger()

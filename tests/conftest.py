@@ -72,6 +72,15 @@ def critical_spin(M, R, k_diam, k_axial, g) -> float:
     return math.sqrt(M * g * R * I_d / (I_a * (I_a + M * R**2)))
 
 
+@pytest.fixture(autouse=True)
+def _fmpy_logger_alive():
+    """After every test, fmpy's process-global logger proxy points at a living callback: the
+    process-lived dispatcher of tests/fmi_helpers.py (a test's own logger dies with it)."""
+    yield
+    from fmi_helpers import reproxy
+    reproxy()
+
+
 @pytest.fixture(scope="session")
 def paper_model() -> CasadiWheel:
     return CasadiWheel(**PAPER)

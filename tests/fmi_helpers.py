@@ -1,37 +1,80 @@
-"""Drive an FMU through fmpy's low-level FMU2Slave, capturing its log messages."""
+"""Drive an FMU through fmpy's low-level FMU2Slave / FMU2Model, capturing its log messages.
+
+fmpy's logger proxy (fmpy.logging.addLoggerProxy, fmpy 0.3.32) formats the FMU's message and
+forwards it to ONE process-global Python callback: the last one proxied. If that callback is
+garbage collected, the next FMU that logs through fmpy's default callbacks calls freed memory.
+So every instance here logs through one module-level callback, kept alive for the process,
+that dispatches on componentEnvironment to the instance's own message list.
+"""
 from __future__ import annotations
 
+import ctypes
+import itertools
+import weakref
 from ctypes import byref
 from pathlib import Path
 
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+import numpy as np
+from fmpy import calloc, extract, free, read_model_description  # fmpy's C allocator
+from fmpy.fmi2 import (FMU2Model, FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-from fmpy import calloc, free  # the C library allocator, as fmpy itself uses it
 from fmpy.logging import addLoggerProxy
 
+_INSTANCES: "weakref.WeakValueDictionary[int, _Instance]" = weakref.WeakValueDictionary()
+_IDS = itertools.count(1)
+ORPHANS: list[tuple[int, str, str]] = []  # messages of instances already gone
 
-class Slave:
-    """One instance of a Co-Simulation FMU with named access to its variables."""
 
-    def __init__(self, fmu: str | Path, unzipdir: str | Path | None = None, name: str = "wheel",
-                 md=None):
+def _dispatch(env, instance, status, category, message):
+    record = (int(status), (category or b"").decode(), (message or b"").decode())
+    target = _INSTANCES.get(env or 0)
+    (target.messages if target is not None else ORPHANS).append(record)
+
+
+_LOGGER = fmi2CallbackLoggerTYPE(_dispatch)  # alive as long as the process
+
+
+def reproxy() -> None:
+    """Point fmpy's global logger proxy at the dispatcher again (after a simulate_fmu(logger=...)
+    whose callback is gone); instances keep receiving their own messages."""
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = _LOGGER
+    addLoggerProxy(byref(callbacks))
+
+
+class _Instance:
+    """One FMU instance of either interface with named access to its variables."""
+
+    def __init__(self, fmu: str | Path, cls, unzipdir=None, name: str = "wheel", md=None,
+                 logging_on: bool = True):
         self.fmu = str(fmu)
         self.md = md or read_model_description(self.fmu)
         self.unzipdir = str(unzipdir or extract(self.fmu))
         self.vars = {v.name: v for v in self.md.modelVariables}
         self.messages: list[tuple[int, str, str]] = []
+        self.env_id = next(_IDS)
+        _INSTANCES[self.env_id] = self
         self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.logger = _LOGGER
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._callbacks.componentEnvironment = self.env_id
         addLoggerProxy(byref(self._callbacks))
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipdir,
-                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.slave.instantiate(callbacks=self._callbacks, loggingOn=True)
+        iface = self.md.coSimulation if cls is FMU2Slave else (self.md.modelExchange or self.md.coSimulation)
+        self.fmu2 = cls(guid=self.md.guid, unzipDirectory=self.unzipdir,
+                        modelIdentifier=iface.modelIdentifier, instanceName=name)
+        self.fmu2.instantiate(callbacks=self._callbacks, loggingOn=logging_on)
 
-    def _log(self, env, instance, status, category, message):
-        self.messages.append((int(status), (category or b"").decode(), (message or b"").decode()))
+    @property
+    def slave(self):  # the name the Co-Simulation tests use
+        return self.fmu2
+
+    def raw(self, function: str, *args) -> int:
+        """Call an fmi2 function of the shared library directly (fmpy's wrappers raise on a
+        status above fmi2Warning); the component is passed first. Returns the fmi2Status."""
+        f = getattr(self.fmu2.dll, function)
+        f.restype = ctypes.c_int
+        return f(ctypes.c_void_p(self.fmu2.component), *args)
 
     def log_text(self) -> str:
         return "\n".join(m for _, _, m in self.messages)
@@ -43,30 +86,72 @@ class Slave:
         for name, value in values.items():
             v = self.vars[name]
             if v.type == "Real":
-                self.slave.setReal([v.valueReference], [float(value)])
+                self.fmu2.setReal([v.valueReference], [float(value)])
             elif v.type in ("Integer", "Enumeration"):
-                self.slave.setInteger([v.valueReference], [int(value)])
+                self.fmu2.setInteger([v.valueReference], [int(value)])
             elif v.type == "Boolean":
-                self.slave.setBoolean([v.valueReference], [bool(value)])
+                self.fmu2.setBoolean([v.valueReference], [bool(value)])
 
     def get(self, *names: str):
         out = []
         for name in names:
             v = self.vars[name]
             if v.type == "Real":
-                out.append(self.slave.getReal([v.valueReference])[0])
+                out.append(self.fmu2.getReal([v.valueReference])[0])
             elif v.type in ("Integer", "Enumeration"):
-                out.append(self.slave.getInteger([v.valueReference])[0])
+                out.append(self.fmu2.getInteger([v.valueReference])[0])
             else:
-                out.append(bool(self.slave.getBoolean([v.valueReference])[0]))
+                out.append(bool(self.fmu2.getBoolean([v.valueReference])[0]))
         return out[0] if len(out) == 1 else out
 
     def init(self, start_time: float = 0.0, tolerance: float | None = None, stop_time: float | None = None,
              **values) -> None:
-        self.slave.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
+        self.fmu2.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
         self.set(**values)
-        self.slave.enterInitializationMode()
-        self.slave.exitInitializationMode()
+        self.fmu2.enterInitializationMode()
+        self.fmu2.exitInitializationMode()
 
     def free(self) -> None:
-        self.slave.freeInstance()
+        self.fmu2.freeInstance()
+
+
+class Slave(_Instance):
+    """A Co-Simulation instance (FMU2Slave)."""
+
+    def __init__(self, fmu: str | Path, unzipdir: str | Path | None = None, name: str = "wheel",
+                 md=None, logging_on: bool = True):
+        super().__init__(fmu, FMU2Slave, unzipdir, name, md, logging_on)
+
+
+class Model(_Instance):
+    """A Model Exchange instance (FMU2Model) with numpy access to the state vector."""
+
+    def __init__(self, fmu: str | Path, unzipdir: str | Path | None = None, name: str = "wheel",
+                 md=None, logging_on: bool = True):
+        super().__init__(fmu, FMU2Model, unzipdir, name, md, logging_on)
+        self.nx = len(self.md.derivatives)
+        self.nz = self.md.numberOfEventIndicators
+
+    @staticmethod
+    def _ptr(a: np.ndarray):
+        return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+    def states(self) -> np.ndarray:
+        x = np.zeros(self.nx)
+        self.fmu2.getContinuousStates(self._ptr(x), self.nx)
+        return x
+
+    def set_states(self, t: float, x: np.ndarray) -> None:
+        self.fmu2.setTime(t)
+        xc = np.ascontiguousarray(x, dtype=float)
+        self.fmu2.setContinuousStates(self._ptr(xc), self.nx)
+
+    def derivatives(self) -> np.ndarray:
+        d = np.zeros(self.nx)
+        self.fmu2.getDerivatives(self._ptr(d), self.nx)
+        return d
+
+    def indicators(self) -> np.ndarray:
+        z = np.zeros(self.nz)
+        self.fmu2.getEventIndicators(self._ptr(z), self.nz)
+        return z

@@ -200,7 +200,7 @@ def test_two_models_side_by_side(earth, earth_gcc, earth_reference, lunar, tmp_p
     assert lunar_result["time"][-1] == t_fall and lunar_result["fallen"][-1] == 1
     first = int(np.argmax(lunar_reference["slipping"]))
     assert lunar_reference["time"][first - 1] < t_slip <= lunar_reference["time"][first]
-    assert "a state of another model" in info["cross_restore"]
+    assert "do not match this model" in info["cross_restore"]
 
 
 def results(stdout: str) -> dict[str, dict[str, float]]:

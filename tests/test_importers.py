@@ -1,9 +1,10 @@
-"""Other importers: fmpy's rebuild from sources/, and libcosim (a real co-simulation master)."""
+"""Other importers: fmpy's rebuild from sources/, libcosim and ecospy (real co-simulation masters)."""
 from __future__ import annotations
 
 import shutil
 
 import numpy as np
+import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.build import build_platform_binary
 
@@ -43,3 +44,58 @@ def test_runs_under_libcosim(earth_fmu):
     reference = simulate_fmu(str(earth_fmu), stop_time=2.0, output_interval=0.01, start_values={"g": 3.721})
     np.testing.assert_allclose(values, [reference[n][-1] for n in STATES], rtol=1e-8, atol=1e-10)
     assert execution.status().current_time == int(2e9)
+
+
+def test_runs_under_ecospy_to_the_fall_and_ends_cleanly(earth_fmu, capfd):
+    """ecospy 0.7.2 (a second real master): the spinless wheel falls at t = 0.4335 s; ecospy ignores
+    fmi2Discard and steps on to 2 s. The FMU answers every further step with fmi2Discard, keeps the
+    state at the fall, logs the refusal once (counted, "repeated 154 more times") and terminates
+    cleanly. Before: fmi2Error at the first further step, then one "illegal call in state Error"
+    line per step."""
+    from ecospy import EcosLib, EcosSimulation, EcosSimulationStructure
+
+    EcosLib.set_log_level("debug")  # ecospy prints the FMU's messages at debug level
+    try:
+        with EcosSimulationStructure() as structure:
+            structure.add_model("wheel", str(earth_fmu))
+            structure.add_parameter_set("nospin", {"wheel::gamma_dot": 0.0})
+            with EcosSimulation(structure=structure, step_size=0.01) as sim:
+                sim.init(parameter_set="nospin")
+                sim.step_until(2.0)
+                assert sim.get_time() == pytest.approx(2.0, abs=0.011)
+                values = [sim.get_real(f"wheel::{n}") for n in STATES]
+                assert sim.get_bool("wheel::fallen")
+                sim.terminate()
+    finally:
+        EcosLib.set_log_level("warn")
+    out = capfd.readouterr().out
+    reference = simulate_fmu(str(earth_fmu), stop_time=2.0, start_values={"gamma_dot": 0.0})
+    assert reference["time"][-1] == pytest.approx(0.4335, abs=1e-3)
+    np.testing.assert_allclose(values, [reference[n][-1] for n in STATES], rtol=1e-9, atol=1e-10)
+    beta_min = float(next(v.start for v in read_model_description(str(earth_fmu)).modelVariables
+                          if v.name == "beta_min"))
+    assert values[STATES.index("beta")] == pytest.approx(beta_min, abs=1e-9)
+    assert "fmi2Error" not in out and "illegal call" not in out
+    assert out.count("no further step is computed") == 1
+    assert "(the previous message was repeated 154 more times)" in out
+
+
+def test_fmu_manipulation_toolbox_reads_and_repacks(earth_fmu, tmp_path):
+    """fmu-manipulation-toolbox 2.0 lists the interface; a repacked FMU (its descriptor rewritten
+    by the toolbox) still runs in fmpy with the same result."""
+    import csv
+
+    from fmu_manipulation_toolbox.operations import FMU, OperationSaveNamesToCSV, OperationStripTopLevel
+
+    names = tmp_path / "names.csv"
+    with FMU(str(earth_fmu)) as fmu:
+        fmu.apply_operation(OperationSaveNamesToCSV(str(names)))
+        fmu.apply_operation(OperationStripTopLevel())
+        fmu.repack(str(tmp_path / "repacked.fmu"))
+    rows = {r["name"]: r for r in csv.DictReader(names.open(), delimiter=";", quotechar="'")}
+    md = read_model_description(str(earth_fmu))
+    assert set(rows) == {v.name for v in md.modelVariables}
+    assert rows["solver"]["scalarType"] == "Enumeration" and rows["g"]["causality"] == "parameter"
+    a = simulate_fmu(str(earth_fmu), stop_time=1.0, output=STATES)
+    b = simulate_fmu(str(tmp_path / "repacked.fmu"), stop_time=1.0, output=STATES)
+    assert all(a[n][-1] == b[n][-1] for n in STATES)

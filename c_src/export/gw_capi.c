@@ -123,8 +123,6 @@ GYROWHEEL_EXPORT void GWC(free)(GWC_T *w) {
     gw_instance_free(w->I);
     if (w->p_tmp) a.free(a.ctx, w->p_tmp);
     if (w->s_tmp) a.free(a.ctx, w->s_tmp);
-    if (w->state_backup) a.free(a.ctx, w->state_backup);
-    if (w->t_events_backup) a.free(a.ctx, w->t_events_backup);
     a.free(a.ctx, w);
 }
 
@@ -151,9 +149,7 @@ static GWC_T *gwc_new(const gyrowheel_allocator *allocator) {
     w->core_state_size = gw_state_size(w->I);
     w->p_tmp = (double *)gwc_alloc(w, (size_t)m->np, sizeof(double));
     w->s_tmp = (double *)gwc_alloc(w, (size_t)m->ns, sizeof(double));
-    w->state_backup = (unsigned char *)gwc_alloc(w, w->core_state_size, 1);
-    w->t_events_backup = (double *)gwc_alloc(w, (size_t)m->ne, sizeof(double));
-    if (!w->p_tmp || !w->s_tmp || !w->state_backup || !w->t_events_backup) goto fail;
+    if (!w->p_tmp || !w->s_tmp) goto fail;
     return w;
 fail:
     GWC(free)(w);

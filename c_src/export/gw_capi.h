@@ -41,8 +41,6 @@ struct GWC_T {
     gyrowheel_logger logger;
     void *logger_env;
     double *p_tmp, *s_tmp;       /* np, ns: values being assembled by *_named */
-    unsigned char *state_backup; /* the core's state before a restore (rolled back if bad) */
-    double *t_events_backup;     /* ne */
     size_t core_state_size;
     size_t pending_len;
     char pending[GWC_MSG];    /* error messages of the core during the call in progress */

@@ -220,11 +220,18 @@ static void bad_calls(void) {
 }
 
 /* ---- saving and restoring ------------------------------------------------------------------ */
-static uint64_t fnv1a(const unsigned char *p, size_t n) {
-    uint64_t h = 14695981039346656037ull;
+/* the core state's trailing CRC-32 (IEEE 802.3, as zlib's crc32) over every byte before it,
+ * recomputed here so that a crafted buffer passes the checksum and meets the value checks */
+static void seal(unsigned char *p, size_t n) {
+    uint32_t crc = 0xFFFFFFFFu;
     size_t i;
-    for (i = 0; i < n; i++) h = (h ^ p[i]) * 1099511628211ull;
-    return h;
+    int k;
+    for (i = 0; i + 4 < n; i++) {
+        crc ^= p[i];
+        for (k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    crc ^= 0xFFFFFFFFu;
+    memcpy(p + n - 4, &crc, 4);
 }
 
 static void save_restore(void) {
@@ -233,7 +240,6 @@ static void save_restore(void) {
     unsigned char *buf = (unsigned char *)malloc(size), *bad = (unsigned char *)malloc(size);
     double y3[PAPER_EARTH_NY], y[PAPER_EARTH_NY], x2[PAPER_EARTH_NX], x[PAPER_EARTH_NX], nan = NAN;
     size_t i, refused = 0;
-    uint64_t sum;
     CHECK(size > 24 && buf && bad);
     if (!buf || !bad) return;
     CHECK(paper_earth_advance(w, 2.0) == GYROWHEEL_OK);
@@ -255,7 +261,7 @@ static void save_restore(void) {
     CHECK(paper_earth_time(w) == 3.0 && paper_earth_get_outputs(w, y) == 0);
     CHECK(memcmp(y, y3, sizeof(y)) == 0);
     CHECK(paper_earth_restore_state(w, buf, size - 1) == GYROWHEEL_ERR_STATE);
-    CHECK_MSG(w, "its header says");
+    CHECK_MSG(w, "header says");
     memcpy(bad, buf, size);
     bad[0] = 'X';
     CHECK(paper_earth_restore_state(w, bad, size) == GYROWHEEL_ERR_STATE);
@@ -267,10 +273,9 @@ static void save_restore(void) {
     CHECK(i + 8 <= size);
     if (i + 8 <= size) {
         memcpy(bad + i, &nan, 8);
-        sum = fnv1a(bad + 24, size - 24);
-        memcpy(bad + 16, &sum, 8);
+        seal(bad, size);
         CHECK(paper_earth_restore_state(w, bad, size) == GYROWHEEL_ERR_STATE);
-        CHECK_MSG(w, "the state holds invalid values: a state is not finite");
+        CHECK_MSG(w, "FMU state holds an invalid x[");
         CHECK(paper_earth_get_states(w, x) == GYROWHEEL_OK && paper_earth_time(w) == 3.0);
         CHECK(!isnan(x[PAPER_EARTH_X_beta]));
     }
@@ -281,8 +286,7 @@ static void save_restore(void) {
     CHECK(i + 8 <= size);
     if (i + 8 <= size) {
         bad[i + 1] = bad[i + 1] == 'f' ? 'e' : 'f';
-        sum = fnv1a(bad + 24, size - 24);
-        memcpy(bad + 16, &sum, 8);
+        seal(bad, size);
         CHECK(paper_earth_restore_state(w, bad, size) == GYROWHEEL_ERR_STATE);
         CHECK_MSG(w, "belongs to another model (token mismatch");
         CHECK(paper_earth_time(w) == 3.0);

@@ -171,7 +171,7 @@ static void errors(void) {
     CHECK(I->in_setup); /* still configurable */
     set(I, VR_K, 1.0);
     CHECK(gw_setup_experiment(I, "setup", 1, -1.0, 0.0, 0, 0.0) == GW_ERROR);
-    CHECK(logged("setup: tolerance -1 must be finite and > 0"));
+    CHECK(logged("setup: tolerance -1 is outside the valid range of a relative tolerance"));
     CHECK(gw_set_logging(I, "logging", 1, 1, cats) == GW_ERROR);
     CHECK(logged("unknown log category \"logNothing\""));
     CHECK(gw_initialize(I, "initialize") == GW_OK);

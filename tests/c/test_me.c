@@ -210,8 +210,16 @@ static void test_rk4_importer_with_events(void) {
         CHECK(ei.terminateSimulation == fmi2True);
         CHECK_NO_LOG("event hit at t=");
     }
-    /* the importer may not go on after terminateSimulation */
-    EXPECT_ERROR(fmi2EnterContinuousTimeMode(c), "terminated at t=");
+    /* OMSimulator and the FMU Compliance Checker enter Continuous-Time Mode once more before
+     * they look at terminateSimulation: accepted, the instance stays terminated */
+    CHECK_STATUS(fmi2EnterContinuousTimeMode(c), fmi2OK);
+    {
+        fmi2Boolean enter = fmi2True, term = fmi2False;
+        CHECK_STATUS(fmi2CompletedIntegratorStep(c, fmi2True, &enter, &term), fmi2OK);
+        CHECK(!enter && term);
+    }
+    CHECK(!isnan(getr(c, VR_ENERGY)));
+    CHECK_STATUS(fmi2Terminate(c), fmi2OK);
     CHECK_STATUS(fmi2Reset(c), fmi2OK);
 
     /* again, with an FMU state taken in CT mode just before the WARN event */
@@ -562,11 +570,11 @@ static void test_errors(void) {
     to_ct_mode(c, &s);
     vr = VR_K;
     EXPECT_ERROR(fmi2GetDirectionalDerivative(c, &vr, 1, KNOWN, 1, seed, r),
-                 "unknown k (vr=0) is not a Real output, continuous state or state derivative");
+                 "k (vr=0) is not an unknown (a Real output, continuous state or state derivative)");
     CHECK_STATUS(fmi2Reset(c), fmi2OK);
     to_ct_mode(c, &s);
     vr = VR_HIT;
-    EXPECT_ERROR(fmi2GetDirectionalDerivative(c, &vr, 1, KNOWN, 1, seed, r), "unknown hit (vr=50)");
+    EXPECT_ERROR(fmi2GetDirectionalDerivative(c, &vr, 1, KNOWN, 1, seed, r), "hit (vr=50) is not an unknown");
     CHECK_STATUS(fmi2Reset(c), fmi2OK);
     to_ct_mode(c, &s);
     vr = VR_ENERGY;

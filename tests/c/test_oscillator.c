@@ -101,7 +101,7 @@ static void test_initial_values(void) {
     CHECK_NEAR(getr(c, VR_POS), 1.0, 0.0);
     CHECK_NEAR(getr(c, VR_ENERGY), 0.5, 1e-15);
     CHECK_STATUS(fmi2SetupExperiment(c, fmi2True, 1e-9, 0.0, fmi2False, 0.0), fmi2OK);
-    CHECK_NEAR(getr(c, VR_REL_TOL), 1e-9, 0.0); /* tolerance overrides rel_tol */
+    CHECK_NEAR(getr(c, VR_REL_TOL), 1e-6, 0.0); /* resolved at initialisation */
     CHECK_STATUS(setr(c, VR_REL_TOL, 1e-3), fmi2OK);
     CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
     CHECK_STATUS(setr(c, VR_POS, 0.8), fmi2OK);
@@ -125,7 +125,8 @@ static void test_initial_values(void) {
     CHECK(getb(c, VR_USE_FORCE) == fmi2True);
     CHECK(getb(c, VR_HIT) == fmi2False);
     CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
-    CHECK_NEAR(getr(c, VR_REL_TOL), 1e-9, 0.0); /* the tolerance wins over a later rel_tol */
+    CHECK_NEAR(getr(c, VR_REL_TOL), 1e-3, 0.0); /* an explicit rel_tol wins over the tolerance */
+    CHECK_NEAR(getr(c, VR_ABS_TOL), 1e-8, 0.0); /* ... and abs_tol keeps its default */
     CHECK_NEAR(getr(c, VR_POS), 0.8, 0.0);
     CHECK_NEAR(getr(c, VR_ENERGY), 0.64, 1e-15);
     CHECK_STATUS(fmi2GetString(c, NULL, 0, NULL), fmi2OK);
@@ -228,9 +229,20 @@ static void test_checks_and_settings(void) {
     } cases[] = {
         {VR_K, -1.0, "k must be > 0 (check value -1)"},
         {VR_K, 0.0, "k must be > 0 (check value 0)"},
-        {VR_REL_TOL, 0.0, "rel_tol = 0 must be finite and > 0"},
-        {VR_ABS_TOL, -1e-9, "abs_tol = -1e-09 must be finite and > 0"},
-        {VR_MAX_STEP, -0.1, "max_step = -0.1 must be finite and > 0"},
+    };
+    /* settings outside their ranges are refused at the call (gw_core.h, docs/fmi.md) */
+    static const struct {
+        fmi2ValueReference vr;
+        double v;
+        const char *msg;
+    } settings[] = {
+        {VR_REL_TOL, 0.0, "rel_tol = 0 is outside its valid range [2.22e-15, 1]"},
+        {VR_REL_TOL, 1e-16, "rel_tol = 1e-16 is outside its valid range"},
+        {VR_REL_TOL, 1e6, "rel_tol = 1e+06 is outside its valid range"},
+        {VR_ABS_TOL, -1e-9, "abs_tol = -1e-09 is outside its valid range [1e-30, 1]"},
+        {VR_ABS_TOL, 2.0, "abs_tol = 2 is outside its valid range"},
+        {VR_MAX_STEP, -0.1, "max_step = -0.1 must be > 0"},
+        {VR_MAX_STEP, 0.0, "max_step = 0 must be > 0"},
     };
     size_t i;
     for (i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
@@ -238,12 +250,14 @@ static void test_checks_and_settings(void) {
         CHECK_STATUS(setr(c, cases[i].vr, cases[i].v), fmi2OK);
         EXPECT_ERROR(c, fmi2ExitInitializationMode(c), cases[i].msg);
     }
-    CHECK_STATUS(seti(c, VR_SOLVER, 6), fmi2OK); /* 4 rosenbrock, 5 dop853: test_c_solvers */
-    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
-    EXPECT_ERROR(c, fmi2ExitInitializationMode(c), "unknown solver 6");
-    CHECK_STATUS(seti(c, VR_SOLVER, 99), fmi2OK);
-    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
-    EXPECT_ERROR(c, fmi2ExitInitializationMode(c), "unknown solver 99");
+    for (i = 0; i < sizeof(settings) / sizeof(settings[0]); i++)
+        EXPECT_ERROR(c, setr(c, settings[i].vr, settings[i].v), settings[i].msg);
+    /* 4 rosenbrock, 5 dop853: test_c_solvers */
+    EXPECT_ERROR(c, seti(c, VR_SOLVER, 6), "solver = 6 is not a solver: valid are 1 (euler)");
+    EXPECT_ERROR(c, seti(c, VR_SOLVER, 0), "solver = 0 is not a solver");
+    EXPECT_ERROR(c, seti(c, VR_SOLVER, 99), "solver = 99 is not a solver");
+    EXPECT_ERROR(c, fmi2SetupExperiment(c, fmi2True, 2.0, 0.0, fmi2False, 0.0),
+                 "tolerance 2 is outside the valid range of a relative tolerance");
     /* after all that, defaults are back and the instance works */
     CHECK_NEAR(getr(c, VR_K), 1.0, 0.0);
     CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
@@ -305,12 +319,25 @@ static void run_terminate(int solver, double rtol, double max_step, double h, do
     CHECK(v[0] <= 0.5);
     CHECK_NEAR(v[1], -sin(te), tol);
     CHECK(getb(c, VR_HIT) == fmi2True);
-    /* never loops: the next step is an error with a reason */
+    /* the reason of the Discard is logged, whatever the logging settings */
+    CHECK_LOG("fmi2DoStep: hit at t=1.0471");
+    /* a master that ignores fmi2Discard and keeps stepping (ecospy): every further step is
+     * fmi2Discard with one logged reason, the state stays the fall's, terminate works */
     log_clear();
-    CHECK_STATUS(fmi2DoStep(c, t, h, fmi2True), fmi2Error);
-    CHECK_LOG("simulation terminated at t=1.0471");
-    CHECK_STATUS(fmi2DoStep(c, t, h, fmi2True), fmi2Error);
-    CHECK_NEAR(getr(c, VR_POS), 0.5, tol); /* still readable (debugging) */
+    CHECK_STATUS(fmi2DoStep(c, t, h, fmi2True), fmi2Discard);
+    CHECK_LOG("the simulation terminated at t=1.0471");
+    CHECK_LOG("no further step is computed");
+    for (n = 0; n < 50; n++) CHECK_STATUS(fmi2DoStep(c, t + n * h, h, fmi2True), fmi2Discard);
+    CHECK_NEAR(last_time(c), te, tol);
+    CHECK_STATUS(fmi2GetBooleanStatus(c, fmi2Terminated, &term), fmi2OK);
+    CHECK(term == fmi2True);
+    CHECK_NEAR(getr(c, VR_POS), 0.5, tol); /* still the state at the fall */
+    CHECK_STATUS(fmi2Terminate(c), fmi2OK);
+    CHECK_LOG("(the previous message was repeated 50 more times)");
+    CHECK_NEAR(getr(c, VR_POS), 0.5, tol);
+    CHECK_STATUS(fmi2Terminate(c), fmi2Warning); /* a second Terminate (PyFMI) is ignored */
+    CHECK_LOG("fmi2Terminate: already terminated; the call is ignored");
+    CHECK_STATUS(fmi2Reset(c), fmi2OK);
     fmi2FreeInstance(c);
 }
 
@@ -332,8 +359,8 @@ static void test_terminate_event(void) {
     CHECK_STATUS(fmi2GetBooleanStatus(c, fmi2Terminated, &term), fmi2OK);
     CHECK(term == fmi2True);
     log_clear();
-    CHECK_STATUS(fmi2DoStep(c, 2.0, 1.0, fmi2True), fmi2Error);
-    CHECK_LOG("simulation terminated at t=");
+    CHECK_STATUS(fmi2DoStep(c, 2.0, 1.0, fmi2True), fmi2Discard);
+    CHECK_LOG("the simulation terminated at t=");
     CHECK_STATUS(fmi2Reset(c), fmi2OK);
     CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
     CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);

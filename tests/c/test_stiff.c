@@ -150,7 +150,7 @@ static void test_order(void) {
     p.w = 2.0;
     for (i = 0; i < 2; i++) {
         const double h = i ? 0.1 : 0.2;
-        fmi2Component c = start("order", ROSENBROCK, 1e3, 1e3, h, &p);
+        fmi2Component c = start("order", ROSENBROCK, 1.0, 1.0, h, &p);
         err[i] = run(c, &p, 0.4, 8.0, NULL);
         fmi2FreeInstance(c);
     }

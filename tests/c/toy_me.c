@@ -188,5 +188,6 @@ static const gw_model GW_MODEL = {
     check_messages,
     GW_SOLVER_DOPRI5,
     1e-8, 1e-10, 0.01,
+    {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
     {NULL, NULL}, /* upd: no update events */
 };

@@ -128,5 +128,6 @@ static const gw_model GW_MODEL = {
     check_messages,
     GW_SOLVER_DOPRI5,
     1e-10, 1e-12, 0.05,
+    {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
     {upd_f, w_5_1},
 };

@@ -140,5 +140,6 @@ static const gw_model GW_MODEL = {
     check_messages,
     GW_SOLVER_ROSENBROCK,
     1e-6, 1e-8, 10.0,
+    {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
     {NULL, NULL}, /* upd: no update events */
 };

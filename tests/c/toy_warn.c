@@ -95,5 +95,6 @@ static const gw_model GW_MODEL = {
     check_messages,
     GW_SOLVER_RK4,
     1e-6, 1e-9, 0.01,
+    {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
     {NULL, NULL}, /* upd: no update events */
 };

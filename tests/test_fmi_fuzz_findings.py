@@ -1,0 +1,221 @@
+"""Issue 8, section 9: what a fuzzer found (except the step budget, issue 8's other part).
+
+Each finding is a test with the value before (the issue's) and after:
+  (a) non-finite values handed to the caller
+      R = 0, M = 0, M = 1e308, R = 5e-324 set in Initialization Mode, fmi2GetReal(der(...)):
+        before NaN with fmi2Warning and no log; after fmi2Error naming the variable and the
+        failed validity check, the caller's array untouched
+      fmi2GetDirectionalDerivative with seed 1e308: before Inf with fmi2OK; after fmi2Error
+  (b) Model Exchange fmi2ExitInitializationMode with M = 1e308: before fmi2Discard (not allowed
+      for that call), nothing logged, instance half-initialised in Event Mode; after fmi2Error
+      with the reason, exactly as Co-Simulation, and no Event Mode
+  (c) corrupt FMU states: before only the header was checked (3,848 of 4,536 single bit flips of
+      a paper_earth state accepted; solver = 42, NaN states, rel_tol = -1 accepted); after a
+      CRC-32 and the same range checks as fmi2Set*: every flip and every bad field refused
+  (d) smaller: an out-of-range solver via fmi2SetInteger (before OK, failed only at
+      initialisation), rel_tol = 1e308 / 1e6 (before accepted: no error control / "step size
+      underflow"), fmi2DoStep with h below the resolution of t (before fmi2OK without advancing,
+      nothing said), fmi2SetInteger / fmi2SetString in Continuous-Time Mode (before fmi2OK):
+      all refused at the call with a reason.
+"""
+from __future__ import annotations
+
+import ctypes
+import math
+import random
+import struct
+import zlib
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+
+from conftest import STATES
+from fmi_helpers import Model, Slave
+
+SENTINEL = 12345.0
+
+
+def _raw_get_real(inst, names):
+    """fmi2GetReal into an array pre-filled with a sentinel: (status, values)."""
+    n = len(names)
+    vr = (ctypes.c_uint * n)(*[inst.vr(x) for x in names])
+    out = (ctypes.c_double * n)(*([SENTINEL] * n))
+    status = inst.raw("fmi2GetReal", vr, ctypes.c_size_t(n), out)
+    return status, list(out)
+
+
+@pytest.mark.parametrize("values,check", [({"R": 0.0}, "R (radius) must be > 0"), ({"M": 0.0}, "M (mass) must be > 0"),
+                                          ({"M": 1e308}, ""), ({"R": 5e-324}, "")])
+@pytest.mark.parametrize("kind", [Slave, Model])
+def test_initial_derivatives_never_non_finite(earth_fmu, kind, values, check):
+    inst = kind(earth_fmu, logging_on=False)
+    try:
+        inst.fmu2.setupExperiment(startTime=0.0)
+        inst.set(**values)
+        inst.fmu2.enterInitializationMode()
+        names = [f"der({n})" for n in STATES] + ["energy"]
+        status, out = _raw_get_real(inst, names)
+        if status == 0:  # computable after all: then every value is finite
+            assert all(math.isfinite(v) for v in out)
+        else:  # before: fmi2Warning with NaN in the array and no message
+            assert status == 3 and out == [SENTINEL] * len(names)
+            assert "is not finite" in inst.log_text() and check in inst.log_text()
+    finally:
+        inst.free()
+
+
+@pytest.mark.parametrize("kind", [Slave, Model])
+def test_huge_seed_is_refused_not_inf(earth_fmu, kind):
+    inst = kind(earth_fmu, logging_on=False)
+    try:
+        inst.init()
+        n = 2
+        uvr = (ctypes.c_uint * n)(inst.vr("der(beta_dot)"), inst.vr("z"))
+        kvr = (ctypes.c_uint * 1)(inst.vr("beta"))
+        seed = (ctypes.c_double * 1)(1e308)
+        out = (ctypes.c_double * n)(SENTINEL, SENTINEL)
+        status = inst.raw("fmi2GetDirectionalDerivative", uvr, ctypes.c_size_t(n), kvr, ctypes.c_size_t(1), seed, out)
+        assert status == 3 and list(out) == [SENTINEL, SENTINEL]  # before: fmi2OK with inf
+        assert "the seed is too large" in inst.log_text()
+    finally:
+        inst.free()
+
+
+@pytest.mark.parametrize("kind", [Slave, Model])
+def test_exit_initialization_refusal_is_the_same_in_both_interfaces(earth_fmu, kind):
+    inst = kind(earth_fmu, logging_on=False)
+    try:
+        inst.fmu2.setupExperiment(startTime=0.0)
+        inst.set(M=1e308)
+        inst.fmu2.enterInitializationMode()
+        status = inst.raw("fmi2ExitInitializationMode")
+        assert status == 3  # before (ME): fmi2Discard, nothing logged
+        assert "fmi2ExitInitializationMode: initial value of output energy is not finite (inf)" \
+            in inst.log_text()
+        if kind is Model:  # not half-initialised in Event Mode: Event Mode calls are refused
+            assert inst.raw("fmi2EnterContinuousTimeMode") == 3
+        inst.fmu2.reset()
+        inst.init()
+    finally:
+        inst.free()
+
+
+# ---- (c) corrupt FMU states -------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def saved(earth_fmu):
+    """A paper_earth instance after 1 s and its serialised state."""
+    s = Slave(earth_fmu, logging_on=False)
+    s.init()
+    s.slave.doStep(0.0, 1.0)
+    blob = bytes(s.slave.serializeFMUstate(s.slave.getFMUstate()))
+    yield s, blob
+    s.free()
+
+
+def _accepts(s, blob: bytes) -> bool:
+    state = ctypes.c_void_p()
+    buf = (ctypes.c_char * len(blob)).from_buffer_copy(blob)
+    status = s.raw("fmi2DeSerializeFMUstate", buf, ctypes.c_size_t(len(blob)), ctypes.byref(state))
+    if status == 0:
+        s.raw("fmi2FreeFMUstate", ctypes.byref(state))
+        return True
+    s.slave.reset()  # fmi2Error: back to a usable instance
+    s.init()
+    s.slave.doStep(0.0, 1.0)
+    return False
+
+
+def test_every_single_bit_flip_is_refused(saved):
+    s, blob = saved
+    assert _accepts(s, blob)
+    accepted = sum(_accepts(s, bytes(blob[:i // 8]) + bytes([blob[i // 8] ^ (1 << i % 8)]) + blob[i // 8 + 1:])
+                   for i in range(8 * len(blob)))
+    print(f"{8 * len(blob)} single bit flips, {accepted} accepted (before: 3,848 of 4,536)")
+    assert accepted == 0
+    assert "CRC-32 checksum does not match" in s.log_text()
+
+
+def _body(blob: bytes) -> int:
+    """Offset of the first field after the model token (gw_state.c layout 2)."""
+    return 44 + struct.unpack_from("<I", blob, 40)[0]
+
+
+def _with_crc(blob: bytearray) -> bytes:
+    struct.pack_into("<I", blob, len(blob) - 4, zlib.crc32(bytes(blob[:-4])) & 0xFFFFFFFF)
+    return bytes(blob)
+
+
+@pytest.mark.parametrize("field,offset,fmt,value,reason", [
+    ("solver", 4, "<i", 42, "solver = 42 is not a solver"),
+    ("rel_tol", 36 + 5 * 8, "<d", -1.0, "rel_tol = -1 is outside its valid range"),
+    ("abs_tol", 36 + 6 * 8, "<d", 1e6, "abs_tol = 1e+06 is outside its valid range"),
+    ("x[0]", 36 + 72 + 40, "<d", math.nan, "invalid x[0] = nan"),
+    ("t", 36, "<d", math.inf, "non-finite t"),
+    ("terminated", 16, "<i", 7, "terminated = 7 (must be 0 or 1)"),
+    ("front state", 0, "<i", 3, "invalid instance state 3"),
+])
+def test_fields_out_of_range_are_refused_even_with_a_valid_checksum(saved, field, offset, fmt, value, reason):
+    s, blob = saved
+    b = bytearray(blob)
+    struct.pack_into(fmt, b, _body(blob) + offset, value)
+    assert not _accepts(s, _with_crc(b))  # before: accepted (only the header was checked)
+    assert reason in s.log_text(), s.log_text()[-300:]
+
+
+def test_random_payload_with_a_valid_header_is_refused(saved):
+    s, blob = saved
+    rng = random.Random(8)
+    for _ in range(50):
+        b = bytearray(blob[:_body(blob)]) + bytearray(rng.getrandbits(8) for _ in range(len(blob) - _body(blob)))
+        assert not _accepts(s, bytes(b))
+        assert not _accepts(s, _with_crc(b))  # a valid checksum over garbage: the range checks
+
+
+# ---- (d) settings and calls refused at the call ------------------------------------------------
+
+@pytest.mark.parametrize("name,value,reason", [
+    ("solver", 42, "solver = 42 is not a solver"), ("solver", 0, "solver = 0 is not a solver"),
+    ("rel_tol", 1e308, "rel_tol = 1e+308 is outside its valid range"),
+    ("rel_tol", 1e6, "rel_tol = 1e+06 is outside its valid range"),
+    ("rel_tol", 1e-20, "rel_tol = 1e-20 is outside its valid range"),
+    ("abs_tol", 0.0, "abs_tol = 0 is outside its valid range"), ("max_step", 0.0, "max_step = 0 must be > 0"),
+])
+def test_settings_are_refused_at_the_call(earth_fmu, name, value, reason):
+    s = Slave(earth_fmu, logging_on=False)
+    try:
+        with pytest.raises(FMICallException) as exc:  # before: fmi2OK, failing later or never
+            s.set(**{name: value})
+        assert exc.value.status == 3 and reason in s.log_text()
+    finally:
+        s.free()
+
+
+def test_step_below_the_resolution_of_t_is_refused(earth_fmu):
+    s = Slave(earth_fmu, logging_on=False)
+    try:
+        s.init(start_time=1e6)
+        with pytest.raises(FMICallException) as exc:  # before: fmi2OK, t unchanged, silent
+            s.slave.doStep(1e6, 1e-12)
+        assert exc.value.status == 3
+        assert "is below the resolution of currentCommunicationPoint" in s.log_text()
+    finally:
+        s.free()
+
+
+@pytest.mark.parametrize("function", ["fmi2SetInteger", "fmi2SetBoolean", "fmi2SetString"])
+def test_discrete_setters_are_refused_in_continuous_time_mode(earth_fmu, function):
+    """FMI 2.0.4 section 3.2.3: not in Continuous-Time Mode. Before: fmi2OK (nvr = 0: the call
+    itself was never checked against the state machine)."""
+    m = Model(earth_fmu, logging_on=False)
+    try:
+        m.init()
+        m.fmu2.newDiscreteStates()
+        m.fmu2.enterContinuousTimeMode()
+        assert m.raw(function, None, ctypes.c_size_t(0), None) == 3
+        assert f"{function}: illegal call in state ContinuousTimeMode" in m.log_text()
+        m.fmu2.reset()
+        m.init()
+    finally:
+        m.free()

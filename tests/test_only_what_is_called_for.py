@@ -20,9 +20,11 @@ BASE_VARIABLES = {
 } | {f"der({s})" for s in STATES}  # state derivatives, for Model Exchange
 EFFECT_VARIABLES = {  # what each effect adds, by name (docs/effects.md)
     "slope": {"slope_angle", "slope_direction"},
-    # the stiction laws (default): a mode state each (local), no smoothing parameter
-    "rolling_resistance": {"c_rr", "rolling_resistance_torque", "lifted_off", "rolling_mode", "der(rolling_mode)"},
-    "spin_friction": {"c_pivot", "d_pivot", "pivot_torque", "lifted_off", "pivot_mode", "der(pivot_mode)"},
+    # the stiction laws (default): a mode state each (local) and its switch event's flag, no smoothing
+    "rolling_resistance": {"c_rr", "rolling_resistance_torque", "lifted_off", "rolling_mode", "der(rolling_mode)",
+                           "rolling_switched"},
+    "spin_friction": {"c_pivot", "d_pivot", "pivot_torque", "lifted_off", "pivot_mode", "der(pivot_mode)",
+                      "pivot_switched"},
     "air_drag": {"rho_air", "cd_area", "c_lin", "cm_spin", "drag_force"},
     "contact_forces": {"mu", "F_n", "F_long", "F_lat", "friction_use", "lifted_off", "slipping"},
     "energy": {"kinetic_energy", "potential_energy", "contact_x", "contact_y"},

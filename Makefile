@@ -73,6 +73,7 @@ test: $(STAMP) browser c-tools tbb
 	$(PY) -m pytest -q
 
 bench: $(STAMP)
+	$(PY) -m pip install --quiet -e ".[bench]"
 	$(PY) benchmarks/work_precision.py --out results/bench
 
 # the real-time figures of docs/c_api.md: the exported C in a fixed-step 1 kHz loop (a few minutes)

@@ -130,4 +130,7 @@ static const gw_model GW_MODEL = {
     1e-10, 1e-12, 0.05,
     {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
     {upd_f, w_5_1},
+    0.0, /* default_max_internal_steps: the runtime's default */
+    {NULL, NULL}, /* ode_pre: none */
+    0,
 };

@@ -227,6 +227,10 @@ GW_API gw_ev_result gw_event_update(gw_instance *I, const double *e_now);
  * fmi2GetEventIndicators): one that is > 0 arms its event (I->e[i] = e[i]), so that a later
  * <= 0 counts as a crossing even when the previous event update left it at 0. */
 GW_API void gw_event_observe(gw_instance *I, const double *e);
+/* 1 if event i is a terminating event and has fired: the reason the simulation ended.  A
+ * flag alone does not say it: warning events and update events (stiction modes: "switched at
+ * least once") set theirs and the simulation goes on. */
+GW_API int gw_event_ended(const gw_instance *I, int i);
 
 /* ---- solvers (gw_solver.c) ------------------------------------------------------------------ */
 

@@ -255,6 +255,10 @@ GW_API gw_ev_result gw_event_update(gw_instance *I, const double *e_now) {
     return r;
 }
 
+GW_API int gw_event_ended(const gw_instance *I, int i) {
+    return I->flags[i] && gw_event_action_of(I, i) == GW_EVENT_TERMINATE;
+}
+
 GW_API void gw_event_observe(gw_instance *I, const double *e) {
     int i;
     for (i = 0; i < I->m->ne; i++)

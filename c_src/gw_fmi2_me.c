@@ -46,9 +46,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
         I->terminated = 1;
         I->last_successful_time = I->t;
         for (i = 0; i < m->ne; i++)
-            if (I->flags[i] && !(I->e[i] > 0.0) &&
-                !(m->event_actions && m->event_actions[i] == GW_EVENT_WARN) &&
-                gw_log_enabled(I, GW_LOG_EVENTS))
+            if (gw_event_ended(I, i) && !(I->e[i] > 0.0) && gw_log_enabled(I, GW_LOG_EVENTS))
                 gw_log(I, GW_OK, GW_LOG_EVENTS,
                        "fmi2NewDiscreteStates: event %s: terminateSimulation = true at t=%.17g",
                        m->event_names ? m->event_names[i] : "?", I->t);

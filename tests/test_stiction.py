@@ -381,22 +381,22 @@ def test_leaning_wheel_breaks_away_where_scipy_does(slope_fmu):
     mode_after, torque_before = r["rolling_mode"][~held][0], r["rolling_resistance_torque"][held][-1]
     assert mode_after == -np.sign(torque_before) == -1.0 and np.all(r["rolling_mode"][~held] == mode_after)
     E = r["energy"] + r["dissipated_energy"]
-    assert np.ptp(E) < 1e-9 * abs(E[0])
+    assert np.ptp(E) < 1e-10 * abs(E[0])  # 4e-12 measured: the fast fall integrated at rel_tol 1e-10
 
 
 # -- Model Exchange and saved states ---------------------------------------------------------------
 
 def test_model_exchange_switches_in_new_discrete_states(slope_fmu):
     """fmpy's ME path with its own event location (CVode): the stop located, then held."""
-    theta, v0 = math.radians(0.5), 0.85
+    theta, v0 = math.radians(0.5), UPHILL_V0
     t_stop = v0 / incline_acceleration(theta, C_RR, -1.0)
-    r, events = run(slope_fmu, 6.0, 0.05, "ModelExchange", slope_angle=theta, c_rr=C_RR, beta=math.pi / 2,
+    r, events = run(slope_fmu, 3.5, 0.05, "ModelExchange", slope_angle=theta, c_rr=C_RR, beta=math.pi / 2,
                     gamma_dot=-v0 / R)
     assert [name for name, _ in events] == ["rolling_stiction"]
     assert events[0][1] == pytest.approx(t_stop, abs=1e-6)
     after = r["time"] > events[0][1]
     assert np.all(r["gamma_dot"][after] == 0.0) and np.all(r["rolling_mode"][after] == 0.0)
-    assert np.ptp(r["x"][after]) < 1e-12
+    assert np.ptp(r["x"][after & upright(r, 3.0)]) < 1e-12
 
 
 def test_model_exchange_reports_changed_states(slope_fmu):

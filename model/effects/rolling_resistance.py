@@ -19,26 +19,15 @@ F_n is solved together with the accelerations (it depends on them). Two laws (sc
 """
 from __future__ import annotations
 
-import casadi as ca
-
 from model.context import WheelContext
-from model.effects.base import Effect
+from model.effects.coulomb import CoulombLaw
 from model.spec import Quantity
 
-LAWS = ("stiction", "smoothed")
 
-
-def smoothing_conflict(options: dict, parameter: str) -> tuple[str, str] | None:
-    """The smoothing parameter given with the stiction law: refused rather than ignored."""
-    if options.get("law", LAWS[0]) == "stiction" and parameter in options:
-        return parameter, ('belongs to law = "smoothed" (the tanh regularisation); law = "stiction" (the '
-                           'default) sticks exactly and has no such parameter: remove it or set law = "smoothed"')
-    return None
-
-
-class RollingResistance(Effect):
+class RollingResistance(CoulombLaw):
     name = "rolling_resistance"
     uses_normal_load = True
+    smoothing = "rr_omega_eps"
     summary = "resistance c_rr F_n to the rolling of the rim, with true stiction (power -c_rr F_n R |gamma_dot|)"
 
     @classmethod
@@ -49,25 +38,10 @@ class RollingResistance(Effect):
                      0.01, minimum=1e-9),
         ]
 
-    @classmethod
-    def choices(cls) -> dict[str, tuple[str, ...]]:
-        return {"law": LAWS}
-
-    @classmethod
-    def option_conflict(cls, options: dict) -> tuple[str, str] | None:
-        return smoothing_conflict(options, "rr_omega_eps")
-
     def apply(self, ctx: WheelContext) -> None:
-        law = self.choice("law")
-        if law == "stiction":  # rr_omega_eps belongs to the smoothed law only
-            self.options["_no_rr_omega_eps"] = True
         p = self.declare(ctx)
         gamma_dot = ctx.qd[4]
-        limit = p["c_rr"] * ctx.par["R"] * ctx.Fn
-        if law == "smoothed":
-            tau = -limit * ca.tanh(gamma_dot / p["rr_omega_eps"])
-        else:
-            tau = ctx.stiction("rolling", gamma_dot, limit, "rolling resistance").force
+        tau = self.coulomb(ctx, p, "rolling", gamma_dot, p["c_rr"] * ctx.par["R"] * ctx.Fn, "rolling resistance")
         ctx.force(tau, gamma_dot, "dissipative")
         ctx.output(Quantity("rolling_resistance_torque", "N.m",
                             "generalised force on the spin coordinate gamma (N.m per rad), not a torque about an "

@@ -10,17 +10,15 @@ optional viscous part. The Coulomb part follows the scene key `law`:
 """
 from __future__ import annotations
 
-import casadi as ca
-
 from model.context import WheelContext
-from model.effects.base import Effect
-from model.effects.rolling_resistance import LAWS, smoothing_conflict
+from model.effects.coulomb import CoulombLaw
 from model.spec import Quantity
 
 
-class SpinFriction(Effect):
+class SpinFriction(CoulombLaw):
     name = "spin_friction"
     uses_normal_load = True
+    smoothing = "pivot_omega_eps"
     summary = "torque about the contact normal opposing the pivot rate alpha_dot + gamma_dot cos(beta), with stiction"
 
     @classmethod
@@ -32,26 +30,10 @@ class SpinFriction(Effect):
                      0.01, minimum=1e-9),
         ]
 
-    @classmethod
-    def choices(cls) -> dict[str, tuple[str, ...]]:
-        return {"law": LAWS}
-
-    @classmethod
-    def option_conflict(cls, options: dict) -> tuple[str, str] | None:
-        return smoothing_conflict(options, "pivot_omega_eps")
-
     def apply(self, ctx: WheelContext) -> None:
-        law = self.choice("law")
-        if law == "stiction":
-            self.options["_no_pivot_omega_eps"] = True
         p = self.declare(ctx)
         w_k = ctx.kin.omega[2]
-        limit = p["c_pivot"] * ctx.Fn
-        if law == "smoothed":
-            coulomb = -limit * ca.tanh(w_k / p["pivot_omega_eps"])
-        else:
-            coulomb = ctx.stiction("pivot", w_k, limit, "pivot friction").force
-        tau = coulomb - p["d_pivot"] * w_k
+        tau = self.coulomb(ctx, p, "pivot", w_k, p["c_pivot"] * ctx.Fn, "pivot friction") - p["d_pivot"] * w_k
         ctx.force(tau, w_k, "dissipative")
         ctx.output(Quantity("pivot_torque", "N.m",
                             "spin-friction torque about the contact normal (the holding torque while stuck)"), tau)

@@ -297,6 +297,22 @@ def test_rolling_uphill_on_a_steep_slope_turns_back(slope_fmu):
     assert np.ptp(E) < 1e-12 * abs(E[0])
 
 
+def test_huge_rolling_resistance_brakes_at_once(slope_fmu):
+    """c_rr = 1.001e6 (the fuzzer's stiff case of the smoothed law, tests/test_bounded_calls.py): with
+    stiction it is a brake, not a stiff term. The rim stops at v0 / a_up (57 ns) and holds; a 1e-4 s
+    step takes a few internal steps (a budget of 100 suffices)."""
+    theta, c_rr, v0 = math.radians(0.5), 1.001e6, UPHILL_V0
+    t_stop = v0 / incline_acceleration(theta, c_rr, -1.0)
+    r, events = run(slope_fmu, 1e-4, 1e-4, slope_angle=theta, c_rr=c_rr, beta=math.pi / 2, gamma_dot=-v0 / R,
+                    max_internal_steps=100)
+    assert [name for name, _ in events] == ["rolling_stiction"]
+    assert events[0][1] == pytest.approx(t_stop, rel=1e-9)
+    assert r["gamma_dot"][-1] == 0.0 and r["rolling_mode"][-1] == 0.0
+    assert r["x"][-1] == pytest.approx(-0.5 * v0 * t_stop, rel=1e-9)
+    E = r["energy"] + r["dissipated_energy"]
+    assert np.ptp(E) < 1e-12 * abs(E[0])
+
+
 # -- pivot friction ------------------------------------------------------------------------------
 
 def test_pivoting_wheel_stops_and_stays_stopped(build):

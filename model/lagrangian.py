@@ -89,6 +89,19 @@ def evaluation_cost(expr: ca.SX) -> int:
     return len(ops) + 7 * ops.count(ca.OP_DIV)
 
 
+def _cramer(A: ca.SX, b: ca.SX) -> ca.SX:
+    """x with A x = b for a small square A (one or two stiction laws) by Cramer's rule: one shared
+    division by det(A) and no square roots (CasADi's symbolic solve is a QR factorisation)."""
+    n = A.size1()
+    inv_det = 1 / ca.det(A)
+    x = ca.SX.zeros(n)
+    for i in range(n):
+        Ai = ca.SX(A)
+        Ai[:, i] = b
+        x[i] = ca.det(Ai) * inv_det
+    return x
+
+
 @dataclass
 class ConstrainedSystem:
     """Placeholders and terms of a system with linear velocity constraints.
@@ -152,6 +165,28 @@ class ConstrainedSystem:
         return ca.simplify(S)
 
     def _solve(self, residual: ca.SX, w: ca.SX) -> ca.SX:
+        """w from the residual, affine in w; the last len(conditions) rows and entries of w are the
+        conditions and their unknowns (the holding forces H of stiction laws).
+
+        Those are eliminated last (a Schur complement): the other rows are solved for the other
+        unknowns with H kept as a symbol (it enters their right-hand side only, linearly:
+        w1 = c0 + C1 H), then the condition rows, affine in H, give H (k x k, k = 1 or 2). So the
+        bulk of the system keeps the small block that _solve_affine's exact polynomial form handles
+        (a 5 x 5 or 6 x 6 block would fall back to CasADi's QR solve, with square roots).
+        """
+        k = len(self.conditions)
+        if k == 0:
+            return self._solve_affine(residual, w)
+        n = w.numel() - k
+        w1, h = w[:n], w[n:]
+        if ca.depends_on(ca.jacobian(residual[:n], w1), h):
+            return self._solve_affine(residual, w)  # H in the coefficients: no elimination
+        w1_h = self._solve_affine(residual[:n], w1)
+        rows_h = ca.substitute(residual[n:], w1, w1_h)
+        h_sol = _cramer(ca.jacobian(rows_h, h), -ca.substitute(rows_h, h, ca.DM.zeros(k)))
+        return ca.vertcat(ca.substitute(w1_h, h, h_sol), h_sol)
+
+    def _solve_affine(self, residual: ca.SX, w: ca.SX) -> ca.SX:
         """w from the residual, which is affine in w: A w + b = 0.
 
         Simplified before code generation, every step exact (issue 11, docs/performance.md):

@@ -45,7 +45,7 @@ def cmd_build(args) -> int:
     except OSError as exc:
         raise CliError(f"{output}: cannot write: {exc.strerror or exc}", EXIT_FAILURE) from None
     try:
-        result = build_fmu(scene, output, build_dir=args.keep_build)
+        result = build_fmu(scene, output, build_dir=args.keep_build, taylor=args.taylor)
     except CompileError as exc:
         raise CliError(f"compiling the FMU failed: {exc}", EXIT_FAILURE) from None
     except ValueError as exc:  # a combination the model refuses (its message names the key)
@@ -224,6 +224,9 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("scene", help="scene file (TOML)")
     b.add_argument("-o", "--output", help="FMU to write (default: <scene name>.fmu)")
     b.add_argument("--keep-build", metavar="DIR", help="keep generated sources and objects in DIR")
+    b.add_argument("--taylor", action="store_true",
+                   help="also generate the Taylor kernel (solver taylor at run time, the ensemble "
+                        "path); implied by solver = \"taylor\" in the scene")
     b.set_defaults(func=cmd_build)
     s = sub.add_parser("simulate", help="simulate an FMU in Co-Simulation with fmpy")
     s.add_argument("fmu")

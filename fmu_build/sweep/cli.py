@@ -25,7 +25,7 @@ def add_parser(sub) -> None:
     e = s.add_argument_group("experiment")
     e.add_argument("--stop-time", type=float, help="s (default: the unit's DefaultExperiment)")
     e.add_argument("--output-interval", type=float, help="communication step, s (default: the unit's step size)")
-    e.add_argument("--solver", help="euler, rk4, dopri5, dop853, rosenbrock")
+    e.add_argument("--solver", help="euler, rk4, dopri5, dop853, rosenbrock, taylor (FMUs with the Taylor kernel)")
     e.add_argument("--rel-tol", type=float)
     e.add_argument("--abs-tol", type=float)
     e.add_argument("--max-step", type=float)
@@ -42,6 +42,8 @@ def add_parser(sub) -> None:
     x.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786")
     x.add_argument("--batch-size", type=int, help="points per task (default: about 4 tasks per worker)")
     x.add_argument("--no-progress", action="store_true", help="no progress bar")
+    x.add_argument("--no-ensemble", action="store_true",
+                   help="with solver taylor, run every point through the FMU instead of the ensemble path")
     s.set_defaults(func=cmd_sweep)
 
 
@@ -60,7 +62,7 @@ def cmd_sweep(args) -> int:
                               fixed=parse_assignments(args.set), derive=args.derive, stop_time=args.stop_time,
                               output_interval=args.output_interval, solver=args.solver, rel_tol=args.rel_tol,
                               abs_tol=args.abs_tol, max_step=args.max_step, metrics=args.metrics,
-                              metric_functions=args.metric_function or ())
+                              metric_functions=args.metric_function or (), ensemble=not args.no_ensemble)
             writer = TableWriter(output, plan.inputs)
             where = args.scheduler or ("in-process loop" if args.workers == 0 else
                                        f"LocalCluster of {args.workers or 'all cores'} worker(s)")

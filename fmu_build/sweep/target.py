@@ -115,6 +115,8 @@ class FmuTarget:
         self.outputs = [v.name for v in self._variables.values() if v.causality == "output" and v.type == "Real"]
         self.flag_names = [v.name for v in self._variables.values()
                            if v.causality == "output" and v.type == "Boolean"]
+        # a gyrowheel FMU built with the Taylor kernel: batches may take the ensemble path
+        self.taylor_kernel = _has_taylor_kernel(self._data)
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -129,6 +131,15 @@ class FmuTarget:
 
     def open(self, payload: bytes | None) -> "FmuInstance":
         return FmuInstance(self, _unpack(self, payload))
+
+
+def _has_taylor_kernel(data: bytes) -> bool:
+    import io
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as zf:
+            return b"GW_TL_NVAR" in zf.read("sources/gw_taylor_model.h")
+    except (KeyError, zipfile.BadZipFile):
+        return False
 
 
 def _unpack(target: FmuTarget, payload: bytes | None) -> str:

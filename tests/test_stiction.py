@@ -281,6 +281,23 @@ def test_rolling_uphill_stops_at_the_analytic_time_and_holds(slope_fmu):
     assert np.ptp(E) < 1e-12 * abs(E[0])  # the stuck constraint does no work
 
 
+def test_taylor_solver_stops_and_holds(build):
+    """Solver taylor (its own dense output and event location, docs/taylor.md) with the update
+    events of stiction: the same analytic stop, then held."""
+    fmu = build("slope_taylor", '[effects.slope]\n[effects.rolling_resistance]\n[effects.energy]\n'
+                '[experiment]\nsolver = "taylor"\n')
+    theta, v0 = math.radians(0.5), UPHILL_V0
+    t_stop = v0 / incline_acceleration(theta, C_RR, -1.0)
+    r, events = run(fmu, 3.5, 0.05, slope_angle=theta, c_rr=C_RR, beta=math.pi / 2, gamma_dot=-v0 / R)
+    assert [name for name, _ in events] == ["rolling_stiction"]
+    assert events[0][1] == pytest.approx(t_stop, abs=1e-9)
+    after = r["time"] > t_stop
+    assert np.all(r["gamma_dot"][after] == 0.0) and np.all(r["rolling_mode"][after] == 0.0)
+    assert np.ptp(r["x"][after & upright(r, 3.5)]) < 1e-12
+    E = r["energy"] + r["dissipated_energy"]
+    assert np.ptp(E) < 1e-12 * abs(E[0])
+
+
 def test_rolling_uphill_on_a_steep_slope_turns_back(slope_fmu):
     theta, v0 = math.atan(2 * C_RR), UPHILL_V0
     t_stop = v0 / incline_acceleration(theta, C_RR, -1.0)

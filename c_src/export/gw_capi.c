@@ -414,7 +414,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(set_inputs)(GWC_T *w, const double *inputs
 static const char *gwc_fired_terminating(const gw_instance *I) {
     int i;
     for (i = 0; i < I->m->ne; i++)
-        if (I->flags[i] && I->m->event_actions && I->m->event_actions[i] == GW_EVENT_TERMINATE)
+        if (gw_event_ended(I, i))
             return GWC_TABLE.rows[GYROWHEEL_KIND_EVENT][i].name;
     return "?";
 }

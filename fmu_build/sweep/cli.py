@@ -47,14 +47,17 @@ def add_parser(sub) -> None:
 
 def cmd_sweep(args) -> int:
     from fmu_build.cli import CliError
-    from fmu_build.sweep.api import open_target, plan_sweep, run_plan
+    from fmu_build.sweep.api import check_execution, open_target, plan_sweep, run_plan
     from fmu_build.sweep.output import TableWriter, check_output_path
+    from fmu_build.sweep.plot import check_plot_path
     from fmu_build.sweep.spec import SweepSpecError, parse_assignments
 
     if args.workers is not None and args.scheduler:
         raise CliError("--workers and --scheduler exclude each other")
     try:
         output = check_output_path(args.output)
+        check_plot_path(args.plot)
+        check_execution(args.workers, args.batch_size)
         with open_target(args.source) as target:
             plan = plan_sweep(target, grid=args.grid, random=args.random, samples=args.samples, seed=args.seed,
                               fixed=parse_assignments(args.set), derive=args.derive, stop_time=args.stop_time,

@@ -67,13 +67,15 @@ def cmd_sweep(args) -> int:
             writer = TableWriter(output, plan.inputs)
             where = args.scheduler or ("in-process loop" if args.workers == 0 else
                                        f"LocalCluster of {args.workers or 'all cores'} worker(s)")
-            print(f"sweep: {len(plan.values)} points, t = {plan.settings.start_time:g} .. "
-                  f"{plan.settings.stop_time:g} s every {plan.settings.output_interval:g} s, on {where}",
-                  file=sys.stderr)
-            try:
+            try:  # from here on, Ctrl-C leaves a complete table of the points done (none, if it comes now)
+                print(f"sweep: {len(plan.values)} points, t = {plan.settings.start_time:g} .. "
+                      f"{plan.settings.stop_time:g} s every {plan.settings.output_interval:g} s, on {where}",
+                      file=sys.stderr)
                 table = run_plan(plan, workers=args.workers, scheduler=args.scheduler, batch_size=args.batch_size,
                                  progress=not args.no_progress, writer=writer)
             except KeyboardInterrupt:
+                if not writer.flushed:  # stopped before run_plan: no table yet, or a previous sweep's
+                    writer.flush()
                 print(f"gyrowheel: interrupted: {writer.written} of {len(plan.values)} points written to {output}",
                       file=sys.stderr)
                 return 130

@@ -67,6 +67,7 @@ class TableWriter:
         self._last = time.monotonic()
         self._cost = 0.0
         self.written = 0
+        self.flushed = False  # the file holds this sweep's table (not a previous one's, or none)
 
     def add(self, rows: list[dict]) -> None:
         self.rows.extend(rows)
@@ -85,6 +86,7 @@ class TableWriter:
             self._cost = time.monotonic() - t0
             self._last = time.monotonic()
             self.written = len(frame)
+            self.flushed = True
         return frame
 
 

@@ -62,6 +62,9 @@ def test_a_missing_enumeration_item_is_no_error(earth_fmu):
     (dict(grid={"M": [1.0]}, output_interval=float("nan")), "--output-interval"),
     (dict(grid={"M": [1.0]}, fixed={"beta": 1.0, "beta_deg": 80.0}), "'beta' given twice"),
     (dict(grid={"M": [1.0]}, fixed={"solver": "rk4"}, solver="dopri5"), "'solver' given twice"),
+    (dict(random={"M": "normal:2:0.1"}, samples=2, seed=-1), "--seed must be a whole number >= 0"),
+    (dict(random={"M": "normal:2:0.1"}, samples=2, seed=1.5), "--seed must be a whole number >= 0"),
+    (dict(random={"M": "normal:2:0.1"}, samples=2.5), "--samples must be a whole number"),
 ])
 def test_bad_values_refused_before_running(earth_fmu, kwargs, message):
     kwargs.setdefault("stop_time", 0.1)
@@ -76,6 +79,7 @@ def test_bad_values_refused_before_running(earth_fmu, kwargs, message):
     (["--grid", "M=1", "--plot", "NODIR/x.png"], "does not exist"),
     (["--grid", "M=1", "--plot", "x.xyz"], "format"),
     (["--grid", "M=1", "--workers", "-1"], "--workers"),
+    (["--random", "M=normal:2:0.1", "--samples", "2", "--seed", "-1"], "--seed must be a whole number >= 0"),
 ])
 def test_cli_bad_values_one_line_exit_2_nothing_run(earth_fmu, tmp_path, capsys, argv, message):
     out = tmp_path / "t.csv"

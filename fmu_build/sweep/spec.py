@@ -152,17 +152,26 @@ def as_random(name: str, spec) -> RandomVariable:
     raise SweepSpecError(f"random {name!r}: expected 'normal:MU:SIGMA', 'uniform:A:B' or a 3-tuple, got {spec!r}")
 
 
+def _whole(value) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
 def point_table(grid: Sequence[Axis] = (), random: Sequence[RandomVariable] = (), samples: int | None = None,
                 seed: int = 0) -> pd.DataFrame:
     """The sweep's inputs, one row per point, columns named as given (index: point number).
 
     Shape: (prod(len(axis.values)) * samples, len(grid) + len(random)). Raises SweepSpecError for
-    a name given twice, random variables without --samples, or nothing to sweep.
+    a name given twice, random variables without --samples, a seed or sample count that is not a
+    whole number (>= 0, >= 1), or nothing to sweep.
     """
     names = [a.name for a in grid] + [r.name for r in random]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise SweepSpecError(f"{', '.join(dup)} given more than once (in --grid/--random)")
+    if not _whole(seed) or seed < 0:  # numpy's own message named no field
+        raise SweepSpecError(f"--seed must be a whole number >= 0 (numpy's default_rng), got {seed!r}")
+    if samples is not None and not _whole(samples):
+        raise SweepSpecError(f"--samples must be a whole number >= 1, got {samples!r}")
     if random and not samples:
         raise SweepSpecError("--random needs --samples N (N >= 1)")
     if samples is not None and samples < 1:

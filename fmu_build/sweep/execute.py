@@ -241,6 +241,19 @@ def execute(plan, writer, *, workers: int | None = None, scheduler: str | None =
     # the cluster closes before the client: its scheduler, told of workers going or of a last
     # result, still finds the client there to tell (else it logs CommClosedError tracebacks)
     with cluster, Client(cluster) as c:
-        if startup.interrupted:
-            raise KeyboardInterrupt
-        return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
+        try:
+            if startup.interrupted:
+                raise KeyboardInterrupt
+            return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
+        except KeyboardInterrupt:
+            _close_workers(cluster)
+            raise
+
+
+def _close_workers(cluster, timeout: float = 10.0) -> None:
+    """Close the workers before the scheduler: closing both at once (the cluster's close), a
+    worker's heartbeat could still be under way to the closed scheduler and print a traceback."""
+    cluster.scale(0)
+    deadline = time.monotonic() + timeout
+    while cluster.workers and time.monotonic() < deadline:
+        time.sleep(0.05)

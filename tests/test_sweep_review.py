@@ -84,10 +84,14 @@ def test_bad_values_refused_before_running(earth_fmu, kwargs, message):
 def test_cli_bad_values_one_line_exit_2_nothing_run(earth_fmu, tmp_path, capsys, argv, message):
     out = tmp_path / "t.csv"
     argv = [a.replace("NODIR", str(tmp_path / "no_such_dir")) for a in argv]
-    code = main(["sweep", str(earth_fmu), "--stop-time", "0.1", "--no-progress", "-o", str(out), *argv]
-                + ([] if "--workers" in argv else ["--workers", "0"]))
+    try:
+        code = main(["sweep", str(earth_fmu), "--stop-time", "0.1", "--no-progress", "-o", str(out), *argv]
+                    + ([] if "--workers" in argv else ["--workers", "0"]))
+    except SystemExit as exc:  # refused by argparse itself (finite_float options)
+        code = exc.code
     err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and err[-1].startswith("gyrowheel: error: ") and message in err[-1], err
+    assert code == 2 and err[-1].startswith(("gyrowheel: error: ", "gyrowheel sweep: error: ")), err
+    assert message in err[-1], err
     assert not any(line.startswith("sweep:") for line in err)  # refused before it started
     assert not out.exists()
 

@@ -126,12 +126,13 @@ def _times(target, stop_time, output_interval, start_time) -> tuple[float, float
 
 def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, derive=None,
               stop_time: float | None = None, output_interval: float | None = None, start_time: float = 0.0,
-              metrics=None, metric_functions=()) -> Plan:
+              metrics=None, metric_functions=(), ensemble: bool = True) -> Plan:
     """Check every name and value against the unit and convert the points to unit values.
 
     A point's empty cell (a key other points have, None, NaN) leaves that variable at the unit's
     start value. A variable with two names (beta and beta_deg; M and wheel.M in a system, through
     the target's optional canonical(name)) may be given only once.
+    ensemble: let batches take the ensemble path where it applies (the unit's solver is taylor).
     """
     variables = target.variables()
     res = Resolver(variables)
@@ -170,6 +171,7 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, der
                 raise SweepSpecError(f"--derive {derive_fn.ref}: must return a dict of unit values, got {extra!r}")
             own.update(res.resolve(n, v, f"--derive {derive_fn.ref}: point {point}: {n}") for n, v in extra.items())
         values.append(own)
-    settings = Settings(stop_time=stop, output_interval=interval, start_time=float(start_time), fixed=fixed_values)
+    settings = Settings(stop_time=stop, output_interval=interval, start_time=float(start_time), fixed=fixed_values,
+                        ensemble=ensemble)
     metric_set = MetricSet.parse(metrics, metric_functions, outputs=list(target.outputs))
     return Plan(target, settings, metric_set, inputs, values)

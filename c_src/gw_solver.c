@@ -288,6 +288,18 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
 }
 
 GW_INTERNAL gw_int_result gw_integrate(gw_instance *I, double t_end) {
+    /* The adaptive solvers never step beyond max_step: a communication step that needs more
+     * than GW_MAX_STEPS_AHEAD of them is refused up front, as by the fixed-step ones (the
+     * guard of gw_too_many_steps needs a run of attempts without rejection, which a
+     * controller that rejects now and then, as DOPRI5 on the paper's wheel, never gives). */
+    const double H = t_end - I->t;
+    if (I->solver != GW_SOLVER_EULER && I->solver != GW_SOLVER_RK4 &&
+        H > GW_MAX_STEPS_AHEAD * I->max_step) {
+        GW_LOG_ERR(I, "communication step %g would need at least %.3g steps of max_step=%g "
+                   "(limit %.0e): raise max_step or shorten the communication step",
+                   H, H / I->max_step, I->max_step, GW_MAX_STEPS_AHEAD);
+        return GW_INT_ERROR;
+    }
     switch (I->solver) {
     case GW_SOLVER_EULER:
     case GW_SOLVER_RK4: return gw_integrate_fixed(I, t_end);

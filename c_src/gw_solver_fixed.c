@@ -82,8 +82,10 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
     /* A communication step meant to be k max_step long (t_k = t0 + k h in the caller) comes out
      * longer by the rounding of t: 1e-13 s at t = 1000 s, 1e-10 of a 1 ms step.  That excess must
      * not add a substep (twice the cost of a real-time step, at random): up to 8 ulps of t are
-     * absorbed into the substeps. */
-    const double slack = 1e-12 * I->max_step + 8.0 * DBL_EPSILON * fmax(fabs(t0), fabs(t_end));
+     * absorbed into the substeps, and never more than a quarter of a step (far from t = 0 the
+     * doubles may be too coarse for max_step: refused below, not absorbed). */
+    const double slack = fmin(1e-12 * I->max_step + 8.0 * DBL_EPSILON * fmax(fabs(t0), fabs(t_end)),
+                              0.25 * I->max_step);
     double nd = ceil((H - slack) / I->max_step);
     unsigned long long n, i;
     int events = 0, growing;
@@ -104,6 +106,14 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
         while (I->t < ti) {
             const double h = ti - I->t;
             gw_int_result r;
+            if (h > 1.5 * I->max_step) {
+                /* t_i rounded onto doubles spaced more than max_step / 8 apart: the step would
+                 * silently be longer than the fixed step asked for */
+                GW_LOG_ERR(I, "%s cannot take steps of max_step=%g at t=%.17g: doubles there are %g s "
+                           "apart, so a step would be %g s; start nearer t = 0 or raise max_step",
+                           gw_solver_name(I->solver), I->max_step, I->t, nextafter(I->t, HUGE_VAL) - I->t, h);
+                return GW_INT_ERROR;
+            }
             if (gw_ensure_f0(I)) return GW_INT_ERROR;
             if (I->solver == GW_SOLVER_EULER) {
                 /* Euler's instability: increments that more than double, step after step */

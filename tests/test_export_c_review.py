@@ -9,17 +9,34 @@ its fix (docs/c_api.md):
                                     hours), DOP853 and RODAS4
   test_docs_figures                 the state size and allocation count docs/c_api.md quotes are
                                     the export's
+  test_reexport_keeps_users_files   a re-export never adopts the user's files (a build/ tree,
+                                    notes, own sources): the next re-export deleted them
+  test_model_names_refused[...]     names that would break the user's program refused before
+                                    anything is written: C23 / C++ keywords, reserved
+                                    identifiers, standard header names (time.h on -I. hid
+                                    <time.h>), names the C library declares (system, log, NULL)
 """
 from __future__ import annotations
 
+import json
 import re
 import subprocess
+from pathlib import Path
 
 import pytest
 
 from c_programs import TESTS_C
-from conftest import ROOT
-from export_c_helpers import STRICT, cc
+from conftest import ROOT, SCENES
+from export_c_helpers import STRICT, cc, gyrowheel
+from fmu_build import load_scene
+from fmu_build.export_c import MARKER, ExportError, export_c
+
+
+def _scene_named(tmp_path: Path, name: str, scene: str = "paper_earth") -> Path:
+    text = (SCENES / f"{scene}.toml").read_text()
+    path = tmp_path / f"{name}.toml"
+    path.write_text(re.sub(r'(?m)^name = ".*"$', f'name = "{name}"', text, count=1))
+    return path
 
 
 @pytest.fixture(scope="module")
@@ -44,3 +61,44 @@ def test_docs_figures(review_run):
     assert f"(`state_size` bytes: {size} for paper_earth)" in text
     assert f"buffer of {size - 1} bytes, a state needs {size} (paper_earth_state_size)" in text
     assert f"({blocks} blocks for paper_earth)" in text
+
+
+def test_reexport_keeps_users_files(tmp_path):
+    out = tmp_path / "export"
+    first = export_c(load_scene(SCENES / "paper_earth.toml"), out, check=False)
+    mine = {"notes.txt": "mine", "build/CMakeCache.txt": "# cmake", "mycode/app.c": "int app;\n",
+            "src/my_extra.c": "int extra;\n"}
+    for rel, text in mine.items():
+        (out / rel).parent.mkdir(parents=True, exist_ok=True)
+        (out / rel).write_text(text)
+    second = export_c(load_scene(SCENES / "paper_earth.toml"), out, check=False)
+    third = export_c(load_scene(_scene_named(tmp_path, "other_wheel")), out, check=False)
+    for rel, text in mine.items():
+        assert (out / rel).read_text() == text, rel
+    recorded = json.loads((out / MARKER).read_text())["files"]
+    assert recorded == third.files and not set(mine) & set(recorded)
+    assert len(first.files) == len(second.files) == len(third.files) == 31
+    assert not (out / "paper_earth.h").exists() and (out / "other_wheel.h").is_file()
+
+
+@pytest.mark.parametrize("name,fragment", [
+    ("new", "'new' is a C++ keyword"),
+    ("bool", "'bool' is a C keyword"),
+    ("_wheel", "reserved identifier"),
+    ("my__wheel", "reserved identifier"),
+    ("time", "would make time.h hide the system header <time.h>"),
+    ("Math", "would make Math.h hide the system header <math.h> (on a case-insensitive"),
+    ("system", "declared by the C library's header <stdlib.h>"),
+    ("log", "declared by the C library's header <math.h>"),
+])
+def test_model_names_refused(name, fragment, tmp_path):
+    out = tmp_path / "out"
+    with pytest.raises(ExportError, match=re.escape(fragment)):
+        export_c(load_scene(_scene_named(tmp_path, name)), out)
+    assert not out.exists()  # nothing written
+
+
+def test_model_name_refused_on_the_command_line(tmp_path):
+    r = gyrowheel("export-c", _scene_named(tmp_path, "clock"), "-o", tmp_path / "out")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert r.stderr.startswith("gyrowheel: error: ") and "<time.h>" in r.stderr

@@ -15,11 +15,16 @@ its fix (docs/c_api.md):
                                     anything is written: C23 / C++ keywords, reserved
                                     identifiers, standard header names (time.h on -I. hid
                                     <time.h>), names the C library declares (system, log, NULL)
+  test_fast_math_parent_project     a parent CMake project with -ffast-math: the library keeps
+                                    its NaN checks (advance(NaN) looped forever); plain cc with
+                                    -ffast-math stops at a clear #error; the export's examples
+                                    are not built inside the parent project
 """
 from __future__ import annotations
 
 import json
 import re
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -102,3 +107,47 @@ def test_model_name_refused_on_the_command_line(tmp_path):
     r = gyrowheel("export-c", _scene_named(tmp_path, "clock"), "-o", tmp_path / "out")
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
     assert r.stderr.startswith("gyrowheel: error: ") and "<time.h>" in r.stderr
+
+
+FAST_MATH_PROGRAM = r"""
+#include <math.h>
+#include <stdio.h>
+#include "paper_earth.h"
+int main(void) {
+    paper_earth *w = NULL;
+    int st;
+    if (paper_earth_create(NULL, NULL, NULL, NULL, &w) < 0) return 1;
+    st = paper_earth_advance(w, NAN);
+    printf("%d\n", st);
+    paper_earth_free(w);
+    return st == GYROWHEEL_ERR_TIME ? 0 : 1;
+}
+"""
+
+
+def test_fast_math_parent_project(earth, tmp_path):
+    if shutil.which("cmake") is None:
+        pytest.skip("cmake is not installed (make test installs it: Debian package cmake)")
+    # plain cc: a clear stop, not a library without its checks
+    r = subprocess.run(["gcc", *STRICT, "-O2", "-ffast-math", "-fsyntax-only", str(earth / "paper_earth.c")],
+                       capture_output=True, text=True)
+    assert r.returncode != 0 and "compile it with -fno-finite-math-only" in r.stderr, r.stderr
+    # a parent CMake project built with -ffast-math
+    project = tmp_path / "rig"
+    project.mkdir()
+    (project / "main.c").write_text(FAST_MATH_PROGRAM)
+    (project / "CMakeLists.txt").write_text(
+        "cmake_minimum_required(VERSION 3.13)\nproject(rig C)\n"
+        f'add_subdirectory("{earth}" paper_earth)\n'
+        "add_executable(rig main.c)\ntarget_link_libraries(rig PRIVATE paper_earth)\n")
+    build = tmp_path / "build"
+    r = subprocess.run(["cmake", "-S", str(project), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release",
+                        "-DCMAKE_C_FLAGS=-ffast-math", "-DPAPER_EARTH_STRICT=ON"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    r = subprocess.run(["cmake", "--build", str(build), "--target", "rig"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    r = subprocess.run([str(build / "rig")], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 0 and r.stdout.strip() == str(-5), r.stdout + r.stderr
+    targets = subprocess.run(["cmake", "--build", str(build), "--target", "help"], capture_output=True,
+                             text=True).stdout
+    assert "paper_earth_example" not in targets and "paper_earth_realtime" not in targets

@@ -193,6 +193,14 @@ static const gwc_table GWC_TABLE = {{
 """
 
 
+def force_kinds(spec) -> dict[str, str]:
+    """examples/realtime.c's flags of the scene's non-conservative forces (ModelSpec.force_kinds):
+    which terms of the energy balance energy + dissipated_energy - actuator_work it needs."""
+    kinds = set(spec.force_kinds)
+    return {"dissipative_forces": str(int("dissipative" in kinds)), "actuator_forces": str(int("actuator" in kinds)),
+            "other_forces": str(int(bool(kinds - {"dissipative", "actuator"})))}
+
+
 def render(template: str, values: dict[str, str]) -> str:
     """@key@ placeholders (as CMake's configure_file); an unknown one left over is an error."""
     for key, value in values.items():
@@ -276,7 +284,7 @@ def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: 
     values = {"model": model, "MODEL": model.upper(), "guid": guid,
               "scene_file": scene_file or f"scene {model!r}",
               "description": _comment(spec.description).rstrip(".") + ".",
-              "macros": header_macros(model, rows, scene)}
+              "macros": header_macros(model, rows, scene), **force_kinds(spec)}
     outputs = {f"{model}.h": "model.h.in", f"{model}.c": "model.c.in", "CMakeLists.txt": "CMakeLists.txt.in",
                "examples/main.c": "examples/main.c", "examples/realtime.c": "examples/realtime.c",
                "README.md": "README.md.in"}

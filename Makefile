@@ -1,7 +1,8 @@
 # Two commands do all set-up on a fresh machine (a C compiler, python3 >= 3.11 assumed):
 #   make demo   builds the paper FMUs, runs earth/Mars/moon, writes CSV, a figure and the earth
 #               run's animation (GIF and interactive HTML) to results/; the Gyrover closed
-#               loop (earth, moon) to results/system/
+#               loop (earth, moon: turn and figure eight) with its plots and animations to
+#               results/system/
 #   make test   installs what the tests need (Debian's chromium too, as root) and runs them all
 #   make bench  the work-precision benchmark (results/bench/*.png, work_precision.md)
 #   make realtime  the exported C in a 1 kHz fixed-step loop (results/c/realtime.md, docs/c_api.md)
@@ -31,6 +32,10 @@ venv: $(STAMP)
 demo: $(STAMP)
 	$(PY) examples/paper_demo.py --out results
 	$(PY) examples/gyrover_control.py --out results/system
+	$(PY) -m fmu_build animate results/system/closed_loop_earth_wheel.csv --fmu results/system/earth/gyrover_earth.fmu \
+	    -o results/system/closed_loop_earth.gif --fps 10 --speed 4 --size 480x360 --trail 30
+	$(PY) -m fmu_build animate results/system/closed_loop_moon_wheel.csv --fmu results/system/moon/gyrover_moon.fmu \
+	    -o results/system/closed_loop_moon.gif --fps 10 --speed 8 --size 480x360 --trail 60
 	$(PY) -m fmu_build animate results/paper_earth.csv --fmu results/fmus/paper_earth.fmu \
 	    -o results/paper_earth.gif --fps 12 --speed 2 --size 480x360 --trail 5
 	$(PY) -m fmu_build animate results/paper_earth.csv --fmu results/fmus/paper_earth.fmu \
@@ -68,6 +73,7 @@ test: $(STAMP) browser c-tools tbb
 	$(PY) -m pytest -q
 
 bench: $(STAMP)
+	$(PY) -m pip install --quiet -e ".[bench]"
 	$(PY) benchmarks/work_precision.py --out results/bench
 
 # the real-time figures of docs/c_api.md: the exported C in a fixed-step 1 kHz loop (a few minutes)

@@ -36,7 +36,7 @@ from fmi_slave import _open, many_steps_seconds  # noqa: E402
 from paper_cost import best_of  # noqa: E402
 
 from fmu_build import build_fmu  # noqa: E402
-from fmu_build.compiler import OPTIMISE, compiler  # noqa: E402
+import rhs_timing  # noqa: E402
 from fmu_build.scene import parse_scene  # noqa: E402
 from model.effects import CATALOGUE  # noqa: E402
 
@@ -99,14 +99,12 @@ def fmpy_call_overhead_ns(fmu: Path) -> float:
 
 
 def rhs_exe(sources: Path, out: Path) -> Path:
-    """benchmarks/rhs_bench.c linked against the kept sources, with the FMU's flags (as paper_cost.rhs_ns)."""
-    subprocess.run([compiler(), "-std=c99", *OPTIMISE, f"-I{sources}", str(HERE / "rhs_bench.c"),
-                    str(HERE / "rhs_model.c"), "-o", str(out), "-lm"], check=True)
-    return out
+    """benchmarks/rhs_bench.c linked against the kept sources, with the FMU's flags (rhs_timing.build)."""
+    return rhs_timing.build(sources, out)
 
 
 def rhs_run_ns(exe: Path) -> float:
-    return float(subprocess.run([str(exe), str(RHS_CALLS)], capture_output=True, text=True, check=True).stdout)
+    return rhs_timing.run(exe, RHS_CALLS)[0]
 
 
 def main() -> None:

@@ -96,10 +96,51 @@ class FmuRunner:
 
     def one_step(self, stop: float, names: list[str], **values) -> list[float]:
         self.start(**values)
-        t0 = time.perf_counter()
+        t0 = time.thread_time()
         self.slave.doStep(0.0, stop)
-        self.last_seconds = time.perf_counter() - t0
+        self.last_seconds = time.thread_time() - t0
         return list(self.slave.getReal([self.vr[n] for n in names]))
 
     def free(self) -> None:
         self.slave.freeInstance()
+
+
+def solver_counts(fmu: Path, stop: float, **values) -> dict[str, int]:
+    """Accepted and rejected internal steps and RHS evaluations of one fmi2DoStep(0, stop),
+    read from the FMU's logSolver message (debug logging on)."""
+    import re
+    from ctypes import byref
+
+    from fmpy import calloc, free
+    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                           fmi2CallbackLoggerTYPE)
+    from fmpy.logging import addLoggerProxy
+
+    md, unzipdir = _open(fmu)
+    messages: list[str] = []
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(lambda env, inst, status, cat, msg: messages.append((msg or b"").decode()))
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    addLoggerProxy(byref(cb))
+    s = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier)
+    s.instantiate(callbacks=cb, loggingOn=True)
+    try:
+        s.setDebugLogging(True, ["logSolver"])
+        vr = {v.name: v for v in md.modelVariables}
+        s.setupExperiment(startTime=0.0)
+        for name, value in values.items():
+            if vr[name].type in ("Integer", "Enumeration"):
+                s.setInteger([vr[name].valueReference], [int(value)])
+            else:
+                s.setReal([vr[name].valueReference], [float(value)])
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        s.doStep(0.0, stop)
+    finally:
+        s.freeInstance()
+    for msg in messages:
+        m = re.search(r"accepted=(\d+) rejected=(\d+) rhs=(\d+)", msg)
+        if m:
+            return {"accepted": int(m[1]), "rejected": int(m[2]), "rhs": int(m[3])}
+    raise RuntimeError("no logSolver message with the step counts")

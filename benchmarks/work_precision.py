@@ -5,15 +5,27 @@ Scenarios (each a scene, built into an FMU):
   long       the same wheel for 1000 s (conservative rolling)
   stiff      Gyrover with a 10^4 rpm flywheel and a stiff tilt servo (double eigenvalue -2e4 1/s)
   near_flat  Euler-disk-like precession at 10 deg above the ground
-Methods, all on the same CasADi model:
+Methods:
   gyrowheel/<solver>  the FMU's internal solvers, one fmi2DoStep(0, T) through fmpy
-  casadi/cvodes       CasADi's integrator on the same expression graph
+  heyoka              heyoka's adaptive Taylor method (LLVM), one trajectory, on the minimal
+                      closed form of the base wheel (benchmarks/peers.py)
+  heyoka batch N      heyoka's batch mode, N trajectories together, time per trajectory
+  plain C DOP853      Hairer's DOP853 in plain C around the minimal hand-written RHS
+  casadi/cvodes       CasADi's integrator on the FMU's expression graph (BDF; cvodes-adams: Adams)
   scipy/<method>      scipy.integrate.solve_ivp (DOP853, Radau, LSODA) calling the CasADi function
   fmpy-ME/CVode       fmpy's CVODE driving the FMU through Model Exchange
-Error: max-norm of the final state against a reference at tolerance 1e-13 (the FMU's DOP853,
-cross-checked against scipy DOP853); also the relative energy drift.
+The peers on the minimal form run only on the base-wheel scenarios (paper, long, near_flat), after a
+check that the minimal form equals the FMU's right-hand side at random states.
+Error: max abs error of the 8 states at the stop time against a reference: heyoka in 80-bit long
+double at tolerance 1e-19 on the base-wheel scenarios (cross-checked against the FMU's DOP853 at
+1e-13), the FMU's DOP853 at 1e-13 otherwise; also the relative energy drift.
+Table: the cheapest time to reach each error (1e-4, 1e-7, 1e-10, 1e-12) as a multiple of
+gyrowheel's best in the same run. Time = CPU time of the calling thread (time.thread_time: time
+the scheduler gives to other processes does not count, so runs of 0.2 ms and of 100 ms compare on a
+loaded machine), best of 3; compilation (heyoka's JIT, the FMU) is not timed.
 
-    python benchmarks/work_precision.py [--quick] [--scenarios paper stiff] [--out results/bench]
+    python benchmarks/work_precision.py [--quick] [--scenarios paper stiff] [--peers heyoka plain]
+                                        [--out results/bench]
 
 Writes <out>/work_precision_<scenario>.png, <out>/work_precision.md and prints the tables.
 """
@@ -32,7 +44,8 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from fmi_slave import FmuRunner  # noqa: E402
+import peers  # noqa: E402
+from fmi_slave import FmuRunner, solver_counts  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
 
@@ -45,8 +58,16 @@ SCENARIOS = {
     "near_flat": ("[wheel]\nk_axial = 0.5\n" + "[effects.gravity]\ng = 9.81\n"
                   "[initial]\nbeta_deg = 10.0\nalpha_dot = 24.5195\ngamma_dot = -24.1470\n", 5.0),
 }
-TARGETS = (1e-3, 1e-5, 1e-7, 1e-9)
-TOLS = [10.0 ** -k for k in range(3, 13)]
+TARGETS = (1e-4, 1e-7, 1e-10, 1e-12)
+TOLS = [10.0 ** -k for k in range(3, 16)]
+BASE_WHEEL = ("paper", "long", "near_flat")  # gravity only: the minimal closed form applies
+PEERS = ("heyoka", "plain", "cvodes", "scipy", "fmpy", "multipliers")
+HEYOKA_BATCH = 4
+try:  # a benchmark dependency (pyproject.toml [bench]), not a core one
+    import heyoka  # noqa: F401
+    HAVE_HEYOKA = True
+except ImportError:
+    HAVE_HEYOKA = False
 FIXED_STEPS = [10.0 ** -k for k in (2, 2.5, 3, 3.5, 4)]
 SOLVER_CODES = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5}
 
@@ -70,9 +91,9 @@ def near_flat_start(beta_deg: float = 10.0, k_diam: float = 0.25, R: float = 0.1
 def best_time(fn, repeat: int) -> tuple[float, object]:
     best, out = float("inf"), None
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = time.thread_time()
         out = fn()
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, time.thread_time() - t0)
     return best, out
 
 
@@ -105,12 +126,16 @@ class Scenario:
         return Point(method, setting, seconds, err, abs(energy - self.E0) / abs(self.E0))
 
 
-def run_internal(sc: Scenario, solver: str, settings, repeat: int, label: str = "") -> list[Point]:
+def run_internal(sc: Scenario, solver: str, settings, repeat: int, label: str = "",
+                 tolerance_only: bool = False) -> list[Point]:
+    """tolerance_only: set rel_tol alone (abs_tol left at the scene default, 0 = rel_tol / 100)."""
     points = []
     for value in settings:
-        values = {"solver": SOLVER_CODES[solver]}
+        values = {"solver": SOLVER_CODES[solver], "max_internal_steps": 2**31 - 1}
         if solver in ("euler", "rk4"):
             values["max_step"] = value
+        elif tolerance_only:
+            values.update(rel_tol=value, max_step=sc.stop)
         else:
             values.update(rel_tol=value, abs_tol=value * 1e-2, max_step=sc.stop)
         try:
@@ -130,7 +155,7 @@ def run_multipliers(sc: Scenario, work: Path, repeat: int) -> tuple[list[Point],
     text, _ = SCENARIOS[sc.name]
     mult = Scenario(sc.name + "_mult", text, sc.stop, work, formulation="multipliers")
     mult.reference, mult.E0 = sc.reference, sc.E0
-    points = run_internal(mult, "dopri5", TOLS, repeat, label=" (multipliers)")
+    points = run_internal(mult, "dopri5", TOLS[:10], repeat, label=" (multipliers)")
     notes = []
     for tol in (TOLS[0], TOLS[len(TOLS) // 2], TOLS[-1]):
         v = mult.runner.one_step(sc.stop, ["constraint_violation"], solver=SOLVER_CODES["dopri5"], rel_tol=tol,
@@ -139,16 +164,56 @@ def run_multipliers(sc: Scenario, work: Path, repeat: int) -> tuple[list[Point],
     return points, notes
 
 
-def run_cvodes(sc: Scenario, repeat: int) -> list[Point]:
+def run_cvodes(sc: Scenario, repeat: int, method: str = "bdf") -> list[Point]:
     x = ca.SX.sym("x", sc.x0.size)
     dae = {"x": x, "ode": sc.fns["ode"](0.0, x, sc.u, sc.p)}
     points = []
-    for tol in TOLS:
+    for tol in TOLS[:10]:
         integ = ca.integrator("cv", "cvodes", dae, 0.0, sc.stop, {"reltol": tol, "abstol": tol * 1e-2,
-                                                                 "max_num_steps": 10**7})
-        seconds, res = best_time(lambda: integ(x0=sc.x0), repeat)
+                                                                 "max_num_steps": 10**7,
+                                                                 "linear_multistep_method": method})
+        try:
+            seconds, res = best_time(lambda: integ(x0=sc.x0), repeat)
+        except RuntimeError as exc:
+            print(f"  cvodes {method} {tol:g}: {exc}", file=sys.stderr)
+            continue
         states, energy = sc.outputs_of(np.array(res["xf"]).ravel())
-        points.append(sc.score("casadi/cvodes", tol, seconds, states, energy))
+        points.append(sc.score("casadi/cvodes" + ("-adams" if method == "adams" else ""), tol, seconds, states,
+                               energy))
+    return points
+
+
+def wheel_params(sc: Scenario) -> tuple[float, ...]:
+    """(M, R, k_diam, k_axial, g) of a base-wheel scenario, for the minimal form."""
+    names = [q.name for q in sc.spec.parameters]
+    return tuple(float(sc.p[names.index(n)]) for n in ("M", "R", "k_diam", "k_axial", "g"))
+
+
+def energy_of(sc: Scenario, x: np.ndarray) -> float:
+    return sc.outputs_of(np.asarray(x, dtype=float))[1]
+
+
+def run_heyoka(sc: Scenario, repeat: int) -> list[Point]:
+    """heyoka, one trajectory and batch mode, on the minimal form (compilation not timed)."""
+    hy = peers.Heyoka(wheel_params(sc), sc.x0, sc.stop)
+    points = []
+    for tol in TOLS:
+        seconds, x = hy.single(tol, repeat)
+        points.append(sc.score("heyoka", tol, seconds, x, energy_of(sc, x)))
+        seconds, x = hy.batch(tol, HEYOKA_BATCH, repeat)
+        points.append(sc.score(f"heyoka batch {HEYOKA_BATCH} (per trajectory)", tol, seconds, x, energy_of(sc, x)))
+    return points
+
+
+def run_plain(sc: Scenario, plain: peers.PlainDop853, repeat: int) -> list[Point]:
+    points = []
+    for tol in TOLS:
+        try:
+            seconds, x = plain.run(wheel_params(sc), sc.x0, sc.stop, tol, tol * 1e-2, repeat)
+        except RuntimeError as exc:
+            print(f"  {exc}", file=sys.stderr)
+            continue
+        points.append(sc.score("plain C DOP853 (minimal RHS)", tol, seconds, x, energy_of(sc, x)))
     return points
 
 
@@ -218,30 +283,59 @@ def plot(name: str, points: list[Point], path: Path) -> None:
     plt.close(fig)
 
 
+def error_floor(points: list[Point], prefix: str = "gyrowheel") -> float:
+    return min((p.error for p in points if p.method.startswith(prefix)), default=float("nan"))
+
+
 def table(name: str, points: list[Point]) -> str:
-    lines = [f"### {name}", "", "| method | error <= 1e-3 | <= 1e-5 | <= 1e-7 | <= 1e-9 |", "|---|---|---|---|---|"]
-    best_ours = {t: min((s for m, s in cheapest(points, t).items() if m.startswith("gyrowheel")), default=None)
-                 for t in TARGETS}
+    """Cheapest time to reach each error, as a multiple of gyrowheel's best (issue 11's table)."""
+    cols = " | ".join(f"{t:.0e}" for t in TARGETS)
+    lines = [f"### {name}", "", f"| method | {cols} |", "|---|" + "---|" * len(TARGETS)]
+    best = {t: min((s for m, s in cheapest(points, t).items() if m.startswith("gyrowheel")), default=None)
+            for t in TARGETS}
+    floor = error_floor(points)
+    cells = [f"1 ({best[t] * 1e3:.3g} ms)" if best[t] else f"not reached (floor {floor:.1e})" for t in TARGETS]
+    lines.append("| gyrowheel best | " + " | ".join(cells) + " |")
     for method in dict.fromkeys(p.method for p in points):
         cells = []
         for t in TARGETS:
             s = cheapest(points, t).get(method)
             if s is None:
                 cells.append("-")
-            elif best_ours[t] and not method.startswith("gyrowheel"):
-                cells.append(f"{s * 1e3:.3g} ms ({s / best_ours[t]:.0f}x)")
+            elif best[t]:
+                cells.append(f"{s / best[t]:.2g}")
             else:
-                cells.append(f"{s * 1e3:.3g} ms")
+                cells.append(f"reached ({s * 1e3:.3g} ms)")
         lines.append(f"| {method} | " + " | ".join(cells) + " |")
     lines.append("")
-    lines.append("Cheapest time to reach each final-state error; in brackets the ratio to the fastest "
-                 "gyrowheel solver at that error.")
+    lines.append(f"Cheapest time to reach each final-state error (max abs error of the 8 states), as a multiple "
+                 f"of gyrowheel's best at that error in the same run (\"-\": not reached). gyrowheel's error "
+                 f"floor: {floor:.1e}.")
     return "\n".join(lines)
+
+
+def step_counts(sc: Scenario, solver: str = "dop853") -> str:
+    """Accepted / rejected steps of one gyrowheel solver over the tolerances (the controller's record)."""
+    parts = []
+    for tol in (1e-4, 1e-7, 1e-10, 1e-13):
+        try:
+            c = solver_counts(sc.fmu, sc.stop, solver=SOLVER_CODES[solver], rel_tol=tol, abs_tol=tol * 1e-2,
+                              max_step=sc.stop)
+        except Exception as exc:  # noqa: BLE001 - a run that fails is reported, not fatal
+            parts.append(f"rel_tol {tol:g}: {exc}")
+            continue
+        frac = c["rejected"] / max(1, c["accepted"] + c["rejected"])
+        parts.append(f"rel_tol {tol:g}: {c['accepted']} accepted, {c['rejected']} rejected ({frac:.0%})")
+    return f"{solver} steps: " + "; ".join(parts)
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenarios", nargs="*", default=list(SCENARIOS), choices=list(SCENARIOS))
+    parser.add_argument("--peers", nargs="*", default=list(PEERS), choices=list(PEERS),
+                        help="peers to measure beside gyrowheel (default: all)")
+    parser.add_argument("--solvers", nargs="*", default=["euler", "rk4", "dopri5", "dop853", "rosenbrock"],
+                        choices=list(SOLVER_CODES), help="gyrowheel solvers to measure")
     parser.add_argument("--quick", action="store_true", help="few settings, no repetitions (a smoke run)")
     parser.add_argument("--out", default="results/bench")
     args = parser.parse_args()
@@ -251,42 +345,74 @@ def main() -> int:
     global TOLS, FIXED_STEPS
     if args.quick:
         TOLS, FIXED_STEPS = [1e-4, 1e-7], [1e-2, 1e-3]
-    report = ["# Work-precision results", ""]
+    report = ["# Work-precision results", "",
+              "Timings from one run on a shared machine: ratios are measured in the same run; "
+              "re-run on a quiet machine for final numbers.", ""]
     import tempfile
     with tempfile.TemporaryDirectory() as tmp:
+        plain = peers.PlainDop853(Path(tmp)) if "plain" in args.peers else None
         for name in args.scenarios:
             text, stop = SCENARIOS[name]
             if args.quick:
                 stop = min(stop, 2.0)
             sc = Scenario(name, text, stop, Path(tmp))
-            ref = sc.runner.one_step(stop, sc.state_names, solver=SOLVER_CODES["dop853"], rel_tol=1e-13,
-                                     abs_tol=1e-15, max_step=stop)
-            sc.reference = np.asarray(ref)
+            ref_fmu = np.asarray(sc.runner.one_step(stop, sc.state_names, solver=SOLVER_CODES["dop853"],
+                                                    rel_tol=1e-13, abs_tol=1e-15, max_step=stop))
+            notes: list[str] = []
+            base = name in BASE_WHEEL
+            if base:
+                mismatch = peers.check_minimal(sc.fns["ode"], wheel_params(sc), sc.p, sc.u)
+                if mismatch > 1e-12:
+                    raise RuntimeError(f"{name}: the minimal form differs from the FMU's RHS by {mismatch:.1e}")
+            if base and HAVE_HEYOKA:
+                sc.reference = peers.reference(sc.x0, wheel_params(sc), stop)
+                notes.append(f"Reference: heyoka in long double (tol 1e-19); the FMU's DOP853 at rel_tol 1e-13 "
+                             f"differs from it by {np.max(np.abs(ref_fmu - sc.reference)):.1e}; minimal form = FMU "
+                             f"RHS to {mismatch:.0e} (relative) at random states.")
+            else:
+                sc.reference = ref_fmu
+                notes.append("Reference: the FMU's DOP853 at rel_tol 1e-13.")
             points: list[Point] = []
             for solver in ("euler", "rk4"):
-                if name != "long" or solver == "rk4":
+                if solver in args.solvers and (name != "long" or solver == "rk4"):
                     points += run_internal(sc, solver, FIXED_STEPS, repeat)
             for solver in ("dopri5", "dop853", "rosenbrock"):
-                points += run_internal(sc, solver, TOLS, repeat)
-            mult_notes: list[str] = []
-            if name in ("paper", "long"):
+                if solver in args.solvers:
+                    points += run_internal(sc, solver, TOLS, repeat)
+            if "dop853" in args.solvers:
+                points += run_internal(sc, "dop853", TOLS, repeat, " (rel_tol only)", tolerance_only=True)
+            if base and "heyoka" in args.peers:
+                if HAVE_HEYOKA:
+                    points += run_heyoka(sc, repeat)
+                else:
+                    notes.append("heyoka is not installed (pip install -e '.[bench]'): its rows are missing.")
+            if base and plain is not None:
+                points += run_plain(sc, plain, repeat)
+            if name in ("paper", "long") and "multipliers" in args.peers:
                 mult_points, mult_notes = run_multipliers(sc, Path(tmp), repeat)
                 points += mult_points
-            points += run_cvodes(sc, repeat)
+                notes.append("Constraint violation of the multiplier form at the end (the reduced form has "
+                             "none by construction): " + "; ".join(mult_notes))
+            if "cvodes" in args.peers:
+                points += run_cvodes(sc, repeat) + run_cvodes(sc, repeat, "adams")
             if stop <= 20.0:
-                for method in ("DOP853", "Radau", "LSODA"):
-                    points += run_scipy(sc, method, 1)
-                points += run_fmpy_me(sc, 1)
+                if "scipy" in args.peers:
+                    for method in ("DOP853", "Radau", "LSODA"):
+                        points += run_scipy(sc, method, 1)
+                if "fmpy" in args.peers:
+                    points += run_fmpy_me(sc, 1)
+            if "dop853" in args.solvers and not args.quick:
+                notes.append(step_counts(sc))
             plot(name, points, out / f"work_precision_{name}.png")
             text_table = table(f"{name} ({stop:g} s)", points)
             print(text_table)
+            for note in notes:
+                print(note)
             report += [text_table, "", f"![{name}](work_precision_{name}.png)", ""]
             drift = {p.method: p.energy_drift for p in sorted(points, key=lambda p: -p.setting)}
             report.append("Energy drift at the tightest setting: " +
                           ", ".join(f"{m} {d:.1e}" for m, d in drift.items()) + "\n")
-            if mult_notes:
-                report.append("Constraint violation of the multiplier form at the end (the reduced form has "
-                              "none by construction): " + "; ".join(mult_notes) + "\n")
+            report += [n + "\n" for n in notes]
     (out / "work_precision.md").write_text("\n".join(report))
     print(f"wrote {out / 'work_precision.md'}")
     return 0

@@ -135,15 +135,20 @@ GW_API double gw_value_get(const gw_instance *I, const gw_variable *v);
 /* Valid ranges of the settings (docs/fmi.md, "Settings"): tolerances are fractions of the
  * states' nominal scales, so neither exceeds 1; rel_tol below 10 machine epsilons cannot be
  * met in double precision (Hairer's DOPRI5 refuses it alike); an abs_tol below 1e-30
- * nominals underflows the error weights. */
+ * nominals underflows the error weights, but abs_tol = 0 exactly is valid and means "follow
+ * rel_tol" (GW_ATOL_PER_RTOL * rel_tol, gw_model.h).  max_internal_steps, the budget of
+ * internal steps of one call, is a whole number that an fmi2Integer holds. */
 #define GW_REL_TOL_MIN 2.220446049250313e-15 /* 10 * DBL_EPSILON */
 #define GW_REL_TOL_MAX 1.0
-#define GW_ABS_TOL_MIN 1e-30
+#define GW_ABS_TOL_MIN 1e-30 /* or 0 */
 #define GW_ABS_TOL_MAX 1.0
+#define GW_MAX_INTERNAL_STEPS_MIN 1.0
+#define GW_MAX_INTERNAL_STEPS_MAX 2147483647.0
 /* Is `value` valid for v?  Every value must be finite; a setting must lie in its range
- * (solver: a known gw_solver; rel_tol, abs_tol as above; max_step > 0); a Boolean is 0 or
- * 1.  GW_OK, or GW_ERROR with the reason logged (messages start with fn).  The front end
- * calls it before gw_value_set; restoring a saved state applies the same checks. */
+ * (solver: a known gw_solver; rel_tol, abs_tol as above; max_step > 0; max_internal_steps
+ * whole, in [1, 2^31 - 1]); a Boolean is 0 or 1.  GW_OK, or GW_ERROR with the reason logged
+ * (messages start with fn).  The front end calls it before gw_value_set; gw_initialize and
+ * restoring a saved state apply the same checks. */
 GW_API gw_status gw_value_check(gw_instance *I, const char *fn, const gw_variable *v,
                                 double value);
 /* Store a value (parameter, start value, input, setting) without any check: the front end
@@ -164,6 +169,9 @@ GW_API void gw_point_changed(gw_instance *I);
  *        set explicitly) scaled alike: default_abs_tol * tolerance / default_rel_tol, so
  *        the declared default tolerance (= default_rel_tol) gives the scene's accuracy
  *   else                                         -> the scene's rel_tol and abs_tol.
+ * abs_tol = 0 (the scenes' default) follows the rel_tol in force (GW_ATOL_PER_RTOL * rel_tol)
+ * and stays 0 when scaled, so it follows a set-up tolerance too; forwarding the declared
+ * default tolerance gives exactly the scene's run.
  * GW_ERROR for a non-finite start, a tolerance outside rel_tol's range or a bad stop time
  * (reason logged). */
 GW_API gw_status gw_setup_experiment(gw_instance *I, const char *fn, int tolerance_defined,

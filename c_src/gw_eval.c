@@ -50,6 +50,7 @@ GW_INTERNAL void gw_fun_bind(gw_instance *I) {
     gw_fun_bind_up(&I->f_evt, I->u, I->p);
     gw_fun_bind_up(&I->f_jac, I->u, I->p);
     gw_fun_bind_up(&I->f_dir, I->u, I->p);
+    if (I->f_pre.eval && I->f_ode.eval) I->f_ode.arg[4] = I->pre_c;
 }
 
 static int gw_fun_call(gw_fun *f) { return f->eval(f->arg, f->res, f->iw, f->w, 0); }
@@ -130,6 +131,12 @@ GW_INTERNAL int gw_eval_jac(gw_instance *I, double t, const double *x, double *J
 
 GW_API int gw_rhs(gw_instance *I, double t, const double *x, double *xdot) {
     I->n_rhs++;
+    if (I->f_pre.eval && !I->pre_valid) { /* the parameter-only part, once per parameter change */
+        I->f_pre.arg[0] = I->p;
+        I->f_pre.res[0] = I->pre_c;
+        if (gw_fun_call(&I->f_pre) != 0) return -1;
+        I->pre_valid = 1;
+    }
     return gw_fun_call_txup(&I->f_ode, t, x, xdot);
 }
 

@@ -75,12 +75,20 @@ GW_API gw_instance *gw_instance_new_with(const gw_model *m, const char *name,
     GW_ALLOC_VEC(I->enew, double, ne);
     GW_ALLOC_VEC(I->eev, double, ne);
     GW_ALLOC_VEC(I->x_bak, double, nx);
+    GW_ALLOC_VEC(I->xc_bak, double, nx);
+    GW_ALLOC_VEC(I->xc, double, nx);
+    GW_ALLOC_VEC(I->xcnew, double, nx);
+    GW_ALLOC_VEC(I->xc_x, double, nx);
+    GW_ALLOC_VEC(I->dx, double, nx);
     GW_ALLOC_VEC(I->e_bak, double, ne);
     GW_ALLOC_VEC(I->flags_bak, int, ne);
     GW_ALLOC_VEC(I->t_events_bak, double, ne);
     if (gw_solver_alloc(I)) goto fail;
 
-    if (gw_fun_alloc(I, &I->f_init, &m->init, 2, 1) || gw_fun_alloc(I, &I->f_ode, &m->ode, 4, 1) ||
+    GW_ALLOC_VEC(I->pre_c, double, m->n_pre);
+    if (gw_fun_alloc(I, &I->f_pre, &m->ode_pre, 1, 1)) goto fail;
+    if (gw_fun_alloc(I, &I->f_init, &m->init, 2, 1) ||
+        gw_fun_alloc(I, &I->f_ode, &m->ode, m->ode_pre.eval ? 5 : 4, 1) ||
         gw_fun_alloc(I, &I->f_out, &m->out, 4, 1) || gw_fun_alloc(I, &I->f_evt, &m->evt, 4, 1) ||
         gw_fun_alloc(I, &I->f_chk, &m->chk, 2, 1) || gw_fun_alloc(I, &I->f_nom, &m->nom, 1, 1) ||
         gw_fun_alloc(I, &I->f_jac, &m->jac, 4, 1))
@@ -125,6 +133,8 @@ GW_API void gw_instance_free(gw_instance *I) {
     gw_fun_free(I, &I->f_dir);
     gw_fun_free(I, &I->f_dini);
     gw_free(I, I->dini_D);
+    gw_fun_free(I, &I->f_pre);
+    gw_free(I, I->pre_c);
     gw_solver_free(I);
     gw_free(I, I->xdot);
     gw_free(I, I->e_me);
@@ -147,6 +157,11 @@ GW_API void gw_instance_free(gw_instance *I) {
     gw_free(I, I->enew);
     gw_free(I, I->eev);
     gw_free(I, I->x_bak);
+    gw_free(I, I->xc_bak);
+    gw_free(I, I->xc);
+    gw_free(I, I->xcnew);
+    gw_free(I, I->xc_x);
+    gw_free(I, I->dx);
     gw_free(I, I->e_bak);
     gw_free(I, I->flags_bak);
     gw_free(I, I->t_events_bak);
@@ -171,6 +186,10 @@ GW_API void gw_instance_reset(gw_instance *I) {
     I->max_step = m->default_max_step;
     I->rel_tol_set = 0;
     I->abs_tol_set = 0;
+    I->max_internal_steps = m->default_max_internal_steps > 0.0 ? m->default_max_internal_steps
+                                                                : GW_DEFAULT_MAX_INTERNAL_STEPS;
+    gw_update_atol_eff(I);
+    I->err_old = 0.0;
     I->t_start = 0.0;
     I->t_stop = 0.0;
     I->stop_defined = 0;
@@ -182,6 +201,8 @@ GW_API void gw_instance_reset(gw_instance *I) {
     for (i = 0; i < m->np; i++) I->p[i] = m->p_start ? m->p_start[i] : 0.0;
     for (i = 0; i < m->nx; i++) {
         I->x[i] = 0.0;
+        I->xc[i] = 0.0;
+        I->xc_x[i] = 0.0;
         I->nominal[i] = 1.0;
     }
     for (i = 0; i < m->ny; i++) I->y[i] = 0.0;
@@ -193,6 +214,7 @@ GW_API void gw_instance_reset(gw_instance *I) {
     I->terminated = 0;
     I->last_successful_time = 0.0;
     I->y_valid = 0;
+    I->pre_valid = 0;
     I->fcur_valid = 0;
     I->xdot_valid = 0;
     I->dir_valid = 0;

@@ -39,6 +39,8 @@ struct gw_instance {
     int solver;
     double rel_tol, abs_tol, max_step;
     int rel_tol_set, abs_tol_set; /* set explicitly: a set-up tolerance does not replace them */
+    double max_internal_steps; /* budget of internal steps of one gw_advance */
+    double atol_eff;           /* abs_tol in force: abs_tol, or rel_tol / 100 when abs_tol == 0 */
 
     /* experiment */
     double t_start, t_stop;
@@ -51,7 +53,7 @@ struct gw_instance {
     double *x, *s, *u, *p, *y, *e, *c, *nominal;
     int *flags; /* ne: event has fired */
     double *t_events; /* ne: time of the event's last firing (valid where flags[i] is set);
-                         not part of gw_state's blob: a front end exposing it saves it */
+                         part of gw_state's blob */
     int terminated;
     double last_successful_time;
 
@@ -67,9 +69,16 @@ struct gw_instance {
     int k7_valid;                      /* k[6] == ode(t0 + h, xnew) */
     int dense_ready;                   /* rcont holds the dense output of that step */
     double *enew, *eev;                /* ne */
+    /* compensated summation of the state (TwoSum): x + xc is the state to twice the working
+     * precision; xcnew goes with xnew; xc_x is the x that xc belongs to (a front end that
+     * writes x makes xc stale) */
+    double *xc, *xcnew, *xc_x, *dx;
+    double err_old;                 /* PI controller: error norm of the last accepted step (0: none) */
+    unsigned long long n_call_steps; /* internal steps (accepted + rejected) of this gw_advance */
+    double t_call;                   /* where this gw_advance started */
 
     /* backup at the start of gw_advance */
-    double *x_bak, *e_bak, *t_events_bak;
+    double *x_bak, *e_bak, *t_events_bak, *xc_bak;
     int *flags_bak;
 
     /* counters (cumulative since initialisation) */
@@ -77,6 +86,9 @@ struct gw_instance {
 
     /* CasADi functions with per-instance buffers */
     gw_fun f_init, f_ode, f_out, f_evt, f_chk, f_nom, f_jac;
+    gw_fun f_pre;   /* ode_pre(p) -> pre_c, if the model has it */
+    double *pre_c;  /* n_pre: the parameter-only subexpressions of ode at the current p */
+    int pre_valid;  /* pre_c == ode_pre(p) */
 
     /* state derivatives and directional derivatives (front end: Model Exchange, Jacobians) */
     double *xdot; /* nx: ode(t, x, u, p) at the current point, valid if xdot_valid */
@@ -91,6 +103,7 @@ struct gw_instance {
     /* DOP853 and Rosenbrock work memory (gw_solver_alloc).  Nothing here survives a saved
      * state: it is recomputed in every step. */
     double *kx[9]; /* extra stage vectors, nx each */
+    double *sacc;  /* nx: DOP853's stage sums */
     double *rcx;   /* 3*nx: DOP853 dense output coefficients beyond rcont */
     double *jac;   /* nx*nx: d xdot / d x, column-major (Rosenbrock) */
     double *lu;    /* nx*nx: LU factors of I/(gamma h) - J, column-major */
@@ -110,6 +123,16 @@ GW_INTERNAL void gw_fun_free(gw_instance *I, gw_fun *f);
 GW_INTERNAL void gw_fun_bind(gw_instance *I);
 /* J = jac(t, x, u, p), dense d xdot / d x column-major; non-zero if failed or absent */
 GW_INTERNAL int gw_eval_jac(gw_instance *I, double t, const double *x, double *J);
+
+/* ---- gw_values.c ---------------------------------------------------------------------------- */
+#define GW_N_SETTINGS 5 /* gw_setting: solver, rel_tol, abs_tol, max_step, max_internal_steps */
+/* Every setting within its range (gw_value_check): value[k] for setting k, or the instance's
+ * own settings if value is NULL.  GW_OK, or GW_ERROR with the first reason logged. */
+GW_INTERNAL gw_status gw_settings_check(gw_instance *I, const char *fn, const double *value);
+
+/* ---- gw_simulation.c -------------------------------------------------------------------------- */
+/* I->atol_eff from abs_tol and rel_tol: abs_tol, or GW_ATOL_PER_RTOL * rel_tol if it is 0 */
+GW_INTERNAL void gw_update_atol_eff(gw_instance *I);
 
 /* ---- gw_simulation.c: logging a non-finite model value with the front end's status ---------- */
 #define GW_LOG_NONFINITE(I, ...)                                                                \

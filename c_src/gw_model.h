@@ -17,6 +17,8 @@
  *   y  outputs                     (ny)   everything readable that is computed from x
  *   e  event indicators            (ne)   an event happens when e_i goes from > 0 to <= 0
  *   c  validity checks             (nc)   each c_i must be > 0 at initialisation
+ * abs_tol = 0 (the scenes' default, or a user's value) means "follow rel_tol": the absolute
+ * tolerance of state i is then GW_ATOL_PER_RTOL * rel_tol * nominal_i.
  *
  * Generated functions (CasADi calling convention, see CodeGenerator docs):
  *   int f(const double **arg, double **res, gw_int *iw, double *w, int mem);
@@ -24,7 +26,7 @@
  * Their inputs and outputs, in this order (all dense column vectors; an input of
  * size 0 may be passed as NULL):
  *   init(s, p)       -> x0          consistent initial state from the start values
- *   ode (t, x, u, p) -> xdot        right-hand side
+ *   ode (t, x, u, p) -> xdot        right-hand side (ode(t, x, u, p, c) with ode_pre, below)
  *   out (t, x, u, p) -> y           outputs
  *   evt (t, x, u, p) -> e           event indicators          (NULL eval if ne == 0)
  *   chk (s, p)       -> c           validity checks           (NULL eval if nc == 0)
@@ -75,8 +77,16 @@ typedef enum {
     GW_SET_SOLVER = 0,   /* Enumeration, values gw_solver */
     GW_SET_REL_TOL = 1,  /* Real */
     GW_SET_ABS_TOL = 2,  /* Real */
-    GW_SET_MAX_STEP = 3  /* Real, s: bound of internal steps; the fixed step of euler/rk4 */
+    GW_SET_MAX_STEP = 3, /* Real, s: bound of internal steps; the fixed step of euler/rk4 */
+    GW_SET_MAX_INTERNAL_STEPS = 4 /* Integer: budget of internal steps (accepted + rejected)
+                                     of one call that advances time */
 } gw_setting;
+
+/* Default budget of internal steps per call when the model gives none (0): about 1 s of CPU
+ * for the base wheel with DOP853 (docs/fmi.md, "Bounded calls"). */
+#define GW_DEFAULT_MAX_INTERNAL_STEPS 1000000.0
+/* abs_tol = 0: abs_tol follows rel_tol as rel_tol / 100 (the old fixed 1e-10 at rel_tol 1e-8) */
+#define GW_ATOL_PER_RTOL 1e-2
 
 /* Enumeration values of the `solver` parameter (modelDescription.xml uses the same). */
 typedef enum {
@@ -125,6 +135,12 @@ typedef struct {
     gw_function dini;
     int n_init_rows;
     const int *init_rows; /* n_vars: row of vars[k] in dini's result, or -1 */
+    double default_max_internal_steps; /* 0: GW_DEFAULT_MAX_INTERNAL_STEPS */
+    /* Optional: ode_pre(p) -> c (n_pre values), the subexpressions of ode that depend on the
+     * parameters alone (model/hoist.py), computed by the runtime when p changes.  When present,
+     * ode takes c as a fifth argument: ode(t, x, u, p, c) -> xdot. */
+    gw_function ode_pre;
+    int n_pre;
 } gw_model;
 
 #endif /* GW_MODEL_H */

@@ -150,14 +150,23 @@ static int gw_check_finite_vec(gw_instance *I, const char *fn, const double *v, 
 }
 
 /* The tolerance precedence of gw_core.h (gw_setup_experiment): an explicit rel_tol wins; a
- * set-up tolerance replaces the scene's rel_tol and scales its abs_tol alike (unless set);
- * the declared default tolerance (= default_rel_tol) thus leaves the scene's accuracy. */
+ * set-up tolerance T replaces the scene's rel_tol and scales its abs_tol alike (unless set):
+ * abs_tol = default_abs_tol * T / default_rel_tol.  A scene abs_tol of 0 ("follow rel_tol",
+ * the scenes' default) stays 0, so the absolute tolerance in force follows T as
+ * GW_ATOL_PER_RTOL * T (gw_update_atol_eff).  Either way the declared default tolerance
+ * (T = default_rel_tol, DefaultExperiment's) gives exactly the scene's rel_tol, abs_tol and
+ * atol_eff, so a tool that forwards it runs the scene's run. */
 static void gw_resolve_tolerances(gw_instance *I) {
     const gw_model *m = I->m;
     if (!I->tol_defined || I->rel_tol_set) return;
     I->rel_tol = I->tolerance;
     if (!I->abs_tol_set && m->default_rel_tol > 0.0)
         I->abs_tol = m->default_abs_tol * (I->tolerance / m->default_rel_tol);
+}
+
+GW_INTERNAL void gw_update_atol_eff(gw_instance *I) {
+    /* abs_tol = 0 follows rel_tol: no fixed absolute floor under a tolerance-only run */
+    I->atol_eff = I->abs_tol > 0.0 ? I->abs_tol : GW_ATOL_PER_RTOL * I->rel_tol;
 }
 
 /* settings and the model's validity checks c(s, p) > 0 */
@@ -169,11 +178,10 @@ static gw_status gw_check_setup(gw_instance *I, const char *fn) {
     ok &= gw_check_finite_vec(I, fn, I->u, m->nu, GW_VAR_INPUT, "input");
     if (!ok) GW_SIM_FAIL("%s: non-finite values", fn);
     gw_resolve_tolerances(I);
-    /* the settings were checked when set; checked again for front ends that store directly */
-    for (i = 0; i < m->n_vars; i++)
-        if (m->vars[i].kind == GW_VAR_SETTING &&
-            gw_value_check(I, fn, &m->vars[i], gw_value_get(I, &m->vars[i])) != GW_OK)
-            return GW_ERROR;
+    /* the settings were checked when set; checked again for front ends that store directly
+     * (and for settings a front end does not expose, e.g. the C API's max_internal_steps) */
+    if (gw_settings_check(I, fn, NULL) != GW_OK) return GW_ERROR;
+    gw_update_atol_eff(I);
     if (m->nc > 0) {
         if (gw_eval_chk(I, I->c) != 0)
             GW_SIM_FAIL("%s: evaluation of the validity checks failed", fn);
@@ -268,6 +276,9 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
     }
     I->terminated = 0;
     I->h_adapt = 0.0;
+    I->err_old = 0.0;
+    memset(I->xc, 0, (size_t)m->nx * sizeof(double));
+    memcpy(I->xc_x, I->x, (size_t)m->nx * sizeof(double));
     I->last_successful_time = I->t;
     I->n_rhs = I->n_accepted = I->n_rejected = I->n_evt = I->n_events = 0;
     return GW_OK;
@@ -276,9 +287,12 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
 /* ---- advancing in time ------------------------------------------------------------------------ */
 
 /* Back to the state at the start of gw_advance. */
-static void gw_restore_step_start(gw_instance *I, double t0, double h0) {
+static void gw_restore_step_start(gw_instance *I, double t0, double h0, double err0) {
     const gw_model *m = I->m;
     memcpy(I->x, I->x_bak, (size_t)m->nx * sizeof(double));
+    memcpy(I->xc, I->xc_bak, (size_t)m->nx * sizeof(double));
+    memcpy(I->xc_x, I->x_bak, (size_t)m->nx * sizeof(double));
+    I->err_old = err0;
     if (m->ne > 0) {
         memcpy(I->e, I->e_bak, (size_t)m->ne * sizeof(double));
         memcpy(I->flags, I->flags_bak, (size_t)m->ne * sizeof(int));
@@ -293,9 +307,16 @@ static void gw_restore_step_start(gw_instance *I, double t0, double h0) {
 
 GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end) {
     const gw_model *m = I->m;
-    const double t0 = I->t, h0 = I->h_adapt;
+    const double t0 = I->t, h0 = I->h_adapt, err0 = I->err_old;
+    const size_t nxb = (size_t)m->nx * sizeof(double);
     gw_int_result r;
-    memcpy(I->x_bak, I->x, (size_t)m->nx * sizeof(double));
+    /* the compensation belongs to the x the solver left; a front end that wrote x since
+     * (Model Exchange, fmi2SetReal of a state) made it stale */
+    if (memcmp(I->x, I->xc_x, nxb) != 0) memset(I->xc, 0, nxb);
+    memcpy(I->x_bak, I->x, nxb);
+    memcpy(I->xc_bak, I->xc, nxb);
+    I->n_call_steps = 0;
+    I->t_call = t0;
     if (m->ne > 0) {
         memcpy(I->e_bak, I->e, (size_t)m->ne * sizeof(double));
         memcpy(I->flags_bak, I->flags, (size_t)m->ne * sizeof(int));
@@ -305,9 +326,10 @@ GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end) {
     r = gw_integrate(I, t_end);
     if (r != GW_INT_ERROR && gw_update_outputs(I, fn) != GW_OK) r = GW_INT_ERROR;
     if (r == GW_INT_ERROR) {
-        gw_restore_step_start(I, t0, h0);
+        gw_restore_step_start(I, t0, h0, err0);
         return GW_ERROR;
     }
+    memcpy(I->xc_x, I->x, nxb);
     if (r == GW_INT_TERMINATED) I->terminated = 1;
     I->last_successful_time = I->t;
     return r == GW_INT_TERMINATED ? GW_DISCARD : GW_OK;

@@ -15,31 +15,66 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include "gw_solver.h"
 
-/* Feasibility guard: a communication step whose remainder would need more than
- * GW_MAX_STEPS_AHEAD internal steps at the step size the controller has settled on is refused
- * at once with a reason instead of running for hours (absurd rates, wrong solver).
- * "Settled": GW_SETTLE consecutive attempts, each after an accepted step and not growing h by
- * more than 2x, all projecting too many steps.  A transient (Rosenbrock at 1e9 rad/s resolves
- * the nutation with h = 4e-9 s for a while, then damps it and takes 0.05 s steps) or a wall
- * approached by accepted / rejected steps (a right-hand side turning NaN ends in the step size
- * underflow error) breaks the run.  Steps the controller chose for accuracy (h < max_step) get
- * the tighter limit GW_MAX_STEPS_CONTROLLED: DOP853 settles at h = 4.6e-9 s for gamma_dot =
- * 1e9 rad/s (2e8 steps, minutes, for a 1 s step), DOPRI5 at 7.6e-10 s.  Steps held at max_step
- * are the user's explicit choice and keep the limit of the fixed-step solvers.
- * (Constants in gw_solver.h.) */
-static int gw_too_many_steps(gw_instance *I, double remaining, double h, double h_prev,
-                          int rejected_last, unsigned long *n_fast) {
-    const double limit = h < I->max_step ? GW_MAX_STEPS_CONTROLLED : GW_MAX_STEPS_AHEAD;
-    if (rejected_last || h > 2.0 * h_prev || !(remaining > limit * h)) {
+/* ---- the budget of internal steps --------------------------------------------------------
+ * One call that advances time (gw_advance: fmi2DoStep, the core's front ends) takes at most
+ * I->max_internal_steps internal steps, accepted and rejected together (a Rosenbrock
+ * refactorisation after a singular W counts as a rejected step), so every call returns in a
+ * time bounded by the budget times the cost of one step.  Three checks:
+ *  1. up front (gw_budget_upfront): no internal step is longer than max_step, so a
+ *     communication step H needs at least ceil(H / max_step) steps, exactly that many for
+ *     euler and rk4; more than the budget is refused before any work.
+ *  2. projection (gw_budget_projection, adaptive solvers): GW_SETTLE attempts in a row, h
+ *     staying within 2x of the window's first, each projecting that the rest of the step needs
+ *     GW_PROJECTION_MARGIN times more steps of the controller's h than the budget has left:
+ *     refused early with the estimate (a stiff transient resolved with tiny steps for a while,
+ *     39x over the budget in tests/c/test_stiff.c, is left to the budget).  Rejected steps do
+ *     not reset this count.
+ *  3. the budget itself (gw_next_attempt): when it is spent the call stops, with the estimate.
+ * Refusing is GW_INT_ERROR: gw_advance restores the state at the start of the call. */
+GW_INTERNAL void gw_budget_message(gw_instance *I, const char *what, double remaining, double h) {
+    const char *hint = I->solver == GW_SOLVER_ROSENBROCK || I->solver == GW_SOLVER_EULER ||
+                               I->solver == GW_SOLVER_RK4
+                           ? ""
+                           : " or stiff (try solver rosenbrock)";
+    GW_LOG_ERR(I, "at t=%.17g %s: the remaining %g s of this communication step (from t=%.17g) "
+               "would need about %.3g internal steps of h=%g, more than the %.0f left of "
+               "max_internal_steps = %.0f (%llu steps taken in this call): the dynamics are far "
+               "too fast for the tolerance (huge rates?)%s; raise max_internal_steps or shorten "
+               "the communication step", I->t, what, remaining, I->t_call, remaining / h, h,
+               I->max_internal_steps - (double)I->n_call_steps, I->max_internal_steps,
+               I->n_call_steps, hint);
+}
+
+/* check 1; 0 or -1 logged */
+static int gw_budget_upfront(gw_instance *I, double t_end) {
+    const double H = t_end - I->t, n_min = gw_fixed_substeps(I, t_end);
+    if (!(n_min > I->max_internal_steps)) return 0;
+    GW_LOG_ERR(I, "communication step %g s from t=%.17g would need %s%.3g internal steps of "
+               "max_step=%g, more than max_internal_steps = %.0f: raise max_internal_steps or "
+               "max_step, or shorten the communication step (refused before any work)", H, I->t,
+               (I->solver == GW_SOLVER_EULER || I->solver == GW_SOLVER_RK4) ? "" : "at least ",
+               n_min, I->max_step, I->max_internal_steps);
+    return -1;
+}
+
+/* check 2: *h_ref is the step size at the start of the current window of attempts that all
+ * project beyond the budget; a window in which h grows past 2 h_ref is a transient, not
+ * settled, and starts again.  0 or -1 logged. */
+static int gw_budget_projection(gw_instance *I, double remaining, double h, double *h_ref,
+                                unsigned long *n_fast) {
+    const double left = I->max_internal_steps - (double)I->n_call_steps;
+    if (!(remaining > GW_PROJECTION_MARGIN * left * h)) {
         *n_fast = 0;
         return 0;
     }
+    if (*n_fast == 0 || h > 2.0 * *h_ref) {
+        *h_ref = h;
+        *n_fast = 1;
+        return 0;
+    }
     if (++(*n_fast) <= GW_SETTLE) return 0;
-    GW_LOG_ERR(I, "at t=%.17g the remaining %g s of this communication step would need about %.3g "
-               "internal steps of h=%g (limit %.0e): the dynamics are far too fast for the tolerance "
-               "(huge rates?)%s", I->t, remaining, remaining / h, h, limit,
-               I->solver == GW_SOLVER_ROSENBROCK ? "" : " or stiff (try solver rosenbrock)");
-    return 1;
+    gw_budget_message(I, "the step size has settled", remaining, h);
+    return -1;
 }
 
 GW_INTERNAL double gw_h_min(double t) {
@@ -108,6 +143,7 @@ GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events)
     if (ev == GW_EV_ERROR) return GW_INT_ERROR;
     if (ev == GW_EV_NONE) {
         gw_swap_ptr(&I->x, &I->xnew);
+        gw_swap_ptr(&I->xc, &I->xcnew);
         if (I->m->ne > 0) gw_swap_ptr(&I->e, &I->enew);
         I->t = t1;
         if (I->k7_valid) {
@@ -118,8 +154,9 @@ GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events)
         }
         return GW_INT_OK;
     }
-    /* an event at te: the state there becomes the current state */
+    /* an event at te: the state there (dense output) becomes the current state */
     gw_swap_ptr(&I->x, &I->xev);
+    memset(I->xc, 0, (size_t)I->m->nx * sizeof(double));
     gw_swap_ptr(&I->e, &I->eev);
     I->t = te;
     I->fcur_valid = 0; /* restart the integration at the event */
@@ -139,7 +176,7 @@ GW_INTERNAL double gw_rms_weighted(const gw_instance *I, const double *v, const 
     int i, nx = I->m->nx;
     double sum = 0.0;
     for (i = 0; i < nx; i++) {
-        double sk = I->abs_tol * I->nominal[i] + I->rel_tol * fabs(x[i]);
+        double sk = I->atol_eff * I->nominal[i] + I->rel_tol * fabs(x[i]);
         double r = v[i] / sk;
         sum += r * r;
     }
@@ -165,25 +202,68 @@ GW_INTERNAL double gw_initial_step(gw_instance *I, double hmax, double order) {
     return h < hmax ? h : hmax;
 }
 
-GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last, double *h_prev,
+GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last, double *h_ref,
                         unsigned long *n_fast, double *h, double *t1, int *last) {
     const double remaining = t_end - I->t;
+    (void)rejected_last;
     *h = I->h_adapt < I->max_step ? I->h_adapt : I->max_step;
     *last = 1.01 * *h >= remaining;
     if (*last) *h = remaining;
     *t1 = *last ? t_end : I->t + *h;
-    if (*last) {
-        *h_prev = *h;
-        return 0;
+    if ((double)I->n_call_steps >= I->max_internal_steps) { /* check 3 */
+        gw_budget_message(I, "the budget of internal steps is spent", remaining, *h);
+        return -1;
     }
-    if (gw_too_many_steps(I, remaining, *h, *h_prev, rejected_last, n_fast)) return -1;
-    *h_prev = *h;
+    I->n_call_steps++;
+    if (*last) return 0;
+    if (gw_budget_projection(I, remaining, *h, h_ref, n_fast)) return -1;
     if (*h < gw_h_min(I->t) || !(*t1 > I->t)) { /* steps that no longer advance time */
         GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, solver %s)", I->t, *h,
                    gw_solver_name(I->solver));
         return -1;
     }
     return 0;
+}
+
+/* Hairer's step size controller with step size stabilisation (PI, Gustafsson; dopri5.f and
+ * dop853.f with BETA): fac = err^-expo / err_old^-beta with expo = 1/q - w beta (Hairer's
+ * weights w: 0.75 for DOPRI5, 0.2 for DOP853), h_new = h * safety * fac within [fac_min,
+ * fac_max]; no increase right after a rejection; a rejected step uses err^(-1/q) alone.
+ * err_old (I->err_old, part of a saved state) is the error norm of the last accepted step,
+ * floored at 1e-4 (0: none yet, integral control alone). */
+GW_INTERNAL double gw_step_factor(gw_instance *I, double err, double q, double beta, double w,
+                                  double fac_min, double fac_max, int accepted, int rejected_last) {
+    const double safety = 0.9;
+    double fac;
+    if (!isfinite(err)) return fac_min;
+    if (!(err > 0.0)) return accepted && !rejected_last ? fac_max : 1.0;
+    if (!accepted) {
+        fac = safety * pow(err, -1.0 / q);
+        return fac < fac_min ? fac_min : (fac > 1.0 ? 1.0 : fac);
+    }
+    fac = (beta > 0.0 && I->err_old > 0.0)
+              ? safety * pow(err, -(1.0 / q - w * beta)) * pow(I->err_old, beta)
+              : safety * pow(err, -1.0 / q);
+    I->err_old = err > 1e-4 ? err : 1e-4;
+    if (fac > fac_max) fac = fac_max;
+    if (fac < fac_min) fac = fac_min;
+    if (rejected_last && fac > 1.0) fac = 1.0;
+    return fac;
+}
+
+/* x_new = x + dx with the state's compensation (TwoSum, Knuth / Moller): x + xc carries the
+ * increments below half an ulp of x that plain addition rounds away (a lean rate of 1e-17
+ * rad/s near pi/2, the phase of a long run), so the state loses nothing to rounding step
+ * after step.  Writes I->xnew and I->xcnew from I->x, I->xc and I->dx. */
+GW_INTERNAL void gw_sum_update(gw_instance *I) {
+    int i, nx = I->m->nx;
+    const double *x = I->x, *xc = I->xc, *dx = I->dx;
+    double *xn = I->xnew, *xcn = I->xcnew;
+    for (i = 0; i < nx; i++) {
+        const double y = dx[i] + xc[i], s = x[i] + y, bp = s - x[i];
+        xn[i] = s;
+        xcn[i] = (x[i] - (s - bp)) + (y - bp);
+    }
 }
 
 /* ---- DOP853 and Rosenbrock: adaptive loop ---------------------------------------------
@@ -197,12 +277,11 @@ GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last,
  * A singular W is treated like a rejected step with h halved. */
 static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
     const int ros = (I->solver == GW_SOLVER_ROSENBROCK);
-    const double expo = ros ? 0.25 : 0.125, fac_min = ros ? 0.2 : 1.0 / 3.0, fac_max = 6.0;
-    const double safety = 0.9, hmax = I->max_step;
+    const double fac_min = ros ? 0.2 : 1.0 / 3.0, fac_max = 6.0, hmax = I->max_step;
     int events = 0, rejected_last = 0, jac_valid = 0;
     double lu_h = 0.0; /* step size of the factors in I->lu (0: none) */
     unsigned long n_jac = 0, n_lu = 0, rhs_jac = 0, n_fast = 0;
-    double h_prev = 0.0; /* the previous attempt's step size (growth test of the guard) */
+    double h_ref = 0.0; /* step size at the start of the budget projection window */
     const double t_begin = I->t;
     gw_int_result result = GW_INT_OK;
     if (gw_ensure_f0(I)) return GW_INT_ERROR;
@@ -212,7 +291,7 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
         double h, err = 0.0, t1, fac;
         int last;
         if (gw_ensure_f0(I)) return GW_INT_ERROR;
-        if (gw_next_attempt(I, t_end, rejected_last, &h_prev, &n_fast, &h, &t1, &last)) return GW_INT_ERROR;
+        if (gw_next_attempt(I, t_end, rejected_last, &h_ref, &n_fast, &h, &t1, &last)) return GW_INT_ERROR;
         if (ros) {
             if (!jac_valid) {
                 unsigned long long r0 = I->n_rhs;
@@ -250,10 +329,9 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
                 if (gw_rhs_checked(I, t1, I->xnew, I->k[6])) return GW_INT_ERROR;
                 I->k7_valid = 1;
             }
-            fac = err > 0.0 ? safety * pow(err, -expo) : fac_max;
-            if (fac > fac_max) fac = fac_max;
-            if (fac < fac_min) fac = fac_min;
-            if (rejected_last && fac > 1.0) fac = 1.0;
+            fac = ros ? gw_step_factor(I, err, 4.0, 0.0, 0.0, fac_min, fac_max, 1, rejected_last)
+                      : gw_step_factor(I, err, 8.0, GW_DOP853_BETA, 0.2, fac_min, fac_max, 1,
+                                       rejected_last);
             hnew = h * fac;
             /* a step shortened to land on t_end says little about the step size */
             if (last && h < I->h_adapt && hnew >= h && hnew < I->h_adapt) hnew = I->h_adapt;
@@ -267,9 +345,7 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
             }
         } else {
             I->n_rejected++;
-            fac = isfinite(err) ? safety * pow(err, -expo) : fac_min;
-            if (fac < fac_min) fac = fac_min;
-            if (fac > 1.0) fac = 1.0;
+            fac = gw_step_factor(I, err, ros ? 4.0 : 8.0, 0.0, 0.0, fac_min, fac_max, 0, rejected_last);
             I->h_adapt = h * fac;
             rejected_last = 1;
             if (I->h_adapt < gw_h_min(I->t)) {
@@ -288,18 +364,7 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
 }
 
 GW_INTERNAL gw_int_result gw_integrate(gw_instance *I, double t_end) {
-    /* The adaptive solvers never step beyond max_step: a communication step that needs more
-     * than GW_MAX_STEPS_AHEAD of them is refused up front, as by the fixed-step ones (the
-     * guard of gw_too_many_steps needs a run of attempts without rejection, which a
-     * controller that rejects now and then, as DOPRI5 on the paper's wheel, never gives). */
-    const double H = t_end - I->t;
-    if (I->solver != GW_SOLVER_EULER && I->solver != GW_SOLVER_RK4 &&
-        H > GW_MAX_STEPS_AHEAD * I->max_step) {
-        GW_LOG_ERR(I, "communication step %g would need at least %.3g steps of max_step=%g "
-                   "(limit %.0e): raise max_step or shorten the communication step",
-                   H, H / I->max_step, I->max_step, GW_MAX_STEPS_AHEAD);
-        return GW_INT_ERROR;
-    }
+    if (gw_budget_upfront(I, t_end)) return GW_INT_ERROR;
     switch (I->solver) {
     case GW_SOLVER_EULER:
     case GW_SOLVER_RK4: return gw_integrate_fixed(I, t_end);
@@ -386,6 +451,8 @@ GW_INTERNAL int gw_solver_alloc(gw_instance *I) {
         if (!I->kx[i]) return -1;
     }
     I->rcx = (double *)gw_alloc(I, 3 * nx, sizeof(double));
+    I->sacc = (double *)gw_alloc(I, nx, sizeof(double));
+    if (!I->sacc) return -1;
     I->jac = (double *)gw_alloc(I, nx * nx, sizeof(double));
     I->lu = (double *)gw_alloc(I, nx * nx, sizeof(double));
     I->piv = (int *)gw_alloc(I, nx, sizeof(int));
@@ -399,6 +466,8 @@ GW_INTERNAL void gw_solver_free(gw_instance *I) {
         I->kx[i] = NULL;
     }
     gw_free(I, I->rcx);
+    gw_free(I, I->sacc);
+    I->sacc = NULL;
     gw_free(I, I->jac);
     gw_free(I, I->lu);
     gw_free(I, I->piv);

@@ -37,20 +37,23 @@
 
 #include "gw_instance.h"
 
-#define GW_DOPRI5_SAFETY 0.9
 #define GW_DOPRI5_FAC_MIN 0.2  /* largest decrease of h per step */
 #define GW_DOPRI5_FAC_MAX 10.0 /* largest increase of h per step */
 #define GW_MAX_EVENTS_PER_STEP 1000
 
-/* Feasibility guard: a communication step whose remainder would need more than
- * GW_MAX_STEPS_AHEAD internal steps at the step size the controller has settled on is refused
- * at once with a reason instead of running for hours (gw_solver.c, gw_too_many_steps; the
- * fixed-step solvers refuse more than GW_MAX_STEPS_AHEAD substeps up front). */
-#define GW_MAX_STEPS_AHEAD 1e9
-#define GW_MAX_STEPS_CONTROLLED 1e8
+/* The budget of internal steps of one call (I->max_internal_steps; gw_solver.c): refused up
+ * front when ceil(H / max_step) exceeds it, refused when GW_SETTLE attempts in a row project
+ * beyond it, stopped when it is spent. */
 #define GW_SETTLE 100
+#define GW_PROJECTION_MARGIN 100.0
+/* step size stabilisation of DOP853 and DOPRI5 (Hairer's BETA; benchmarks/work_precision.py
+ * measures the rejected-step fraction) */
+#define GW_DOP853_BETA 0.04
+#define GW_DOPRI5_BETA 0.0
 
 /* ---- gw_solver.c: the step driver's helpers, shared by the families ----------------------- */
+/* log that the budget of internal steps refuses the rest of the call (what: why now) */
+GW_INTERNAL void gw_budget_message(gw_instance *I, const char *what, double remaining, double h);
 /* smallest step size allowed at time t before "step size underflow" */
 GW_INTERNAL double gw_h_min(double t);
 GW_INTERNAL const char *gw_x_name(const gw_instance *I, int i);
@@ -64,15 +67,24 @@ GW_INTERNAL int gw_rhs_checked(gw_instance *I, double t, const double *x, double
 GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events);
 /* weighted RMS norm of v with the error weights at x */
 GW_INTERNAL double gw_rms_weighted(const gw_instance *I, const double *v, const double *x);
+/* Step size factor h_new / h of Hairer's controller with stabilisation beta and weight w (PI);
+ * updates I->err_old on accepted steps. */
+GW_INTERNAL double gw_step_factor(gw_instance *I, double err, double q, double beta, double w,
+                                  double fac_min, double fac_max, int accepted, int rejected_last);
+/* I->xnew, I->xcnew = I->x + I->dx with compensated summation (TwoSum) */
+GW_INTERNAL void gw_sum_update(gw_instance *I);
 /* Hairer's initial step size estimate (one extra RHS evaluation). */
 GW_INTERNAL double gw_initial_step(gw_instance *I, double hmax, double order);
 /* The next attempt of an adaptive loop: the controller's h, bounded by max_step and shortened
  * to land exactly on t_end (*last), refused by the feasibility guard or when it no longer
  * advances time. Returns 0, or -1 with the reason logged. */
-GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last, double *h_prev,
+GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last, double *h_ref,
                                 unsigned long *n_fast, double *h, double *t1, int *last);
 
 /* ---- gw_solver_fixed.c ------------------------------------------------------------------------ */
+/* ceil((t_end - I->t) / max_step) less the rounding of t (>= 1): the fixed-step solvers' exact
+ * substep count, a lower bound for the adaptive ones */
+GW_INTERNAL double gw_fixed_substeps(const gw_instance *I, double t_end);
 GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end);
 
 /* ---- gw_solver_dopri5.c ----------------------------------------------------------------------- */

@@ -37,7 +37,7 @@ static const double dp5_d1 = -12715105075.0 / 11282082432.0,
 static int gw_dopri5_step(gw_instance *I, double h, double t1, double *err) {
     int i, nx = I->m->nx;
     const double t = I->t, *x = I->x, *nom = I->nominal;
-    const double rtol = I->rel_tol, atol = I->abs_tol;
+    const double rtol = I->rel_tol, atol = I->atol_eff;
     double *k1 = I->k[0], *k2 = I->k[1], *k3 = I->k[2], *k4 = I->k[3], *k5 = I->k[4],
            *k6 = I->k[5], *k7 = I->k[6], *xt = I->xtmp, *xn = I->xnew;
     double sum = 0.0;
@@ -56,8 +56,9 @@ static int gw_dopri5_step(gw_instance *I, double h, double t1, double *err) {
                             dp5_a65 * k5[i]);
     if (gw_rhs_checked(I, t1, xt, k6)) return -1;
     for (i = 0; i < nx; i++)
-        xn[i] = x[i] + h * (dp5_a71 * k1[i] + dp5_a73 * k3[i] + dp5_a74 * k4[i] + dp5_a75 * k5[i] +
-                            dp5_a76 * k6[i]);
+        I->dx[i] = h * (dp5_a71 * k1[i] + dp5_a73 * k3[i] + dp5_a74 * k4[i] + dp5_a75 * k5[i] +
+                        dp5_a76 * k6[i]);
+    gw_sum_update(I); /* xn = x + dx, compensated */
     if (gw_rhs_checked(I, t1, xn, k7)) return -1;
     I->k7_valid = 1;
     for (i = 0; i < nx; i++) {
@@ -90,7 +91,7 @@ GW_INTERNAL void gw_dopri5_dense(gw_instance *I) {
 GW_INTERNAL gw_int_result gw_integrate_dopri5(gw_instance *I, double t_end) {
     int events = 0, rejected_last = 0;
     unsigned long n_fast = 0; /* attempts in a row projecting too many steps (guard) */
-    double h_prev = 0.0; /* the previous attempt's step size (growth test of the guard) */
+    double h_ref = 0.0; /* step size at the start of the budget projection window */
     const double hmax = I->max_step;
     if (gw_ensure_f0(I)) return GW_INT_ERROR;
     if (!(I->h_adapt > 0.0)) I->h_adapt = gw_initial_step(I, hmax, 5.0);
@@ -99,14 +100,12 @@ GW_INTERNAL gw_int_result gw_integrate_dopri5(gw_instance *I, double t_end) {
         double h, err = 0.0, t1, fac;
         int last;
         if (gw_ensure_f0(I)) return GW_INT_ERROR;
-        if (gw_next_attempt(I, t_end, rejected_last, &h_prev, &n_fast, &h, &t1, &last)) return GW_INT_ERROR;
+        if (gw_next_attempt(I, t_end, rejected_last, &h_ref, &n_fast, &h, &t1, &last)) return GW_INT_ERROR;
         if (gw_dopri5_step(I, h, t1, &err)) return GW_INT_ERROR;
         if (err <= 1.0) {
             gw_int_result r;
-            fac = err > 0.0 ? GW_DOPRI5_SAFETY * pow(err, -0.2) : GW_DOPRI5_FAC_MAX;
-            if (fac > GW_DOPRI5_FAC_MAX) fac = GW_DOPRI5_FAC_MAX;
-            if (fac < GW_DOPRI5_FAC_MIN) fac = GW_DOPRI5_FAC_MIN;
-            if (rejected_last && fac > 1.0) fac = 1.0;
+            fac = gw_step_factor(I, err, 5.0, GW_DOPRI5_BETA, 0.75, GW_DOPRI5_FAC_MIN,
+                                 GW_DOPRI5_FAC_MAX, 1, rejected_last);
             {
                 double hnew = h * fac;
                 /* a step shortened to land on t_end says little about the step size */
@@ -120,8 +119,8 @@ GW_INTERNAL gw_int_result gw_integrate_dopri5(gw_instance *I, double t_end) {
             if (r != GW_INT_OK) return r;
         } else {
             I->n_rejected++;
-            fac = isfinite(err) ? GW_DOPRI5_SAFETY * pow(err, -0.2) : GW_DOPRI5_FAC_MIN;
-            if (fac < GW_DOPRI5_FAC_MIN) fac = GW_DOPRI5_FAC_MIN;
+            fac = gw_step_factor(I, err, 5.0, 0.0, 0.0, GW_DOPRI5_FAC_MIN, GW_DOPRI5_FAC_MAX, 0,
+                                 rejected_last);
             I->h_adapt = h * fac;
             rejected_last = 1;
             if (I->h_adapt < gw_h_min(I->t)) {

@@ -19,7 +19,9 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 static int gw_euler_step(gw_instance *I, double h) {
     int i, nx = I->m->nx;
     const double *x = I->x, *k1 = I->k[0];
-    for (i = 0; i < nx; i++) I->xnew[i] = x[i] + h * k1[i];
+    for (i = 0; i < nx; i++) I->dx[i] = h * k1[i];
+    (void)x;
+    gw_sum_update(I);
     I->k7_valid = 0;
     return 0;
 }
@@ -68,8 +70,8 @@ static int gw_rk4_step(gw_instance *I, double h, double t1) {
     if (gw_rk4_unstable(I, h)) return -1;
     for (i = 0; i < nx; i++) xt[i] = x[i] + h * k3[i];
     if (gw_rhs_checked(I, t1, xt, k4)) return -1;
-    for (i = 0; i < nx; i++)
-        I->xnew[i] = x[i] + (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+    for (i = 0; i < nx; i++) I->dx[i] = (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+    gw_sum_update(I);
     I->k7_valid = 0;
     return 0;
 }
@@ -77,27 +79,27 @@ static int gw_rk4_step(gw_instance *I, double h, double t1) {
 
 /* ---- the fixed-step loop ------------------------------------------------------ */
 
-GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
+/* Substeps of max_step that cover [I->t, t_end] (at least 1).  A communication step meant to be
+ * k max_step long (t_k = t0 + k h in the caller) comes out longer by the rounding of t: 1e-13 s
+ * at t = 1000 s, 1e-10 of a 1 ms step.  That excess must not add a substep (twice the cost of a
+ * real-time step, at random): up to 8 ulps of t are absorbed into the substeps, and never more
+ * than a quarter of a step (far from t = 0 the doubles may be too coarse for max_step: refused
+ * in gw_integrate_fixed, not absorbed).  Also the lower bound of every solver's step count that
+ * the budget checks up front (gw_solver.c). */
+GW_INTERNAL double gw_fixed_substeps(const gw_instance *I, double t_end) {
     const double t0 = I->t, H = t_end - t0;
-    /* A communication step meant to be k max_step long (t_k = t0 + k h in the caller) comes out
-     * longer by the rounding of t: 1e-13 s at t = 1000 s, 1e-10 of a 1 ms step.  That excess must
-     * not add a substep (twice the cost of a real-time step, at random): up to 8 ulps of t are
-     * absorbed into the substeps, and never more than a quarter of a step (far from t = 0 the
-     * doubles may be too coarse for max_step: refused below, not absorbed). */
     const double slack = fmin(1e-12 * I->max_step + 8.0 * DBL_EPSILON * fmax(fabs(t0), fabs(t_end)),
                               0.25 * I->max_step);
-    double nd = ceil((H - slack) / I->max_step);
+    const double nd = ceil((H - slack) / I->max_step);
+    return nd < 1.0 ? 1.0 : nd;
+}
+
+GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
+    const double t0 = I->t, H = t_end - t0;
     unsigned long long n, i;
     int events = 0, growing;
     double d_prev;
-    if (nd < 1.0) nd = 1.0;
-    if (nd > GW_MAX_STEPS_AHEAD) {
-        GW_LOG_ERR(I, "communication step %g would need %.3g steps of max_step=%g (limit %.0e): "
-                   "raise max_step or shorten the communication step", H, nd, I->max_step,
-                   GW_MAX_STEPS_AHEAD);
-        return GW_INT_ERROR;
-    }
-    n = (unsigned long long)nd;
+    n = (unsigned long long)gw_fixed_substeps(I, t_end); /* within the budget (gw_integrate) */
     d_prev = 0.0;
     growing = 0;
     for (i = 1; i <= n; i++) {
@@ -114,6 +116,11 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
                            gw_solver_name(I->solver), I->max_step, I->t, nextafter(I->t, HUGE_VAL) - I->t, h);
                 return GW_INT_ERROR;
             }
+            if ((double)I->n_call_steps >= I->max_internal_steps) { /* events restart substeps */
+                gw_budget_message(I, "the budget of internal steps is spent", t_end - I->t, h);
+                return GW_INT_ERROR;
+            }
+            I->n_call_steps++;
             if (gw_ensure_f0(I)) return GW_INT_ERROR;
             if (I->solver == GW_SOLVER_EULER) {
                 /* Euler's instability: increments that more than double, step after step */

@@ -208,11 +208,14 @@ GW_INTERNAL int gw_rodas4_step(gw_instance *I, double h, double t1, double *err)
         k6[i] = dy[i] + (hc61 * k1[i] + hc62 * k2[i] + hc63 * k3[i] + hc64 * k4[i] +
                          hc65 * k5[i]);
     gw_rodas4_solve(I, k6);
+    for (i = 0; i < nx; i++) /* x_new - x, summed apart from x (compensated below) */
+        I->dx[i] = (ros_a51 * k1[i] + ros_a52 * k2[i] + ros_a53 * k3[i] + ros_a54 * k4[i] + k5[i]) +
+                   k6[i];
+    gw_sum_update(I);
     for (i = 0; i < nx; i++) {
         double ax = fabs(x[i]), an, sk, r;
-        xn[i] = xt[i] + k6[i];
         an = fabs(xn[i]);
-        sk = I->abs_tol * I->nominal[i] + I->rel_tol * (ax > an ? ax : an);
+        sk = I->atol_eff * I->nominal[i] + I->rel_tol * (ax > an ? ax : an);
         r = k6[i] / sk;
         sum += r * r;
     }

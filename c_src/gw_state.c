@@ -1,8 +1,9 @@
 /*
  * gw_state.c -- saving and restoring an instance: one serialised blob, so that a saved
  * state and its serialised form share one code path (the FMI layer's fmi2Get/SetFMUstate
- * and fmi2(De)SerializeFMUstate both use it).  Byte layout, version 2, native byte order,
- * no padding:
+ * and fmi2(De)SerializeFMUstate both use it).  Byte layout, version 3, native byte order,
+ * no padding (version 2 of fmi-robust plus the solvers' budget, controller memory and
+ * compensation; version 1 had neither the CRC nor t_events):
  *
  *   offset  size       field
  *   0       4          magic "GWST"
@@ -14,8 +15,11 @@
  *   then    9*4        int32 front[0] (FMI: its state), solver, stop_defined, tol_defined,
  *                            terminated, front[1] (FMI: last fmi2DoStep status and more),
  *                            y_valid, rel_tol_set, abs_tol_set
- *           9*8        double t, t_start, t_stop, tolerance, last_successful_time,
- *                             rel_tol, abs_tol, max_step, h_adapt (adaptive step size)
+ *           11*8       double t, t_start, t_stop, tolerance, last_successful_time,
+ *                             rel_tol, abs_tol, max_step, max_internal_steps (the budget
+ *                             of internal steps per call), h_adapt (adaptive step size),
+ *                             err_old (the PI controller's memory: error norm of the last
+ *                             accepted step, 0: none)
  *           5*8        uint64 n_rhs, n_accepted, n_rejected, n_evt, n_events
  *           8*nx       double x
  *           8*ns       double s
@@ -25,14 +29,20 @@
  *           8*ne       double e (event indicators at t)
  *           8*nx       double x nominal
  *           8*ne       double t_events (time of each event's last firing)
+ *           8*nx       double xc (compensation of the state's summation: x + xc is the
+ *                             state to twice the working precision; 0 if x was written
+ *                             since the solver left it)
  *           ne         uint8 event flags
  *           4          uint32 CRC-32 (IEEE 802.3, as zlib's crc32) of every byte before it
  *
  * Reading (gw_state_check) refuses, with the reason logged: a wrong magic, version, size,
  * model sizes or token; a checksum that does not match (every single-bit and burst error
  * up to 32 bits in the blob is caught); and any field outside the range that fmi2Set* and
- * the core accept: non-finite numbers, a solver that does not exist, tolerances or max_step
- * outside their ranges (gw_core.h), flags that are neither 0 nor 1, non-positive nominals.
+ * the core accept: non-finite numbers, a solver that does not exist, tolerances, max_step or
+ * max_internal_steps outside their ranges (gw_core.h: abs_tol 0 is valid, the budget a
+ * whole number), flags that are neither 0 nor 1, non-positive nominals, a negative step
+ * size, err_old outside [0, 1] (an accepted step's error norm), a compensation xc_i larger
+ * than an ulp of x_i (TwoSum leaves at most half of one).
  * So a restored state is one the instance could have reached itself.  The two front-end
  * ints are the front end's to give meaning to and to validate.  Logging settings are not
  * part of a state.
@@ -41,6 +51,7 @@
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
 #else
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -48,10 +59,10 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include "gw_instance.h"
 
 #define GW_STATE_MAGIC "GWST"
-#define GW_STATE_VERSION 2u
+#define GW_STATE_VERSION 3u
 #define GW_STATE_HEADER 44 /* bytes before the model token */
 #define GW_STATE_NINT 9
-#define GW_STATE_NDBL 9
+#define GW_STATE_NDBL 11
 #define GW_STATE_NU64 5
 
 /* ---- CRC-32 (reflected polynomial 0xEDB88320), bitwise: the blobs are small ------------ */
@@ -79,7 +90,7 @@ typedef struct {
 enum { GW_SI_FRONT0, GW_SI_SOLVER, GW_SI_STOP_DEF, GW_SI_TOL_DEF, GW_SI_TERMINATED,
        GW_SI_FRONT1, GW_SI_Y_VALID, GW_SI_REL_SET, GW_SI_ABS_SET };
 enum { GW_SD_T, GW_SD_T_START, GW_SD_T_STOP, GW_SD_TOLERANCE, GW_SD_LAST_TIME, GW_SD_REL_TOL,
-       GW_SD_ABS_TOL, GW_SD_MAX_STEP, GW_SD_H };
+       GW_SD_ABS_TOL, GW_SD_MAX_STEP, GW_SD_MAX_INTERNAL_STEPS, GW_SD_H, GW_SD_ERR_OLD };
 
 static void gw_scalars_of(const gw_instance *I, const int front[2], gw_state_scalars *sc) {
     sc->ints[GW_SI_FRONT0] = front[0];
@@ -99,7 +110,9 @@ static void gw_scalars_of(const gw_instance *I, const int front[2], gw_state_sca
     sc->dbl[GW_SD_REL_TOL] = I->rel_tol;
     sc->dbl[GW_SD_ABS_TOL] = I->abs_tol;
     sc->dbl[GW_SD_MAX_STEP] = I->max_step;
+    sc->dbl[GW_SD_MAX_INTERNAL_STEPS] = I->max_internal_steps;
     sc->dbl[GW_SD_H] = I->h_adapt;
+    sc->dbl[GW_SD_ERR_OLD] = I->err_old;
     sc->u64[0] = I->n_rhs;
     sc->u64[1] = I->n_accepted;
     sc->u64[2] = I->n_rejected;
@@ -107,11 +120,12 @@ static void gw_scalars_of(const gw_instance *I, const int front[2], gw_state_sca
     sc->u64[4] = I->n_events;
 }
 
-/* the vectors of the layout, in order: x, s, u, p, y, e, nominal, t_events */
-#define GW_STATE_NVEC 8
+/* the vectors of the layout, in order: x, s, u, p, y, e, nominal, t_events, xc */
+#define GW_STATE_NVEC 9
 #define GW_STATE_VEC_NOMINAL 6
+#define GW_STATE_VEC_XC 8
 static const char *const gw_vec_names[GW_STATE_NVEC] = {"x", "s", "u", "p", "y", "e", "nominal",
-                                                        "t_events"};
+                                                        "t_events", "xc"};
 
 static void gw_vectors_of(const gw_instance *I, double *vec[GW_STATE_NVEC], int len[GW_STATE_NVEC]) {
     const gw_model *m = I->m;
@@ -123,6 +137,13 @@ static void gw_vectors_of(const gw_instance *I, double *vec[GW_STATE_NVEC], int 
     vec[5] = I->e, len[5] = m->ne;
     vec[6] = I->nominal, len[6] = m->nx;
     vec[7] = I->t_events, len[7] = m->ne;
+    vec[8] = I->xc, len[8] = m->nx;
+}
+
+/* xc belongs to the x the solver left (I->xc_x); a front end that wrote x since (Model
+ * Exchange) made it stale, and gw_advance would drop it: so does a saved state */
+static int gw_xc_stale(const gw_instance *I) {
+    return memcmp(I->x, I->xc_x, (size_t)I->m->nx * sizeof(double)) != 0;
 }
 
 /* ---- writer -------------------------------------------------------------------------------- */
@@ -168,7 +189,15 @@ static void gw_write_state(const gw_instance *I, const int front[2], gw_writer *
         gw_put(w, &x, 8);
     }
     gw_vectors_of(I, vec, len);
-    for (i = 0; i < GW_STATE_NVEC; i++) gw_put(w, vec[i], (size_t)len[i] * sizeof(double));
+    for (i = 0; i < GW_STATE_NVEC; i++) {
+        if (i == GW_STATE_VEC_XC && gw_xc_stale(I)) {
+            const double zero = 0.0;
+            int j;
+            for (j = 0; j < len[i]; j++) gw_put(w, &zero, 8);
+            continue;
+        }
+        gw_put(w, vec[i], (size_t)len[i] * sizeof(double));
+    }
     for (i = 0; i < m->ne; i++) {
         unsigned char f = I->flags[i] ? 1 : 0;
         gw_put(w, &f, 1);
@@ -300,28 +329,16 @@ static int gw_state_check_header(gw_instance *I, const char *fn, const unsigned 
     return 1;
 }
 
-/* the setting ranges of gw_value_check, for the settings stored in a state */
+/* the setting ranges of gw_value_check (gw_settings_check), for the settings stored in a
+ * state, and the set-up tolerance; 1 or reason logged */
 static int gw_state_check_settings(gw_instance *I, const char *fn, const gw_state_scalars *sc) {
-    static const struct {
-        int setting, field;
-        const char *name;
-    } settings[] = {{GW_SET_REL_TOL, GW_SD_REL_TOL, "rel_tol"},
-                    {GW_SET_ABS_TOL, GW_SD_ABS_TOL, "abs_tol"},
-                    {GW_SET_MAX_STEP, GW_SD_MAX_STEP, "max_step"}};
-    gw_variable v;
-    size_t k;
-    memset(&v, 0, sizeof(v));
-    v.kind = GW_VAR_SETTING;
-    v.type = GW_ENUM;
-    v.index = GW_SET_SOLVER;
-    v.name = "solver";
-    if (gw_value_check(I, fn, &v, (double)sc->ints[GW_SI_SOLVER]) != GW_OK) return 0;
-    v.type = GW_REAL;
-    for (k = 0; k < sizeof(settings) / sizeof(settings[0]); k++) {
-        v.index = settings[k].setting;
-        v.name = settings[k].name;
-        if (gw_value_check(I, fn, &v, sc->dbl[settings[k].field]) != GW_OK) return 0;
-    }
+    double value[GW_N_SETTINGS];
+    value[GW_SET_SOLVER] = (double)sc->ints[GW_SI_SOLVER];
+    value[GW_SET_REL_TOL] = sc->dbl[GW_SD_REL_TOL];
+    value[GW_SET_ABS_TOL] = sc->dbl[GW_SD_ABS_TOL];
+    value[GW_SET_MAX_STEP] = sc->dbl[GW_SD_MAX_STEP];
+    value[GW_SET_MAX_INTERNAL_STEPS] = sc->dbl[GW_SD_MAX_INTERNAL_STEPS];
+    if (gw_settings_check(I, fn, value) != GW_OK) return 0;
     if (sc->ints[GW_SI_TOL_DEF] &&
         !(sc->dbl[GW_SD_TOLERANCE] >= GW_REL_TOL_MIN && sc->dbl[GW_SD_TOLERANCE] <= GW_REL_TOL_MAX)) {
         GW_LOG_ERR(I, "%s: FMU state holds an invalid set-up tolerance %g", fn,
@@ -339,13 +356,13 @@ static int gw_state_check_fields(gw_instance *I, const char *fn, const unsigned 
                                              "y_valid", "rel_tol_set", "abs_tol_set"};
     static const char *const dbl_names[GW_STATE_NDBL] = {
         "t", "t_start", "t_stop", "tolerance", "last_successful_time", "rel_tol", "abs_tol",
-        "max_step", "h_adapt"};
+        "max_step", "max_internal_steps", "h_adapt", "err_old"};
     const gw_model *m = I->m;
     gw_reader r = gw_state_body(I, buf);
     gw_state_scalars sc;
     double *vec[GW_STATE_NVEC];
     int len[GW_STATE_NVEC], i, k;
-    size_t j;
+    size_t j, x_pos;
     gw_read_scalars(&r, &sc);
     for (j = 0; j < sizeof(flags01) / sizeof(flags01[0]); j++)
         if (sc.ints[flags01[j]] != 0 && sc.ints[flags01[j]] != 1) {
@@ -362,18 +379,29 @@ static int gw_state_check_fields(gw_instance *I, const char *fn, const unsigned 
         GW_LOG_ERR(I, "%s: FMU state holds a negative step size %g", fn, sc.dbl[GW_SD_H]);
         return 0;
     }
+    if (!(sc.dbl[GW_SD_ERR_OLD] >= 0.0 && sc.dbl[GW_SD_ERR_OLD] <= 1.0)) {
+        GW_LOG_ERR(I, "%s: FMU state holds err_old = %g (the error norm of an accepted step: "
+                   "0 to 1)", fn, sc.dbl[GW_SD_ERR_OLD]);
+        return 0;
+    }
     if (!gw_state_check_settings(I, fn, &sc)) return 0;
     gw_vectors_of(I, vec, len);
+    x_pos = r.pos; /* x is the first vector */
     for (k = 0; k < GW_STATE_NVEC; k++)
         for (i = 0; i < len[k]; i++) {
-            double d;
+            double d, x = 0.0;
+            const char *why = "not finite";
             gw_get(&r, &d, 8);
-            if (!isfinite(d) || (k == GW_STATE_VEC_NOMINAL && !(d > 0.0))) {
-                GW_LOG_ERR(I, "%s: FMU state holds an invalid %s[%d] = %g (%s)", fn, gw_vec_names[k],
-                           i, d, k == GW_STATE_VEC_NOMINAL ? "a nominal must be finite and > 0"
-                                                           : "not finite");
-                return 0;
-            }
+            if (k == GW_STATE_VEC_XC) memcpy(&x, buf + x_pos + 8 * (size_t)i, 8);
+            if (isfinite(d) && k == GW_STATE_VEC_NOMINAL && !(d > 0.0))
+                why = "a nominal must be finite and > 0";
+            else if (isfinite(d) && k == GW_STATE_VEC_XC && !(fabs(d) <= DBL_EPSILON * fabs(x)))
+                why = "a compensation is at most an ulp of its state";
+            else if (isfinite(d))
+                continue;
+            GW_LOG_ERR(I, "%s: FMU state holds an invalid %s[%d] = %g (%s)", fn, gw_vec_names[k],
+                       i, d, why);
+            return 0;
         }
     for (i = 0; i < m->ne; i++) {
         unsigned char f;
@@ -421,7 +449,9 @@ GW_API void gw_state_apply(gw_instance *I, const unsigned char *buf) {
     I->rel_tol = sc.dbl[GW_SD_REL_TOL];
     I->abs_tol = sc.dbl[GW_SD_ABS_TOL];
     I->max_step = sc.dbl[GW_SD_MAX_STEP];
+    I->max_internal_steps = sc.dbl[GW_SD_MAX_INTERNAL_STEPS];
     I->h_adapt = sc.dbl[GW_SD_H];
+    I->err_old = sc.dbl[GW_SD_ERR_OLD];
     I->n_rhs = sc.u64[0];
     I->n_accepted = sc.u64[1];
     I->n_rejected = sc.u64[2];
@@ -434,6 +464,9 @@ GW_API void gw_state_apply(gw_instance *I, const unsigned char *buf) {
         gw_get(&r, &f, 1);
         I->flags[i] = f ? 1 : 0;
     }
+    memcpy(I->xc_x, I->x, (size_t)m->nx * sizeof(double)); /* xc belongs to this x */
+    gw_update_atol_eff(I);
+    I->pre_valid = 0; /* p came from the state */
     I->fcur_valid = 0;
     I->k7_valid = 0;
     I->dense_ready = 0;

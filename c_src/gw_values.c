@@ -8,6 +8,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #else
 
 #include <math.h>
+#include <string.h>
 
 #include "gw_instance.h"
 
@@ -44,6 +45,7 @@ static double gw_setting_value(const gw_instance *I, int index) {
     case GW_SET_REL_TOL: return I->rel_tol;
     case GW_SET_ABS_TOL: return I->abs_tol;
     case GW_SET_MAX_STEP: return I->max_step;
+    case GW_SET_MAX_INTERNAL_STEPS: return I->max_internal_steps;
     default: return 0.0;
     }
 }
@@ -80,14 +82,22 @@ static int gw_setting_in_range(gw_instance *I, const char *fn, const gw_variable
                    GW_REL_TOL_MIN, GW_REL_TOL_MAX);
         return 0;
     case GW_SET_ABS_TOL:
-        if (value >= GW_ABS_TOL_MIN && value <= GW_ABS_TOL_MAX) return 1;
-        GW_LOG_ERR(I, "%s: %s = %g is outside its valid range [%g, %g] (an absolute error "
-                   "tolerance in units of each state's nominal value)", fn, v->name, value,
-                   GW_ABS_TOL_MIN, GW_ABS_TOL_MAX);
+        if (value == 0.0 || (value >= GW_ABS_TOL_MIN && value <= GW_ABS_TOL_MAX)) return 1;
+        GW_LOG_ERR(I, "%s: %s = %g is outside its valid range [%g, %g] or 0 (an absolute error "
+                   "tolerance in units of each state's nominal value; 0: follow rel_tol, as "
+                   "rel_tol / 100)", fn, v->name, value, GW_ABS_TOL_MIN, GW_ABS_TOL_MAX);
         return 0;
     case GW_SET_MAX_STEP:
         if (value > 0.0) return 1;
         GW_LOG_ERR(I, "%s: %s = %g must be > 0 (s)", fn, v->name, value);
+        return 0;
+    case GW_SET_MAX_INTERNAL_STEPS:
+        if (value == floor(value) && value >= GW_MAX_INTERNAL_STEPS_MIN &&
+            value <= GW_MAX_INTERNAL_STEPS_MAX)
+            return 1;
+        GW_LOG_ERR(I, "%s: %s = %.17g must be a whole number from %.0f to %.0f (a budget of "
+                   "internal steps per call)", fn, v->name, value, GW_MAX_INTERNAL_STEPS_MIN,
+                   GW_MAX_INTERNAL_STEPS_MAX);
         return 0;
     default: return 1;
     }
@@ -109,10 +119,34 @@ GW_API gw_status gw_value_check(gw_instance *I, const char *fn, const gw_variabl
     return GW_OK;
 }
 
+GW_INTERNAL gw_status gw_settings_check(gw_instance *I, const char *fn, const double *value) {
+    static const char *const names[GW_N_SETTINGS] = {"solver", "rel_tol", "abs_tol", "max_step",
+                                                     "max_internal_steps"};
+    static const gw_type types[GW_N_SETTINGS] = {GW_ENUM, GW_REAL, GW_REAL, GW_REAL, GW_INTEGER};
+    int k, i;
+    for (k = 0; k < GW_N_SETTINGS; k++) {
+        gw_variable v;
+        memset(&v, 0, sizeof(v));
+        v.kind = GW_VAR_SETTING;
+        v.index = k;
+        v.type = types[k];
+        v.name = names[k];
+        for (i = 0; i < I->m->n_vars; i++) /* the model's own variable, if it exposes one */
+            if (I->m->vars[i].kind == GW_VAR_SETTING && I->m->vars[i].index == k) {
+                v = I->m->vars[i];
+                break;
+            }
+        if (gw_value_check(I, fn, &v, value ? value[k] : gw_setting_value(I, k)) != GW_OK)
+            return GW_ERROR;
+    }
+    return GW_OK;
+}
+
 GW_API void gw_value_set(gw_instance *I, const gw_variable *v, double value) {
     switch (v->kind) {
     case GW_VAR_PARAM:
         I->p[v->index] = value;
+        I->pre_valid = 0;
         if (!I->in_setup) { /* tunable parameter during the simulation */
             gw_point_changed(I);
             I->fcur_valid = 0;
@@ -137,6 +171,7 @@ GW_API void gw_value_set(gw_instance *I, const gw_variable *v, double value) {
             I->abs_tol_set = 1;
             break;
         case GW_SET_MAX_STEP: I->max_step = value; break;
+        case GW_SET_MAX_INTERNAL_STEPS: I->max_internal_steps = value; break;
         default: break;
         }
         break;

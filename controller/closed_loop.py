@@ -1,23 +1,25 @@
 """The Gyrover closed loop as a system: wheel FMU + controller FMU + SSP / OSP files.
 
 build_closed_loop(scene) builds the wheel from its scene (the same path as `gyrowheel build`),
-designs the controller on the scene's own model (controller/design.py) unless a design is
-given, builds the controller FMU through the general path (model/system.py ->
+designs the gain-scheduled controller on the scene's own model (controller/schedule.py) unless a
+schedule is given, builds the controller FMU through the general path (model/system.py ->
 fmu_build.builder.build_spec_fmu) and writes <name>.ssp. Connections are by name:
 wheel outputs alpha, alpha_dot, beta, beta_dot, vx, vy, tilt -> controller inputs;
 controller outputs tilt_cmd, drive_torque -> wheel inputs.
 """
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
 from controller.compensator import EXPERIMENT, controller_spec
-from controller.design import Design, design
 from controller.mission import Mission, standard
+from controller.schedule import Schedule, design_schedule, uniform
 from cosim.system import Component, SystemDescription, connect_by_name, write_ssp
 from fmu_build.builder import build_fmu, build_spec_fmu, model_spec
 from fmu_build.scene import Scene
+from model.spec import ModelSpec
 
 MEASURED = ("alpha", "alpha_dot", "beta", "beta_dot", "vx", "vy", "tilt")
 COMMANDS = ("tilt_cmd", "drive_torque")
@@ -26,10 +28,15 @@ COMMANDS = ("tilt_cmd", "drive_torque")
 @dataclass
 class ClosedLoop:
     system: SystemDescription
-    design: Design
+    schedule: Schedule
     wheel_fmu: Path
     controller_fmu: Path
     ssp: Path
+
+    @property
+    def design(self):
+        """The design at straight upright rolling (the schedule's centre)."""
+        return self.schedule.centre
 
 
 def closed_loop_system(name: str, wheel_fmu: Path, controller_fmu: Path, stop_time: float = 60.0) -> SystemDescription:
@@ -38,23 +45,34 @@ def closed_loop_system(name: str, wheel_fmu: Path, controller_fmu: Path, stop_ti
                              + connect_by_name("controller", list(COMMANDS), "wheel"), stop_time=stop_time)
 
 
-def build_controller_fmu(d: Design, mission: Mission, output: Path, name: str = "gyrover_controller") -> Path:
-    """The controller FMU of a design (gains and mission as parameter start values)."""
-    import json
-    source = json.dumps({"design": d.scene, "speed": d.speed, "g": d.g, "mission": mission.points}, indent=1)
-    return build_spec_fmu(controller_spec(d, mission, name), output, EXPERIMENT, source=source).fmu
+def schedule_for(spec: ModelSpec, speed: float, mission: Mission, scene: str = "", rate_points: int = 5,
+                 tilt_points: int = 9, **kw) -> Schedule:
+    """The gain schedule a mission needs: heading rates up to 1.25 times the mission's largest
+    (at least 0.1 rad/s), tilts over the gimbal's range (+-0.8 rad, a little beyond the 45 deg stop)."""
+    rate_max = max(0.1, 1.25 * max(abs(p[1]) for p in mission.points))
+    return design_schedule(spec, speed, uniform(rate_max, rate_points), uniform(0.8, tilt_points), scene=scene, **kw)
+
+
+def build_controller_fmu(schedule: Schedule, mission: Mission, wheel: ModelSpec, output: Path,
+                         name: str = "gyrover_controller") -> Path:
+    """The controller FMU of a schedule (gains built in, mission as parameter start values)."""
+    source = json.dumps({"design": schedule.scene, "speed": schedule.speed, "g": schedule.g, "rates": schedule.rates,
+                         "tilts": schedule.tilts, "mission": mission.points}, indent=1)
+    return build_spec_fmu(controller_spec(schedule, mission, wheel, name=name), output, EXPERIMENT, source=source).fmu
 
 
 def build_closed_loop(scene: Scene, out_dir: str | Path, mission: Mission | None = None, speed: float = 1.5,
-                      d: Design | None = None, stop_time: float = 60.0) -> ClosedLoop:
-    """Wheel and controller FMUs and the .ssp of the closed loop, in out_dir."""
+                      schedule: Schedule | None = None, stop_time: float | None = None) -> ClosedLoop:
+    """Wheel and controller FMUs and the .ssp of the closed loop, in out_dir (stop time: the
+    mission's duration unless given)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     mission = mission or standard(speed)
-    d = d or design(model_spec(scene), speed, scene=scene.name)
+    spec = model_spec(scene)
+    schedule = schedule or schedule_for(spec, speed, mission, scene=scene.name)
     wheel = build_fmu(scene, out_dir / f"{scene.name}.fmu").fmu
-    ctrl = build_controller_fmu(d, mission, out_dir / f"{scene.name}_controller.fmu",
+    ctrl = build_controller_fmu(schedule, mission, spec, out_dir / f"{scene.name}_controller.fmu",
                                 name=f"{scene.name}_controller")
-    system = closed_loop_system(f"{scene.name}_closed_loop", wheel, ctrl, stop_time)
+    system = closed_loop_system(f"{scene.name}_closed_loop", wheel, ctrl, stop_time or mission.duration)
     ssp = write_ssp(system, out_dir / f"{scene.name}_closed_loop.ssp")
-    return ClosedLoop(system, d, wheel, ctrl, ssp)
+    return ClosedLoop(system, schedule, wheel, ctrl, ssp)

@@ -85,12 +85,17 @@ def connect_by_name(a: str, outputs: list[str], b: str) -> list[Connection]:
 
 # -- SSP ---------------------------------------------------------------------------------------
 def write_ssp(system: SystemDescription, path: str | Path) -> Path:
-    """Write <path>.ssp: SystemStructure.ssd (SSP 1.0) and resources/<component>.fmu."""
+    """Write <path>.ssp: SystemStructure.ssd (SSP 1.0) and resources/<component>.fmu.
+
+    Raises SystemFileError if a connection does not fit or a start value is not a parameter or
+    an input (check_bindings)."""
     from pyssp_standard.common_content_ssc import TypeReal
     from pyssp_standard.ssd import SSD, Component as SspComponent, Connection as SspConnection
     from pyssp_standard.ssd import Connector, DefaultExperiment, System
 
     system.check()
+    for c in system.components:
+        check_bindings(c)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="gyrowheel-ssp-") as tmp:
@@ -125,11 +130,40 @@ def write_ssp(system: SystemDescription, path: str | Path) -> Path:
     return path
 
 
+BINDABLE = ("parameter", "input")
+# one name for every component's set: ecos applies the sets of the one name given at init,
+# libcosim a component's first set (and any by its name), gyrowheel's master all of them
+PARAMETER_SET = "start"
+
+
+def check_bindings(component: Component, where: str = "") -> None:
+    """A parameter binding must set a parameter or an input of its FMU (SystemFileError otherwise).
+
+    SSP 1.0 parameter sets carry parameter values; libcosim's SSP loader applies them only to
+    variables of causality parameter or input and drops any other with a warning ("Non-input
+    causality for variable wheel:beta"), so a binding of a state's start value (an output with
+    initial="exact", e.g. the wheel's beta) would make masters disagree. Set such start values in
+    the scene's [initial] (the FMU's default start) or through a master's own start values.
+    """
+    if not component.start_values:
+        return
+    md = read_model_description(str(component.fmu), validate=False)
+    causality = {v.name: v.causality for v in md.modelVariables}
+    for name in component.start_values:
+        got = causality.get(name)
+        if got not in BINDABLE:
+            raise SystemFileError(
+                f"{where}{component.name}.{name}: an SSP parameter binding sets a parameter or an input, "
+                f"this is {'an ' + got if got else 'not a variable'} (SSP masters such as libcosim ignore it): "
+                f"give it as the FMU's start value (a scene's [initial]) or as a master's start value")
+
+
 def _add_parameter_bindings(ssd_path: Path, system: SystemDescription) -> None:
     """Inline ssd:ParameterBindings (SSP 1.0 section 5.3.5) for components with start values.
 
     pyssp-standard 0.9 writes bindings only as external .ssv references; the values belong in
-    the .ssd itself here, so they are added to the written tree in schema order.
+    the .ssd itself here, so they are added to the written tree in schema order. Only parameters
+    and inputs are bound (check_bindings); every component's set is named PARAMETER_SET.
     """
     if not any(c.start_values for c in system.components):
         return
@@ -143,7 +177,7 @@ def _add_parameter_bindings(ssd_path: Path, system: SystemDescription) -> None:
             continue
         bindings = ET.Element(f"{{{SSD_NS}}}ParameterBindings")
         values = ET.SubElement(ET.SubElement(bindings, f"{{{SSD_NS}}}ParameterBinding"), f"{{{SSD_NS}}}ParameterValues")
-        pset = ET.SubElement(values, f"{{{SSV_NS}}}ParameterSet", {"version": "1.0", "name": f"{comp.name}_start"})
+        pset = ET.SubElement(values, f"{{{SSV_NS}}}ParameterSet", {"version": "1.0", "name": PARAMETER_SET})
         params = ET.SubElement(pset, f"{{{SSV_NS}}}Parameters")
         for name, value in comp.start_values.items():
             ET.SubElement(ET.SubElement(params, f"{{{SSV_NS}}}Parameter", {"name": name}), f"{{{SSV_NS}}}Real",
@@ -188,6 +222,7 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
                                       "ssv:ParameterSet/ssv:Parameters/ssv:Parameter", ns)
                   if p.find("ssv:Real", ns) is not None}
         components.append(Component(el.get("name"), fmu, starts))
+        check_bindings(components[-1], f"{path}: ")
     connections = [Connection(k.get("startElement"), k.get("startConnector"), k.get("endElement"),
                               k.get("endConnector")) for k in sysel.findall("ssd:Connections/ssd:Connection", ns)]
     exp = root.find("ssd:DefaultExperiment", ns)

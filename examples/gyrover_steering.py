@@ -1,12 +1,16 @@
 """Steer the Gyrover by tilting its flywheel (scene examples/scenes/gyrover_steering.toml).
 
-Tilting the spinning flywheel turns its angular momentum; the wheel answers with a roll
-torque (it leans) and its heading rotates. A held tilt leaves the heading offset, it does
-not keep turning: steady turning needs the lean held by feedback, as on the real robot.
+The tilt (Xu & Ou's beta_a) turns the flywheel's spin axis about the assembly's fore-aft axis m_p,
+from the axle towards the pendulum link: its angular momentum H_f tips out of the horizontal. The
+yaw momentum of the whole Gyrover stays (nearly) what it was, so the wheel leans the other way
+until the vertical components cancel, H_f sin(tilt) + (H_w + H_f) sin(lean) = 0 (H_w = I_axial
+gamma_dot, the wheel's spin momentum), and the lean turns it steadily, as a leaning rolling
+wheel does: a held tilt is a steady turn (docs/effects.md, gyrover).
 
-The FMU's input tilt_cmd follows a profile: straight for 1 s, a slow tilt to +0.3 rad (the wheel leans
-and turns left), slowly over to -0.3 rad (turns right), then back to zero. The script writes the
-trajectory and a figure of the path, heading, lean and tilt.
+The FMU's input tilt_cmd follows a profile: straight for 1 s, a slow tilt to -0.3 rad (with the
+flywheel co-rotating with the wheel, the wheel leans left and turns left), slowly over to +0.3 rad
+(leans and turns right), then back to zero. The script writes the trajectory and a figure of the
+path, heading, lean and tilt, and prints each held tilt's lean against the momentum prediction.
 
     python examples/gyrover_steering.py --out results
 """
@@ -27,7 +31,7 @@ from fmu_build import build_fmu, load_scene  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 # (time, tilt_cmd): slow ramps, so that the open-loop tilt excites little wobble
-PROFILE = [(0.0, 0.0), (1.0, 0.0), (4.0, 0.3), (8.0, 0.3), (14.0, -0.3), (18.0, -0.3), (21.0, 0.0), (24.0, 0.0)]
+PROFILE = [(0.0, 0.0), (1.0, 0.0), (4.0, -0.3), (8.0, -0.3), (14.0, 0.3), (18.0, 0.3), (21.0, 0.0), (24.0, 0.0)]
 
 
 def tilt_profile() -> np.ndarray:
@@ -65,17 +69,22 @@ def main() -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     fmu = build_fmu(load_scene(HERE / "scenes" / "gyrover_steering.toml"), out / "gyrover_steering.fmu").fmu
-    r = simulate_fmu(str(fmu), stop_time=PROFILE[-1][0], input=tilt_profile(), output=["x", "y", "alpha", "beta", "tilt", "tilt_cmd",
-                                                                "gamma_dot", "energy", "actuator_work"])
+    r = simulate_fmu(str(fmu), stop_time=PROFILE[-1][0], input=tilt_profile(),
+                     output=["x", "y", "alpha", "beta", "tilt", "tilt_cmd", "gamma_dot", "flywheel_momentum",
+                             "energy", "actuator_work"])
     write_csv(str(out / "gyrover_steering.csv"), r)
     plot(r, out / "gyrover_steering.png")
-    # A held tilt gives a heading offset, not a turn rate: tilting moves flywheel momentum
-    # I Omega sin(tilt) onto the travel axis and the wheel's momentum turns to answer it.
-    for t0, t1, side in ((4.0, 8.0, "left"), (14.0, 18.0, "right")):
+    scene = load_scene(HERE / "scenes" / "gyrover_steering.toml")
+    I_axial = scene.wheel["k_axial"] * scene.wheel["M"] * scene.wheel["R"] ** 2
+    for t0, t1, side in ((5.0, 8.0, "left"), (15.0, 18.0, "right")):
         held = (r["time"] >= t0) & (r["time"] < t1)
         rate = np.polyfit(r["time"][held], r["alpha"][held], 1)[0]
-        print(f"tilt held for the {side} offset ({t0:g}-{t1:g} s): mean heading {np.degrees(r['alpha'][held].mean()):+.2f}"
-              f" deg, drift {np.degrees(rate):+.3f} deg/s")
+        H_w, H_f = I_axial * r["gamma_dot"][held].mean(), r["flywheel_momentum"][held].mean()
+        tilt = r["tilt"][held].mean()
+        predicted = -np.arcsin(H_f * np.sin(tilt) / (H_w + H_f))
+        print(f"tilt held at {np.degrees(tilt):+.1f} deg ({t0:g}-{t1:g} s): mean lean "
+              f"{np.degrees(r['beta'][held].mean() - np.pi / 2):+.2f} deg (the spin momenta alone predict "
+              f"{np.degrees(predicted):+.2f}), steady turn {np.degrees(rate):+.1f} deg/s to the {side}")
     print(f"wrote {out / 'gyrover_steering.csv'} and {out / 'gyrover_steering.png'}")
     return 0
 

@@ -177,7 +177,8 @@ def main() -> int:
                              ("dopri5", dict(rel_tol=1e-10, abs_tol=1e-12)),
                              ("rosenbrock", dict(rel_tol=1e-8, abs_tol=1e-10)),
                              ("rk4", dict(max_step=2e-3))):
-        paper.start(g=1.625, solver=solver, **{"max_step": 100.0, **settings})
+        # one 10^4 s step: rk4 at 2 ms takes 5e6 internal steps, beyond the default budget of 1e6
+        paper.start(g=1.625, solver=solver, **{"max_step": 100.0, "max_internal_steps": 10**7, **settings})
         e0 = paper.get("energy")[0]
         t0 = time.perf_counter()
         paper.slave.doStep(0.0, 1e4)

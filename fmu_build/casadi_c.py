@@ -14,6 +14,11 @@ names (issue 8, section 9), and the body functions ignore some of the standard a
     dropped, together with the sparsity patterns only it referred to;
   * each body function (casadi_f<N>) marks the standard arguments it ignores as used
     ((void)iw; ...), so the file is clean under -Wall -Wextra -Wpedantic;
+  * each body's element loads `arg[i]? arg[i][j] : 0` become `arg[i][j]`: the runtime passes a
+    valid pointer for every input it indexes (gw_model.h: only inputs of size 0 may be NULL,
+    and those are never indexed), and the NULL tests split the body into branches that keep
+    gcc from merging sin(x) and cos(x) into one sincos call (measured: one libm call, 5-7 ns,
+    of a 28 ns right-hand side; docs/performance.md);
   * the whole file is guarded by GW_UNITY_BUILD, so that compiled on its own it is empty.
 Anything it does not recognise (a function definition of another shape, a global left over)
 raises CodegenFormatError naming the line: a new CasADi version fails the build loudly rather
@@ -37,6 +42,7 @@ _HEAD = re.compile(r"^(?P<static>static\s+)?(?P<type>[A-Za-z_][\w\s\*]*?[\s\*])(
 _SPARSITY = re.compile(r"^static const casadi_int (casadi_s\d+)\[\d+\] = \{[^;]*\};$")
 _BODY = re.compile(r"casadi_f\d+")
 _STANDARD_ARGS = ("arg", "res", "iw", "w", "mem")
+_INPUT_LOAD = re.compile(r"\barg\[(\d+)\]\? arg\[\1\]\[(\d+)\] : 0;")
 
 
 class CodegenFormatError(RuntimeError):
@@ -78,6 +84,8 @@ def make_internal(text: str, keep: set[str]) -> str:
         name = m["name"]
         if m["static"]:
             if _BODY.fullmatch(name):
+                for k in range(first + 1, last + 1):
+                    lines[k] = _INPUT_LOAD.sub(r"arg[\1][\2];", lines[k])
                 body = "\n".join(lines[first + 1:last + 1])
                 unused = [a for a in _STANDARD_ARGS
                           if re.search(rf"\b{a}\b", m["params"]) and not re.search(rf"\b{a}\b", body)]

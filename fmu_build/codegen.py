@@ -16,11 +16,12 @@ import casadi as ca
 from fmu_build.casadi_c import UNITY_GUARD_CLOSE, UNITY_GUARD_OPEN, make_internal
 from fmu_build.scene import SOLVERS, Experiment
 from fmu_build.variables import KIND, TYPE, Variable
+from model.hoist import split_parameters
 from model.spec import ModelSpec
 
 FUNCTION_FILE = "gw_funcs"
 DESC_FILE = "model_desc.c"
-SLOTS = ("init", "ode", "out", "evt", "chk", "nom", "jac", "dir", "dini")
+SLOTS = ("init", "ode", "out", "evt", "chk", "nom", "jac", "dir", "dini", "ode_pre")
 EVENT_ACTION = {"terminate": "GW_EVENT_TERMINATE", "warn": "GW_EVENT_WARN"}
 
 
@@ -67,12 +68,25 @@ def init_jacobian(spec: ModelSpec, table: list[Variable]) -> ca.Function | None:
                        [ca.densify(ca.jacobian(v0, knowns))], ["t", "s", "u", "p"], ["D0"])
 
 
+def hoisted(spec: ModelSpec) -> dict[str, ca.Function]:
+    """spec.functions() with the parameter-only subexpressions of ode moved to ode_pre(p) -> c
+    (model/hoist.py): ode(t, x, u, p, c), evaluated by the runtime once per parameter change."""
+    fns = spec.functions()
+    c, ode_c, c_sym = split_parameters(ca.cse(spec.ode), [spec.t, spec.x, spec.u], spec.p)
+    if c.numel() > 0:
+        fns["ode"] = ca.Function("gw_ode", [spec.t, spec.x, spec.u, spec.p, c_sym], [ode_c],
+                                 ["t", "x", "u", "p", "c"], ["xdot"])
+        fns["ode_pre"] = ca.Function("gw_ode_pre", [spec.p], [c], ["p"], ["c"])
+    return fns
+
+
 def generate_functions(spec: ModelSpec, out_dir: Path, table: list[Variable] | None = None
                        ) -> dict[str, ca.Function]:
     """Write gw_funcs.c (static functions only); return the functions by slot name.
 
-    With the variable table, also `dini`, the partial derivatives of Initialization Mode."""
-    functions = spec.functions()
+    ode comes split into ode_pre(p) and ode(t, x, u, p, c) when that hoists anything (hoisted);
+    with the variable table, also `dini`, the partial derivatives of Initialization Mode."""
+    functions = hoisted(spec)
     if table is not None and (dini := init_jacobian(spec, table)) is not None:
         functions["dini"] = dini
     fns = {slot: optimised(f) for slot, f in functions.items()}
@@ -162,6 +176,8 @@ static const gw_model GW_MODEL = {{
     .default_max_step = {exp.max_step!r},
     .n_init_rows = {len(init_row)},
     .init_rows = gwm_init_rows,
+    .default_max_internal_steps = {float(exp.max_internal_steps)!r},
+    .n_pre = {fns["ode_pre"].numel_out(0) if "ode_pre" in fns else 0},
 }};
 
 {UNITY_GUARD_CLOSE}"""

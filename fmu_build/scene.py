@@ -5,7 +5,8 @@
     [effects.X]   one table per effect X, its parameters (see model.effects)
     [initial]     x, y, alpha, beta, gamma, alpha_dot, beta_dot, gamma_dot
                   (angles also as <name>_deg); never x_dot/y_dot: rolling fixes them
-    [experiment]  start_time, stop_time, output_interval, solver, rel_tol, abs_tol, max_step
+    [experiment]  start_time, stop_time, output_interval, solver, rel_tol, abs_tol, max_step,
+                  max_internal_steps
     [outputs]     keep = [...] to expose only some outputs (optional)
 
 Every error names the file, the table and the key, and lists the valid choices.
@@ -36,8 +37,9 @@ class Experiment:
     output_interval: float = 0.01
     solver: str = "dopri5"
     rel_tol: float = 1e-8
-    abs_tol: float = 1e-10
+    abs_tol: float = 0.0  # 0: follow rel_tol (rel_tol / 100, so a tolerance-only run has no floor)
     max_step: float = 0.01
+    max_internal_steps: int = 1_000_000  # budget of internal steps of one fmi2DoStep (docs/fmi.md)
 
 
 @dataclass
@@ -183,8 +185,10 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
     return effects
 
 
-# valid ranges of the FMU's tolerance settings (c_src/gw_core.h GW_REL_TOL_MIN ...)
+# valid ranges of the FMU's settings (c_src/gw_core.h GW_REL_TOL_MIN ...); abs_tol may also be
+# exactly 0, its default: follow rel_tol (rel_tol / 100)
 TOLERANCE_RANGES = {"rel_tol": (2.220446049250313e-15, 1.0), "abs_tol": (1e-30, 1.0)}
+MAX_INTERNAL_STEPS_RANGE = (1, 2**31 - 1)  # an fmi2Integer (GW_MAX_INTERNAL_STEPS_MIN/_MAX)
 
 
 def _experiment(r: _Reader, data: dict) -> Experiment:
@@ -197,13 +201,22 @@ def _experiment(r: _Reader, data: dict) -> Experiment:
             exp.solver = value
         elif key == "start_time":
             exp.start_time = r.number("experiment", key, value)
+        elif key == "max_internal_steps":
+            low, high = MAX_INTERNAL_STEPS_RANGE
+            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+                raise r.fail("experiment", key, f"must be a whole number from {low} to {high}, got {value!r}")
+            exp.max_internal_steps = value
+        elif key == "abs_tol":  # 0 allowed (follow rel_tol); the range below
+            exp.abs_tol = r.number("experiment", key, value)
         else:
             setattr(exp, key, r.positive("experiment", key, value))
     if exp.stop_time <= exp.start_time:
         raise r.fail("experiment", "stop_time", "must be greater than start_time")
     for key, (low, high) in TOLERANCE_RANGES.items():  # the FMU refuses others (docs/fmi.md)
-        if not low <= getattr(exp, key) <= high:
-            raise r.fail("experiment", key, f"must lie in [{low:.3g}, {high:g}], got {getattr(exp, key)!r}")
+        v = getattr(exp, key)
+        if not (low <= v <= high or (key == "abs_tol" and v == 0.0)):
+            zero = " or be 0 (follow rel_tol)" if key == "abs_tol" else ""
+            raise r.fail("experiment", key, f"must lie in [{low:.3g}, {high:g}]{zero}, got {v!r}")
     return exp
 
 

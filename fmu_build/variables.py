@@ -21,7 +21,7 @@ KIND = {"param": "GW_VAR_PARAM", "start": "GW_VAR_START", "input": "GW_VAR_INPUT
         "output": "GW_VAR_OUTPUT", "setting": "GW_VAR_SETTING", "event": "GW_VAR_EVENT",
         "state": "GW_VAR_STATE", "derivative": "GW_VAR_DERIVATIVE"}
 TYPE = {"Real": "GW_REAL", "Integer": "GW_INTEGER", "Boolean": "GW_BOOLEAN", "Enumeration": "GW_ENUM"}
-SETTING_INDEX = {"solver": 0, "rel_tol": 1, "abs_tol": 2, "max_step": 3}
+SETTING_INDEX = {"solver": 0, "rel_tol": 1, "abs_tol": 2, "max_step": 3, "max_internal_steps": 4}
 
 
 @dataclass
@@ -59,11 +59,16 @@ def solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
         (Quantity("rel_tol", "1", "relative error tolerance of adaptive solvers, in [2.2e-15, 1]; "
                   "when not set, a tolerance passed to fmi2SetupExperiment replaces it",
                   exp.rel_tol), "Real", None),
-        (Quantity("abs_tol", "1", "absolute error tolerance of adaptive solvers, in [1e-30, 1], "
-                  "scaled by each state's nominal value; when not set, scaled with a tolerance "
-                  "passed to fmi2SetupExperiment", exp.abs_tol), "Real", None),
+        (Quantity("abs_tol", "1", "absolute error tolerance of adaptive solvers, 0 or in [1e-30, 1], "
+                  "scaled by each state's nominal value; 0: follow rel_tol (rel_tol / 100); when not "
+                  "set, scaled with a tolerance passed to fmi2SetupExperiment (0 stays 0)",
+                  exp.abs_tol), "Real", None),
         (Quantity("max_step", "s", "upper bound of internal steps; the fixed step of euler and rk4",
                   exp.max_step), "Real", None),
+        (Quantity("max_internal_steps", "", "budget of internal steps (accepted and rejected) of one "
+                  "fmi2DoStep, from 1 to 2147483647: a step needing more is refused up front or stopped, "
+                  "state kept at its start",
+                  exp.max_internal_steps), "Integer", None),
     ]
 
 

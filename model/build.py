@@ -233,7 +233,7 @@ class _Assembler:
         nf = len(self.free)
         A = ca.horzcat(ctx.kin.rolling_constraint(), ca.SX.zeros(2, nf - 5))
         system = ConstrainedSystem(q=self.q, qd=self.qd, qdd=self.qdd, n_free=nf, T=T, V=V, A=A,
-                                   Q_nc=self.generalised_forces(), unknowns=unknowns)
+                                   Q_nc=self.generalised_forces(), unknowns=unknowns, parameters=list(ctx.par))
         qd_driven = ca.vertcat(*[c.rate for c in self.driven]) if self.driven else ca.SX(0, 1)
         qdd_driven = ca.vertcat(*[c.accel for c in self.driven]) if self.driven else ca.SX(0, 1)
         S = system.null_space(DEPENDENT)

@@ -34,6 +34,8 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from model.polynomial import simplify, solve_linear
+
 
 def prune_identically_zero(A: ca.SX, trials: int = 6, seed: int = 20261122) -> ca.SX:
     """A with its identically-zero entries made structural zeros.
@@ -59,6 +61,31 @@ def prune_identically_zero(A: ca.SX, trials: int = 6, seed: int = 20261122) -> c
     return ca.sparsify(pruned)
 
 
+def independent_of(expr: ca.SX, sym: ca.SX, trials: int = 6, seed: int = 20261129) -> bool:
+    """True if expr does not depend on the scalar symbol sym (d expr / d sym vanishes, to 1e-12 of
+    expr's size, at `trials` random points of all its arguments: an analytic derivative that is
+    not identically zero vanishes only on a null set, as in prune_identically_zero)."""
+    syms = ca.symvar(expr)
+    if not any(ca.is_equal(sym, v) for v in syms):
+        return True
+    f = ca.Function("dependence", syms, [ca.jacobian(ca.vec(expr), sym), ca.vec(expr)])
+    rng = np.random.default_rng(seed)
+    for _ in range(trials):
+        d, e = (np.array(v) for v in f(*rng.uniform(0.2, 1.3, len(syms))))
+        if np.max(np.abs(d), initial=0.0) > 1e-12 * max(1.0, np.max(np.abs(e), initial=0.0)):
+            return False
+    return True
+
+
+def evaluation_cost(expr: ca.SX) -> int:
+    """Instructions of expr after common-subexpression elimination, a division counted as 8 (its
+    latency against a multiplication's): how the candidate forms of the solve are compared."""
+    expr = ca.cse(ca.SX(expr))
+    f = ca.Function("cost", ca.symvar(expr), [ca.densify(ca.vec(expr))])
+    ops = [f.instruction_id(k) for k in range(f.n_instructions())]
+    return len(ops) + 7 * ops.count(ca.OP_DIV)
+
+
 @dataclass
 class ConstrainedSystem:
     """Placeholders and terms of a system with linear velocity constraints.
@@ -79,6 +106,7 @@ class ConstrainedSystem:
     A: ca.SX
     Q_nc: ca.SX | None = None
     unknowns: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
+    parameters: list[str] = field(default_factory=list)  # names of the parameter symbols (hoisting)
 
     @property
     def n(self) -> int:
@@ -118,13 +146,33 @@ class ConstrainedSystem:
         return ca.simplify(S)
 
     def _solve(self, residual: ca.SX, w: ca.SX) -> ca.SX:
-        """w from the residual, which is affine in w: A w + b = 0."""
+        """w from the residual, which is affine in w: A w + b = 0.
+
+        Simplified before code generation, every step exact (issue 11, docs/performance.md):
+        identically-zero entries of A pruned; coordinates on which neither A nor b depends
+        (cyclic: x, y, the heading alpha and the spin gamma of the wheel on flat ground) set to 0,
+        which removes their sines and cosines from the accelerations; then A w = -b solved block
+        by block by Cramer's rule in exact polynomial arithmetic (model/polynomial.py: equal terms
+        merged, sin^2 + cos^2 = 1, common monomial factors cancelled, one division in all).  Of
+        that, CasADi's solve of the same system and its solve of the original system, the
+        cheapest to evaluate is kept (evaluation_cost): all three are the same function.
+        """
         A = ca.jacobian(residual, w)
         if ca.depends_on(A, w):
             raise ValueError("the equations are not affine in the accelerations and extra unknowns; "
                              "generalised forces must be linear in the normal force")
         b = ca.substitute(residual, w, ca.DM.zeros(w.numel()))
-        return ca.solve(prune_identically_zero(A), -b)
+        A = prune_identically_zero(A)
+        candidates = [ca.solve(A, -b)]  # the plain symbolic solve, kept when it is the cheapest
+        both = ca.veccat(A, b)
+        cyclic = [self.q[i] for i in range(self.n_free) if independent_of(both, self.q[i])]
+        if cyclic:
+            zero = ca.DM.zeros(len(cyclic))
+            A = ca.substitute(A, ca.vertcat(*cyclic), zero)
+            b = ca.substitute(b, ca.vertcat(*cyclic), zero)
+            candidates.append(ca.solve(A, -b))
+        candidates.append(solve_linear(A, -b, max_block=4, params=self.parameters))
+        return min(candidates, key=evaluation_cost)
 
     def _unknowns(self):
         if not self.unknowns:
@@ -142,6 +190,9 @@ class ConstrainedSystem:
         nf = self.n_free
         qf = self.q[:nf]
         qd_free = ca.mtimes(S, v)
+        simpler = simplify(qd_free, params=self.parameters)  # sin^2 + cos^2 = 1 in the kinematics
+        if evaluation_cost(simpler) < evaluation_cost(qd_free):
+            qd_free = simpler
         qd_all = ca.vertcat(qd_free, qd_driven)
         S_dot_v = ca.jtimes(qd_free, qf, qd_free)  # d(S v)/dq q_dot with v held fixed
         qdd_all = ca.vertcat(ca.mtimes(S, v_dot) + S_dot_v, qdd_driven)

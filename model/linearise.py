@@ -111,17 +111,26 @@ def initial_state(spec: ModelSpec, p: np.ndarray, starts: dict[str, float]) -> n
     return np.array(ca.Function("init", [spec.s, spec.p], [spec.init])(s, p), dtype=float).ravel()
 
 
-def upright_rolling(spec: ModelSpec, speed: float, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def upright_rolling(spec: ModelSpec, speed: float, p: np.ndarray, tilt: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(x0, u0): straight upright rolling at centre speed `speed` [m/s], inputs zero.
 
     beta = pi/2, gamma_dot = speed / R, every other start value zero (angles, rates, the gyrover's
-    swing and tilt). Raises LinearisationError if that is not an equilibrium of the spec.
+    swing), the gyrover's flywheel held at `tilt` [rad] (state tilt and input tilt_cmd; a spinning
+    flywheel at any fixed tilt leaves straight upright rolling an equilibrium). Raises
+    LinearisationError if that is not an equilibrium of the spec.
     """
     R = p[[q.name for q in spec.parameters].index("R")]
     starts = {q.name: 0.0 for q in spec.starts}
     starts.update(beta=math.pi / 2, gamma_dot=speed / R)
+    inputs = [q.name for q in spec.inputs]
+    if tilt:
+        if "tilt" not in starts or "tilt_cmd" not in inputs:
+            raise LinearisationError("a tilt needs the gyrover effect (state tilt, input tilt_cmd)")
+        starts["tilt"] = tilt
     x0 = initial_state(spec, p, starts)
     u0 = np.zeros(spec.u.numel())
+    if tilt:
+        u0[inputs.index("tilt_cmd")] = tilt
     check_equilibrium(spec, x0, u0, p, moving=("x", "y", "gamma"))
     return x0, u0
 

@@ -100,9 +100,11 @@ def earth_fmu(fmu_dir) -> Path:
 
 @pytest.fixture(scope="session")
 def earth_loop(fmu_dir):
-    """The Gyrover closed loop on earth (wheel + controller FMUs, .ssp), built once."""
+    """The Gyrover closed loop on earth (wheel + controller FMUs, .ssp) on the earth's course, built once."""
     from controller.closed_loop import build_closed_loop
-    return build_closed_loop(load_scene(SCENES / "gyrover_mission_earth.toml"), fmu_dir / "closed_loop")
+    from controller.mission import course
+    return build_closed_loop(load_scene(SCENES / "gyrover_mission_earth.toml"), fmu_dir / "closed_loop",
+                             course("earth"))
 
 
 @pytest.fixture(scope="session")

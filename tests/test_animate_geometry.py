@@ -106,7 +106,7 @@ def test_poses_match_the_fmus_contact_point_and_height(gyrover_run):
 
 def test_flywheel_axis_matches_the_fmus_flywheel_momentum(gyrover_run):
     """flywheel_momentum = I_fly_axial (omega_frame . a + theta_p_dot cos(tilt) + flywheel_rate)
-    (model/effects/gyrover.py: a is normal to l_p and a . n = cos(tilt)), with the frame's angular
+    (model/effects/gyrover.py: a = cos(tilt) n + sin(tilt) l_p, normal to m_p), with the frame's angular
     velocity omega_frame = alpha_dot k - beta_dot (cos alpha, sin alpha, 0) (heading about k, lean
     about the horizontal -m): the FMU's number fixes the component of the drawn axis along it."""
     fmu, _, r = gyrover_run
@@ -126,6 +126,9 @@ def test_flywheel_axis_matches_the_fmus_flywheel_momentum(gyrover_run):
     np.testing.assert_allclose(np.einsum("ni,ni->n", arm, lmn[:, :, 0]), 0.03 * np.cos(r["theta_p"]), atol=1e-15)
     np.testing.assert_allclose(np.einsum("ni,ni->n", arm, lmn[:, :, 1]), 0.03 * np.sin(r["theta_p"]), atol=1e-15)
     np.testing.assert_allclose(np.einsum("ni,ni->n", axis, lmn[:, :, 2]), np.cos(r["tilt"]), atol=1e-14)
+    # tilted about m_p, from the axle towards the link l_p (Xu & Ou's beta_a)
+    np.testing.assert_allclose(np.einsum("ni,ni->n", axis, arm / 0.03), np.sin(r["tilt"]), atol=1e-14)
+    assert np.ptp(r["tilt"]) > 0.25
 
 
 def test_timeline_checks_the_radius_against_the_csv(gyrover_run, tmp_path):

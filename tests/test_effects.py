@@ -184,8 +184,8 @@ def test_terminating_event_already_true_at_the_start_is_an_error(build):
 GYROVER = BASE + "[effects.gyrover]\n[effects.energy]\n"
 
 
-def _lean_acceleration(fmu, flywheel_rate, tilt_rate, h=1e-4):
-    """beta_ddot at t = 0 from beta(h) = beta0 + beta_ddot h^2 / 2 (beta_dot0 = 0)."""
+def _initial_accelerations(fmu, flywheel_rate, tilt_rate, h=1e-4):
+    """(alpha_ddot, beta_ddot) at t = 0 from q(h) = q0 + q_ddot h^2 / 2 (alpha_dot0 = beta_dot0 = 0)."""
     s = Slave(fmu)
     try:
         # servo at rest on a ramp: tilt_cmd = tilt + 2 zeta rate / omega gives zero servo acceleration
@@ -193,50 +193,95 @@ def _lean_acceleration(fmu, flywheel_rate, tilt_rate, h=1e-4):
                rel_tol=1e-12, abs_tol=1e-14)
         s.set(tilt_cmd=2 * 1.0 * tilt_rate / 20.0)
         s.slave.doStep(0.0, h)
-        return 2 * (s.get("beta") - math.pi / 2) / h**2
+        return 2 * s.get("alpha") / h**2, 2 * (s.get("beta") - math.pi / 2) / h**2
     finally:
         s.free()
 
 
 @pytest.mark.parametrize("flywheel_rate,tilt_rate", [(400.0, 0.5), (-400.0, 0.5), (800.0, -0.3)])
-def test_tilting_a_spinning_flywheel_leans_the_wheel(build, flywheel_rate, tilt_rate):
-    """Angular-momentum balance: the tilt turns the flywheel's momentum I_a Omega n about l, so
-    the wheel and assembly receive the roll torque tilt_rate I_a Omega about the travel axis;
-    with the lean inertia about the contact point (wheel I_diam + M R^2, assembly m (R - L)^2 +
-    flywheel I_diam) that is the initial lean acceleration. Upright with beta_dot = alpha_dot =
-    0, gravity and the wheel's own gyroscopic terms vanish."""
+def test_tilting_a_spinning_flywheel_turns_the_wheel_about_the_vertical(build, flywheel_rate, tilt_rate):
+    """Angular-momentum balance (Xu & Ou's tilt: the spin axis a = cos(tilt) n + sin(tilt) l_p turns
+    about m_p, from the axle towards the link): a tilt rate turns the flywheel's momentum
+    I_a Omega n towards l_p = -k at the rate I_a Omega tilt_rate, so the wheel and assembly receive
+    the torque +I_a Omega tilt_rate k about the vertical, and nothing about the travel axis.
+    Upright with alpha_dot = beta_dot = 0 (no gyroscopic terms yet), the yaw inertia about the
+    vertical through the centre is the wheel's I_diam plus the flywheel's I_fly_diam (the
+    assembly's mass hangs on that vertical): alpha_ddot = I_a Omega tilt_rate / (I_diam + I_fly_diam),
+    beta_ddot = 0."""
     fmu = build(GYROVER, "gyrover")
     md = read_model_description(fmu)
     p = {v.name: float(v.start) for v in md.modelVariables if v.causality == "parameter" and v.type == "Real"}
-    I_roll = KD * M * R**2 + M * R**2 + p["m_fly"] * (R - p["L_pend"]) ** 2 + p["I_fly_diam"]
-    expected = tilt_rate * p["I_fly_axial"] * flywheel_rate / I_roll
-    assert _lean_acceleration(fmu, flywheel_rate, tilt_rate) == pytest.approx(expected, rel=2e-3)
+    I_yaw = KD * M * R**2 + p["I_fly_diam"]
+    expected = tilt_rate * p["I_fly_axial"] * flywheel_rate / I_yaw
+    yaw, lean = _initial_accelerations(fmu, flywheel_rate, tilt_rate)
+    assert yaw == pytest.approx(expected, rel=2e-3)
+    assert abs(lean) < 1e-3 * abs(expected)
 
 
-def _heading_after_held_tilt(fmu, flywheel_rate, tilt, seconds=3.0):
-    s = Slave(fmu)
-    try:
-        s.init(flywheel_rate=flywheel_rate, beta=math.pi / 2, gamma_dot=10.0)
-        s.set(tilt_cmd=tilt)
-        t = 0.0
-        for _ in range(int(round(seconds / 1e-2))):
-            s.slave.doStep(t, 1e-2)
-            t += 1e-2
-        return s.get("alpha")
-    finally:
-        s.free()
+def _held_tilt(fmu, flywheel_rate, tilt, seconds=6.0):
+    """Run with tilt_cmd held at `tilt` from t = 0; returns fmpy's result."""
+    signal = np.array([(0.0, tilt, 0.0), (seconds, tilt, 0.0)],
+                      dtype=[("time", np.float64), ("tilt_cmd", np.float64), ("drive_torque", np.float64)])
+    return simulate_fmu(fmu, stop_time=seconds, output_interval=0.01, input=signal,
+                        start_values={"flywheel_rate": flywheel_rate, "beta": math.pi / 2, "gamma_dot": 10.0},
+                        output=["alpha", "beta", "alpha_dot"])
 
 
-def test_held_tilt_steers_towards_the_lean_it_causes(build):
-    """Co-rotating flywheel: tilting it by +tilt leans the wheel left (test above) and rotates its
-    heading left, -tilt right by the same angle; a flywheel at rest does not steer."""
+def test_held_tilt_leans_the_wheel_into_a_steady_turn(build):
+    """The Gyrover's steering: the yaw momentum stays (nearly) what it was, so tilting the flywheel's
+    momentum H_f out of the horizontal leans the wheel the other way until the vertical components
+    cancel, H_f sin(tilt) + (H_w + H_f) sin(lean) = 0 (H_w = I_axial gamma_dot); the lean then turns
+    the wheel steadily. Mean lean over 2-6 s within 5 % of that; +tilt and -tilt mirror each other;
+    a flywheel at rest does not steer."""
     fmu = build(GYROVER, "gyrover")
-    left, right = _heading_after_held_tilt(fmu, 400.0, 0.3), _heading_after_held_tilt(fmu, 400.0, -0.3)
-    assert left > 0.05
-    assert right == pytest.approx(-left, rel=1e-6)
-    still = _heading_after_held_tilt(fmu, 0.0, 0.3)
-    assert abs(still) < 0.05 * left
-    assert abs(_lean_acceleration(fmu, 0.0, 0.5)) < 1e-3 * abs(_lean_acceleration(fmu, 400.0, 0.5))
+    left, right = _held_tilt(fmu, 400.0, -0.3), _held_tilt(fmu, 400.0, 0.3)
+    late = left["time"] >= 2.0
+    H_w, H_f = KA * M * R**2 * 10.0, 5e-4 * 400.0
+    lean = math.asin(H_f * math.sin(0.3) / (H_w + H_f))  # for tilt = -0.3: leans left (beta > pi/2)
+    assert np.mean(left["beta"][late] - math.pi / 2) == pytest.approx(lean, rel=0.05)
+    rate = np.polyfit(left["time"][late], left["alpha"][late], 1)[0]
+    assert rate > 0.3  # leaning left, it turns left (and keeps turning: > 1.2 rad in 4 s)
+    np.testing.assert_allclose(right["alpha"], -left["alpha"], atol=1e-9)
+    np.testing.assert_allclose(right["beta"] - math.pi / 2, -(left["beta"] - math.pi / 2), atol=1e-9)
+    still = _held_tilt(fmu, 0.0, 0.3)
+    assert np.abs(still["alpha"]).max() < 0.01 * np.abs(left["alpha"]).max()
+    assert abs(_initial_accelerations(fmu, 0.0, 0.5)[0]) < 1e-3 * abs(_initial_accelerations(fmu, 400.0, 0.5)[0])
+
+
+def test_gyrover_matches_an_independent_newton_euler_derivation():
+    """The effect's right-hand side (CasADi, one Lagrangian) against tests/reference/gyrover_newton_euler.py
+    (sympy rotation matrices, momentum balances) at random states, inputs and parameters: the
+    accelerations of all coordinates, the tilt and flywheel motor torques, the centre velocity."""
+    from model.build import build_model
+    from reference import gyrover_newton_euler as ne
+
+    spec = build_model(wheel={"M": M, "R": R, "k_diam": KD, "k_axial": KA}, effects={"gravity": {}, "gyrover": {}})
+    fns = spec.functions()
+    out_names = [q.name for q, _ in spec.outputs]
+    rng = np.random.default_rng(20261129)
+    for _ in range(8):
+        par = {q.name: q.start for q in spec.parameters}
+        par.update(M=rng.uniform(1, 3), R=rng.uniform(0.1, 0.3), k_diam=rng.uniform(0.2, 0.5),
+                   k_axial=rng.uniform(0.3, 0.9), g=rng.uniform(1, 10), m_fly=rng.uniform(0.1, 1),
+                   L_pend=rng.uniform(0.01, 0.08), I_fly_axial=rng.uniform(1e-4, 1e-3),
+                   I_fly_diam=rng.uniform(1e-4, 1e-3), flywheel_rate=rng.uniform(-600, 600),
+                   tilt_omega=rng.uniform(5, 30), tilt_zeta=rng.uniform(0.3, 1.2))
+        state = dict(alpha=rng.uniform(-3, 3), beta=rng.uniform(0.5, 2.6), gamma=rng.uniform(-3, 3),
+                     theta_p=rng.uniform(-3, 3), alpha_dot=rng.normal(), beta_dot=rng.normal(),
+                     gamma_dot=5 * rng.normal(), theta_p_dot=rng.normal(), tilt=rng.uniform(-1.2, 1.2),
+                     tilt_rate=rng.normal())
+        inputs = dict(tilt_cmd=rng.uniform(-1, 1), drive_torque=0.1 * rng.normal())
+        p = np.array([par[q.name] for q in spec.parameters])
+        x = np.array(fns["init"]([state.get(q.name, q.start) for q in spec.starts], p)).ravel()
+        u = [inputs[q.name] for q in spec.inputs]
+        xdot = dict(zip(spec.x_names, np.array(fns["ode"](0.0, x, u, p)).ravel()))
+        y = dict(zip(out_names, np.array(fns["out"](0.0, x, u, p)).ravel()))
+        got = dict(alpha_ddot=xdot["alpha_dot"], beta_ddot=xdot["beta_dot"], gamma_ddot=xdot["gamma_dot"],
+                   theta_p_ddot=xdot["theta_p_dot"], tilt_ddot=xdot["tilt_rate"], tilt_torque=y["tilt_torque"],
+                   flywheel_torque=y["flywheel_torque"], vx=y["vx"], vy=y["vy"])
+        ref = ne.evaluate(state, inputs, par)
+        for k, v in got.items():
+            assert v == pytest.approx(ref[k], rel=1e-9, abs=1e-11 * (1 + abs(ref[k]))), k
 
 
 def test_actuator_work_balances_energy(build):
@@ -259,21 +304,28 @@ def test_actuator_work_balances_energy(build):
 
 
 def test_tilt_torque_sign(build):
-    """tilt_torque is the torque the tilt motor applies to the flywheel about +l_p, positive in the
-    sense of increasing tilt. Upright, at rest, flywheel not spinning, tilt_cmd = 0.2 rad: the servo
-    starts with tilt_ddot = tilt_omega^2 0.2 = 80 rad/s^2 about l_p = -k; the reaction turns the
-    wheel the other way about the vertical (angular momentum about k is conserved), so the motor
-    supplies I_f I_w / (I_f + I_w) tilt_ddot with I_f = I_fly_diam, I_w = k_diam M R^2."""
+    """tilt_torque is the torque the tilt motor applies to the flywheel about +m_p (the tilt axis),
+    positive in the sense of increasing tilt. Upright, at rest, flywheel not spinning, tilt_cmd =
+    0.2 rad: the servo starts with tilt_ddot = tilt_omega^2 0.2 = 80 rad/s^2 about m_p = m, the
+    horizontal roll axis; the reaction rolls the wheel the other way about the contact line (no
+    moment of gravity or of the ground about it, upright), so the motor supplies
+    I_f I_roll / (I_f + I_roll) tilt_ddot with I_f = I_fly_diam and the roll inertia about the
+    contact line I_roll = k_diam M R^2 + M R^2 + m_fly (R - L_pend)^2, and the lean accelerates
+    at beta_ddot = -I_f tilt_ddot / (I_f + I_roll)."""
     fmu = build(GYROVER, "gyrover")
     s = Slave(fmu)
     try:
-        s.init(flywheel_rate=0.0, beta=math.pi / 2, gamma_dot=0.0, tilt_cmd=0.2)
+        s.init(flywheel_rate=0.0, beta=math.pi / 2, gamma_dot=0.0, tilt_cmd=0.2, rel_tol=1e-12, abs_tol=1e-14)
         tau = s.get("tilt_torque")
+        h = 1e-4
+        s.slave.doStep(0.0, h)
+        lean_acc = 2 * (s.get("beta") - math.pi / 2) / h**2
     finally:
         s.free()
-    I_f, I_w = 2.5e-4, KD * M * R**2
-    assert tau == pytest.approx(I_f * I_w / (I_f + I_w) * 20.0**2 * 0.2, rel=1e-9)
+    I_f, I_roll = 2.5e-4, KD * M * R**2 + M * R**2 + 0.4 * (R - 0.03) ** 2
+    assert tau == pytest.approx(I_f * I_roll / (I_f + I_roll) * 20.0**2 * 0.2, rel=1e-9)
     assert tau > 0
+    assert lean_acc == pytest.approx(-I_f * 80.0 / (I_f + I_roll), rel=2e-3)
 
 
 def _max_swing(fmu, torque, ramp: float, seconds: float) -> float:

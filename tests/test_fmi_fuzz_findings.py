@@ -138,8 +138,30 @@ def test_every_single_bit_flip_is_refused(saved):
 
 
 def _body(blob: bytes) -> int:
-    """Offset of the first field after the model token (gw_state.c layout 2)."""
+    """Offset of the first field after the model token (gw_state.c layout 3)."""
     return 44 + struct.unpack_from("<I", blob, 40)[0]
+
+
+# layout 3 after the token: 9 int32, 11 doubles (t, t_start, t_stop, tolerance,
+# last_successful_time, rel_tol, abs_tol, max_step, max_internal_steps, h_adapt, err_old), 5 uint64,
+# then the vectors x, s, u, p, y, e, nominal, t_events, xc
+_DBL = {name: 36 + 8 * k for k, name in enumerate(
+    ("t", "t_start", "t_stop", "tolerance", "last_successful_time", "rel_tol", "abs_tol", "max_step",
+     "max_internal_steps", "h_adapt", "err_old"))}
+_VECTORS = ("x", "s", "u", "p", "y", "e", "nominal", "t_events", "xc")
+
+
+def _field(blob: bytes, where) -> int:
+    """Offset in the blob of a body offset (int) or of a vector element (name, index)."""
+    if isinstance(where, int):
+        return _body(blob) + where
+    name, i = where
+    nx, ns, nu, np_, ny, ne, _ = struct.unpack_from("<7i", blob, 12)
+    lengths = dict(zip(_VECTORS, (nx, ns, nu, np_, ny, ne, nx, ne, nx)))
+    offset = _body(blob) + 36 + 8 * len(_DBL) + 5 * 8
+    for v in _VECTORS[:_VECTORS.index(name)]:
+        offset += 8 * lengths[v]
+    return offset + 8 * i
 
 
 def _with_crc(blob: bytearray) -> bytes:
@@ -147,21 +169,60 @@ def _with_crc(blob: bytearray) -> bytes:
     return bytes(blob)
 
 
-@pytest.mark.parametrize("field,offset,fmt,value,reason", [
+@pytest.mark.parametrize("field,where,fmt,value,reason", [
     ("solver", 4, "<i", 42, "solver = 42 is not a solver"),
-    ("rel_tol", 36 + 5 * 8, "<d", -1.0, "rel_tol = -1 is outside its valid range"),
-    ("abs_tol", 36 + 6 * 8, "<d", 1e6, "abs_tol = 1e+06 is outside its valid range"),
-    ("x[0]", 36 + 72 + 40, "<d", math.nan, "invalid x[0] = nan"),
-    ("t", 36, "<d", math.inf, "non-finite t"),
+    ("rel_tol", _DBL["rel_tol"], "<d", -1.0, "rel_tol = -1 is outside its valid range"),
+    ("abs_tol", _DBL["abs_tol"], "<d", 1e6, "abs_tol = 1e+06 is outside its valid range"),
+    ("abs_tol", _DBL["abs_tol"], "<d", 1e-40, "abs_tol = 1e-40 is outside its valid range"),
+    ("abs_tol", _DBL["abs_tol"], "<d", -1e-10, "abs_tol = -1e-10 is outside its valid range"),
+    ("max_internal_steps", _DBL["max_internal_steps"], "<d", 0.0,
+     "max_internal_steps = 0 must be a whole number from 1 to 2147483647"),
+    ("max_internal_steps", _DBL["max_internal_steps"], "<d", 2.5, "max_internal_steps = 2.5 must be a whole number"),
+    ("max_internal_steps", _DBL["max_internal_steps"], "<d", 3e9, "max_internal_steps = 3000000000 must be"),
+    ("err_old", _DBL["err_old"], "<d", -1e-3, "err_old = -0.001 (the error norm of an accepted step: 0 to 1)"),
+    ("err_old", _DBL["err_old"], "<d", 2.0, "err_old = 2 (the error norm of an accepted step"),
+    ("err_old", _DBL["err_old"], "<d", math.nan, "non-finite err_old"),
+    ("x[0]", ("x", 0), "<d", math.nan, "invalid x[0] = nan"),
+    ("xc[3]", ("xc", 3), "<d", math.inf, "invalid xc[3] = inf (not finite)"),
+    ("xc[3]", ("xc", 3), "<d", 1e-9, "invalid xc[3] = 1e-09 (a compensation is at most an ulp of its state)"),
+    ("t", _DBL["t"], "<d", math.inf, "non-finite t"),
     ("terminated", 16, "<i", 7, "terminated = 7 (must be 0 or 1)"),
     ("front state", 0, "<i", 3, "invalid instance state 3"),
 ])
-def test_fields_out_of_range_are_refused_even_with_a_valid_checksum(saved, field, offset, fmt, value, reason):
+def test_fields_out_of_range_are_refused_even_with_a_valid_checksum(saved, field, where, fmt, value, reason):
     s, blob = saved
     b = bytearray(blob)
-    struct.pack_into(fmt, b, _body(blob) + offset, value)
+    struct.pack_into(fmt, b, _field(blob, where), value)
     assert not _accepts(s, _with_crc(b))  # before: accepted (only the header was checked)
     assert reason in s.log_text(), s.log_text()[-300:]
+
+
+@pytest.mark.parametrize("field,where,value", [
+    ("abs_tol", _DBL["abs_tol"], 0.0),  # follow rel_tol: valid (solvers), like the scenes' default
+    ("max_internal_steps", _DBL["max_internal_steps"], 1.0),
+    ("max_internal_steps", _DBL["max_internal_steps"], 2147483647.0),
+    ("err_old", _DBL["err_old"], 0.0),
+    ("err_old", _DBL["err_old"], 1.0),
+    ("xc[3]", ("xc", 3), 0.0),
+])
+def test_fields_at_the_edges_of_their_ranges_are_accepted(saved, field, where, value):
+    s, blob = saved
+    b = bytearray(blob)
+    struct.pack_into("<d", b, _field(blob, where), value)
+    assert _accepts(s, _with_crc(b)), s.log_text()[-300:]
+
+
+def test_the_saved_run_carries_the_solvers_memory(saved):
+    """The blob holds the budget, a controller memory of an accepted step and a compensation of at
+    most half an ulp of each state (paper_earth after 1 s of DOPRI5)."""
+    _, blob = saved
+    budget, err_old = (struct.unpack_from("<d", blob, _field(blob, _DBL[k]))[0]
+                       for k in ("max_internal_steps", "err_old"))
+    assert budget == 1_000_000 and 1e-4 <= err_old <= 1.0
+    nx = struct.unpack_from("<i", blob, 12)[0]
+    x = struct.unpack_from(f"<{nx}d", blob, _field(blob, ("x", 0)))
+    xc = struct.unpack_from(f"<{nx}d", blob, _field(blob, ("xc", 0)))
+    assert all(abs(c) <= math.ulp(v) / 2 for v, c in zip(x, xc)) and any(c != 0.0 for c in xc)
 
 
 def test_random_payload_with_a_valid_header_is_refused(saved):
@@ -180,7 +241,12 @@ def test_random_payload_with_a_valid_header_is_refused(saved):
     ("rel_tol", 1e308, "rel_tol = 1e+308 is outside its valid range"),
     ("rel_tol", 1e6, "rel_tol = 1e+06 is outside its valid range"),
     ("rel_tol", 1e-20, "rel_tol = 1e-20 is outside its valid range"),
-    ("abs_tol", 0.0, "abs_tol = 0 is outside its valid range"), ("max_step", 0.0, "max_step = 0 must be > 0"),
+    # abs_tol = 0 is valid (follow rel_tol, the scenes' default): the smallest refused are below 1e-30
+    ("abs_tol", 1e-40, "abs_tol = 1e-40 is outside its valid range [1e-30, 1] or 0"),
+    ("abs_tol", -1e-9, "abs_tol = -1e-09 is outside its valid range"),
+    ("max_step", 0.0, "max_step = 0 must be > 0"),
+    ("max_internal_steps", 0, "max_internal_steps = 0 must be a whole number from 1 to 2147483647"),
+    ("max_internal_steps", -5, "max_internal_steps = -5 must be a whole number from 1 to 2147483647"),
 ])
 def test_settings_are_refused_at_the_call(earth_fmu, name, value, reason):
     s = Slave(earth_fmu, logging_on=False)

@@ -5,6 +5,8 @@ DefaultExperiment declares the scene's rel_tol. At initialisation, whatever the 
   else fmi2SetupExperiment(tolerance = T)     -> rel_tol = T, abs_tol = scene abs_tol * T / scene rel_tol
                                                  (so the declared default T keeps the scene's accuracy)
   else                                        -> the scene's rel_tol and abs_tol.
+abs_tol = 0 (the scenes' default since the solvers branch; lunar_rover has it) follows the rel_tol in
+force as rel_tol / 100, and scales to 0: it follows a forwarded T too.
 
 Importers, reproduced as call sequences (communication step 0.01 s, the scenes' stop times):
   PyFMI 2.21, OMSimulator 3.0   forward DefaultExperiment's tolerance, 1e-4 when none is declared.
@@ -63,17 +65,20 @@ def _final(fmu, tolerance=None, before_setup=None, after_setup=None, read=("rel_
 def test_forwarded_default_gets_the_scenes_accuracy(scene, fixture, before, values, request):
     """PyFMI / OMSimulator: fmi2SetupExperiment(toleranceDefined, DefaultExperiment's tolerance)."""
     fmu = request.getfixturevalue(fixture)
+    exp = load_scene(SCENES / f"{scene}.toml").experiment
     declared = float(read_model_description(str(fmu)).defaultExperiment.tolerance)
-    assert declared == load_scene(SCENES / f"{scene}.toml").experiment.rel_tol
+    assert declared == exp.rel_tol == 1e-8
+    assert exp.abs_tol == {"paper_earth": 1e-10, "lunar_rover": 0.0}[scene]  # explicit; follows rel_tol
     scene_run, _ = _final(fmu, before_setup=values)
     forwarded, settings = _final(fmu, tolerance=declared, before_setup=values)
     assert np.array_equal(forwarded, scene_run)  # after: 0 (before: `before`, see below)
-    assert settings == {"rel_tol": 1e-8, "abs_tol": 1e-10}
+    assert settings == {"rel_tol": exp.rel_tol, "abs_tol": exp.abs_tol}  # exactly the scene's
     # what the importers forwarded before DefaultExperiment declared a tolerance (FMIL's 1e-4):
     own, settings = _final(fmu, tolerance=1e-4, before_setup=values)
     err = float(np.max(np.abs(own - scene_run)))
     print(f"{scene}: forwarded default 0, own tolerance 1e-4 {err:.3g} (issue: {before:.2g})")
-    assert settings == {"rel_tol": 1e-4, "abs_tol": pytest.approx(1e-6, rel=1e-12)}
+    # abs_tol scaled alike: 1e-10 -> 1e-6; 0 stays 0 (absolute 1e-4 / 100 = 1e-6 in force alike)
+    assert settings == {"rel_tol": 1e-4, "abs_tol": pytest.approx(exp.abs_tol * 1e4, rel=1e-12, abs=0.0)}
     # a tool's own tolerance applies: an error of that tolerance's size
     assert before / 30 < err < before * 30
 
@@ -90,6 +95,29 @@ def test_user_rel_tol_wins_over_a_forwarded_tolerance(earth_fmu):
     assert np.array_equal(fmpy_order, alone) and np.array_equal(oms_order, alone)
     both, settings = _final(earth_fmu, tolerance=1e-4, after_setup={"abs_tol": 1e-12})
     assert settings == {"rel_tol": 1e-4, "abs_tol": 1e-12}  # an explicit abs_tol is kept
+
+
+@pytest.mark.parametrize("tolerance", [1e-4, 1e-6])
+def test_abs_tol_zero_follows_a_forwarded_tolerance(lunar_fmu, tolerance):
+    """lunar_rover's abs_tol = 0: a forwarded T runs exactly as rel_tol = T, abs_tol = T / 100 set
+    by hand (the absolute tolerance in force is GW_ATOL_PER_RTOL * T, bit for bit), and unlike a
+    fixed abs_tol of the scene's rel_tol / 100 (1e-10), which would floor a loose run."""
+    values = {"beta_min": 0.02}
+    forwarded, settings = _final(lunar_fmu, tolerance=tolerance, before_setup=values)
+    assert settings == {"rel_tol": tolerance, "abs_tol": 0.0}
+    by_hand, _ = _final(lunar_fmu, before_setup={**values, "rel_tol": tolerance, "abs_tol": 1e-2 * tolerance})
+    assert np.array_equal(forwarded, by_hand)
+    fixed, _ = _final(lunar_fmu, before_setup={**values, "rel_tol": tolerance, "abs_tol": 1e-10})
+    assert not np.array_equal(forwarded, fixed)
+
+
+def test_abs_tol_zero_is_a_valid_setting(earth_fmu):
+    """fmi2SetReal(abs_tol, 0) is accepted at the call (fmi-robust refused it: below 1e-30) and means
+    rel_tol / 100: the same run as abs_tol = rel_tol / 100 set explicitly."""
+    zero, settings = _final(earth_fmu, after_setup={"rel_tol": 1e-6, "abs_tol": 0.0})
+    assert settings == {"rel_tol": 1e-6, "abs_tol": 0.0}
+    explicit, _ = _final(earth_fmu, after_setup={"rel_tol": 1e-6, "abs_tol": 1e-2 * 1e-6})
+    assert np.array_equal(zero, explicit)
 
 
 def test_simulate_fmu_forwards_the_declared_tolerance(earth_fmu):

@@ -198,9 +198,9 @@ static gyrowheel_status gwc_check_settings(GWC_T *w, const char *fn, const gyrow
         if (!isfinite(v[i]))
             return gwc_fail(w, GYROWHEEL_ERR_NOT_FINITE, "%s: %s is not finite (%g)", fn, names[i],
                             v[i]);
-        if (!(v[i] > 0.0))
-            return gwc_fail(w, GYROWHEEL_ERR_INVALID, "%s: %s = %g must be > 0", fn, names[i],
-                            v[i]);
+        if (!(v[i] > 0.0) && !(i == 1 && v[i] == 0.0)) /* abs_tol 0: rel_tol / 100 */
+            return gwc_fail(w, GYROWHEEL_ERR_INVALID, "%s: %s = %g must be > 0%s", fn, names[i],
+                            v[i], i == 1 ? " (or 0: follow rel_tol)" : "");
     }
     return GYROWHEEL_OK;
 }

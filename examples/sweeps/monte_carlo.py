@@ -11,11 +11,10 @@ rigid body) are refused by the FMU and stay in the table as failed rows with tha
 rates are over the admissible samples (uniform over the admissible part of the box). Prints the success rate (95% Wilson interval)
 and the worst lean; draws docs/img/sweep_monte_carlo.png.
 
---closed-loop: the same study of the Gyrover's closed loop (issue 9: wheel + LQR/Kalman controller
-FMUs as an .ssp, built here with controller.closed_loop.build_closed_loop for the earth mission
-scene): wheel mass and inertia +/-20% around the design's nominal values (the controller keeps its
-nominal gains), the mission's 5 deg push (alpha_dot0 of zero yaw momentum for the nominal wheel),
-60 s. That wheel has no friction effects, so friction is not varied there.
+--closed-loop: the same study of the Gyrover's closed loop (issue 9: wheel + gain-scheduled LQG
+controller FMUs as an .ssp, built here with controller.closed_loop.build_closed_loop for the earth
+mission scene and course): wheel mass and inertia +/-20% around the design's nominal values (the
+controller keeps its nominal gains), the mission's 5 deg lean with zero heading rate, 60 s. That wheel has no friction effects, so friction is not varied there.
 """
 from __future__ import annotations
 
@@ -49,11 +48,13 @@ def command(out: Path, samples: int, seed: int, execution: list[str], source: st
 
 
 def closed_loop_source(out: Path) -> tuple[str, list[str]]:
-    """Build the earth mission's closed loop (.ssp); two starts: upright, and the mission's 5 deg push."""
+    """Build the earth mission's closed loop (.ssp); two starts: upright, and the mission's 5 deg lean."""
     from controller.closed_loop import build_closed_loop
+    from controller.mission import course
     from fmu_build import load_scene
 
-    loop = build_closed_loop(load_scene(ROOT / "examples/scenes/gyrover_mission_earth.toml"), out / "closed_loop")
+    loop = build_closed_loop(load_scene(ROOT / "examples/scenes/gyrover_mission_earth.toml"), out / "closed_loop",
+                             course("earth"))
     return str(loop.ssp), ["--grid", "lean_deg=0,-5", "--derive", "examples/sweeps/closed_loop_push.py:start"]
 
 

@@ -9,7 +9,7 @@ evaluates model/kinematics.py's WheelKinematics (paper section 2, INTERFACE.md):
 - the contact point A = C + R l (eq. 14).
 The Gyrover's internal assembly follows model/effects/gyrover.py: it swings by theta_p in the wheel
 plane, l_p = cos(theta_p) l + sin(theta_p) m, m_p = -sin(theta_p) l + cos(theta_p) m; the flywheel's
-centre is C + L_pend l_p and its spin axis a = cos(tilt) n - sin(tilt) m_p.
+centre is C + L_pend l_p and its spin axis a = cos(tilt) n + sin(tilt) l_p (tilted about m_p).
 """
 from __future__ import annotations
 
@@ -28,8 +28,8 @@ class Poses:
     """Poses at N instants, ground coordinates (x, y horizontal, z up), metres.
 
     body[k] has columns (e_1, e_2, n): e_1, e_2 span the wheel plane and turn with the spin
-    (e_1 = l at gamma = 0), n is the axle. fly_frame[k] has columns (l_p, a x l_p, a) of the
-    flywheel (a its spin axis); fly_centre and fly_frame are None without a gyrover.
+    (e_1 = l at gamma = 0), n is the axle. fly_frame[k] has columns (m_p, a x m_p, a) of the
+    flywheel (a its spin axis, m_p its tilt axis); fly_centre and fly_frame are None without a gyrover.
     """
 
     centre: np.ndarray  # (N, 3)
@@ -48,8 +48,8 @@ def _pose_function() -> ca.Function:
     l, m, n = kin.l, kin.m, kin.n
     l_p = ca.cos(theta_p) * l + ca.sin(theta_p) * m
     m_p = -ca.sin(theta_p) * l + ca.cos(theta_p) * m
-    axis = ca.cos(tilt) * n - ca.sin(tilt) * m_p
-    fly_frame = ca.horzcat(l_p, ca.cross(axis, l_p), axis)
+    axis = ca.cos(tilt) * n + ca.sin(tilt) * l_p
+    fly_frame = ca.horzcat(m_p, ca.cross(axis, m_p), axis)
     return ca.Function("wheel_pose", [q, R, theta_p, tilt, L_pend],
                        [kin.centre, kin.body, kin.contact, -m, kin.centre + L_pend * l_p, fly_frame],
                        ["q", "R", "theta_p", "tilt", "L_pend"],

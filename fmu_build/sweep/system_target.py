@@ -113,7 +113,13 @@ class SystemInstance:
             unit.read(row[where])
 
     def flags(self) -> list[str]:
-        return self.units[self.target.plant].flags()
+        """The plant's true Boolean flags, then the other components' as '<component>.<flag>'
+        (e.g. the controller's 'controller.lost')."""
+        out = list(self.units[self.target.plant].flags())
+        for name, unit in self.units.items():
+            if name != self.target.plant:
+                out += [f"{name}.{f}" for f in unit.flags()]
+        return out
 
     def close(self) -> None:
         for unit in self.units.values():

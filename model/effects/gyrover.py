@@ -6,15 +6,21 @@ derived here from first principles):
   the angle in the wheel plane from l (towards the contact point) towards m. Its mass m_fly
   (flywheel plus gimbal) sits at distance L_pend from the centre along
   l_p = cos(theta_p) l + sin(theta_p) m.
-- The flywheel is tilted relative to the assembly about l_p by the angle `tilt` (driven:
-  a servo with natural frequency tilt_omega and damping tilt_zeta follows the FMI input
-  tilt_cmd), and spins about its axis a = cos(tilt) n - sin(tilt) (-sin(theta_p) l +
-  cos(theta_p) m) at the constant rate flywheel_rate (driven: the spin motor holds it).
-  Its inertia: I_fly_axial about a, I_fly_diam about diameters.
+- The flywheel is tilted relative to the assembly by the angle `tilt`, Xu & Ou's beta_a
+  (Table 2.1: the angle between the link and the flywheel's spin axis is pi/2 - tilt): the tilt
+  joint's axis m_p = -sin(theta_p) l + cos(theta_p) m is normal to the link l_p and to the axle
+  n, and the spin axis a = cos(tilt) n + sin(tilt) l_p turns from the axle towards the link, so
+  that at theta_p = 0 the flywheel leans by beta + tilt. The tilt is driven: a servo with
+  natural frequency tilt_omega and damping tilt_zeta follows the FMI input tilt_cmd. The
+  flywheel spins about a at the constant rate flywheel_rate (driven: the spin motor holds it).
+  Its inertia: I_fly_axial about a, I_fly_diam about diameters. A tilt rate turns the
+  flywheel's momentum out of the horizontal: its reaction on the wheel is a torque about the
+  vertical, which is how the Gyrover steers (docs/effects.md).
 - The drive motor applies drive_torque (FMI input) between wheel and assembly about the
   axle: power drive_torque (theta_p_dot - gamma_dot).
 Driven coordinates give no equation of their own; the torques the tilt and spin motors
-must supply come out as outputs (tilt_torque, flywheel_torque) and count as actuator work.
+must supply to the flywheel (about +m_p and +a) come out as outputs (tilt_torque,
+flywheel_torque) and count as actuator work.
 M stays the mass of the wheel shell; the assembly adds m_fly.
 """
 from __future__ import annotations
@@ -73,10 +79,12 @@ class Gyrover(Effect):
         th = pend.q
         l_p = ca.cos(th) * l + ca.sin(th) * m
         m_p = -ca.sin(th) * l + ca.cos(th) * m
-        axis = ca.cos(tc.q) * n - ca.sin(tc.q) * m_p
+        # the tilt joint turns the spin axis about m_p (normal to the link l_p and to the axle n)
+        # from the axle towards the link: at theta_p = 0 the flywheel leans by beta + tilt
+        axis = ca.cos(tc.q) * n + ca.sin(tc.q) * l_p
         q_all, qd_all = ctx.all_q(), ctx.all_qd()
         omega_frame = kin.omega_frame  # the {l, m, n} frame (no spin)
-        omega_fly = omega_frame + pend.qd * n + tc.qd * l_p + spin.qd * axis
+        omega_fly = omega_frame + pend.qd * n + tc.qd * m_p + spin.qd * axis
         r_fly = kin.centre + p["L_pend"] * l_p
         v_fly = ca.jtimes(r_fly, q_all, qd_all)
         w_a = ca.dot(omega_fly, axis)

@@ -148,7 +148,15 @@ static void bad_values(void) {
     st.rel_tol = -1.0;
     CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_ERR_INVALID);
     CHECK_MSG(w, "rel_tol = -1 must be > 0");
+    st.rel_tol = 2.0; /* > 0, but outside the core's range: refused by the initialisation */
+    CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_ERR_INVALID);
+    CHECK_MSG(w, "rel_tol = 2 is outside its valid range [2.22e-15, 1]");
     st.rel_tol = 1e-8;
+    st.abs_tol = 1e-40;
+    CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_ERR_INVALID);
+    CHECK_MSG(w, "abs_tol = 1e-40 is outside its valid range [1e-30, 1] or 0");
+    st.abs_tol = 0.0; /* valid: follows rel_tol (rel_tol / 100) */
+    CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_OK);
     st.max_step = NAN;
     CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_ERR_NOT_FINITE);
     CHECK_MSG(w, "max_step is not finite");
@@ -234,6 +242,30 @@ static void seal(unsigned char *p, size_t n) {
     memcpy(p + n - 4, &crc, 4);
 }
 
+/* offset of the first 8 bytes equal to what (after the first 24), or size if none */
+static size_t find8(const unsigned char *b, size_t size, const void *what) {
+    size_t i;
+    for (i = 24; i + 8 <= size; i++)
+        if (memcmp(b + i, what, 8) == 0) return i;
+    return size;
+}
+
+/* buf with the first 8 bytes equal to find replaced by value and the checksum made valid: the
+ * value checks must refuse it with msg and leave the instance (at t = 3) as it was */
+static void crafted_refused(paper_earth *w, const unsigned char *buf, unsigned char *bad,
+                            size_t size, const void *find, double value, const char *msg) {
+    size_t i;
+    memcpy(bad, buf, size);
+    i = find8(bad, size, find);
+    CHECK(i < size);
+    if (i >= size) return;
+    memcpy(bad + i, &value, 8);
+    seal(bad, size);
+    CHECK(paper_earth_restore_state(w, bad, size) == GYROWHEEL_ERR_STATE);
+    CHECK_MSG(w, msg);
+    CHECK(paper_earth_time(w) == 3.0);
+}
+
 static void save_restore(void) {
     paper_earth *w = defaults();
     const size_t size = paper_earth_state_size(w);
@@ -266,25 +298,20 @@ static void save_restore(void) {
     bad[0] = 'X';
     CHECK(paper_earth_restore_state(w, bad, size) == GYROWHEEL_ERR_STATE);
     CHECK_MSG(w, "bad magic");
-    /* a NaN state with a valid checksum: refused by the value check */
-    memcpy(bad, buf, size);
-    for (i = 24; i + 8 <= size; i++)
-        if (memcmp(bad + i, &x2[PAPER_EARTH_X_beta], 8) == 0) break;
-    CHECK(i + 8 <= size);
-    if (i + 8 <= size) {
-        memcpy(bad + i, &nan, 8);
-        seal(bad, size);
-        CHECK(paper_earth_restore_state(w, bad, size) == GYROWHEEL_ERR_STATE);
-        CHECK_MSG(w, "FMU state holds an invalid x[");
-        CHECK(paper_earth_get_states(w, x) == GYROWHEEL_OK && paper_earth_time(w) == 3.0);
-        CHECK(!isnan(x[PAPER_EARTH_X_beta]));
+    /* a NaN state, a budget of internal steps no run can have (the default 1e6 made 0.5), each
+     * with a valid checksum: refused by the value checks */
+    crafted_refused(w, buf, bad, size, &x2[PAPER_EARTH_X_beta], nan, "FMU state holds an invalid x[");
+    CHECK(paper_earth_get_states(w, x) == GYROWHEEL_OK && !isnan(x[PAPER_EARTH_X_beta]));
+    {
+        const double budget = 1e6;
+        crafted_refused(w, buf, bad, size, &budget, 0.5,
+                        "max_internal_steps = 0.5 must be a whole number from 1 to 2147483647");
     }
     /* another model of the same sizes (another guid), with a valid checksum */
     memcpy(bad, buf, size);
-    for (i = 24; i + 8 <= size; i++)
-        if (memcmp(bad + i, PAPER_EARTH_GUID, 8) == 0) break;
-    CHECK(i + 8 <= size);
-    if (i + 8 <= size) {
+    i = find8(bad, size, PAPER_EARTH_GUID);
+    CHECK(i < size);
+    if (i < size) {
         bad[i + 1] = bad[i + 1] == 'f' ? 'e' : 'f';
         seal(bad, size);
         CHECK(paper_earth_restore_state(w, bad, size) == GYROWHEEL_ERR_STATE);

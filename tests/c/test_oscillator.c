@@ -9,7 +9,7 @@
 
 enum { VR_K = 0, VR_POS_LIM = 1, VR_N_INT = 2, VR_USE_FORCE = 3, VR_POS = 10, VR_VEL = 11,
        VR_ENERGY = 20, VR_FORCE = 21, VR_F = 30, VR_SOLVER = 40, VR_REL_TOL = 41,
-       VR_ABS_TOL = 42, VR_MAX_STEP = 43, VR_HIT = 50 };
+       VR_ABS_TOL = 42, VR_MAX_STEP = 43, VR_MAX_INTERNAL_STEPS = 44, VR_HIT = 50 };
 
 static fmi2Component inst(const char *name) {
     return fmi2Instantiate(name, fmi2CoSimulation, TOKEN, "", &h_callbacks, fmi2False, fmi2False);
@@ -243,6 +243,7 @@ static void test_checks_and_settings(void) {
         {VR_ABS_TOL, 2.0, "abs_tol = 2 is outside its valid range"},
         {VR_MAX_STEP, -0.1, "max_step = -0.1 must be > 0"},
         {VR_MAX_STEP, 0.0, "max_step = 0 must be > 0"},
+        {VR_ABS_TOL, 1e-40, "abs_tol = 1e-40 is outside its valid range [1e-30, 1] or 0"},
     };
     size_t i;
     for (i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
@@ -256,6 +257,11 @@ static void test_checks_and_settings(void) {
     EXPECT_ERROR(c, seti(c, VR_SOLVER, 6), "solver = 6 is not a solver: valid are 1 (euler)");
     EXPECT_ERROR(c, seti(c, VR_SOLVER, 0), "solver = 0 is not a solver");
     EXPECT_ERROR(c, seti(c, VR_SOLVER, 99), "solver = 99 is not a solver");
+    /* the budget of internal steps, an Integer setting: refused at the call (fmi2SetInteger) */
+    EXPECT_ERROR(c, seti(c, VR_MAX_INTERNAL_STEPS, 0),
+                 "max_internal_steps = 0 must be a whole number from 1 to 2147483647");
+    EXPECT_ERROR(c, seti(c, VR_MAX_INTERNAL_STEPS, -5),
+                 "max_internal_steps = -5 must be a whole number from 1 to 2147483647");
     EXPECT_ERROR(c, fmi2SetupExperiment(c, fmi2True, 2.0, 0.0, fmi2False, 0.0),
                  "tolerance 2 is outside the valid range of a relative tolerance");
     /* after all that, defaults are back and the instance works */
@@ -264,6 +270,60 @@ static void test_checks_and_settings(void) {
     CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
     CHECK_STATUS(fmi2DoStep(c, 0.0, 1.0, fmi2True), fmi2OK);
     CHECK_NEAR(getr(c, VR_POS), cos(1.0), 1e-5);
+    fmi2FreeInstance(c);
+}
+
+/* abs_tol = 0 follows rel_tol (the solvers branch), under fmi-robust's checks at the call and
+ * its tolerance precedence; the budget max_internal_steps bounds a call and survives a state */
+static void test_abs_tol_zero_and_budget(void) {
+    fmi2Component a = inst("zero"), b = inst("explicit"), c;
+    fmi2FMUstate s = NULL;
+    int i;
+    CHECK_STATUS(setr(a, VR_ABS_TOL, 0.0), fmi2OK); /* valid at the call */
+    CHECK_STATUS(setr(b, VR_ABS_TOL, 1e-2 * 1e-7), fmi2OK);
+    /* a forwarded tolerance 1e-7 replaces rel_tol of both; abs_tol set explicitly stays, and 0
+     * follows it: the same run as rel_tol / 100 set by hand, bit for bit */
+    CHECK_STATUS(fmi2SetupExperiment(a, fmi2True, 1e-7, 0.0, fmi2False, 0.0), fmi2OK);
+    CHECK_STATUS(fmi2SetupExperiment(b, fmi2True, 1e-7, 0.0, fmi2False, 0.0), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(a), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(a), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(b), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(b), fmi2OK);
+    CHECK(getr(a, VR_REL_TOL) == 1e-7 && getr(a, VR_ABS_TOL) == 0.0);
+    for (i = 0; i < 5; i++) {
+        CHECK_STATUS(fmi2DoStep(a, i * 0.2, 0.2, fmi2True), fmi2OK);
+        CHECK_STATUS(fmi2DoStep(b, i * 0.2, 0.2, fmi2True), fmi2OK);
+    }
+    CHECK(getr(a, VR_POS) == getr(b, VR_POS) && getr(a, VR_VEL) == getr(b, VR_VEL));
+    CHECK_NEAR(getr(a, VR_POS), cos(1.0), 1e-6);
+    fmi2FreeInstance(b);
+    fmi2FreeInstance(a);
+
+    /* the budget: 10 steps of max_step 0.01 allowed, an 0.2 s step refused up front and the
+     * state kept; a 0.1 s step runs; the budget comes back with a saved state */
+    c = inst("budget");
+    CHECK_STATUS(seti(c, VR_SOLVER, 2), fmi2OK);
+    CHECK_STATUS(setr(c, VR_MAX_STEP, 0.01), fmi2OK);
+    CHECK_STATUS(seti(c, VR_MAX_INTERNAL_STEPS, 10), fmi2OK);
+    CHECK_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2OK);
+    CHECK_STATUS(fmi2GetFMUstate(c, &s), fmi2OK);
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, 0.1, 0.2, fmi2True), fmi2Error);
+    CHECK_LOG("more than max_internal_steps = 10");
+    CHECK(last_time(c) == 0.1);
+    CHECK_STATUS(fmi2Reset(c), fmi2OK);
+    CHECK_STATUS(fmi2SetFMUstate(c, s), fmi2OK);
+    {
+        fmi2ValueReference vr = VR_MAX_INTERNAL_STEPS;
+        fmi2Integer n = 0;
+        CHECK_STATUS(fmi2GetInteger(c, &vr, 1, &n), fmi2OK);
+        CHECK(n == 10);
+    }
+    CHECK_STATUS(fmi2DoStep(c, 0.1, 0.1, fmi2True), fmi2OK);
+    CHECK_STATUS(fmi2FreeFMUstate(c, &s), fmi2OK);
     fmi2FreeInstance(c);
 }
 
@@ -625,6 +685,7 @@ int main(void) {
     test_variable_errors();
     test_logging();
     test_checks_and_settings();
+    test_abs_tol_zero_and_budget();
     test_accuracy();
     test_terminate_event();
     test_landing();

@@ -100,6 +100,7 @@ static const gw_variable vars[] = {
     {41, "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0, -1},
     {42, "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0, -1},
     {43, "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0, -1},
+    {44, "max_internal_steps", GW_INTEGER, GW_VAR_SETTING, GW_SET_MAX_INTERNAL_STEPS, -1, 0, -1},
     {50, "hit", GW_BOOLEAN, GW_VAR_EVENT, 0, -1, 0, -1},
 };
 
@@ -130,4 +131,7 @@ static const gw_model GW_MODEL = {
     GW_SOLVER_DOPRI5,
     1e-6, 1e-8, 0.01,
     {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
+    0.0, /* default_max_internal_steps: the runtime's default */
+    {NULL, NULL}, /* ode_pre: none */
+    0,
 };

@@ -85,7 +85,7 @@ const axle = new THREE.Mesh(new THREE.CylinderGeometry(0.03 * R, 0.03 * R, 0.7 *
 axle.rotation.x = Math.PI / 2;
 wheel.add(axle);
 
-// the Gyrover's flywheel (frame l_p, a x l_p, a) on its pendulum rod from the axle
+// the Gyrover's flywheel (frame m_p, a x m_p, a) on its pendulum rod from the axle
 let flywheel = null, rod = null;
 if (run.fly) {
   flywheel = new THREE.Group();

@@ -1,0 +1,208 @@
+"""Every fmi2DoStep returns in bounded time: the budget of internal steps (issue 8, section 9).
+
+`max_internal_steps` (an FMI parameter and a scene setting) bounds the internal steps, accepted and
+rejected together, of one call. A step that needs more is refused up front when the count is known
+(ceil(H / max_step) is a lower bound for every solver, exact for euler and rk4) or stopped when the
+budget runs out, with the estimate in the message; the instance stays at the start of the step.
+Each case the fuzzer reported is here with a small budget so that it runs in milliseconds; the
+docstring gives its time before (from the issue) and the test asserts the time after.
+"""
+from __future__ import annotations
+
+import math
+import re
+import time
+
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import fmi2LastSuccessfulTime
+
+from conftest import ROOT, STATES
+from fmi_helpers import Slave
+from fmu_build import build_fmu, load_scene, parse_scene
+from fmu_build.scene import SceneError
+
+SCENE = "[model]\nname = 'bounded'\n[effects.gravity]\ng = 9.81\n[experiment]\nmax_step = 0.05\n"
+
+
+@pytest.fixture(scope="module")
+def euler_disk(tmp_path_factory):
+    root = tmp_path_factory.mktemp("bounded_disk")
+    return str(build_fmu(load_scene(ROOT / "examples" / "scenes" / "euler_disk.toml"), root / "disk.fmu").fmu)
+
+
+@pytest.fixture
+def slave(earth_fmu):
+    """the paper's earth wheel (examples/scenes/paper_earth.toml: dopri5, max_step 0.05 s)"""
+    s = Slave(earth_fmu)
+    yield s
+    s.free()
+
+
+def refused(s: Slave, t: float, h: float) -> tuple[float, str]:
+    """fmi2DoStep(t, h) must fail with fmi2Error; returns (seconds, log)."""
+    t0 = time.perf_counter()
+    with pytest.raises(FMICallException) as exc:
+        s.slave.doStep(t, h)
+    seconds = time.perf_counter() - t0
+    assert exc.value.status == 3
+    return seconds, s.log_text()
+
+
+def assert_state_kept(s: Slave, before: list[float], t: float) -> None:
+    assert s.get(*STATES) == before
+    assert s.slave.getRealStatus(fmi2LastSuccessfulTime) == t
+
+
+def steps_taken(log: str) -> int:
+    return int(re.search(r"\((\d+) steps taken in this call\)", log)[1])
+
+
+def test_huge_communication_step_is_refused_up_front(slave):
+    """fmi2DoStep(0, 1e9): before, hours (1e4 s took 1.6 s with 720k DOPRI5 steps); now refused before
+    any work: at max_step 0.05 s it needs at least 2e10 steps, more than the default budget 1e6."""
+    slave.init(solver=3)
+    before = slave.get(*STATES)
+    seconds, log = refused(slave, 0.0, 1e9)
+    assert seconds < 0.5
+    assert "would need at least 2e+10 internal steps of max_step=0.05" in log
+    assert "max_internal_steps = 1000000" in log and "refused before any work" in log
+    assert_state_kept(slave, before, 0.0)
+    slave.slave.reset()  # after fmi2Error FMI 2.0 allows reset; the instance works again
+    slave.init(solver=3)
+    slave.slave.doStep(0.0, 0.1)
+    assert slave.get("beta") != before[3]
+
+
+def test_huge_step_with_a_huge_max_step_stops_when_the_budget_is_spent(slave):
+    """The same with max_step = 1e9 (so the up-front count says nothing): DOPRI5 stops within the budget
+    (here 2000 steps, accepted and rejected), either when the settled step size projects 100x more than
+    the budget has left or when the budget is spent, with its estimate of what the rest needs."""
+    slave.init(solver=3, max_step=1e9, max_internal_steps=2000)
+    before = slave.get(*STATES)
+    seconds, log = refused(slave, 0.0, 1e4)
+    assert seconds < 0.5
+    assert "max_internal_steps = 2000" in log
+    assert "the budget of internal steps is spent" in log or "the step size has settled" in log
+    assert steps_taken(log) <= 2000
+    estimate = float(re.search(r"would need about ([0-9.e+]+) internal steps", log)[1])
+    assert 1e5 < estimate < 1e7  # 720k steps for 1e4 s (the issue's measurement)
+    assert_state_kept(slave, before, 0.0)
+
+
+def test_rosenbrock_long_step_is_bounded(slave):
+    """rosenbrock fmi2DoStep(0, 1e5): before, more than 30 s; now refused up front at the default max_step
+    (2e6 steps), and with max_step relaxed stopped by a budget of 300 steps in milliseconds."""
+    slave.init(solver=4)
+    seconds, log = refused(slave, 0.0, 1e5)
+    assert seconds < 0.5 and "would need at least 2e+06 internal steps" in log
+    slave.slave.reset()
+    slave.messages.clear()
+    slave.init(solver=4, max_step=1e5, max_internal_steps=300)
+    before = slave.get(*STATES)
+    seconds, log = refused(slave, 0.0, 1e5)
+    assert seconds < 1.0
+    assert steps_taken(log) <= 300 and "max_internal_steps = 300" in log
+    assert_state_kept(slave, before, 0.0)
+
+
+def test_budget_stops_a_step_the_projection_lets_through(slave):
+    """With the projection out of the way (a budget close to what the step needs, 20 s at loose
+    tolerance with max_step 1 s), the budget itself stops the call at exactly its count."""
+    slave.init(solver=5, max_step=1.0, rel_tol=1e-10, max_internal_steps=200)
+    before = slave.get(*STATES)
+    _, log = refused(slave, 0.0, 20.0)
+    assert "the budget of internal steps is spent" in log and steps_taken(log) == 200
+    assert_state_kept(slave, before, 0.0)
+
+
+def test_tiny_max_step_is_refused_up_front(slave):
+    """max_step = 1e-10, then a 0.01 s step: before, 4 minutes; now refused at once (1e8 steps needed)."""
+    slave.init(solver=3, max_step=1e-10)
+    before = slave.get(*STATES)
+    seconds, log = refused(slave, 0.0, 0.01)
+    assert seconds < 0.5 and "would need at least 1e+08 internal steps of max_step=1e-10" in log
+    assert_state_kept(slave, before, 0.0)
+
+
+def test_rk4_exact_step_count_is_refused_up_front(slave):
+    """rk4 with max_step = 1e-9 over 1 s: before, 25 minutes; the fixed step's count is exact (1e9)."""
+    slave.init(solver=2, max_step=1e-9)
+    before = slave.get(*STATES)
+    seconds, log = refused(slave, 0.0, 1.0)
+    assert seconds < 0.5
+    assert "would need 1e+09 internal steps of max_step=1e-09" in log and "at least" not in log
+    assert_state_kept(slave, before, 0.0)
+
+
+def test_rk4_within_the_budget_runs(slave):
+    """The exact count is the limit: 100 substeps with a budget of 100 run, 101 are refused."""
+    slave.init(solver=2, max_step=0.01, max_internal_steps=100)
+    slave.slave.doStep(0.0, 1.0)
+    _, log = refused(slave, 1.0, 1.01 - 1e-9 + 0.0)
+    assert "would need 101 internal steps" in log
+
+
+def test_stiff_rolling_resistance_is_stopped_by_the_budget(euler_disk):
+    """euler_disk with c_rr = 1.001e6 (accepted): before, 12.7 s for a 1e-4 s step; now the step is
+    stopped by a budget of 5000 steps (or refused earlier by the projection), in milliseconds, and
+    the instance is back at the step start."""
+    s = Slave(euler_disk)
+    try:
+        s.init(c_rr=1.001e6, max_internal_steps=5000)
+        before = s.get(*STATES)
+        seconds, log = refused(s, 0.0, 1e-4)
+        assert seconds < 1.0
+        assert "max_internal_steps = 5000" in log and "would need about" in log
+        assert steps_taken(log) <= 5000
+        assert_state_kept(s, before, 0.0)
+    finally:
+        s.free()
+
+
+def test_rejected_steps_count_against_the_budget(slave):
+    """A budget smaller than what a step costs stops it however accepted and rejected steps mix: the
+    count in the message is the budget, and it includes the rejected ones (at loose tolerance from a
+    wild start DOPRI5 rejects some)."""
+    slave.init(solver=3, max_step=10.0, rel_tol=1e-3, gamma_dot=2000.0, beta=1.2, max_internal_steps=50)
+    _, log = refused(slave, 0.0, 10.0)
+    assert steps_taken(log) == 50
+
+
+@pytest.mark.parametrize("value", [0, -5])
+def test_budget_must_be_positive(slave, value):
+    """Refused at the call, fmi2SetInteger itself, like every setting (fmi-robust's rule; before the
+    merge: only at fmi2ExitInitializationMode)."""
+    slave.slave.setupExperiment(startTime=0.0)
+    with pytest.raises(FMICallException) as exc:
+        slave.set(max_internal_steps=value)
+    assert exc.value.status == 3
+    assert f"fmi2SetInteger: max_internal_steps = {value} must be a whole number from 1 to 2147483647" \
+        in slave.log_text()
+
+
+def test_budget_is_a_scene_setting(tmp_path):
+    scene = parse_scene(SCENE + "max_internal_steps = 20\n", "b.toml")
+    assert scene.experiment.max_internal_steps == 20
+    built = build_fmu(scene, tmp_path / "b.fmu")
+    s = Slave(str(built.fmu))
+    try:
+        s.init(solver=3, max_step=1.0)
+        assert s.get("max_internal_steps") == 20
+        _, log = refused(s, 0.0, 100.0)
+        assert "would need at least 100 internal steps of max_step=1" in log
+    finally:
+        s.free()
+    for bad in ("0", "1.5", "true", "3000000000"):
+        with pytest.raises(SceneError, match=r"\[experiment\] max_internal_steps: must be a whole number"):
+            parse_scene(SCENE + f"max_internal_steps = {bad}\n", "b.toml")
+
+
+def test_budget_survives_a_saved_state(slave):
+    slave.init(solver=3, max_internal_steps=1234)
+    state = slave.slave.getFMUstate()
+    slave.slave.reset()
+    slave.init(solver=3)
+    slave.slave.setFMUstate(state)
+    assert slave.get("max_internal_steps") == 1234
+    assert math.isfinite(slave.get("beta"))

@@ -23,6 +23,9 @@ its fix (docs/c_api.md):
                                     energy + dissipated_energy - actuator_work: a friction
                                     scene's physical loss (7.9e-2 in 5 s) was reported as drift;
                                     without the energy effect's terms: NaN and the reason
+  test_realtime_steps_out_of_range  --steps beyond 10^9 refused (2^63 - 1 wrapped the allocation:
+                                    status 1, no message)
+  test_realtime_out_of_memory_...   timings that do not fit: a message, before the reference
 """
 from __future__ import annotations
 
@@ -186,3 +189,21 @@ def test_realtime_energy_balance_of_a_dissipative_scene(tmp_path, energy_effect)
         assert fields["energy_drift"] == "nan"
         assert "energy drift not measured: the scene dissipates energy but has no dissipated_energy output " \
                "(add [effects.energy])" in r.stdout
+
+
+@pytest.mark.parametrize("steps", ["9223372036854775807", "99999999999999999999", "1000000001", "0"])
+def test_realtime_steps_out_of_range(earth_gcc, steps):
+    """--steps beyond what a run can hold (16 bytes of timings a step): at 2^63 - 1 the
+    allocation's size wrapped and the example ended with status 1 and no word; at 1e11 it first
+    computed a 1e8 s reference for hours, then failed the same way. Refused at once, exit 2."""
+    r = subprocess.run([str(earth_gcc["realtime"]), "--steps", steps], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "--steps needs an integer in [1, 1e9]" in r.stderr, r.stderr
+
+
+def test_realtime_out_of_memory_says_so(earth_gcc):
+    """Timings that do not fit in memory: a message naming the steps and the size, exit 1, before
+    the reference is computed (ulimit -v 300 MB; 10^8 steps need 1.6 GB)."""
+    r = subprocess.run(f"ulimit -v 300000; exec {earth_gcc['realtime']} --steps 100000000", shell=True,
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "out of memory for 100000000 steps (1613 MB of timings and reference)" in r.stderr, r.stderr

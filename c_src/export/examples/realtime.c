@@ -11,6 +11,7 @@
  *   @model@_realtime [--steps N] [--rate HZ] [--solver euler|rk4|dopri5|dop853|rosenbrock]
  *                    [--compare] [--paced] [--mlock]
  *
+ *   --steps    1 to 10^9 (the cost of every step is kept: 16 bytes a step)
  *   --compare  the same loop with euler, rk4, dopri5 and dop853 (the scene's tolerances for
  *              the adaptive ones): which solver is the cheapest that is accurate enough
  *   --paced    sleep to each period's start (clock_nanosleep, absolute time) as a real
@@ -33,6 +34,9 @@
 #include "@model@.h"
 
 static const char *prog = "@model@_realtime";
+
+/* --steps at most: 16 GB of timings (two doubles a step) and 10^6 s of reference at 1 kHz */
+#define MAX_STEPS 1000000000L
 
 typedef struct {
     int solver;
@@ -340,7 +344,8 @@ int main(int argc, char **argv) {
                 fprintf(stderr, "%s: mlockall failed (not permitted here?); going on\n", prog);
         } else if (a + 1 < argc && strcmp(argv[a], "--steps") == 0) {
             c.steps = strtol(argv[++a], &end, 10);
-            if (*end != '\0' || c.steps < 1) return usage(argv[a], "--steps needs an integer >= 1");
+            if (*end != '\0' || c.steps < 1 || c.steps > MAX_STEPS)
+                return usage(argv[a], "--steps needs an integer in [1, 1e9]");
         } else if (a + 1 < argc && strcmp(argv[a], "--rate") == 0) {
             c.rate = strtod(argv[++a], &end);
             if (*end != '\0' || !(c.rate >= 1.0 && c.rate <= 1e7))
@@ -352,13 +357,20 @@ int main(int argc, char **argv) {
             return usage(argv[a], "unknown argument (or a missing value)");
         }
     }
+    /* the timings of every step (16 bytes a step), before the reference takes its time */
+    r.cost_ns = (double *)malloc((size_t)c.steps * sizeof(double));
+    r.cpu_ns = (double *)malloc((size_t)c.steps * sizeof(double));
     /* reference: DOP853 at rel_tol 1e-13, its own error bounded by the difference to 1e-12 */
     ref_seconds = (long)floor((double)c.steps / c.rate);
     ref = (double *)calloc((size_t)(ref_seconds + 1) * @MODEL@_NX + 1, sizeof(double));
     ref_check = (double *)calloc((size_t)(ref_seconds + 1) * @MODEL@_NX + 1, sizeof(double));
-    r.cost_ns = r.cpu_ns = NULL;
-    if (!ref || !ref_check || reference(ref, &ref_seconds, 1e-13) ||
-        reference(ref_check, &ref_seconds, 1e-12)) {
+    if (!r.cost_ns || !r.cpu_ns || !ref || !ref_check) {
+        fprintf(stderr, "%s: out of memory for %ld steps (%.0f MB of timings and reference)\n", prog,
+                c.steps, ((double)c.steps * 2.0 + (double)(ref_seconds + 1) * 2.0 * @MODEL@_NX) * 8e-6);
+        status = 1;
+        goto done;
+    }
+    if (reference(ref, &ref_seconds, 1e-13) || reference(ref_check, &ref_seconds, 1e-12)) {
         status = 1;
         goto done;
     }
@@ -373,12 +385,6 @@ int main(int argc, char **argv) {
     if (energy_balance_missing())
         printf("energy drift not measured: %s\n", energy_balance_missing());
     printf("RESULT overhead wall_ns=%.6g cpu_ns=%.6g\n", wall_overhead, cpu_overhead);
-    r.cost_ns = (double *)malloc((size_t)c.steps * sizeof(double));
-    r.cpu_ns = (double *)malloc((size_t)c.steps * sizeof(double));
-    if (!r.cost_ns || !r.cpu_ns) {
-        status = 1;
-        goto done;
-    }
     for (i = 0; i < (compare ? 4 : 1); i++) {
         if (compare) c.solver = compared[i];
         if (run_loop(&c, ref, ref_seconds, &r)) {

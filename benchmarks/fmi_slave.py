@@ -8,6 +8,10 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 _CACHE: dict[str, tuple] = {}
+# fmpy's logger proxy is process-global and calls the logger registered last: the one of
+# solver_counts must outlive the call (a dead one crashed the next FMU's error message)
+_COUNT_MESSAGES: list[str] = []
+_COUNT_LOGGER = None
 
 
 def _open(fmu: Path):
@@ -116,10 +120,15 @@ def solver_counts(fmu: Path, stop: float, **values) -> dict[str, int]:
                            fmi2CallbackLoggerTYPE)
     from fmpy.logging import addLoggerProxy
 
+    global _COUNT_LOGGER
     md, unzipdir = _open(fmu)
-    messages: list[str] = []
+    messages = _COUNT_MESSAGES
+    messages.clear()
+    if _COUNT_LOGGER is None:
+        _COUNT_LOGGER = fmi2CallbackLoggerTYPE(
+            lambda env, inst, status, cat, msg: _COUNT_MESSAGES.append((msg or b"").decode()))
     cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(lambda env, inst, status, cat, msg: messages.append((msg or b"").decode()))
+    cb.logger = _COUNT_LOGGER
     cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
     cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
     addLoggerProxy(byref(cb))

@@ -6,7 +6,8 @@ Scenarios (each a scene, built into an FMU):
   stiff      Gyrover with a 10^4 rpm flywheel and a stiff tilt servo (double eigenvalue -2e4 1/s)
   near_flat  Euler-disk-like precession at 10 deg above the ground
 Methods:
-  gyrowheel/<solver>  the FMU's internal solvers, one fmi2DoStep(0, T) through fmpy
+  gyrowheel/<solver>  the FMU's internal solvers, one fmi2DoStep(0, T) through fmpy (the FMUs
+                      are built with the Taylor kernel, so solver taylor is among them)
   heyoka              heyoka's adaptive Taylor method (LLVM), one trajectory, on the minimal
                       closed form of the base wheel (benchmarks/peers.py)
   heyoka batch N      heyoka's batch mode, N trajectories together, time per trajectory
@@ -69,7 +70,7 @@ try:  # a benchmark dependency (pyproject.toml [bench]), not a core one
 except ImportError:
     HAVE_HEYOKA = False
 FIXED_STEPS = [10.0 ** -k for k in (2, 2.5, 3, 3.5, 4)]
-SOLVER_CODES = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5}
+SOLVER_CODES = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
 
 
 @dataclass
@@ -102,7 +103,7 @@ class Scenario:
         self.name, self.stop = name, stop
         header = f'[model]\nname = "bench_{name}"\nformulation = "{formulation}"\n'
         scene = parse_scene(header + text, f"{name}.toml")
-        built = build_fmu(scene, work / f"{name}.fmu", build_dir=work / name)
+        built = build_fmu(scene, work / f"{name}.fmu", build_dir=work / name, taylor=True)
         self.fmu, self.spec = built.fmu, built.spec
         self.runner = FmuRunner(self.fmu)
         self.fns = self.spec.functions()
@@ -127,8 +128,9 @@ class Scenario:
 
 
 def run_internal(sc: Scenario, solver: str, settings, repeat: int, label: str = "",
-                 tolerance_only: bool = False) -> list[Point]:
-    """tolerance_only: set rel_tol alone (abs_tol left at the scene default, 0 = rel_tol / 100)."""
+                 tolerance_only: bool = False, atol_per_rtol: float = 1e-2) -> list[Point]:
+    """tolerance_only: set rel_tol alone (abs_tol left at the scene default, 0 = rel_tol / 100);
+    otherwise abs_tol = atol_per_rtol * rel_tol."""
     points = []
     for value in settings:
         values = {"solver": SOLVER_CODES[solver], "max_internal_steps": 2**31 - 1}
@@ -137,7 +139,7 @@ def run_internal(sc: Scenario, solver: str, settings, repeat: int, label: str = 
         elif tolerance_only:
             values.update(rel_tol=value, max_step=sc.stop)
         else:
-            values.update(rel_tol=value, abs_tol=value * 1e-2, max_step=sc.stop)
+            values.update(rel_tol=value, abs_tol=value * atol_per_rtol, max_step=sc.stop)
         try:
             seconds = float("inf")
             for _ in range(repeat):
@@ -334,7 +336,7 @@ def main() -> int:
     parser.add_argument("--scenarios", nargs="*", default=list(SCENARIOS), choices=list(SCENARIOS))
     parser.add_argument("--peers", nargs="*", default=list(PEERS), choices=list(PEERS),
                         help="peers to measure beside gyrowheel (default: all)")
-    parser.add_argument("--solvers", nargs="*", default=["euler", "rk4", "dopri5", "dop853", "rosenbrock"],
+    parser.add_argument("--solvers", nargs="*", default=["euler", "rk4", "dopri5", "dop853", "rosenbrock", "taylor"],
                         choices=list(SOLVER_CODES), help="gyrowheel solvers to measure")
     parser.add_argument("--quick", action="store_true", help="few settings, no repetitions (a smoke run)")
     parser.add_argument("--out", default="results/bench")
@@ -381,6 +383,9 @@ def main() -> int:
                     points += run_internal(sc, solver, TOLS, repeat)
             if "dop853" in args.solvers:
                 points += run_internal(sc, "dop853", TOLS, repeat, " (rel_tol only)", tolerance_only=True)
+            if "taylor" in args.solvers:  # the Taylor step is set by the weights: abs_tol = rel_tol too
+                points += run_internal(sc, "taylor", TOLS, repeat)
+                points += run_internal(sc, "taylor", TOLS, repeat, " (abs_tol = rel_tol)", atol_per_rtol=1.0)
             if base and "heyoka" in args.peers:
                 if HAVE_HEYOKA:
                     points += run_heyoka(sc, repeat)

@@ -18,5 +18,6 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include "gw_solver_dopri5.c"
 #include "gw_solver_dop853.c"
 #include "gw_solver_rodas4.c"
+#include "gw_solver_taylor.c"
 
 #endif /* GW_UNITY_BUILD */

@@ -19,6 +19,7 @@
 #include GW_MODEL_SOURCE
 #else
 #include "gw_funcs.c"
+#include "gw_taylor.c"
 #include "model_desc.c"
 #endif
 

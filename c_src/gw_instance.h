@@ -108,6 +108,13 @@ struct gw_instance {
     double *jac;   /* nx*nx: d xdot / d x, column-major (Rosenbrock) */
     double *lu;    /* nx*nx: LU factors of I/(gamma h) - J, column-major */
     int *piv;      /* nx: pivot rows of lu */
+
+    /* Taylor work memory (gw_taylor_alloc; only if the model has a Taylor kernel): the series
+     * of the last step (dense output) and the constants.  Nothing here survives a saved state:
+     * the series is recomputed in every step, the state's compensation is xc. */
+    double *tl_w;    /* n_var * (GW_TAYLOR_MAX_ORDER + 1) */
+    double *tl_c;    /* n_cst */
+    int tl_order;    /* order of the series in tl_w */
 };
 
 /* ---- gw_instance.c ------------------------------------------------------------------------ */

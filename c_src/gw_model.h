@@ -94,8 +94,24 @@ typedef enum {
     GW_SOLVER_RK4 = 2,
     GW_SOLVER_DOPRI5 = 3,
     GW_SOLVER_ROSENBROCK = 4, /* linearly implicit Rosenbrock RODAS4, uses jac */
-    GW_SOLVER_DOP853 = 5      /* Dormand-Prince 8(5,3) */
+    GW_SOLVER_DOP853 = 5,     /* Dormand-Prince 8(5,3) */
+    GW_SOLVER_TAYLOR = 6      /* Taylor series of adaptive order (needs the model's taylor kernel) */
 } gw_solver;
+
+/* The Taylor kernel of solver `taylor`, generated from the ode (fmu_build/taylor_c.py,
+ * template gw_taylor_model.h instantiated by gw_taylor.c): cst(u, p, c) computes the n_cst
+ * quantities that depend on u and p only; jet(order, t, x, c, w) the Taylor series of order
+ * `order` of the n_var nodes of the right-hand side at (t, x), node n's coefficient k at
+ * w[n (order + 1) + k]; nodes 0 .. nx-1 are the states (x_i^[k] = x_i^(k)(t) / k!). */
+typedef void (*gw_taylor_cst_fn)(const double *u, const double *p, double *c);
+typedef void (*gw_taylor_jet_fn)(int order, const double *t, const double *x, const double *c,
+                                 double *w);
+typedef struct {
+    gw_taylor_jet_fn jet; /* NULL: no kernel (why_absent says why) */
+    gw_taylor_cst_fn cst;
+    int n_var, n_cst;
+    const char *why_absent; /* NULL if present */
+} gw_taylor_kernel;
 
 /* What happens when an event indicator crosses zero from above. */
 typedef enum {
@@ -141,6 +157,7 @@ typedef struct {
      * ode takes c as a fifth argument: ode(t, x, u, p, c) -> xdot. */
     gw_function ode_pre;
     int n_pre;
+    gw_taylor_kernel taylor; /* zero: the model has no Taylor kernel */
 } gw_model;
 
 #endif /* GW_MODEL_H */

@@ -371,6 +371,7 @@ GW_INTERNAL gw_int_result gw_integrate(gw_instance *I, double t_end) {
     case GW_SOLVER_DOPRI5: return gw_integrate_dopri5(I, t_end);
     case GW_SOLVER_DOP853:
     case GW_SOLVER_ROSENBROCK: return gw_integrate_adaptive(I, t_end);
+    case GW_SOLVER_TAYLOR: return gw_integrate_taylor(I, t_end);
     default:
         GW_LOG_ERR(I, "solver %s (%d) not available", gw_solver_name(I->solver), I->solver);
         return GW_INT_ERROR;
@@ -388,6 +389,10 @@ GW_INTERNAL void gw_dense_prepare(gw_instance *I) {
     const double *x = I->x, *xn = I->xnew, *k1 = I->k[0], *k7 = I->k[6];
     double *r0 = I->rcont, *r1 = r0 + nx, *r2 = r1 + nx, *r3 = r2 + nx, *r4 = r3 + nx;
     if (I->dense_ready) return;
+    if (I->solver == GW_SOLVER_TAYLOR) { /* the step's own polynomial */
+        I->dense_ready = 1;
+        return;
+    }
     if (I->solver == GW_SOLVER_ROSENBROCK) {
         gw_rodas4_dense(I);
         I->dense_ready = 1;
@@ -425,6 +430,10 @@ GW_INTERNAL void gw_dense_eval(const gw_instance *I, double t, double *x_out) {
         memcpy(x_out, I->xnew, (size_t)nx * sizeof(double));
         return;
     }
+    if (I->solver == GW_SOLVER_TAYLOR) {
+        gw_taylor_dense_eval(I, t < I->dense_t0 ? I->dense_t0 : t, x_out);
+        return;
+    }
     th = (t - I->dense_t0) / I->dense_h;
     if (th < 0.0) th = 0.0;
     th1 = 1.0 - th;
@@ -440,7 +449,8 @@ GW_INTERNAL void gw_dense_eval(const gw_instance *I, double t, double *x_out) {
 
 GW_API int gw_solver_available(int solver) {
     return solver == GW_SOLVER_EULER || solver == GW_SOLVER_RK4 || solver == GW_SOLVER_DOPRI5 ||
-           solver == GW_SOLVER_ROSENBROCK || solver == GW_SOLVER_DOP853;
+           solver == GW_SOLVER_ROSENBROCK || solver == GW_SOLVER_DOP853 ||
+           solver == GW_SOLVER_TAYLOR;
 }
 
 GW_INTERNAL int gw_solver_alloc(gw_instance *I) {
@@ -456,6 +466,7 @@ GW_INTERNAL int gw_solver_alloc(gw_instance *I) {
     I->jac = (double *)gw_alloc(I, nx * nx, sizeof(double));
     I->lu = (double *)gw_alloc(I, nx * nx, sizeof(double));
     I->piv = (int *)gw_alloc(I, nx, sizeof(int));
+    if (gw_taylor_alloc(I)) return -1;
     return (I->rcx && I->jac && I->lu && I->piv) ? 0 : -1;
 }
 
@@ -473,6 +484,7 @@ GW_INTERNAL void gw_solver_free(gw_instance *I) {
     gw_free(I, I->piv);
     I->rcx = I->jac = I->lu = NULL;
     I->piv = NULL;
+    gw_taylor_free(I);
 }
 
 GW_API const char *gw_solver_name(int solver) {
@@ -482,6 +494,7 @@ GW_API const char *gw_solver_name(int solver) {
     case GW_SOLVER_DOPRI5: return "dopri5";
     case GW_SOLVER_ROSENBROCK: return "rosenbrock";
     case GW_SOLVER_DOP853: return "dop853";
+    case GW_SOLVER_TAYLOR: return "taylor";
     default: return "unknown";
     }
 }

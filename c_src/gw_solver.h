@@ -27,6 +27,8 @@
  *                       (dense, in the instance's work arrays); J is evaluated once per
  *                       accepted step, a rejected step only refactors.  Error = weighted RMS
  *                       norm of the embedded difference, same weights.  3rd-order dense output.
+ *   gw_solver_taylor.c  GW_SOLVER_TAYLOR: Taylor series of adaptive order (Jorba & Zou) with
+ *                       the model's generated kernel; its polynomial is the dense output
  * All adaptive solvers land exactly on t_end, respect max_step, carry the step size between
  * communication steps in I->h_adapt (the only solver memory kept between steps, part of a
  * saved state) and fail with "step size underflow" below gw_h_min.  Dense output: all in the
@@ -108,5 +110,33 @@ GW_INTERNAL int gw_rodas4_factor(gw_instance *I, double h);
 GW_INTERNAL int gw_rodas4_step(gw_instance *I, double h, double t1, double *err);
 /* rcont of the last accepted step (order 3) */
 GW_INTERNAL void gw_rodas4_dense(gw_instance *I);
+
+/* ---- gw_solver_taylor.c ----------------------------------------------------------------------- */
+#define GW_TAYLOR_MAX_ORDER 30 /* rel_tol 1e-25; the work memory holds series of this order */
+/* order of the series for a relative tolerance: ceil(-ln(rel_tol) / 2 + 1) in [2, MAX] */
+GW_INTERNAL int gw_taylor_order(double rel_tol);
+/* Jorba-Zou step size from the coefficients of orders p-1 and p of lane `lane` of X (series
+ * of the states, lanes interleaved); 0 and *bad_order = j if order j is not finite. */
+GW_INTERNAL double gw_taylor_step(const gw_instance *I, const double *X, int order, int lanes,
+                                  int lane, int *bad_order);
+/* dx = sum_{k>=1} X_k h^k of lane `lane` (the state's increment; gw_sum_update adds it) */
+GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int lane, int nx,
+                                     double h, double *dx);
+/* The bookkeeping of one integration call (feasibility guard, event count, steps). */
+typedef struct {
+    int events;
+    unsigned long n_fast, steps;
+    double h_prev;
+} gw_taylor_run;
+/* Start an integration call: kernel present, order from rel_tol. */
+GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run);
+/* One step from (I->t, I->x) with the series already in I->tl_w: step size, update, events
+ * (gw_accept_step).  Shared by gw_integrate_taylor and the ensemble path (gw_ensemble.c). */
+GW_INTERNAL gw_int_result gw_taylor_step_once(gw_instance *I, double t_end, gw_taylor_run *run);
+GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end);
+/* the Taylor polynomial of the last step at t */
+GW_INTERNAL void gw_taylor_dense_eval(const gw_instance *I, double t, double *x_out);
+GW_INTERNAL int gw_taylor_alloc(gw_instance *I); /* nothing if the model has no kernel */
+GW_INTERNAL void gw_taylor_free(gw_instance *I);
 
 #endif /* GW_SOLVER_H */

@@ -70,10 +70,17 @@ static int gw_setting_in_range(gw_instance *I, const char *fn, const gw_variable
                                double value) {
     switch (v->index) {
     case GW_SET_SOLVER:
+        if (value == GW_SOLVER_TAYLOR && !I->m->taylor.jet) {
+            GW_LOG_ERR(I, "%s: %s = 6 (taylor) is not available in this model: %s (build it "
+                       "from a scene with solver = \"taylor\", or with the Taylor kernel)", fn,
+                       v->name, I->m->taylor.why_absent ? I->m->taylor.why_absent
+                                                        : "built without a Taylor kernel");
+            return 0;
+        }
         if (value == floor(value) && fabs(value) < 1e9 && gw_solver_available((int)value))
             return 1;
         GW_LOG_ERR(I, "%s: %s = %.17g is not a solver: valid are 1 (euler), 2 (rk4), 3 (dopri5), "
-                   "4 (rosenbrock), 5 (dop853)", fn, v->name, value);
+                   "4 (rosenbrock), 5 (dop853), 6 (taylor)", fn, v->name, value);
         return 0;
     case GW_SET_REL_TOL:
         if (value >= GW_REL_TOL_MIN && value <= GW_REL_TOL_MAX) return 1;

@@ -82,7 +82,9 @@ def controller_system(schedule: Schedule, mission: Mission, wheel: ModelSpec,
                  about="Gain-scheduled LQG from gyrowheel's controller/schedule.py: measurements in, "
                        "tilt_cmd and drive_torque out, saturated at the actuators' limits.")
     gain_scale = sys.parameter("gain_scale", 1.0, "1", "factor on the state-feedback gain K", minimum=0.0)
-    tilt_max = sys.parameter("tilt_max", d0.tilt_max, "rad", "saturation of tilt_cmd (gimbal stop)", minimum=0.0)
+    # at a tilt of pi/2 the flywheel's spin axis lies along the link (docs/system.md): no gimbal goes past it
+    tilt_max = sys.parameter("tilt_max", d0.tilt_max, "rad", "saturation of tilt_cmd (gimbal stop), at most pi/2",
+                             minimum=0.0, maximum=math.pi / 2)
     drive_max = sys.parameter("drive_max", d0.drive_max, "N.m", "saturation of drive_torque", minimum=0.0)
     v0 = schedule.speed
     mt, mr, mv = [], [], []

@@ -11,8 +11,10 @@ as "<component>.<variable>", sampled at the communication points.
 from __future__ import annotations
 
 import math
+import os
+import shutil
 import time as _time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from fmpy import extract, read_model_description
@@ -20,6 +22,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Discard
 
 from cosim.system import SystemDescription
+from cosim.fmi_log import forget_messages, logging_callbacks
 
 
 class MasterError(RuntimeError):
@@ -32,6 +35,29 @@ class _Unit:
     slave: FMU2Slave
     vars: dict
     outputs: list[str]
+    messages: list = field(default_factory=list)  # the FMU's logged errors (fmi2Error, fmi2Fatal)
+    callbacks: object = None
+    log_id: int = 0
+    unzipdir: str | None = None  # fmpy.extract's temporary directory, removed after the run
+
+    def get(self, vr: int, fmi_type: str):
+        if fmi_type == "Real":
+            return self.slave.getReal([vr])[0]
+        if fmi_type == "Boolean":
+            return self.slave.getBoolean([vr])[0]
+        if fmi_type == "String":
+            return self.slave.getString([vr])[0]
+        return self.slave.getInteger([vr])[0]
+
+    def put(self, vr: int, fmi_type: str, value) -> None:
+        if fmi_type == "Real":
+            self.slave.setReal([vr], [value])
+        elif fmi_type == "Boolean":
+            self.slave.setBoolean([vr], [value])
+        elif fmi_type == "String":
+            self.slave.setString([vr], [value])
+        else:
+            self.slave.setInteger([vr], [value])
 
 
 @dataclass
@@ -45,14 +71,20 @@ def _set(unit: _Unit, name: str, value) -> None:
     v = unit.vars.get(name)
     if v is None:
         raise MasterError(f"{unit.name}: no variable {name!r}")
-    if v.type == "Real":
-        unit.slave.setReal([v.valueReference], [float(value)])
-    elif v.type in ("Integer", "Enumeration"):
-        unit.slave.setInteger([v.valueReference], [int(value)])
-    elif v.type == "Boolean":
-        unit.slave.setBoolean([v.valueReference], [bool(value)])
-    else:
-        raise MasterError(f"{unit.name}.{name}: type {v.type} not supported")
+    try:
+        value = (float(value) if v.type == "Real" else bool(value) if v.type == "Boolean"
+                 else str(value) if v.type == "String" else int(value))
+    except (TypeError, ValueError):
+        raise MasterError(f"{unit.name}.{name}: {value!r} is not a valid {v.type}") from None
+    unit.put(v.valueReference, v.type, value)
+
+
+def _physical_memory() -> int:
+    """Bytes of physical memory (0 where the platform does not say)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return 0
 
 
 def run(system: SystemDescription, step: float, stop_time: float | None = None,
@@ -60,59 +92,77 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
     """Run the system with communication step `step` [s] to stop_time (default: the system's).
 
     start_values: {component: {variable: value}} on top of the system's own. Raises
-    MasterError if a component fails (fmi2Error), ValueError for a bad step.
+    MasterError if a component fails (fmi2Error; the message carries the FMU's logged reason),
+    ValueError for a bad step or stop time (or a result that would not fit in half the machine's
+    memory), SystemFileError (a ValueError) for a system whose connections do not fit its FMUs.
     """
     if not (step > 0 and math.isfinite(step)):
         raise ValueError(f"step must be a positive number of seconds, got {step!r}")
     t0 = system.start_time
     stop = system.stop_time if stop_time is None else stop_time
+    if not math.isfinite(stop):
+        raise ValueError(f"stop time must be a finite number of seconds, got {stop!r}")
     if not stop > t0:
-        raise ValueError(f"stop time {stop} must be after the start time {t0}")
-    n_steps = int(round((stop - t0) / step))
-    if abs(t0 + n_steps * step - stop) > 1e-9 * max(1.0, abs(stop)):
-        raise ValueError(f"stop time {stop} is not a whole number of steps {step} from {t0}")
+        raise ValueError(f"stop time {stop:g} must be after the start time {t0:g}")
+    steps = (stop - t0) / step
+    n_steps = int(round(steps))
+    if n_steps < 1 or abs(n_steps - steps) > 1e-9 * max(1.0, steps):
+        below, above = t0 + math.floor(steps) * step, t0 + math.ceil(steps) * step
+        near = f"{below:.12g} or {above:.12g}" if math.floor(steps) >= 1 else f"{above:.12g}"
+        raise ValueError(f"stop time {stop:.12g} is not a whole number (>= 1) of steps {step:g} from {t0:g}: "
+                         f"stop at {near}, or choose a step that divides {stop - t0:.12g} s")
+    system.check()
+    columns = 1 + sum(sum(v.causality == "output" for v in read_model_description(str(c.fmu)).modelVariables)
+                      for c in system.components)
+    need, have = (n_steps + 1) * columns * 8, _physical_memory()
+    if have and need > have / 2:
+        raise ValueError(f"{n_steps + 1} communication points of {columns} columns would take "
+                         f"{need / 2**30:.3g} GiB, more than half of this machine's {have / 2**30:.3g} GiB: "
+                         f"choose a longer step or a shorter stop time")
     units = []
     try:
         for c in system.components:
             md = read_model_description(str(c.fmu))
             unit = _Unit(c.name, None, {v.name: v for v in md.modelVariables},
                          [v.name for v in md.modelVariables if v.causality == "output"])
-            unit.slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(c.fmu)),
-                                   modelIdentifier=md.coSimulation.modelIdentifier, instanceName=c.name)
-            unit.slave.instantiate(loggingOn=False)
+            unit.callbacks, unit.log_id = logging_callbacks(unit.messages)
             units.append(unit)
+            unit.unzipdir = extract(str(c.fmu))
+            unit.slave = FMU2Slave(guid=md.guid, unzipDirectory=unit.unzipdir,
+                                   modelIdentifier=md.coSimulation.modelIdentifier, instanceName=c.name)
+            unit.slave.instantiate(callbacks=unit.callbacks, loggingOn=False)
         by_name = {u.name: u for u in units}
-        links = [(by_name[k.start_element], by_name[k.start_element].vars[k.start_connector].valueReference,
-                  by_name[k.end_element], by_name[k.end_element].vars[k.end_connector].valueReference)
-                 for k in system.connections]
+        links = []
+        for k in system.connections:
+            src, dst = by_name[k.start_element], by_name[k.end_element]
+            sv, dv = src.vars[k.start_connector], dst.vars[k.end_connector]
+            links.append((src, sv.valueReference, sv.type, dst, dv.valueReference, dv.type))
         for c, u in zip(system.components, units):
             u.slave.setupExperiment(startTime=t0)
             for name, value in {**c.start_values, **(start_values or {}).get(c.name, {})}.items():
                 _set(u, name, value)
             u.slave.enterInitializationMode()
 
-        def exchange():
-            for src, svr, dst, dvr in links:
-                dst.slave.setReal([dvr], src.slave.getReal([svr]))
+        def exchange():  # system.check(): both ends of a connection have one type
+            for src, svr, stype, dst, dvr, dtype in links:
+                dst.put(dvr, dtype, src.get(svr, stype))
 
         exchange()
         for u in units:
             u.slave.exitInitializationMode()
         names = ["time"] + [f"{u.name}.{o}" for u in units for o in u.outputs]
-        rows = []
+        data = np.zeros(n_steps + 1, dtype=[(n, np.float64) for n in names])  # every point, filled as it runs
+        count = 0
 
         def record(t):
+            nonlocal count
             row = [t]
             for u in units:
                 for o in u.outputs:
                     v = u.vars[o]
-                    if v.type == "Boolean":
-                        row.append(float(u.slave.getBoolean([v.valueReference])[0]))
-                    elif v.type in ("Integer", "Enumeration"):
-                        row.append(float(u.slave.getInteger([v.valueReference])[0]))
-                    else:
-                        row.append(u.slave.getReal([v.valueReference])[0])
-            rows.append(row)
+                    row.append(float(u.get(v.valueReference, v.type)) if v.type != "String" else math.nan)
+            data[count] = tuple(row)
+            count += 1
 
         record(t0)
         stopped_by = None
@@ -135,15 +185,19 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
         wall = _time.perf_counter() - wall
         for u in units:
             u.slave.terminate()
-        data = np.array([tuple(r) for r in rows], dtype=[(n, np.float64) for n in names])
-        return RunResult(data, stopped_by, wall)
+        return RunResult(data[:count].copy(), stopped_by, wall)
     except MasterError:
         raise
     except Exception as exc:  # fmpy raises FMICallException (fmi2Error) and plain Exceptions
-        raise MasterError(f"{exc} (run again with the FMU's logging categories on to see its reason)") from None
+        logged = "; ".join(f"{u.name}: {m}" for u in units for m in u.messages)
+        raise MasterError(f"{logged} ({exc})" if logged else str(exc)) from None
     finally:
         for u in units:
             try:
-                u.slave.freeInstance()
+                if u.slave is not None:
+                    u.slave.freeInstance()  # also unloads the shared library
             except Exception:
                 pass
+            forget_messages(u.log_id)
+            if u.unzipdir:
+                shutil.rmtree(u.unzipdir, ignore_errors=True)

@@ -32,7 +32,7 @@ class SystemFileError(ValueError):
 class Component:
     name: str
     fmu: Path  # on disk (while writing) or inside the unpacked .ssp (after reading)
-    start_values: dict[str, float] = field(default_factory=dict)  # parameters / start values by name
+    start_values: dict[str, object] = field(default_factory=dict)  # parameter / input values by name
 
 
 @dataclass
@@ -58,24 +58,67 @@ class SystemDescription:
         raise SystemFileError(f"no component {name!r}; components: {', '.join(c.name for c in self.components)}")
 
     def check(self) -> None:
-        """Every connection joins an existing output to an existing input; each input has one source."""
-        causality = {}
+        """The system is runnable by an FMI 2.0 Co-Simulation master: at least one component, unique
+        component names, every component an FMI 2.0 FMU with Co-Simulation, every connection an
+        existing output to an existing input of the same type (SSP 1.0 section 5.3.6), each input
+        with one source. Raises SystemFileError naming the component, connection or variable."""
+        if not self.components:
+            raise SystemFileError(f"system {self.name!r} has no components")
+        names = [c.name for c in self.components]
         for c in self.components:
-            md = read_model_description(str(c.fmu), validate=False)
-            causality[c.name] = {v.name: v.causality for v in md.modelVariables}
+            if not c.name:
+                raise SystemFileError(f"system {self.name!r}: a component has no name")
+            if names.count(c.name) > 1:
+                raise SystemFileError(f"system {self.name!r}: two components are named {c.name!r}")
+        variables = {c.name: fmu_variables(c.fmu, c.name) for c in self.components}
         seen = set()
-        for k in self.connections:
-            for elem, conn, want in ((k.start_element, k.start_connector, "output"),
-                                     (k.end_element, k.end_connector, "input")):
-                if elem not in causality:
-                    raise SystemFileError(f"connection {k}: no component {elem!r}")
-                got = causality[elem].get(conn)
+        for i, k in enumerate(self.connections, 1):
+            ends = ((k.start_element, k.start_connector, "output"), (k.end_element, k.end_connector, "input"))
+            for elem, conn, want in ends:
+                if not elem or not conn:
+                    raise SystemFileError(f"connection {i}: startElement, startConnector, endElement and "
+                                          f"endConnector are required (connections to the system's own "
+                                          f"connectors are not supported), got {_describe(k)}")
+                if elem not in variables:
+                    raise SystemFileError(f"connection {_describe(k)}: no component {elem!r}; components: "
+                                          f"{', '.join(names)}")
+                v = variables[elem].get(conn)
+                got = v.causality if v is not None else None
                 if got != want:
                     raise SystemFileError(f"connection {elem}.{conn}: must be an {want} of {elem}, "
                                           f"is {got or 'not a variable'}")
+            src = variables[k.start_element][k.start_connector]
+            dst = variables[k.end_element][k.end_connector]
+            if _kind(src.type) != _kind(dst.type):
+                raise SystemFileError(f"connection {_describe(k)}: joins a {src.type} to a {dst.type} "
+                                      f"(a connection joins variables of one type)")
             if (k.end_element, k.end_connector) in seen:
                 raise SystemFileError(f"input {k.end_element}.{k.end_connector} has two sources")
             seen.add((k.end_element, k.end_connector))
+
+
+def _describe(k: "Connection") -> str:
+    return f"{k.start_element}.{k.start_connector} -> {k.end_element}.{k.end_connector}"
+
+
+def _kind(fmi_type: str) -> str:
+    """Connection compatibility: Enumeration values travel as Integers (FMI 2.0 section 2.2.7)."""
+    return "Integer" if fmi_type == "Enumeration" else fmi_type
+
+
+def fmu_variables(fmu: str | Path, component: str = "") -> dict:
+    """{name: fmpy ScalarVariable} of an FMI 2.0 Co-Simulation FMU; SystemFileError if it is not one."""
+    where = f"component {component!r}: " if component else ""
+    try:
+        md = read_model_description(str(fmu), validate=False)
+    except Exception as exc:  # fmpy raises plain Exceptions (BadZipFile, KeyError, XML errors)
+        raise SystemFileError(f"{where}{Path(fmu).name} is not a readable FMU "
+                              f"({type(exc).__name__}: {exc})") from None
+    if md.fmiVersion != "2.0":
+        raise SystemFileError(f"{where}{Path(fmu).name} is an FMI {md.fmiVersion} FMU (FMI 2.0 needed)")
+    if md.coSimulation is None:
+        raise SystemFileError(f"{where}{Path(fmu).name} does not support Co-Simulation")
+    return {v.name: v for v in md.modelVariables}
 
 
 def connect_by_name(a: str, outputs: list[str], b: str) -> list[Connection]:
@@ -134,28 +177,81 @@ BINDABLE = ("parameter", "input")
 # one name for every component's set: ecos applies the sets of the one name given at init,
 # libcosim a component's first set (and any by its name), gyrowheel's master all of them
 PARAMETER_SET = "start"
+PARAMETER_SET_TYPE = "application/x-ssp-parameter-set"
+SSV_TYPES = ("Real", "Integer", "Boolean", "String", "Enumeration")  # SSP 1.0 ssv:TParameter, but Binary
 
 
-def check_bindings(component: Component, where: str = "") -> None:
-    """A parameter binding must set a parameter or an input of its FMU (SystemFileError otherwise).
+def check_bindings(component: Component, where: str = "") -> dict:
+    """The component's parameter bindings as values of their FMU variables' types.
 
-    SSP 1.0 parameter sets carry parameter values; libcosim's SSP loader applies them only to
-    variables of causality parameter or input and drops any other with a warning ("Non-input
-    causality for variable wheel:beta"), so a binding of a state's start value (an output with
-    initial="exact", e.g. the wheel's beta) would make masters disagree. Set such start values in
-    the scene's [initial] (the FMU's default start) or through a master's own start values.
+    A binding must set a parameter or an input of its FMU (SystemFileError otherwise). SSP 1.0
+    parameter sets carry parameter values; libcosim's SSP loader applies them only to variables
+    of causality parameter or input and drops any other with a warning ("Non-input causality
+    for variable wheel:beta"), so a binding of a state's start value (an output with
+    initial="exact", e.g. the wheel's beta) would make masters disagree. Set such start values
+    in the scene's [initial] (the FMU's default start) or through a master's own start values.
+    Enumeration variables (the wheel's solver) are refused too: libcosim and ecos leave them out
+    and would ignore the binding. Values: a Real takes a number, an Integer a whole number, a
+    Boolean true/false (or 1/0), a String text; anything else raises SystemFileError naming
+    <component>.<variable>. Returns {name: float | int | bool | str}.
     """
     if not component.start_values:
-        return
-    md = read_model_description(str(component.fmu), validate=False)
-    causality = {v.name: v.causality for v in md.modelVariables}
-    for name in component.start_values:
-        got = causality.get(name)
+        return {}
+    variables = fmu_variables(component.fmu, component.name)
+    out = {}
+    for name, value in component.start_values.items():
+        v = variables.get(name)
+        got = v.causality if v is not None else None
         if got not in BINDABLE:
             raise SystemFileError(
                 f"{where}{component.name}.{name}: an SSP parameter binding sets a parameter or an input, "
                 f"this is {'an ' + got if got else 'not a variable'} (SSP masters such as libcosim ignore it): "
                 f"give it as the FMU's start value (a scene's [initial]) or as a master's start value")
+        if v.type == "Enumeration":
+            raise SystemFileError(
+                f"{where}{component.name}.{name}: an Enumeration; libcosim and ecos leave FMI 2.0 Enumeration "
+                f"variables out (\"Enumeration variable type not supported\") and ignore the binding, so masters "
+                f"would disagree: set it in the FMU (a scene's [experiment]) or as a master's start value")
+        out[name] = _coerce(v, value, f"{where}{component.name}.{name}")
+    return out
+
+
+def _coerce(v, value, where: str):
+    """value (a number, or the text of an SSV value attribute) as the type of FMU variable v."""
+    text = value.strip() if isinstance(value, str) else value
+    try:
+        if v.type == "Real":
+            if isinstance(text, bool):
+                raise ValueError
+            return float(text)
+        if v.type == "Boolean":
+            if isinstance(text, str):
+                if text.lower() not in ("true", "false", "1", "0"):
+                    raise ValueError
+                return text.lower() in ("true", "1")
+            if text not in (0, 1):
+                raise ValueError
+            return bool(text)
+        if v.type == "String":
+            return str(value)
+        number = float(text)
+        if isinstance(text, bool) or not number.is_integer():
+            raise ValueError
+        return int(number)
+    except (TypeError, ValueError):
+        raise SystemFileError(f"{where}: {value!r} is not a valid {v.type}") from None
+
+
+def _ssv_element(v, value) -> tuple[str, str]:
+    """(SSV element name, value attribute) of a binding of FMU variable v (SSP 1.0 ssv:TParameter;
+    never ssv:Enumeration, which libcosim's SSP parser (0.0.6) aborts the process on)."""
+    if v.type == "Real":
+        return "Real", repr(float(value))
+    if v.type == "Boolean":
+        return "Boolean", "true" if value else "false"
+    if v.type == "String":
+        return "String", str(value)
+    return "Integer", str(int(value))
 
 
 def _add_parameter_bindings(ssd_path: Path, system: SystemDescription) -> None:
@@ -163,7 +259,8 @@ def _add_parameter_bindings(ssd_path: Path, system: SystemDescription) -> None:
 
     pyssp-standard 0.9 writes bindings only as external .ssv references; the values belong in
     the .ssd itself here, so they are added to the written tree in schema order. Only parameters
-    and inputs are bound (check_bindings); every component's set is named PARAMETER_SET.
+    and inputs are bound (check_bindings), each as its variable's SSV type (_ssv_element); every
+    component's set is named PARAMETER_SET.
     """
     if not any(c.start_values for c in system.components):
         return
@@ -175,62 +272,171 @@ def _add_parameter_bindings(ssd_path: Path, system: SystemDescription) -> None:
         comp = system.component(elem.get("name"))
         if not comp.start_values:
             continue
+        values_of = check_bindings(comp)
+        variables = fmu_variables(comp.fmu, comp.name)
         bindings = ET.Element(f"{{{SSD_NS}}}ParameterBindings")
         values = ET.SubElement(ET.SubElement(bindings, f"{{{SSD_NS}}}ParameterBinding"), f"{{{SSD_NS}}}ParameterValues")
         pset = ET.SubElement(values, f"{{{SSV_NS}}}ParameterSet", {"version": "1.0", "name": PARAMETER_SET})
         params = ET.SubElement(pset, f"{{{SSV_NS}}}Parameters")
-        for name, value in comp.start_values.items():
-            ET.SubElement(ET.SubElement(params, f"{{{SSV_NS}}}Parameter", {"name": name}), f"{{{SSV_NS}}}Real",
-                          {"value": repr(float(value))})
+        for name, value in values_of.items():
+            kind, text = _ssv_element(variables[name], value)
+            ET.SubElement(ET.SubElement(params, f"{{{SSV_NS}}}Parameter", {"name": name}), f"{{{SSV_NS}}}{kind}",
+                          {"value": text})
         children = list(elem)
         position = next((i for i, ch in enumerate(children) if ch.tag != f"{{{SSD_NS}}}Connectors"), len(children))
         elem.insert(position, bindings)
     tree.write(ssd_path, xml_declaration=True, encoding="UTF-8")
 
 
+_NS = {"ssd": SSD_NS, "ssc": SSC_NS, "ssv": SSV_NS}
+
+
+def _number(text: str | None, default: float, what: str) -> float:
+    if text is None:
+        return default
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if value != value or value in (float("inf"), float("-inf")):
+        raise SystemFileError(f"{what} = {text!r} is not a finite number")
+    return value
+
+
+def _parameter_values(binding, root: Path, where: str) -> dict[str, tuple[str, str, str | None]]:
+    """{name (with the binding's prefix): (SSV type, value text, unit)} of one ssd:ParameterBinding,
+    inline (ssd:ParameterValues) or from its source .ssv in the archive (SSP 1.0 section 5.3.5)."""
+    kind = binding.get("type", PARAMETER_SET_TYPE)
+    if kind != PARAMETER_SET_TYPE:
+        raise SystemFileError(f"{where}: parameter binding of type {kind!r} (only {PARAMETER_SET_TYPE})")
+    if binding.find("ssd:ParameterMapping", _NS) is not None:
+        raise SystemFileError(f"{where}: ssd:ParameterMapping is not supported by gyrowheel's master "
+                              "(bind the FMU's own variable names)")
+    source = binding.get("source")
+    if source:
+        if binding.get("sourceBase", "SSD") != "SSD" or "://" in source:
+            raise SystemFileError(f"{where}: parameter source {source!r}: only files in the .ssp beside "
+                                  "SystemStructure.ssd are supported (sourceBase SSD)")
+        ssv = _inside(root, source, where)
+        try:
+            pset = ET.parse(ssv).getroot()
+        except ET.ParseError as exc:
+            raise SystemFileError(f"{where}: {source} is not well-formed XML: {exc}") from None
+    else:
+        pset = binding.find("ssd:ParameterValues/ssv:ParameterSet", _NS)
+        if pset is None:
+            return {}
+    if pset.tag != f"{{{SSV_NS}}}ParameterSet":
+        raise SystemFileError(f"{where}: {source or 'ParameterValues'} holds no ssv:ParameterSet")
+    prefix = binding.get("prefix", "")
+    out = {}
+    for p in pset.findall("ssv:Parameters/ssv:Parameter", _NS):
+        name = p.get("name")
+        typed = [ch for ch in p if ch.tag.startswith(f"{{{SSV_NS}}}")]
+        if not name or len(typed) != 1:
+            raise SystemFileError(f"{where}: a parameter needs a name and one value element, got {name!r}")
+        kind = typed[0].tag.split("}", 1)[1]
+        if kind not in SSV_TYPES:
+            raise SystemFileError(f"{where}: parameter {name!r}: ssv:{kind} values are not supported "
+                                  f"({', '.join(SSV_TYPES)})")
+        if typed[0].get("value") is None:
+            raise SystemFileError(f"{where}: parameter {name!r} has no value")
+        out[prefix + name] = (kind, typed[0].get("value"), typed[0].get("unit"))
+    return out
+
+
+def _inside(root: Path, source: str, where: str) -> Path:
+    """The archive member `source` (relative to SystemStructure.ssd), refusing paths that leave it."""
+    target = (root / source).resolve()
+    if not target.is_relative_to(root.resolve()):
+        raise SystemFileError(f"{where}: {source!r} points outside the .ssp")
+    if not target.is_file():
+        raise SystemFileError(f"{where}: {source} is not in the archive")
+    return target
+
+
+def _bound(binding_values: dict, component: str, variables: dict, where: str) -> dict:
+    """Check each binding's SSV type and unit against the FMU variable; {name: value text}."""
+    out = {}
+    for name, (kind, text, unit) in binding_values.items():
+        v = variables.get(name)
+        if v is not None:
+            # an Integer may bind an Enumeration (by value) or a Real
+            if kind != v.type and not (kind == "Integer" and v.type in ("Enumeration", "Real")):
+                raise SystemFileError(f"{where}{component}.{name}: bound as ssv:{kind}, the FMU's variable is "
+                                      f"a {v.type}")
+            fmu_unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None)
+            if unit and fmu_unit and unit != fmu_unit:
+                raise SystemFileError(f"{where}{component}.{name}: value in {unit!r}, the FMU's unit is "
+                                      f"{fmu_unit!r} (unit conversion is not supported)")
+        out[name] = text
+    return out
+
+
 def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
-    """Read an .ssp (SSP 1.0): components with their FMUs unpacked under unpack_dir, connections."""
+    """Read an .ssp (SSP 1.0): components with their FMUs unpacked under unpack_dir, connections,
+    parameter bindings (inline or .ssv files in the archive, of the components and of the system
+    with names '<component>.<variable>'; the system's take precedence, SSP 1.0 section 5.3.5)
+    and the DefaultExperiment. Raises SystemFileError naming the file and the element at fault."""
     path = Path(path)
     if not path.is_file():
         raise SystemFileError(f"{path}: no such SSP file")
+    root_dir = Path(unpack_dir)
     try:
         with zipfile.ZipFile(path) as zf:
-            zf.extractall(unpack_dir)
+            zf.extractall(root_dir)
     except zipfile.BadZipFile:
         raise SystemFileError(f"{path}: not an SSP archive (not a zip file)") from None
-    ssd = Path(unpack_dir) / "SystemStructure.ssd"
+    ssd = root_dir / "SystemStructure.ssd"
     if not ssd.is_file():
         raise SystemFileError(f"{path}: has no SystemStructure.ssd")
     try:
         root = ET.parse(ssd).getroot()
     except ET.ParseError as exc:
         raise SystemFileError(f"{path}: SystemStructure.ssd is not well-formed XML: {exc}") from None
-    ns = {"ssd": SSD_NS, "ssc": SSC_NS, "ssv": SSV_NS}
-    sysel = root.find("ssd:System", ns)
+    sysel = root.find("ssd:System", _NS)
     if sysel is None:
         raise SystemFileError(f"{path}: SystemStructure.ssd has no ssd:System")
-    components = []
-    for el in sysel.findall("ssd:Elements/ssd:Component", ns):
-        source = el.get("source", "")
+    if sysel.find("ssd:Elements/ssd:System", _NS) is not None or sysel.find("ssd:Elements/ssd:SignalDictionaryReference", _NS) is not None:
+        raise SystemFileError(f"{path}: nested systems and signal dictionaries are not supported "
+                              "(components of FMUs only)")
+    components, raw = [], {}
+    for el in sysel.findall("ssd:Elements/ssd:Component", _NS):
+        name, source = el.get("name"), el.get("source", "")
+        if not name:
+            raise SystemFileError(f"{path}: a component has no name")
+        where = f"{path}: component {name!r}"
         if el.get("type", FMU_TYPE) != FMU_TYPE:
-            raise SystemFileError(f"{path}: component {el.get('name')!r} is not an FMU ({el.get('type')})")
-        fmu = Path(unpack_dir) / source
-        if not fmu.is_file():
-            raise SystemFileError(f"{path}: component {el.get('name')!r}: {source} is not in the archive")
-        starts = {p.get("name"): float(p.find("ssv:Real", ns).get("value"))
-                  for p in el.findall("ssd:ParameterBindings/ssd:ParameterBinding/ssd:ParameterValues/"
-                                      "ssv:ParameterSet/ssv:Parameters/ssv:Parameter", ns)
-                  if p.find("ssv:Real", ns) is not None}
-        components.append(Component(el.get("name"), fmu, starts))
-        check_bindings(components[-1], f"{path}: ")
+            raise SystemFileError(f"{where} is not an FMU ({el.get('type')})")
+        fmu = _inside(root_dir, source, where)
+        components.append(Component(name, fmu))
+        raw[name] = {}
+        for binding in el.findall("ssd:ParameterBindings/ssd:ParameterBinding", _NS):
+            raw[name].update(_parameter_values(binding, root_dir, f"{where}, parameter binding"))
+    for binding in sysel.findall("ssd:ParameterBindings/ssd:ParameterBinding", _NS):
+        for name, value in _parameter_values(binding, root_dir, f"{path}: system parameter binding").items():
+            comp, _, var = name.partition(".")
+            if comp not in raw or not var:
+                raise SystemFileError(f"{path}: system parameter binding {name!r}: expected "
+                                      f"<component>.<variable> with a component of {', '.join(raw) or 'none'}")
+            raw[comp][var] = value
     connections = [Connection(k.get("startElement"), k.get("startConnector"), k.get("endElement"),
-                              k.get("endConnector")) for k in sysel.findall("ssd:Connections/ssd:Connection", ns)]
-    exp = root.find("ssd:DefaultExperiment", ns)
+                              k.get("endConnector")) for k in sysel.findall("ssd:Connections/ssd:Connection", _NS)]
+    exp = root.find("ssd:DefaultExperiment", _NS)
     system = SystemDescription(root.get("name") or sysel.get("name"), components, connections)
     if exp is not None:
-        system.start_time = float(exp.get("startTime", 0.0))
-        system.stop_time = float(exp.get("stopTime", system.stop_time))
-    system.check()
+        system.start_time = _number(exp.get("startTime"), 0.0, f"{path}: DefaultExperiment startTime")
+        system.stop_time = _number(exp.get("stopTime"), system.stop_time, f"{path}: DefaultExperiment stopTime")
+        if not system.stop_time > system.start_time:
+            raise SystemFileError(f"{path}: DefaultExperiment stopTime {system.stop_time:g} is not after "
+                                  f"startTime {system.start_time:g}")
+    try:
+        system.check()
+    except SystemFileError as exc:
+        raise SystemFileError(f"{path}: {exc}") from None
+    for c in components:
+        c.start_values = _bound(raw[c.name], c.name, fmu_variables(c.fmu, c.name), f"{path}: ")
+        c.start_values = check_bindings(c, f"{path}: ")
     return system
 
 
@@ -250,11 +456,16 @@ def write_osp(system: SystemDescription, directory: str | Path, step: float) -> 
         shutil.copy2(c.fmu, directory / f"{c.name}.fmu")
         sim = ET.SubElement(sims, f"{{{OSP_NS}}}Simulator", {"name": c.name, "source": f"{c.name}.fmu",
                                                            "stepSize": repr(float(step))})
-        if c.start_values:
+        if c.start_values:  # OSP's value elements: Real, Integer (Enumerations too), Boolean, String
             init = ET.SubElement(sim, f"{{{OSP_NS}}}InitialValues")
+            types = {n: v.type for n, v in fmu_variables(c.fmu, c.name).items()}
             for name, value in c.start_values.items():
+                kind = types.get(name, "Real")
+                kind, text = (("Real", repr(float(value))) if kind == "Real" else
+                              ("Boolean", "true" if value in (True, "true", "1", 1) else "false") if kind == "Boolean" else
+                              ("String", str(value)) if kind == "String" else ("Integer", str(int(value))))
                 iv = ET.SubElement(init, f"{{{OSP_NS}}}InitialValue", {"variable": name})
-                ET.SubElement(iv, f"{{{OSP_NS}}}Real", {"value": repr(float(value))})
+                ET.SubElement(iv, f"{{{OSP_NS}}}{kind}", {"value": text})
     conns = ET.SubElement(root, f"{{{OSP_NS}}}Connections")
     for k in system.connections:
         vc = ET.SubElement(conns, f"{{{OSP_NS}}}VariableConnection")

@@ -6,6 +6,7 @@ never a traceback.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -17,6 +18,32 @@ class CliError(Exception):
     def __init__(self, message: str, code: int = EXIT_BAD_INPUT):
         super().__init__(message)
         self.code = code
+
+
+def finite_float(text: str) -> float:
+    """argparse type of every number option: a finite float (inf and nan are not seconds)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def output_file(path: str | Path, flag: str = "-o") -> Path:
+    """An output file the command can write: its directory is created (as `gyrowheel build` does)
+    and it must not be a directory. Checked before the run, not after it. Raises CliError."""
+    path = Path(path)
+    if path.is_dir():
+        raise CliError(f"{flag} {path}: is a directory; give a file name")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise CliError(f"{flag} {path}: {path.parent} is not a directory") from None
+    except OSError as exc:
+        raise CliError(f"{flag} {path}: cannot create its directory: {exc.strerror or exc}", EXIT_FAILURE) from None
+    return path
 
 
 def _fmu_path(text: str) -> Path:
@@ -45,7 +72,7 @@ def cmd_build(args) -> int:
     except OSError as exc:
         raise CliError(f"{output}: cannot write: {exc.strerror or exc}", EXIT_FAILURE) from None
     try:
-        result = build_fmu(scene, output, build_dir=args.keep_build)
+        result = build_fmu(scene, output, build_dir=args.keep_build, taylor=args.taylor)
     except CompileError as exc:
         raise CliError(f"compiling the FMU failed: {exc}", EXIT_FAILURE) from None
     except ValueError as exc:  # a combination the model refuses (its message names the key)
@@ -85,12 +112,14 @@ def cmd_simulate(args) -> int:
     for flag, value in (("--stop-time", args.stop_time), ("--output-interval", args.output_interval)):
         if value is not None and not value > 0:
             raise CliError(f"{flag} must be > 0, got {value}")
+    output = output_file(args.output or fmu.with_suffix(".csv").name)
+    if args.plot:
+        output_file(args.plot, "--plot")
     try:
         start = coerce_start_values(fmu, _parse_sets(args.set))
         result = run(fmu, stop_time=args.stop_time, output_interval=args.output_interval, start_values=start)
     except SimulationError as exc:
         raise CliError(str(exc), EXIT_FAILURE if "reported" in str(exc) else EXIT_BAD_INPUT) from None
-    output = Path(args.output or fmu.with_suffix(".csv").name)
     write_csv(str(output), _numeric(result))
     print(f"wrote {output}: {len(result)} rows, t = {result['time'][0]:g} .. {result['time'][-1]:g} s"
           + _events_summary(result))
@@ -172,19 +201,44 @@ def cmd_system_run(args) -> int:
 
     if not args.step > 0:
         raise CliError(f"--step must be > 0, got {args.step}")
+    if args.stop_time is not None and not args.stop_time > 0:
+        raise CliError(f"--stop-time must be > 0, got {args.stop_time}")
+    output = output_file(args.output or Path(args.ssp).with_suffix(".csv").name)
+    sets = _parse_sets(args.set)
     with tempfile.TemporaryDirectory(prefix="gyrowheel-system-") as tmp:
         try:
             system = read_ssp(args.ssp, tmp)
-            result = run(system, args.step, args.stop_time)
+            starts = _system_start_values(system, sets)
+            result = run(system, args.step, args.stop_time, start_values=starts)
         except (SystemFileError, ValueError) as exc:
             raise CliError(str(exc)) from None
         except MasterError as exc:
-            raise CliError(str(exc), EXIT_FAILURE) from None
-    output = Path(args.output or Path(args.ssp).with_suffix(".csv").name)
+            raise CliError(f"the system failed: {exc}", EXIT_FAILURE) from None
     write_csv(str(output), result.data)
     ended = f", stopped by {result.stopped_by} at t = {result.data['time'][-1]:.6g} s" if result.stopped_by else ""
     print(f"wrote {output}: {len(result.data)} rows{ended}")
     return 0
+
+
+def _system_start_values(system, sets: dict[str, str]) -> dict[str, dict[str, object]]:
+    """--set COMPONENT.VARIABLE=VALUE -> {component: {variable: typed value}} (as `simulate --set`
+    checks them against each component's FMU: name, settable, type). Raises CliError."""
+    from fmu_build.simulate import SimulationError, coerce_start_values
+    names = [c.name for c in system.components]
+    by_component: dict[str, dict[str, str]] = {}
+    for key, text in sets.items():
+        component, _, variable = key.partition(".")
+        if component not in names or not variable:
+            raise CliError(f"--set {key}={text}: expected COMPONENT.VARIABLE=VALUE with a component of "
+                           f"{', '.join(names)}")
+        by_component.setdefault(component, {})[variable] = text
+    out = {}
+    for c, values in by_component.items():
+        try:
+            out[c] = coerce_start_values(system.component(c).fmu, values)
+        except SimulationError as exc:
+            raise CliError(f"--set, component {c}: {exc}") from None
+    return out
 
 
 def cmd_export_c(args) -> int:
@@ -195,12 +249,16 @@ def cmd_export_c(args) -> int:
 
     scene = load_scene(args.scene)
     out = Path(args.output or f"{scene.name}_c")
+    if out.exists() and not out.is_dir():
+        raise CliError(f"-o {out}: exists and is not a directory")
     try:
         result = export_c(scene, out, check=not args.no_compile, scene_file=Path(args.scene).name)
     except CompileError as exc:
         raise CliError(f"compiling the export failed: {exc}", EXIT_FAILURE) from None
     except (ExportError, ValueError) as exc:
         raise CliError(f"{args.scene}: {exc}") from None
+    except OSError as exc:
+        raise CliError(f"{exc.filename or out}: cannot write: {exc.strerror or exc}", EXIT_FAILURE) from None
     print(f"wrote {out}/ (model {result.identifier}: {result.identifier}.h, {result.identifier}.c, "
           f"CMakeLists.txt, examples/; {len(result.files)} files)")
     return 0
@@ -224,11 +282,14 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("scene", help="scene file (TOML)")
     b.add_argument("-o", "--output", help="FMU to write (default: <scene name>.fmu)")
     b.add_argument("--keep-build", metavar="DIR", help="keep generated sources and objects in DIR")
+    b.add_argument("--taylor", action="store_true",
+                   help="also generate the Taylor kernel (solver taylor at run time, the ensemble "
+                        "path); implied by solver = \"taylor\" in the scene")
     b.set_defaults(func=cmd_build)
     s = sub.add_parser("simulate", help="simulate an FMU in Co-Simulation with fmpy")
     s.add_argument("fmu")
-    s.add_argument("--stop-time", type=float)
-    s.add_argument("--output-interval", type=float)
+    s.add_argument("--stop-time", type=finite_float)
+    s.add_argument("--output-interval", type=finite_float)
     s.add_argument("--set", action="append", metavar="NAME=VALUE", help="start value (repeatable)")
     s.add_argument("-o", "--output", help="CSV file to write")
     s.add_argument("--plot", metavar="PNG", help="also plot the trajectory")
@@ -241,8 +302,10 @@ def make_parser() -> argparse.ArgumentParser:
     y = sub.add_parser("system", help="systems of FMUs (SSP 1.0)").add_subparsers(dest="system_command", required=True)
     yr = y.add_parser("run", help="run an .ssp with gyrowheel's master (fixed communication step, fmpy)")
     yr.add_argument("ssp")
-    yr.add_argument("--step", type=float, default=0.01, help="communication step [s] (default 0.01)")
-    yr.add_argument("--stop-time", type=float, help="default: the .ssp's DefaultExperiment")
+    yr.add_argument("--step", type=finite_float, default=0.01, help="communication step [s] (default 0.01)")
+    yr.add_argument("--stop-time", type=finite_float, help="default: the .ssp's DefaultExperiment")
+    yr.add_argument("--set", action="append", metavar="COMPONENT.NAME=VALUE",
+                    help="start value of a component's variable, e.g. wheel.M=2.1 (repeatable)")
     yr.add_argument("-o", "--output", help="CSV file to write (<component>.<variable> columns)")
     yr.set_defaults(func=cmd_system_run)
     x = sub.add_parser("export-c", help="write the scene's model as plain C with a C API (no FMI)")
@@ -275,6 +338,10 @@ def main(argv: list[str] | None = None) -> int:
         return getattr(exc, "code", EXIT_BAD_INPUT)
     except KeyboardInterrupt:
         return 130
+    except OSError as exc:  # a file the command could not write or read: one line, never a traceback
+        print(f"gyrowheel: error: {exc.filename or ''}{': ' if exc.filename else ''}{exc.strerror or exc}",
+              file=sys.stderr)
+        return EXIT_FAILURE
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ import casadi as ca
 
 from fmu_build.casadi_c import UNITY_GUARD_CLOSE, UNITY_GUARD_OPEN, make_internal
 from fmu_build.scene import SOLVERS, Experiment
+from fmu_build.taylor_c import KERNEL_FILE, TaylorKernel, write_taylor_kernel
 from fmu_build.variables import KIND, TYPE, Variable
 from model.hoist import split_parameters
 from model.spec import ModelSpec
@@ -107,6 +108,39 @@ def generate_functions(spec: ModelSpec, out_dir: Path, table: list[Variable] | N
     return fns
 
 
+def taylor_ode(fns: dict[str, ca.Function]) -> ca.Function:
+    """ode(t, x, u, p) -> xdot whole: a hoisted ode(t, x, u, p, c) with c = ode_pre(p) put back.
+
+    The Taylor kernel hoists on its own (its constants: the nodes depending on u and p only,
+    computed once per integration call), so it takes the unsplit expression graph."""
+    ode = fns["ode"]
+    if ode.n_in() == 4:
+        return ode
+    t, x, u, p = ode.sx_in()[:4]
+    xdot = ode(t, x, u, p, fns["ode_pre"](p))
+    return ca.Function("gw_ode_whole", [t, x, u, p], [ca.cse(xdot)], ["t", "x", "u", "p"], ["xdot"])
+
+
+NO_KERNEL = ("built without a Taylor kernel (build it from a scene with solver = \"taylor\", "
+             "or with the Taylor kernel: gyrowheel build --taylor, build_fmu(..., taylor=True))")
+
+
+def generate_taylor(fns: dict[str, ca.Function], model: str, out_dir: Path,
+                    wanted: bool) -> TaylorKernel | str:
+    """Write gw_taylor_model.h (solver `taylor`); the kernel, or why the model has none.
+
+    Only an FMU that asks for it gets the kernel (wanted: the scene's solver is taylor, or the
+    build option for the ensemble path): it doubles the C to compile (docs/taylor.md, build
+    time), so every other FMU builds as fast as without solver taylor and carries a
+    gw_taylor_model.h of one comment.  wanted and an operation without a recurrence raises
+    TaylorUnsupportedError naming it.
+    """
+    if not wanted:
+        (out_dir / KERNEL_FILE).write_text(f"/* no Taylor kernel: {NO_KERNEL} */\n")
+        return NO_KERNEL
+    return write_taylor_kernel(taylor_ode(fns), model, out_dir)
+
+
 def _c_string(text: str) -> str:
     return json.dumps(text)  # a JSON string literal is a valid C string literal for our texts
 
@@ -119,8 +153,16 @@ def _c_strings(values) -> str:
     return "{" + ", ".join(_c_string(v) for v in values) + "}" if values else "{\"\"}"
 
 
+def _taylor_slot(taylor: TaylorKernel | str | None) -> str:
+    if isinstance(taylor, TaylorKernel):
+        return (f"    .taylor = {{gw_tl1_jet, gw_tl1_cst, {taylor.n_var}, {taylor.n_cst}, 0}},")
+    why = taylor if isinstance(taylor, str) else NO_KERNEL
+    return f"    .taylor = {{0, 0, 0, 0, {_c_string(why)}}},"
+
+
 def write_model_desc(spec: ModelSpec, table: list[Variable], exp: Experiment, identifier: str,
-                     guid: str, fns: dict[str, ca.Function], out_dir: Path) -> Path:
+                     guid: str, fns: dict[str, ca.Function], out_dir: Path,
+                     taylor: TaylorKernel | str | None = None) -> Path:
     """model_desc.c: the static GW_MODEL constant of c_src/gw_model.h (after gw_funcs.c in the unit)."""
     rows = sorted(table, key=lambda v: v.vr)
     var_lines = []
@@ -178,6 +220,7 @@ static const gw_model GW_MODEL = {{
     .init_rows = gwm_init_rows,
     .default_max_internal_steps = {float(exp.max_internal_steps)!r},
     .n_pre = {fns["ode_pre"].numel_out(0) if "ode_pre" in fns else 0},
+{_taylor_slot(taylor)}
 }};
 
 {UNITY_GUARD_CLOSE}"""

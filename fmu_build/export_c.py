@@ -24,7 +24,7 @@ from pathlib import Path
 
 from fmu_build import c_names
 from fmu_build.builder import RUNTIME_DIR, _guid, model_spec
-from fmu_build.codegen import FUNCTION_FILE, generate_functions, write_model_desc
+from fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
 from fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
 from fmu_build.scene import Scene
 from fmu_build.variables import Variable, build_table
@@ -269,9 +269,10 @@ def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: 
     table = build_table(spec, exp, scene.outputs)
     src = out_dir / "src"
     fns = generate_functions(spec, src)
+    kernel = generate_taylor(fns, model, src, wanted=exp.solver == "taylor")  # as the FMU's
     guid = _guid((src / f"{FUNCTION_FILE}.c").read_text(),
                  repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]), repr(exp), model)
-    write_model_desc(spec, table, exp, model, guid, fns, src)
+    write_model_desc(spec, table, exp, model, guid, fns, src, kernel)
     written = set()
     for f in core_sources():
         shutil.copy2(f, src / f.name)

@@ -51,8 +51,11 @@ def _unit_of(v: Variable) -> str | None:
 
 def write_model_description(model_name: str, exp: Experiment, table: list[Variable], identifier: str,
                             guid: str, sources: list[str], description: str, model_exchange: bool = False,
-                            directional: bool = False) -> str:
+                            directional: bool = False, taylor: bool = False) -> str:
     """The XML text. `sources` are the C files listed under <SourceFiles>.
+
+    taylor: the model has the Taylor kernel, so the Solver enumeration lists item taylor (6);
+    an FMU without it lists only the solvers it can run.
 
     model_exchange adds the ModelExchange interface (the runtime's fmi2GetDerivatives & co.),
     directional declares fmi2GetDirectionalDerivative (CasADi's exact Jacobian).
@@ -107,7 +110,8 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
     solver_type = ET.SubElement(types, "SimpleType", {"name": "Solver"})
     enum = ET.SubElement(solver_type, "Enumeration")
     for name, value in SOLVERS.items():
-        ET.SubElement(enum, "Item", {"name": name, "value": str(value)})
+        if name != "taylor" or taylor:
+            ET.SubElement(enum, "Item", {"name": name, "value": str(value)})
 
     cats = ET.SubElement(root, "LogCategories")
     for name, desc in LOG_CATEGORIES.items():

@@ -21,7 +21,7 @@ from pathlib import Path
 from model.build import BETA_MIN_DEFAULT, FORMULATIONS, start_values, touchdown_lean, wheel_parameters
 from model.effects import CATALOGUE, lift_off_conflict
 
-SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5}
+SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
 TOUCHDOWN = "touchdown"  # [wheel] beta_min preset: the lean at which the body must touch the ground
 

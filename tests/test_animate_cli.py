@@ -78,3 +78,56 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, make, extra, fragmen
     assert err.startswith("gyrowheel: error: ") and err.count("\n") == 1, err
     assert fragment in err, err
     assert not (tmp_path / "out.gif").exists()
+
+
+def _as_system_result(csv, path, components=("wheel",)):
+    """The columns of `csv` as `gyrowheel system run` writes them: "<component>.<variable>", plus a
+    controller's columns (one component, or the wheel's columns under several names)."""
+    lines = csv.read_text().splitlines()
+    names = [n.strip('"') for n in lines[0].split(",")]
+    header = ["time"] + [f"{c}.{n}" for c in components for n in names[1:]] + ["controller.tilt_cmd"]
+    rows = [r.split(",") for r in lines[1:]]
+    body = [",".join([r[0]] + [v for _ in components for v in r[1:]] + ["0.0"]) for r in rows]
+    path.write_text(",".join(f'"{h}"' for h in header) + "\n" + "\n".join(body) + "\n")
+    return path
+
+
+def test_animate_reads_a_system_result(tmp_path, capsys):
+    """`gyrowheel system run` writes "<component>.<variable>" columns; animate draws the component with
+    the wheel's columns (here the only one), the same frames as from the wheel's own table."""
+    plain = rolling_csv(tmp_path / "plain.csv", stop=1.0, gyrover=True)
+    system = _as_system_result(plain, tmp_path / "loop.csv")
+    assert main(["animate", str(system), "-o", str(tmp_path / "loop.gif"), "--fps", "10", "--size", "96x64"]) == 0
+    assert main(["animate", str(plain), "-o", str(tmp_path / "plain.gif"), "--fps", "10", "--size", "96x64"]) == 0
+    with Image.open(tmp_path / "loop.gif") as a, Image.open(tmp_path / "plain.gif") as b:
+        assert a.n_frames == b.n_frames == 11
+    assert (tmp_path / "loop.gif").read_bytes() == (tmp_path / "plain.gif").read_bytes()
+    capsys.readouterr()
+    two = _as_system_result(plain, tmp_path / "two.csv", components=("left", "right"))
+    assert main(["animate", str(two), "-o", str(tmp_path / "two.gif")]) == 2
+    assert "components left, right all have the wheel's columns: choose one with --component" in capsys.readouterr().err
+    assert main(["animate", str(two), "-o", str(tmp_path / "two.gif"), "--component", "right", "--fps", "5",
+                 "--size", "96x64"]) == 0
+    capsys.readouterr()
+    assert main(["animate", str(system), "-o", str(tmp_path / "x.gif"), "--component", "controller"]) == 2
+    assert "no component 'controller' with the wheel's columns" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("option,value", [("--R", "inf"), ("--fps", "nan"), ("--trail", "inf"), ("--start", "nan")])
+def test_non_finite_numbers_are_refused(tmp_path, capsys, option, value):
+    """inf and nan are not seconds, frames or metres: argparse refuses them (exit 2, no traceback)."""
+    csv = rolling_csv(tmp_path / "ok.csv")
+    with pytest.raises(SystemExit) as exc:
+        main(["animate", str(csv), "-o", str(tmp_path / "out.gif"), option, value])
+    assert exc.value.code == 2
+    assert f"argument {option}: '{value}' is not a finite number" in capsys.readouterr().err
+
+
+def test_output_directory_is_created_and_a_directory_refused(tmp_path, capsys):
+    csv = rolling_csv(tmp_path / "ok.csv", stop=0.5)
+    assert main(["animate", str(csv), "-o", str(tmp_path / "new" / "dir" / "run.html")]) == 0
+    assert (tmp_path / "new" / "dir" / "run.html").is_file()
+    capsys.readouterr()
+    (tmp_path / "dir.gif").mkdir()
+    assert main(["animate", str(csv), "-o", str(tmp_path / "dir.gif")]) == 2
+    assert "dir.gif: is a directory; give a file name" in capsys.readouterr().err

@@ -52,4 +52,5 @@ def test_enumeration_values():
     """The solver enumeration is append-only: the Python side writes these numbers."""
     text = (C_SRC / "gw_model.h").read_text()
     values = dict(re.findall(r"GW_SOLVER_(\w+) = (\d+)", text))
-    assert values == {"EULER": "1", "RK4": "2", "DOPRI5": "3", "ROSENBROCK": "4", "DOP853": "5"}
+    assert values == {"EULER": "1", "RK4": "2", "DOPRI5": "3", "ROSENBROCK": "4", "DOP853": "5",
+                      "TAYLOR": "6"}

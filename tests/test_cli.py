@@ -58,6 +58,11 @@ def _bad_scene(tmp_path, text):
     (("simulate", "{fmu}", "--stop-time", "-1"), "--stop-time must be > 0"),
     (("simulate", "{fmu}", "--set", "M=-2"), "M (mass) must be > 0"),
     (("build", "{bad}"), "bad.toml: [wheel] mass: unknown key"),
+    # outputs that cannot be written are refused before the run, in one line
+    (("simulate", "{fmu}", "-o", "{bad}/x.csv"), "bad.toml is not a directory"),
+    (("simulate", "{fmu}", "--plot", "{bad}/p.png"), "bad.toml is not a directory"),
+    (("simulate", "{fmu}", "-o", "."), "-o .: is a directory; give a file name"),
+    (("export-c", str(SCENES / "paper_earth.toml"), "-o", "{bad}", "--no-compile"), "exists and is not a directory"),
 ])
 def test_bad_input_is_one_line(built, tmp_path, args, fragment):
     bad = _bad_scene(tmp_path, "[wheel]\nmass = 2\n")
@@ -77,3 +82,21 @@ def test_simulate_reports_the_fall(built, tmp_path):
     assert "(events: fallen at t = " in r.stdout
     rows = list(csv.DictReader((tmp_path / "f.csv").open()))
     assert rows[0]["fallen"] == "0" and rows[-1]["fallen"] == "1"
+
+
+@pytest.mark.parametrize("args", [
+    ("simulate", "x.fmu", "--stop-time", "inf"),
+    ("simulate", "x.fmu", "--output-interval", "nan"),
+    ("system", "run", "x.ssp", "--step", "inf"),
+    ("system", "run", "x.ssp", "--stop-time", "inf"),
+    ("sweep", "x.fmu", "--stop-time", "nan"),
+    ("sweep", "x.fmu", "--max-step", "inf"),
+    ("animate", "x.csv", "--R", "inf"),
+])
+def test_non_finite_numbers_are_refused(tmp_path, args):
+    """Every number option is a finite float: inf and nan are refused by argparse (exit 2, one
+    error line, no traceback) before anything runs. `simulate --output-interval inf` used to
+    run and write 2 rows; `system run --stop-time inf` raised OverflowError."""
+    r = gyrowheel(*args, cwd=tmp_path)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert f"argument {args[-2]}: '{args[-1]}' is not a finite number" in r.stderr

@@ -208,3 +208,14 @@ def test_make_internal_refuses_what_it_does_not_know():
         make_internal(GENERATED, {"gw_ode", "gw_ode_work", "gw_out"})
     with pytest.raises(CodegenFormatError, match="non-static object"):
         make_internal(GENERATED + "\ncasadi_int gw_counter = 0;\n", {"gw_ode", "gw_ode_work"})
+
+
+def test_large_generated_sources_are_compiled_at_O1(tmp_path):
+    """-O2 on CasADi's multi-megabyte straight-line functions costs minutes (docs/runtime.md);
+    the level follows the largest file the unity build includes."""
+    from fmu_build.compiler import LARGE_SOURCE_BYTES, OPTIMISE, OPTIMISE_LARGE, optimisation_for
+    (tmp_path / "gw_fmu.c").write_text("/* unity */\n")
+    (tmp_path / "gw_funcs.c").write_text("x" * 1000)
+    assert optimisation_for(tmp_path) == OPTIMISE and "-O2" in OPTIMISE
+    (tmp_path / "gw_funcs.c").write_text("x" * (LARGE_SOURCE_BYTES + 1))
+    assert optimisation_for(tmp_path) == OPTIMISE_LARGE and "-O1" in OPTIMISE_LARGE

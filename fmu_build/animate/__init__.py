@@ -20,22 +20,30 @@ __all__ = ["FORMATS", "AnimationError", "Options", "Parameters", "Timeline", "an
 
 
 def animate(result: str | Path, output: str | Path, R: float | None = None, fmu: str | Path | None = None,
-            **options) -> Timeline:
+            component: str | None = None, **options) -> Timeline:
     """Write the animation of a result CSV to output (.gif, .mp4 or .html, by its extension).
 
-    R (m) or fmu (its start values) give the wheel's geometry when the CSV does not (see
-    resolve_parameters); options are those of Options (fps, speed, size, trail, start, stop).
+    R (m) or fmu (its start values; or an .ssp: its wheel component's) give the wheel's geometry
+    when the CSV does not (see resolve_parameters); component picks the component of a system's
+    result (read_result); options are those of Options (fps, speed, size, trail, start, stop).
+    The output's directory is created.
     Returns the Timeline drawn. Raises AnimationError for bad input, with a one-line message.
     """
     output = Path(output)
     if output.suffix.lower() not in FORMATS:
         raise AnimationError(f"{output}: unknown output format {output.suffix!r}: use .gif, .mp4 or .html")
-    table = read_result(result)
+    if output.is_dir():
+        raise AnimationError(f"{output}: is a directory; give a file name")
+    table = read_result(result, component)
     timeline = build_timeline(table, resolve_parameters(table, R=R, fmu=fmu), Options(**options))
-    if output.suffix.lower() == ".html":
-        from fmu_build.animate.html import write_html
-        write_html(timeline, output, title=f"gyrowheel: {Path(result).name}")
-    else:
-        from fmu_build.animate.render import render_video
-        render_video(timeline, output)
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        if output.suffix.lower() == ".html":
+            from fmu_build.animate.html import write_html
+            write_html(timeline, output, title=f"gyrowheel: {Path(result).name}")
+        else:
+            from fmu_build.animate.render import render_video
+            render_video(timeline, output)
+    except OSError as exc:
+        raise AnimationError(f"{exc.filename or output}: cannot write: {exc.strerror or exc}") from None
     return timeline

@@ -18,17 +18,22 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from fmu_build.cli import finite_float
+
     parser.add_argument("result", help="result CSV (gyrowheel simulate, or any table with its column names)")
     parser.add_argument("-o", "--output", help="animation to write: .gif, .mp4 or .html (default: RESULT.gif)")
-    parser.add_argument("--fmu", help="read R and the flywheel's geometry from this FMU's start values")
-    parser.add_argument("--R", type=float, help="wheel radius in m (default: the FMU's, or z / sin(beta))")
-    parser.add_argument("--fps", type=float, default=25.0, help="frames per second of playback (default 25)")
-    parser.add_argument("--speed", type=float, default=1.0,
+    parser.add_argument("--fmu", help="read R and the flywheel's geometry from this FMU's start values "
+                        "(or from a system's .ssp: its wheel component's FMU and bindings)")
+    parser.add_argument("--component", help="for a system's result (<component>.<variable> columns, "
+                        "gyrowheel system run): the component to draw (default: the one with the wheel's columns)")
+    parser.add_argument("--R", type=finite_float, help="wheel radius in m (default: the FMU's, or z / sin(beta))")
+    parser.add_argument("--fps", type=finite_float, default=25.0, help="frames per second of playback (default 25)")
+    parser.add_argument("--speed", type=finite_float, default=1.0,
                         help="simulated seconds per second of playback (default 1)")
     parser.add_argument("--size", default="640x480", help="WIDTHxHEIGHT in pixels (default 640x480)")
-    parser.add_argument("--trail", type=float, help="seconds of contact track behind the wheel (default: all)")
-    parser.add_argument("--start", type=float, help="first simulated time shown, s (default: the run's start)")
-    parser.add_argument("--stop", type=float, help="last simulated time shown, s (default: the run's end)")
+    parser.add_argument("--trail", type=finite_float, help="seconds of contact track behind the wheel (default: all)")
+    parser.add_argument("--start", type=finite_float, help="first simulated time shown, s (default: the run's start)")
+    parser.add_argument("--stop", type=finite_float, help="last simulated time shown, s (default: the run's end)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -37,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
 
     output = Path(args.output or Path(args.result).with_suffix(".gif").name)
     size = parse_size(args.size)
-    tl = animate(args.result, output, R=args.R, fmu=args.fmu, fps=args.fps, speed=args.speed, size=size,
+    tl = animate(args.result, output, R=args.R, fmu=args.fmu, component=args.component, fps=args.fps, speed=args.speed, size=size,
                  trail=args.trail, start=args.start, stop=args.stop)
     t0, t1 = tl.time[0], tl.time[-1]
     what = f"{len(tl.time)} frame{'s' * (len(tl.time) != 1)} at {args.fps:g} fps" + ("" if output.suffix.lower() == ".html"

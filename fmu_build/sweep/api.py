@@ -80,7 +80,7 @@ def plan_sweep(target, *, grid=None, random=None, samples: int | None = None, se
                derive=None, stop_time: float | None = None, output_interval: float | None = None,
                start_time: float = 0.0, solver: str | None = None, rel_tol: float | None = None,
                abs_tol: float | None = None, max_step: float | None = None, metrics=None,
-               metric_functions=()) -> Plan:
+               metric_functions=(), ensemble: bool = True) -> Plan:
     """The points and settings of a sweep, every name and value checked (SweepSpecError if not)."""
     if points is not None:
         if grid or random:
@@ -97,7 +97,7 @@ def plan_sweep(target, *, grid=None, random=None, samples: int | None = None, se
             fixed[name] = value
     return make_plan(target, inputs, fixed=fixed, derive=derive, stop_time=stop_time,
                      output_interval=output_interval, start_time=start_time, metrics=metrics,
-                     metric_functions=metric_functions)
+                     metric_functions=metric_functions, ensemble=ensemble)
 
 
 def run_plan(plan: Plan, *, output: str | Path | None = None, workers: int | None = None,
@@ -123,7 +123,8 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
           rel_tol: float | None = None, abs_tol: float | None = None, max_step: float | None = None,
           metrics=None, metric_functions=(), workers: int | None = None, scheduler: str | None = None,
           client=None, batch_size: int | None = None, output: str | Path | None = None,
-          plot: str | Path | None = None, plot_metric: str | None = None, progress: bool = False) -> pd.DataFrame:
+          plot: str | Path | None = None, plot_metric: str | None = None, progress: bool = False,
+          ensemble: bool = True) -> pd.DataFrame:
     """Run a parameter sweep or Monte Carlo study of a scene, an FMU or a target; returns the table.
 
     source: scene (.toml, built first), FMU (.fmu), system of FMUs (.ssp: fmu_build.sweep.system_target)
@@ -139,6 +140,9 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     workers (0: in-process loop; default: a LocalCluster with one process per core), scheduler
     (address of a running Dask scheduler) or client (a distributed.Client); batch_size points
     per task (default: fmu_build.sweep.execute.auto_batch_size).
+    ensemble: when the unit is an FMU with the Taylor kernel and the sweep's solver is taylor,
+    each batch runs through the ensemble path (fmu_build.sweep.ensemble_path: several points
+    at once, results equal to the plain loop to rounding); False: always one FMU run per point.
     output: .parquet or .csv, kept current while the sweep runs; plot: a PNG of the table.
     Returns a DataFrame with one row per point: point, inputs, metrics, status, reason, wall_time.
     Raises SweepSpecError (a ValueError) for any bad name, value or spec, before anything runs.
@@ -148,7 +152,8 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
         plan = plan_sweep(target, grid=grid, random=random, samples=samples, seed=seed, points=points,
                           fixed=fixed, derive=derive, stop_time=stop_time, output_interval=output_interval,
                           start_time=start_time, solver=solver, rel_tol=rel_tol, abs_tol=abs_tol,
-                          max_step=max_step, metrics=metrics, metric_functions=metric_functions)
+                          max_step=max_step, metrics=metrics, metric_functions=metric_functions,
+                          ensemble=ensemble)
         table = run_plan(plan, output=output, workers=workers, scheduler=scheduler, client=client,
                          batch_size=batch_size, progress=progress)
     if plot:

@@ -26,6 +26,7 @@ class Settings:
     output_interval: float
     start_time: float = 0.0
     fixed: dict = field(default_factory=dict)  # FMU name -> value, set before each point's own values
+    ensemble: bool = True  # batches take the ensemble path where it applies (sweep/ensemble_path.py)
 
     def grid(self) -> tuple[int, float]:
         """(number of communication steps, step size)."""
@@ -60,12 +61,21 @@ def run_point(instance, values: dict, settings: Settings, metrics: MetricSet, in
     return metrics.evaluate(run, inputs)
 
 
-def run_batch(target, payload, settings: Settings, metrics: MetricSet, batch: list) -> list[dict]:
-    """Run `batch` = [(point number, FMU values, inputs as given), ...] in one instance.
+def run_batch(target, payload, settings: Settings, metrics: MetricSet, batch: list,
+              ensemble: bool = True) -> list[dict]:
+    """Run `batch` = [(point number, FMU values, inputs as given), ...] in one instance, or through
+    the ensemble path when the unit's solver is taylor (fmu_build.sweep.ensemble_path; ensemble
+    and settings.ensemble allow it).
 
     Returns one row per point: {'point', metric columns..., 'status' ('ok' | 'error'), 'reason',
     'wall_time' [s]}. A point that fails is a row with its reason; the batch goes on.
     """
+    if ensemble and settings.ensemble:
+        from fmu_build.sweep.ensemble_path import run_batch_ensemble
+        rows = run_batch_ensemble(target, payload, settings, metrics, batch,
+                                  lambda points: run_batch(target, payload, settings, metrics, points, False))
+        if rows is not None:
+            return rows
     rows = []
     try:
         instance = target.open(payload)

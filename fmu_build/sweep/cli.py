@@ -9,6 +9,8 @@ import sys
 
 
 def add_parser(sub) -> None:
+    from fmu_build.cli import finite_float
+
     s = sub.add_parser("sweep", help="parameter sweep / Monte Carlo of a scene or FMU (on Dask)",
                        description="Run many points of a scene or FMU; one row per point in a Parquet or CSV table.")
     s.add_argument("source", help="scene (.toml, built first), FMU (.fmu) or system of FMUs (.ssp)")
@@ -23,12 +25,12 @@ def add_parser(sub) -> None:
     g.add_argument("--derive", metavar="FUNC", help="module:function or file.py:function turning a point's "
                    "inputs into unit values: f(point, values) -> dict")
     e = s.add_argument_group("experiment")
-    e.add_argument("--stop-time", type=float, help="s (default: the unit's DefaultExperiment)")
-    e.add_argument("--output-interval", type=float, help="communication step, s (default: the unit's step size)")
-    e.add_argument("--solver", help="euler, rk4, dopri5, dop853, rosenbrock")
-    e.add_argument("--rel-tol", type=float)
-    e.add_argument("--abs-tol", type=float)
-    e.add_argument("--max-step", type=float)
+    e.add_argument("--stop-time", type=finite_float, help="s (default: the unit's DefaultExperiment)")
+    e.add_argument("--output-interval", type=finite_float, help="communication step, s (default: the unit's step size)")
+    e.add_argument("--solver", help="euler, rk4, dopri5, dop853, rosenbrock, taylor (FMUs with the Taylor kernel)")
+    e.add_argument("--rel-tol", type=finite_float)
+    e.add_argument("--abs-tol", type=finite_float)
+    e.add_argument("--max-step", type=finite_float)
     m = s.add_argument_group("metrics and output")
     m.add_argument("--metrics", help="comma-separated: survived, fall_time, end_time, event, min_beta, max_beta, "
                    "max_lean, final_position, energy_drift, final:NAME, max:NAME, min:NAME, mean:NAME")
@@ -42,6 +44,8 @@ def add_parser(sub) -> None:
     x.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786")
     x.add_argument("--batch-size", type=int, help="points per task (default: about 4 tasks per worker)")
     x.add_argument("--no-progress", action="store_true", help="no progress bar")
+    x.add_argument("--no-ensemble", action="store_true",
+                   help="with solver taylor, run every point through the FMU instead of the ensemble path")
     s.set_defaults(func=cmd_sweep)
 
 
@@ -60,7 +64,7 @@ def cmd_sweep(args) -> int:
                               fixed=parse_assignments(args.set), derive=args.derive, stop_time=args.stop_time,
                               output_interval=args.output_interval, solver=args.solver, rel_tol=args.rel_tol,
                               abs_tol=args.abs_tol, max_step=args.max_step, metrics=args.metrics,
-                              metric_functions=args.metric_function or ())
+                              metric_functions=args.metric_function or (), ensemble=not args.no_ensemble)
             writer = TableWriter(output, plan.inputs)
             where = args.scheduler or ("in-process loop" if args.workers == 0 else
                                        f"LocalCluster of {args.workers or 'all cores'} worker(s)")

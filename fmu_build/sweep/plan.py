@@ -103,8 +103,10 @@ class Plan:
 
 def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, derive=None,
               stop_time: float | None = None, output_interval: float | None = None, start_time: float = 0.0,
-              metrics=None, metric_functions=()) -> Plan:
-    """Check every name and value against the unit and convert the points to unit values."""
+              metrics=None, metric_functions=(), ensemble: bool = True) -> Plan:
+    """Check every name and value against the unit and convert the points to unit values.
+
+    ensemble: let batches take the ensemble path where it applies (the unit's solver is taylor)."""
     variables = target.variables()
     res = Resolver(variables)
     derive_fn = UserFunction.parse(derive, "--derive") if derive is not None else None
@@ -143,6 +145,6 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, der
     if not interval > 0:
         raise SweepSpecError(f"--output-interval must be > 0, got {interval:g}")
     settings = Settings(stop_time=float(stop), output_interval=float(min(interval, stop - start_time)),
-                        start_time=float(start_time), fixed=fixed_values)
+                        start_time=float(start_time), fixed=fixed_values, ensemble=ensemble)
     metric_set = MetricSet.parse(metrics, metric_functions, outputs=list(target.outputs))
     return Plan(target, settings, metric_set, inputs, values)

@@ -76,6 +76,7 @@ class SystemInstance:
             raise
         self.output_names = list(target.outputs)
         self._links = [(self.units[a], target.components[a].variables()[av].vr,
+                        target.components[a].variables()[av].type,
                         self.units[b], target.components[b].variables()[bv].vr)
                        for a, av, b, bv in target.connections]
         self._slices, i = [], 0
@@ -84,8 +85,8 @@ class SystemInstance:
             i += len(unit.output_names)
 
     def _exchange(self) -> None:
-        for src, svr, dst, dvr in self._links:
-            src.copy_real(svr, dst, dvr)
+        for src, svr, kind, dst, dvr in self._links:
+            src.copy(svr, kind, dst, dvr)
 
     def start(self, values: dict, start_time: float) -> None:
         split = {name: dict(self.target.starts[name]) for name in self.units}

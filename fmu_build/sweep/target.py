@@ -32,22 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
+from cosim.fmi_log import forget_messages, logging_callbacks
+
 _UNPACKED: dict[str, str] = {}  # FMU digest -> extraction directory, per worker process
 _LOCK = threading.Lock()  # fmpy's FMU2Slave() changes the working directory while loading
-
-
-# fmpy's logger proxy (it formats the FMU's variadic message) keeps ONE Python logger per process:
-# every instance registers the same dispatcher and tells itself apart by its componentEnvironment.
-_MESSAGES: dict[int, list] = {}
-_LOGGER = None
-_NEXT_ID = 0
-
-
-def _dispatch_log(env, instance, status, category, message):
-    if status >= 3:  # fmi2Error, fmi2Fatal: always logged by the FMU (docs/fmi.md)
-        messages = _MESSAGES.get(env or 0)
-        if messages is not None:
-            messages.append((message or b"").decode(errors="replace"))
 
 
 class PointFailure(Exception):
@@ -115,6 +103,8 @@ class FmuTarget:
         self.outputs = [v.name for v in self._variables.values() if v.causality == "output" and v.type == "Real"]
         self.flag_names = [v.name for v in self._variables.values()
                            if v.causality == "output" and v.type == "Boolean"]
+        # a gyrowheel FMU built with the Taylor kernel: batches may take the ensemble path
+        self.taylor_kernel = _has_taylor_kernel(self._data)
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -129,6 +119,15 @@ class FmuTarget:
 
     def open(self, payload: bytes | None) -> "FmuInstance":
         return FmuInstance(self, _unpack(self, payload))
+
+
+def _has_taylor_kernel(data: bytes) -> bool:
+    import io
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as zf:
+            return b"GW_TL_NVAR" in zf.read("sources/gw_taylor_model.h")
+    except (KeyError, zipfile.BadZipFile):
+        return False
 
 
 def _unpack(target: FmuTarget, payload: bytes | None) -> str:
@@ -149,26 +148,11 @@ class FmuInstance:
     """One FMU2Slave, reused: fmi2Reset, set, initialise, fmi2DoStep ... for every point."""
 
     def __init__(self, target: FmuTarget, unzipdir: str):
-        from fmpy import calloc, free
-        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-        from fmpy.logging import addLoggerProxy
+        from fmpy.fmi2 import FMU2Slave
 
-        global _LOGGER, _NEXT_ID
         self.target = target
         self.messages: list[str] = []
-        with _LOCK:
-            if _LOGGER is None:
-                _LOGGER = fmi2CallbackLoggerTYPE(_dispatch_log)
-            _NEXT_ID += 1
-            self._id = _NEXT_ID
-            _MESSAGES[self._id] = self.messages
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = _LOGGER
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        self._callbacks.componentEnvironment = self._id
-        addLoggerProxy(byref(self._callbacks))
+        self._callbacks, self._id = logging_callbacks(self.messages)
         with _LOCK:
             self.slave = FMU2Slave(guid=target.guid, unzipDirectory=unzipdir,
                                    modelIdentifier=target.identifier, instanceName="sweep")
@@ -227,6 +211,18 @@ class FmuInstance:
         self._check(self._get_real(self._c, byref(ref), 1, byref(value)), "fmi2GetReal")
         to._check(to._f["fmi2SetReal"](to._c, byref(c_uint(to_vr)), 1, byref(value)), "fmi2SetReal")
 
+    def copy(self, vr: int, fmi_type: str, to: "FmuInstance", to_vr: int) -> None:
+        """One connection of any FMI 2.0 type but String (both ends of one type: SystemDescription.check;
+        an Enumeration travels as an Integer)."""
+        if fmi_type == "Real":
+            return self.copy_real(vr, to, to_vr)
+        if fmi_type == "String":
+            raise PointFailure("String connections are not supported by the sweep's master")
+        kind = "Boolean" if fmi_type == "Boolean" else "Integer"
+        value = c_int(0)
+        self._check(self._f[f"fmi2Get{kind}"](self._c, byref(c_uint(vr)), 1, byref(value)), f"fmi2Get{kind}")
+        to._check(to._f[f"fmi2Set{kind}"](to._c, byref(c_uint(to_vr)), 1, byref(value)), f"fmi2Set{kind}")
+
     def _reinstantiate(self) -> None:
         """After fmi2Fatal (or a refused fmi2Reset) the instance is gone: make a new one."""
         try:
@@ -267,4 +263,4 @@ class FmuInstance:
             self.slave.freeInstance()
         except Exception:
             pass
-        _MESSAGES.pop(self._id, None)
+        forget_messages(self._id)

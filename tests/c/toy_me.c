@@ -192,4 +192,5 @@ static const gw_model GW_MODEL = {
     0.0, /* default_max_internal_steps: the runtime's default */
     {NULL, NULL}, /* ode_pre: none */
     0,
+    {NULL, NULL, 0, 0, "a toy model without a Taylor kernel"}, /* taylor */
 };

@@ -1,0 +1,270 @@
+/*
+ * gw_ensemble.c -- the ensemble path: N trajectories of one model (each its own parameters and
+ * start values) integrated by solver taylor, GW_ENSEMBLE_LANES of them advanced together.
+ *
+ * Each lane is a full gw_instance (the same checks, initialisation, events, outputs and error
+ * messages as one FMU run); only the Taylor coefficients are computed for all lanes at once by
+ * the model's kernel instantiated with GW_ENSEMBLE_LANES lanes (gw_tlb_jet: structure of
+ * arrays, the lane loops of gw_taylor_ops.h vectorise; on x86-64 with GCC or clang the kernel
+ * is also compiled for x86-64-v3 (AVX2, FMA) and chosen at load time, target_clones, with a
+ * portable default).  Each lane then takes its own step (gw_taylor_step_once: its own step
+ * size, dense output, event location, compensated update): a lane whose trajectory reaches
+ * t_end or stops at a terminating event (a fall) takes the next trajectory of the job at once,
+ * while the others go on.  The order p is common (from rel_tol).
+ *
+ * Not part of an FMU: included by the ensemble library's unity file (fmu_build/ensemble.py),
+ * after gw_core.c and the model (gw_taylor_model.h).  All memory through the callbacks.
+ */
+#ifndef GW_UNITY_BUILD
+typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
+#else
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "gw_ensemble.h"
+#include "gw_solver.h"
+
+#ifndef GW_ENSEMBLE_LANES
+#define GW_ENSEMBLE_LANES 8
+#endif
+
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && !defined(GW_NO_CLONES) &&   \
+    ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && __GNUC__ >= 8))
+/* used below, so no GW_MAYBE_UNUSED (clang refuses it beside target_clones) */
+#define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define GW_TL_STATIC static GW_MAYBE_UNUSED
+#endif
+#define GW_TL_W GW_ENSEMBLE_LANES
+#define GW_TL(name) gw_tlb_##name
+#include "gw_taylor_model.h" /* with its recurrences, gw_taylor_ops.h */
+#undef GW_TL
+#undef GW_TL_W
+#undef GW_TL_STATIC
+
+/* one lane: its instance, the trajectory it holds (-1: none), the bookkeeping of its run */
+typedef struct {
+    gw_instance *I;
+    long traj;
+    gw_taylor_run run;
+    int gi;          /* next communication point (job->t_grid), if the job has a grid */
+    unsigned long steps; /* Taylor steps of this trajectory */
+} gw_lane;
+
+enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
+
+typedef struct {
+    const gw_model *m;
+    const gw_ensemble_job *job;
+    gw_lane lane[GW_ENS_LANES];
+    double *w, *c, *x, *u, *p, t[GW_ENS_LANES]; /* batch kernel memory, lanes innermost */
+    long next;                                  /* next trajectory to start */
+} gw_ensemble;
+
+static void gw_ens_finish(gw_ensemble *E, gw_lane *L, gw_status status) {
+    const gw_ensemble_job *job = E->job;
+    const gw_model *m = E->m;
+    const long j = L->traj;
+    gw_instance *I = L->I;
+    int i;
+    if (status != GW_ERROR && gw_update_outputs(I, "ensemble") > GW_DISCARD) status = GW_ERROR;
+    job->status[j] = (int)status;
+    if (job->t_final) job->t_final[j] = I->t;
+    if (job->x_final)
+        for (i = 0; i < m->nx; i++) job->x_final[(size_t)j * m->nx + i] = I->x[i];
+    if (job->y_final)
+        for (i = 0; i < m->ny; i++)
+            job->y_final[(size_t)j * m->ny + i] = status == GW_ERROR ? NAN : I->y[i];
+    if (job->steps) job->steps[j] = L->steps;
+    if (job->flags)
+        for (i = 0; i < m->ne; i++) job->flags[(size_t)j * m->ne + i] = I->flags[i] != 0;
+    L->traj = -1;
+}
+
+/* the lane's target of this call: the next communication point, or t_end */
+static double gw_ens_target(const gw_ensemble *E, const gw_lane *L) {
+    return E->job->n_grid > 0 ? E->job->t_grid[L->gi] : E->job->t_end;
+}
+
+/* outputs of lane L as row `row` of its trajectory in y_grid; 0, or -1 (failure logged) */
+static int gw_ens_record(gw_ensemble *E, gw_lane *L, long row) {
+    const gw_ensemble_job *job = E->job;
+    const int ny = E->m->ny;
+    int i;
+    if (!job->y_grid) return 0;
+    if (gw_update_outputs(L->I, "ensemble") > GW_DISCARD) return -1;
+    for (i = 0; i < ny; i++)
+        job->y_grid[((size_t)L->traj * (size_t)(job->n_grid + 1) + (size_t)row) * (size_t)ny + i] =
+            L->I->y[i];
+    job->n_rows[L->traj] = row + 1;
+    return 0;
+}
+
+/* A new call as gw_advance starts one: the budget, the event count, the guard's window. */
+static void gw_ens_new_call(gw_lane *L) {
+    L->I->n_call_steps = 0;
+    L->I->t_call = L->I->t;
+    L->run.events = 0;
+    L->run.n_fast = 0;
+    L->run.h_prev = 0.0;
+    gw_point_changed(L->I);
+}
+
+/* Start trajectories in lane L until one initialises (or none is left). */
+static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
+    const gw_ensemble_job *job = E->job;
+    const gw_model *m = E->m;
+    while (L->traj < 0 && E->next < job->n) {
+        const long j = E->next++;
+        gw_instance *I = L->I;
+        char fn[48];
+        int i;
+        snprintf(fn, sizeof fn, "ensemble trajectory %ld", j);
+        gw_instance_reset(I);
+        for (i = 0; i < m->np; i++) I->p[i] = job->p ? job->p[(size_t)j * m->np + i] : m->p_start[i];
+        for (i = 0; i < m->ns; i++) I->s[i] = job->s ? job->s[(size_t)j * m->ns + i] : m->s_start[i];
+        I->solver = GW_SOLVER_TAYLOR;
+        I->rel_tol = job->rel_tol;
+        I->abs_tol = job->abs_tol;
+        I->max_step = job->max_step;
+        L->traj = j;
+        L->gi = 0;
+        L->steps = 0;
+        if (job->n_rows) job->n_rows[j] = 0;
+        if (gw_setup_experiment(I, fn, 0, 0.0, job->t_start, 1, job->t_end) != GW_OK ||
+            gw_initialize(I, fn) > GW_WARNING || gw_taylor_begin(I, &L->run)) {
+            gw_ens_finish(E, L, GW_ERROR);
+            continue;
+        }
+        /* one call per communication step (without a grid: the whole trajectory is one call,
+         * the budget max_internal_steps covers t_start .. t_end) */
+        gw_ens_new_call(L);
+        if (gw_ens_record(E, L, 0)) {
+            gw_ens_finish(E, L, GW_ERROR);
+            continue;
+        }
+        if (m->taylor.n_cst > 0) { /* this lane's constants (the kernel computes all lanes) */
+            const int l = (int)(L - E->lane);
+            for (i = 0; i < m->np; i++) E->p[(size_t)i * GW_ENS_LANES + l] = I->p[i];
+            for (i = 0; i < m->nu; i++) E->u[(size_t)i * GW_ENS_LANES + l] = I->u[i];
+        }
+    }
+}
+
+/* One batch step: the coefficients of every lane, then each active lane's own step. */
+static int gw_ens_step(gw_ensemble *E, int order) {
+    const gw_model *m = E->m;
+    const size_t S = (size_t)(order + 1) * GW_ENS_LANES;
+    int l, i, k, active = -1, n_active = 0;
+    for (l = 0; l < GW_ENS_LANES; l++)
+        if (E->lane[l].traj >= 0) active = l;
+    if (active < 0) return 0;
+    for (l = 0; l < GW_ENS_LANES; l++) { /* idle lanes repeat an active one (finite values) */
+        const gw_instance *I = E->lane[E->lane[l].traj >= 0 ? l : active].I;
+        E->t[l] = I->t;
+        for (i = 0; i < m->nx; i++) E->x[(size_t)i * GW_ENS_LANES + l] = I->x[i];
+        if (E->lane[l].traj < 0) {
+            for (i = 0; i < m->np; i++) E->p[(size_t)i * GW_ENS_LANES + l] = I->p[i];
+            for (i = 0; i < m->nu; i++) E->u[(size_t)i * GW_ENS_LANES + l] = I->u[i];
+        }
+    }
+    if (m->taylor.n_cst > 0) gw_tlb_cst(E->u, E->p, E->c);
+    gw_tlb_jet(order, E->t, E->x, E->c, E->w);
+    for (l = 0; l < GW_ENS_LANES; l++) {
+        gw_lane *L = &E->lane[l];
+        gw_int_result r;
+        double target;
+        if (L->traj < 0) continue;
+        n_active++;
+        for (i = 0; i < m->nx; i++) /* this lane's polynomials: its dense output */
+            for (k = 0; k <= order; k++)
+                L->I->tl_w[(size_t)i * (size_t)(order + 1) + k] = E->w[i * S + (size_t)k * GW_ENS_LANES + l];
+        target = gw_ens_target(E, L);
+        r = gw_taylor_step_once(L->I, target, &L->run);
+        L->steps = L->run.steps;
+        if (r == GW_INT_ERROR)
+            gw_ens_finish(E, L, GW_ERROR);
+        else if (r == GW_INT_TERMINATED)
+            gw_ens_finish(E, L, gw_ens_record(E, L, L->gi + 1) ? GW_ERROR : GW_DISCARD);
+        else if (!(L->I->t < target)) { /* a communication point (or t_end) reached */
+            L->I->t = target;
+            gw_point_changed(L->I);
+            if (gw_ens_record(E, L, L->gi + 1))
+                gw_ens_finish(E, L, GW_ERROR);
+            else if (!(target < E->job->t_end))
+                gw_ens_finish(E, L, GW_OK);
+            else {
+                L->gi++;
+                gw_ens_new_call(L);
+            }
+        }
+        if (L->traj < 0) gw_ens_fill(E, L);
+    }
+    return n_active;
+}
+
+static void *gw_ens_alloc(const gw_callbacks *cb, size_t n) {
+    void *p = cb->allocate(n > 0 ? n : 1, sizeof(double));
+    if (p) memset(p, 0, (n > 0 ? n : 1) * sizeof(double));
+    return p;
+}
+
+GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
+                                 const gw_ensemble_job *job) {
+    gw_ensemble E;
+    const size_t L = GW_ENS_LANES;
+    gw_status st = GW_OK;
+    int l, order;
+    long j;
+    int bad_grid = job->n_grid < 0 || (job->n_grid > 0 && (!job->t_grid || !job->n_rows ||
+                                                           job->t_grid[job->n_grid - 1] != job->t_end));
+    for (j = 0; !bad_grid && j < job->n_grid; j++)
+        bad_grid = !(job->t_grid[j] > (j > 0 ? job->t_grid[j - 1] : job->t_start));
+    if (!m->taylor.jet || job->n < 0 || !job->status || !(job->t_end > job->t_start) ||
+        !(job->rel_tol > 0.0) || !(job->abs_tol >= 0.0) || !(job->max_step > 0.0) || bad_grid) {
+        if (cb->logger)
+            cb->logger(cb->env, "ensemble", GW_ERROR, "logStatusError",
+                       !m->taylor.jet ? "ensemble: the model has no Taylor kernel"
+                                      : "ensemble: bad job (n >= 0, status, t_end > t_start, "
+                                        "rel_tol, max_step > 0, abs_tol >= 0, an increasing grid "
+                                        "ending at t_end with n_rows required)");
+        return GW_ERROR;
+    }
+    memset(&E, 0, sizeof E);
+    E.m = m;
+    E.job = job;
+    order = gw_taylor_order(job->rel_tol);
+    E.w = (double *)gw_ens_alloc(cb, (size_t)m->taylor.n_var * (size_t)(order + 1) * L);
+    E.c = (double *)gw_ens_alloc(cb, (size_t)m->taylor.n_cst * L);
+    E.x = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
+    E.u = (double *)gw_ens_alloc(cb, (size_t)m->nu * L);
+    E.p = (double *)gw_ens_alloc(cb, (size_t)m->np * L);
+    for (l = 0; l < GW_ENS_LANES; l++) {
+        char name[32];
+        snprintf(name, sizeof name, "ensemble lane %d", l);
+        E.lane[l].traj = -1;
+        E.lane[l].I = gw_instance_new(m, name, cb, 0);
+        if (!E.lane[l].I) st = GW_FATAL;
+    }
+    if (!E.w || !E.c || !E.x || !E.u || !E.p) st = GW_FATAL;
+    if (st == GW_OK) {
+        for (j = 0; j < job->n; j++) job->status[j] = (int)GW_FATAL; /* not run (yet) */
+        for (l = 0; l < GW_ENS_LANES; l++) gw_ens_fill(&E, &E.lane[l]);
+        while (gw_ens_step(&E, order) > 0) {
+        }
+    } else if (cb->logger) {
+        cb->logger(cb->env, "ensemble", GW_FATAL, "logStatusFatal", "ensemble: out of memory");
+    }
+    for (l = 0; l < GW_ENS_LANES; l++)
+        if (E.lane[l].I) gw_instance_free(E.lane[l].I);
+    cb->free(E.w);
+    cb->free(E.c);
+    cb->free(E.x);
+    cb->free(E.u);
+    cb->free(E.p);
+    return st;
+}
+
+#endif /* GW_UNITY_BUILD */

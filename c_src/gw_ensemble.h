@@ -1,0 +1,45 @@
+/*
+ * gw_ensemble.h -- the ensemble path's API (gw_ensemble.c): N trajectories of one model with
+ * solver taylor, GW_ENSEMBLE_LANES at a time, each stopping at its own terminating event.
+ * Called by the ensemble library (fmu_build/ensemble.py builds it next to an FMU, Python
+ * wrapper fmu_build.ensemble.Ensemble) and, later, by the plain C API of `gyrowheel export-c`.
+ */
+#ifndef GW_ENSEMBLE_H
+#define GW_ENSEMBLE_H
+
+#include "gw_core.h"
+
+/* One ensemble run.  Arrays are row-major, one row per trajectory; an input array NULL means
+ * the model's defaults for every trajectory; an output array NULL is not written. */
+typedef struct {
+    long n;                 /* trajectories */
+    const double *p;        /* n x np parameters (GW_MODEL order) */
+    const double *s;        /* n x ns start values */
+    double t_start, t_end;  /* common time span, t_end > t_start */
+    double rel_tol, abs_tol, max_step; /* solver settings (as the FMU's parameters) */
+    int *status;            /* n (required): GW_OK at t_end, GW_DISCARD stopped by a
+                               terminating event (at t_final), GW_ERROR (reason logged) */
+    double *t_final;        /* n: t_end, the event time, or where the error happened */
+    double *x_final;        /* n x nx: states at t_final */
+    double *y_final;        /* n x ny: outputs at t_final (NaN after an error) */
+    unsigned long *steps;   /* n: Taylor steps taken */
+    /* Optional communication grid (n_grid = 0: none).  Each trajectory then advances from
+     * point to point as through fmi2DoStep(t_k, t_(k+1) - t_k) (the budget, the event count and
+     * the step size guard start anew at each point; each step lands on it) and records its
+     * outputs there: the sweep engine's path (fmu_build/sweep/ensemble_path.py). */
+    int n_grid;             /* communication points after t_start */
+    const double *t_grid;   /* n_grid: increasing, in (t_start, t_end], the last == t_end */
+    double *y_grid;         /* n x (n_grid + 1) x ny: outputs at t_start and at each point
+                               reached; a terminating event in step k writes row k + 1 at the
+                               event time, and no rows after it */
+    long *n_rows;           /* n: rows of y_grid written */
+    int *flags;             /* n x ne (may be NULL): 1 where event i has fired by t_final */
+} gw_ensemble_job;
+
+/* Run a job.  GW_OK when every trajectory was attempted (see job->status for each);
+ * GW_ERROR for a bad job or a model without a Taylor kernel; GW_FATAL out of memory.
+ * Messages (trajectory failures: "ensemble trajectory <j>: ...") go to cb->logger. */
+GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
+                                 const gw_ensemble_job *job);
+
+#endif /* GW_ENSEMBLE_H */

@@ -1,0 +1,175 @@
+/*
+ * gw_solver_taylor.c -- GW_SOLVER_TAYLOR: the Taylor series method of adaptive order with the
+ * model's generated Taylor kernel (GW_MODEL.taylor; gw_taylor.c, fmu_build/taylor_c.py).
+ *
+ * One step from (t, x): the kernel computes the Taylor coefficients x_i^[k], k = 0..p, of the
+ * solution through t (automatic differentiation of the right-hand side's expression graph);
+ * then (A. Jorba, M. Zou, A software package for the numerical integration of ODEs by means
+ * of high-order Taylor methods, Exp. Math. 14 (2005) 99-117, sect. 3.2-3.3):
+ *   order   p = ceil(-ln(eps) / 2 + 1), eps = rel_tol (clamped to [2, GW_TAYLOR_MAX_ORDER]);
+ *           heyoka makes the same choice (Biscani & Izzo, MNRAS 504 (2021) 2614, sect. 4)
+ *   step    h = rho / e^2 * exp(-0.7 / (p - 1)),  rho = min_{j = p-1, p} N_j^(-1/j),
+ *           N_j = max_i |x_i^[j]| / sc_i,  sc_i = |x_i| + (atol / rel_tol) nominal_i,
+ *           so that the truncation error of component i is about
+ *           eps sc_i = rel_tol |x_i| + atol nominal_i, the error weight of every solver
+ *           (atol: abs_tol, or rel_tol / 100 when abs_tol = 0);
+ *   update  dx_i = sum_{k=1..p} x_i^[k] h^k (Horner), added to the state with the TwoSum
+ *           compensation every solver shares (gw_sum_update: x + xc, xc part of a saved
+ *           state, layout v3), so that rounding does not accumulate over thousands of steps;
+ *   dense   the Taylor polynomial itself: x(t + s) for s in [0, h], exact to the order of the
+ *           step, used by the event location (gw_events.c) like every dense output.
+ * No step is rejected: the step size follows from the coefficients.  As in the other adaptive
+ * solvers the step is bounded by max_step, lands exactly on t_end, counts against the budget
+ * max_internal_steps and is refused by the feasibility guard (gw_next_attempt), and below
+ * gw_h_min ("step size underflow"); a
+ * non-finite derivative, a non-finite coefficient of the orders that set h, or a non-finite
+ * state is an error with its reason.  One kernel call counts as one right-hand side
+ * evaluation in n_rhs.
+ */
+#ifndef GW_UNITY_BUILD
+typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
+#else
+
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "gw_solver.h"
+
+GW_INTERNAL int gw_taylor_order(double rel_tol) {
+    const double eps = rel_tol > DBL_EPSILON ? rel_tol : DBL_EPSILON;
+    int p = (int)ceil(-0.5 * log(eps) + 1.0);
+    if (p < 2) p = 2;
+    if (p > GW_TAYLOR_MAX_ORDER) p = GW_TAYLOR_MAX_ORDER;
+    return p;
+}
+
+GW_INTERNAL double gw_taylor_step(const gw_instance *I, const double *X, int order, int lanes,
+                                  int lane, int *bad_order) {
+    const int nx = I->m->nx;
+    const size_t S = (size_t)(order + 1) * (size_t)lanes;
+    const double floor_scale = I->atol_eff / I->rel_tol;
+    double rho = HUGE_VAL;
+    int j, i;
+    *bad_order = 0;
+    for (j = order - 1; j <= order; j++) {
+        double nj = 0.0;
+        for (i = 0; i < nx; i++) {
+            const double *xi = X + (size_t)i * S + lane;
+            const double sc = fabs(xi[0]) + floor_scale * I->nominal[i];
+            const double r = fabs(xi[(size_t)j * lanes]) / sc;
+            if (!(r <= DBL_MAX)) {
+                *bad_order = j;
+                return 0.0;
+            }
+            if (r > nj) nj = r;
+        }
+        if (nj > 0.0) {
+            const double rj = pow(nj, -1.0 / j);
+            if (rj < rho) rho = rj;
+        }
+    }
+    /* rho / e^2 * exp(-0.7 / (p - 1)) */
+    return rho * exp(-2.0 - 0.7 / (order - 1));
+}
+
+/* dx = sum_{k>=1} X_k h^k (Horner) */
+GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int lane, int nx,
+                                     double h, double *dx) {
+    const size_t S = (size_t)(order + 1) * (size_t)lanes;
+    int i, k;
+    for (i = 0; i < nx; i++) {
+        const double *xi = X + (size_t)i * S + lane;
+        double d = xi[(size_t)order * lanes];
+        for (k = order - 1; k >= 1; k--) d = d * h + xi[(size_t)k * lanes];
+        dx[i] = d * h;
+    }
+}
+
+GW_INTERNAL void gw_taylor_dense_eval(const gw_instance *I, double t, double *x_out) {
+    const int nx = I->m->nx, p = I->tl_order;
+    const double s = t - I->dense_t0;
+    int i, k;
+    for (i = 0; i < nx; i++) {
+        const double *xi = I->tl_w + (size_t)i * (size_t)(p + 1);
+        double v = xi[p];
+        for (k = p - 1; k >= 0; k--) v = v * s + xi[k];
+        x_out[i] = v;
+    }
+}
+
+GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run) {
+    const gw_taylor_kernel *tk = &I->m->taylor;
+    if (!tk->jet || !I->tl_w) {
+        GW_LOG_ERR(I, "solver taylor is not available in this model: %s",
+                   tk->why_absent ? tk->why_absent : "it was built without a Taylor kernel");
+        return -1;
+    }
+    memset(run, 0, sizeof *run);
+    I->tl_order = gw_taylor_order(I->rel_tol);
+    return 0;
+}
+
+GW_INTERNAL gw_int_result gw_taylor_step_once(gw_instance *I, double t_end, gw_taylor_run *run) {
+    const int nx = I->m->nx, p = I->tl_order;
+    double h, t1;
+    int last, bad, i;
+    I->n_rhs++;
+    for (i = 0; i < nx; i++) {
+        const double f = I->tl_w[(size_t)i * (size_t)(p + 1) + 1];
+        if (!isfinite(f)) {
+            GW_LOG_ERR(I, "derivative of state %s is not finite (%g) at t=%.17g", gw_x_name(I, i),
+                       f, I->t);
+            return GW_INT_ERROR;
+        }
+    }
+    h = gw_taylor_step(I, I->tl_w, p, 1, 0, &bad);
+    if (bad) {
+        GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g (the solution's "
+                   "series diverges: a singularity of the right-hand side?)", bad, I->t);
+        return GW_INT_ERROR;
+    }
+    I->h_adapt = h < I->max_step ? h : I->max_step;
+    if (gw_next_attempt(I, t_end, 0, &run->h_prev, &run->n_fast, &h, &t1, &last))
+        return GW_INT_ERROR;
+    gw_taylor_increment(I->tl_w, p, 1, 0, nx, h, I->dx);
+    gw_sum_update(I); /* xnew, xcnew; an event restarts the compensation (gw_accept_step) */
+    run->steps++;
+    return gw_accept_step(I, t1, &run->events);
+}
+
+GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end) {
+    const gw_taylor_kernel *tk = &I->m->taylor;
+    gw_taylor_run run;
+    gw_int_result result = GW_INT_OK;
+    const double t_begin = I->t;
+    if (gw_taylor_begin(I, &run)) return GW_INT_ERROR;
+    if (tk->cst) tk->cst(I->u, I->p, I->tl_c);
+    while (I->t < t_end) {
+        double tt = I->t;
+        tk->jet(I->tl_order, &tt, I->x, I->tl_c, I->tl_w);
+        result = gw_taylor_step_once(I, t_end, &run);
+        if (result != GW_INT_OK) break;
+    }
+    if (result == GW_INT_OK) I->t = t_end;
+    if (gw_log_enabled(I, GW_LOG_SOLVER))
+        gw_log(I, GW_OK, GW_LOG_SOLVER, "taylor t=%.17g -> t=%.17g order=%d steps=%lu", t_begin,
+               I->t, I->tl_order, run.steps);
+    return result;
+}
+
+GW_INTERNAL int gw_taylor_alloc(gw_instance *I) {
+    const gw_taylor_kernel *tk = &I->m->taylor;
+    if (!tk->jet) return 0;
+    I->tl_w = (double *)gw_alloc(I, (size_t)tk->n_var * (GW_TAYLOR_MAX_ORDER + 1), sizeof(double));
+    I->tl_c = (double *)gw_alloc(I, (size_t)(tk->n_cst > 0 ? tk->n_cst : 1), sizeof(double));
+    return (I->tl_w && I->tl_c) ? 0 : -1;
+}
+
+GW_INTERNAL void gw_taylor_free(gw_instance *I) {
+    gw_free(I, I->tl_w);
+    gw_free(I, I->tl_c);
+    I->tl_w = I->tl_c = NULL;
+}
+
+#endif /* GW_UNITY_BUILD */

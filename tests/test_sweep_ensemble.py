@@ -1,0 +1,79 @@
+"""The sweep engine's ensemble path (fmu_build/sweep/ensemble_path.py): with solver taylor, a
+batch of points runs through the ensemble library (c_src/gw_ensemble.c) and gives the table the
+plain loop (one FMU run per point) gives, falls, failures and batch splits included."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from conftest import SCENES
+from fmu_build import build_fmu, load_scene
+from fmu_build.ensemble import Ensemble
+from fmu_build.sweep import SweepSpecError, sweep
+
+METRICS = ["survived", "fall_time", "end_time", "event", "min_beta", "max:beta", "final:x", "final:alpha",
+           "energy_drift"]
+
+
+@pytest.fixture(scope="module")
+def taylor_fmu(tmp_path_factory):
+    work = tmp_path_factory.mktemp("sweep_ens")
+    return build_fmu(load_scene(SCENES / "paper_earth.toml"), work / "paper_earth.fmu", build_dir=work / "b",
+                     taylor=True).fmu
+
+
+@pytest.fixture
+def ensemble_calls(monkeypatch):
+    calls = []
+    run = Ensemble.run
+
+    def spy(self, *args, **kwargs):
+        calls.append(kwargs.get("grid"))
+        return run(self, *args, **kwargs)
+    monkeypatch.setattr(Ensemble, "run", spy)
+    return calls
+
+
+POINTS = ([dict(gamma_dot=g, beta=math.radians(b), M=2.0) for g in (0.0, 0.7, 3.0, 6.0, 9.0) for b in (70.0, 85.0)]
+          + [dict(gamma_dot=6.0, beta=math.radians(80.0), M=-1.0)])  # refused: M must be > 0
+
+
+def _both(fmu, **kw):
+    return (sweep(fmu, points=POINTS, metrics=METRICS, workers=0, **kw),
+            sweep(fmu, points=POINTS, metrics=METRICS, workers=0, ensemble=False, **kw))
+
+
+def test_ensemble_table_equals_plain_loop(taylor_fmu, ensemble_calls):
+    ens, plain = _both(taylor_fmu, stop_time=4.0, output_interval=0.05, solver="taylor", rel_tol=1e-10,
+                       abs_tol=1e-12, batch_size=4)
+    assert len(ensemble_calls) == 3  # 11 points in batches of 4: every batch took the ensemble path
+    assert all(len(g) == 80 and g[-1] == 4.0 for g in ensemble_calls)
+    assert list(ens["status"]) == list(plain["status"]) == ["ok"] * 10 + ["error"], list(ens["reason"])
+    assert ens["reason"].iloc[-1] == plain["reason"].iloc[-1] and "M" in ens["reason"].iloc[-1]
+    assert (~ens["survived"].iloc[:10]).sum() >= 2  # some points fall: the event path is covered
+    for col in ("survived", "event"):
+        assert list(ens[col].iloc[:10]) == list(plain[col].iloc[:10]), col
+    for col in ("fall_time", "end_time", "min_beta", "max_beta", "final_x", "final_alpha"):
+        np.testing.assert_allclose(ens[col].iloc[:10], plain[col].iloc[:10], rtol=1e-9, atol=1e-9,
+                                   err_msg=col)  # the ensemble library uses FMA contraction
+    np.testing.assert_allclose(ens["energy_drift"].iloc[:10], plain["energy_drift"].iloc[:10], atol=1e-12)
+
+
+def test_plain_path_when_the_solver_is_not_taylor(taylor_fmu, ensemble_calls):
+    """dop853 (the sweep's solver), or a per-point solver setting: no ensemble."""
+    table = sweep(taylor_fmu, points=POINTS[:2], metrics=["survived"], stop_time=0.5, output_interval=0.1,
+                  solver="dop853", workers=0)
+    assert (table["status"] == "ok").all() and ensemble_calls == []
+    table = sweep(taylor_fmu, points=[dict(p, rel_tol=1e-8) for p in POINTS[:2]], metrics=["survived"],
+                  stop_time=0.5, output_interval=0.1, solver="taylor", workers=0)
+    assert (table["status"] == "ok").all() and ensemble_calls == []
+
+
+def test_default_fmu_refuses_solver_taylor_before_running(earth_fmu, ensemble_calls):
+    """An FMU without the kernel lists no solver taylor: the sweep is refused before it runs."""
+    with pytest.raises(SweepSpecError, match="'taylor' for 'solver'.*valid: euler, rk4, dopri5, rosenbrock, dop853 "):
+        sweep(earth_fmu, points=POINTS[:2], metrics=["survived"], stop_time=0.5, output_interval=0.1,
+              solver="taylor", workers=0)
+    assert ensemble_calls == []

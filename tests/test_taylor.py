@@ -1,0 +1,310 @@
+"""Solver taylor (c_src/gw_solver_taylor.c, fmu_build/taylor_graph.py, taylor_c.py) and the
+ensemble path (c_src/gw_ensemble.c, fmu_build/ensemble.py).
+
+- the recurrence of every elementary operation against CasADi's own derivatives (Taylor
+  coefficient = derivative / k!) at random points;
+- convergence on the paper scenario against scipy's DOP853 and the energy drift;
+- the fall located like DOP853's (1e-9 s);
+- every example scene's operations are supported; each builds and runs briefly with taylor;
+- an unsupported operation is refused loudly;
+- an ensemble equals N single-trajectory runs, falls included.
+"""
+from __future__ import annotations
+
+import ctypes
+import math
+import subprocess
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from conftest import SCENES, STATES, CasadiWheel
+from fmu_build import build_fmu, load_scene, parse_scene
+from fmu_build.builder import model_spec
+from fmu_build.codegen import optimised
+from fmu_build.compiler import compiler
+from fmu_build.ensemble import STATUS_OK, STATUS_TERMINATED, Ensemble, EnsembleError
+from fmu_build.taylor_c import taylor_source
+from fmu_build.taylor_graph import TaylorUnsupportedError, decompose
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))  # fmi_slave.FmuRunner: one fmi2DoStep per run
+TAYLOR = 6
+
+
+# ---- recurrences ---------------------------------------------------------------------------
+
+def _op_system():
+    """x' = (drivers y, z; then one state per operation of y and z)."""
+    y, z, t = ca.SX.sym("y"), ca.SX.sym("z"), ca.SX.sym("t")
+    p = ca.SX.sym("p", 1)
+    ops = {
+        "mul": y * z, "div": y / z, "div_const_num": 2.0 / z, "sq": y ** 2, "sqrt": ca.sqrt(z),
+        "sin": ca.sin(y), "cos": ca.cos(z), "tan": ca.tan(y), "exp": ca.exp(y), "log": ca.log(z),
+        "pow_const": y ** 2.5, "pow_var": z ** y, "tanh": ca.tanh(y), "atan2": ca.atan2(y, z),
+        "atan": ca.atan(y), "asin": ca.asin(y), "acos": ca.acos(z), "fabs": ca.fabs(y - 0.5),
+        "fmin": ca.fmin(y, z), "fmax": ca.fmax(y, p[0] * z), "if_else": ca.if_else(y > z, y * y, z),
+        "sinh": ca.sinh(y), "cosh": ca.cosh(z), "neg_twice": -(2 * y) + z - 1.0, "inv": 1.0 / y,
+        "time": ca.sin(t) * y, "sub_const": 1.0 - y * p[0],
+    }
+    w = ca.SX.sym("w", len(ops))
+    x = ca.vertcat(y, z, w)
+    xdot = ca.vertcat(0.3 + 0.2 * z * p[0], -0.25 * y + 0.1, *ops.values())
+    f = ca.Function("gw_ode", [t, x, ca.SX.sym("u", 0), p], [xdot], ["t", "x", "u", "p"], ["xdot"])
+    return f, list(ops)
+
+
+def _jet_library(f: ca.Function, tmp: Path) -> ctypes.CDLL:
+    (tmp / "gw_taylor_model.h").write_text(taylor_source(decompose(optimised(f)), "ops"))
+    (tmp / "jet.c").write_text(
+        '#include <math.h>\n#include <stddef.h>\n#define GW_MAYBE_UNUSED __attribute__((unused))\n#define GW_TL_W 1\n'
+        '#define GW_TL(name) gw_tl1_##name\n#include "gw_taylor_model.h"\n'
+        "void jet(int order, const double *t, const double *x, const double *p, double *w);\n"
+        "void jet(int order, const double *t, const double *x, const double *p, double *w) {\n"
+        "    double c[GW_TL_NCST + 1];\n    gw_tl1_cst(NULL, p, c);\n    gw_tl1_jet(order, t, x, c, w);\n}\n")
+    lib = tmp / "jet.so"
+    subprocess.run([compiler(), "-std=c99", "-O1", "-shared", "-fPIC", "-Wall", "-Wextra", "-Werror",
+                    f"-I{ROOT / 'c_src'}", f"-I{tmp}", str(tmp / "jet.c"), "-o", str(lib), "-lm"],
+                   check=True, capture_output=True)
+    return ctypes.CDLL(str(lib))
+
+
+def _lie_derivatives(f: ca.Function, order: int) -> ca.Function:
+    """x^(k)(t), k = 0..order, of the solution through (t, x): d/dt g = dg/dx f + dg/dt."""
+    t, x, p = ca.SX.sym("t"), ca.SX.sym("x", f.nnz_in(1)), ca.SX.sym("p", 1)
+    rhs = f(t, x, ca.SX(0, 1), p)
+    ders, g = [x], x
+    for _ in range(order):
+        g = ca.jtimes(g, x, rhs) + ca.jacobian(g, t)
+        ders.append(g)
+    return ca.Function("lie", [t, x, p], [ca.horzcat(*ders)])
+
+
+def test_recurrences_match_casadi_derivatives(tmp_path):
+    """Coefficient k of every operation's series equals CasADi's k-th derivative / k!."""
+    f, names = _op_system()
+    order = 7
+    lib = _jet_library(f, tmp_path)
+    lie = _lie_derivatives(f, order)
+    dec = decompose(optimised(f))
+    nx = f.nnz_in(1)
+    rng = np.random.default_rng(11)
+    D = ctypes.POINTER(ctypes.c_double)
+    for _ in range(5):
+        y, z = rng.uniform(0.2, 0.8, 2)
+        x = np.concatenate([[y, z], rng.uniform(-1, 1, nx - 2)])
+        t, p = np.array([rng.uniform(0, 2)]), np.array([rng.uniform(0.5, 1.5)])
+        w = np.zeros(dec.n_var * (order + 1))
+        lib.jet(order, t.ctypes.data_as(D), x.ctypes.data_as(D), p.ctypes.data_as(D), w.ctypes.data_as(D))
+        jet = w[: nx * (order + 1)].reshape(nx, order + 1)
+        ref = np.array(lie(t[0], x, p)) / np.array([math.factorial(k) for k in range(order + 1)])
+        for i in range(nx):
+            name = "driver" if i < 2 else names[i - 2]
+            np.testing.assert_allclose(jet[i], ref[i], rtol=1e-9, atol=1e-11, err_msg=name)
+
+
+def test_unsupported_operation_is_refused_by_name(tmp_path):
+    x = ca.SX.sym("x", 1)
+    f = ca.Function("gw_ode", [ca.SX.sym("t"), x, ca.SX.sym("u", 0), ca.SX.sym("p", 0)], [ca.erf(x)])
+    with pytest.raises(TaylorUnsupportedError, match="'erf'"):
+        decompose(f)
+
+
+# ---- the wheel -------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def paper(tmp_path_factory):
+    from fmi_slave import FmuRunner
+    work = tmp_path_factory.mktemp("taylor")
+    scene = load_scene(SCENES / "paper_earth.toml")
+    built = build_fmu(scene, work / "paper_earth.fmu", build_dir=work / "build", taylor=True)
+    return built, FmuRunner(built.fmu)
+
+
+def _run(runner, stop, names, **values):
+    values.setdefault("max_step", stop)
+    return np.array(runner.one_step(stop, names, **values))
+
+
+def test_paper_convergence_and_energy(paper):
+    """Error at t = 20 s against scipy DOP853 (rtol 1e-13) follows the tolerance; energy kept."""
+    _, runner = paper
+    wheel = CasadiWheel()
+    sol = wheel.integrate(wheel.x0(), 20.0, rtol=1e-13, atol=1e-15)
+    ref = np.array([wheel.out(sol.y[:, -1])[n] for n in STATES])
+    errors = {}
+    for tol in (1e-4, 1e-7, 1e-10, 1e-12):
+        v = _run(runner, 20.0, STATES + ["energy"], solver=TAYLOR, rel_tol=tol, abs_tol=tol * 1e-2)
+        errors[tol] = np.max(np.abs(v[:8] - ref))
+        assert errors[tol] < 30 * tol, (tol, errors[tol])
+    tight = _run(runner, 20.0, STATES + ["energy"], solver=TAYLOR, rel_tol=1e-14, abs_tol=1e-16)
+    assert np.max(np.abs(tight[:8] - ref)) < 5e-11  # scipy's own accuracy bounds this check
+    E0 = wheel.out(wheel.x0())["energy"]
+    assert abs(tight[8] - E0) / abs(E0) < 1e-13  # conservative rolling: energy is constant
+
+
+def test_fall_located_like_dop853(paper):
+    _, runner = paper
+    names = ["fallen"]
+    times = {}
+    for solver in (5, TAYLOR):
+        runner.start(solver=solver, rel_tol=1e-12, abs_tol=1e-14, max_step=20.0, gamma_dot=1.0, beta_min=0.1)
+        from fmpy.fmi2 import fmi2LastSuccessfulTime
+        try:
+            runner.slave.doStep(0.0, 20.0)
+        except Exception:
+            pass
+        times[solver] = runner.slave.getRealStatus(fmi2LastSuccessfulTime)
+        assert runner.slave.getBoolean([runner.vr[names[0]]])[0]
+    assert abs(times[5] - times[TAYLOR]) < 1e-9, times
+
+
+def _kernel_in(fmu: Path) -> dict[str, bool]:
+    """Whether an FMU carries the Taylor kernel: its source, its slot, its compiled code."""
+    with zipfile.ZipFile(fmu) as zf:
+        source = zf.read("sources/gw_taylor_model.h").decode()
+        desc = zf.read("sources/model_desc.c").decode()
+        binary = [n for n in zf.namelist() if n.startswith("binaries/") and n.endswith(".so")][0]
+        with tempfile.TemporaryDirectory() as tmp:
+            so = Path(zf.extract(binary, tmp))
+            symbols = subprocess.run(["nm", str(so)], capture_output=True, text=True).stdout
+        xml = zf.read("modelDescription.xml").decode()
+    return {"source": "GW_TL_NVAR" in source, "slot": ".taylor = {gw_tl1_jet, gw_tl1_cst" in desc,
+            "code": "gw_tl1_jet" in symbols, "item": '<Item name="taylor" value="6"' in xml}
+
+
+def test_default_fmu_has_no_kernel_and_refuses_taylor(earth_fmu, paper):
+    """Only an FMU that asks for it carries the Taylor kernel (build time: docs/taylor.md); a
+    default one refuses solver 6 at the call, with the reason and how to get the kernel."""
+    from fmi_slave import FmuRunner
+    from fmpy.fmi1 import FMICallException
+    assert _kernel_in(earth_fmu) == {"source": False, "slot": False, "code": False, "item": False}
+    with zipfile.ZipFile(earth_fmu) as zf:  # nor the recurrences and the ensemble's sources
+        assert not {"sources/gw_taylor_ops.h", "sources/gw_ensemble.c"} & set(zf.namelist())
+    assert _kernel_in(paper[0].fmu) == {"source": True, "slot": True, "code": True, "item": True}  # taylor=True
+    runner = FmuRunner(earth_fmu)
+    with pytest.raises(FMICallException):
+        runner.start(solver=TAYLOR)
+    with pytest.raises(EnsembleError, match="no Taylor kernel.*gyrowheel build --taylor"):
+        Ensemble(earth_fmu)
+
+
+@pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.stem)
+def test_every_example_scene_supported(path):
+    """Every effect's operations have recurrences (the decomposition of each example scene)."""
+    spec = model_spec(load_scene(path))
+    dec = decompose(optimised(spec.functions()["ode"]))
+    assert dec.nx == spec.x.numel() and dec.n_var > dec.nx
+
+
+@pytest.mark.parametrize("name", ["lunar_rover", "euler_disk"])
+def test_scenes_run_briefly_with_taylor(name, tmp_path):
+    """Scenes with contact forces, drag, rolling resistance and slope simulate with taylor like
+    DOP853 for 0.5 s (the Gyrover scenes: their decomposition above; their FMU build is slow).
+    euler_disk's scene names solver = "taylor" (its FMU gets the kernel from that alone),
+    lunar_rover's does not (built with taylor=True)."""
+    from fmi_slave import FmuRunner
+    text = (SCENES / f"{name}.toml").read_text()
+    if name == "euler_disk":
+        assert 'solver = "dopri5"' in text
+        text = text.replace('solver = "dopri5"', 'solver = "taylor"')
+    built = build_fmu(parse_scene(text, f"{name}.toml"), tmp_path / f"{name}.fmu", build_dir=tmp_path / "b",
+                      taylor=name == "lunar_rover")
+    assert _kernel_in(built.fmu) == {"source": True, "slot": True, "code": True, "item": True}
+    runner = FmuRunner(built.fmu)
+    a = _run(runner, 0.5, STATES, solver=TAYLOR, rel_tol=1e-10, abs_tol=1e-12)
+    b = _run(runner, 0.5, STATES, solver=5, rel_tol=1e-10, abs_tol=1e-12)
+    assert np.all(np.isfinite(a)) and np.max(np.abs(a - b)) < 1e-7
+
+
+def test_solver_loop_contract_state_budget_and_steps(paper):
+    """Solver taylor keeps main's solver-loop contract: many communication steps equal one
+    (dense landing, the TwoSum compensation xc carried in the state), a saved state (layout v3)
+    restores the run bit for bit, and max_internal_steps stops a call with fmi2Error, the state
+    left at the step's start."""
+    from fmpy.fmi1 import FMICallException
+    _, runner = paper
+    vrs = [runner.vr[n] for n in STATES]
+    one = _run(runner, 2.0, STATES, solver=TAYLOR, rel_tol=1e-12, abs_tol=1e-14, max_step=0.5)
+    runner.start(solver=TAYLOR, rel_tol=1e-12, abs_tol=1e-14, max_step=0.5)
+    s = runner.slave
+    for k in range(40):
+        s.doStep(k * 0.05, 0.05)
+    many = np.array(s.getReal(vrs))
+    assert np.max(np.abs(many - one)) < 1e-11
+    state = s.getFMUstate()
+    for k in range(40, 80):
+        s.doStep(k * 0.05, 0.05)
+    first = np.array(s.getReal(vrs))
+    s.setFMUstate(state)
+    for k in range(40, 80):
+        s.doStep(k * 0.05, 0.05)
+    assert np.array_equal(first, np.array(s.getReal(vrs)))  # bit for bit
+    s.freeFMUstate(state)
+    runner.start(solver=TAYLOR, rel_tol=1e-12, abs_tol=1e-14, max_step=20.0, max_internal_steps=5)
+    s = runner.slave
+    x0 = np.array(s.getReal(vrs))
+    with pytest.raises(FMICallException):
+        s.doStep(0.0, 20.0)
+    assert np.array_equal(x0, np.array(s.getReal(vrs)))
+
+
+@pytest.mark.parametrize("cc", ["gcc", "clang"])
+def test_kernel_and_ensemble_sources_warning_clean(cc, paper, tmp_path):
+    """An FMU with the kernel and its ensemble library build under -std=c99 -Wall -Wextra
+    -Wpedantic -Werror with gcc and clang (the target_clones kernel included)."""
+    import shutil
+    from fmu_build.ensemble import _UNITY
+    if shutil.which(cc) is None:
+        pytest.skip(f"{cc} is not installed (make test installs it: Debian package {cc})")
+    src = paper[0].sources
+    strict = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-shared", "-fPIC", f"-I{src}"]
+    unity = tmp_path / "ens.c"
+    unity.write_text(_UNITY.format(id=paper[0].identifier, lanes=8))
+    for source in (src / "gw_fmu.c", unity):
+        r = subprocess.run([cc, *strict, str(source), "-o", str(tmp_path / "x.so"), "-lm"],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, f"{cc} {source.name}:\n{r.stderr}"
+
+
+# ---- ensemble ----------------------------------------------------------------------------------
+
+def test_ensemble_equals_single_runs(paper, tmp_path):
+    """N trajectories (g, gamma_dot varied; some fall) equal N fmi2DoStep runs with taylor."""
+    built, runner = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    g = np.array([9.81, 3.721, 1.625, 9.81, 9.81, 0.0, 9.81, 5.0, 9.81, 2.0])
+    spin = np.array([6.0, 6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 4.0, 0.2, 6.0])
+    res = ens.run(20.0, parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-10)
+    assert set(res.status) <= {STATUS_OK, STATUS_TERMINATED} and res.terminated.any()
+    from fmpy.fmi2 import fmi2LastSuccessfulTime
+    for j in range(len(g)):
+        runner.start(solver=TAYLOR, rel_tol=1e-10, abs_tol=1e-12, max_step=20.0, g=g[j], gamma_dot=spin[j],
+                     beta_min=0.1)
+        try:
+            runner.slave.doStep(0.0, 20.0)
+            t = 20.0
+        except Exception:
+            t = runner.slave.getRealStatus(fmi2LastSuccessfulTime)
+        x = np.array(runner.slave.getReal([runner.vr[n] for n in STATES + ["energy"]]))
+        # the library is built with FMA contraction (rounding differs from the FMU's build)
+        assert abs(res.t_final[j] - t) < 1e-9, j
+        np.testing.assert_allclose(res.x_final[j], x[:8], rtol=1e-9, atol=1e-8, err_msg=str(j))
+        assert res.output("energy")[j] == pytest.approx(x[8], abs=1e-9)
+
+
+def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
+    built, _ = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    res = ens.run(1.0, parameters={"M": [2.0, -1.0]}, rel_tol=1e-8)
+    assert list(res.status) == [STATUS_OK, 3]
+    assert any("ensemble trajectory 1" in m for m in res.messages)
+    with pytest.raises(KeyError, match="unknown parameter 'mass'"):
+        ens.run(1.0, parameters={"mass": [1.0]})
+    with pytest.raises(ValueError, match=r"shape \(N, 6\)"):
+        ens.run(1.0, parameters=np.ones((2, 3)))

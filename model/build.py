@@ -391,7 +391,8 @@ class _Assembler:
             s=s, starts=starts, u=ca.vertcat(*[sym for _, sym in ctx.inputs]) if ctx.inputs else ca.SX(0, 1),
             inputs=[qq for qq, _ in ctx.inputs], p=p, parameters=ctx.parameters,
             init=init, ode=ode, outputs=outputs, events=events, checks=ctx.checks, nominal=nominal,
-            effects=effect_names, formulation=self.formulation, about=WHEEL_ABOUT.format(self.formulation))
+            effects=effect_names, force_kinds=sorted({f.kind for f in ctx.forces}), formulation=self.formulation,
+            about=WHEEL_ABOUT.format(self.formulation))
 
     def _started(self, init: ca.SX, x: ca.SX, bind) -> ca.SX:
         """init with the states that start from an expression (stiction modes) filled in."""

@@ -74,6 +74,9 @@ class ModelSpec:
     checks: list[Check] = field(default_factory=list)
     nominal: ca.SX | None = None  # x scale(p) for absolute tolerances
     effects: list[str] = field(default_factory=list)
+    # kinds of the non-conservative forces ("dissipative", "actuator": model/context.py); empty:
+    # energy is conserved, else energy + dissipated_energy - actuator_work is (the energy effect)
+    force_kinds: list[str] = field(default_factory=list)
     formulation: str = "reduced"
     about: str = ""  # what the model is, one paragraph for the FMU's documentation/index.html
 

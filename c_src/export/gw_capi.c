@@ -40,6 +40,7 @@ static gyrowheel_status gwc_fail(const struct GWC_T *w, gyrowheel_status code, c
     va_start(ap, fmt);
     vsnprintf(mw->last_error, sizeof(mw->last_error), fmt, ap);
     va_end(ap);
+    if (w->logger) w->logger(w->logger_env, GYROWHEEL_LOG_ERROR, w->last_error);
     return code;
 }
 
@@ -54,7 +55,10 @@ static void gwc_begin(struct GWC_T *w) {
 
 static gyrowheel_status gwc_fail_core(struct GWC_T *w, gyrowheel_status code,
                                       const char *fallback) {
-    return gwc_fail(w, code, "%s", w->pending_len ? w->pending : fallback);
+    if (!w->pending_len) return gwc_fail(w, code, "%s", fallback);
+    /* the core's messages reached the logger as they were logged (gwc_core_logger) */
+    snprintf(w->last_error, sizeof(w->last_error), "%s", w->pending);
+    return code;
 }
 
 /* The core's logger: errors are kept for last_error, everything goes to the caller's logger. */
@@ -79,8 +83,8 @@ static void gwc_core_logger(void *env, const char *instance_name, gw_status stat
 
 GYROWHEEL_EXPORT const char *GWC(last_error)(const GWC_T *w) {
     if (!w)
-        return GWC_FN(last_error) ": no instance (create was given a NULL instance pointer or "
-                                  "ran out of memory)";
+        return GWC_FN(last_error) ": no instance (create was given a NULL instance pointer, "
+                                  "an allocator without both functions, or ran out of memory)";
     return w->last_error;
 }
 

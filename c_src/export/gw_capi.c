@@ -202,6 +202,10 @@ static gyrowheel_status gwc_check_settings(GWC_T *w, const char *fn, const gyrow
             return gwc_fail(w, GYROWHEEL_ERR_INVALID, "%s: %s = %g must be > 0%s", fn, names[i],
                             v[i], i == 1 ? " (or 0: follow rel_tol)" : "");
     }
+    if (s->max_internal_steps < 0 || (double)s->max_internal_steps > GW_MAX_INTERNAL_STEPS_MAX)
+        return gwc_fail(w, GYROWHEEL_ERR_INVALID,
+                        "%s: max_internal_steps = %ld must lie in [1, 2147483647] (or 0: the "
+                        "scene's)", fn, s->max_internal_steps);
     return GYROWHEEL_OK;
 }
 
@@ -227,6 +231,7 @@ static gyrowheel_status gwc_setup(GWC_T *w, const char *fn, const double *p, con
     I->rel_tol = st.rel_tol;
     I->abs_tol = st.abs_tol;
     I->max_step = st.max_step;
+    if (st.max_internal_steps > 0) I->max_internal_steps = (double)st.max_internal_steps;
     if (gw_setup_experiment(I, fn, 0, 0.0, st.start_time, 0, 0.0) != GW_OK)
         return gwc_fail_core(w, GYROWHEEL_ERR_INVALID, "experiment set-up failed");
     if (gw_initialize(I, fn) > GW_WARNING)
@@ -263,7 +268,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(create)(const double *parameters, const do
 
 /* ---- by name -------------------------------------------------------------------------------- */
 
-/* settings by name: solver, rel_tol, abs_tol, max_step (the model's GW_VAR_SETTING variables)
+/* settings by name: solver, rel_tol, abs_tol, max_step, max_internal_steps (the model's GW_VAR_SETTING variables)
  * and start_time; 0 if `name` is none of them */
 static int gwc_named_setting(GWC_T *w, const char *fn, gyrowheel_settings *st, const char *name,
                              double value, gyrowheel_status *r) {
@@ -292,6 +297,15 @@ static int gwc_named_setting(GWC_T *w, const char *fn, gyrowheel_settings *st, c
         st->max_step = value;
         return 1;
     }
+    if (strcmp(name, "max_internal_steps") == 0) {
+        if (!(value >= 0.0 && value <= GW_MAX_INTERNAL_STEPS_MAX) || value != floor(value))
+            *r = gwc_fail(w, isfinite(value) ? GYROWHEEL_ERR_INVALID : GYROWHEEL_ERR_NOT_FINITE,
+                          "%s: max_internal_steps = %g must be a whole number in [1, 2147483647] "
+                          "(or 0: the scene's)", fn, value);
+        else
+            st->max_internal_steps = (long)value;
+        return 1;
+    }
     return 0;
 }
 
@@ -313,7 +327,7 @@ static gyrowheel_status gwc_unknown_name(GWC_T *w, const char *fn, const char *n
     gwc_name_list(initial, sizeof(initial), GYROWHEEL_KIND_INITIAL);
     return gwc_fail(w, GYROWHEEL_ERR_NAME,
                     "%s: unknown name \"%s\"; parameters: %s; initial values: %s; settings: "
-                    "solver, rel_tol, abs_tol, max_step, start_time",
+                    "solver, rel_tol, abs_tol, max_step, max_internal_steps, start_time",
                     fn, name, params, initial);
 }
 

@@ -202,6 +202,54 @@ def test_every_example_scene_supported(path):
     assert dec.nx == spec.x.numel() and dec.n_var > dec.nx
 
 
+@pytest.fixture(scope="module")
+def lunar(tmp_path_factory):
+    """lunar_rover (rolling resistance tanh(omega / rr_omega_eps), contact forces) with the kernel."""
+    work = tmp_path_factory.mktemp("lunar")
+    return build_fmu(load_scene(SCENES / "lunar_rover.toml"), work / "lunar_rover.fmu", build_dir=work / "b",
+                     taylor=True)
+
+
+# lunar_rover's state at t = 17.466 s on its way to the fall (DOP853, rel_tol 1e-13): nearly flat,
+# spin rate 8.4 rad/s falling at 5000 rad/s^2 to zero within 2.7 ms, where the rolling resistance
+# tanh(omega / 0.01) turns it into a stiff, nearly discontinuous decay
+NEAR_FALL = dict(x=12.819282792842362, y=-9.94660362227494, alpha=-8.926627197498364, beta=0.011077986863648658,
+                 gamma=165.05761343062568, alpha_dot=-1.768003941167051, beta_dot=-1.1145939382724355,
+                 gamma_dot=8.441488319529059)
+
+
+def test_step_size_defect_checked_through_a_near_pole(lunar):
+    """The step size from the last two coefficients (Jorba & Zou) misses the near pole of
+    tanh(omega / eps) where the spin rate crosses zero: the full scene's fall came 2e-8 s late
+    with the rates 0.7 rad/s off at rel_tol 1e-12, 0.24 rad/s at 1e-9 (taylor took 299 steps to
+    17.47 s where DOP853 took 1820).  The defect check of every step keeps the error at the
+    tolerance, through fmi2DoStep and the ensemble path alike.  Reference: DOP853 at rel_tol 1e-13
+    with max_step 1e-5."""
+    from fmi_slave import FmuRunner
+    runner, T = FmuRunner(lunar.fmu), 0.004
+    ref = _run(runner, T, STATES, solver=5, rel_tol=1e-13, abs_tol=1e-15, max_step=1e-5, **NEAR_FALL)
+    assert ref[7] == pytest.approx(-6.1479961e-4, rel=1e-6)  # the spin rate crossed zero
+    ens = Ensemble(lunar.fmu, cache=lunar.fmu.parent / "ens")
+    for tol in (1e-6, 1e-9, 1e-12):
+        got = _run(runner, T, STATES, solver=TAYLOR, rel_tol=tol, abs_tol=tol * 1e-2, **NEAR_FALL)
+        assert np.max(np.abs(got - ref)) < max(100 * tol, 1e-12), tol
+        res = ens.run(T, starts={k: [v] for k, v in NEAR_FALL.items()}, rel_tol=tol, abs_tol=tol * 1e-2)
+        assert res.status[0] == STATUS_OK
+        assert np.max(np.abs(res.x_final[0, :8] - ref)) < max(100 * tol, 1e-12), tol
+    # the whole scene (its output interval, 0.02 s): the fall located as DOP853 locates it
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
+    times = {}
+    for solver, tol in ((5, 1e-13), (TAYLOR, 1e-12)):
+        runner.start(solver=solver, rel_tol=tol, abs_tol=tol * 1e-2, max_step=60.0)
+        with pytest.raises(FMICallException):
+            for k in range(3000):
+                runner.slave.doStep(k * 0.02, 0.02)
+        assert runner.slave.getBooleanStatus(fmi2Terminated)
+        times[solver] = runner.slave.getRealStatus(fmi2LastSuccessfulTime)
+    assert times[TAYLOR] == pytest.approx(17.4747724753, abs=1e-9) and abs(times[TAYLOR] - times[5]) < 1e-11, times
+
+
 @pytest.mark.parametrize("name", ["lunar_rover", "euler_disk"])
 def test_scenes_run_briefly_with_taylor(name, tmp_path):
     """Scenes with contact forces, drag, rolling resistance and slope simulate with taylor like

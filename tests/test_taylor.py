@@ -352,6 +352,11 @@ def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
     res = ens.run(1.0, parameters={"M": [2.0, -1.0]}, rel_tol=1e-8)
     assert list(res.status) == [STATUS_OK, 3]
     assert any("ensemble trajectory 1" in m for m in res.messages)
+    # an error while integrating names its trajectory too (it used to come without: which of N?)
+    res = ens.run(2.0, starts={"gamma_dot": [6.0, 6.0, 1e9, 6.0]}, rel_tol=1e-8)
+    assert list(res.status) == [STATUS_OK, STATUS_OK, 3, STATUS_OK]
+    assert res.messages and all(m.startswith("ensemble trajectory 2: ") for m in res.messages), res.messages
+    assert "max_internal_steps" in res.messages[0]
     with pytest.raises(KeyError, match="unknown parameter 'mass'"):
         ens.run(1.0, parameters={"mass": [1.0]})
     with pytest.raises(ValueError, match=r"shape \(N, 6\)"):

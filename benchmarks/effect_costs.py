@@ -70,15 +70,22 @@ max_step = 0.05
 def effect_sets() -> list[tuple[str, list[str]]]:
     sets = [("base (gravity)", ["gravity"])]
     sets += [(f"+ {name}", ["gravity", name]) for name in CATALOGUE if name != "gravity"]
+    # the Coulomb laws' other law (the default is true stiction: docs/effects.md, "Stiction")
+    sets += [(f"+ {name} (law smoothed)", ["gravity", f"{name}:smoothed"]) for name in ("rolling_resistance",
+                                                                                      "spin_friction")]
     sets.append(("all effects", list(CATALOGUE)))
     return sets
 
 
 def scene_for(label: str, effects: list[str]):
+    """The scene of an effect set; "name:law" chooses a law (rolling_resistance:smoothed)."""
     ident = "cost_" + "_".join(e for e in effects if e != "gravity") if len(effects) < len(CATALOGUE) else "cost_all"
+    ident = ident.replace(":", "_")
     if ident == "cost_":
         ident = "cost_base"
-    tables = "[effects.gravity]\ng = \"earth\"\n" + "".join(f"[effects.{e}]\n" for e in effects if e != "gravity")
+    tables = "[effects.gravity]\ng = \"earth\"\n" + "".join(
+        f"[effects.{e}]\n" if ":" not in e else "[effects.{}]\nlaw = \"{}\"\n".format(*e.split(":"))
+        for e in effects if e != "gravity")
     return parse_scene(SCENE.format(name=ident, effects=tables), f"<{label}>")
 
 

@@ -208,12 +208,29 @@ GW_API int gw_rhs(gw_instance *I, double t, const double *x, double *xdot);
 
 /* ---- events (gw_events.c) ------------------------------------------------------------------- */
 
-typedef enum { GW_EV_NONE = 0, GW_EV_WARN = 1, GW_EV_TERMINATE = 2, GW_EV_ERROR = 3 } gw_ev_result;
+typedef enum {
+    GW_EV_NONE = 0,
+    GW_EV_WARN = 1,
+    GW_EV_TERMINATE = 2,
+    GW_EV_ERROR = 3,
+    GW_EV_UPDATE = 4 /* the state jumped (GW_EVENT_UPDATE); the integration goes on from it */
+} gw_ev_result;
 /* Event update at the current point when the front end has located the crossing itself
- * (Model Exchange): e_now are the indicators now, I->e those of the previous update.  An
- * indicator that went from > 0 to <= 0 (or is <= 0 now and TERMINATE and not yet fired)
- * fires: flag set, logged; then I->e = e_now. */
+ * (Model Exchange): e_now are the indicators now, I->e those of the previous update (or the
+ * positive values gw_event_observe saw since).  An indicator that went from > 0 to <= 0 (or
+ * is <= 0 now and TERMINATE and not yet fired) fires: flag set, logged; an UPDATE event
+ * changes I->x (and sets I->x_jumped), and crossings that jump causes fire in the same
+ * instant (each event at most once per instant).  Then I->e = the indicators at the final
+ * state. */
 GW_API gw_ev_result gw_event_update(gw_instance *I, const double *e_now);
+/* Indicators the front end evaluated on the current trajectory (Model Exchange,
+ * fmi2GetEventIndicators): one that is > 0 arms its event (I->e[i] = e[i]), so that a later
+ * <= 0 counts as a crossing even when the previous event update left it at 0. */
+GW_API void gw_event_observe(gw_instance *I, const double *e);
+/* 1 if event i is a terminating event and has fired: the reason the simulation ended.  A
+ * flag alone does not say it: warning events and update events (stiction modes: "switched at
+ * least once") set theirs and the simulation goes on. */
+GW_API int gw_event_ended(const gw_instance *I, int i);
 
 /* ---- solvers (gw_solver.c) ------------------------------------------------------------------ */
 

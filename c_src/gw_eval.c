@@ -50,6 +50,7 @@ GW_INTERNAL void gw_fun_bind(gw_instance *I) {
     gw_fun_bind_up(&I->f_evt, I->u, I->p);
     gw_fun_bind_up(&I->f_jac, I->u, I->p);
     gw_fun_bind_up(&I->f_dir, I->u, I->p);
+    gw_fun_bind_up(&I->f_upd, I->u, I->p);
     if (I->f_pre.eval && I->f_ode.eval) I->f_ode.arg[4] = I->pre_c;
 }
 
@@ -127,6 +128,16 @@ GW_API int gw_eval_dini(gw_instance *I, double t, double *D0) {
 GW_INTERNAL int gw_eval_jac(gw_instance *I, double t, const double *x, double *J) {
     if (!I->f_jac.eval) return -1;
     return gw_fun_call_txup(&I->f_jac, t, x, J);
+}
+
+GW_INTERNAL int gw_eval_upd(gw_instance *I, double t, const double *x, int k, double *x_out) {
+    double kk = (double)k;
+    int r;
+    if (!I->f_upd.eval) return -1;
+    I->f_upd.arg[4] = &kk;
+    r = gw_fun_call_txup(&I->f_upd, t, x, x_out);
+    I->f_upd.arg[4] = NULL;
+    return r;
 }
 
 GW_API int gw_rhs(gw_instance *I, double t, const double *x, double *xdot) {

@@ -102,8 +102,7 @@ GW_INTERNAL const char *gw_fmi2_stop_reason(const gw_instance *I) {
     const gw_model *m = I->m;
     int i;
     for (i = 0; i < m->ne; i++)
-        if (I->flags[i] && !(m->event_actions && m->event_actions[i] == GW_EVENT_WARN) &&
-            m->event_names && m->event_names[i])
+        if (gw_event_ended(I, i) && m->event_names && m->event_names[i])
             return m->event_names[i];
     return "a terminating event";
 }

@@ -46,9 +46,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
         I->terminated = 1;
         I->last_successful_time = I->t;
         for (i = 0; i < m->ne; i++)
-            if (I->flags[i] && !(I->e[i] > 0.0) &&
-                !(m->event_actions && m->event_actions[i] == GW_EVENT_WARN) &&
-                gw_log_enabled(I, GW_LOG_EVENTS))
+            if (gw_event_ended(I, i) && !(I->e[i] > 0.0) && gw_log_enabled(I, GW_LOG_EVENTS))
                 gw_log(I, GW_OK, GW_LOG_EVENTS,
                        "fmi2NewDiscreteStates: event %s: terminateSimulation = true at t=%.17g",
                        m->event_names ? m->event_names[i] : "?", I->t);
@@ -56,7 +54,9 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = I->terminated ? fmi2True : fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
-    eventInfo->valuesOfContinuousStatesChanged = fmi2False;
+    /* an update event (or the initial settling of the model's modes) changed the states */
+    eventInfo->valuesOfContinuousStatesChanged = I->x_jumped ? fmi2True : fmi2False;
+    I->x_jumped = 0;
     eventInfo->nextEventTimeDefined = fmi2False;
     eventInfo->nextEventTime = 0.0;
     GW_END_FUNCTION();
@@ -159,6 +159,7 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], s
             goto END;
         }
     memcpy(eventIndicators, I->e_me, ni * sizeof(double));
+    if (!I->in_setup) gw_event_observe(I, I->e_me); /* positive values arm their events */
     GW_END_FUNCTION();
 }
 

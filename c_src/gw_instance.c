@@ -106,6 +106,11 @@ GW_API gw_instance *gw_instance_new_with(const gw_model *m, const char *name,
         GW_ALLOC_VEC(I->dini_D, double,
                      (size_t)m->n_init_rows * (size_t)(m->ns + m->np + m->nu));
     }
+    /* event instants with state updates */
+    if (gw_fun_alloc(I, &I->f_upd, &m->upd, 5, 1)) goto fail;
+    GW_ALLOC_VEC(I->x_upd, double, nx);
+    GW_ALLOC_VEC(I->e_upd, double, ne);
+    GW_ALLOC_VEC(I->ev_fired, int, ne);
     gw_fun_bind(I);
     gw_instance_reset(I);
     return I;
@@ -133,6 +138,10 @@ GW_API void gw_instance_free(gw_instance *I) {
     gw_fun_free(I, &I->f_dir);
     gw_fun_free(I, &I->f_dini);
     gw_free(I, I->dini_D);
+    gw_fun_free(I, &I->f_upd);
+    gw_free(I, I->x_upd);
+    gw_free(I, I->e_upd);
+    gw_free(I, I->ev_fired);
     gw_fun_free(I, &I->f_pre);
     gw_free(I, I->pre_c);
     gw_solver_free(I);
@@ -212,6 +221,7 @@ GW_API void gw_instance_reset(gw_instance *I) {
         I->t_events[i] = 0.0;
     }
     I->terminated = 0;
+    I->x_jumped = 0;
     I->last_successful_time = 0.0;
     I->y_valid = 0;
     I->pre_valid = 0;

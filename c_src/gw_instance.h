@@ -77,6 +77,13 @@ struct gw_instance {
     unsigned long long n_call_steps; /* internal steps (accepted + rejected) of this gw_advance */
     double t_call;                   /* where this gw_advance started */
 
+    /* event instants with state updates (GW_EVENT_UPDATE, gw_events.c) */
+    gw_fun f_upd;      /* upd(t, x, u, p, k), only if the model has it */
+    double *x_upd;     /* nx: upd's result */
+    double *e_upd;     /* ne: indicators after an update */
+    int *ev_fired;     /* ne: 0 not yet, 1 fires now, 2 fired in this instant */
+    int x_jumped;      /* front end: an update changed x since the front end last cleared it */
+
     /* backup at the start of gw_advance */
     double *x_bak, *e_bak, *t_events_bak, *xc_bak;
     int *flags_bak;
@@ -130,6 +137,8 @@ GW_INTERNAL void gw_fun_free(gw_instance *I, gw_fun *f);
 GW_INTERNAL void gw_fun_bind(gw_instance *I);
 /* J = jac(t, x, u, p), dense d xdot / d x column-major; non-zero if failed or absent */
 GW_INTERNAL int gw_eval_jac(gw_instance *I, double t, const double *x, double *J);
+/* x_out = upd(t, x, u, p, k); non-zero if failed or absent */
+GW_INTERNAL int gw_eval_upd(gw_instance *I, double t, const double *x, int k, double *x_out);
 
 /* ---- gw_values.c ---------------------------------------------------------------------------- */
 #define GW_N_SETTINGS 5 /* gw_setting: solver, rel_tol, abs_tol, max_step, max_internal_steps */
@@ -167,5 +176,8 @@ GW_INTERNAL void gw_solver_free(gw_instance *I);
  * <= 0, locates the earliest crossing te, writes the state there into I->xev and
  * the indicators into I->eev, sets flags, logs, and returns *t_event = te. */
 GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_event);
+/* gw_initialize: update events whose indicator is <= 0 at the start (I->e) fire now, so the
+ * model's discrete state (a stiction mode) is settled before the first step.  0 or -1 logged. */
+GW_INTERNAL int gw_events_initial(gw_instance *I, const char *fn);
 
 #endif /* GW_INSTANCE_H */

@@ -40,6 +40,9 @@
  *                                   of modelDescription.xml (row init_rows[k] for vars[k],
  *                                   -1 if not one), the knowns of Initialization Mode
  *                                   (FMI 2.0.4 section 2.2.8); NULL if absent
+ *   upd (t, x, u, p, k) -> x_new    the state after the update of event k (k, an event index
+ *                                   passed as a double, has action GW_EVENT_UPDATE); only in
+ *                                   models with such events (NULL otherwise)
  * Each instance allocates its own arg/res/iw/w buffers from the sizes f_work reports
  * (CasADi SX functions are reentrant then); mem is always 0.  The generated functions
  * are static too (fmu_build/codegen.py makes them so and keeps only what the runtime calls).
@@ -116,7 +119,10 @@ typedef struct {
 /* What happens when an event indicator crosses zero from above. */
 typedef enum {
     GW_EVENT_TERMINATE = 0, /* stop at the located time: fmi2Discard + fmi2Terminated */
-    GW_EVENT_WARN = 1       /* log a warning at the located time, set the flag, go on */
+    GW_EVENT_WARN = 1,      /* log a warning at the located time, set the flag, go on */
+    GW_EVENT_UPDATE = 2     /* the state jumps to upd(t, x, u, p, k) at the located time (a
+                               discrete mode switch; the flag: switched at least once) and
+                               the integration restarts */
 } gw_event_action;
 
 typedef struct {
@@ -151,6 +157,7 @@ typedef struct {
     gw_function dini;
     int n_init_rows;
     const int *init_rows; /* n_vars: row of vars[k] in dini's result, or -1 */
+    gw_function upd; /* state update of GW_EVENT_UPDATE events ({NULL, NULL}: none) */
     double default_max_internal_steps; /* 0: GW_DEFAULT_MAX_INTERNAL_STEPS */
     /* Optional: ode_pre(p) -> c (n_pre values), the subexpressions of ode that depend on the
      * parameters alone (model/hoist.py), computed by the runtime when p changes.  When present,

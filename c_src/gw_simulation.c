@@ -215,6 +215,16 @@ static gw_status gw_initial_point(gw_instance *I, const char *fn) {
         if (!isfinite(I->x[i]))
             GW_SIM_FAIL("%s: initial state %s is not finite (%g)", fn,
                         m->x_names ? m->x_names[i] : "?", I->x[i]);
+    /* the model's discrete state (stiction modes) is settled at the start: update events whose
+     * indicator is <= 0 there fire now (gw_events_initial), before outputs and derivatives */
+    I->x_jumped = 0;
+    for (i = 0; i < m->ne; i++) {
+        I->flags[i] = 0;
+        I->t_events[i] = 0.0;
+    }
+    if (m->ne > 0 && gw_eval_evt(I, I->t, I->x, I->e) != 0)
+        GW_SIM_FAIL("%s: evaluation of the event indicators failed", fn);
+    if (m->ne > 0 && gw_events_initial(I, fn) != 0) return GW_ERROR;
     if (gw_eval_out(I, I->t, I->x, I->y) != 0)
         GW_SIM_FAIL("%s: evaluation of the initial outputs failed", fn);
     for (i = 0; i < m->ny; i++)
@@ -238,9 +248,11 @@ static gw_status gw_initial_point(gw_instance *I, const char *fn) {
             GW_SIM_FAIL("%s: initial event indicator %s is not finite (%g)", fn,
                         m->event_names ? m->event_names[i] : "?", I->e[i]);
     /* An event whose condition holds already at the start cannot be crossed later:
-     * a terminating one means an invalid initial state, a warning one is flagged now. */
+     * a terminating one means an invalid initial state, a warning one is flagged now (update
+     * events were settled above; one may be left at 0, a law starting to slide from rest). */
     for (i = 0; i < m->ne; i++)
-        if (!(I->e[i] > 0.0) && !(m->event_actions && m->event_actions[i] == GW_EVENT_WARN))
+        if (!(I->e[i] > 0.0) && !(m->event_actions && (m->event_actions[i] == GW_EVENT_WARN ||
+                                                       m->event_actions[i] == GW_EVENT_UPDATE)))
             GW_SIM_FAIL("%s: the initial state already triggers event %s (indicator %g <= 0)",
                         fn, m->event_names ? m->event_names[i] : "?", I->e[i]);
     return GW_OK;
@@ -265,6 +277,7 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
     memcpy(I->xdot, I->k[0], (size_t)m->nx * sizeof(double));
     I->xdot_valid = 1;
     for (i = 0; i < m->ne; i++) {
+        if (m->event_actions && m->event_actions[i] == GW_EVENT_UPDATE) continue; /* settled */
         I->flags[i] = 0;
         I->t_events[i] = 0.0;
         if (I->e[i] > 0.0) continue;

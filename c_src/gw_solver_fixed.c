@@ -82,11 +82,14 @@ static int gw_rk4_step(gw_instance *I, double h, double t1) {
 /* Substeps of max_step that cover [I->t, t_end] (at least 1).  A communication step meant to be
  * k max_step long (t_k = t0 + k h in the caller) comes out longer by the rounding of t: 1e-13 s
  * at t = 1000 s, 1e-10 of a 1 ms step.  That excess must not add a substep (twice the cost of a
- * real-time step, at random): up to 8 ulps of t are absorbed into the substeps.  Also the lower
- * bound of every solver's step count that the budget checks up front (gw_solver.c). */
+ * real-time step, at random): up to 8 ulps of t are absorbed into the substeps, and never more
+ * than a quarter of a step (far from t = 0 the doubles may be too coarse for max_step: refused
+ * in gw_integrate_fixed, not absorbed).  Also the lower bound of every solver's step count that
+ * the budget checks up front (gw_solver.c). */
 GW_INTERNAL double gw_fixed_substeps(const gw_instance *I, double t_end) {
     const double t0 = I->t, H = t_end - t0;
-    const double slack = 1e-12 * I->max_step + 8.0 * DBL_EPSILON * fmax(fabs(t0), fabs(t_end));
+    const double slack = fmin(1e-12 * I->max_step + 8.0 * DBL_EPSILON * fmax(fabs(t0), fabs(t_end)),
+                              0.25 * I->max_step);
     const double nd = ceil((H - slack) / I->max_step);
     return nd < 1.0 ? 1.0 : nd;
 }
@@ -105,6 +108,14 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
         while (I->t < ti) {
             const double h = ti - I->t;
             gw_int_result r;
+            if (h > 1.5 * I->max_step) {
+                /* t_i rounded onto doubles spaced more than max_step / 8 apart: the step would
+                 * silently be longer than the fixed step asked for */
+                GW_LOG_ERR(I, "%s cannot take steps of max_step=%g at t=%.17g: doubles there are %g s "
+                           "apart, so a step would be %g s; start nearer t = 0 or raise max_step",
+                           gw_solver_name(I->solver), I->max_step, I->t, nextafter(I->t, HUGE_VAL) - I->t, h);
+                return GW_INT_ERROR;
+            }
             if ((double)I->n_call_steps >= I->max_internal_steps) { /* events restart substeps */
                 gw_budget_message(I, "the budget of internal steps is spent", t_end - I->t, h);
                 return GW_INT_ERROR;

@@ -20,6 +20,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2LastSuccessfulTime
 
 from fmu_build import build_fmu, load_scene, parse_scene
+from fmu_build.scipy_reference import solve_hybrid
 from model.build import BETA_MIN_DEFAULT
 
 HERE = Path(__file__).resolve().parent
@@ -71,19 +72,14 @@ class Fmu:
 
 
 def reference_fall(spec, start, beta_min, stop=60.0, rtol=1e-13):
-    """scipy DOP853 (rtol 1e-13 unless said) on the CasADi model: the fall time (or None)."""
-    from scipy.integrate import solve_ivp
+    """scipy DOP853 (rtol 1e-13 unless said) on the CasADi model, with its mode switches (the
+    stiction laws' update events): the fall time (or None)."""
     f = spec.functions()
     p = np.array([beta_min if q.name == "beta_min" else q.start for q in spec.parameters])
     s = np.array([start.get(q.name, q.start) for q in spec.starts])
     x0 = np.array(f["init"](s, p)).ravel()
-
-    def fall(t, x):
-        return math.sin(x[3]) - math.sin(beta_min)
-    fall.terminal, fall.direction = True, -1
-    r = solve_ivp(lambda t, x: np.array(f["ode"](t, x, [], p)).ravel(), (0, stop), x0, method="DOP853",
-                  rtol=rtol, atol=rtol * 1e-2, events=fall)
-    return r.t_events[0][0] if len(r.t_events[0]) else None
+    return solve_hybrid(spec, x0, p, stop, stop=lambda t, x: math.sin(x[3]) - math.sin(beta_min),
+                        rtol=rtol, atol=rtol * 1e-2)[0]
 
 
 def main() -> int:

@@ -22,8 +22,8 @@ from model.spec import ModelSpec
 
 FUNCTION_FILE = "gw_funcs"
 DESC_FILE = "model_desc.c"
-SLOTS = ("init", "ode", "out", "evt", "chk", "nom", "jac", "dir", "dini", "ode_pre")
-EVENT_ACTION = {"terminate": "GW_EVENT_TERMINATE", "warn": "GW_EVENT_WARN"}
+SLOTS = ("init", "ode", "out", "evt", "chk", "nom", "jac", "dir", "dini", "upd", "ode_pre")
+EVENT_ACTION = {"terminate": "GW_EVENT_TERMINATE", "warn": "GW_EVENT_WARN", "update": "GW_EVENT_UPDATE"}
 
 
 def optimised(fn: ca.Function) -> ca.Function:

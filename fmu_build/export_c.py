@@ -15,7 +15,6 @@ Only <model>_* functions are external, so two exported models link into one prog
 from __future__ import annotations
 
 import json
-import keyword
 import re
 import shutil
 import subprocess
@@ -23,6 +22,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from fmu_build import c_names
 from fmu_build.builder import RUNTIME_DIR, _guid, model_spec
 from fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
 from fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
@@ -35,9 +35,6 @@ API_SOURCES = ("gw_capi.h", "gw_capi.c", "gw_capi_names.c", "gw_capi_state.c")
 MARKER = ".gyrowheel-export"
 KINDS = ("PARAMETER", "INITIAL", "INPUT", "STATE", "OUTPUT", "EVENT")  # gyrowheel_kind order
 MACRO_LETTER = {"PARAMETER": "P", "INITIAL": "I", "INPUT": "U", "STATE": "X", "OUTPUT": "Y", "EVENT": "E"}
-C_KEYWORDS = set("""auto break case char const continue default do double else enum extern float for
-goto if inline int long register restrict return short signed sizeof static struct switch typedef
-union unsigned void volatile while _Bool _Complex _Imaginary main""".split())
 
 
 class ExportError(ValueError):
@@ -64,14 +61,12 @@ class Row:
 
 
 def check_identifier(name: str) -> str:
-    """The model name as the prefix of C names: an ASCII C identifier, not reserved."""
-    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
-        raise ExportError(f"model name {name!r} is not an ASCII C identifier (letters, digits, _)")
-    if name in C_KEYWORDS or keyword.iskeyword(name):
-        raise ExportError(f"model name {name!r} is a C keyword; rename the model in [model] name")
-    if re.match(r"(?i)(gw_|gwc_|gyrowheel)", name):
-        raise ExportError(f"model name {name!r} starts with a prefix the runtime reserves (gw_, gwc_, gyrowheel)")
-    return name
+    """The model name as the prefix of C names (fmu_build/c_names.py: an ASCII C identifier,
+    no C or C++ keyword, reserved identifier or standard header's name); ExportError if not."""
+    try:
+        return c_names.check(name)
+    except c_names.ModelNameError as exc:
+        raise ExportError(str(exc)) from None
 
 
 def core_sources() -> list[Path]:
@@ -198,6 +193,14 @@ static const gwc_table GWC_TABLE = {{
 """
 
 
+def force_kinds(spec) -> dict[str, str]:
+    """examples/realtime.c's flags of the scene's non-conservative forces (ModelSpec.force_kinds):
+    which terms of the energy balance energy + dissipated_energy - actuator_work it needs."""
+    kinds = set(spec.force_kinds)
+    return {"dissipative_forces": str(int("dissipative" in kinds)), "actuator_forces": str(int("actuator" in kinds)),
+            "other_forces": str(int(bool(kinds - {"dissipative", "actuator"})))}
+
+
 def render(template: str, values: dict[str, str]) -> str:
     """@key@ placeholders (as CMake's configure_file); an unknown one left over is an error."""
     for key, value in values.items():
@@ -230,6 +233,11 @@ def _prepare(out_dir: Path) -> None:
     out_dir.mkdir(parents=True, exist_ok=True)
 
 
+def _files(out_dir: Path) -> set[str]:
+    """Every file under out_dir (relative, POSIX), the export's marker excepted."""
+    return {p.relative_to(out_dir).as_posix() for p in out_dir.rglob("*") if p.is_file() and p.name != MARKER}
+
+
 def compile_check(unity: Path) -> None:
     """Compile <model>.c as a user would, strictly (C99, all warnings as errors)."""
     with tempfile.TemporaryDirectory(prefix="gyrowheel-export-") as tmp:
@@ -242,13 +250,20 @@ def compile_check(unity: Path) -> None:
 def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: str = "") -> ExportResult:
     """Write the C export of `scene` into out_dir (see the module docstring).
 
-    check: compile <model>.c strictly afterwards (CompileError if it fails).
+    check: probe the model name against the C library's declarations first, and compile
+    <model>.c strictly afterwards (CompileError if it fails).
     Raises ExportError (bad model name, unusable directory), ValueError (bad output table),
     CompileError.
     """
     model = check_identifier(scene.name)
+    if check:  # a name the C library declares (system, clock, FILE, ...): before anything is written
+        try:
+            c_names.probe(model, compiler())
+        except c_names.ModelNameError as exc:
+            raise ExportError(str(exc)) from None
     out_dir = Path(out_dir)
     _prepare(out_dir)
+    users = _files(out_dir)  # what is left is the user's: never recorded, so never removed
     spec = model_spec(scene)
     exp = scene.experiment
     table = build_table(spec, exp, scene.outputs)
@@ -258,16 +273,19 @@ def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: 
     guid = _guid((src / f"{FUNCTION_FILE}.c").read_text(),
                  repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]), repr(exp), model)
     write_model_desc(spec, table, exp, model, guid, fns, src, kernel)
+    written = set()
     for f in core_sources():
         shutil.copy2(f, src / f.name)
+        written.add(f"src/{f.name}")
     for name in API_SOURCES:
         shutil.copy2(EXPORT_DIR / name, src / name)
+        written.add(f"src/{name}")
     rows = api_table(spec, table)
     (src / "capi_desc.c").write_text(capi_desc(rows, scene, model))
     values = {"model": model, "MODEL": model.upper(), "guid": guid,
               "scene_file": scene_file or f"scene {model!r}",
               "description": _comment(spec.description).rstrip(".") + ".",
-              "macros": header_macros(model, rows, scene)}
+              "macros": header_macros(model, rows, scene), **force_kinds(spec)}
     outputs = {f"{model}.h": "model.h.in", f"{model}.c": "model.c.in", "CMakeLists.txt": "CMakeLists.txt.in",
                "examples/main.c": "examples/main.c", "examples/realtime.c": "examples/realtime.c",
                "README.md": "README.md.in"}
@@ -276,7 +294,8 @@ def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: 
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(render((EXPORT_DIR / template).read_text(), values))
     shutil.copy2(EXPORT_DIR / "gyrowheel_api.h", out_dir / "gyrowheel_api.h")
-    files = sorted(p.relative_to(out_dir).as_posix() for p in out_dir.rglob("*") if p.is_file() and p.name != MARKER)
+    written |= {"src/capi_desc.c", "gyrowheel_api.h", *outputs}
+    files = sorted((_files(out_dir) - users) | written)
     (out_dir / MARKER).write_text(json.dumps({"model": model, "files": files}, indent=1) + "\n")
     if check:
         compile_check(out_dir / f"{model}.c")

@@ -176,6 +176,9 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
         cls = CATALOGUE[name]
         r.unknown(table, options, {q.name for q in cls.parameters()} | set(cls.choices()))
         effects[name] = {key: _effect_value(r, table, key, value, cls) for key, value in options.items()}
+        conflict = cls.option_conflict(effects[name])
+        if conflict:
+            raise r.fail(table, conflict[0], conflict[1])
     if "gravity" not in effects:
         raise r.fail("effects", None, "[effects.gravity] is required: every FMU exposes g "
                      "(INTERFACE.md); use g = 0 for a weightless wheel")

@@ -19,6 +19,7 @@ from model.effects import CATALOGUE, lift_off_conflict
 from model.kinematics import WheelKinematics
 from model.lagrangian import ConstrainedSystem
 from model.spec import Event, ModelSpec, Quantity
+from model.stiction import law_update, stuck_rate_rows
 
 FORMULATIONS = ("reduced", "multipliers")
 SPEED_CHOICES = ("body", "angle_rates")
@@ -230,10 +231,13 @@ class _Assembler:
         T, V = self.energies()
         Fc = self.contact_force()
         unknowns = [(ctx.Fn, Fc[2])] if ctx.uses_Fn else []
+        # stiction laws: the holding force of each, from s r_dot + (1 - s) H = 0
+        conditions = [(law.hold, law.condition(ctx.acceleration_of_rate(law.rate))) for law in ctx.stick_slip]
         nf = len(self.free)
         A = ca.horzcat(ctx.kin.rolling_constraint(), ca.SX.zeros(2, nf - 5))
         system = ConstrainedSystem(q=self.q, qd=self.qd, qdd=self.qdd, n_free=nf, T=T, V=V, A=A,
-                                   Q_nc=self.generalised_forces(), unknowns=unknowns, parameters=list(ctx.par))
+                                   Q_nc=self.generalised_forces(), unknowns=unknowns, conditions=conditions,
+                                   parameters=list(ctx.par))
         qd_driven = ca.vertcat(*[c.rate for c in self.driven]) if self.driven else ca.SX(0, 1)
         qdd_driven = ca.vertcat(*[c.accel for c in self.driven]) if self.driven else ca.SX(0, 1)
         S = system.null_space(DEPENDENT)
@@ -243,12 +247,14 @@ class _Assembler:
 
         starts = _with_values(start_values(), {})
         extra_starts = [c.start for c in self.free[5:]] + [c.rate_start for c in self.free[5:]]
-        state_starts = [st.quantity for st in ctx.states]
+        state_starts = [st.quantity for st in ctx.states if st.start_expr is None]
         starts = _with_values(starts + extra_starts + state_starts, self.initial)
         s = ca.SX.sym("s", len(starts))
         s_by_name = {qq.name: s[i] for i, qq in enumerate(starts)}
         e_states = ca.vertcat(*[st.sym for st in ctx.states]) if ctx.states else ca.SX(0, 1)
-        e_start = ca.vertcat(*[s_by_name[st.quantity.name] for st in ctx.states]) if ctx.states else ca.SX(0, 1)
+        # states started from an expression (stiction modes) get their value once bind() exists
+        e_start = ca.vertcat(*[s_by_name[st.quantity.name] if st.start_expr is None else ca.SX(0)
+                               for st in ctx.states]) if ctx.states else ca.SX(0, 1)
         q0 = ca.vertcat(*[s_by_name[n] for n in COORDINATES], *[s_by_name[c.start.name] for c in self.free[5:]])
         v0 = ca.vertcat(*[s_by_name[n] for n in SPEEDS], *[s_by_name[c.rate_start.name] for c in self.free[5:]])
 
@@ -270,6 +276,8 @@ class _Assembler:
             ode_mech = ca.vertcat(qd_all[:nf], v_dot)
             init = ca.vertcat(q0, v0, e_start)
             nominal_rates = [1.0] * v.numel()
+            speed_rows = list(range(nf, nf + v.numel()))
+            speeds_now, to_state = v, (lambda vs: vs)
         else:
             k_stab = ctx.parameter(Quantity("k_stab", "1/s", "velocity-constraint stabilisation gain", 10.0))
             qd_free = ca.vertcat(*[c.qd for c in self.free])
@@ -280,6 +288,9 @@ class _Assembler:
             ode_mech = ca.vertcat(qd_free, qdd_all[:nf])
             S0 = ca.substitute(S, q_free, q0)
             init = ca.vertcat(q0, ca.mtimes(S0, v0), e_start)
+            speed_rows = list(range(nf, 2 * nf))
+            speeds_now = qd_free[[i for i in range(nf) if i not in DEPENDENT]]
+            to_state = (lambda vs: ca.mtimes(S, vs))  # consistent with A q_dot = 0
             nominal_rates = [P["R"], P["R"]] + [1.0] * (nf - 2)  # x_dot, y_dot scale like R sqrt(g/R)
             extra_outputs = [
                 (Quantity("constraint_violation", "m/s", "|A(q) q_dot|, drift of the rolling constraint"),
@@ -304,6 +315,9 @@ class _Assembler:
         if ctx.uses_Fn:
             placeholders = ca.vertcat(placeholders, ctx.Fn)
             values = ca.vertcat(values, x_sol[0])
+        for i, law in enumerate(ctx.stick_slip):
+            placeholders = ca.vertcat(placeholders, law.hold)
+            values = ca.vertcat(values, x_sol[len(unknowns) + i])
 
         keep = [i for i in range(placeholders.numel()) if not ca.is_equal(placeholders[i], values[i])]
         placeholders, values = placeholders[keep], values[keep]  # drop identities (independent speeds)
@@ -321,6 +335,9 @@ class _Assembler:
         ctx.late_values = {"Fc": bind(Fc)}
         derivs = [bind(st.derivative) for st in ctx.states]
         ode = ca.vertcat(bind(ode_mech), *derivs)
+        for row, stuck in stuck_rate_rows(ctx.stick_slip, x, bind).items():
+            ode[row] = (1 - stuck) * ode[row]  # a stuck rate that is a state stays exactly 0
+        init = self._started(init, x, bind)
 
         by_name = {qq.name: qq for qq in starts}
         outputs = [(by_name[n], self.q[i]) for i, n in enumerate(COORDINATES)]
@@ -344,6 +361,13 @@ class _Assembler:
         fallen = Quantity("fallen", "", "true once the wheel has fallen flat (beta <= beta_min or >= pi - beta_min)")
         events = [Event("fall", ca.sin(self.q[3]) - ca.sin(P["beta_min"]), "terminate", fallen)]
         events += [Event(n, bind(self._late(e)), a, f) for n, e, a, f in ctx.events]
+        n_mech = x.numel() - len(ctx.states)
+        for law in ctx.stick_slip:
+            mode_row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)
+            switched = Quantity(f"{law.name}_switched", "", f"true once the {law.what} has switched mode (stuck, "
+                                "sliding again or turned back)")
+            events.append(Event(f"{law.name}_stiction", bind(law.indicator()), "update", switched,
+                                law_update(law, x, bind, mode_row, speed_rows, speeds_now, to_state)))
         if ctx.uses_Fn and not any(ev.name == "lift_off" for ev in events):
             # load-proportional laws (rolling resistance, pivot friction) would push, not resist,
             # with F_n < 0: the model ends there, so stop and say so (lift_off_conflict refuses any
@@ -367,7 +391,20 @@ class _Assembler:
             s=s, starts=starts, u=ca.vertcat(*[sym for _, sym in ctx.inputs]) if ctx.inputs else ca.SX(0, 1),
             inputs=[qq for qq, _ in ctx.inputs], p=p, parameters=ctx.parameters,
             init=init, ode=ode, outputs=outputs, events=events, checks=ctx.checks, nominal=nominal,
-            effects=effect_names, formulation=self.formulation, about=WHEEL_ABOUT.format(self.formulation))
+            effects=effect_names, force_kinds=sorted({f.kind for f in ctx.forces}), formulation=self.formulation,
+            about=WHEEL_ABOUT.format(self.formulation))
+
+    def _started(self, init: ca.SX, x: ca.SX, bind) -> ca.SX:
+        """init with the states that start from an expression (stiction modes) filled in."""
+        n_mech = x.numel() - len(self.ctx.states)
+        init = ca.SX(init)
+        for i, st in enumerate(self.ctx.states):
+            if st.start_expr is not None:
+                expr = bind(st.start_expr)
+                if self.ctx.inputs and ca.depends_on(expr, ca.vertcat(*[sym for _, sym in self.ctx.inputs])):
+                    raise ValueError(f"the start value of {st.quantity.name} must not depend on inputs")
+                init[n_mech + i] = ca.substitute(expr, x, init)
+        return init
 
     def _late(self, expr):
         """The contact-force placeholder -> the back-substituted contact force."""

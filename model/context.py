@@ -43,6 +43,9 @@ class State:
     derivative: ca.SX | None = None
     output: bool = True
     nominal: ca.SX | float = 1.0  # scale for the absolute tolerance
+    # no start variable: the initial value is this expression of the placeholders (q, q_dot)
+    # evaluated at the initial point (e.g. the mode of a stiction law, sign of its rate)
+    start_expr: ca.SX | None = None
 
 
 @dataclass
@@ -59,6 +62,55 @@ class Force:
     velocity: ca.SX
     kind: str = "dissipative"
     point: bool = False
+
+
+# Breakaway margin of the stiction laws: a stuck mode holds while the holding force needed stays
+# below (1 + BREAKAWAY) times the Coulomb limit and is left at or above it, so the motion after a
+# breakaway always accelerates away from zero (never a zero-acceleration slide that chatters).
+BREAKAWAY = 1e-9
+
+
+@dataclass
+class StickSlip:
+    """A Coulomb law with true stiction on one rate (docs/effects.md, "Stiction").
+
+    rate r(q, q_dot): the sliding rate, linear in q_dot (gamma_dot for rolling resistance, the
+    pivot rate omega . k for spin friction); limit L >= 0: the Coulomb force (may contain F_n).
+    The mode m (a state with zero derivative that only the law's update event changes) is +1 /
+    -1 while r slides forwards / backwards and 0 while stuck; s = 1 - m^2 is 1 when stuck.
+    The law's generalised force on r is  F = -L m + s H,  where H (`hold`, a placeholder solved
+    with the accelerations) is the holding force: with s = 1 it is the multiplier of the extra
+    constraint r_dot = 0, with s = 0 the row reads H = 0.  Arithmetic only: the right-hand side
+    stays smooth within a mode and needs no if_else.
+    """
+
+    name: str
+    rate: ca.SX
+    limit: ca.SX
+    mode: "State"
+    hold: ca.SX
+    what: str = "law"  # for descriptions: "rolling resistance", "pivot friction"
+
+    @property
+    def stuck(self) -> ca.SX:
+        return 1 - self.mode.sym**2
+
+    @property
+    def force(self) -> ca.SX:
+        """Generalised force of the law on its rate: Coulomb while sliding, holding when stuck."""
+        return -self.limit * self.mode.sym + self.stuck * self.hold
+
+    def condition(self, rate_dot: ca.SX) -> ca.SX:
+        """The row solved for `hold`: s r_dot + (1 - s) H = 0 (affine in accelerations and H)."""
+        return self.stuck * rate_dot + (1 - self.stuck) * self.hold
+
+    def indicator(self) -> ca.SX:
+        """Event indicator of the mode switches (fires going from > 0 to <= 0).
+
+        Sliding (s = 0): m r, the rate in the mode's direction, reaches 0 (stick or reverse).
+        Stuck (m = 0): (L (1 + BREAKAWAY))^2 - H^2 reaches 0 (breakaway). Smooth, no abs.
+        """
+        return self.stuck * ((self.limit * (1 + BREAKAWAY))**2 - self.hold**2) + self.mode.sym * self.rate
 
 
 @dataclass
@@ -86,6 +138,7 @@ class WheelContext:
     outputs: list[tuple[Quantity, ca.SX]] = field(default_factory=list)
     events: list[tuple[str, ca.SX, str, Quantity]] = field(default_factory=list)
     checks: list[Check] = field(default_factory=list)
+    stick_slip: list[StickSlip] = field(default_factory=list)
     Fn: ca.SX = field(default_factory=lambda: ca.SX.sym("Fn"))
     uses_Fn: bool = False
     kin: object = None  # model.kinematics.WheelKinematics of the wheel coordinates
@@ -130,6 +183,20 @@ class WheelContext:
         self.states.append(st)
         return st
 
+    def stiction(self, name: str, rate: ca.SX, limit: ca.SX, what: str) -> StickSlip:
+        """Declare a Coulomb law with true stiction on `rate` (see StickSlip); returns it.
+
+        Adds the mode state `<name>_mode` (no start variable: it starts as sign(rate), and a
+        law starting at rest is settled by the initial event iteration), the holding force
+        placeholder, and (in model/build.py) the constraint row, the event and its update.
+        """
+        mode = State(Quantity(f"{name}_mode", "1", f"{what}: +1 / -1 sliding forwards / backwards, 0 stuck"),
+                     ca.SX.sym(f"{name}_mode"), ca.SX(0), output=False, start_expr=ca.sign(rate))
+        self.states.append(mode)
+        law = StickSlip(name, ca.SX(rate), ca.SX(limit), mode, ca.SX.sym(f"{name}_hold"), what)
+        self.stick_slip.append(law)
+        return law
+
     def output(self, quantity: Quantity, expr) -> None:
         self.outputs.append((quantity, expr))
 
@@ -167,6 +234,11 @@ class WheelContext:
 
     def all_qdd(self) -> ca.SX:
         return ca.vertcat(*[c.qdd for c in self.coords])
+
+    def acceleration_of_rate(self, rate: ca.SX) -> ca.SX:
+        """Time derivative of a rate r(q, q_dot) given in the coordinates' placeholders."""
+        q, qd, qdd = self.all_q(), self.all_qd(), self.all_qdd()
+        return ca.jtimes(rate, q, qd) + ca.jtimes(rate, qd, qdd)
 
     def acceleration(self, position: ca.SX) -> ca.SX:
         """Second time derivative of a position given in the coordinates' placeholders."""

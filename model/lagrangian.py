@@ -23,6 +23,9 @@ Two extensions the effects need:
 * extra unknowns: Q_nc may depend on quantities that are themselves affine in the
   accelerations (the normal load on a rolling-resistance torque). Their defining
   equations are appended and everything is solved as one linear system.
+* conditions: extra unknowns defined by a residual row instead of an explicit
+  expression, e.g. the holding force H of a stiction law, s r_dot + (1 - s) H = 0
+  (the multiplier of the constraint r_dot = 0 while stuck, zero while sliding).
 
 All expressions are written in placeholder symbols (q, q_dot, q_ddot of every
 coordinate); `formulate_*` return the accelerations as expressions of the state.
@@ -86,6 +89,19 @@ def evaluation_cost(expr: ca.SX) -> int:
     return len(ops) + 7 * ops.count(ca.OP_DIV)
 
 
+def _cramer(A: ca.SX, b: ca.SX) -> ca.SX:
+    """x with A x = b for a small square A (one or two stiction laws) by Cramer's rule: one shared
+    division by det(A) and no square roots (CasADi's symbolic solve is a QR factorisation)."""
+    n = A.size1()
+    inv_det = 1 / ca.det(A)
+    x = ca.SX.zeros(n)
+    for i in range(n):
+        Ai = ca.SX(A)
+        Ai[:, i] = b
+        x[i] = ca.det(Ai) * inv_det
+    return x
+
+
 @dataclass
 class ConstrainedSystem:
     """Placeholders and terms of a system with linear velocity constraints.
@@ -94,7 +110,9 @@ class ConstrainedSystem:
     n_free: how many are free; T, V: energies in (q, qd); A: constraint matrix
     (m x n_free) in q; Q_nc: generalised forces (n, one per coordinate) in
     (q, qd, unknowns); unknowns: extra unknown symbols with their defining
-    expressions (unknown = expr(q, qd, qdd)), e.g. the normal force.
+    expressions (unknown = expr(q, qd, qdd)), e.g. the normal force; conditions: extra
+    unknown symbols with a residual row (residual(q, qd, qdd, unknowns) = 0, affine), solved
+    after the unknowns in the same system.
     """
 
     q: ca.SX
@@ -106,6 +124,7 @@ class ConstrainedSystem:
     A: ca.SX
     Q_nc: ca.SX | None = None
     unknowns: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
+    conditions: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
     parameters: list[str] = field(default_factory=list)  # names of the parameter symbols (hoisting)
 
     @property
@@ -146,6 +165,28 @@ class ConstrainedSystem:
         return ca.simplify(S)
 
     def _solve(self, residual: ca.SX, w: ca.SX) -> ca.SX:
+        """w from the residual, affine in w; the last len(conditions) rows and entries of w are the
+        conditions and their unknowns (the holding forces H of stiction laws).
+
+        Those are eliminated last (a Schur complement): the other rows are solved for the other
+        unknowns with H kept as a symbol (it enters their right-hand side only, linearly:
+        w1 = c0 + C1 H), then the condition rows, affine in H, give H (k x k, k = 1 or 2). So the
+        bulk of the system keeps the small block that _solve_affine's exact polynomial form handles
+        (a 5 x 5 or 6 x 6 block would fall back to CasADi's QR solve, with square roots).
+        """
+        k = len(self.conditions)
+        if k == 0:
+            return self._solve_affine(residual, w)
+        n = w.numel() - k
+        w1, h = w[:n], w[n:]
+        if ca.depends_on(ca.jacobian(residual[:n], w1), h):
+            return self._solve_affine(residual, w)  # H in the coefficients: no elimination
+        w1_h = self._solve_affine(residual[:n], w1)
+        rows_h = ca.substitute(residual[n:], w1, w1_h)
+        h_sol = _cramer(ca.jacobian(rows_h, h), -ca.substitute(rows_h, h, ca.DM.zeros(k)))
+        return ca.vertcat(ca.substitute(w1_h, h, h_sol), h_sol)
+
+    def _solve_affine(self, residual: ca.SX, w: ca.SX) -> ca.SX:
         """w from the residual, which is affine in w: A w + b = 0.
 
         Simplified before code generation, every step exact (issue 11, docs/performance.md):
@@ -175,11 +216,12 @@ class ConstrainedSystem:
         return min(candidates, key=evaluation_cost)
 
     def _unknowns(self):
-        if not self.unknowns:
+        """Symbols of the extra unknowns and their rows (unknowns, then conditions)."""
+        rows = [s - e for s, e in self.unknowns] + [r for _, r in self.conditions]
+        if not rows:
             return ca.SX(0, 1), ca.SX(0, 1)
-        syms = ca.vertcat(*[s for s, _ in self.unknowns])
-        exprs = ca.vertcat(*[e for _, e in self.unknowns])
-        return syms, exprs
+        syms = ca.vertcat(*[s for s, _ in self.unknowns], *[s for s, _ in self.conditions])
+        return syms, ca.vertcat(*rows)
 
     def reduced(self, S: ca.SX, v: ca.SX, v_dot: ca.SX, qd_driven: ca.SX, qdd_driven: ca.SX):
         """Kane-Maggi form. Returns (q_dot, q_ddot, v_dot solved, unknowns solved) as expressions.
@@ -198,8 +240,8 @@ class ConstrainedSystem:
         qdd_all = ca.vertcat(ca.mtimes(S, v_dot) + S_dot_v, qdd_driven)
         M, c, Q = self.terms()
         eq = ca.mtimes(S.T, (ca.mtimes(M, self.qdd) + c - Q)[:nf])
-        x_syms, x_exprs = self._unknowns()
-        residual = ca.vertcat(eq, x_syms - x_exprs)
+        x_syms, x_rows = self._unknowns()
+        residual = ca.vertcat(eq, x_rows)
         residual = ca.substitute(residual, ca.vertcat(self.qd, self.qdd), ca.vertcat(qd_all, qdd_all))
         w = ca.vertcat(v_dot, x_syms)
         sol = self._solve(residual, w)
@@ -223,8 +265,8 @@ class ConstrainedSystem:
         A_dot_qd = ca.jtimes(Aqd, qf, qd_free)
         dyn = (ca.mtimes(M, self.qdd) + c - Q)[:nf] - ca.mtimes(self.A.T, lam)
         con = ca.mtimes(self.A, qdd_free) + A_dot_qd + k_stab * Aqd
-        x_syms, x_exprs = self._unknowns()
-        residual = ca.vertcat(dyn, con, x_syms - x_exprs)
+        x_syms, x_rows = self._unknowns()
+        residual = ca.vertcat(dyn, con, x_rows)
         residual = ca.substitute(residual, ca.vertcat(self.qd, self.qdd), ca.vertcat(qd_all, qdd_all))
         w = ca.vertcat(qdd_free, lam, x_syms)
         sol = self._solve(residual, w)

@@ -3,7 +3,7 @@
 A ModelSpec is everything fmu_build needs and nothing it must know about wheels (the
 wheel's comes from model/build.py, any other system's from model/system.py):
 symbol vectors (t, x, s, u, p), the expressions of the generated functions
-(init, ode, out, evt, chk, nom) and the metadata (names, units, defaults,
+(init, ode, out, evt, chk, nom, and upd when an event updates the state) and the metadata (names, units, defaults,
 descriptions) of every FMI-visible quantity.
 """
 from __future__ import annotations
@@ -29,12 +29,19 @@ class Quantity:
 
 @dataclass
 class Event:
-    """An event indicator: fires when expr goes from > 0 to <= 0."""
+    """An event indicator: fires when expr goes from > 0 to <= 0.
+
+    action "terminate" (stop there) or "warn" (log, go on); "update": the state jumps to
+    `update`, an expression of (t, x, u, p) (a discrete mode switch, e.g. a stiction law
+    sticking), and the integration goes on. The Boolean output `flag` turns true when it
+    first fires.
+    """
 
     name: str
     expr: ca.SX
-    action: str  # "terminate" or "warn"
+    action: str  # "terminate", "warn" or "update"
     flag: Quantity  # the Boolean output that turns true when it fires
+    update: ca.SX | None = None  # "update": the new state x+(t, x, u, p)
 
 
 @dataclass
@@ -67,6 +74,9 @@ class ModelSpec:
     checks: list[Check] = field(default_factory=list)
     nominal: ca.SX | None = None  # x scale(p) for absolute tolerances
     effects: list[str] = field(default_factory=list)
+    # kinds of the non-conservative forces ("dissipative", "actuator": model/context.py); empty:
+    # energy is conserved, else energy + dissipated_energy - actuator_work is (the energy effect)
+    force_kinds: list[str] = field(default_factory=list)
     formulation: str = "reduced"
     about: str = ""  # what the model is, one paragraph for the FMU's documentation/index.html
 
@@ -88,6 +98,14 @@ class ModelSpec:
         if self.events:
             e = ca.vertcat(*[ev.expr for ev in self.events])
             fns["evt"] = ca.Function("gw_evt", [t, x, u, p], [e], ["t", "x", "u", "p"], ["e"])
+        updates = [(k, ev.update) for k, ev in enumerate(self.events) if ev.action == "update"]
+        if updates:
+            # upd(t, x, u, p, k): the state after the update of event k (an index, as a double)
+            k = ca.SX.sym("k")
+            x_new = x
+            for i, expr in reversed(updates):
+                x_new = ca.if_else(k == i, expr, x_new)
+            fns["upd"] = ca.Function("gw_upd", [t, x, u, p, k], [x_new], ["t", "x", "u", "p", "k"], ["x_new"])
         if self.checks:
             c = ca.vertcat(*[ch.expr for ch in self.checks])
             fns["chk"] = ca.Function("gw_chk", [s, p], [c], ["s", "p"], ["c"])

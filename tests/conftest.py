@@ -115,3 +115,32 @@ def earth_design(earth_loop):
 @pytest.fixture(scope="session")
 def controller_fmu(earth_loop):
     return earth_loop.controller_fmu
+
+
+# ---- `gyrowheel export-c` (test_export_c.py, test_export_c_review.py) ----------------------------
+
+@pytest.fixture(scope="session")
+def earth(tmp_path_factory) -> Path:
+    """paper_earth exported through the command line (with its strict compile check)."""
+    from export_c_helpers import gyrowheel
+
+    out = tmp_path_factory.mktemp("export") / "paper_earth"
+    r = gyrowheel("export-c", SCENES / "paper_earth.toml", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith(f"wrote {out}/") and r.stderr == ""
+    return out
+
+
+@pytest.fixture(scope="session")
+def earth_gcc(earth, tmp_path_factory) -> dict:
+    """The export's library object and both examples, gcc -O2, strict; and what gcc printed."""
+    from export_c_helpers import STRICT, cc
+
+    out = tmp_path_factory.mktemp("earth_gcc")
+    built = {"obj": out / "paper_earth.o", "example": out / "example", "realtime": out / "realtime"}
+    diagnostics = cc("gcc", *STRICT, "-O2", "-c", earth / "paper_earth.c", "-o", built["obj"]).stderr
+    for name in ("example", "realtime"):
+        src = earth / "examples" / ("main.c" if name == "example" else "realtime.c")
+        diagnostics += cc("gcc", *STRICT, "-O2", f"-I{earth}", src, built["obj"], "-lm", "-o", built[name]).stderr
+    built["diagnostics"] = diagnostics
+    return built

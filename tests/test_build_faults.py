@@ -171,9 +171,13 @@ def test_lift_off_policy_decides_the_event(policy, events):
     assert {ev.name: ev.action for ev in spec.events} == events
 
 
-def test_load_proportional_law_alone_stops_at_lift_off():
-    spec = build_model(effects={"gravity": {}, "rolling_resistance": {}})
-    assert {ev.name: ev.action for ev in spec.events} == {"fall": "terminate", "lift_off": "terminate"}
+@pytest.mark.parametrize("law,events", [
+    ("smoothed", {"fall": "terminate", "lift_off": "terminate"}),
+    ("stiction", {"fall": "terminate", "rolling_stiction": "update", "lift_off": "terminate"}),
+])
+def test_load_proportional_law_alone_stops_at_lift_off(law, events):
+    spec = build_model(effects={"gravity": {}, "rolling_resistance": {"law": law}})
+    assert {ev.name: ev.action for ev in spec.events} == events
 
 
 def test_ignored_lift_off_runs_on(tmp_path):

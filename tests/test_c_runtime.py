@@ -20,7 +20,8 @@ import pytest
 from c_programs import (C_SRC, FMI_HEADERS, MODES, STRICT, TESTS_C, UNITY, run_program, unity_flags,
                         writable_symbols)
 
-PROGRAMS = {"oscillator": "oscillator", "warn": "warn", "decay": "decay"}  # driver -> toy model
+PROGRAMS = {"oscillator": "oscillator", "warn": "warn", "decay": "decay",  # driver -> toy model
+            "stickslip": "stickslip"}
 
 
 @pytest.mark.parametrize("mode", MODES)

@@ -125,8 +125,9 @@ def test_drag_force_uses_the_smoothed_speed():
 
 
 def test_rolling_resistance_torque_is_a_generalised_force_on_gamma():
-    """rolling_resistance_torque is Q_gamma = -c_rr R F_n tanh(gamma_dot / rr_omega_eps) (N.m per
-    rad of gamma): its power is Q_gamma gamma_dot, not a torque about the axle times omega . n."""
+    """rolling_resistance_torque is Q_gamma = -c_rr R F_n sign(gamma_dot) while rolling (the default
+    stiction law; the smoothed law's tanh(5 / 0.01) is 1 too) (N.m per rad of gamma): its power is
+    Q_gamma gamma_dot, not a torque about the axle times omega . n."""
     spec, fns, p, names = _spec_functions({"rolling_resistance": {}, "contact_forces": {}, "energy": {}})
     start = {"beta": 1.2, "alpha_dot": 2.0, "gamma_dot": 5.0}
     x = np.array(fns["init"]([start.get(q.name, q.start) for q in spec.starts], p)).ravel()

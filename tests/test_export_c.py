@@ -31,7 +31,6 @@ import json
 import re
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -41,44 +40,8 @@ from fmpy import simulate_fmu
 from c_programs import MODE_FLAGS, MODES, TESTS_C, run_built, writable_symbols
 from conftest import ROOT, SCENES
 from fmu_build import build_fmu, load_scene
+from export_c_helpers import STRICT, cc, gyrowheel
 from fmu_build.export_c import MARKER, export_c
-
-STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror"]
-
-
-def gyrowheel(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "fmu_build", *map(str, args)], capture_output=True, text=True,
-                          cwd=cwd or ROOT)
-
-
-def cc(compiler: str, *args) -> subprocess.CompletedProcess:
-    r = subprocess.run([compiler, *map(str, args)], capture_output=True, text=True)
-    assert r.returncode == 0, f"{compiler} {' '.join(map(str, args))}\n{r.stderr}"
-    return r
-
-
-@pytest.fixture(scope="module")
-def earth(tmp_path_factory) -> Path:
-    """paper_earth exported through the command line (with its strict compile check)."""
-    out = tmp_path_factory.mktemp("export") / "paper_earth"
-    r = gyrowheel("export-c", SCENES / "paper_earth.toml", "-o", out)
-    assert r.returncode == 0, r.stderr
-    assert r.stdout.startswith(f"wrote {out}/") and r.stderr == ""
-    return out
-
-
-@pytest.fixture(scope="module")
-def earth_gcc(earth, tmp_path_factory) -> dict:
-    """The library object and both examples, gcc -O2, strict; and what gcc printed."""
-    out = tmp_path_factory.mktemp("earth_gcc")
-    built = {"obj": out / "paper_earth.o", "example": out / "example", "realtime": out / "realtime"}
-    diagnostics = cc("gcc", *STRICT, "-O2", "-c", earth / "paper_earth.c", "-o", built["obj"]).stderr
-    for name in ("example", "realtime"):
-        src = earth / "examples" / ("main.c" if name == "example" else "realtime.c")
-        diagnostics += cc("gcc", *STRICT, "-O2", f"-I{earth}", src, built["obj"], "-lm", "-o", built[name]).stderr
-    built["diagnostics"] = diagnostics
-    return built
-
 
 @pytest.fixture(scope="module")
 def earth_reference(earth_fmu):

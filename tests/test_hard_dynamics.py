@@ -15,6 +15,7 @@ from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 from conftest import CasadiWheel, PAPER, SCENES, STATES
 from fmi_helpers import Slave
 from fmu_build import build_fmu, load_scene, parse_scene
+from fmu_build.scipy_reference import solve_hybrid
 from model.build import BETA_MIN_DEFAULT
 
 TIGHT = dict(rel_tol=1e-12, abs_tol=1e-14)
@@ -104,22 +105,24 @@ def test_euler_disk_precession_grows_like_beta_to_the_minus_half(euler_disk):
 @pytest.mark.parametrize("solver,tol", [(5, 1e-12), (3, 1e-12), (4, 1e-10)])
 def test_euler_disk_fall_located_to_a_nanosecond(euler_disk, solver, tol):
     """The fall of the dissipating disk, located on the dense output, agrees with scipy DOP853
-    at rtol 1e-13 with its own event location to 1e-9 s."""
+    at rtol 1e-13 with its own event location to 1e-9 s. On the way the pivot friction (stiction
+    law) reverses once, at 7.11 s where the pivot rate reaches 0: the reference switches there too
+    (tests/reference/hybrid.py, scipy's own event location)."""
     spec = euler_disk.spec
-    from scipy.integrate import solve_ivp
     f = spec.functions()
     p = np.array([q.start for q in spec.parameters])
     x0 = np.array(f["init"]([q.start for q in spec.starts], p)).ravel()
-
-    def fall(t, x):
-        return math.sin(x[3]) - math.sin(0.05)
-    fall.terminal, fall.direction = True, -1
-    ref = solve_ivp(lambda t, x: np.array(f["ode"](t, x, [], p)).ravel(), (0, 60), x0, method="DOP853",
-                    rtol=1e-13, atol=1e-15, events=fall)
+    t_ref, _, switches = solve_hybrid(spec, x0, p, 60.0, stop=lambda t, x: math.sin(x[3]) - math.sin(0.05),
+                                      rtol=1e-13, atol=1e-15)
+    assert [name for _, name in switches] == ["pivot_stiction"]
     t, x, fallen, _, _ = _run_until(euler_disk.fmu, 60.0, 1.0, solver=solver, rel_tol=tol, abs_tol=tol * 1e-2,
                                     max_step=1.0)
     assert fallen
-    assert t == pytest.approx(ref.t_events[0][0], abs=1e-9)
+    assert t == pytest.approx(t_ref, abs=1e-9)
+
+
+# the fall at beta_min = 1e-3 rad (scipy DOP853 at rtol 1e-10 with the pivot reversal at 7.11 s)
+FALL_AT_DEFAULT_BETA_MIN = 10.7599885
 
 
 def test_euler_disk_down_to_the_default_beta_min(euler_disk):
@@ -130,7 +133,6 @@ def test_euler_disk_down_to_the_default_beta_min(euler_disk):
     accelerations carry a round-off of about 2e-10 relative (10 eps / beta^2), which a tighter
     tolerance only chases with rejected steps."""
     from fmpy import simulate_fmu
-    from scipy.integrate import solve_ivp
     settings = dict(beta_min=BETA_MIN_DEFAULT, solver=5, rel_tol=1e-10, abs_tol=1e-12, max_step=1.0)
     r = simulate_fmu(str(euler_disk.fmu), output_interval=1e-3, start_values=settings)
     assert r["fallen"][-1] and math.sin(r["beta"][-1]) == pytest.approx(math.sin(BETA_MIN_DEFAULT), abs=1e-12)
@@ -144,13 +146,11 @@ def test_euler_disk_down_to_the_default_beta_min(euler_disk):
     p = np.array([BETA_MIN_DEFAULT if q.name == "beta_min" else q.start for q in spec.parameters])
     x0 = np.array(f["init"]([q.start for q in spec.starts], p)).ravel()
 
-    def fall(t, x):
-        return math.sin(x[3]) - math.sin(BETA_MIN_DEFAULT)
-    fall.terminal, fall.direction = True, -1
-    ref = solve_ivp(lambda t, x: np.array(f["ode"](t, x, [], p)).ravel(), (0, 60), x0, method="DOP853",
-                    rtol=1e-10, atol=1e-12, events=fall)
-    assert ref.t_events[0][0] == pytest.approx(10.7596925, abs=1e-7)
-    assert r["time"][-1] == pytest.approx(ref.t_events[0][0], abs=1e-8)
+    t_ref, _, _ = solve_hybrid(spec, x0, p, 60.0, stop=lambda t, x: math.sin(x[3]) - math.sin(BETA_MIN_DEFAULT),
+                               rtol=1e-10, atol=1e-12)
+    # 10.7596925 s with the smoothed (tanh) pivot friction, which fades below 0.01 rad/s of pivot rate
+    assert t_ref == pytest.approx(FALL_AT_DEFAULT_BETA_MIN, abs=1e-7)
+    assert r["time"][-1] == pytest.approx(t_ref, abs=1e-8)
 
 
 # -- 3. fast spin ----------------------------------------------------------------------

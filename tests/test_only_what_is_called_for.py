@@ -21,8 +21,11 @@ BASE_VARIABLES = {
 } | {f"der({s})" for s in STATES}  # state derivatives, for Model Exchange
 EFFECT_VARIABLES = {  # what each effect adds, by name (docs/effects.md)
     "slope": {"slope_angle", "slope_direction"},
-    "rolling_resistance": {"c_rr", "rr_omega_eps", "rolling_resistance_torque", "lifted_off"},
-    "spin_friction": {"c_pivot", "d_pivot", "pivot_omega_eps", "pivot_torque", "lifted_off"},
+    # the stiction laws (default): a mode state each (local) and its switch event's flag, no smoothing
+    "rolling_resistance": {"c_rr", "rolling_resistance_torque", "lifted_off", "rolling_mode", "der(rolling_mode)",
+                           "rolling_switched"},
+    "spin_friction": {"c_pivot", "d_pivot", "pivot_torque", "lifted_off", "pivot_mode", "der(pivot_mode)",
+                      "pivot_switched"},
     "air_drag": {"rho_air", "cd_area", "c_lin", "cm_spin", "drag_force"},
     "contact_forces": {"mu", "F_n", "F_long", "F_lat", "friction_use", "lifted_off", "slipping"},
     "energy": {"kinetic_energy", "potential_energy", "contact_x", "contact_y"},
@@ -39,10 +42,13 @@ def built(tmp_path_factory):
     cache = {}
 
     def _built(*effects: str) -> tuple[set[str], Path]:
+        """Effects by name; "name:law" chooses a law (rolling_resistance:smoothed)."""
         key = tuple(sorted(effects))
         if key not in cache:
-            name = "_".join(("w",) + key)
-            text = f'[model]\nname = "{name}"\n[effects.gravity]\n' + "".join(f"[effects.{e}]\n" for e in effects)
+            name = "_".join(("w",) + key).replace(":", "_")
+            text = f'[model]\nname = "{name}"\n[effects.gravity]\n' + "".join(
+                f"[effects.{e}]\n" if ":" not in e else "[effects.{}]\nlaw = \"{}\"\n".format(*e.split(":"))
+                for e in effects)
             result = build_fmu(parse_scene(text, f"{name}.toml"), root / f"{name}.fmu", build_dir=root / name)
             names = {v.name for v in read_model_description(str(result.fmu)).modelVariables}
             cache[key] = (names, result.sources)
@@ -88,7 +94,8 @@ def test_the_right_hand_side_contains_only_named_effects(built):
         assert _ode_body(built(outputs_only)[1]) == base_ode, outputs_only
     assert "tanh(" not in base_ode and "tanh(" not in (base / "gw_funcs.c").read_text()
     for law in ("rolling_resistance", "spin_friction"):
-        assert "tanh(" in _ode_body(built(law)[1]), law  # the regularised Coulomb laws
+        assert "tanh(" not in _ode_body(built(law)[1]), law  # true stiction: no regularisation
+        assert "tanh(" in _ode_body(built(law + ":smoothed")[1]), law  # the regularised Coulomb laws
     assert len(_ode_body(built("air_drag")[1])) > len(base_ode)
     assert "tanh(" not in _ode_body(built("air_drag")[1])
 
@@ -98,3 +105,21 @@ def test_a_lunar_coasting_study_pays_for_no_drag(built):
     assert not names & (EFFECT_VARIABLES["air_drag"] | EFFECT_VARIABLES["gyrover"])
     header = (sources / "model_desc.c").read_text()
     assert ".nu = 0" in header  # no inputs: nothing of the Gyrover actuation
+
+
+def test_mode_machinery_only_for_the_stiction_laws(built):
+    """The state update function, update events and mode states exist only where a scene names a
+    stiction law; the smoothed laws and every other effect have none (no upd in the C at all)."""
+    for effects in [(), ("contact_forces",), ("rolling_resistance:smoothed",), ("spin_friction:smoothed",),
+                    ("air_drag", "energy")]:
+        names, sources = built(*effects)
+        assert "gw_upd" not in (sources / "gw_funcs.c").read_text(), effects
+        desc = (sources / "model_desc.c").read_text()
+        assert ".upd = {0, 0}" in desc and "GW_EVENT_UPDATE" not in desc, effects
+        assert not any(n.endswith("_mode") for n in names), effects
+    for law, mode in (("rolling_resistance", "rolling_mode"), ("spin_friction", "pivot_mode")):
+        names, sources = built(law)
+        assert "gw_upd" in (sources / "gw_funcs.c").read_text()
+        desc = (sources / "model_desc.c").read_text()
+        assert ".upd = {gw_upd, gw_upd_work}" in desc and desc.count("GW_EVENT_UPDATE") == 1
+        assert mode in names

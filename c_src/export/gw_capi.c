@@ -40,6 +40,7 @@ static gyrowheel_status gwc_fail(const struct GWC_T *w, gyrowheel_status code, c
     va_start(ap, fmt);
     vsnprintf(mw->last_error, sizeof(mw->last_error), fmt, ap);
     va_end(ap);
+    if (w->logger) w->logger(w->logger_env, GYROWHEEL_LOG_ERROR, w->last_error);
     return code;
 }
 
@@ -54,7 +55,10 @@ static void gwc_begin(struct GWC_T *w) {
 
 static gyrowheel_status gwc_fail_core(struct GWC_T *w, gyrowheel_status code,
                                       const char *fallback) {
-    return gwc_fail(w, code, "%s", w->pending_len ? w->pending : fallback);
+    if (!w->pending_len) return gwc_fail(w, code, "%s", fallback);
+    /* the core's messages reached the logger as they were logged (gwc_core_logger) */
+    snprintf(w->last_error, sizeof(w->last_error), "%s", w->pending);
+    return code;
 }
 
 /* The core's logger: errors are kept for last_error, everything goes to the caller's logger. */
@@ -79,8 +83,8 @@ static void gwc_core_logger(void *env, const char *instance_name, gw_status stat
 
 GYROWHEEL_EXPORT const char *GWC(last_error)(const GWC_T *w) {
     if (!w)
-        return GWC_FN(last_error) ": no instance (create was given a NULL instance pointer or "
-                                  "ran out of memory)";
+        return GWC_FN(last_error) ": no instance (create was given a NULL instance pointer, "
+                                  "an allocator without both functions, or ran out of memory)";
     return w->last_error;
 }
 
@@ -198,6 +202,10 @@ static gyrowheel_status gwc_check_settings(GWC_T *w, const char *fn, const gyrow
             return gwc_fail(w, GYROWHEEL_ERR_INVALID, "%s: %s = %g must be > 0%s", fn, names[i],
                             v[i], i == 1 ? " (or 0: follow rel_tol)" : "");
     }
+    if (s->max_internal_steps < 0 || (double)s->max_internal_steps > GW_MAX_INTERNAL_STEPS_MAX)
+        return gwc_fail(w, GYROWHEEL_ERR_INVALID,
+                        "%s: max_internal_steps = %ld must lie in [1, 2147483647] (or 0: the "
+                        "scene's)", fn, s->max_internal_steps);
     return GYROWHEEL_OK;
 }
 
@@ -223,6 +231,7 @@ static gyrowheel_status gwc_setup(GWC_T *w, const char *fn, const double *p, con
     I->rel_tol = st.rel_tol;
     I->abs_tol = st.abs_tol;
     I->max_step = st.max_step;
+    if (st.max_internal_steps > 0) I->max_internal_steps = (double)st.max_internal_steps;
     if (gw_setup_experiment(I, fn, 0, 0.0, st.start_time, 0, 0.0) != GW_OK)
         return gwc_fail_core(w, GYROWHEEL_ERR_INVALID, "experiment set-up failed");
     if (gw_initialize(I, fn) > GW_WARNING)
@@ -259,7 +268,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(create)(const double *parameters, const do
 
 /* ---- by name -------------------------------------------------------------------------------- */
 
-/* settings by name: solver, rel_tol, abs_tol, max_step (the model's GW_VAR_SETTING variables)
+/* settings by name: solver, rel_tol, abs_tol, max_step, max_internal_steps (the model's GW_VAR_SETTING variables)
  * and start_time; 0 if `name` is none of them */
 static int gwc_named_setting(GWC_T *w, const char *fn, gyrowheel_settings *st, const char *name,
                              double value, gyrowheel_status *r) {
@@ -288,6 +297,15 @@ static int gwc_named_setting(GWC_T *w, const char *fn, gyrowheel_settings *st, c
         st->max_step = value;
         return 1;
     }
+    if (strcmp(name, "max_internal_steps") == 0) {
+        if (!(value >= 0.0 && value <= GW_MAX_INTERNAL_STEPS_MAX) || value != floor(value))
+            *r = gwc_fail(w, isfinite(value) ? GYROWHEEL_ERR_INVALID : GYROWHEEL_ERR_NOT_FINITE,
+                          "%s: max_internal_steps = %g must be a whole number in [1, 2147483647] "
+                          "(or 0: the scene's)", fn, value);
+        else
+            st->max_internal_steps = (long)value;
+        return 1;
+    }
     return 0;
 }
 
@@ -309,7 +327,7 @@ static gyrowheel_status gwc_unknown_name(GWC_T *w, const char *fn, const char *n
     gwc_name_list(initial, sizeof(initial), GYROWHEEL_KIND_INITIAL);
     return gwc_fail(w, GYROWHEEL_ERR_NAME,
                     "%s: unknown name \"%s\"; parameters: %s; initial values: %s; settings: "
-                    "solver, rel_tol, abs_tol, max_step, start_time",
+                    "solver, rel_tol, abs_tol, max_step, max_internal_steps, start_time",
                     fn, name, params, initial);
 }
 
@@ -414,7 +432,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(set_inputs)(GWC_T *w, const double *inputs
 static const char *gwc_fired_terminating(const gw_instance *I) {
     int i;
     for (i = 0; i < I->m->ne; i++)
-        if (I->flags[i] && I->m->event_actions && I->m->event_actions[i] == GW_EVENT_TERMINATE)
+        if (gw_event_ended(I, i))
             return GWC_TABLE.rows[GYROWHEEL_KIND_EVENT][i].name;
     return "?";
 }

@@ -48,7 +48,8 @@ struct GWC_T {
 };
 
 /* ---- gw_capi.c: shared by the API's files -------------------------------------------------- */
-/* Set last_error (printf-style) and return code; const instances too (the one field written). */
+/* Set last_error (printf-style), hand it to the logger, return code; const instances too (the
+ * one field written). */
 static gyrowheel_status gwc_fail(const struct GWC_T *w, gyrowheel_status code, const char *fmt, ...)
     GW_PRINTF(3, 4);
 /* GYROWHEEL_ERR_ARGUMENT, "fn: what is NULL" */

@@ -56,6 +56,9 @@ GYROWHEEL_EXPORT void GWC(default_settings)(gyrowheel_settings *settings) {
     settings->rel_tol = GW_MODEL.default_rel_tol;
     settings->abs_tol = GW_MODEL.default_abs_tol;
     settings->max_step = GW_MODEL.default_max_step;
+    settings->max_internal_steps = (long)(GW_MODEL.default_max_internal_steps > 0.0
+                                              ? GW_MODEL.default_max_internal_steps
+                                              : GW_DEFAULT_MAX_INTERNAL_STEPS);
 }
 
 GYROWHEEL_EXPORT const char *GWC(status_string)(gyrowheel_status status) {

@@ -92,6 +92,10 @@ typedef struct {
     double abs_tol;    /* 1, 0 or in [1e-30, 1]: absolute tolerance, scaled by each state's
                           nominal value; 0: rel_tol / 100 (follows the tolerance) */
     double max_step;   /* s, > 0: bound of internal steps; THE step of euler and rk4 */
+    long max_internal_steps; /* 1, in [1, 2^31 - 1]: budget of internal steps of one advance
+                                (an advance that would need more is refused at once, or stopped
+                                when the budget runs out, the instance back where it was);
+                                0: the scene's (GW_DEFAULT_MAX_INTERNAL_STEPS, 10^6) */
 } gyrowheel_settings;
 
 /* An allocator (optional; NULL means malloc/free).  allocate returns size bytes aligned for any

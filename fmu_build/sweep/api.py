@@ -18,6 +18,7 @@ import pandas as pd
 from fmu_build.sweep.execute import execute
 from fmu_build.sweep.output import TableWriter, check_output_path
 from fmu_build.sweep.plan import Plan, make_plan
+from fmu_build.sweep.plot import check_plot_path
 from fmu_build.sweep.spec import (SweepSpecError, as_axis, as_random, parse_grid, parse_random,
                                   point_table)
 from fmu_build.sweep.target import FmuTarget
@@ -30,7 +31,8 @@ def open_target(source, fmu_out: str | Path | None = None):
         yield source
         return
     path = Path(source)
-    if path.suffix == ".toml":
+    suffix = path.suffix.lower()
+    if suffix == ".toml":
         from fmu_build.builder import build_fmu
         from fmu_build.scene import load_scene
 
@@ -40,7 +42,7 @@ def open_target(source, fmu_out: str | Path | None = None):
             build_fmu(scene, fmu, build_dir=Path(tmp) / "build")
             yield FmuTarget(fmu)
         return
-    if path.suffix == ".ssp":
+    if suffix == ".ssp":
         from cosim.system import SystemFileError
 
         from fmu_build.sweep.system_target import SspTarget
@@ -49,7 +51,7 @@ def open_target(source, fmu_out: str | Path | None = None):
         except SystemFileError as exc:
             raise SweepSpecError(str(exc)) from None
         return
-    if path.suffix != ".fmu":
+    if suffix != ".fmu":
         raise SweepSpecError(f"{path}: expected a scene (.toml), an FMU (.fmu) or a system (.ssp)")
     if not path.is_file():
         raise SweepSpecError(f"{path}: no such FMU file")
@@ -94,20 +96,26 @@ def plan_sweep(target, *, grid=None, random=None, samples: int | None = None, se
     fixed = dict(fixed or {})
     for name, value in (("solver", solver), ("rel_tol", rel_tol), ("abs_tol", abs_tol), ("max_step", max_step)):
         if value is not None:
+            if name in fixed:
+                raise SweepSpecError(f"{name!r} given twice (--{name.replace('_', '-')} and --set {name})")
             fixed[name] = value
     return make_plan(target, inputs, fixed=fixed, derive=derive, stop_time=stop_time,
                      output_interval=output_interval, start_time=start_time, metrics=metrics,
                      metric_functions=metric_functions, ensemble=ensemble)
 
 
-def run_plan(plan: Plan, *, output: str | Path | None = None, workers: int | None = None,
-             scheduler: str | None = None, client=None, batch_size: int | None = None,
-             progress: bool = False, writer: TableWriter | None = None) -> pd.DataFrame:
-    """Run a plan; returns the table (and keeps `output` up to date while it runs)."""
+def check_execution(workers: int | None, batch_size: int | None) -> None:
     if batch_size is not None and batch_size < 1:
         raise SweepSpecError(f"--batch-size must be >= 1, got {batch_size}")
     if workers is not None and workers < 0:
         raise SweepSpecError(f"--workers must be >= 0, got {workers}")
+
+
+def run_plan(plan: Plan, *, output: str | Path | None = None, workers: int | None = None,
+             scheduler: str | None = None, client=None, batch_size: int | None = None,
+             progress: bool = False, writer: TableWriter | None = None) -> pd.DataFrame:
+    """Run a plan; returns the table (and keeps `output` up to date while it runs)."""
+    check_execution(workers, batch_size)
     writer = writer or TableWriter(check_output_path(output), plan.inputs)
     try:
         execute(plan, writer, workers=workers, scheduler=scheduler, client=client, batch_size=batch_size,
@@ -148,6 +156,8 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     Raises SweepSpecError (a ValueError) for any bad name, value or spec, before anything runs.
     """
     check_output_path(output)
+    check_plot_path(plot)
+    check_execution(workers, batch_size)
     with open_target(source) as target:
         plan = plan_sweep(target, grid=grid, random=random, samples=samples, seed=seed, points=points,
                           fixed=fixed, derive=derive, stop_time=stop_time, output_interval=output_interval,

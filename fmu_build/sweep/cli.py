@@ -51,14 +51,17 @@ def add_parser(sub) -> None:
 
 def cmd_sweep(args) -> int:
     from fmu_build.cli import CliError
-    from fmu_build.sweep.api import open_target, plan_sweep, run_plan
+    from fmu_build.sweep.api import check_execution, open_target, plan_sweep, run_plan
     from fmu_build.sweep.output import TableWriter, check_output_path
+    from fmu_build.sweep.plot import check_plot_path
     from fmu_build.sweep.spec import SweepSpecError, parse_assignments
 
     if args.workers is not None and args.scheduler:
         raise CliError("--workers and --scheduler exclude each other")
     try:
         output = check_output_path(args.output)
+        check_plot_path(args.plot)
+        check_execution(args.workers, args.batch_size)
         with open_target(args.source) as target:
             plan = plan_sweep(target, grid=args.grid, random=args.random, samples=args.samples, seed=args.seed,
                               fixed=parse_assignments(args.set), derive=args.derive, stop_time=args.stop_time,
@@ -68,13 +71,15 @@ def cmd_sweep(args) -> int:
             writer = TableWriter(output, plan.inputs)
             where = args.scheduler or ("in-process loop" if args.workers == 0 else
                                        f"LocalCluster of {args.workers or 'all cores'} worker(s)")
-            print(f"sweep: {len(plan.values)} points, t = {plan.settings.start_time:g} .. "
-                  f"{plan.settings.stop_time:g} s every {plan.settings.output_interval:g} s, on {where}",
-                  file=sys.stderr)
-            try:
+            try:  # from here on, Ctrl-C leaves a complete table of the points done (none, if it comes now)
+                print(f"sweep: {len(plan.values)} points, t = {plan.settings.start_time:g} .. "
+                      f"{plan.settings.stop_time:g} s every {plan.settings.output_interval:g} s, on {where}",
+                      file=sys.stderr)
                 table = run_plan(plan, workers=args.workers, scheduler=args.scheduler, batch_size=args.batch_size,
                                  progress=not args.no_progress, writer=writer)
             except KeyboardInterrupt:
+                if not writer.flushed:  # stopped before run_plan: no table yet, or a previous sweep's
+                    writer.flush()
                 print(f"gyrowheel: interrupted: {writer.written} of {len(plan.values)} points written to {output}",
                       file=sys.stderr)
                 return 130

@@ -8,17 +8,20 @@
 - scheduler='tcp://host:port': a running cluster (`dask scheduler`, `dask worker ADDRESS`); its
   workers need gyrowheel installed (they import fmu_build.sweep), not the FMU nor user files.
 - client=distributed.Client: an existing client (Python API).
-The FMU's bytes are scattered to every worker once; each task is one batch (fmu_build.sweep.batch).
-Rows are handed to the writer as batches finish; Ctrl-C cancels what is left and re-raises after
-the rows done so far are written.
+The FMU's bytes travel once, as a task's result; each task is one batch (fmu_build.sweep.batch).
+Rows are handed to the writer as batches finish; Ctrl-C cancels what is left (and waits until the
+scheduler has let go of it) and re-raises after the rows done so far are written.
 """
 from __future__ import annotations
 
 import contextlib
 import math
 import os
+import shutil
 import signal
+import subprocess
 import threading
+import time
 import uuid
 
 from fmu_build.sweep.batch import run_batch
@@ -27,8 +30,11 @@ MAX_BATCH = 500
 # The workers' statistical profiler samples every thread's stack every 10 ms: ~4% of the CPU of
 # 1 ms points (benchmarks/sweep_scaling.py). Off for our LocalCluster; for a cluster of your own,
 # start the workers with DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False.
-LOCAL_CONFIG = {"distributed.worker.profile.enabled": False}
+# The workers of our LocalCluster ignore SIGINT (see _children_ignore_sigint).
+WORKER_PRELOAD = "fmu_build.sweep.worker_setup"
+LOCAL_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.worker.preload": [WORKER_PRELOAD]}
 TASKS_PER_THREAD = 4
+CONNECT_TIMEOUT = 20.0  # s, for a scheduler address to connect and answer Dask's handshake
 
 
 def auto_batch_size(n_points: int, n_threads: int) -> int:
@@ -51,8 +57,19 @@ def _progress(total: int, enabled: bool):
 
 
 def _failed_rows(batch, exc) -> list[dict]:
-    reason = f"task failed: {type(exc).__name__}: {exc}"
+    if type(exc).__name__ == "KilledWorker":  # Dask gave up after allowed-failures + 1 deaths
+        # Dask counts a death against every task waiting on the dying worker: an innocent batch
+        # queued beside the crashing one can be given up too (docs/sweeps.md)
+        reason = ("a worker process died on every try while this batch ran or waited on it (a crash in the unit "
+                  "or a metric function, in this batch or one beside it?): KilledWorker")
+    else:
+        reason = f"task failed: {type(exc).__name__}: {exc}"
     return [{"point": p, "status": "error", "reason": reason, "wall_time": 0.0} for p, _, _ in batch]
+
+
+def _payload(data):
+    """The unit's bytes as a task of their own (see run_dask)."""
+    return data
 
 
 def run_loop(plan, writer, batch_size: int | None = None, progress: bool = False) -> None:
@@ -74,8 +91,12 @@ def run_dask(plan, writer, *, client, batch_size: int | None = None, progress: b
     size = batch_size or auto_batch_size(len(plan.values), threads)
     tasks = plan.tasks(size)
     payload = plan.target.payload()
-    shipped = client.scatter(payload, broadcast=True, hash=False) if payload is not None else None
     tag = uuid.uuid4().hex[:8]
+    # The bytes travel once, as a task's result, not scattered: if every worker holding them dies
+    # (killed, or a unit that crashes its process), the scheduler computes them again; scattered
+    # data would be lost and every batch still waiting would be cancelled with it.
+    shipped = (client.submit(_payload, payload, key=f"gyrowheel-sweep-{tag}-payload", pure=False)
+               if payload is not None else None)
     futures = {client.submit(run_batch, plan.target, shipped, plan.settings, plan.metrics, batch,
                              key=f"gyrowheel-sweep-{tag}-{i}", pure=False): batch
                for i, batch in enumerate(tasks)}
@@ -91,23 +112,112 @@ def run_dask(plan, writer, *, client, batch_size: int | None = None, progress: b
                 bar.update(len(rows))
                 future.release()
     except BaseException:
-        client.cancel(list(futures))
+        _cancel(client, [*futures, *([shipped] if shipped is not None else [])])
         raise
+
+
+def _still_known(keys, dask_scheduler=None) -> int:
+    """On the scheduler: how many of `keys` it still has."""
+    return sum(key in dask_scheduler.tasks for key in keys)
+
+
+def _cancel(client, futures, timeout: float = 5.0) -> None:
+    """Cancel `futures` (the payload too) and wait until the scheduler has forgotten them.
+
+    Client.cancel only sends a message: a client that disconnects right after leaves the
+    scheduler reporting results (and recomputing lost ones, the payload) to a closed connection,
+    with tracebacks on our stderr for a LocalCluster (a Ctrl-C that is not clean).
+    """
+    client.cancel(futures)
+    keys = [f.key for f in futures]
+    deadline = time.monotonic() + timeout
+    try:
+        while client.run_on_scheduler(_still_known, keys) and time.monotonic() < deadline:
+            time.sleep(0.02)
+    except Exception:  # noqa: BLE001 - a scheduler that refuses to run functions: nothing to wait for
+        pass
+
+
+def probe_scheduler(address: str, timeout: float | None = None) -> None:
+    """Raise ConnectionError unless a Dask scheduler at `address` completes Dask's handshake in time.
+
+    distributed.Client bounds the TCP connection by its timeout but not the handshake after it: an
+    address where something accepts and stays silent would hang it forever, and one that answers
+    otherwise (a web server, the dashboard's port) makes it read a garbage frame length.
+    """
+    import asyncio
+
+    from distributed.comm import connect
+
+    timeout = CONNECT_TIMEOUT if timeout is None else timeout
+    outcome: dict = {}
+
+    async def handshake():
+        comm = await asyncio.wait_for(connect(address, timeout=timeout), timeout)
+        await comm.close()
+
+    def run():  # in a thread of its own: the caller may be inside an event loop (Jupyter)
+        try:
+            asyncio.run(handshake())
+        except BaseException as exc:  # noqa: BLE001 - any failure means: no scheduler there
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=run, name="gyrowheel-probe-scheduler", daemon=True)
+    thread.start()
+    thread.join(timeout + 5)
+    if thread.is_alive() or isinstance(outcome.get("error"), (asyncio.TimeoutError, TimeoutError)):
+        raise ConnectionError(f"no Dask scheduler answers at {address} within {timeout:g} s")
+    if "error" in outcome:
+        exc = outcome["error"]
+        if isinstance(exc, ValueError):  # a malformed address
+            raise exc
+        raise ConnectionError(f"no Dask scheduler at {address}: {type(exc).__name__}: {exc}")
+
+
+class _Startup:
+    interrupted = False
 
 
 @contextlib.contextmanager
 def _children_ignore_sigint():
-    """Start worker processes with SIGINT ignored (inherited through exec; Python keeps an ignored
-    SIGINT ignored), so that Ctrl-C in a terminal, which reaches the whole process group, stops the
-    sweep here, cleanly, instead of killing the workers mid-batch with tracebacks of their own."""
+    """Start worker processes that never see SIGINT, without losing a Ctrl-C meant for the sweep.
+
+    Ctrl-C in a terminal reaches the whole process group; the workers must not die mid-batch with
+    tracebacks of their own, the sweep must stop here, cleanly. SIGINT is ignored (SIG_IGN) while
+    the cluster starts: an ignored signal stays ignored through exec and Python keeps it so, so
+    the workers started meanwhile ignore it from their first instruction (a mask would not do:
+    distributed starts them from threads that do not inherit ours). Workers the nanny restarts
+    later ignore it from their preload on (WORKER_PRELOAD). An ignored Ctrl-C would be lost, so a
+    sentinel child (`sleep`) with SIGINT at its default waits in our process group meanwhile: if
+    it died of SIGINT, a Ctrl-C came, reported as `interrupted` when the block ends for the
+    caller to stop once the cluster can be closed."""
+    startup = _Startup()
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield startup
         return
+    sentinel = _sentinel()
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
-        yield
+        yield startup
     finally:
+        if sentinel is not None:
+            time.sleep(0.01)  # a signal sent just now has reached the sentinel too
+            startup.interrupted = sentinel.poll() == -signal.SIGINT
+            sentinel.kill()
+            sentinel.wait()
         signal.signal(signal.SIGINT, previous)
+
+
+def _sentinel():
+    """A `sleep` child in this process group with SIGINT at its default (None if none can start)."""
+    sleep = shutil.which("sleep")
+    if sleep is None or signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        return None  # no sleep, or SIGINT already ignored (nohup, a background job): nothing to see
+    try:
+        return subprocess.Popen([sleep, "3600"], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+    except OSError:
+        return None
 
 
 def execute(plan, writer, *, workers: int | None = None, scheduler: str | None = None, client=None,
@@ -121,11 +231,29 @@ def execute(plan, writer, *, workers: int | None = None, scheduler: str | None =
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
-        with Client(scheduler, timeout="20s") as c:
+        probe_scheduler(scheduler)
+        with Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s") as c:
             return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
     n = workers or os.cpu_count() or 1
-    with dask.config.set(LOCAL_CONFIG), _children_ignore_sigint():
+    with dask.config.set(LOCAL_CONFIG), _children_ignore_sigint() as startup:
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
                                dashboard_address=":0")
+    # the cluster closes before the client: its scheduler, told of workers going or of a last
+    # result, still finds the client there to tell (else it logs CommClosedError tracebacks)
     with cluster, Client(cluster) as c:
-        return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
+        try:
+            if startup.interrupted:
+                raise KeyboardInterrupt
+            return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
+        except KeyboardInterrupt:
+            _close_workers(cluster)
+            raise
+
+
+def _close_workers(cluster, timeout: float = 10.0) -> None:
+    """Close the workers before the scheduler: closing both at once (the cluster's close), a
+    worker's heartbeat could still be under way to the closed scheduler and print a traceback."""
+    cluster.scale(0)
+    deadline = time.monotonic() + timeout
+    while cluster.workers and time.monotonic() < deadline:
+        time.sleep(0.05)

@@ -23,7 +23,7 @@ def check_output_path(path: str | Path | None) -> Path | None:
     if path is None:
         return None
     path = Path(path)
-    if path.suffix not in FORMATS:
+    if path.suffix.lower() not in FORMATS:
         raise SweepSpecError(f"-o {path}: unknown format {path.suffix or '(no suffix)'!r}; use .parquet or .csv")
     if not path.parent.exists():
         raise SweepSpecError(f"-o {path}: directory {path.parent} does not exist")
@@ -67,6 +67,7 @@ class TableWriter:
         self._last = time.monotonic()
         self._cost = 0.0
         self.written = 0
+        self.flushed = False  # the file holds this sweep's table (not a previous one's, or none)
 
     def add(self, rows: list[dict]) -> None:
         self.rows.extend(rows)
@@ -85,12 +86,13 @@ class TableWriter:
             self._cost = time.monotonic() - t0
             self._last = time.monotonic()
             self.written = len(frame)
+            self.flushed = True
         return frame
 
 
 def write_table(frame: pd.DataFrame, path: Path) -> None:
     tmp = path.with_name(f".{path.name}.part")
-    if path.suffix == ".parquet":
+    if path.suffix.lower() == ".parquet":
         frame.to_parquet(tmp, index=False, engine="pyarrow")
     else:
         frame.to_csv(tmp, index=False)
@@ -100,4 +102,6 @@ def write_table(frame: pd.DataFrame, path: Path) -> None:
 def read_table(path: str | Path) -> pd.DataFrame:
     """Read a sweep table written by gyrowheel sweep (Parquet or CSV)."""
     path = Path(path)
-    return pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
+    if path.suffix.lower() == ".parquet":
+        return pd.read_parquet(path)
+    return _dtypes(pd.read_csv(path))  # True/False with gaps: nullable booleans, as the Parquet file has

@@ -16,6 +16,24 @@ import pandas as pd
 SKIP = {"point", "status", "reason", "wall_time", "event"}
 
 
+def check_plot_path(path: str | Path | None) -> Path | None:
+    """Refuse, before a sweep runs, a plot it could not write: an unknown image format or no such directory."""
+    if path is None:
+        return None
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    from fmu_build.sweep.spec import SweepSpecError
+
+    path = Path(path)
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if path.suffix.lower().lstrip(".") not in formats:
+        raise SweepSpecError(f"--plot {path}: unknown image format {path.suffix or '(no suffix)'!r}; "
+                             f"use .{', .'.join(sorted(formats))}")
+    if not path.parent.is_dir():
+        raise SweepSpecError(f"--plot {path}: directory {path.parent} does not exist")
+    return path
+
+
 def default_metric(table: pd.DataFrame, inputs: list[str]) -> str:
     numeric = [c for c in table.columns if c not in SKIP and c not in inputs
                and pd.api.types.is_numeric_dtype(table[c])]

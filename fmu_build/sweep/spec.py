@@ -15,7 +15,6 @@ degrees); conversion to FMU values happens in fmu_build.sweep.plan.
 """
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -24,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 DISTRIBUTIONS = {"normal": ("mu", "sigma"), "uniform": ("a", "b")}
+MAX_POINTS = 10**7  # a typo such as 1:2:100000 x 1:2:100000 is refused, not allowed to fill the memory
 
 
 class SweepSpecError(ValueError):
@@ -60,6 +60,13 @@ def _number(text: str, where: str) -> float:
         raise SweepSpecError(f"{where}: {text!r} is not a number") from None
     if not math.isfinite(value):
         raise SweepSpecError(f"{where}: {text!r} is not finite")
+    return value
+
+
+def _finite(value: float, where: str) -> float:
+    """A value of a grid must be a number: NaN would read as "not set" and inf is no state."""
+    if not math.isfinite(value):
+        raise SweepSpecError(f"{where}: {value!r} is not finite")
     return value
 
 
@@ -101,9 +108,11 @@ def parse_grid(item: str) -> Axis:
         if not text:
             raise SweepSpecError(f"{where}: empty value in the list")
         try:
-            values.append(float(text))
+            value = float(text)
         except ValueError:
             values.append(text)  # a preset or enumeration item, checked against the FMU later
+            continue
+        values.append(_finite(value, where))
     return Axis(name, tuple(values))
 
 
@@ -126,10 +135,11 @@ def as_axis(name: str, spec) -> Axis:
     """API form: a spec string ('0:20:41'), a number, or a sequence of values."""
     if isinstance(spec, str):
         return parse_grid(f"{name}={spec}")
+    where = f"grid {name!r}"
     if isinstance(spec, (int, float)):
-        return Axis(name, (float(spec),))
+        return Axis(name, (_finite(float(spec), where),))
     if isinstance(spec, (Sequence, np.ndarray)) and len(spec):
-        return Axis(name, tuple(v if isinstance(v, str) else float(v) for v in spec))
+        return Axis(name, tuple(v if isinstance(v, str) else _finite(float(v), where) for v in spec))
     raise SweepSpecError(f"grid {name!r}: expected 'START:STOP:N', a number or a non-empty sequence, got {spec!r}")
 
 
@@ -142,33 +152,48 @@ def as_random(name: str, spec) -> RandomVariable:
     raise SweepSpecError(f"random {name!r}: expected 'normal:MU:SIGMA', 'uniform:A:B' or a 3-tuple, got {spec!r}")
 
 
+def _whole(value) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
 def point_table(grid: Sequence[Axis] = (), random: Sequence[RandomVariable] = (), samples: int | None = None,
                 seed: int = 0) -> pd.DataFrame:
     """The sweep's inputs, one row per point, columns named as given (index: point number).
 
     Shape: (prod(len(axis.values)) * samples, len(grid) + len(random)). Raises SweepSpecError for
-    a name given twice, random variables without --samples, or nothing to sweep.
+    a name given twice, random variables without --samples, a seed or sample count that is not a
+    whole number (>= 0, >= 1), or nothing to sweep.
     """
     names = [a.name for a in grid] + [r.name for r in random]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise SweepSpecError(f"{', '.join(dup)} given more than once (in --grid/--random)")
+    if not _whole(seed) or seed < 0:  # numpy's own message named no field
+        raise SweepSpecError(f"--seed must be a whole number >= 0 (numpy's default_rng), got {seed!r}")
+    if samples is not None and not _whole(samples):
+        raise SweepSpecError(f"--samples must be a whole number >= 1, got {samples!r}")
     if random and not samples:
         raise SweepSpecError("--random needs --samples N (N >= 1)")
     if samples is not None and samples < 1:
         raise SweepSpecError(f"--samples must be >= 1, got {samples}")
     if not grid and not samples:
         raise SweepSpecError("nothing to sweep: give --grid and/or --random with --samples")
+    n_samples = samples or 1
+    n_grid = math.prod(len(a.values) for a in grid)
+    if n_grid * n_samples > MAX_POINTS:
+        raise SweepSpecError(f"{n_grid * n_samples} points: more than {MAX_POINTS} in one sweep (the table and "
+                             "the plan are held in memory); split it into several sweeps")
     rng = np.random.default_rng(seed)
     draws = {r.name: r.draw(rng, samples) for r in random}
-    n_samples = samples or 1
-    rows = []
-    for combo in itertools.product(*[a.values for a in grid]):
-        for k in range(n_samples):
-            row = dict(zip((a.name for a in grid), combo))
-            row.update({name: float(v[k]) for name, v in draws.items()})
-            rows.append(row)
-    table = pd.DataFrame(rows, columns=names)
+    point = np.arange(n_grid * n_samples)
+    columns, inner = {}, n_samples
+    for axis in reversed(grid):  # nested loops: the last axis varies fastest (after the samples)
+        values = np.array(axis.values, dtype=float if all(isinstance(v, float) for v in axis.values) else object)
+        columns[axis.name] = values[(point // inner) % len(values)]
+        inner *= len(values)
+    for name, v in draws.items():  # common random numbers: the same samples at every grid point
+        columns[name] = np.tile(v, n_grid)
+    table = pd.DataFrame({name: columns[name] for name in names}, columns=names)
     table.index.name = "point"
     return table
 

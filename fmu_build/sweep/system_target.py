@@ -55,6 +55,11 @@ class SspTarget:
     def variables(self) -> dict:
         return self._variables
 
+    def canonical(self, name: str) -> str:
+        """One name per variable: the plant's 'M' and 'wheel.M' are both 'wheel.M'."""
+        component, var = self.where.get(name, (None, name))
+        return f"{component}.{var}" if component else name
+
     def payload(self):
         return self._bytes
 

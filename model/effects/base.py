@@ -43,11 +43,21 @@ class Effect:
         """Named values a parameter may be given as (parameter -> {name: value})."""
         return {}
 
+    @classmethod
+    def option_conflict(cls, options: dict) -> tuple[str, str] | None:
+        """(key, reason) when the scene's options contradict each other (a parameter that the
+        chosen structure does not use), else None. The scene reader reports it naming the key;
+        apply() raises ValueError with it."""
+        return None
+
     def choice(self, key: str) -> str:
         return self.options.get(key, self.choices()[key][0])
 
     def declare(self, ctx: WheelContext) -> dict:
         """Declare every parameter with the scene's value as start; return the symbols by name."""
+        conflict = self.option_conflict({k: v for k, v in self.options.items() if not k.startswith("_")})
+        if conflict:
+            raise ValueError(f"{self.name} {conflict[0]}: {conflict[1]}")
         syms = {}
         for q in self.parameters():
             if self.options.get("_no_" + q.name):

@@ -10,7 +10,7 @@
  *   unchanged; the fall as a
  *   terminating event with its time; the logger; a user allocator with a context pointer (no
  *   allocation while advancing, out of memory at every allocation); one RK4 step per 1 ms
- *   advance at t = 1000 s; two threads with one instance each, bit-identical to one thread.
+ *   advance at t = 1000 s; the budget of internal steps of one advance; two threads with one instance each, bit-identical to one thread.
  */
 #include <math.h>
 #include <pthread.h>
@@ -439,6 +439,42 @@ static void fixed_step_late(void) {
     paper_earth_free(w);
 }
 
+/* ---- the budget of internal steps of one advance (settings.max_internal_steps) ---------- */
+static void budget(void) {
+    static const char *const name[] = {"max_internal_steps"};
+    gyrowheel_settings st;
+    paper_earth *w = NULL;
+    double value;
+    paper_earth_default_settings(&st);
+    CHECK(st.max_internal_steps == 1000000); /* the scene's, docs/fmi.md */
+    st.solver = GYROWHEEL_SOLVER_RK4;
+    st.max_step = 1e-3;
+    st.max_internal_steps = 10;
+    CHECK(paper_earth_create(NULL, NULL, &st, NULL, &w) == GYROWHEEL_OK);
+    CHECK(paper_earth_advance(w, 0.01) == GYROWHEEL_OK); /* exactly 10 steps of 1 ms */
+    CHECK(paper_earth_advance(w, 0.021) == GYROWHEEL_ERR_SIMULATION); /* 11: refused at once */
+    CHECK_MSG(w, "more than max_internal_steps = 10");
+    CHECK(paper_earth_time(w) == 0.01);
+    st.solver = GYROWHEEL_SOLVER_DOPRI5; /* adaptive: stopped when the budget runs out */
+    st.max_internal_steps = 5;
+    CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_OK);
+    CHECK(paper_earth_advance(w, 1.0) == GYROWHEEL_ERR_SIMULATION); /* > 20 steps of max_step */
+    CHECK(paper_earth_time(w) == 0.0);
+    st.max_internal_steps = 0; /* 0: the scene's budget */
+    CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_OK);
+    CHECK(paper_earth_advance(w, 1.0) == GYROWHEEL_OK);
+    st.max_internal_steps = -1;
+    CHECK(paper_earth_reset(w, NULL, NULL, &st) == GYROWHEEL_ERR_INVALID);
+    CHECK_MSG(w, "max_internal_steps = -1 must lie in [1, 2147483647]");
+    value = 2.5;
+    CHECK(paper_earth_reset_named(w, 1, name, &value) == GYROWHEEL_ERR_INVALID);
+    CHECK_MSG(w, "max_internal_steps = 2.5 must be a whole number");
+    value = 3.0;
+    CHECK(paper_earth_reset_named(w, 1, name, &value) == GYROWHEEL_OK);
+    CHECK(paper_earth_advance(w, 1.0) == GYROWHEEL_ERR_SIMULATION);
+    paper_earth_free(w);
+}
+
 /* ---- two threads, one instance each --------------------------------------------------------- */
 typedef struct {
     double gamma_dot, y[PAPER_EARTH_NY];
@@ -478,6 +514,7 @@ int main(void) {
     fall();
     allocator();
     fixed_step_late();
+    budget();
     threads();
     fprintf(stderr, "test_capi: %d checks, %d failures\n", h_checks, h_failures);
     return h_failures == 0 ? 0 : 1;

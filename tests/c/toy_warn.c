@@ -96,6 +96,7 @@ static const gw_model GW_MODEL = {
     GW_SOLVER_RK4,
     1e-6, 1e-9, 0.01,
     {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
+    {NULL, NULL}, /* upd: no update events */
     0.0, /* default_max_internal_steps: the runtime's default */
     {NULL, NULL}, /* ode_pre: none */
     0,

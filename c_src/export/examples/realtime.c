@@ -2,14 +2,16 @@
  * realtime.c -- @model@ in a fixed-step real-time loop.  Each period the loop advances the
  * model by one step and reads its outputs, as a hardware-in-the-loop rig or a game loop does;
  * the cost of every such step is measured with CLOCK_MONOTONIC and reported as mean, median,
- * 99th and 99.9th percentile and worst case, beside the energy drift and the error against a
- * tight DOP853 reference (max over the states of |x - x_ref| / max(1, |x_ref|), at 20 s and at
- * the end).  Defaults: RK4 at
- * 1 kHz, 10^6 steps (1000 s of simulated time).  docs/c_api.md has figures and their reading.
+ * 99th and 99.9th percentile and worst case, beside the drift of the energy balance
+ * energy + dissipated_energy - actuator_work (constant in an exact run, docs/effects.md) and the
+ * error against a tight DOP853 reference (max over the states of |x - x_ref| / max(1, |x_ref|),
+ * at 20 s and at the end).  Defaults: RK4 at 1 kHz, 10^6 steps (1000 s of simulated time).
+ * docs/c_api.md has figures and their reading.
  *
  *   @model@_realtime [--steps N] [--rate HZ] [--solver euler|rk4|dopri5|dop853|rosenbrock]
  *                    [--compare] [--paced] [--mlock]
  *
+ *   --steps    1 to 10^9 (the cost of every step is kept: 16 bytes a step)
  *   --compare  the same loop with euler, rk4, dopri5 and dop853 (the scene's tolerances for
  *              the adaptive ones): which solver is the cheapest that is accurate enough
  *   --paced    sleep to each period's start (clock_nanosleep, absolute time) as a real
@@ -33,6 +35,9 @@
 
 static const char *prog = "@model@_realtime";
 
+/* --steps at most: 16 GB of timings (two doubles a step) and 10^6 s of reference at 1 kHz */
+#define MAX_STEPS 1000000000L
+
 typedef struct {
     int solver;
     double rate;         /* Hz */
@@ -46,7 +51,10 @@ typedef struct {
                             to others (CLOCK_THREAD_CPUTIME_ID; includes the two wall-clock
                             reads, ~50 ns) */
     long done;           /* steps run (fewer if the run ended) */
-    double energy_drift; /* max |E - E0| / |E0| (NaN without an energy output) */
+    double energy_drift; /* max |B - B0| / |B0| of the energy balance B = energy +
+                            dissipated_energy - actuator_work (the terms the scene has;
+                            docs/effects.md): constant in an exact run (NaN when the model
+                            lacks a term: see energy_balance_missing) */
     double violation;    /* max |constraint_violation| (the multipliers formulation; else NaN) */
     double err_20, err_end; /* max |x - x_ref| over the states at 20 s and at the end */
     double rhs_per_step;
@@ -128,9 +136,37 @@ static double state_error(const double *a, const double *b) {
     return m;
 }
 
+/* The kinds of non-conservative forces of the scene (written by gyrowheel export-c): a
+ * dissipative scene loses energy by design, a driven one gains the actuators' work, so only the
+ * balance with the terms of the energy effect is conserved. */
+enum {
+    DISSIPATIVE_FORCES = @dissipative_forces@,
+    ACTUATOR_FORCES = @actuator_forces@,
+    OTHER_FORCES = @other_forces@
+};
+
+/* why the energy balance cannot be measured from the model's outputs, or NULL if it can */
+static const char *energy_balance_missing(void) {
+    if (@model@_index(GYROWHEEL_KIND_OUTPUT, "energy") < 0) return "the model has no energy output";
+    if (DISSIPATIVE_FORCES && @model@_index(GYROWHEEL_KIND_OUTPUT, "dissipated_energy") < 0)
+        return "the scene dissipates energy but has no dissipated_energy output (add [effects.energy])";
+    if (ACTUATOR_FORCES && @model@_index(GYROWHEEL_KIND_OUTPUT, "actuator_work") < 0)
+        return "the scene's actuators do work but it has no actuator_work output (add [effects.energy])";
+    if (OTHER_FORCES) return "the scene has forces whose work no output accounts for";
+    return NULL;
+}
+
+/* the energy balance energy + dissipated_energy - actuator_work of outputs y (the terms the
+ * model has) */
+static double energy_balance(const double *y, int i_energy, int i_dissipated, int i_work) {
+    return y[i_energy] + (i_dissipated >= 0 ? y[i_dissipated] : 0.0) - (i_work >= 0 ? y[i_work] : 0.0);
+}
+
 static int run_loop(const loop_config *c, const double *ref, long ref_seconds, loop_result *r) {
     const double period = 1.0 / c->rate;
     const int i_energy = @model@_index(GYROWHEEL_KIND_OUTPUT, "energy");
+    const int i_dissipated = @model@_index(GYROWHEEL_KIND_OUTPUT, "dissipated_energy");
+    const int i_work = @model@_index(GYROWHEEL_KIND_OUTPUT, "actuator_work");
     const int i_violation = @model@_index(GYROWHEEL_KIND_OUTPUT, "constraint_violation");
     const long per_second = (long)floor(c->rate + 0.5);
     double y[@MODEL@_NY + 1], x[@MODEL@_NX + 1], t0, e0 = 0.0, release = 0.0;
@@ -148,8 +184,8 @@ static int run_loop(const loop_config *c, const double *ref, long ref_seconds, l
     if (make(&w, c->solver, period, 0.0, 0.0)) return 1;
     t0 = @model@_time(w);
     @model@_get_outputs(w, y);
-    if (i_energy >= 0) {
-        e0 = y[i_energy];
+    if (!energy_balance_missing()) {
+        e0 = energy_balance(y, i_energy, i_dissipated, i_work);
         r->energy_drift = 0.0;
     }
     if (c->paced) release = now_ns();
@@ -177,8 +213,11 @@ static int run_loop(const loop_config *c, const double *ref, long ref_seconds, l
             if (start - release > r->max_late_ns) r->max_late_ns = start - release;
             if (stop > release + period * 1e9) r->misses++;
         }
-        if (i_energy >= 0 && fabs(y[i_energy] - e0) > r->energy_drift * fabs(e0))
-            r->energy_drift = fabs(y[i_energy] - e0) / (e0 != 0.0 ? fabs(e0) : 1.0);
+        if (!isnan(r->energy_drift)) {
+            const double drift = fabs(energy_balance(y, i_energy, i_dissipated, i_work) - e0) /
+                                 (e0 != 0.0 ? fabs(e0) : 1.0);
+            if (drift > r->energy_drift || isnan(drift)) r->energy_drift = drift;
+        }
         if (i_violation >= 0 && fabs(y[i_violation]) > r->violation)
             r->violation = fabs(y[i_violation]);
         if (k % per_second == 0 && k / per_second <= ref_seconds) { /* a whole second */
@@ -305,7 +344,8 @@ int main(int argc, char **argv) {
                 fprintf(stderr, "%s: mlockall failed (not permitted here?); going on\n", prog);
         } else if (a + 1 < argc && strcmp(argv[a], "--steps") == 0) {
             c.steps = strtol(argv[++a], &end, 10);
-            if (*end != '\0' || c.steps < 1) return usage(argv[a], "--steps needs an integer >= 1");
+            if (*end != '\0' || c.steps < 1 || c.steps > MAX_STEPS)
+                return usage(argv[a], "--steps needs an integer in [1, 1e9]");
         } else if (a + 1 < argc && strcmp(argv[a], "--rate") == 0) {
             c.rate = strtod(argv[++a], &end);
             if (*end != '\0' || !(c.rate >= 1.0 && c.rate <= 1e7))
@@ -317,13 +357,20 @@ int main(int argc, char **argv) {
             return usage(argv[a], "unknown argument (or a missing value)");
         }
     }
+    /* the timings of every step (16 bytes a step), before the reference takes its time */
+    r.cost_ns = (double *)malloc((size_t)c.steps * sizeof(double));
+    r.cpu_ns = (double *)malloc((size_t)c.steps * sizeof(double));
     /* reference: DOP853 at rel_tol 1e-13, its own error bounded by the difference to 1e-12 */
     ref_seconds = (long)floor((double)c.steps / c.rate);
     ref = (double *)calloc((size_t)(ref_seconds + 1) * @MODEL@_NX + 1, sizeof(double));
     ref_check = (double *)calloc((size_t)(ref_seconds + 1) * @MODEL@_NX + 1, sizeof(double));
-    r.cost_ns = r.cpu_ns = NULL;
-    if (!ref || !ref_check || reference(ref, &ref_seconds, 1e-13) ||
-        reference(ref_check, &ref_seconds, 1e-12)) {
+    if (!r.cost_ns || !r.cpu_ns || !ref || !ref_check) {
+        fprintf(stderr, "%s: out of memory for %ld steps (%.0f MB of timings and reference)\n", prog,
+                c.steps, ((double)c.steps * 2.0 + (double)(ref_seconds + 1) * 2.0 * @MODEL@_NX) * 8e-6);
+        status = 1;
+        goto done;
+    }
+    if (reference(ref, &ref_seconds, 1e-13) || reference(ref_check, &ref_seconds, 1e-12)) {
         status = 1;
         goto done;
     }
@@ -335,13 +382,9 @@ int main(int argc, char **argv) {
            c.paced ? ", paced to the wall clock" : ", back to back",
            state_error(ref + ref_seconds * @MODEL@_NX, ref_check + ref_seconds * @MODEL@_NX),
            wall_overhead, cpu_overhead);
+    if (energy_balance_missing())
+        printf("energy drift not measured: %s\n", energy_balance_missing());
     printf("RESULT overhead wall_ns=%.6g cpu_ns=%.6g\n", wall_overhead, cpu_overhead);
-    r.cost_ns = (double *)malloc((size_t)c.steps * sizeof(double));
-    r.cpu_ns = (double *)malloc((size_t)c.steps * sizeof(double));
-    if (!r.cost_ns || !r.cpu_ns) {
-        status = 1;
-        goto done;
-    }
     for (i = 0; i < (compare ? 4 : 1); i++) {
         if (compare) c.solver = compared[i];
         if (run_loop(&c, ref, ref_seconds, &r)) {

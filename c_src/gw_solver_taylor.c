@@ -20,13 +20,13 @@
  *           step, used by the event location (gw_events.c) like every dense output.
  *   check   the defect of the polynomial at the step's end, f(t1, P(h)) - P'(h), one right-hand
  *           side evaluation (gw_taylor_defect): the estimate from the last two orders misses a
- *           near complex pole or a stiff mode (lunar_rover's rolling resistance tanh(omega/eps)
- *           near the fall took steps 100x too long and ended 0.7 rad/s off); a step whose
- *           defect exceeds the error weight is shortened on the same series and counted as
- *           rejected.  As in the other adaptive
- * solvers the step is bounded by max_step, lands exactly on t_end, counts against the budget
- * max_internal_steps and is refused by the feasibility guard (gw_next_attempt), and below
- * gw_h_min ("step size underflow"); a
+ *           near complex pole or a stiff mode (lunar_rover's smoothed rolling resistance
+ *           tanh(omega/eps) near the fall: steps 100x too long, rates 0.7 rad/s off); a step
+ *           whose defect exceeds the error weight is shortened on the same series and counted
+ *           as rejected.
+ * As in the other adaptive solvers the step is bounded by max_step, lands exactly on t_end,
+ * counts against the budget max_internal_steps (every attempt) and is refused by the
+ * feasibility guard (gw_next_attempt), and below gw_h_min ("step size underflow"); a
  * non-finite derivative, a non-finite coefficient of the orders that set h, or a non-finite
  * state is an error with its reason.  One kernel call counts as one right-hand side
  * evaluation in n_rhs.

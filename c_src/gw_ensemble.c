@@ -122,6 +122,14 @@ static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
         char fn[48];
         int i;
         snprintf(fn, sizeof fn, "ensemble trajectory %ld", j);
+        { /* the lane's instance takes the trajectory's name: the logger's instance argument
+           * says whose message it is (integration errors carry no function name) */
+            char *name = gw_str_dup(I, fn);
+            if (name) {
+                gw_free(I, I->name);
+                I->name = name;
+            }
+        }
         gw_instance_reset(I);
         for (i = 0; i < m->np; i++) I->p[i] = job->p ? job->p[(size_t)j * m->np + i] : m->p_start[i];
         for (i = 0; i < m->ns; i++) I->s[i] = job->s ? job->s[(size_t)j * m->ns + i] : m->s_start[i];

@@ -125,7 +125,7 @@ GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int 
 /* The bookkeeping of one integration call (feasibility guard, event count, steps). */
 typedef struct {
     int events;
-    unsigned long n_fast, steps;
+    unsigned long n_fast, steps, rejected;
     double h_prev;
 } gw_taylor_run;
 /* Start an integration call: kernel present, order from rel_tol. */

@@ -290,7 +290,9 @@ class Ensemble:
 
         @_LOGGER
         def logger(env, instance, st, category, message):
-            messages.append(message.decode(errors="replace"))
+            # "ensemble trajectory <j>: ..." (the lane's instance is named after its trajectory)
+            text, who = message.decode(errors="replace"), (instance or b"").decode(errors="replace")
+            messages.append(text if not who or text.startswith(who) else f"{who}: {text}")
         rc = self._run(ctypes.c_long(n), P.ctypes.data_as(_D), S.ctypes.data_as(_D),
                        span.ctypes.data_as(_D), tol.ctypes.data_as(_D),
                        status.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), t_final.ctypes.data_as(_D),

@@ -77,3 +77,21 @@ def test_default_fmu_refuses_solver_taylor_before_running(earth_fmu, ensemble_ca
         sweep(earth_fmu, points=POINTS[:2], metrics=["survived"], stop_time=0.5, output_interval=0.1,
               solver="taylor", workers=0)
     assert ensemble_calls == []
+
+
+def test_ensemble_path_leaves_no_file_in_the_temp_directory(taylor_fmu, ensemble_calls, monkeypatch, tmp_path):
+    """The ensemble path used to leave /tmp/gyrowheel-sweep-ens-<digest>.fmu behind for good (one
+    per FMU ever swept) and to trust such a file if it was already there (a file of that name put
+    by anyone was compiled and loaded); now the FMU's bytes go to a private directory removed once
+    the library is loaded."""
+    import tempfile
+
+    from fmu_build.sweep import ensemble_path
+    shared = tmp_path / "tmp"
+    shared.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(shared))
+    monkeypatch.setattr(ensemble_path, "_ENSEMBLES", {})  # load the library again in this process
+    table = sweep(taylor_fmu, points=POINTS[:3], metrics=["survived"], stop_time=0.5, output_interval=0.1,
+                  solver="taylor", workers=0)
+    assert (table["status"] == "ok").all() and len(ensemble_calls) == 1
+    assert list(shared.iterdir()) == []

@@ -5,6 +5,8 @@ ensemble path (c_src/gw_ensemble.c, fmu_build/ensemble.py).
   coefficient = derivative / k!) at random points;
 - convergence on the paper scenario against scipy's DOP853 and the energy drift;
 - the fall located like DOP853's (1e-9 s);
+- the step size checked by the defect of each step's polynomial (lunar_rover near its fall,
+  against DOP853 at rel_tol 1e-13);
 - every example scene's operations are supported; each builds and runs briefly with taylor;
 - an unsupported operation is refused loudly;
 - an ensemble equals N single-trajectory runs, falls included.
@@ -202,6 +204,58 @@ def test_every_example_scene_supported(path):
     assert dec.nx == spec.x.numel() and dec.n_var > dec.nx
 
 
+@pytest.fixture(scope="module")
+def lunar(tmp_path_factory):
+    """lunar_rover with the smoothed rolling resistance c_rr R F_n tanh(omega / rr_omega_eps) (the
+    law of every scene before stiction became the default), contact forces, the kernel."""
+    work = tmp_path_factory.mktemp("lunar")
+    text = (SCENES / "lunar_rover.toml").read_text()
+    assert "c_rr = 0.05\n" in text
+    text = text.replace("c_rr = 0.05\n", 'c_rr = 0.05\nlaw = "smoothed"\n')
+    return build_fmu(parse_scene(text, "lunar_rover.toml"), work / "lunar_rover.fmu", build_dir=work / "b",
+                     taylor=True)
+
+
+# lunar_rover's state at t = 17.466 s on its way to the fall (DOP853, rel_tol 1e-13): nearly flat,
+# spin rate 8.4 rad/s falling at 5000 rad/s^2 to zero within 2.7 ms, where the rolling resistance
+# tanh(omega / 0.01) turns it into a stiff, nearly discontinuous decay
+NEAR_FALL = dict(x=12.819282792842362, y=-9.94660362227494, alpha=-8.926627197498364, beta=0.011077986863648658,
+                 gamma=165.05761343062568, alpha_dot=-1.768003941167051, beta_dot=-1.1145939382724355,
+                 gamma_dot=8.441488319529059)
+
+
+def test_step_size_defect_checked_through_a_near_pole(lunar):
+    """The step size from the last two coefficients (Jorba & Zou) misses the near pole of
+    tanh(omega / eps) where the spin rate crosses zero: the full scene's fall came 2e-8 s late
+    with the rates 0.7 rad/s off at rel_tol 1e-12, 0.24 rad/s at 1e-9 (taylor took 299 steps to
+    17.47 s where DOP853 took 1820).  The defect check of every step keeps the error at the
+    tolerance, through fmi2DoStep and the ensemble path alike.  Reference: DOP853 at rel_tol 1e-13
+    with max_step 1e-5."""
+    from fmi_slave import FmuRunner
+    runner, T = FmuRunner(lunar.fmu), 0.004
+    ref = _run(runner, T, STATES, solver=5, rel_tol=1e-13, abs_tol=1e-15, max_step=1e-5, **NEAR_FALL)
+    assert ref[7] == pytest.approx(-6.1479961e-4, rel=1e-6)  # the spin rate crossed zero
+    ens = Ensemble(lunar.fmu, cache=lunar.fmu.parent / "ens")
+    for tol in (1e-6, 1e-9, 1e-12):
+        got = _run(runner, T, STATES, solver=TAYLOR, rel_tol=tol, abs_tol=tol * 1e-2, **NEAR_FALL)
+        assert np.max(np.abs(got - ref)) < max(100 * tol, 1e-12), tol
+        res = ens.run(T, starts={k: [v] for k, v in NEAR_FALL.items()}, rel_tol=tol, abs_tol=tol * 1e-2)
+        assert res.status[0] == STATUS_OK
+        assert np.max(np.abs(res.x_final[0, :8] - ref)) < max(100 * tol, 1e-12), tol
+    # the whole scene (its output interval, 0.02 s): the fall located as DOP853 locates it
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
+    times = {}
+    for solver, tol in ((5, 1e-13), (TAYLOR, 1e-12)):
+        runner.start(solver=solver, rel_tol=tol, abs_tol=tol * 1e-2, max_step=60.0)
+        with pytest.raises(FMICallException):
+            for k in range(3000):
+                runner.slave.doStep(k * 0.02, 0.02)
+        assert runner.slave.getBooleanStatus(fmi2Terminated)
+        times[solver] = runner.slave.getRealStatus(fmi2LastSuccessfulTime)
+    assert times[TAYLOR] == pytest.approx(17.4747724753, abs=1e-9) and abs(times[TAYLOR] - times[5]) < 1e-11, times
+
+
 @pytest.mark.parametrize("name", ["lunar_rover", "euler_disk"])
 def test_scenes_run_briefly_with_taylor(name, tmp_path):
     """Scenes with contact forces, drag, rolling resistance and slope simulate with taylor like
@@ -333,6 +387,11 @@ def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
     res = ens.run(1.0, parameters={"M": [2.0, -1.0]}, rel_tol=1e-8)
     assert list(res.status) == [STATUS_OK, 3]
     assert any("ensemble trajectory 1" in m for m in res.messages)
+    # an error while integrating names its trajectory too (it used to come without: which of N?)
+    res = ens.run(2.0, starts={"gamma_dot": [6.0, 6.0, 1e9, 6.0]}, rel_tol=1e-8)
+    assert list(res.status) == [STATUS_OK, STATUS_OK, 3, STATUS_OK]
+    assert res.messages and all(m.startswith("ensemble trajectory 2: ") for m in res.messages), res.messages
+    assert "max_internal_steps" in res.messages[0]
     with pytest.raises(KeyError, match="unknown parameter 'mass'"):
         ens.run(1.0, parameters={"mass": [1.0]})
     with pytest.raises(ValueError, match=r"shape \(N, 6\)"):

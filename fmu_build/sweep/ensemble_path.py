@@ -16,6 +16,7 @@ the plain way, so its row carries the FMU's own reason.
 """
 from __future__ import annotations
 
+import shutil
 import tempfile
 import threading
 import time
@@ -38,16 +39,19 @@ def _ensemble(target, payload):
 
     with _LOCK:
         if target.digest not in _ENSEMBLES:
-            data = payload if payload is not None else Path(target.path).read_bytes()
-            fmu = Path(tempfile.gettempdir()) / f"gyrowheel-sweep-ens-{target.digest[:16]}.fmu"
-            if not fmu.exists():
-                part = fmu.with_suffix(f".{threading.get_ident()}.part")
-                part.write_bytes(data)
-                part.replace(fmu)
-            try:
-                _ENSEMBLES[target.digest] = Ensemble(fmu)
-            except EnsembleError:
-                _ENSEMBLES[target.digest] = None
+            # the FMU's bytes in a private directory, removed once the library is loaded (the
+            # library itself is cached by content): nothing is left in the shared temp
+            # directory, and no file there that another user could have put is trusted
+            with tempfile.TemporaryDirectory(prefix="gyrowheel-sweep-ens-") as tmp:
+                fmu = Path(tmp) / "unit.fmu"
+                if payload is not None:
+                    fmu.write_bytes(payload)
+                else:
+                    shutil.copyfile(target.path, fmu)
+                try:
+                    _ENSEMBLES[target.digest] = Ensemble(fmu)
+                except EnsembleError:
+                    _ENSEMBLES[target.digest] = None
         return _ENSEMBLES[target.digest]
 
 

@@ -10,7 +10,8 @@
  *
  * NAME=VALUE sets a parameter, an initial value or a setting before the run, e.g.
  * gamma_dot=8 beta=1.2 solver=2 max_step=0.001 (solver: 1 euler, 2 rk4, 3 dopri5,
- * 4 rosenbrock, 5 dop853).  Exit status: 0 done, 1 the simulation failed, 2 bad arguments.
+ * 4 rosenbrock, 5 dop853, 6 taylor if the export carries the Taylor kernel: a scene with
+ * solver = "taylor").  Exit status: 0 done, 1 the simulation failed, 2 bad arguments.
  */
 #include <math.h>
 #include <stdio.h>

@@ -235,8 +235,8 @@ def _coerce(v, value, where: str):
         if v.type == "String":
             return str(value)
         number = float(text)
-        if isinstance(text, bool) or not number.is_integer():
-            raise ValueError
+        if isinstance(text, bool) or not number.is_integer() or not -2**31 <= number < 2**31:
+            raise ValueError  # an fmi2Integer is 32 bits: ctypes would wrap a larger one
         return int(number)
     except (TypeError, ValueError):
         raise SystemFileError(f"{where}: {value!r} is not a valid {v.type}") from None

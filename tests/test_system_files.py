@@ -73,6 +73,9 @@ BAD = {
                                r"wheel\.solver: an Enumeration"),
     "bad_integer": (lambda s: bind(s, "wheel", param("max_internal_steps", "Integer", "1.5")),
                     r"wheel\.max_internal_steps: '1.5' is not a valid Integer"),
+    # an fmi2Integer is 32 bits: ctypes would wrap 3e9 to -1294967296
+    "integer_out_of_range": (lambda s: bind(s, "wheel", param("max_internal_steps", "Integer", "3000000000")),
+                             r"wheel\.max_internal_steps: '3000000000' is not a valid Integer"),
     "type_mismatch": (lambda s: bind(s, "wheel", param("M", "Boolean", "true")),
                       r"wheel\.M: bound as ssv:Boolean, the FMU's variable is a Real"),
     "unit": (lambda s: bind(s, "wheel", param("M", "Real", "2000", ' unit="g"')),

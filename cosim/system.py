@@ -212,11 +212,11 @@ def check_bindings(component: Component, where: str = "") -> dict:
                 f"{where}{component.name}.{name}: an Enumeration; libcosim and ecos leave FMI 2.0 Enumeration "
                 f"variables out (\"Enumeration variable type not supported\") and ignore the binding, so masters "
                 f"would disagree: set it in the FMU (a scene's [experiment]) or as a master's start value")
-        out[name] = _coerce(v, value, f"{where}{component.name}.{name}")
+        out[name] = coerce_value(v, value, f"{where}{component.name}.{name}")
     return out
 
 
-def _coerce(v, value, where: str):
+def coerce_value(v, value, where: str):
     """value (a number, or the text of an SSV value attribute) as the type of FMU variable v."""
     text = value.strip() if isinstance(value, str) else value
     try:

@@ -163,6 +163,21 @@ def gyrowheel(*args, cwd):
                           cwd=cwd)
 
 
+@pytest.mark.parametrize("name, value, message", [
+    ("max_internal_steps", 1.5, r"wheel\.max_internal_steps: 1\.5 is not a valid Integer"),  # before: int() -> 1
+    ("max_internal_steps", 3e9, r"wheel\.max_internal_steps: 3000000000\.0 is not a valid Integer"),  # wrapped
+    ("M", "heavy", r"wheel\.M: 'heavy' is not a valid Real"),
+])
+def test_master_start_values_are_checked_like_bindings(unpacked, tmp_path, name, value, message):
+    """cosim.master.run(start_values=...) (the Python side of `gyrowheel system run --set`) types
+    its values with the bindings' checks: nothing truncated (1.5 was run as max_internal_steps =
+    1), nothing wrapped (3e9 reached the FMU as -1294967296), the variable named."""
+    ssd, fmus = unpacked
+    system = read_ssp(archive(tmp_path / "plain.ssp", ssd, fmus), tmp_path / "u")
+    with pytest.raises(MasterError, match=message):
+        run(system, 0.01, stop_time=0.02, start_values={"wheel": {name: value}})
+
+
 def test_a_failing_component_says_why(unpacked, tmp_path):
     """A component that refuses a bound value: MasterError names it and carries the FMU's logged
     reason; the CLI prints that one line and exits 1. It used to say 'fmi2ExitInitializationMode

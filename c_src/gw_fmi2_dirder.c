@@ -111,41 +111,52 @@ static double gw_dd_sum(const gw_instance *I, int init_mode, const gw_dd_unknown
     return sum;
 }
 
-/* the matrix of the current mode at the current point; 0 or reason logged */
+/* the matrix of the current mode at the current point; 0 or reason logged.  Its entries are
+ * checked where they are used (gw_dd_check): a non-finite partial of one pair (norm_2's
+ * derivative at 0 once made every partial of a multipliers model NaN) must not refuse the
+ * others. */
 static int gw_dd_matrix(gw_instance *I, const char *fn, int init_mode) {
-    const gw_model *m = I->m;
-    int k, n, nrow;
-    const double *D;
     if (init_mode) {
-        nrow = m->n_init_rows;
-        n = nrow * (m->ns + m->np + m->nu);
         if (gw_eval_dini(I, I->t, I->dini_D) != 0) {
             GW_LOG_ERR(I, "%s: evaluation of the initial partial derivatives failed", fn);
             return -1;
         }
-        D = I->dini_D;
-    } else {
-        nrow = m->nx + m->ny;
-        n = nrow * (m->nx + m->nu);
-        if (I->dir_valid) return 0;
-        if (I->in_setup && gw_eval_init(I, I->x) != 0) {
-            GW_LOG_ERR(I, "%s: evaluation of the initial state failed", fn);
-            return -1;
-        }
-        if (gw_eval_dir(I, I->t, I->x, I->dir_D) != 0) {
-            GW_LOG_ERR(I, "%s: evaluation of the Jacobian failed at t=%.17g", fn, I->t);
-            return -1;
-        }
-        D = I->dir_D;
+        return 0;
     }
-    for (k = 0; k < n; k++)
-        if (!isfinite(D[k])) {
-            GW_LOG_ERR(I, "%s: partial derivative (%d, %d) is not finite at t=%.17g%s", fn,
-                       k % nrow, k / nrow, I->t,
+    if (I->dir_valid) return 0;
+    if (I->in_setup && gw_eval_init(I, I->x) != 0) {
+        GW_LOG_ERR(I, "%s: evaluation of the initial state failed", fn);
+        return -1;
+    }
+    if (gw_eval_dir(I, I->t, I->x, I->dir_D) != 0) {
+        GW_LOG_ERR(I, "%s: evaluation of the Jacobian failed at t=%.17g", fn, I->t);
+        return -1;
+    }
+    I->dir_valid = !I->in_setup;
+    return 0;
+}
+
+/* a non-finite entry of the matrix that the sum for this unknown uses: logged, -1; else 0 */
+static int gw_dd_check(gw_instance *I, const char *fn, int init_mode, const gw_variable *u,
+                       const gw_dd_unknown_at *at, const fmi2ValueReference vKnown_ref[],
+                       size_t nKnown) {
+    const gw_model *m = I->m;
+    size_t j;
+    if (at->ident >= 0) return 0;
+    for (j = 0; j < nKnown; j++) {
+        const gw_variable *v = gw_variable_find(m, vKnown_ref[j]);
+        int zero = 0, col = init_mode ? gw_dd_known_init(m, v, &zero) : gw_dd_known_sim(m, v);
+        double d;
+        if (zero) continue;
+        d = init_mode ? I->dini_D[(size_t)at->row + (size_t)col * (size_t)m->n_init_rows]
+                      : I->dir_D[(size_t)at->row + (size_t)col * (size_t)(m->nx + m->ny)];
+        if (!isfinite(d)) {
+            GW_LOG_ERR(I, "%s: the partial derivative of %s with respect to %s is not finite "
+                       "(%g) at t=%.17g%s; nothing returned", fn, u->name, v->name, d, I->t,
                        init_mode ? " (check the parameters and start values)" : "");
             return -1;
         }
-    if (!init_mode) I->dir_valid = !I->in_setup;
+    }
     return 0;
 }
 
@@ -213,6 +224,10 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         double d;
         if (init_mode) gw_dd_unknown_init(m, v, &at);
         else gw_dd_unknown_sim(m, v, &at);
+        if (gw_dd_check(I, fn, init_mode, v, &at, vKnown_ref, nKnown) != 0) {
+            status = fmi2Error;
+            goto END;
+        }
         d = gw_dd_sum(I, init_mode, &at, vKnown_ref, nKnown, dvKnown);
         if (!isfinite(d))
             GW_FAIL("%s: the directional derivative of %s is not finite (%g): the seed is too "

@@ -24,9 +24,9 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
  *     communication step H needs at least ceil(H / max_step) steps, exactly that many for
  *     euler and rk4; more than the budget is refused before any work.
  *  2. projection (gw_budget_projection, adaptive solvers): GW_SETTLE attempts in a row, h
- *     staying within 2x of the window's first, each projecting that the rest of the step needs
- *     GW_PROJECTION_MARGIN times more steps of the controller's h than the budget has left:
- *     refused early with the estimate (a stiff transient resolved with tiny steps for a while,
+ *     staying within a factor 2 either way of the window's first, each projecting that the
+ *     rest of the step needs GW_PROJECTION_MARGIN times more steps of the controller's h
+ *     than the budget has left: refused early with the estimate (a stiff transient resolved with tiny steps for a while,
  *     39x over the budget in tests/c/test_stiff.c, is left to the budget).  Rejected steps do
  *     not reset this count.
  *  3. the budget itself (gw_next_attempt): when it is spent the call stops, with the estimate.
@@ -58,8 +58,10 @@ static int gw_budget_upfront(gw_instance *I, double t_end) {
 }
 
 /* check 2: *h_ref is the step size at the start of the current window of attempts that all
- * project beyond the budget; a window in which h grows past 2 h_ref is a transient, not
- * settled, and starts again.  0 or -1 logged. */
+ * project beyond the budget; a window in which h leaves [h_ref / 2, 2 h_ref] is a transient,
+ * not settled, and starts again: growing past 2 h_ref, and shrinking below h_ref / 2 too (a
+ * dip, e.g. the step size closing in on a zero crossing and opening again, projected from its
+ * smallest steps would refuse a call that the budget covers).  0 or -1 logged. */
 static int gw_budget_projection(gw_instance *I, double remaining, double h, double *h_ref,
                                 unsigned long *n_fast) {
     const double left = I->max_internal_steps - (double)I->n_call_steps;
@@ -67,7 +69,7 @@ static int gw_budget_projection(gw_instance *I, double remaining, double h, doub
         *n_fast = 0;
         return 0;
     }
-    if (*n_fast == 0 || h > 2.0 * *h_ref) {
+    if (*n_fast == 0 || h > 2.0 * *h_ref || h < 0.5 * *h_ref) {
         *h_ref = h;
         *n_fast = 1;
         return 0;

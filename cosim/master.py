@@ -21,7 +21,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Discard
 
-from cosim.system import SystemDescription
+from cosim.system import SystemDescription, SystemFileError, coerce_value
 from cosim.fmi_log import forget_messages, logging_callbacks
 
 
@@ -71,11 +71,10 @@ def _set(unit: _Unit, name: str, value) -> None:
     v = unit.vars.get(name)
     if v is None:
         raise MasterError(f"{unit.name}: no variable {name!r}")
-    try:
-        value = (float(value) if v.type == "Real" else bool(value) if v.type == "Boolean"
-                 else str(value) if v.type == "String" else int(value))
-    except (TypeError, ValueError):
-        raise MasterError(f"{unit.name}.{name}: {value!r} is not a valid {v.type}") from None
+    try:  # the bindings' checks: 1.5 for an Integer is refused, not truncated; "false" is false
+        value = coerce_value(v, value, f"{unit.name}.{name}")
+    except SystemFileError as exc:
+        raise MasterError(str(exc)) from None
     unit.put(v.valueReference, v.type, value)
 
 

@@ -212,11 +212,11 @@ def check_bindings(component: Component, where: str = "") -> dict:
                 f"{where}{component.name}.{name}: an Enumeration; libcosim and ecos leave FMI 2.0 Enumeration "
                 f"variables out (\"Enumeration variable type not supported\") and ignore the binding, so masters "
                 f"would disagree: set it in the FMU (a scene's [experiment]) or as a master's start value")
-        out[name] = _coerce(v, value, f"{where}{component.name}.{name}")
+        out[name] = coerce_value(v, value, f"{where}{component.name}.{name}")
     return out
 
 
-def _coerce(v, value, where: str):
+def coerce_value(v, value, where: str):
     """value (a number, or the text of an SSV value attribute) as the type of FMU variable v."""
     text = value.strip() if isinstance(value, str) else value
     try:
@@ -235,8 +235,8 @@ def _coerce(v, value, where: str):
         if v.type == "String":
             return str(value)
         number = float(text)
-        if isinstance(text, bool) or not number.is_integer():
-            raise ValueError
+        if isinstance(text, bool) or not number.is_integer() or not -2**31 <= number < 2**31:
+            raise ValueError  # an fmi2Integer is 32 bits: ctypes would wrap a larger one
         return int(number)
     except (TypeError, ValueError):
         raise SystemFileError(f"{where}: {value!r} is not a valid {v.type}") from None

@@ -64,6 +64,8 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
                 out[name] = float(text)
             elif v.type == "Integer":
                 out[name] = int(text)
+                if not -2**31 <= out[name] < 2**31:  # an fmi2Integer is 32 bits: fmpy would wrap it
+                    raise ValueError
             elif v.type == "Enumeration":
                 items = enums.get(v.declaredType.name if v.declaredType else "", {})
                 out[name] = items[text] if text in items else int(text)
@@ -83,6 +85,16 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
     return out
 
 
+def _as_text(value: object) -> str:
+    """A Python start value as the text coerce_start_values reads: floats by repr (exact round
+    trip), so 1.5 given for an Integer is refused instead of truncated by int()."""
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value))
+    return str(value)
+
+
 def _settable(v) -> bool:
     return v.causality in ("parameter", "input") or v.initial in ("exact", "approx")
 
@@ -90,8 +102,20 @@ def _settable(v) -> bool:
 def run(fmu: str | Path, stop_time: float | None = None, output_interval: float | None = None,
         start_values: dict[str, object] | None = None, solver_tolerance: float | None = None,
         messages: Messages | None = None) -> np.ndarray:
-    """Simulate in Co-Simulation; returns fmpy's structured result array."""
+    """Simulate in Co-Simulation; returns fmpy's structured result array.
+
+    start_values are checked by name and type like `gyrowheel simulate --set` (strings or Python
+    values: 1.5 for an Integer is refused, not truncated); stop_time, output_interval and
+    solver_tolerance must be numbers. Raises SimulationError naming the value, or with the FMU's
+    logged reason."""
     messages = messages or Messages()
+    for what, value in (("stop_time", stop_time), ("output_interval", output_interval),
+                        ("solver_tolerance", solver_tolerance)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.number))):
+            raise SimulationError(f"{what} must be a number, got {type(value).__name__} {value!r}")
+    if start_values:
+        start_values = coerce_start_values(fmu, {k: v if isinstance(v, str) else _as_text(v)
+                                                 for k, v in start_values.items()})
     if output_interval is None:  # fmpy would pick its own; the scene's interval is what users expect
         exp = read_model_description(str(fmu)).defaultExperiment
         output_interval = float(exp.stepSize) if exp is not None and exp.stepSize else None

@@ -16,7 +16,7 @@ import casadi as ca
 
 from model.context import Body, WheelContext
 from model.effects import CATALOGUE, lift_off_conflict
-from model.kinematics import WheelKinematics
+from model.kinematics import WheelKinematics, norm
 from model.lagrangian import ConstrainedSystem
 from model.spec import Event, ModelSpec, Quantity
 from model.stiction import law_update, stuck_rate_rows
@@ -292,9 +292,11 @@ class _Assembler:
             speeds_now = qd_free[[i for i in range(nf) if i not in DEPENDENT]]
             to_state = (lambda vs: ca.mtimes(S, vs))  # consistent with A q_dot = 0
             nominal_rates = [P["R"], P["R"]] + [1.0] * (nf - 2)  # x_dot, y_dot scale like R sqrt(g/R)
+            # kinematics.norm: its derivative is defined at 0, where every initial state lies
+            # (norm_2's 0/0 there made every partial of Initialization Mode NaN)
             extra_outputs = [
                 (Quantity("constraint_violation", "m/s", "|A(q) q_dot|, drift of the rolling constraint"),
-                 ca.norm_2(violation)),
+                 norm(violation)),
                 (Quantity("lambda_x", "N", "constraint multiplier: contact force along x"), lam[0]),
                 (Quantity("lambda_y", "N", "constraint multiplier: contact force along y"), lam[1]),
             ]

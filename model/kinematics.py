@@ -14,6 +14,18 @@ import casadi as ca
 AXES = {"x": ca.SX([1, 0, 0]), "y": ca.SX([0, 1, 0]), "z": ca.SX([0, 0, 1])}
 
 
+
+def norm(v) -> ca.SX:
+    """|v| (shape (n, 1) -> scalar, v's unit) with a derivative at v = 0.
+
+    Written (v . v) / sqrt(v . v + 1e-200): the value is |v| to rounding above 1e-100 and exactly 0
+    at 0; the derivative is v / |v| away from 0 and 0 at 0 (CasADi's convention for fabs there,
+    sign(0) = 0), where norm_2's v / |v| is 0/0. Magnitudes that are 0 at a start (a violation of
+    the rolling constraint, the drag on a wheel at rest, the tangential force of a wheel standing
+    still) otherwise made the FMU's directional derivatives NaN (review of issue 8, section 3)."""
+    vv = ca.dot(v, v)
+    return vv / ca.sqrt(vv + 1e-200)
+
 def rot_x(a, sign: int = 1):
     """Rotation about x by sign * a (sign = -1 reuses sin(a), cos(a) instead of new trig)."""
     c, s = ca.cos(a), sign * ca.sin(a)

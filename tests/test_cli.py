@@ -55,6 +55,9 @@ def _bad_scene(tmp_path, text):
     (("simulate", "{fmu}", "--set", "solver=rk45"), "valid: euler, rk4, dopri5"),
     (("simulate", "{fmu}", "--set", "energy=3"), "'energy' is a calculated output"),
     (("simulate", "{fmu}", "--set", "M"), "expected NAME=VALUE"),
+    # an fmi2Integer is 32 bits (before: fmpy wrapped it, "max_internal_steps = -1294967296 must be ...")
+    (("simulate", "{fmu}", "--set", "max_internal_steps=3000000000"),
+     "value '3000000000' for 'max_internal_steps' is not a valid Integer"),
     (("simulate", "{fmu}", "--stop-time", "-1"), "--stop-time must be > 0"),
     (("simulate", "{fmu}", "--set", "M=-2"), "M (mass) must be > 0"),
     (("build", "{bad}"), "bad.toml: [wheel] mass: unknown key"),
@@ -100,3 +103,23 @@ def test_non_finite_numbers_are_refused(tmp_path, args):
     r = gyrowheel(*args, cwd=tmp_path)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert f"argument {args[-2]}: '{args[-1]}' is not a finite number" in r.stderr
+
+
+@pytest.mark.parametrize("kwargs,message", [
+    # before: int(1.5) = 1, silently, then "the budget of internal steps is spent" from the FMU
+    (dict(start_values={"max_internal_steps": 1.5}), "value '1.5' for 'max_internal_steps' is not a valid Integer"),
+    (dict(start_values={"solver": 2.7}), "value '2.7' for 'solver' is not a valid Enumeration"),  # before: rk4
+    (dict(start_values={"M": "abc"}), "value 'abc' for 'M' is not a valid Real"),  # before: a bare ValueError
+    (dict(start_values={"gamma_dot": True}), "value 'true' for 'gamma_dot' is not a valid Real"),
+    (dict(start_values={"z": 1.0}), "variable 'z' is a calculated output and cannot be set"),
+    (dict(stop_time="x"), "stop_time must be a number, got str 'x'"),
+])
+def test_python_run_checks_values_by_name_and_type(built, kwargs, message):
+    """fmu_build.simulate.run (the Python side of gyrowheel simulate) checks Python start values
+    like --set does: nothing truncated, every error a SimulationError naming the value."""
+    from fmu_build.simulate import SimulationError, run
+    with pytest.raises(SimulationError) as exc:
+        run(built, **{"stop_time": 0.1, **kwargs})
+    assert message in str(exc.value)
+    r = run(built, stop_time=0.1, start_values={"gamma_dot": 0, "solver": "rk4", "max_internal_steps": 2000})
+    assert r["time"][-1] == pytest.approx(0.1)

@@ -36,6 +36,27 @@ def disk_fmu(tmp_path_factory):
     return build_fmu(load_scene(SCENES / "euler_disk.toml"), root / "euler_disk.fmu").fmu
 
 
+@pytest.fixture(scope="module")
+def rest_fmu(tmp_path_factory):
+    """A wheel at rest (no spin) with air drag and contact forces: drag_force and the tangential
+    contact force are magnitudes of vectors that are 0 at the start."""
+    from fmu_build.scene import parse_scene
+    text = ('[model]\nname = "drag_at_rest"\n[effects.gravity]\n[effects.air_drag]\nc_lin = 0.1\n'
+            '[effects.contact_forces]\n[initial]\nbeta_deg = 80.0\ngamma_dot = 0.0\n')
+    return build_fmu(parse_scene(text, "drag_at_rest.toml"),
+                     tmp_path_factory.mktemp("rest_partials") / "drag_at_rest.fmu").fmu
+
+@pytest.fixture(scope="module")
+def mult_fmu(tmp_path_factory):
+    """paper_earth in the multipliers formulation (outputs constraint_violation, lambda_x, lambda_y)."""
+    from fmu_build.scene import parse_scene
+    text = (SCENES / "paper_earth.toml").read_text().replace('[model]\n', '[model]\nformulation = "multipliers"\n', 1)
+    text = text.replace('name = "paper_earth"', 'name = "earth_multipliers"')
+    scene = parse_scene(text, "earth_multipliers.toml")
+    assert scene.formulation == "multipliers"
+    return build_fmu(scene, tmp_path_factory.mktemp("mult_partials") / "earth_multipliers.fmu").fmu
+
+
 def _structure(md_xml: str):
     """{list name: [(unknown index, [dependency indices])]} and the variables, 1-based."""
     root = ET.fromstring(md_xml)
@@ -70,7 +91,7 @@ def _mismatch(f, x0: float, d: float) -> tuple[float, float]:
     return best
 
 
-@pytest.mark.parametrize("fixture", ["earth_fmu", "disk_fmu"])
+@pytest.mark.parametrize("fixture", ["earth_fmu", "disk_fmu", "mult_fmu", "rest_fmu"])
 def test_every_initial_unknown_partial_is_answered_and_right(fixture, request):
     fmu = request.getfixturevalue(fixture)
     s = Slave(fmu)
@@ -196,7 +217,7 @@ def test_dz_dR_is_sin_beta(earth_fmu):
         s.free()
 
 
-@pytest.mark.parametrize("fixture", ["earth_fmu", "disk_fmu"])
+@pytest.mark.parametrize("fixture", ["earth_fmu", "disk_fmu", "mult_fmu"])
 def test_every_output_and_derivative_partial_in_continuous_time_mode(fixture, request):
     fmu = request.getfixturevalue(fixture)
     m = Model(fmu)
@@ -228,6 +249,55 @@ def test_every_output_and_derivative_partial_in_continuous_time_mode(fixture, re
         assert worst < 1e-6
     finally:
         m.free()
+
+
+def test_constraint_violation_partials_at_the_start_are_zero(mult_fmu):
+    """Review of issue 8, section 3, multipliers formulation: the initial state lies on the
+    constraint manifold for every start value and parameter (x = init(s, p) builds the speeds
+    from the null space), so constraint_violation = |A(q) q_dot| is identically 0 there and its
+    partials in Initialization Mode are exactly 0. Before: norm_2's derivative v / |v| is 0/0 at
+    v = 0, one NaN entry refused every partial of the model (134 advertised, all fmi2Error:
+    "partial derivative (4, 2) is not finite"); after a step the violation is > 0 and its
+    partials are the smooth ones."""
+    s = Slave(mult_fmu)
+    try:
+        s.slave.setupExperiment(startTime=0.0)
+        s.slave.enterInitializationMode()
+        cv = s.vr("constraint_violation")
+        knowns = ["alpha", "beta", "alpha_dot", "beta_dot", "gamma_dot", "M", "R", "g", "k_diam", "k_axial"]
+        assert s.get("constraint_violation") == 0.0
+        assert [s.slave.getDirectionalDerivative([cv], [s.vr(k)], [1.0])[0] for k in knowns] == [0.0] * 10
+        s.slave.exitInitializationMode()
+        s.slave.doStep(0.0, 1.0)
+        assert 0.0 < s.get("constraint_violation") < 1e-6  # the stabilised drift
+        assert math.isfinite(s.slave.getDirectionalDerivative([cv], [s.vr("beta")], [1.0])[0])
+        assert [m for m in s.messages if m[0] >= 2] == []
+    finally:
+        s.free()
+
+
+def test_magnitudes_of_zero_vectors_have_partials_at_rest(rest_fmu):
+    """Review of issue 8, section 3: at rest the drag force F = -(c_lin + ...) v is 0 for every
+    drag parameter, so d drag_force / d (c_lin, rho_air, cd_area) = 0 exactly; with respect to a
+    rate the magnitude has a symmetric kink, answered 0 like fabs (sign(0) = 0) and like central
+    differences. Before: norm_2's 0/0 made these entries NaN and one NaN refused every partial
+    of the model in Initialization Mode."""
+    s = Slave(rest_fmu)
+    try:
+        s.slave.setupExperiment(startTime=0.0)
+        s.slave.enterInitializationMode()
+        assert s.get("drag_force") == 0.0
+        f = s.vr("drag_force")
+        for k in ("c_lin", "rho_air", "cd_area", "gamma_dot", "alpha_dot"):
+            assert s.slave.getDirectionalDerivative([f], [s.vr(k)], [1.0]) == [0.0], k
+        s.slave.exitInitializationMode()
+        s.slave.doStep(0.0, 0.05)  # falling: v > 0, the smooth partials
+        assert s.get("drag_force") > 0.0
+        d = s.slave.getDirectionalDerivative([f, s.vr("friction_use")], [s.vr("beta_dot")], [1.0])
+        assert all(math.isfinite(x) for x in d) and d[0] != 0.0
+        assert [m for m in s.messages if m[0] >= 2] == []
+    finally:
+        s.free()
 
 
 def test_co_simulation_answers_what_model_exchange_answers(earth_fmu):

@@ -73,6 +73,9 @@ BAD = {
                                r"wheel\.solver: an Enumeration"),
     "bad_integer": (lambda s: bind(s, "wheel", param("max_internal_steps", "Integer", "1.5")),
                     r"wheel\.max_internal_steps: '1.5' is not a valid Integer"),
+    # an fmi2Integer is 32 bits: ctypes would wrap 3e9 to -1294967296
+    "integer_out_of_range": (lambda s: bind(s, "wheel", param("max_internal_steps", "Integer", "3000000000")),
+                             r"wheel\.max_internal_steps: '3000000000' is not a valid Integer"),
     "type_mismatch": (lambda s: bind(s, "wheel", param("M", "Boolean", "true")),
                       r"wheel\.M: bound as ssv:Boolean, the FMU's variable is a Real"),
     "unit": (lambda s: bind(s, "wheel", param("M", "Real", "2000", ' unit="g"')),
@@ -158,6 +161,21 @@ def test_every_binding_type_is_applied(unpacked, earth_loop, tmp_path):
 def gyrowheel(*args, cwd):
     return subprocess.run([sys.executable, "-m", "fmu_build", *map(str, args)], capture_output=True, text=True,
                           cwd=cwd)
+
+
+@pytest.mark.parametrize("name, value, message", [
+    ("max_internal_steps", 1.5, r"wheel\.max_internal_steps: 1\.5 is not a valid Integer"),  # before: int() -> 1
+    ("max_internal_steps", 3e9, r"wheel\.max_internal_steps: 3000000000\.0 is not a valid Integer"),  # wrapped
+    ("M", "heavy", r"wheel\.M: 'heavy' is not a valid Real"),
+])
+def test_master_start_values_are_checked_like_bindings(unpacked, tmp_path, name, value, message):
+    """cosim.master.run(start_values=...) (the Python side of `gyrowheel system run --set`) types
+    its values with the bindings' checks: nothing truncated (1.5 was run as max_internal_steps =
+    1), nothing wrapped (3e9 reached the FMU as -1294967296), the variable named."""
+    ssd, fmus = unpacked
+    system = read_ssp(archive(tmp_path / "plain.ssp", ssd, fmus), tmp_path / "u")
+    with pytest.raises(MasterError, match=message):
+        run(system, 0.01, stop_time=0.02, start_values={"wheel": {name: value}})
 
 
 def test_a_failing_component_says_why(unpacked, tmp_path):

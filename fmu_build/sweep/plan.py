@@ -77,6 +77,9 @@ class Resolver:
         if v.type in ("Integer", "Enumeration"):
             if value != int(value):
                 raise SweepSpecError(f"{where}: {name!r} is an {v.type} and {value!r} is not an integer")
+            if not -2**31 <= value < 2**31:  # an fmi2Integer: ctypes would wrap it (3e9 -> -1294967296)
+                raise SweepSpecError(f"{where}: {name!r} is an {v.type} (32 bits) and {value!r} is out "
+                                     f"of its range [-2147483648, 2147483647]")
             value = int(value)
             if v.type == "Enumeration" and v.items and value not in v.items.values():
                 raise SweepSpecError(f"{where}: {value} is not an item of {name!r}; valid: "

@@ -10,6 +10,7 @@ import casadi as ca
 
 from model.context import WheelContext
 from model.effects.base import Effect
+from model.kinematics import norm
 from model.spec import Quantity
 
 
@@ -36,4 +37,4 @@ class AirDrag(Effect):
         tau = -0.5 * p["rho_air"] * p["cm_spin"] * ctx.par["R"] ** 5 * ca.fabs(w_z) * w_z
         ctx.force(tau, w_z, "dissipative")
         ctx.output(Quantity("drag_force", "N", "magnitude of the drag force on the centre (law with the smoothed "
-                            "speed sqrt(v.v + (1e-6 m/s)^2))"), ca.norm_2(F))
+                            "speed sqrt(v.v + (1e-6 m/s)^2))"), norm(F))

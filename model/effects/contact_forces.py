@@ -16,6 +16,7 @@ import casadi as ca
 
 from model.context import WheelContext
 from model.effects.base import Effect
+from model.kinematics import norm
 from model.spec import Quantity
 
 ACTIONS = ("terminate", "warn", "ignore")
@@ -43,7 +44,7 @@ class ContactForces(Effect):
         F_n = F[2]
         F_long = F[0] * ca.cos(a) + F[1] * ca.sin(a)
         F_lat = -F[0] * ca.sin(a) + F[1] * ca.cos(a)
-        F_t = ca.sqrt(F_long**2 + F_lat**2)
+        F_t = norm(ca.vertcat(F_long, F_lat))  # derivative defined at F_t = 0 (kinematics.norm)
         ctx.output(Quantity("F_n", "N", "normal contact force (ground on wheel)"), F_n)
         ctx.output(Quantity("F_long", "N", "contact force along the heading"), F_long)
         ctx.output(Quantity("F_lat", "N", "contact force across the heading (to the left)"), F_lat)

@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 
 from fmu_build.sweep import read_table, sweep
+from terminal import AS_FROM_A_TERMINAL
 
 # dask's own command line (`dask scheduler`, `dask worker`), from this interpreter's environment
 DASK = [str(Path(sys.executable).with_name("dask"))] if Path(sys.executable).with_name("dask").exists() \
@@ -128,7 +129,7 @@ def test_ctrl_c_leaves_a_readable_partial_table(earth_fmu, scheduler, tmp_path, 
     proc = subprocess.Popen([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu),
                              "--grid", "beta_deg=60:89:40", "--grid", "gamma_dot=0:15:50", "--stop-time", "20",
                              *execution, "--batch-size", "10", "--no-progress", "-o", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **AS_FROM_A_TERMINAL)
     deadline = time.monotonic() + 60
     while not out.exists() and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.1)

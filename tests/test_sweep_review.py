@@ -18,6 +18,7 @@ import pytest
 from fmu_build.cli import main
 from fmu_build.sweep import SweepSpecError, read_table, sweep
 from fmu_build.sweep.spec import parse_grid, point_table
+from terminal import AS_FROM_A_TERMINAL
 
 KEEP = ["point", "beta_deg", "survived", "fall_time", "max_lean", "final_x", "status", "reason"]
 
@@ -263,7 +264,7 @@ def test_ctrl_c_while_the_local_cluster_starts(earth_fmu, tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu), "--grid", "beta_deg=60:89:40",
                              "--grid", "gamma_dot=0:15:50", "--stop-time", "20", "--workers", "2", "--batch-size", "10",
                              "--no-progress", "-o", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **AS_FROM_A_TERMINAL)
     line = proc.stderr.readline()
     assert line.startswith("sweep:"), line + proc.stderr.read()
     os.killpg(proc.pid, signal.SIGINT)  # what a terminal does: the whole process group
@@ -300,7 +301,7 @@ def test_startup_guard_keeps_a_ctrl_c_for_later(tmp_path, ctrl_c):
     script = tmp_path / "guard.py"
     script.write_text(GUARD)
     proc = subprocess.Popen([sys.executable, str(script), "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True, cwd=Path(__file__).resolve().parent.parent)
+                            text=True, **AS_FROM_A_TERMINAL, cwd=Path(__file__).resolve().parent.parent)
     try:
         assert proc.stdout.readline().strip() == "False"
         assert proc.stdout.readline().strip() == "ready"

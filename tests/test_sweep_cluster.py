@@ -145,3 +145,21 @@ def test_ctrl_c_leaves_a_readable_partial_table(earth_fmu, scheduler, tmp_path, 
     table = read_table(out)
     assert 0 < len(table) < total
     assert (table["status"] == "ok").all() and table["point"].is_unique
+
+
+def test_both_workers_run_batches(earth_fmu, scheduler, tmp_path):
+    """The FMU's bytes are one task's result that every batch depends on; a batch prefers a worker
+    holding its inputs, so before they were replicated every batch ran on the worker that had
+    them and the second sat idle (1 -> 2 workers gave 1.0-1.6x). Each worker's process id, as a
+    user metric, must appear in the table."""
+    metric = tmp_path / "pid.py"
+    metric.write_text("import os\ndef pid(traj):\n    return float(os.getpid())\n")
+    out = tmp_path / "pids.csv"
+    done = subprocess.run([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu), "--grid", "beta_deg=60:89:40",
+                           "--stop-time", "2", "--scheduler", scheduler, "--batch-size", "2",
+                           "--metric-function", f"{metric}:pid", "--no-progress", "-o", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    table = read_table(out)
+    assert len(table) == 40 and (table["status"] == "ok").all()
+    assert table["pid"].nunique() == 2

@@ -97,6 +97,11 @@ def run_dask(plan, writer, *, client, batch_size: int | None = None, progress: b
     # data would be lost and every batch still waiting would be cancelled with it.
     shipped = (client.submit(_payload, payload, key=f"gyrowheel-sweep-{tag}-payload", pure=False)
                if payload is not None else None)
+    if shipped is not None and threads > 1:
+        # ... and are copied to every worker before the batches go out: a batch prefers a worker
+        # holding its input, so with the bytes on one worker the others sat idle (1 -> 2 workers
+        # gave 1.0-1.6x instead of 1.9x, benchmarks/sweep_scaling.py).
+        client.replicate([shipped])
     futures = {client.submit(run_batch, plan.target, shipped, plan.settings, plan.metrics, batch,
                              key=f"gyrowheel-sweep-{tag}-{i}", pure=False): batch
                for i, batch in enumerate(tasks)}

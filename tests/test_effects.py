@@ -11,17 +11,9 @@ from conftest import PAPER, SCENES, steady_precession
 from fmi_helpers import Slave
 from fmu_build import build_fmu, parse_scene
 from fmu_build.analysis import fit_circle
+from paper_wheel import G, KA, KD, M, R
+from paper_wheel import PAPER_WHEEL_TOML as BASE
 
-M, R, KA, KD, G = 2.0, 0.17, 0.4, 0.25, 9.81
-BASE = """
-[wheel]
-M = 2.0
-R = 0.17
-k_diam = 0.25
-k_axial = 0.4
-[effects.gravity]
-g = 9.81
-"""
 
 
 @pytest.fixture(scope="module")

@@ -22,18 +22,10 @@ from fmu_build.scene import SceneError
 from fmu_build.scipy_reference import solve_hybrid
 from model.build import build_model
 from reference.planar_gyrover import Planar
+from paper_wheel import G, KA, KD, M, R
+from paper_wheel import PAPER_WHEEL_TOML as WHEEL
 
-M, R, KA, KD, G = 2.0, 0.17, 0.4, 0.25, 9.81
 C_RR = 0.02
-WHEEL = """
-[wheel]
-M = 2.0
-R = 0.17
-k_diam = 0.25
-k_axial = 0.4
-[effects.gravity]
-g = 9.81
-"""
 TIGHT = {"rel_tol": 1e-10, "abs_tol": 1e-12}
 
 

@@ -268,8 +268,8 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(create)(const double *parameters, const do
 
 /* ---- by name -------------------------------------------------------------------------------- */
 
-/* settings by name: solver, rel_tol, abs_tol, max_step, max_internal_steps (the model's GW_VAR_SETTING variables)
- * and start_time; 0 if `name` is none of them */
+/* settings by name: solver, rel_tol, abs_tol, max_step, max_internal_steps (the model's
+ * GW_VAR_SETTING variables) and start_time; 0 if `name` is none of them */
 static int gwc_named_setting(GWC_T *w, const char *fn, gyrowheel_settings *st, const char *name,
                              double value, gyrowheel_status *r) {
     *r = GYROWHEEL_OK;

@@ -87,7 +87,8 @@ def run_dask(plan, writer, *, client, batch_size: int | None = None, progress: b
     """Submit one task per batch to `client`, collect rows as tasks finish (any order)."""
     from distributed import as_completed
 
-    threads = sum(client.nthreads().values()) or 1
+    nthreads = client.nthreads()  # {worker: threads}
+    threads = sum(nthreads.values()) or 1
     size = batch_size or auto_batch_size(len(plan.values), threads)
     tasks = plan.tasks(size)
     payload = plan.target.payload()
@@ -97,7 +98,7 @@ def run_dask(plan, writer, *, client, batch_size: int | None = None, progress: b
     # data would be lost and every batch still waiting would be cancelled with it.
     shipped = (client.submit(_payload, payload, key=f"gyrowheel-sweep-{tag}-payload", pure=False)
                if payload is not None else None)
-    if shipped is not None and threads > 1:
+    if shipped is not None and len(nthreads) > 1:  # more than one worker process
         # ... and are copied to every worker before the batches go out: a batch prefers a worker
         # holding its input, so with the bytes on one worker the others sat idle (1 -> 2 workers
         # gave 1.0-1.6x instead of 1.9x, benchmarks/sweep_scaling.py).

@@ -1,15 +1,15 @@
 """The Taylor kernel alone (one jet call = the coefficients of one step), per lane count and order.
 
 Builds a scene's FMU with the Taylor kernel, compiles its gw_taylor_model.h into small C
-drivers the way the runtime does (W = 1 as in the FMU: -std=c99 -O2 -fno-math-errno; W > 1 as
-in the ensemble library: -O3 -ffp-contract=fast, the kernel a target clone for x86-64-v3 beside
-the portable default) and times jet at the scene's initial state: thread CPU time of a batch of
+drivers the way the runtime does (W = 1: the FMU's c_src/gw_taylor.c with its flags, -std=c99
+-O2 -fno-math-errno; W > 1 as in the ensemble library: -O3 -ffp-contract=fast, the kernel a
+target clone for x86-64-v3 beside the portable default) and times jet at the scene's initial state: thread CPU time of a batch of
 calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8 at orders 6, 10, 13,
 15 (rel_tol 1e-4, 1e-7, 1e-10, 1e-12) and the ratio of a W-lane call to a one-lane call (the
 cost of W trajectories against one: 1 would be perfect vectorisation, W none at all).
 
 With --baseline REF the kernel generator of that git ref (fmu_build/taylor_c.py, taylor_graph.py,
-c_src/gw_taylor_ops.h) is timed in the same rounds, and its states' series are compared with
+c_src/gw_taylor_ops.h, gw_taylor.c) is timed in the same rounds, and its states' series are compared with
 this tree's (they differ by rounding only: the summation order).  Timings on a loaded machine
 are noisy: compare ratios from one run; re-measure absolute times on a quiet machine.
 
@@ -41,13 +41,20 @@ DRIVER = r"""#define _POSIX_C_SOURCE 199309L
 #include <math.h>
 #include <stddef.h>
 #include <time.h>
+#if {lanes} == 1 /* the FMU's instance: gw_taylor.c itself (its target clone), as gw_tl1_ */
+#define GW_UNITY_BUILD 1
+#include "gw_taylor.c"
+#define gw_tlb_cst gw_tl1_cst
+#define gw_tlb_jet gw_tl1_jet
+#else /* the ensemble's: as gw_ensemble.c */
 #define GW_MAYBE_UNUSED __attribute__((unused))
 #define GW_TL_W {lanes}
 #define GW_TL(name) gw_tlb_##name
-#if GW_TL_W > 1 && defined(__x86_64__) && !defined(__clang__)
+#if defined(__x86_64__) && !defined(__clang__)
 #define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
 #include "gw_taylor_model.h"
+#endif
 int bench_nvar(void);
 int bench_ncst(void);
 void bench_cst(const double *u, const double *p, double *c);
@@ -87,7 +94,8 @@ def baseline_source(ref: str, ode, model: str, out: Path) -> None:
     (pkg / f"{tag}_graph.py").write_text(show("fmu_build/taylor_graph.py"))
     (pkg / f"{tag}_c.py").write_text(show("fmu_build/taylor_c.py").replace(
         "fmu_build.taylor_graph", f"{tag}_graph"))
-    (out / "gw_taylor_ops.h").write_text(show("c_src/gw_taylor_ops.h"))
+    for name in ("gw_taylor_ops.h", "gw_taylor.c"):
+        (out / name).write_text(show(f"c_src/{name}"))
     sys.path.insert(0, str(pkg))
     try:
         mod = importlib.import_module(f"{tag}_c")

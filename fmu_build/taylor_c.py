@@ -30,6 +30,7 @@ are copied to the output layout.
 """
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -191,10 +192,16 @@ def _zero_lines(dec: Decomposition) -> list[str]:
 
 def _interior_lines(plan: _Plan) -> list[str]:
     """phase 1 of order k: the interior sums, GROUP accumulators per loop over j"""
+    # sum_j A_j B_{k-j} = sum_j B_j A_{k-j} over j = 1 .. k-1: each term reads its more
+    # frequent operand at j, and the accumulators are grouped by it, so that a group loads
+    # each shared coefficient once per j
+    uses = Counter(n for t in plan.terms for n in (t.a, t.b))
     targets: dict[int, list[_Term]] = {}
-    for term in plan.terms:
-        targets.setdefault(term.target, []).append(term)
-    order = list(targets)
+    for t in plan.terms:
+        if (uses[t.b], -t.b) > (uses[t.a], -t.a):
+            t = _Term(t.target, t.sign, t.b, t.a, t.factor)
+        targets.setdefault(t.target, []).append(t)
+    order = sorted(targets, key=lambda n: (-uses[targets[n][0].a], targets[n][0].a, n))
     lines = []
     for g in range(0, len(order), GROUP):
         group = order[g:g + GROUP]

@@ -42,7 +42,7 @@ __all__ = ["TaylorKernel", "taylor_source", "write_taylor_kernel", "work_series"
            "GROUP"]
 
 KERNEL_FILE = "gw_taylor_model.h"
-GROUP = 10  # accumulators of one interior loop (registers: 16 vector registers on x86-64)
+GROUP = 12  # accumulators of one interior loop (registers: 16 vector registers on x86-64)
 
 # ops whose order k >= 1 has an interior sum, and the weighted operands (j a_j) they need:
 # "a", "b": the first, second argument; "v": the node's own series

@@ -24,12 +24,14 @@ right-hand side.  Each order k >= 1 then has two phases:
      W-wide vector operation for W lanes); the sums land in slot k of their nodes;
   2. in program order, each node's boundary terms (j = 0 and j = k: they need coefficient k of
      the operands) and its finishing operation (divide by b_0, by k, ...); the states get
-     x_i^[k+1] = f_i^[k] / (k + 1).
+     x_i^[k+1] = f_i^[k] / (k + 1).  A node whose coefficients no interior sum reads is a local
+     variable here (no store and reload).
 No function calls, and code size O(nodes), whatever the order.  At the end the states' series
 are copied to the output layout.
 """
 from __future__ import annotations
 
+import re
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -330,6 +332,43 @@ def _next(plan: _Plan, order0: bool) -> list[tuple[bool, str]]:
     return out
 
 
+def _locals(plan: _Plan, items: list[tuple[bool, str]]) -> list[tuple[bool, str]]:
+    """order k >= 1: a node whose coefficients no interior sum reads (and not a state or t)
+    needs its coefficient k only in this order's statements: a local variable (a register, no
+    store and reload) when its statement and all its uses are in one loop of whole statements
+    (its slot k still holds its interior sum, if it has one)"""
+    dec = plan.dec
+    read = {n for t in plan.terms for n in (t.a, t.b)} | set(range(dec.nx)) | {dec.t_node}
+    run, r = [], 0
+    for i, (lane, _) in enumerate(items):
+        r += i > 0 and lane != items[i - 1][0]
+        run.append(r)
+    defs: dict[int, int] = {}
+    uses: dict[int, set[int]] = {}
+    for i, (lane, text) in enumerate(items):
+        lhs, rhs = text.split(" = ", 1)
+        m = re.fullmatch(r"GW_VK\((\d+)\)", lhs)
+        if m and not lane:
+            defs[int(m[1])] = i
+        for u in re.findall(r"GW_[VL]K\((\d+)\)", rhs):
+            uses.setdefault(int(u), set()).add(i)
+    local = {n for n, i in defs.items() if n not in read
+             and all(run[u] == run[i] and u >= i for u in uses.get(n, ()))}
+    out = []
+    for i, (lane, text) in enumerate(items):
+        lhs, rhs = text.split(" = ", 1)
+        for n in local:
+            if defs[n] < i:
+                rhs = rhs.replace(f"GW_VK({n})", f"v{n}")
+        m = re.fullmatch(r"GW_VK\((\d+)\)", lhs)
+        if m and int(m[1]) in local and defs[int(m[1])] == i:
+            if not uses.get(int(m[1]), set()) - {i}:
+                continue  # read by nothing at order k >= 1 (an operand of a piecewise op)
+            lhs = f"const GW_TL(v) v{m[1]}"
+        out.append((lane, f"{lhs} = {rhs}"))
+    return out
+
+
 def _loops(items: list[tuple[bool, str]]) -> list[str]:
     """statements in loops: runs of whole-vector statements over GW_TL_BLK, of lane-wise ones
     over the W lanes"""
@@ -412,7 +451,7 @@ GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const 
     rk = 1.0 / dk;
     rk1 = 1.0 / (dk + 1.0);
 {chr(10).join(_interior_lines(plan))}
-{chr(10).join(_loops(_boundary(plan) + _next(plan, False)))}
+{chr(10).join(_loops(_locals(plan, _boundary(plan) + _next(plan, False))))}
     }}
     for (i = 0; i < GW_TL_NX; i++) /* the states' series, to the output layout */
         for (k = 0; k <= order; k++)

@@ -59,11 +59,13 @@ typedef struct {
 enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
 
 /* With this many active lanes or fewer the batch runs each lane's series with the one-lane
- * kernel (gw_tl1_jet, as solver taylor does) instead of all GW_ENS_LANES lanes of gw_tlb_jet
- * (the lanes' tail when N is not a multiple of the lanes, or trajectories end at different
- * times; measured in benchmarks/ensemble_scaling.py). */
+ * kernel (gw_tl1_jet, as solver taylor does) instead of all GW_ENS_LANES lanes of gw_tlb_jet:
+ * the tail of a job whose N is not a multiple of the lanes, or whose trajectories end at
+ * different times.  The 8-lane kernel costs about 3.3 one-lane kernels (paper scenario, rel_tol
+ * 1e-10, x86-64-v3: N = 1 took 3.3 ms per trajectory on 8 lanes, 1.07 ms with the one-lane
+ * kernel; N = 2, 3: 1.67, 1.14 ms against 1.04, 1.03 ms; from N = 4 the 8-lane kernel wins). */
 #ifndef GW_ENSEMBLE_SINGLE_MAX
-#define GW_ENSEMBLE_SINGLE_MAX (GW_ENSEMBLE_LANES / 4)
+#define GW_ENSEMBLE_SINGLE_MAX (3 * GW_ENSEMBLE_LANES / 8)
 #endif
 
 typedef struct {

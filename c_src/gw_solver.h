@@ -132,9 +132,10 @@ typedef struct {
  * of the states, lanes interleaved); 0 and *bad_order = j if order j is not finite. */
 GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run, const double *X,
                                   int order, int lanes, int lane, int *bad_order);
-/* dx = sum_{k>=1} X_k h^k of lane `lane` (the state's increment; gw_sum_update adds it) */
+/* dx = sum_{k>=1} X_k h^k of lane `lane` (the state's increment; gw_sum_update adds it) and,
+ * unless dp is NULL, dp = P'(h), the polynomial's derivative (for the defect check) */
 GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int lane, int nx,
-                                     double h, double *dx);
+                                     double h, double *dx, double *dp);
 /* Start an integration call: kernel present, order from rel_tol. */
 GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run);
 /* A step in two halves, so that the defect check can take f(t1, P(h)) from the series the

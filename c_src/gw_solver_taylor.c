@@ -86,16 +86,33 @@ GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run
     return exp(lr + run->log_c);
 }
 
-/* dx = sum_{k>=1} X_k h^k (Horner) */
+/* dx = P(h) - x0 = sum_{k>=1} X_k h^k and, if dp is not NULL, dp = P'(h), in one Horner pass:
+ * with Q(s) = sum_{k>=1} X_k s^(k-1), dx = h Q(h) and P'(h) = Q(h) + h Q'(h).  The order loop
+ * is outside the component loop (blocks of 8 components): the components' Horner chains are
+ * independent and overlap, where one chain after the other waited on each multiply-add. */
 GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int lane, int nx,
-                                     double h, double *dx) {
+                                     double h, double *dx, double *dp) {
+    enum { B = 8 };
     const size_t S = (size_t)(order + 1) * (size_t)lanes;
-    int i, k;
-    for (i = 0; i < nx; i++) {
-        const double *xi = X + (size_t)i * S + lane;
-        double d = xi[(size_t)order * lanes];
-        for (k = order - 1; k >= 1; k--) d = d * h + xi[(size_t)k * lanes];
-        dx[i] = d * h;
+    int i0, b, k;
+    for (i0 = 0; i0 < nx; i0 += B) {
+        const int nb = nx - i0 < B ? nx - i0 : B;
+        const double *x0 = X + (size_t)i0 * S + lane;
+        double q[B], dq[B];
+        for (b = 0; b < nb; b++) {
+            q[b] = x0[(size_t)b * S + (size_t)order * lanes];
+            dq[b] = 0.0;
+        }
+        for (k = order - 1; k >= 1; k--) {
+            const double *xk = x0 + (size_t)k * lanes;
+            for (b = 0; b < nb; b++) {
+                dq[b] = dq[b] * h + q[b];
+                q[b] = q[b] * h + xk[(size_t)b * S];
+            }
+        }
+        for (b = 0; b < nb; b++) dx[i0 + b] = q[b] * h;
+        if (dp)
+            for (b = 0; b < nb; b++) dp[i0 + b] = q[b] + h * dq[b];
     }
 }
 
@@ -139,21 +156,19 @@ GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run) {
  * I->k[1].  Returns err, or -1 if the right-hand side failed (logged). */
 static double gw_taylor_defect(gw_instance *I, double t1, double h, const double *f1,
                                size_t stride) {
-    const int nx = I->m->nx, p = I->tl_order;
-    const double scale = h / (p + 1);
+    const int nx = I->m->nx;
+    const double scale = h / (I->tl_order + 1), rtol = I->rel_tol, atol = I->atol_eff;
+    const double *dp = I->k[2], *xnew = I->xnew, *nominal = I->nominal; /* P'(h): attempt's */
     double err = 0.0;
-    int i, k;
+    int i;
     if (!f1) {
         if (gw_rhs_checked(I, t1, I->xnew, I->k[1])) return -1.0;
         f1 = I->k[1];
         stride = 1;
     }
     for (i = 0; i < nx; i++) {
-        const double *xi = I->tl_w + (size_t)i * (size_t)(p + 1);
-        const double w = I->rel_tol * fabs(I->xnew[i]) + I->atol_eff * I->nominal[i];
-        double d = p * xi[p], r;
-        for (k = p - 1; k >= 1; k--) d = d * h + k * xi[k]; /* P'(h) */
-        r = fabs(f1[(size_t)i * stride] - d) * scale / w;
+        const double r = fabs(f1[(size_t)i * stride] - dp[i]) * scale /
+                         (rtol * fabs(xnew[i]) + atol * nominal[i]);
         if (!(r <= err)) err = r; /* NaN propagates as a rejection */
     }
     return isfinite(err) ? err : HUGE_VAL;
@@ -180,7 +195,7 @@ GW_INTERNAL gw_int_result gw_taylor_attempt(gw_instance *I, double t_end, gw_tay
     }
     I->h_adapt = hs < I->max_step ? hs : I->max_step;
     if (gw_next_attempt(I, t_end, 0, &run->h_prev, &run->n_fast, h, t1, last)) return GW_INT_ERROR;
-    gw_taylor_increment(I->tl_w, p, 1, 0, nx, *h, I->dx);
+    gw_taylor_increment(I->tl_w, p, 1, 0, nx, *h, I->dx, I->k[2]);
     gw_sum_update(I); /* xnew, xcnew; an event restarts the compensation (gw_accept_step) */
     return GW_INT_OK;
 }
@@ -210,7 +225,7 @@ GW_INTERNAL gw_int_result gw_taylor_conclude(gw_instance *I, double t_end, gw_ta
         }
         if (gw_next_attempt(I, t_end, 0, &run->h_prev, &run->n_fast, &h, &t1, &last))
             return GW_INT_ERROR;
-        gw_taylor_increment(I->tl_w, p, 1, 0, nx, h, I->dx);
+        gw_taylor_increment(I->tl_w, p, 1, 0, nx, h, I->dx, I->k[2]);
         gw_sum_update(I);
         f1 = NULL; /* retries: one right-hand side evaluation each */
         err = gw_taylor_defect(I, t1, h, NULL, 1);
@@ -227,6 +242,12 @@ static void gw_swap_series(double **a, double **b) {
     *a = *b;
     *b = tmp;
 }
+
+/* 1: every step checks with a right-hand side evaluation, as before the deferred check (for
+ * tests/test_taylor.py::test_deferred_defect_check_rejects_where_the_rhs_check_does) */
+#ifndef GW_TAYLOR_DEFECT_RHS
+#define GW_TAYLOR_DEFECT_RHS 0
+#endif
 
 /* Each step: the series at its start (in I->tl_w), the attempt, then the series at the
  * attempt's end point (I->tl_wn), whose order 1 is f(t1, P(h)) for the defect check; accepted
@@ -250,6 +271,7 @@ GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end) {
         }
         result = gw_taylor_attempt(I, t_end, &run, &h, &t1, &last);
         if (result != GW_INT_OK) break;
+        if (GW_TAYLOR_DEFECT_RHS) last = 1;
         if (!last) {
             double tt = t1;
             tk->jet(I->tl_order, &tt, I->xnew, I->tl_c, I->tl_wn);

@@ -256,6 +256,45 @@ def test_step_size_defect_checked_through_a_near_pole(lunar):
     assert times[TAYLOR] == pytest.approx(17.4747724753, abs=1e-9) and abs(times[TAYLOR] - times[5]) < 1e-11, times
 
 
+def _rejections(fmu: Path, unzipdir: Path | None, T: float, tol: float) -> list[tuple[float, float]]:
+    """(t, h) of every rejected Taylor step of one fmi2DoStep(0, T) from NEAR_FALL, from the
+    solver log ("taylor step rejected at t=... h=...")."""
+    import re
+
+    from fmi_helpers import Slave
+    s = Slave(fmu, unzipdir=unzipdir)
+    try:
+        s.init(solver=TAYLOR, rel_tol=tol, abs_tol=tol * 1e-2, max_step=60.0, **NEAR_FALL)
+        s.slave.doStep(0.0, T)
+        return [(float(m.group(1)), float(m.group(2))) for _, _, text in s.messages
+                for m in [re.search(r"taylor step rejected at t=(\S+): h=(\S+) ", text)] if m]
+    finally:
+        s.free()
+
+
+def test_deferred_defect_check_rejects_where_the_rhs_check_does(lunar, tmp_path):
+    """The defect check takes f(t1, P(h)) from the series of the next step (order 1), computed at
+    the attempt's end point anyway, instead of a right-hand side evaluation: the same numbers to
+    rounding, so the same steps are rejected. The FMU's own sources compiled with
+    GW_TAYLOR_DEFECT_RHS=1 (every step checked with the right-hand side, as before) reject at the
+    same times with the same step sizes on the near-pole case."""
+    from fmpy import extract
+
+    from fmu_build.compiler import UNITY_SOURCE, compile_shared
+    rhs_dir = Path(extract(str(lunar.fmu), unzipdir=str(tmp_path / "rhs")))
+    so = next((rhs_dir / "binaries").rglob("*.so"))
+    compile_shared(rhs_dir / "sources" / UNITY_SOURCE, [rhs_dir / "sources"], so,
+                   extra_flags=["-DGW_TAYLOR_DEFECT_RHS=1"])
+    total = 0
+    for tol in (1e-6, 1e-9, 1e-12):
+        deferred = _rejections(lunar.fmu, None, 0.004, tol)
+        rhs = _rejections(lunar.fmu, rhs_dir, 0.004, tol)
+        assert len(deferred) == len(rhs), (tol, deferred, rhs)
+        np.testing.assert_allclose(np.array(deferred), np.array(rhs).reshape(-1, 2), rtol=1e-9, err_msg=str(tol))
+        total += len(rhs)
+    assert total >= 3  # the check does reject there (the step from the coefficients is too long)
+
+
 @pytest.mark.parametrize("name", ["lunar_rover", "euler_disk"])
 def test_scenes_run_briefly_with_taylor(name, tmp_path):
     """Scenes with contact forces, drag, rolling resistance and slope simulate with taylor like

@@ -7,10 +7,15 @@
  * the model's kernel instantiated with GW_ENSEMBLE_LANES lanes (gw_tlb_jet: structure of
  * arrays, the lane loops of gw_taylor_ops.h vectorise; on x86-64 with GCC or clang the kernel
  * is also compiled for x86-64-v3 (AVX2, FMA) and chosen at load time, target_clones, with a
- * portable default).  Each lane then takes its own step (gw_taylor_step_once: its own step
- * size, dense output, event location, compensated update): a lane whose trajectory reaches
- * t_end or stops at a terminating event (a fall) takes the next trajectory of the job at once,
- * while the others go on.  The order p is common (from rel_tol).
+ * portable default).  Each lane then takes its own step (gw_taylor_attempt / _conclude of
+ * solver taylor: its own step size, defect check, dense output, event location, compensated
+ * update); the batch runs each lane at its pending attempt's end point, so that the series of
+ * the next step is also the defect check's f(t1, P(h)) (one kernel call per lane and step, as
+ * in gw_integrate_taylor).  A lane whose trajectory reaches t_end or stops at a terminating
+ * event (a fall) takes the next trajectory of the job at once, while the others go on; with
+ * few lanes left active (the tail of the job) the batch runs them with the one-lane kernel.
+ * The order p is common (from rel_tol); the constants are recomputed only when a lane's
+ * parameters change.
  *
  * Not part of an FMU: included by the ensemble library's unity file (fmu_build/ensemble.py),
  * after gw_core.c and the model (gw_taylor_model.h).  All memory through the callbacks.
@@ -130,7 +135,7 @@ static void gw_ens_new_call(gw_lane *L) {
 static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
     const gw_ensemble_job *job = E->job;
     const gw_model *m = E->m;
-    while (L->traj < 0 && E->next < job->n) {
+    while (L->I && L->traj < 0 && E->next < job->n) {
         const long j = E->next++;
         gw_instance *I = L->I;
         char fn[48];
@@ -355,10 +360,11 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
     E.x = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
     E.u = (double *)gw_ens_alloc(cb, (size_t)m->nu * L);
     E.p = (double *)gw_ens_alloc(cb, (size_t)m->np * L);
-    for (l = 0; l < GW_ENS_LANES; l++) {
+    for (l = 0; l < GW_ENS_LANES; l++) { /* instances for the lanes that will have work */
         char name[32];
         snprintf(name, sizeof name, "ensemble lane %d", l);
         E.lane[l].traj = -1;
+        if (l >= job->n) continue;
         E.lane[l].I = gw_instance_new(m, name, cb, 0);
         if (!E.lane[l].I) st = GW_FATAL;
     }

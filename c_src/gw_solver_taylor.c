@@ -6,28 +6,37 @@
  * solution through t (automatic differentiation of the right-hand side's expression graph);
  * then (A. Jorba, M. Zou, A software package for the numerical integration of ODEs by means
  * of high-order Taylor methods, Exp. Math. 14 (2005) 99-117, sect. 3.2-3.3):
- *   order   p = ceil(-ln(eps) / 2 + 1), eps = rel_tol (clamped to [3, GW_TAYLOR_MAX_ORDER]:
- *           at order 2 the step h ~ 0.07 (|x_i| + floor) / |x_i'| closes in on every zero of a
- *           state geometrically when the floor atol / rel_tol is small, so rel_tol > e^-2
- *           took 15x the steps of rel_tol 0.1 (48,000 against 3,200 on the paper's 20 s);
- *           from order 3 h ~ |x_i|^(1/2) near a zero and crosses it in a few steps);
- *           heyoka makes the same choice (Biscani & Izzo, MNRAS 504 (2021) 2614, sect. 4)
- *   step    h = rho / e^2 * exp(-0.7 / (p - 1)),  rho = min_{j = p-1, p} N_j^(-1/j),
+ *   order   p = p0 + GW_TAYLOR_EXTRA_ORDER (4), p0 = ceil(-ln(eps) / 2 + 1), eps = rel_tol,
+ *           p0 clamped to [3, GW_TAYLOR_MAX_ORDER] (at order 2 the step h ~ 0.07 (|x_i| +
+ *           floor) / |x_i'| closes in on every zero of a state geometrically when the floor
+ *           atol / rel_tol is small, so rel_tol > e^-2 took 15x the steps of rel_tol 0.1
+ *           (48,000 against 3,200 on the paper's 20 s); from order 3 h ~ |x_i|^(1/2) near a
+ *           zero and crosses it in a few steps).  p0 is Jorba & Zou's and heyoka's order
+ *           (Biscani & Izzo, MNRAS 504 (2021) 2614, sect. 4), optimal when a step costs ~p^2;
+ *           this kernel's cost per step grows nearly linearly with p (a fixed part, the linear
+ *           nodes, few products), so fewer, longer steps of a higher order reach the same
+ *           error sooner (paper scenario: 13-25% less time to each error, docs/taylor.md)
+ *   step    h = rho exp(c),  rho = min_{j = p-1, p} N_j^(-1/j),
  *           N_j = max_i |x_i^[j]| / sc_i,  sc_i = |x_i| + (atol / rel_tol) nominal_i,
- *           so that the truncation error of component i is about
- *           eps sc_i = rel_tol |x_i| + atol nominal_i, the error weight of every solver
- *           (atol: abs_tol, or rel_tol / 100 when abs_tol = 0);
- *   update  dx_i = sum_{k=1..p} x_i^[k] h^k (Horner), added to the state with the TwoSum
- *           compensation every solver shares (gw_sum_update: x + xc, xc part of a saved
- *           state, layout v3), so that rounding does not accumulate over thousands of steps;
+ *           c = -(2 + 0.7 / (p0 - 1)) (p0 + 1) / (p + 1): the first neglected term
+ *           (h / rho)^(p+1) is the one of Jorba & Zou's step rho / e^2 exp(-0.7 / (p0 - 1))
+ *           at order p0 (the rule itself when p = p0), about eps sc_i = rel_tol |x_i| + atol
+ *           nominal_i, the error weight of every solver (atol: abs_tol, or rel_tol / 100 when
+ *           abs_tol = 0); two logarithms and one exponential, no pow;
+ *   update  dx_i = sum_{k=1..p} x_i^[k] h^k (Horner, with P'(h) in the same pass), added to
+ *           the state with the TwoSum compensation every solver shares (gw_sum_update: x + xc,
+ *           xc part of a saved state, layout v3), so that rounding does not accumulate;
  *   dense   the Taylor polynomial itself: x(t + s) for s in [0, h], exact to the order of the
  *           step, used by the event location (gw_events.c) like every dense output.
- *   check   the defect of the polynomial at the step's end, f(t1, P(h)) - P'(h), one right-hand
- *           side evaluation (gw_taylor_defect): the estimate from the last two orders misses a
- *           near complex pole or a stiff mode (lunar_rover's smoothed rolling resistance
- *           tanh(omega/eps) near the fall: steps 100x too long, rates 0.7 rad/s off); a step
- *           whose defect exceeds the error weight is shortened on the same series and counted
- *           as rejected.
+ *   check   the defect of the polynomial at the step's end, f(t1, P(h)) - P'(h)
+ *           (gw_taylor_defect): the estimate from the last two orders misses a near complex
+ *           pole or a stiff mode (lunar_rover's smoothed rolling resistance tanh(omega/eps)
+ *           near the fall: steps 100x too long, rates 0.7 rad/s off); a step whose defect
+ *           exceeds the error weight is shortened on the same series and counted as rejected.
+ *           f(t1, P(h)) is order 1 of the series at (t1, P(h)), which the next step needs:
+ *           the kernel runs there before the step is accepted (gw_integrate_taylor), so the
+ *           check costs nothing when the step is accepted; the last step of a call, and the
+ *           retries of a rejected step, evaluate the right-hand side instead.
  * As in the other adaptive solvers the step is bounded by max_step, lands exactly on t_end,
  * counts against the budget max_internal_steps (every attempt) and is refused by the
  * feasibility guard (gw_next_attempt), and below gw_h_min ("step size underflow"); a

@@ -420,6 +420,44 @@ def test_ensemble_equals_single_runs(paper, tmp_path):
         assert res.output("energy")[j] == pytest.approx(x[8], abs=1e-9)
 
 
+def test_ensemble_lanes_tail_and_refill_equal_the_single_runs(paper, tmp_path):
+    """N not a multiple of the lanes and trajectories ending at different times (falls): the
+    lanes take the next trajectory as soon as theirs ends, and when few lanes are left active
+    the batch runs them with the one-lane kernel (gw_ensemble.c, GW_ENSEMBLE_SINGLE_MAX).  7
+    trajectories on 1, 4 and 8 lanes (the 4-lane run ends with 3 on the one-lane kernel, the
+    8-lane one starts with 7 of 8 lanes; on a grid, each lane's calls end at every point) equal
+    the 8-lane run of test_ensemble_equals_single_runs's kind: the same steps, the same values
+    to rounding (the one-lane and the lane kernels round differently)."""
+    built, runner = paper
+    g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0])
+    spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2])
+    kw = dict(parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-9)
+    runs = {w: Ensemble(built.fmu, lanes=w, cache=tmp_path).run(6.0, **kw) for w in (1, 4, 8)}
+    gridded = {w: Ensemble(built.fmu, lanes=w, cache=tmp_path).run(6.0, grid=np.linspace(0.5, 6.0, 12), **kw)
+               for w in (1, 4)}
+    ref = runs[8]
+    assert 0 < ref.terminated.sum() < len(g) and set(ref.status) <= {STATUS_OK, STATUS_TERMINATED}
+    for res in [runs[1], runs[4], *gridded.values()]:
+        assert list(res.status) == list(ref.status)
+        np.testing.assert_allclose(res.t_final, ref.t_final, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(res.x_final, ref.x_final, rtol=1e-9, atol=1e-8)
+    for w in (1, 4):
+        assert list(runs[w].steps) == list(ref.steps)
+    np.testing.assert_allclose(gridded[1].y_grid, gridded[4].y_grid, rtol=1e-9, atol=1e-8)
+    from fmpy.fmi2 import fmi2LastSuccessfulTime
+    for j in (0, 2):  # one that runs to the end, one that falls: as one fmi2DoStep run
+        runner.start(solver=TAYLOR, rel_tol=1e-9, abs_tol=1e-11, max_step=6.0, g=g[j], gamma_dot=spin[j],
+                     beta_min=0.1)
+        try:
+            runner.slave.doStep(0.0, 6.0)
+            t = 6.0
+        except Exception:
+            t = runner.slave.getRealStatus(fmi2LastSuccessfulTime)
+        assert abs(ref.t_final[j] - t) < 1e-9
+        np.testing.assert_allclose(ref.x_final[j], runner.slave.getReal([runner.vr[n] for n in STATES]),
+                                   rtol=1e-9, atol=1e-8)
+
+
 def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
     built, _ = paper
     ens = Ensemble(built.fmu, cache=tmp_path)

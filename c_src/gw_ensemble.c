@@ -7,10 +7,15 @@
  * the model's kernel instantiated with GW_ENSEMBLE_LANES lanes (gw_tlb_jet: structure of
  * arrays, the lane loops of gw_taylor_ops.h vectorise; on x86-64 with GCC or clang the kernel
  * is also compiled for x86-64-v3 (AVX2, FMA) and chosen at load time, target_clones, with a
- * portable default).  Each lane then takes its own step (gw_taylor_step_once: its own step
- * size, dense output, event location, compensated update): a lane whose trajectory reaches
- * t_end or stops at a terminating event (a fall) takes the next trajectory of the job at once,
- * while the others go on.  The order p is common (from rel_tol).
+ * portable default).  Each lane then takes its own step (gw_taylor_attempt / _conclude of
+ * solver taylor: its own step size, defect check, dense output, event location, compensated
+ * update); the batch runs each lane at its pending attempt's end point, so that the series of
+ * the next step is also the defect check's f(t1, P(h)) (one kernel call per lane and step, as
+ * in gw_integrate_taylor).  A lane whose trajectory reaches t_end or stops at a terminating
+ * event (a fall) takes the next trajectory of the job at once, while the others go on; with
+ * few lanes left active (the tail of the job) the batch runs them with the one-lane kernel.
+ * The order p is common (from rel_tol); the constants are recomputed only when a lane's
+ * parameters change.
  *
  * Not part of an FMU: included by the ensemble library's unity file (fmu_build/ensemble.py),
  * after gw_core.c and the model (gw_taylor_model.h).  All memory through the callbacks.
@@ -51,9 +56,22 @@ typedef struct {
     gw_taylor_run run;
     int gi;          /* next communication point (job->t_grid), if the job has a grid */
     unsigned long steps; /* Taylor steps of this trajectory */
+    int pending;     /* an attempt (h, t1; I->xnew) awaits its defect check: the lane's point in
+                        the next batch is its end point, else the lane's current point */
+    double h, t1;
 } gw_lane;
 
 enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
+
+/* With this many active lanes or fewer the batch runs each lane's series with the one-lane
+ * kernel (gw_tl1_jet, as solver taylor does) instead of all GW_ENS_LANES lanes of gw_tlb_jet:
+ * the tail of a job whose N is not a multiple of the lanes, or whose trajectories end at
+ * different times.  The 8-lane kernel costs about 3.3 one-lane kernels (paper scenario, rel_tol
+ * 1e-10, x86-64-v3: N = 1 took 3.3 ms per trajectory on 8 lanes, 1.07 ms with the one-lane
+ * kernel; N = 2, 3: 1.67, 1.14 ms against 1.04, 1.03 ms; from N = 4 the 8-lane kernel wins). */
+#ifndef GW_ENSEMBLE_SINGLE_MAX
+#define GW_ENSEMBLE_SINGLE_MAX (3 * GW_ENSEMBLE_LANES / 8)
+#endif
 
 typedef struct {
     const gw_model *m;
@@ -61,6 +79,7 @@ typedef struct {
     gw_lane lane[GW_ENS_LANES];
     double *w, *c, *x, *u, *p, t[GW_ENS_LANES]; /* batch kernel memory, lanes innermost */
     long next;                                  /* next trajectory to start */
+    int cst_dirty;                              /* a lane's parameters or inputs changed */
 } gw_ensemble;
 
 static void gw_ens_finish(gw_ensemble *E, gw_lane *L, gw_status status) {
@@ -116,7 +135,7 @@ static void gw_ens_new_call(gw_lane *L) {
 static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
     const gw_ensemble_job *job = E->job;
     const gw_model *m = E->m;
-    while (L->traj < 0 && E->next < job->n) {
+    while (L->I && L->traj < 0 && E->next < job->n) {
         const long j = E->next++;
         gw_instance *I = L->I;
         char fn[48];
@@ -140,6 +159,7 @@ static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
         L->traj = j;
         L->gi = 0;
         L->steps = 0;
+        L->pending = 0;
         if (job->n_rows) job->n_rows[j] = 0;
         if (gw_setup_experiment(I, fn, 0, 0.0, job->t_start, 1, job->t_end) != GW_OK ||
             gw_initialize(I, fn) > GW_WARNING || gw_taylor_begin(I, &L->run)) {
@@ -157,59 +177,150 @@ static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
             const int l = (int)(L - E->lane);
             for (i = 0; i < m->np; i++) E->p[(size_t)i * GW_ENS_LANES + l] = I->p[i];
             for (i = 0; i < m->nu; i++) E->u[(size_t)i * GW_ENS_LANES + l] = I->u[i];
+            E->cst_dirty = 1;
         }
+        if (m->taylor.cst) m->taylor.cst(I->u, I->p, I->tl_c); /* for the one-lane kernel */
     }
 }
 
-/* One batch step: the coefficients of every lane, then each active lane's own step. */
+/* Lane L after a concluded step (result r): an error or a fall ends its trajectory, a
+ * communication point reached is recorded and starts the next call or ends the trajectory.
+ * Returns 1 if the lane goes on with the same trajectory inside the same call. */
+static int gw_ens_after(gw_ensemble *E, gw_lane *L, gw_int_result r, double target) {
+    L->steps = L->run.steps;
+    if (r == GW_INT_ERROR) {
+        gw_ens_finish(E, L, GW_ERROR);
+        return 0;
+    }
+    if (r == GW_INT_TERMINATED) {
+        gw_ens_finish(E, L, gw_ens_record(E, L, L->gi + 1) ? GW_ERROR : GW_DISCARD);
+        return 0;
+    }
+    if (L->I->t < target) return 1;
+    L->I->t = target; /* a communication point (or t_end) reached */
+    gw_point_changed(L->I);
+    if (gw_ens_record(E, L, L->gi + 1))
+        gw_ens_finish(E, L, GW_ERROR);
+    else if (!(target < E->job->t_end))
+        gw_ens_finish(E, L, GW_OK);
+    else {
+        L->gi++;
+        gw_ens_new_call(L);
+    }
+    return 0;
+}
+
+/* Lane l's point in the next batch: its attempt's end (pending) or its current point. */
+static void gw_ens_point(gw_ensemble *E, int l) {
+    const gw_lane *L = &E->lane[l];
+    const double *x = L->pending ? L->I->xnew : L->I->x;
+    int i;
+    E->t[l] = L->pending ? L->t1 : L->I->t;
+    for (i = 0; i < E->m->nx; i++) E->x[(size_t)i * GW_ENS_LANES + l] = x[i];
+}
+
+/* Lane L, its series at its current point in I->tl_w: the next attempt.  A step that lands on
+ * the call's target is checked at once (one right-hand side evaluation, as solver taylor
+ * does); the lane then needs the series at its new point (or a new trajectory). */
+static void gw_ens_attempt(gw_ensemble *E, gw_lane *L) {
+    const double target = gw_ens_target(E, L);
+    gw_int_result r;
+    int last, fresh;
+    L->pending = 0;
+    r = gw_taylor_attempt(L->I, target, &L->run, &L->h, &L->t1, &last);
+    if (r != GW_INT_OK) {
+        gw_ens_after(E, L, r, target);
+        return;
+    }
+    if (!last) {
+        L->pending = 1;
+        return;
+    }
+    r = gw_taylor_conclude(L->I, target, &L->run, L->h, L->t1, NULL, 1, &fresh);
+    gw_ens_after(E, L, r, target);
+}
+
+/* Lane l after the batch: conclude its pending attempt with f(t1, P(h)) from the batch's
+ * series at that point (order 1 of state i at f1[i * stride]), then, if that series is the
+ * lane's new current one, take it and attempt the next step. */
+static void gw_ens_advance(gw_ensemble *E, int l, const double *f1, size_t stride, int batch,
+                           int order) {
+    gw_lane *L = &E->lane[l];
+    gw_instance *I = L->I;
+    const long traj = L->traj;
+    int fresh = 1;
+    if (L->pending) {
+        const double target = gw_ens_target(E, L);
+        gw_int_result r = gw_taylor_conclude(I, target, &L->run, L->h, L->t1, f1, stride, &fresh);
+        L->pending = 0;
+        if (!gw_ens_after(E, L, r, target)) fresh = 0;
+    }
+    if (L->traj != traj || L->traj < 0) return; /* ended (a new one, if any, needs its series) */
+    if (!fresh) return;                          /* the state moved: a new series next batch */
+    if (batch) { /* the lane's polynomials, its dense output, from the batch layout */
+        const size_t S = (size_t)(order + 1) * GW_ENS_LANES;
+        int i, k;
+        for (i = 0; i < E->m->nx; i++) {
+            const double *src = E->w + (size_t)i * S + l;
+            double *dst = I->tl_w + (size_t)i * (size_t)(order + 1);
+            for (k = 0; k <= order; k++) dst[k] = src[(size_t)k * GW_ENS_LANES];
+        }
+    } else {
+        double *tmp = I->tl_w;
+        I->tl_w = I->tl_wn;
+        I->tl_wn = tmp;
+    }
+    gw_ens_attempt(E, L);
+}
+
+/* One batch: the series of every active lane at its point, then each lane's step.  Returns
+ * the number of active lanes (0: the job is done). */
 static int gw_ens_step(gw_ensemble *E, int order) {
     const gw_model *m = E->m;
     const size_t S = (size_t)(order + 1) * GW_ENS_LANES;
-    int l, i, k, active = -1, n_active = 0;
+    int l, i, active = -1, n_active = 0;
     for (l = 0; l < GW_ENS_LANES; l++)
-        if (E->lane[l].traj >= 0) active = l;
+        if (E->lane[l].traj >= 0) {
+            active = l;
+            n_active++;
+            gw_ens_point(E, l);
+            E->lane[l].I->n_rhs++; /* one kernel call counts as one right-hand side evaluation */
+        }
     if (active < 0) return 0;
-    for (l = 0; l < GW_ENS_LANES; l++) { /* idle lanes repeat an active one (finite values) */
-        const gw_instance *I = E->lane[E->lane[l].traj >= 0 ? l : active].I;
-        E->t[l] = I->t;
-        for (i = 0; i < m->nx; i++) E->x[(size_t)i * GW_ENS_LANES + l] = I->x[i];
-        if (E->lane[l].traj < 0) {
-            for (i = 0; i < m->np; i++) E->p[(size_t)i * GW_ENS_LANES + l] = I->p[i];
-            for (i = 0; i < m->nu; i++) E->u[(size_t)i * GW_ENS_LANES + l] = I->u[i];
+    if (n_active <= GW_ENSEMBLE_SINGLE_MAX) { /* the one-lane kernel, lane by lane */
+        for (l = 0; l < GW_ENS_LANES; l++) {
+            gw_instance *I = E->lane[l].I;
+            if (E->lane[l].traj < 0) continue;
+            m->taylor.jet(order, &E->t[l], E->lane[l].pending ? I->xnew : I->x, I->tl_c, I->tl_wn);
         }
-    }
-    if (m->taylor.n_cst > 0) gw_tlb_cst(E->u, E->p, E->c);
-    gw_tlb_jet(order, E->t, E->x, E->c, E->w);
-    for (l = 0; l < GW_ENS_LANES; l++) {
-        gw_lane *L = &E->lane[l];
-        gw_int_result r;
-        double target;
-        if (L->traj < 0) continue;
-        n_active++;
-        for (i = 0; i < m->nx; i++) /* this lane's polynomials: its dense output */
-            for (k = 0; k <= order; k++)
-                L->I->tl_w[(size_t)i * (size_t)(order + 1) + k] = E->w[i * S + (size_t)k * GW_ENS_LANES + l];
-        target = gw_ens_target(E, L);
-        r = gw_taylor_step_once(L->I, target, &L->run);
-        L->steps = L->run.steps;
-        if (r == GW_INT_ERROR)
-            gw_ens_finish(E, L, GW_ERROR);
-        else if (r == GW_INT_TERMINATED)
-            gw_ens_finish(E, L, gw_ens_record(E, L, L->gi + 1) ? GW_ERROR : GW_DISCARD);
-        else if (!(L->I->t < target)) { /* a communication point (or t_end) reached */
-            L->I->t = target;
-            gw_point_changed(L->I);
-            if (gw_ens_record(E, L, L->gi + 1))
-                gw_ens_finish(E, L, GW_ERROR);
-            else if (!(target < E->job->t_end))
-                gw_ens_finish(E, L, GW_OK);
-            else {
-                L->gi++;
-                gw_ens_new_call(L);
+        for (l = 0; l < GW_ENS_LANES; l++)
+            if (E->lane[l].traj >= 0) {
+                gw_ens_advance(E, l, E->lane[l].I->tl_wn + 1, (size_t)order + 1, 0, order);
+                if (E->lane[l].traj < 0) gw_ens_fill(E, &E->lane[l]);
             }
-        }
-        if (L->traj < 0) gw_ens_fill(E, L);
+        return n_active;
     }
+    for (l = 0; l < GW_ENS_LANES; l++) { /* idle lanes repeat an active one (finite values) */
+        if (E->lane[l].traj >= 0) continue;
+        E->t[l] = E->t[active];
+        for (i = 0; i < m->nx; i++)
+            E->x[(size_t)i * GW_ENS_LANES + l] = E->x[(size_t)i * GW_ENS_LANES + active];
+        if (m->taylor.n_cst > 0 && E->lane[l].traj == -1) {
+            const gw_instance *A = E->lane[active].I;
+            for (i = 0; i < m->np; i++) E->p[(size_t)i * GW_ENS_LANES + l] = A->p[i];
+            for (i = 0; i < m->nu; i++) E->u[(size_t)i * GW_ENS_LANES + l] = A->u[i];
+            E->lane[l].traj = -2; /* idle, with an active lane's parameters */
+            E->cst_dirty = 1;
+        }
+    }
+    if (m->taylor.n_cst > 0 && E->cst_dirty) gw_tlb_cst(E->u, E->p, E->c);
+    E->cst_dirty = 0;
+    gw_tlb_jet(order, E->t, E->x, E->c, E->w);
+    for (l = 0; l < GW_ENS_LANES; l++)
+        if (E->lane[l].traj >= 0) {
+            gw_ens_advance(E, l, E->w + GW_ENS_LANES + l, S, 1, order);
+            if (E->lane[l].traj < 0) gw_ens_fill(E, &E->lane[l]);
+        }
     return n_active;
 }
 
@@ -249,10 +360,11 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
     E.x = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
     E.u = (double *)gw_ens_alloc(cb, (size_t)m->nu * L);
     E.p = (double *)gw_ens_alloc(cb, (size_t)m->np * L);
-    for (l = 0; l < GW_ENS_LANES; l++) {
+    for (l = 0; l < GW_ENS_LANES; l++) { /* instances for the lanes that will have work */
         char name[32];
         snprintf(name, sizeof name, "ensemble lane %d", l);
         E.lane[l].traj = -1;
+        if (l >= job->n) continue;
         E.lane[l].I = gw_instance_new(m, name, cb, 0);
         if (!E.lane[l].I) st = GW_FATAL;
     }

@@ -119,7 +119,8 @@ struct gw_instance {
     /* Taylor work memory (gw_taylor_alloc; only if the model has a Taylor kernel): the series
      * of the last step (dense output) and the constants.  Nothing here survives a saved state:
      * the series is recomputed in every step, the state's compensation is xc. */
-    double *tl_w;    /* n_var * (GW_TAYLOR_MAX_ORDER + 1) */
+    double *tl_w;    /* n_var * (GW_TAYLOR_MAX_ORDER + 1): the series of the current step */
+    double *tl_wn;   /* the same at the step's end point, computed for its defect check */
     double *tl_c;    /* n_cst */
     int tl_order;    /* order of the series in tl_w */
 };

@@ -112,27 +112,46 @@ GW_INTERNAL int gw_rodas4_step(gw_instance *I, double h, double t1, double *err)
 GW_INTERNAL void gw_rodas4_dense(gw_instance *I);
 
 /* ---- gw_solver_taylor.c ----------------------------------------------------------------------- */
-#define GW_TAYLOR_MAX_ORDER 30 /* rel_tol 1e-25; the work memory holds series of this order */
-/* order of the series for a relative tolerance: ceil(-ln(rel_tol) / 2 + 1) in [2, MAX] */
+#define GW_TAYLOR_MAX_ORDER 30 /* the work memory holds series of this order */
+/* orders above the tolerance's p0 = ceil(-ln(rel_tol) / 2 + 1) (gw_solver_taylor.c: fewer,
+ * longer steps for the same error, measured in benchmarks/taylor_vs_heyoka.py) */
+#ifndef GW_TAYLOR_EXTRA_ORDER
+#define GW_TAYLOR_EXTRA_ORDER 4
+#endif
+/* order of the series for a relative tolerance: p0 in [3, MAX] plus GW_TAYLOR_EXTRA_ORDER */
 GW_INTERNAL int gw_taylor_order(double rel_tol);
-/* Jorba-Zou step size from the coefficients of orders p-1 and p of lane `lane` of X (series
- * of the states, lanes interleaved); 0 and *bad_order = j if order j is not finite. */
-GW_INTERNAL double gw_taylor_step(const gw_instance *I, const double *X, int order, int lanes,
-                                  int lane, int *bad_order);
-/* dx = sum_{k>=1} X_k h^k of lane `lane` (the state's increment; gw_sum_update adds it) */
-GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int lane, int nx,
-                                     double h, double *dx);
-/* The bookkeeping of one integration call (feasibility guard, event count, steps). */
+/* The bookkeeping of one integration call (feasibility guard, event count, steps) and the
+ * step size rule's constant for the call's tolerance and order. */
 typedef struct {
     int events;
     unsigned long n_fast, steps, rejected;
     double h_prev;
+    double log_c; /* ln(h / rho) of the step size rule (gw_taylor_begin) */
 } gw_taylor_run;
+/* Jorba-Zou step size from the coefficients of orders p-1 and p of lane `lane` of X (series
+ * of the states, lanes interleaved); 0 and *bad_order = j if order j is not finite. */
+GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run, const double *X,
+                                  int order, int lanes, int lane, int *bad_order);
+/* dx = sum_{k>=1} X_k h^k of lane `lane` (the state's increment; gw_sum_update adds it) and,
+ * unless dp is NULL, dp = P'(h), the polynomial's derivative (for the defect check) */
+GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int lane, int nx,
+                                     double h, double *dx, double *dp);
 /* Start an integration call: kernel present, order from rel_tol. */
 GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run);
-/* One step from (I->t, I->x) with the series already in I->tl_w: step size, update, events
- * (gw_accept_step).  Shared by gw_integrate_taylor and the ensemble path (gw_ensemble.c). */
-GW_INTERNAL gw_int_result gw_taylor_step_once(gw_instance *I, double t_end, gw_taylor_run *run);
+/* A step in two halves, so that the defect check can take f(t1, P(h)) from the series the
+ * next step needs anyway (gw_integrate_taylor, and the ensemble path's batch, gw_ensemble.c):
+ * gw_taylor_attempt: from the series of (I->t, I->x) in I->tl_w, the step size, its first
+ *   attempt (t1, I->xnew) and *last (it lands on t_end); GW_INT_OK or GW_INT_ERROR (logged).
+ * gw_taylor_conclude: the defect check of the attempt with f1 = f(t1, I->xnew) (f1[i * stride],
+ *   or NULL: one right-hand side evaluation), rejected attempts shortened and checked with the
+ *   right-hand side, then the accepted step (events, gw_accept_step).  *fresh = 1 when the
+ *   step was accepted at its first attempt and no event moved the state: (I->t, I->x) is then
+ *   the point f1 came from (its series, if computed, serves the next step). */
+GW_INTERNAL gw_int_result gw_taylor_attempt(gw_instance *I, double t_end, gw_taylor_run *run,
+                                            double *h, double *t1, int *last);
+GW_INTERNAL gw_int_result gw_taylor_conclude(gw_instance *I, double t_end, gw_taylor_run *run,
+                                             double h, double t1, const double *f1,
+                                             size_t stride, int *fresh);
 GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end);
 /* the Taylor polynomial of the last step at t */
 GW_INTERNAL void gw_taylor_dense_eval(const gw_instance *I, double t, double *x_out);

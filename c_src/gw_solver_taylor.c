@@ -6,28 +6,37 @@
  * solution through t (automatic differentiation of the right-hand side's expression graph);
  * then (A. Jorba, M. Zou, A software package for the numerical integration of ODEs by means
  * of high-order Taylor methods, Exp. Math. 14 (2005) 99-117, sect. 3.2-3.3):
- *   order   p = ceil(-ln(eps) / 2 + 1), eps = rel_tol (clamped to [3, GW_TAYLOR_MAX_ORDER]:
- *           at order 2 the step h ~ 0.07 (|x_i| + floor) / |x_i'| closes in on every zero of a
- *           state geometrically when the floor atol / rel_tol is small, so rel_tol > e^-2
- *           took 15x the steps of rel_tol 0.1 (48,000 against 3,200 on the paper's 20 s);
- *           from order 3 h ~ |x_i|^(1/2) near a zero and crosses it in a few steps);
- *           heyoka makes the same choice (Biscani & Izzo, MNRAS 504 (2021) 2614, sect. 4)
- *   step    h = rho / e^2 * exp(-0.7 / (p - 1)),  rho = min_{j = p-1, p} N_j^(-1/j),
+ *   order   p = p0 + GW_TAYLOR_EXTRA_ORDER (4), p0 = ceil(-ln(eps) / 2 + 1), eps = rel_tol,
+ *           p0 clamped to [3, GW_TAYLOR_MAX_ORDER] (at order 2 the step h ~ 0.07 (|x_i| +
+ *           floor) / |x_i'| closes in on every zero of a state geometrically when the floor
+ *           atol / rel_tol is small, so rel_tol > e^-2 took 15x the steps of rel_tol 0.1
+ *           (48,000 against 3,200 on the paper's 20 s); from order 3 h ~ |x_i|^(1/2) near a
+ *           zero and crosses it in a few steps).  p0 is Jorba & Zou's and heyoka's order
+ *           (Biscani & Izzo, MNRAS 504 (2021) 2614, sect. 4), optimal when a step costs ~p^2;
+ *           this kernel's cost per step grows nearly linearly with p (a fixed part, the linear
+ *           nodes, few products), so fewer, longer steps of a higher order reach the same
+ *           error sooner (paper scenario: 13-25% less time to each error, docs/taylor.md)
+ *   step    h = rho exp(c),  rho = min_{j = p-1, p} N_j^(-1/j),
  *           N_j = max_i |x_i^[j]| / sc_i,  sc_i = |x_i| + (atol / rel_tol) nominal_i,
- *           so that the truncation error of component i is about
- *           eps sc_i = rel_tol |x_i| + atol nominal_i, the error weight of every solver
- *           (atol: abs_tol, or rel_tol / 100 when abs_tol = 0);
- *   update  dx_i = sum_{k=1..p} x_i^[k] h^k (Horner), added to the state with the TwoSum
- *           compensation every solver shares (gw_sum_update: x + xc, xc part of a saved
- *           state, layout v3), so that rounding does not accumulate over thousands of steps;
+ *           c = -(2 + 0.7 / (p0 - 1)) (p0 + 1) / (p + 1): the first neglected term
+ *           (h / rho)^(p+1) is the one of Jorba & Zou's step rho / e^2 exp(-0.7 / (p0 - 1))
+ *           at order p0 (the rule itself when p = p0), about eps sc_i = rel_tol |x_i| + atol
+ *           nominal_i, the error weight of every solver (atol: abs_tol, or rel_tol / 100 when
+ *           abs_tol = 0); two logarithms and one exponential, no pow;
+ *   update  dx_i = sum_{k=1..p} x_i^[k] h^k (Horner, with P'(h) in the same pass), added to
+ *           the state with the TwoSum compensation every solver shares (gw_sum_update: x + xc,
+ *           xc part of a saved state, layout v3), so that rounding does not accumulate;
  *   dense   the Taylor polynomial itself: x(t + s) for s in [0, h], exact to the order of the
  *           step, used by the event location (gw_events.c) like every dense output.
- *   check   the defect of the polynomial at the step's end, f(t1, P(h)) - P'(h), one right-hand
- *           side evaluation (gw_taylor_defect): the estimate from the last two orders misses a
- *           near complex pole or a stiff mode (lunar_rover's smoothed rolling resistance
- *           tanh(omega/eps) near the fall: steps 100x too long, rates 0.7 rad/s off); a step
- *           whose defect exceeds the error weight is shortened on the same series and counted
- *           as rejected.
+ *   check   the defect of the polynomial at the step's end, f(t1, P(h)) - P'(h)
+ *           (gw_taylor_defect): the estimate from the last two orders misses a near complex
+ *           pole or a stiff mode (lunar_rover's smoothed rolling resistance tanh(omega/eps)
+ *           near the fall: steps 100x too long, rates 0.7 rad/s off); a step whose defect
+ *           exceeds the error weight is shortened on the same series and counted as rejected.
+ *           f(t1, P(h)) is order 1 of the series at (t1, P(h)), which the next step needs:
+ *           the kernel runs there before the step is accepted (gw_integrate_taylor), so the
+ *           check costs nothing when the step is accepted; the last step of a call, and the
+ *           retries of a rejected step, evaluate the right-hand side instead.
  * As in the other adaptive solvers the step is bounded by max_step, lands exactly on t_end,
  * counts against the budget max_internal_steps (every attempt) and is refused by the
  * feasibility guard (gw_next_attempt), and below gw_h_min ("step size underflow"); a
@@ -45,7 +54,8 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include "gw_solver.h"
 
-GW_INTERNAL int gw_taylor_order(double rel_tol) {
+/* p0 = ceil(-ln(eps) / 2 + 1) in [3, MAX], the order of Jorba & Zou's rule for eps */
+static int gw_taylor_base_order(double rel_tol) {
     const double eps = rel_tol > DBL_EPSILON ? rel_tol : DBL_EPSILON;
     int p = (int)ceil(-0.5 * log(eps) + 1.0);
     if (p < 3) p = 3;
@@ -53,45 +63,65 @@ GW_INTERNAL int gw_taylor_order(double rel_tol) {
     return p;
 }
 
-GW_INTERNAL double gw_taylor_step(const gw_instance *I, const double *X, int order, int lanes,
-                                  int lane, int *bad_order) {
+GW_INTERNAL int gw_taylor_order(double rel_tol) {
+    const int p = gw_taylor_base_order(rel_tol) + GW_TAYLOR_EXTRA_ORDER;
+    return p < GW_TAYLOR_MAX_ORDER ? p : GW_TAYLOR_MAX_ORDER;
+}
+
+GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run, const double *X,
+                                  int order, int lanes, int lane, int *bad_order) {
     const int nx = I->m->nx;
     const size_t S = (size_t)(order + 1) * (size_t)lanes;
     const double floor_scale = I->atol_eff / I->rel_tol;
-    double rho = HUGE_VAL;
-    int j, i;
+    const double *nominal = I->nominal;
+    double n1 = 0.0, n2 = 0.0, lr = HUGE_VAL;
+    int i;
     *bad_order = 0;
-    for (j = order - 1; j <= order; j++) {
-        double nj = 0.0;
-        for (i = 0; i < nx; i++) {
-            const double *xi = X + (size_t)i * S + lane;
-            const double sc = fabs(xi[0]) + floor_scale * I->nominal[i];
-            const double r = fabs(xi[(size_t)j * lanes]) / sc;
-            if (!(r <= DBL_MAX)) {
-                *bad_order = j;
-                return 0.0;
-            }
-            if (r > nj) nj = r;
-        }
-        if (nj > 0.0) {
-            const double rj = pow(nj, -1.0 / j);
-            if (rj < rho) rho = rj;
-        }
+    for (i = 0; i < nx; i++) { /* N_j = max_i |x_i^[j]| / sc_i, j = p-1 and p, in one pass */
+        const double *xi = X + (size_t)i * S + lane;
+        const double rsc = 1.0 / (fabs(xi[0]) + floor_scale * nominal[i]);
+        const double r1 = fabs(xi[(size_t)(order - 1) * lanes]) * rsc;
+        const double r2 = fabs(xi[(size_t)order * lanes]) * rsc;
+        n1 = r1 > n1 ? r1 : n1;
+        n2 = r2 > n2 ? r2 : n2;
     }
-    /* rho / e^2 * exp(-0.7 / (p - 1)) */
-    return rho * exp(-2.0 - 0.7 / (order - 1));
+    if (!(n1 <= DBL_MAX) || !(n2 <= DBL_MAX)) { /* NaN or inf: which order */
+        *bad_order = !(n1 <= DBL_MAX) ? order - 1 : order;
+        return 0.0;
+    }
+    /* ln rho = min_j ln(N_j^(-1/j)): two logarithms and one exponential (no pow) */
+    if (n1 > 0.0) lr = -log(n1) / (order - 1);
+    if (n2 > 0.0 && -log(n2) / order < lr) lr = -log(n2) / order;
+    return exp(lr + run->log_c);
 }
 
-/* dx = sum_{k>=1} X_k h^k (Horner) */
+/* dx = P(h) - x0 = sum_{k>=1} X_k h^k and, if dp is not NULL, dp = P'(h), in one Horner pass:
+ * with Q(s) = sum_{k>=1} X_k s^(k-1), dx = h Q(h) and P'(h) = Q(h) + h Q'(h).  The order loop
+ * is outside the component loop (blocks of 8 components): the components' Horner chains are
+ * independent and overlap, where one chain after the other waited on each multiply-add. */
 GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int lane, int nx,
-                                     double h, double *dx) {
+                                     double h, double *dx, double *dp) {
+    enum { B = 8 };
     const size_t S = (size_t)(order + 1) * (size_t)lanes;
-    int i, k;
-    for (i = 0; i < nx; i++) {
-        const double *xi = X + (size_t)i * S + lane;
-        double d = xi[(size_t)order * lanes];
-        for (k = order - 1; k >= 1; k--) d = d * h + xi[(size_t)k * lanes];
-        dx[i] = d * h;
+    int i0, b, k;
+    for (i0 = 0; i0 < nx; i0 += B) {
+        const int nb = nx - i0 < B ? nx - i0 : B;
+        const double *x0 = X + (size_t)i0 * S + lane;
+        double q[B], dq[B];
+        for (b = 0; b < nb; b++) {
+            q[b] = x0[(size_t)b * S + (size_t)order * lanes];
+            dq[b] = 0.0;
+        }
+        for (k = order - 1; k >= 1; k--) {
+            const double *xk = x0 + (size_t)k * lanes;
+            for (b = 0; b < nb; b++) {
+                dq[b] = dq[b] * h + q[b];
+                q[b] = q[b] * h + xk[(size_t)b * S];
+            }
+        }
+        for (b = 0; b < nb; b++) dx[i0 + b] = q[b] * h;
+        if (dp)
+            for (b = 0; b < nb; b++) dp[i0 + b] = q[b] + h * dq[b];
     }
 }
 
@@ -109,13 +139,19 @@ GW_INTERNAL void gw_taylor_dense_eval(const gw_instance *I, double t, double *x_
 
 GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run) {
     const gw_taylor_kernel *tk = &I->m->taylor;
+    int p0, p;
     if (!tk->jet || !I->tl_w) {
         GW_LOG_ERR(I, "solver taylor is not available in this model: %s",
                    tk->why_absent ? tk->why_absent : "it was built without a Taylor kernel");
         return -1;
     }
     memset(run, 0, sizeof *run);
-    I->tl_order = gw_taylor_order(I->rel_tol);
+    p0 = gw_taylor_base_order(I->rel_tol);
+    p = I->tl_order = gw_taylor_order(I->rel_tol);
+    /* (h / rho)^(p+1), the size of the first neglected term, as with Jorba & Zou's rule at the
+     * tolerance's order p0, h0 = rho / e^2 exp(-0.7 / (p0 - 1)): ln(h / rho) = ln(h0 / rho)
+     * (p0 + 1) / (p + 1); at p = p0 the rule itself */
+    run->log_c = -(2.0 + 0.7 / (p0 - 1)) * (p0 + 1) / (p + 1);
     return 0;
 }
 
@@ -124,30 +160,34 @@ GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run) {
  * P'(h).  With the remainder R ~ c_{p+1} s^{p+1} of the series, h d ~ (p+1) R(h), plus J R(h) h
  * where the step excites a stiff mode; so the step is accepted when
  *     err = max_i h |d_i| / ((p + 1) w_i) <= 1,  w_i = rel_tol |xnew_i| + atol nominal_i,
- * the error weight of every solver.  Costs one right-hand side evaluation per step (I->k[1]).
- * Returns err, or -1 if the right-hand side failed (logged). */
-static double gw_taylor_defect(gw_instance *I, double t1, double h) {
-    const int nx = I->m->nx, p = I->tl_order;
-    double *f1 = I->k[1], err = 0.0;
-    int i, k;
-    if (gw_rhs_checked(I, t1, I->xnew, f1)) return -1.0;
-    for (i = 0; i < nx; i++) {
-        const double *xi = I->tl_w + (size_t)i * (size_t)(p + 1);
-        const double w = I->rel_tol * fabs(I->xnew[i]) + I->atol_eff * I->nominal[i];
-        double d = p * xi[p], r;
-        for (k = p - 1; k >= 1; k--) d = d * h + k * xi[k]; /* P'(h) */
-        r = fabs(f1[i] - d) * h / ((p + 1) * w);
-        if (!(r <= err)) err = r; /* NaN propagates as a rejection */
-        if (!isfinite(err)) return HUGE_VAL;
+ * the error weight of every solver.  f1[i * stride] = f_i(t1, P(h)): the next step's series
+ * (order 1) when the caller computed it, else (f1 NULL) one right-hand side evaluation into
+ * I->k[1].  Returns err, or -1 if the right-hand side failed (logged). */
+static double gw_taylor_defect(gw_instance *I, double t1, double h, const double *f1,
+                               size_t stride) {
+    const int nx = I->m->nx;
+    const double scale = h / (I->tl_order + 1), rtol = I->rel_tol, atol = I->atol_eff;
+    const double *dp = I->k[2], *xnew = I->xnew, *nominal = I->nominal; /* P'(h): attempt's */
+    double err = 0.0;
+    int i;
+    if (!f1) {
+        if (gw_rhs_checked(I, t1, I->xnew, I->k[1])) return -1.0;
+        f1 = I->k[1];
+        stride = 1;
     }
-    return err;
+    for (i = 0; i < nx; i++) {
+        const double r = fabs(f1[(size_t)i * stride] - dp[i]) * scale /
+                         (rtol * fabs(xnew[i]) + atol * nominal[i]);
+        if (!(r <= err)) err = r; /* NaN propagates as a rejection */
+    }
+    return isfinite(err) ? err : HUGE_VAL;
 }
 
-GW_INTERNAL gw_int_result gw_taylor_step_once(gw_instance *I, double t_end, gw_taylor_run *run) {
+GW_INTERNAL gw_int_result gw_taylor_attempt(gw_instance *I, double t_end, gw_taylor_run *run,
+                                            double *h, double *t1, int *last) {
     const int nx = I->m->nx, p = I->tl_order;
-    double h, t1;
-    int last, bad, i;
-    I->n_rhs++;
+    double hs;
+    int bad, i;
     for (i = 0; i < nx; i++) {
         const double f = I->tl_w[(size_t)i * (size_t)(p + 1) + 1];
         if (!isfinite(f)) {
@@ -156,50 +196,101 @@ GW_INTERNAL gw_int_result gw_taylor_step_once(gw_instance *I, double t_end, gw_t
             return GW_INT_ERROR;
         }
     }
-    h = gw_taylor_step(I, I->tl_w, p, 1, 0, &bad);
+    hs = gw_taylor_step(I, run, I->tl_w, p, 1, 0, &bad);
     if (bad) {
         GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g (the solution's "
                    "series diverges: a singularity of the right-hand side?)", bad, I->t);
         return GW_INT_ERROR;
     }
-    I->h_adapt = h < I->max_step ? h : I->max_step;
-    for (;;) {
-        double err;
-        if (gw_next_attempt(I, t_end, 0, &run->h_prev, &run->n_fast, &h, &t1, &last))
-            return GW_INT_ERROR;
-        gw_taylor_increment(I->tl_w, p, 1, 0, nx, h, I->dx);
-        gw_sum_update(I); /* xnew, xcnew; an event restarts the compensation (gw_accept_step) */
-        err = gw_taylor_defect(I, t1, h);
-        if (!(err >= 0.0)) return GW_INT_ERROR; /* the right-hand side failed (logged) */
-        if (err <= 1.0) break;
+    I->h_adapt = hs < I->max_step ? hs : I->max_step;
+    if (gw_next_attempt(I, t_end, 0, &run->h_prev, &run->n_fast, h, t1, last)) return GW_INT_ERROR;
+    gw_taylor_increment(I->tl_w, p, 1, 0, nx, *h, I->dx, I->k[2]);
+    gw_sum_update(I); /* xnew, xcnew; an event restarts the compensation (gw_accept_step) */
+    return GW_INT_OK;
+}
+
+GW_INTERNAL gw_int_result gw_taylor_conclude(gw_instance *I, double t_end, gw_taylor_run *run,
+                                             double h, double t1, const double *f1,
+                                             size_t stride, int *fresh) {
+    const int nx = I->m->nx, p = I->tl_order;
+    gw_int_result r;
+    double err = gw_taylor_defect(I, t1, h, f1, stride);
+    int last;
+    *fresh = 0;
+    while (err > 1.0) {
         /* the coefficients' step was too long (a near pole the last two orders do not show, a
          * stiff mode): shorter steps on the same series, as a rejected step of any solver */
         I->n_rejected++;
         run->rejected++;
-        h *= err < 1e30 ? fmax(0.2, 0.9 * pow(err, -1.0 / p)) : 0.2;
+        if (gw_log_enabled(I, GW_LOG_SOLVER))
+            gw_log(I, GW_OK, GW_LOG_SOLVER, "taylor step rejected at t=%.17g: h=%.17g defect %g",
+                   I->t, h, err);
+        h *= err < 1e30 ? fmax(0.2, 0.9 * exp(-log(err) / p)) : 0.2;
         I->h_adapt = h;
         if (h < gw_h_min(I->t)) {
             GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, solver taylor: defect %g of "
                        "the Taylor polynomial)", I->t, h, err);
             return GW_INT_ERROR;
         }
+        if (gw_next_attempt(I, t_end, 0, &run->h_prev, &run->n_fast, &h, &t1, &last))
+            return GW_INT_ERROR;
+        gw_taylor_increment(I->tl_w, p, 1, 0, nx, h, I->dx, I->k[2]);
+        gw_sum_update(I);
+        f1 = NULL; /* retries: one right-hand side evaluation each */
+        err = gw_taylor_defect(I, t1, h, NULL, 1);
     }
+    if (!(err >= 0.0)) return GW_INT_ERROR; /* the right-hand side failed (logged) */
     run->steps++;
-    return gw_accept_step(I, t1, &run->events);
+    r = gw_accept_step(I, t1, &run->events);
+    *fresh = r == GW_INT_OK && f1 != NULL && I->t == t1;
+    return r;
 }
 
+static void gw_swap_series(double **a, double **b) {
+    double *tmp = *a;
+    *a = *b;
+    *b = tmp;
+}
+
+/* 1: every step checks with a right-hand side evaluation, as before the deferred check (for
+ * tests/test_taylor.py::test_deferred_defect_check_rejects_where_the_rhs_check_does) */
+#ifndef GW_TAYLOR_DEFECT_RHS
+#define GW_TAYLOR_DEFECT_RHS 0
+#endif
+
+/* Each step: the series at its start (in I->tl_w), the attempt, then the series at the
+ * attempt's end point (I->tl_wn), whose order 1 is f(t1, P(h)) for the defect check; accepted
+ * as it was, that series is the next step's.  The last step of the call checks with one
+ * right-hand side evaluation instead (the next call may change inputs or the state). */
 GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end) {
     const gw_taylor_kernel *tk = &I->m->taylor;
     gw_taylor_run run;
     gw_int_result result = GW_INT_OK;
     const double t_begin = I->t;
+    int have = 0; /* I->tl_w holds the series at (I->t, I->x) */
     if (gw_taylor_begin(I, &run)) return GW_INT_ERROR;
     if (tk->cst) tk->cst(I->u, I->p, I->tl_c);
     while (I->t < t_end) {
-        double tt = I->t;
-        tk->jet(I->tl_order, &tt, I->x, I->tl_c, I->tl_w);
-        result = gw_taylor_step_once(I, t_end, &run);
+        double h, t1;
+        int last, fresh;
+        if (!have) {
+            double tt = I->t;
+            tk->jet(I->tl_order, &tt, I->x, I->tl_c, I->tl_w);
+            I->n_rhs++;
+        }
+        result = gw_taylor_attempt(I, t_end, &run, &h, &t1, &last);
         if (result != GW_INT_OK) break;
+        if (GW_TAYLOR_DEFECT_RHS) last = 1;
+        if (!last) {
+            double tt = t1;
+            tk->jet(I->tl_order, &tt, I->xnew, I->tl_c, I->tl_wn);
+            I->n_rhs++;
+        }
+        result = gw_taylor_conclude(I, t_end, &run, h, t1, last ? NULL : I->tl_wn + 1,
+                                    (size_t)I->tl_order + 1, &fresh);
+        if (result != GW_INT_OK) break;
+        have = fresh;
+        if (have) gw_swap_series(&I->tl_w, &I->tl_wn);
     }
     if (result == GW_INT_OK) I->t = t_end;
     if (gw_log_enabled(I, GW_LOG_SOLVER))
@@ -212,14 +303,16 @@ GW_INTERNAL int gw_taylor_alloc(gw_instance *I) {
     const gw_taylor_kernel *tk = &I->m->taylor;
     if (!tk->jet) return 0;
     I->tl_w = (double *)gw_alloc(I, (size_t)tk->n_var * (GW_TAYLOR_MAX_ORDER + 1), sizeof(double));
+    I->tl_wn = (double *)gw_alloc(I, (size_t)tk->n_var * (GW_TAYLOR_MAX_ORDER + 1), sizeof(double));
     I->tl_c = (double *)gw_alloc(I, (size_t)(tk->n_cst > 0 ? tk->n_cst : 1), sizeof(double));
-    return (I->tl_w && I->tl_c) ? 0 : -1;
+    return (I->tl_w && I->tl_wn && I->tl_c) ? 0 : -1;
 }
 
 GW_INTERNAL void gw_taylor_free(gw_instance *I) {
     gw_free(I, I->tl_w);
+    gw_free(I, I->tl_wn);
     gw_free(I, I->tl_c);
-    I->tl_w = I->tl_c = NULL;
+    I->tl_w = I->tl_wn = I->tl_c = NULL;
 }
 
 #endif /* GW_UNITY_BUILD */

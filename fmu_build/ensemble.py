@@ -227,6 +227,10 @@ class Ensemble:
         self.default_parameters, self.default_starts = p0[: self.np], s0[: self.ns]
         self._run = fn("run")
         self._run.restype = ctypes.c_int
+        # arrays passed as addresses (ndarray.ctypes.data): data_as() cost ~2 us per array
+        vp = ctypes.c_void_p
+        self._run.argtypes = [ctypes.c_long, vp, vp, vp, vp, vp, vp, vp, vp, vp, _LOGGER, ctypes.c_int,
+                              vp, vp, vp, vp]
 
     def _table(self, what: str, values, names: list[str], default: np.ndarray, n: int | None):
         """(N, len(names)) from an array of that shape or a {name: scalar or (N,)} dict."""
@@ -293,15 +297,10 @@ class Ensemble:
             # "ensemble trajectory <j>: ..." (the lane's instance is named after its trajectory)
             text, who = message.decode(errors="replace"), (instance or b"").decode(errors="replace")
             messages.append(text if not who or text.startswith(who) else f"{who}: {text}")
-        rc = self._run(ctypes.c_long(n), P.ctypes.data_as(_D), S.ctypes.data_as(_D),
-                       span.ctypes.data_as(_D), tol.ctypes.data_as(_D),
-                       status.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), t_final.ctypes.data_as(_D),
-                       x_final.ctypes.data_as(_D), y_final.ctypes.data_as(_D),
-                       steps.ctypes.data_as(ctypes.c_void_p), logger, ctypes.c_int(g.size),
-                       g.ctypes.data_as(_D) if g.size else None,
-                       y_grid.ctypes.data_as(_D) if g.size else None,
-                       n_rows.ctypes.data_as(ctypes.c_void_p) if g.size else None,
-                       flags.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
+        rc = self._run(n, P.ctypes.data, S.ctypes.data, span.ctypes.data, tol.ctypes.data, status.ctypes.data,
+                       t_final.ctypes.data, x_final.ctypes.data, y_final.ctypes.data, steps.ctypes.data, logger,
+                       g.size, g.ctypes.data if g.size else None, y_grid.ctypes.data if g.size else None,
+                       n_rows.ctypes.data if g.size else None, flags.ctypes.data)
         if rc >= STATUS_ERROR:
             raise EnsembleError("; ".join(messages) or f"ensemble run failed (status {rc})")
         return EnsembleResult(status=status.astype(int), t_final=t_final, x_final=x_final,

@@ -256,6 +256,45 @@ def test_step_size_defect_checked_through_a_near_pole(lunar):
     assert times[TAYLOR] == pytest.approx(17.4747724753, abs=1e-9) and abs(times[TAYLOR] - times[5]) < 1e-11, times
 
 
+def _rejections(fmu: Path, unzipdir: Path | None, T: float, tol: float) -> list[tuple[float, float]]:
+    """(t, h) of every rejected Taylor step of one fmi2DoStep(0, T) from NEAR_FALL, from the
+    solver log ("taylor step rejected at t=... h=...")."""
+    import re
+
+    from fmi_helpers import Slave
+    s = Slave(fmu, unzipdir=unzipdir)
+    try:
+        s.init(solver=TAYLOR, rel_tol=tol, abs_tol=tol * 1e-2, max_step=60.0, **NEAR_FALL)
+        s.slave.doStep(0.0, T)
+        return [(float(m.group(1)), float(m.group(2))) for _, _, text in s.messages
+                for m in [re.search(r"taylor step rejected at t=(\S+): h=(\S+) ", text)] if m]
+    finally:
+        s.free()
+
+
+def test_deferred_defect_check_rejects_where_the_rhs_check_does(lunar, tmp_path):
+    """The defect check takes f(t1, P(h)) from the series of the next step (order 1), computed at
+    the attempt's end point anyway, instead of a right-hand side evaluation: the same numbers to
+    rounding, so the same steps are rejected. The FMU's own sources compiled with
+    GW_TAYLOR_DEFECT_RHS=1 (every step checked with the right-hand side, as before) reject at the
+    same times with the same step sizes on the near-pole case."""
+    from fmpy import extract
+
+    from fmu_build.compiler import UNITY_SOURCE, compile_shared
+    rhs_dir = Path(extract(str(lunar.fmu), unzipdir=str(tmp_path / "rhs")))
+    so = next((rhs_dir / "binaries").rglob("*.so"))
+    compile_shared(rhs_dir / "sources" / UNITY_SOURCE, [rhs_dir / "sources"], so,
+                   extra_flags=["-DGW_TAYLOR_DEFECT_RHS=1"])
+    total = 0
+    for tol in (1e-6, 1e-9, 1e-12):
+        deferred = _rejections(lunar.fmu, None, 0.004, tol)
+        rhs = _rejections(lunar.fmu, rhs_dir, 0.004, tol)
+        assert len(deferred) == len(rhs), (tol, deferred, rhs)
+        np.testing.assert_allclose(np.array(deferred), np.array(rhs).reshape(-1, 2), rtol=1e-9, err_msg=str(tol))
+        total += len(rhs)
+    assert total >= 3  # the check does reject there (the step from the coefficients is too long)
+
+
 @pytest.mark.parametrize("name", ["lunar_rover", "euler_disk"])
 def test_scenes_run_briefly_with_taylor(name, tmp_path):
     """Scenes with contact forces, drag, rolling resistance and slope simulate with taylor like
@@ -379,6 +418,44 @@ def test_ensemble_equals_single_runs(paper, tmp_path):
         assert abs(res.t_final[j] - t) < 1e-9, j
         np.testing.assert_allclose(res.x_final[j], x[:8], rtol=1e-9, atol=1e-8, err_msg=str(j))
         assert res.output("energy")[j] == pytest.approx(x[8], abs=1e-9)
+
+
+def test_ensemble_lanes_tail_and_refill_equal_the_single_runs(paper, tmp_path):
+    """N not a multiple of the lanes and trajectories ending at different times (falls): the
+    lanes take the next trajectory as soon as theirs ends, and when few lanes are left active
+    the batch runs them with the one-lane kernel (gw_ensemble.c, GW_ENSEMBLE_SINGLE_MAX).  7
+    trajectories on 1, 4 and 8 lanes (the 4-lane run ends with 3 on the one-lane kernel, the
+    8-lane one starts with 7 of 8 lanes; on a grid, each lane's calls end at every point) equal
+    the 8-lane run of test_ensemble_equals_single_runs's kind: the same steps, the same values
+    to rounding (the one-lane and the lane kernels round differently)."""
+    built, runner = paper
+    g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0])
+    spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2])
+    kw = dict(parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-9)
+    runs = {w: Ensemble(built.fmu, lanes=w, cache=tmp_path).run(6.0, **kw) for w in (1, 4, 8)}
+    gridded = {w: Ensemble(built.fmu, lanes=w, cache=tmp_path).run(6.0, grid=np.linspace(0.5, 6.0, 12), **kw)
+               for w in (1, 4)}
+    ref = runs[8]
+    assert 0 < ref.terminated.sum() < len(g) and set(ref.status) <= {STATUS_OK, STATUS_TERMINATED}
+    for res in [runs[1], runs[4], *gridded.values()]:
+        assert list(res.status) == list(ref.status)
+        np.testing.assert_allclose(res.t_final, ref.t_final, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(res.x_final, ref.x_final, rtol=1e-9, atol=1e-8)
+    for w in (1, 4):
+        assert list(runs[w].steps) == list(ref.steps)
+    np.testing.assert_allclose(gridded[1].y_grid, gridded[4].y_grid, rtol=1e-9, atol=1e-8)
+    from fmpy.fmi2 import fmi2LastSuccessfulTime
+    for j in (0, 2):  # one that runs to the end, one that falls: as one fmi2DoStep run
+        runner.start(solver=TAYLOR, rel_tol=1e-9, abs_tol=1e-11, max_step=6.0, g=g[j], gamma_dot=spin[j],
+                     beta_min=0.1)
+        try:
+            runner.slave.doStep(0.0, 6.0)
+            t = 6.0
+        except Exception:
+            t = runner.slave.getRealStatus(fmi2LastSuccessfulTime)
+        assert abs(ref.t_final[j] - t) < 1e-9
+        np.testing.assert_allclose(ref.x_final[j], runner.slave.getReal([runner.vr[n] for n in STATES]),
+                                   rtol=1e-9, atol=1e-8)
 
 
 def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):

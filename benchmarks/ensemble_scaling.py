@@ -1,0 +1,148 @@
+"""The ensemble path's time per trajectory against heyoka's batch mode, measured in one run (issue 11).
+
+Paper scenario (earth, 20 s).  For each target error (max abs error of the 8 states at 20 s
+against heyoka in long double at tol 1e-19) the cheapest tolerance reaching it is found first,
+on one trajectory, for each method separately (a grid of half decades; gyrowheel: abs_tol =
+rel_tol * {1e-2, 1}); then N trajectories (gamma_dot spread over 6 +- 1 %, so that the lanes
+take different steps) are timed at that tolerance:
+  gyrowheel  fmu_build.ensemble.Ensemble(lanes=W).run, W = 1, 4, 8 (the whole call: marshalling,
+             instances' initialisation, integration)
+  heyoka     taylor_adaptive_batch of N (N = 1: taylor_adaptive), propagate_until, state reset
+             included; its JIT compilation is not counted
+Every time is thread CPU time, best of --repeat, the methods interleaved; ratios compare
+per-trajectory times in this one run (absolute times on a loaded machine are not to be quoted).
+Also the fixed cost of one run: N = 1 to t_end = 1 ms (a handful of steps).
+
+    python benchmarks/ensemble_scaling.py [--n 1 4 16 64] [--lanes 1 4 8] [--targets 1e-4 1e-10]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent))
+
+from taylor_vs_heyoka import to_heyoka  # noqa: E402
+from work_precision import SCENARIOS  # noqa: E402
+
+from fmu_build import build_fmu, parse_scene  # noqa: E402
+from fmu_build.codegen import optimised  # noqa: E402
+from fmu_build.ensemble import Ensemble  # noqa: E402
+
+TOLS = [10.0 ** -(k / 2) for k in range(6, 30)]  # 1e-3 .. 10^-14.5
+
+
+def best(fn, repeat: int) -> float:
+    out = float("inf")
+    for _ in range(repeat):
+        t0 = time.thread_time()
+        fn()
+        out = min(out, time.thread_time() - t0)
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, nargs="*", default=[1, 4, 16, 64])
+    ap.add_argument("--lanes", type=int, nargs="*", default=[1, 4, 8])
+    ap.add_argument("--targets", type=float, nargs="*", default=[1e-4, 1e-7, 1e-10, 1e-12])
+    ap.add_argument("--repeat", type=int, default=5)
+    args = ap.parse_args()
+    import heyoka as hy
+
+    text, stop = SCENARIOS["paper"]
+    with tempfile.TemporaryDirectory(prefix="gw-ens-scaling-") as tmp:
+        work = Path(tmp)
+        built = build_fmu(parse_scene('[model]\nname = "ens_paper"\n' + text, "paper.toml"),
+                          work / "paper.fmu", build_dir=work / "b", taylor=True)
+        fns = built.spec.functions()
+        p = [q.start for q in built.spec.parameters]
+        s0 = np.array([q.start for q in built.spec.starts])
+        x0 = np.array(fns["init"](s0, p)).ravel()
+        f = optimised(fns["ode"])
+        xs = hy.make_vars(*[f"x{i}" for i in range(x0.size)])
+        eqs = list(zip(xs, to_heyoka(f, xs, p)))
+        ld = np.longdouble
+        ta_ref = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p, ld))), x0.astype(ld), tol=ld(1e-19),
+                                    fp_type=ld)
+        ta_ref.propagate_until(ld(stop))
+        ref = np.array(ta_ref.state, dtype=float)  # the 8 states are the first 8 of x
+        ens = {w: Ensemble(built.fmu, lanes=w, cache=work / "ens") for w in args.lanes}
+        i_spin = [q.name for q in built.spec.starts].index("gamma_dot")
+        i_x = [ens[args.lanes[0]].state_names.index(n) for n in
+               ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")]
+
+        # calibration: the cheapest tolerance per target, one trajectory each
+        gw_pts, hy_pts = [], []
+        e1 = ens[args.lanes[0]]
+        for tol in TOLS:
+            for af in (1e-2, 1.0):
+                r = e1.run(stop, rel_tol=tol, abs_tol=tol * af)
+                sec = best(lambda: e1.run(stop, rel_tol=tol, abs_tol=tol * af), 2)
+                gw_pts.append((sec, float(np.max(np.abs(r.x_final[0, i_x] - ref[:8]))), tol, af))
+            ta = hy.taylor_adaptive(eqs, x0, tol=tol)
+
+            def prop():
+                ta.time, ta.state[:] = 0.0, x0
+                ta.propagate_until(stop)
+            sec = best(prop, 2)
+            hy_pts.append((sec, float(np.max(np.abs(ta.state[:8] - ref[:8]))), tol))
+
+        def pick(points, target):
+            ok = [q for q in points if q[1] <= target]
+            return min(ok) if ok else None
+
+        print(f"### ensemble scaling, paper scenario ({stop:g} s), time per trajectory (ms)\n")
+        print("| target | N | " + " | ".join(f"gyrowheel W={w}" for w in args.lanes)
+              + " | heyoka batch N | best W / heyoka |")
+        print("|---|---|" + "---|" * (len(args.lanes) + 2))
+        for target in args.targets:
+            g, h = pick(gw_pts, target), pick(hy_pts, target)
+            if g is None or h is None:
+                print(f"| {target:g} | - | not reached (gyrowheel {g is not None}, heyoka {h is not None}) |")
+                continue
+            for n in args.n:
+                spin = s0[i_spin] * (1.0 + 0.01 * np.linspace(-1.0, 1.0, n) if n > 1 else np.ones(1))
+                starts = np.tile(s0, (n, 1))
+                starts[:, i_spin] = spin
+                x0s = np.array([np.array(fns["init"](row, p)).ravel() for row in starts]).T
+                if n == 1:
+                    tb = hy.taylor_adaptive(eqs, x0, tol=h[2])
+
+                    def hy_run():
+                        tb.time, tb.state[:] = 0.0, x0
+                        tb.propagate_until(stop)
+                else:
+                    tb = hy.taylor_adaptive_batch(eqs, x0s.copy(), tol=h[2])
+
+                    def hy_run():
+                        tb.set_time(0.0)
+                        tb.state[:] = x0s
+                        tb.propagate_until(stop)
+                times = {w: float("inf") for w in args.lanes}
+                t_hy = float("inf")
+                for _ in range(args.repeat):  # interleaved
+                    for w in args.lanes:
+                        times[w] = min(times[w], best(lambda: ens[w].run(stop, starts=starts, rel_tol=g[2],
+                                                                         abs_tol=g[2] * g[3]), 1))
+                    t_hy = min(t_hy, best(hy_run, 1))
+                bw = min(times.values())
+                cells = " | ".join(f"{times[w] / n * 1e3:.3f}" for w in args.lanes)
+                print(f"| {target:g} (gw tol {g[2]:.1e}, heyoka {h[2]:.1e}) | {n} | {cells} | "
+                      f"{t_hy / n * 1e3:.4f} | {bw / t_hy:.2f}x |", flush=True)
+        print("\nfixed cost of one run (N = 1, t_end = 1 ms, rel_tol 1e-10):")
+        for w in args.lanes:
+            t = min(best(lambda: ens[w].run(1e-3, rel_tol=1e-10), 1) for _ in range(args.repeat * 4))
+            print(f"  W = {w}: {t * 1e3:.3f} ms")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -104,8 +104,9 @@ typedef enum {
 /* The Taylor kernel of solver `taylor`, generated from the ode (fmu_build/taylor_c.py,
  * template gw_taylor_model.h instantiated by gw_taylor.c): cst(u, p, c) computes the n_cst
  * quantities that depend on u and p only; jet(order, t, x, c, w) the Taylor series of order
- * `order` of the n_var nodes of the right-hand side at (t, x), node n's coefficient k at
- * w[n (order + 1) + k]; nodes 0 .. nx-1 are the states (x_i^[k] = x_i^(k)(t) / k!). */
+ * `order` of the states at (t, x), state i's coefficient k at w[i (order + 1) + k]
+ * (x_i^[k] = x_i^(k)(t) / k!); w holds n_var series of order `order` (the rest is the kernel's
+ * work: every node of the right-hand side). */
 typedef void (*gw_taylor_cst_fn)(const double *u, const double *p, double *c);
 typedef void (*gw_taylor_jet_fn)(int order, const double *t, const double *x, const double *c,
                                  double *w);

@@ -31,7 +31,7 @@ from fmu_build.builder import model_spec
 from fmu_build.codegen import optimised
 from fmu_build.compiler import compiler
 from fmu_build.ensemble import STATUS_OK, STATUS_TERMINATED, Ensemble, EnsembleError
-from fmu_build.taylor_c import taylor_source
+from fmu_build.taylor_c import taylor_source, work_series
 from fmu_build.taylor_graph import TaylorUnsupportedError, decompose
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -101,7 +101,7 @@ def test_recurrences_match_casadi_derivatives(tmp_path):
         y, z = rng.uniform(0.2, 0.8, 2)
         x = np.concatenate([[y, z], rng.uniform(-1, 1, nx - 2)])
         t, p = np.array([rng.uniform(0, 2)]), np.array([rng.uniform(0.5, 1.5)])
-        w = np.zeros(dec.n_var * (order + 1))
+        w = np.zeros(work_series(dec) * (order + 1))
         lib.jet(order, t.ctypes.data_as(D), x.ctypes.data_as(D), p.ctypes.data_as(D), w.ctypes.data_as(D))
         jet = w[: nx * (order + 1)].reshape(nx, order + 1)
         ref = np.array(lie(t[0], x, p)) / np.array([math.factorial(k) for k in range(order + 1)])

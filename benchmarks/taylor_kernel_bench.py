@@ -1,0 +1,210 @@
+"""The Taylor kernel alone (one jet call = the coefficients of one step), per lane count and order.
+
+Builds a scene's FMU with the Taylor kernel, compiles its gw_taylor_model.h into small C
+drivers the way the runtime does (W = 1: the FMU's c_src/gw_taylor.c with its flags, -std=c99
+-O2 -fno-math-errno; W > 1 as in the ensemble library: -O3 -ffp-contract=fast, the kernel a
+target clone for x86-64-v3 beside the portable default) and times jet at the scene's initial state: thread CPU time of a batch of
+calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8 at orders 6, 10, 13,
+15 (rel_tol 1e-4, 1e-7, 1e-10, 1e-12) and the ratio of a W-lane call to a one-lane call (the
+cost of W trajectories against one: 1 would be perfect vectorisation, W none at all).
+
+With --baseline REF the kernel generator of that git ref (fmu_build/taylor_c.py, taylor_graph.py,
+c_src/gw_taylor_ops.h, gw_taylor.c) is timed in the same rounds, and its states' series are compared with
+this tree's (they differ by rounding only: the summation order).  Timings on a loaded machine
+are noisy: compare ratios from one run; re-measure absolute times on a quiet machine.
+
+    python benchmarks/taylor_kernel_bench.py [--scene examples/scenes/paper_earth.toml]
+        [--baseline main] [--lanes 1 4 8] [--orders 6 10 13 15] [--rounds 15]
+"""
+from __future__ import annotations
+
+import argparse
+import ctypes
+import importlib
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(ROOT))
+
+from fmu_build import build_fmu, load_scene  # noqa: E402
+from fmu_build.codegen import taylor_ode  # noqa: E402
+from fmu_build.compiler import OPTIMISE, STANDARD, compiler  # noqa: E402
+from fmu_build.ensemble import FLAGS as ENSEMBLE_FLAGS  # noqa: E402
+
+DRIVER = r"""#define _POSIX_C_SOURCE 199309L
+#include <math.h>
+#include <stddef.h>
+#include <time.h>
+#if {lanes} == 1 /* the FMU's instance: gw_taylor.c itself (its target clone), as gw_tl1_ */
+#define GW_UNITY_BUILD 1
+#include "gw_taylor.c"
+#define gw_tlb_cst gw_tl1_cst
+#define gw_tlb_jet gw_tl1_jet
+#else /* the ensemble's: as gw_ensemble.c */
+#define GW_MAYBE_UNUSED __attribute__((unused))
+#define GW_TL_W {lanes}
+#define GW_TL(name) gw_tlb_##name
+#if defined(__x86_64__) && !defined(__clang__)
+#define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+#include "gw_taylor_model.h"
+#endif
+int bench_nvar(void);
+int bench_ncst(void);
+void bench_cst(const double *u, const double *p, double *c);
+void bench_jet(int order, const double *t, const double *x, const double *c, double *w);
+double bench_time(long calls, int order, const double *t, const double *x, const double *c, double *w);
+int bench_nvar(void) {{ return GW_TL_NVAR; }}
+int bench_ncst(void) {{ return GW_TL_NCST; }}
+void bench_cst(const double *u, const double *p, double *c) {{ gw_tlb_cst(u, p, c); }}
+void bench_jet(int order, const double *t, const double *x, const double *c, double *w) {{
+    gw_tlb_jet(order, t, x, c, w);
+}}
+double bench_time(long calls, int order, const double *t, const double *x, const double *c, double *w) {{
+    struct timespec a, b;
+    long i;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &a);
+    for (i = 0; i < calls; i++) gw_tlb_jet(order, t, x, c, w);
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &b);
+    return ((double)(b.tv_sec - a.tv_sec) + 1e-9 * (double)(b.tv_nsec - a.tv_nsec)) / (double)calls;
+}}
+"""
+
+_D = ctypes.POINTER(ctypes.c_double)
+
+
+def _ptr(a: np.ndarray):
+    return a.ctypes.data_as(_D)
+
+
+def baseline_source(ref: str, ode, model: str, out: Path) -> None:
+    """gw_taylor_model.h and gw_taylor_ops.h of git ref `ref`'s generator, into out."""
+    def show(path: str) -> str:
+        return subprocess.run(["git", "-C", str(ROOT), "show", f"{ref}:{path}"], check=True,
+                              capture_output=True, text=True).stdout
+    pkg = out / "py"
+    pkg.mkdir(parents=True)
+    tag = "gwbase_" + "".join(ch for ch in ref if ch.isalnum())
+    (pkg / f"{tag}_graph.py").write_text(show("fmu_build/taylor_graph.py"))
+    (pkg / f"{tag}_c.py").write_text(show("fmu_build/taylor_c.py").replace(
+        "fmu_build.taylor_graph", f"{tag}_graph"))
+    for name in ("gw_taylor_ops.h", "gw_taylor.c"):
+        (out / name).write_text(show(f"c_src/{name}"))
+    sys.path.insert(0, str(pkg))
+    try:
+        mod = importlib.import_module(f"{tag}_c")
+        graph = importlib.import_module(f"{tag}_graph")
+        (out / "gw_taylor_model.h").write_text(mod.taylor_source(graph.decompose(ode), model))
+    finally:
+        sys.path.remove(str(pkg))
+
+
+class Kernel:
+    """One compiled instance: a kernel directory at a lane count."""
+
+    def __init__(self, src: Path, lanes: int, work: Path, name: str):
+        self.lanes = lanes
+        c = work / f"{name}_w{lanes}.c"
+        c.write_text(DRIVER.format(lanes=lanes))
+        lib = work / f"{name}_w{lanes}.so"
+        flags = [*STANDARD, *OPTIMISE] if lanes == 1 else ["-std=c99", *ENSEMBLE_FLAGS]
+        subprocess.run([compiler(), *flags, "-shared", "-fPIC", f"-I{src}", f"-I{ROOT / 'c_src'}",
+                        str(c), "-o", str(lib), "-lm"], check=True)
+        self.lib = ctypes.CDLL(str(lib))
+        self.lib.bench_time.restype = ctypes.c_double
+        self.nvar, self.ncst = self.lib.bench_nvar(), self.lib.bench_ncst()
+
+    def setup(self, x0: np.ndarray, u: np.ndarray, p: np.ndarray, order: int):
+        W = self.lanes
+        rng = np.random.default_rng(1)
+        self.x = np.ascontiguousarray(np.repeat(x0[:, None], W, 1) * (1 + 1e-3 * rng.standard_normal((x0.size, W))))
+        self.t = np.zeros(W)
+        self.c = np.zeros(max(self.ncst, 1) * W)
+        pl = np.ascontiguousarray(np.repeat(p[:, None], W, 1)) if p.size else np.zeros(W)
+        ul = np.ascontiguousarray(np.repeat(u[:, None], W, 1)) if u.size else np.zeros(W)
+        self.lib.bench_cst(_ptr(ul), _ptr(pl), _ptr(self.c))
+        self.w = np.zeros(self.nvar * (order + 1) * W)
+        self.order = order
+
+    def states(self, nx: int) -> np.ndarray:
+        """lane 0's state series, (nx, order + 1)"""
+        self.lib.bench_jet(self.order, _ptr(self.t), _ptr(self.x), _ptr(self.c), _ptr(self.w))
+        S = self.order + 1
+        return self.w[: nx * S * self.lanes].reshape(nx, S, self.lanes)[:, :, 0]
+
+    def time(self, calls: int) -> float:
+        return self.lib.bench_time(calls, self.order, _ptr(self.t), _ptr(self.x), _ptr(self.c), _ptr(self.w))
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scene", default=str(ROOT / "examples/scenes/paper_earth.toml"))
+    parser.add_argument("--baseline", help="git ref whose kernel generator to time alongside")
+    parser.add_argument("--lanes", type=int, nargs="*", default=[1, 4, 8])
+    parser.add_argument("--orders", type=int, nargs="*", default=[6, 10, 13, 15])
+    parser.add_argument("--rounds", type=int, default=15)
+    parser.add_argument("--seconds", type=float, default=0.004, help="per timed batch")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory(prefix="gw-tkernel-") as tmp:
+        work = Path(tmp)
+        scene = load_scene(Path(args.scene))
+        built = build_fmu(scene, work / "k.fmu", build_dir=work / "build", taylor=True)
+        fns = built.spec.functions()
+        p = np.array([q.start for q in built.spec.parameters], dtype=float)
+        s0 = [q.start for q in built.spec.starts]
+        x0 = np.array(fns["init"](s0, p)).ravel()
+        u = np.array([q.start for q in built.spec.inputs], dtype=float)
+        nx = x0.size
+        variants = {"this tree": built.sources}
+        if args.baseline:
+            base = work / "base"
+            baseline_source(args.baseline, taylor_ode(fns), scene.name, base)
+            variants[args.baseline] = base
+        kernels = {(v, W): Kernel(src, W, work, f"k{i}") for i, (v, src) in enumerate(variants.items())
+                   for W in args.lanes}
+        print(f"{args.scene}: {nx} states; work series: "
+              + ", ".join(f"{v} {kernels[(v, args.lanes[0])].nvar}" for v in variants))
+        best = {}
+        for order in args.orders:
+            for k in kernels.values():
+                k.setup(x0, u, p, order)
+            if args.baseline:
+                a, b = (kernels[(v, 1)].states(nx) for v in variants)
+                dev = np.max(np.abs(a - b) / np.abs(b).max(axis=1, keepdims=True))
+                print(f"order {order}: states' series of the two kernels differ by {dev:.1e} "
+                      "(relative to each series' largest coefficient)")
+            calls = {key: max(1, int(args.seconds / max(k.time(20), 1e-9))) for key, k in kernels.items()}
+            for _ in range(args.rounds):
+                for key, k in kernels.items():
+                    best[(key, order)] = min(best.get((key, order), np.inf), k.time(calls[key]))
+        for v in variants:
+            print(f"\n### {v}: us per jet call (ratio to one lane; per trajectory)\n")
+            print("| order | " + " | ".join(f"W = {W}" for W in args.lanes) + " |")
+            print("|---|" + "---|" * len(args.lanes))
+            for order in args.orders:
+                one = best[((v, args.lanes[0]), order)]
+                cells = []
+                for W in args.lanes:
+                    t = best[((v, W), order)]
+                    cells.append(f"{t * 1e6:.3f}" + ("" if W == args.lanes[0] else
+                                                     f" ({t / one:.2f}x; {t * 1e6 / W:.3f}/traj)"))
+                print(f"| {order} | " + " | ".join(cells) + " |")
+        if args.baseline:
+            print(f"\n### speed-up of this tree over {args.baseline} (time ratio, > 1: faster)\n")
+            print("| order | " + " | ".join(f"W = {W}" for W in args.lanes) + " |")
+            print("|---|" + "---|" * len(args.lanes))
+            for order in args.orders:
+                print(f"| {order} | " + " | ".join(
+                    f"{best[((args.baseline, W), order)] / best[(('this tree', W), order)]:.2f}"
+                    for W in args.lanes) + " |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

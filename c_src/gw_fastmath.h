@@ -35,8 +35,9 @@
 #ifndef GW_FASTMATH_H
 #define GW_FASTMATH_H
 
-#include <float.h>
 #include <math.h>
+#include <stdint.h>
+#include <string.h>
 
 /* inlined whatever the compiler's size heuristics say: the sharing of one reduction between
  * sin(x) and cos(x) depends on it (gcc -O2 keeps 4 out-of-line calls otherwise: 62 ns per
@@ -81,13 +82,16 @@ static void gw_trig_reduce_precise(double x, double kd, double *rh, double *rl) 
  * precise reduction. */
 GW_FASTMATH_INLINE int gw_trig_reduce(double x, double *rh, double *rl) {
     const double xs = fabs(x) <= GW_TRIG_FAST_MAX ? x : 0.0;
-#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD == 0
-    /* round to the nearest integer by adding and subtracting 1.5 2^52 (exact double arithmetic) */
-    const double kd = (xs * GW_INVPIO2 + 0x1.8p52) - 0x1.8p52;
-#else /* excess precision (x87) would defeat the rounding trick */
-    const double kf = xs * GW_INVPIO2;
-    const double kd = (double)(long)(kf >= 0.0 ? kf + 0.5 : kf - 0.5);
-#endif
+    /* k: xs 2/pi + 1.5 2^52 rounds to 1.5 2^52 + k, whose low 32 bits are k (two's complement).
+     * Read as bits rather than by subtracting 1.5 2^52 again: reassociation (-ffast-math in a
+     * parent project of the C export) would fold (y + C) - C into y. */
+    const double t = xs * GW_INVPIO2 + 0x1.8p52;
+    uint64_t bits;
+    int32_t k;
+    double kd;
+    memcpy(&bits, &t, sizeof bits);
+    k = (int32_t)(uint32_t)bits;
+    kd = (double)k;
     const double a = xs - kd * GW_PIO2_1, w = kd * GW_PIO2_1T, r = a - w;
     if (fabs(r) >= fabs(xs) * 0x1p-16) {
         *rh = r;
@@ -95,7 +99,7 @@ GW_FASTMATH_INLINE int gw_trig_reduce(double x, double *rh, double *rl) {
     } else {
         gw_trig_reduce_precise(xs, kd, rh, rl);
     }
-    return (int)((long)kd & 3);
+    return (int)(k & 3);
 }
 
 /* sin(x + y), |x| <= pi/4, |y| tiny against x (FreeBSD k_sin.c) */

@@ -62,7 +62,7 @@
  * P3 + P3T, P1..P3 of 33 bits each so that kd Pi is exact; x - kd P1 is exact (both are multiples
  * of ulp(x), the difference is below 1 in magnitude), the two further subtractions are TwoSums:
  * r carries about 150 bits of pi/2 whatever the cancellation. */
-static void gw_trig_reduce_precise(double x, double kd, double *rh, double *rl) {
+GW_FASTMATH_INLINE void gw_trig_reduce_precise(double x, double kd, double *rh, double *rl) {
     const double a = x - kd * GW_PIO2_1;
     const double t2 = kd * GW_PIO2_2, t3 = kd * GW_PIO2_3;
     const double s1 = a - t2, b1 = s1 - a; /* TwoSum(a, -t2) = s1 + e1 */

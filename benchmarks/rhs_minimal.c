@@ -15,8 +15,7 @@ void rhs_minimal(const void *w, const double *x, double *xdot) {
 }
 void rhs_minimal_fast(const void *w, const double *x, double *xdot) {
     double sa, ca, sb, cb;
-    gw_sincos(x[2], &sa, &ca);
-    gw_sincos(x[3], &sb, &cb);
+    gw_sincos2(x[2], x[3], &sa, &ca, &sb, &cb);
     minimal_wheel_rhs_trig((const minimal_wheel *)w, x, xdot, sa, ca, sb, cb);
 }
 void rhs_minimal_init(void *w, const double *p) { minimal_wheel_init((minimal_wheel *)w, p); }

@@ -1,7 +1,9 @@
 /*
  * gw_fastmath.h -- sin and cos for the generated right-hand sides: static inline, pure, C99,
  * at most 1 ulp from the exact value for |x| <= GW_TRIG_FAST_MAX (libm beyond, and for NaN
- * and infinities), about 3x cheaper than glibc's sin/cos here (docs/performance.md).
+ * and infinities); gw_sincos2 computes two arguments' in the two lanes of an SSE2 register.
+ * Measured (docs/performance.md): a DOP853 run 17-20% faster than with glibc's sincos (the
+ * trig is on the stage-to-stage critical path), one RHS evaluation as fast.
  *
  * Why not libm: glibc's sin and cos are out-of-line calls through the PLT (gcc merges a pair
  * into one sincos call at best), 10-15 ns each inside gw_ode, about 45% of a DOP853 run.  Why
@@ -17,20 +19,20 @@
  *   Permission to use, copy, modify, and distribute this software is freely granted,
  *   provided that this notice is preserved.
  *
- * Reduction (Cody-Waite in four pieces, branch-free): k = nearest integer to x 2/pi (|k| <
- * 2^20), r = x - k pi/2 as a double-double (rh, rl) with pi/2 = P1 + P2 + P3 + P3T, P1..P3 of
- * 33 bits each so that k Pi is exact; x - k P1 is exact (both are multiples of ulp(x) and the
- * difference is below 1 in magnitude), the two further subtractions are TwoSums, so r carries
- * about 150 bits of pi/2: no cancellation near a multiple of pi/2 (the closest double there is
- * some 2^-60 away relative) reaches the result.  sin and cos of the same x share one reduction
- * and both kernels: gw_sin and gw_cos compute the same pure expressions before a quadrant
- * select, so after inlining the compiler keeps one copy (gcc and clang at -O2; the generated
- * code calls both for alpha and beta).
+ * Reduction (Cody-Waite; gw_trig_reduce): k = nearest integer to x 2/pi (|k| < 2^20), r =
+ * x - k pi/2 as a double-double (rh, rl).  Common case: fdlibm's first round, pi/2 = P1 + P1T
+ * with P1 of 33 bits (k P1 exact, x - k P1 exact), good to 85 bits; within |x| 2^-16 of a
+ * multiple of pi/2 the precise reduction, pi/2 in four pieces and two TwoSums (about 150
+ * bits), so no cancellation reaches the result.  sin and cos of one x share the reduction and
+ * both kernels (gw_sincos); compilers do not merge two inlined gw_sin / gw_cos by themselves,
+ * so fmu_build/casadi_c.py writes gw_sincos / gw_sincos2 calls into the generated code.
  *
  * Error measured against glibc's long double sinl/cosl (tests/c/test_fastmath.c, run by
  * tests/test_fastmath.py): at most 1 ulp over 10^7 points in [-1e5, 1e5], near every multiple
- * of pi/2 below 2^20, and on [-pi, pi]; the tally is in docs/performance.md.  Deterministic:
- * only +, -, * and two conversions between double and int, no lookup tables, no state.
+ * of pi/2 below 2^20, and on [-pi, pi] (0.78 ulp at most, 97% correctly rounded; glibc:
+ * 0.52); docs/performance.md.  Deterministic: +, -, *, a bit read and one int-to-double
+ * conversion, no tables, no state; a parent project's -ffast-math costs accuracy (the TwoSums
+ * are reassociated away), not correctness of the quadrant.
  */
 #ifndef GW_FASTMATH_H
 #define GW_FASTMATH_H
@@ -39,9 +41,8 @@
 #include <stdint.h>
 #include <string.h>
 
-/* inlined whatever the compiler's size heuristics say: the sharing of one reduction between
- * sin(x) and cos(x) depends on it (gcc -O2 keeps 4 out-of-line calls otherwise: 62 ns per
- * gw_ode instead of 22) */
+/* inlined whatever the compiler's size heuristics say (gcc -O2 kept out-of-line calls: 62 ns
+ * per gw_ode instead of 22; a call even on the rare path made it spill around it) */
 #if defined(__GNUC__) || defined(__clang__)
 #define GW_FASTMATH_INLINE static inline __attribute__((always_inline))
 #else
@@ -144,6 +145,103 @@ GW_FASTMATH_INLINE void gw_sincos(double x, double *s, double *c) {
     *s = x == 0.0 ? x : gw_trig_select(ks, kc, n); /* sin(-0) = -0 */
     *c = gw_trig_select(ks, kc, n + 1);
 }
+
+/* sin and cos of two arguments at once: the generated code pairs the sincos of alpha and of
+ * beta.  With SSE2 (every x86-64) the two reductions and kernels run in the two lanes of one
+ * register, the same IEEE operations in the same order as gw_sincos, so the same bits (checked
+ * by tests/c/test_fastmath.c); elsewhere (or with -DGW_FASTMATH_NO_SIMD) two gw_sincos calls. */
+#if (defined(__SSE2__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 2)) && \
+    !defined(GW_FASTMATH_NO_SIMD)
+#include <emmintrin.h>
+#define GW_FASTMATH_SSE2 1
+GW_FASTMATH_INLINE void gw_sincos2(double x0, double x1, double *s0, double *c0, double *s1,
+                                   double *c1) {
+    const __m128d absmask = _mm_castsi128_pd(_mm_set_epi32(0x7fffffff, -1, 0x7fffffff, -1));
+    const __m128d x = _mm_set_pd(x1, x0), half = _mm_set1_pd(0.5), one = _mm_set1_pd(1.0);
+    const __m128d xs = _mm_and_pd(x, _mm_cmple_pd(_mm_and_pd(x, absmask), _mm_set1_pd(GW_TRIG_FAST_MAX)));
+    const __m128d t = _mm_add_pd(_mm_mul_pd(xs, _mm_set1_pd(GW_INVPIO2)), _mm_set1_pd(0x1.8p52));
+    const __m128i kb = _mm_castpd_si128(t);
+    const __m128d kd = _mm_cvtepi32_pd(_mm_shuffle_epi32(kb, 0x08)); /* dwords 0 and 2 */
+    const __m128d a = _mm_sub_pd(xs, _mm_mul_pd(kd, _mm_set1_pd(GW_PIO2_1)));
+    const __m128d w0 = _mm_mul_pd(kd, _mm_set1_pd(GW_PIO2_1T));
+    __m128d rh = _mm_sub_pd(a, w0), rl = _mm_sub_pd(_mm_sub_pd(a, rh), w0);
+    __m128d z, w, v, sr, cr, ks, kc;
+    int l;
+    if (_mm_movemask_pd(_mm_cmpge_pd(_mm_and_pd(rh, absmask),
+                                     _mm_mul_pd(_mm_and_pd(xs, absmask), _mm_set1_pd(0x1p-16)))) != 3) {
+        double xsv[2], kdv[2], rhv[2], rlv[2];
+        _mm_storeu_pd(xsv, xs);
+        _mm_storeu_pd(kdv, kd);
+        _mm_storeu_pd(rhv, rh);
+        _mm_storeu_pd(rlv, rl);
+        for (l = 0; l < 2; l++)
+            if (!(fabs(rhv[l]) >= fabs(xsv[l]) * 0x1p-16))
+                gw_trig_reduce_precise(xsv[l], kdv[l], &rhv[l], &rlv[l]);
+        rh = _mm_loadu_pd(rhv);
+        rl = _mm_loadu_pd(rlv);
+    }
+    z = _mm_mul_pd(rh, rh);
+    w = _mm_mul_pd(z, z);
+    v = _mm_mul_pd(z, rh);
+    /* gw_kernel_sin, operation by operation */
+    sr = _mm_add_pd(
+        _mm_add_pd(_mm_set1_pd(8.33333333332248946124e-03),
+                   _mm_mul_pd(z, _mm_add_pd(_mm_set1_pd(-1.98412698298579493134e-04),
+                                            _mm_mul_pd(z, _mm_set1_pd(2.75573137070700676789e-06))))),
+        _mm_mul_pd(_mm_mul_pd(z, w),
+                   _mm_add_pd(_mm_set1_pd(-2.50507602534068634195e-08),
+                              _mm_mul_pd(z, _mm_set1_pd(1.58969099521155010221e-10)))));
+    ks = _mm_sub_pd(rh, _mm_sub_pd(_mm_sub_pd(_mm_mul_pd(z, _mm_sub_pd(_mm_mul_pd(half, rl), _mm_mul_pd(v, sr))),
+                                              rl),
+                                   _mm_mul_pd(v, _mm_set1_pd(-1.66666666666666324348e-01))));
+    /* gw_kernel_cos, operation by operation */
+    cr = _mm_add_pd(
+        _mm_mul_pd(z, _mm_add_pd(_mm_set1_pd(4.16666666666666019037e-02),
+                                 _mm_mul_pd(z, _mm_add_pd(_mm_set1_pd(-1.38888888888741095749e-03),
+                                                          _mm_mul_pd(z, _mm_set1_pd(2.48015872894767294178e-05)))))),
+        _mm_mul_pd(_mm_mul_pd(w, w),
+                   _mm_add_pd(_mm_set1_pd(-2.75573143513906633035e-07),
+                              _mm_mul_pd(z, _mm_add_pd(_mm_set1_pd(2.08757232129817482790e-09),
+                                                       _mm_mul_pd(z, _mm_set1_pd(-1.13596475577881948265e-11)))))));
+    {
+        const __m128d hz = _mm_mul_pd(half, z), w1 = _mm_sub_pd(one, hz);
+        kc = _mm_add_pd(w1, _mm_add_pd(_mm_sub_pd(_mm_sub_pd(one, w1), hz),
+                                       _mm_sub_pd(_mm_mul_pd(z, cr), _mm_mul_pd(rh, rl))));
+    }
+    { /* quadrant select in the register: lane swap where k is odd (k + 1 for cos), sign flip
+       * where bit 1 is set, as gw_trig_select; sin(+-0) = +-0; libm beyond the bound */
+        const __m128i one32 = _mm_set_epi32(0, 1, 0, 1), two32 = _mm_set_epi32(0, 2, 0, 2);
+        const __m128i kc1 = _mm_add_epi32(kb, one32);
+        const __m128d odd_s = _mm_castsi128_pd(
+            _mm_shuffle_epi32(_mm_cmpeq_epi32(_mm_and_si128(kb, one32), one32), 0xA0));
+        const __m128d sgn_s = _mm_castsi128_pd(_mm_slli_epi64(_mm_and_si128(kb, two32), 62));
+        const __m128d sgn_c = _mm_castsi128_pd(_mm_slli_epi64(_mm_and_si128(kc1, two32), 62));
+        const __m128d vs = _mm_or_pd(_mm_and_pd(odd_s, kc), _mm_andnot_pd(odd_s, ks));
+        const __m128d vc = _mm_or_pd(_mm_and_pd(odd_s, ks), _mm_andnot_pd(odd_s, kc));
+        const __m128d zero = _mm_cmpeq_pd(x, _mm_setzero_pd());
+        const __m128d sv = _mm_or_pd(_mm_and_pd(zero, x), _mm_andnot_pd(zero, _mm_xor_pd(vs, sgn_s)));
+        const __m128d cv = _mm_xor_pd(vc, sgn_c);
+        _mm_storel_pd(s0, sv);
+        _mm_storeh_pd(s1, sv);
+        _mm_storel_pd(c0, cv);
+        _mm_storeh_pd(c1, cv);
+        if (!(fabs(x0) <= GW_TRIG_FAST_MAX)) {
+            *s0 = sin(x0);
+            *c0 = cos(x0);
+        }
+        if (!(fabs(x1) <= GW_TRIG_FAST_MAX)) {
+            *s1 = sin(x1);
+            *c1 = cos(x1);
+        }
+    }
+}
+#else
+GW_FASTMATH_INLINE void gw_sincos2(double x0, double x1, double *s0, double *c0, double *s1,
+                                   double *c1) {
+    gw_sincos(x0, s0, c0);
+    gw_sincos(x1, s1, c1);
+}
+#endif
 
 /* sin(x) alone (the generated code calls gw_sincos where it needs both) */
 GW_FASTMATH_INLINE double gw_sin(double x) {

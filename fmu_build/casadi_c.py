@@ -19,12 +19,14 @@ names (issue 8, section 9), and the body functions ignore some of the standard a
     and those are never indexed), and the NULL tests split the body into branches that keep
     gcc from merging sin(x) and cos(x) into one sincos call (measured: one libm call, 5-7 ns,
     of a 28 ns right-hand side; docs/performance.md);
-  * each body's sin and cos come from c_src/gw_fastmath.h (static inline, at most 1 ulp, about
-    1.4x cheaper than glibc's sincos call; docs/performance.md): a cos(aY) and a sin(aY) of the
-    same variable, aY unchanged in between, become one gw_sincos(aY, &gw_sN, &gw_cN) at the
-    first of the two and reads of gw_sN / gw_cN (compilers do not merge the two inlined
-    reductions by themselves: measured), any other sin / cos a gw_sin / gw_cos; the file
-    includes gw_fastmath.h after <math.h>;
+  * each body's sin and cos come from c_src/gw_fastmath.h (static inline, at most 1 ulp;
+    docs/performance.md): a cos(aY) and a sin(aY) of the same variable, aY unchanged in
+    between, become one gw_sincos(aY, &gw_sN, &gw_cN) at the first of the two and reads of
+    gw_sN / gw_cN (compilers do not merge two inlined reductions by themselves: measured); two
+    such gw_sincos in a body (alpha and beta in gw_ode) become one gw_sincos2 at the second
+    when nothing in between uses the first's output or changes its argument (SSE2 lanes, the
+    same bits); any other sin / cos a gw_sin / gw_cos; the file includes gw_fastmath.h after
+    <math.h>;
   * the whole file is guarded by GW_UNITY_BUILD, so that compiled on its own it is empty.
 Anything it does not recognise (a function definition of another shape, a global left over)
 raises CodegenFormatError naming the line: a new CasADi version fails the build loudly rather
@@ -97,6 +99,7 @@ def make_internal(text: str, keep: set[str]) -> str:
                 for k in range(first + 1, last + 1):
                     lines[k] = _INPUT_LOAD.sub(r"arg[\1][\2];", lines[k])
                 _merge_sincos(lines, first + 1, last)
+                _pair_sincos(lines, first + 1, last)
                 for k in range(first + 1, last + 1):
                     lines[k] = _TRIG.sub(r"gw_\1(", lines[k])
                 body = "\n".join(lines[first + 1:last + 1])
@@ -159,6 +162,25 @@ def _merge_sincos(lines: list[str], first: int, last: int) -> None:
                 break
             if assign.match(lines[j]):
                 break
+
+
+_SINCOS_LINE = re.compile(r"^(?P<indent>\s*)casadi_real (?P<s>gw_s\d+), (?P<c>gw_c\d+); "
+                          r"gw_sincos\((?P<arg>\w+), &(?P=s), &(?P=c)\); (?P<out>\w+)=(?P<val>gw_[sc]\d+);$")
+
+
+def _pair_sincos(lines: list[str], first: int, last: int) -> None:
+    """Two gw_sincos lines of one body -> one gw_sincos2 at the second (both arguments in the
+    two lanes of a register), if nothing in between reads or writes the first one's output or
+    writes its argument."""
+    found = [(i, m) for i in range(first, last + 1) if (m := _SINCOS_LINE.match(lines[i]))]
+    for (i, m), (j, mj) in zip(found[::2], found[1::2]):
+        between = "\n".join(lines[i + 1:j])
+        if re.search(rf"\b{m['out']}\b", between) or re.search(rf"^\s*{m['arg']}=", between, re.M):
+            continue
+        lines[i] = ""
+        lines[j] = (f"{mj['indent']}casadi_real {m['s']}, {m['c']}, {mj['s']}, {mj['c']}; "
+                    f"gw_sincos2({m['arg']}, {mj['arg']}, &{m['s']}, &{m['c']}, &{mj['s']}, &{mj['c']}); "
+                    f"{m['out']}={m['val']}; {mj['out']}={mj['val']};")
 
 
 def _check_no_globals(lines: list[str]) -> None:

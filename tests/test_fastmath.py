@@ -4,10 +4,14 @@
       strict flags and the FMU's optimisation: at most 1 ulp from glibc's long double sinl/cosl
       over 1.2e7 arguments (uniform in [-1e5, 1e5], every multiple of pi/2 below 2^20 and its
       neighbours, [-pi, pi], tiny magnitudes, the bound); NaN, infinities, -0, libm beyond it
+      (and gw_sincos2, two arguments in SSE2 lanes, bit-equal to gw_sincos), also built with
+      -DGW_FASTMATH_NO_SIMD (the portable path of gw_sincos2)
   test_generated_code_merges_sincos    the paper wheel's gw_ode computes sin and cos of alpha
-      and of beta with one gw_sincos each, no libm call on the fast path
+      and beta with one gw_sincos2, no libm sin or cos
   test_merge_respects_reassignment     fmu_build.casadi_c pairs sin(a) with cos(a) only while
       a keeps its value
+  test_pair_respects_uses              two gw_sincos become one gw_sincos2 only if the first's
+      output is not used or its argument changed before the second
 """
 from __future__ import annotations
 
@@ -18,16 +22,16 @@ import subprocess
 import pytest
 
 from c_programs import C_SRC, STRICT, TESTS_C
-from fmu_build.casadi_c import _merge_sincos
+from fmu_build.casadi_c import _merge_sincos, _pair_sincos
 
 COMPILERS = [c for c in ("gcc", "clang") if shutil.which(c)]
 
 
-@pytest.mark.parametrize("cc", COMPILERS)
-def test_ulp_error_against_long_double(cc, tmp_path):
+@pytest.mark.parametrize("cc,extra", [(cc, []) for cc in COMPILERS] + [("gcc", ["-DGW_FASTMATH_NO_SIMD"])])
+def test_ulp_error_against_long_double(cc, extra, tmp_path):
     exe = tmp_path / "test_fastmath"
-    cmd = [cc, *STRICT, "-O2", "-fno-math-errno", f"-I{C_SRC}", str(TESTS_C / "test_fastmath.c"), "-lm", "-o",
-           str(exe)]
+    cmd = [cc, *STRICT, *extra, "-O2", "-fno-math-errno", f"-I{C_SRC}", str(TESTS_C / "test_fastmath.c"), "-lm",
+           "-o", str(exe)]
     subprocess.run(cmd, check=True)
     r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stdout + r.stderr
@@ -36,6 +40,7 @@ def test_ulp_error_against_long_double(cc, tmp_path):
     assert [s[0] for s in sets] == ["uniform", "halfpi", "small", "bound"], r.stdout
     assert sum(int(s[1]) for s in sets) >= 10_000_000
     assert max(max(float(s[2]), float(s[3])) for s in sets) <= 1.0, r.stdout
+    assert "gw_sincos2 against gw_sincos: 0 pairs not bit-equal" in r.stdout, r.stdout
 
 
 def test_generated_code_merges_sincos(tmp_path):
@@ -47,7 +52,7 @@ def test_generated_code_merges_sincos(tmp_path):
     assert '#include "gw_fastmath.h"' in text
     ode = text[text.index("/* gw_ode:"):]
     ode = ode[:ode.index("\n}\n")]
-    assert len(re.findall(r"\bgw_sincos\(", ode)) == 2, ode
+    assert len(re.findall(r"\bgw_sincos2\(", ode)) == 1 and "gw_sincos(" not in ode, ode
     assert not re.search(r"(?<![\w.])(sin|cos)\(", ode), ode
 
 
@@ -61,3 +66,16 @@ def test_merge_respects_reassignment():
     assert lines[4] == "  a4=gw_s0;"
     assert lines[5] == "  casadi_real gw_s1, gw_c1; gw_sincos(a6, &gw_s1, &gw_c1); a5=gw_s1;"
     assert lines[6] == "  a6=gw_c1;"
+
+
+def test_pair_respects_uses():
+    one = "  casadi_real gw_s0, gw_c0; gw_sincos(a0, &gw_s0, &gw_c0); a1=gw_c0;"
+    two = "  casadi_real gw_s1, gw_c1; gw_sincos(a2, &gw_s1, &gw_c1); a3=gw_s1;"
+    lines = [one, "  a2=arg[1][3];", two]
+    _pair_sincos(lines, 0, 2)
+    assert lines == ["", "  a2=arg[1][3];", "  casadi_real gw_s0, gw_c0, gw_s1, gw_c1; gw_sincos2(a0, a2, &gw_s0, "
+                     "&gw_c0, &gw_s1, &gw_c1); a1=gw_c0; a3=gw_s1;"]
+    for middle in ("  a4=(a1*a2);", "  a0=arg[1][2];"):  # the first's output read, its argument written
+        lines = [one, middle, two]
+        _pair_sincos(lines, 0, 2)
+        assert lines == [one, middle, two]

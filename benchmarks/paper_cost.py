@@ -34,7 +34,7 @@ def best_of(fn, repeat=5):
 
 
 def rhs_ns(sources: Path, work: Path, rounds: int = 5) -> tuple[float, float, float]:
-    """(generated, minimal hand-written with libm's sin/cos, the same with gw_sincos) ns per RHS
+    """(generated, minimal hand-written with libm's sin/cos, the same with gw_sincos2) ns per RHS
     evaluation: the best of `rounds` runs of rhs_bench, each timing all in the same process
     (benchmarks/rhs_timing.py)."""
     import rhs_timing
@@ -56,7 +56,7 @@ def main() -> None:
         c_ns, min_ns, min_fast_ns = rhs_ns(built.sources, work)
         print(f"RHS evaluation: generated C {c_ns:.1f} ns; minimal hand-written closed form {min_ns:.1f} ns "
               f"with libm's sin/cos (ratio {c_ns / min_ns:.2f}), {min_fast_ns:.1f} ns with the runtime's "
-              f"gw_sincos as the generated code (ratio {c_ns / min_fast_ns:.2f})")
+              f"gw_sincos2 as the generated code (ratio {c_ns / min_fast_ns:.2f})")
         ode = fns["ode"]
         n = 20000
         vm_ns = best_of(lambda: [ode(0.0, x0, [], p) for _ in range(n)], 3) / n * 1e9

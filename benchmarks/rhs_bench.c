@@ -1,7 +1,7 @@
 /* Times one evaluation of the generated right-hand side gw_ode (ns per call) and, in the same
  * run, the minimal hand-written closed form of the base wheel (rhs_minimal.c, minimal_wheel.h)
- * at the same states, with libm's sin/cos and with the runtime's gw_sincos (the generated code's):
- * prints "<generated ns> <minimal ns> <minimal with gw_sincos ns>" (minimal: "nan" when the
+ * at the same states, with libm's sin/cos and with the runtime's gw_sincos2 (the generated code's):
+ * prints "<generated ns> <minimal ns> <minimal with gw_sincos2 ns>" (minimal: "nan" when the
  * model is not the base wheel: nx != 8 or np != 6).  Built by benchmarks/paper_cost.py, effect_costs.py
  * and work_precision.py against a scene's generated sources, with benchmarks/rhs_model.c and
  * rhs_minimal.c (each in a translation unit of its own, called through pointers). */
@@ -79,7 +79,7 @@ int main(int argc, char **argv) {
         if (rhs_minimal_size() > sizeof wbuf) return 3;
         rhs_minimal_init(wbuf, pm);
         for (rep = 0; rep < 8; rep++) x1[rep] = x0[rep];
-        for (rep = 0; rep < 10; rep++) { /* interleaved: libm, gw_sincos, libm, ... */
+        for (rep = 0; rep < 10; rep++) { /* interleaved: libm, gw_sincos2, libm, ... */
             long i;
             v = rep % 2;
             t0 = now();

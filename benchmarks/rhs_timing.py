@@ -1,6 +1,6 @@
 """Build and run benchmarks/rhs_bench.c: ns per RHS evaluation of a scene's generated model and, in
 the same run, of the minimal hand-written closed form of the base wheel (rhs_minimal.c), with libm's
-sin/cos and with the runtime's gw_sincos (c_src/gw_fastmath.h, what the generated code uses)."""
+sin/cos and with the runtime's gw_sincos2 (c_src/gw_fastmath.h, what the generated code uses)."""
 from __future__ import annotations
 
 import math
@@ -28,7 +28,7 @@ def run(exe: Path, calls: int = 2_000_000) -> tuple[float, float]:
 
 
 def run3(exe: Path, calls: int = 2_000_000) -> tuple[float, float, float]:
-    """(generated ns, minimal ns with libm's sin/cos, minimal ns with gw_sincos); nan for the
+    """(generated ns, minimal ns with libm's sin/cos, minimal ns with gw_sincos2); nan for the
     minimal ones when the model is not the base wheel."""
     out = subprocess.run([str(exe), str(calls)], capture_output=True, text=True, check=True).stdout.split()
     return tuple(float(v) if v != "nan" else math.nan for v in out[:3])

@@ -129,7 +129,7 @@ def make_internal(text: str, keep: set[str]) -> str:
         result.append(line)
     _check_no_globals(result)
     body = "\n".join(result).rstrip("\n") + "\n"
-    if "gw_sin(" in body or "gw_cos(" in body:
+    if re.search(r"\bgw_(sin|cos|sincos|sincos2)\(", body):
         if _MATH_INCLUDE not in body:
             raise CodegenFormatError("generated C lacks #include <math.h>")
         body = body.replace(_MATH_INCLUDE, _MATH_INCLUDE + FASTMATH_INCLUDE, 1)
@@ -160,7 +160,7 @@ def _merge_sincos(lines: list[str], first: int, last: int) -> None:
                 done.update((i, j))
                 n_pairs += 1
                 break
-            if assign.match(lines[j]):
+            if assign.match(lines[j]) or "{" in lines[j] or "}" in lines[j]:  # changed, or scope
                 break
 
 
@@ -170,12 +170,13 @@ _SINCOS_LINE = re.compile(r"^(?P<indent>\s*)casadi_real (?P<s>gw_s\d+), (?P<c>gw
 
 def _pair_sincos(lines: list[str], first: int, last: int) -> None:
     """Two gw_sincos lines of one body -> one gw_sincos2 at the second (both arguments in the
-    two lanes of a register), if nothing in between reads or writes the first one's output or
-    writes its argument."""
+    two lanes of a register), if nothing in between reads or writes the first one's outputs,
+    writes its argument or opens or closes a block."""
     found = [(i, m) for i in range(first, last + 1) if (m := _SINCOS_LINE.match(lines[i]))]
     for (i, m), (j, mj) in zip(found[::2], found[1::2]):
         between = "\n".join(lines[i + 1:j])
-        if re.search(rf"\b{m['out']}\b", between) or re.search(rf"^\s*{m['arg']}=", between, re.M):
+        used = re.search(rf"\b({m['out']}|{m['s']}|{m['c']})\b", between)
+        if used or re.search(rf"^\s*{m['arg']}=", between, re.M) or "{" in between or "}" in between:
             continue
         lines[i] = ""
         lines[j] = (f"{mj['indent']}casadi_real {m['s']}, {m['c']}, {mj['s']}, {mj['c']}; "

@@ -75,7 +75,17 @@ def test_pair_respects_uses():
     _pair_sincos(lines, 0, 2)
     assert lines == ["", "  a2=arg[1][3];", "  casadi_real gw_s0, gw_c0, gw_s1, gw_c1; gw_sincos2(a0, a2, &gw_s0, "
                      "&gw_c0, &gw_s1, &gw_c1); a1=gw_c0; a3=gw_s1;"]
-    for middle in ("  a4=(a1*a2);", "  a0=arg[1][2];"):  # the first's output read, its argument written
+    # the first's output read, its other result read, its argument written, a block
+    for middle in ("  a4=(a1*a2);", "  a4=gw_s0;", "  a0=arg[1][2];", "  }"):
         lines = [one, middle, two]
         _pair_sincos(lines, 0, 2)
         assert lines == [one, middle, two]
+
+
+def test_include_with_sincos_only():
+    from fmu_build.casadi_c import make_internal
+    text = ("#include <math.h>\n\nstatic int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, "
+            "casadi_real* w, int mem) {\n  casadi_real a0, a1, a2;\n  a0=arg[0][0];\n  a1=cos(a0);\n  a2=sin(a0);\n"
+            "  if (res[0]!=0) res[0][0]=(a1*a2);\n  return 0;\n}\n")
+    out = make_internal(text, set())
+    assert "gw_sincos(a0, &gw_s0, &gw_c0)" in out and '#include "gw_fastmath.h"' in out, out

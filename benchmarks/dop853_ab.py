@@ -1,4 +1,5 @@
-"""DOP853 of this tree against DOP853 of another checkout (default /work/main) and heyoka, one run.
+"""DOP853 (or another adaptive solver) of this tree against the same solver of another checkout
+(default /work/main) and heyoka, one run.
 
 For each scenario of work_precision.py (paper, long, near_flat) both trees build the FMU of the
 same scene with their own fmu_build and c_src; every tolerance is timed for both FMUs in turn
@@ -9,7 +10,7 @@ to reach each target error and its ratio to heyoka's (< 1: faster than heyoka), 
 evaluations and rejected steps at a few tolerances.  Ratios come from one run on a shared
 machine: re-measure on a quiet one.
 
-    python benchmarks/dop853_ab.py [--ref /work/main] [--scenarios paper long near_flat]
+    python benchmarks/dop853_ab.py [--ref /work/main] [--scenarios paper long near_flat] [--solver dopri5]
 """
 from __future__ import annotations
 
@@ -28,14 +29,13 @@ sys.path.insert(0, str(HERE.parent))
 
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
 from taylor_vs_heyoka import TARGETS, cheapest, to_heyoka  # noqa: E402
-from work_precision import SCENARIOS  # noqa: E402
+from work_precision import SCENARIOS, SOLVER_CODES  # noqa: E402
 from work_precision import best_time as best  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
 from fmu_build.codegen import optimised  # noqa: E402
 
 TOLS = [10.0 ** -k for k in range(3, 15)]
-DOP853 = 5
 
 
 def build_ref(ref: Path, name: str, work: Path) -> Path:
@@ -50,7 +50,7 @@ def build_ref(ref: Path, name: str, work: Path) -> Path:
     return work / "ref.fmu"
 
 
-def run(name: str, ref: Path, work: Path, repeat: int) -> list[str]:
+def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853") -> list[str]:
     import heyoka as hy
     text, stop = SCENARIOS[name]
     work = work / name
@@ -77,7 +77,7 @@ def run(name: str, ref: Path, work: Path, repeat: int) -> list[str]:
         vals = {}
         for _ in range(repeat):  # interleaved: both trees see the same machine load
             for k, r in runners.items():
-                vals[k] = r.one_step(stop, names, solver=DOP853, rel_tol=tol, abs_tol=tol * 1e-2, max_step=stop)
+                vals[k] = r.one_step(stop, names, solver=SOLVER_CODES[solver], rel_tol=tol, abs_tol=tol * 1e-2, max_step=stop)
                 secs[k] = min(secs[k], r.last_seconds)
         for k in fmus:
             pts[k].append((secs[k], float(np.max(np.abs(np.array(vals[k]) - ref_x)))))
@@ -90,7 +90,7 @@ def run(name: str, ref: Path, work: Path, repeat: int) -> list[str]:
         pts["heyoka"].append((sec, float(np.max(np.abs(out(ta.state) - ref_x)))))
     for r in runners.values():
         r.free()
-    lines = [f"### {name} ({stop:g} s): DOP853 (abs_tol = rel_tol/100, max_step = T)", "",
+    lines = [f"### {name} ({stop:g} s): {solver} (abs_tol = rel_tol/100, max_step = T)", "",
              "| method | " + " | ".join(f"err <= {t:g}" for t in TARGETS) + " | floor |",
              "|---|" + "---|" * (len(TARGETS) + 1)]
     for method, points in pts.items():
@@ -101,7 +101,7 @@ def run(name: str, ref: Path, work: Path, repeat: int) -> list[str]:
         lines.append(f"| {method} | " + " | ".join(cells) + f" | {min(e for _, e in points):.1e} |")
     lines += ["", "In brackets: time / heyoka's.", ""]
     for tol in (1e-4, 1e-7, 1e-10, 1e-13):
-        cnt = {k: solver_counts(v, stop, solver=DOP853, rel_tol=tol, abs_tol=tol * 1e-2, max_step=stop)
+        cnt = {k: solver_counts(v, stop, solver=SOLVER_CODES[solver], rel_tol=tol, abs_tol=tol * 1e-2, max_step=stop)
                for k, v in fmus.items()}
         lines.append(f"rel_tol {tol:g}: " + "; ".join(f"{k}: {c}" for k, c in cnt.items()))
     return lines + [""]
@@ -113,10 +113,11 @@ def main() -> int:
     parser.add_argument("--scenarios", nargs="*", default=["paper", "long", "near_flat"],
                         choices=["paper", "long", "near_flat"])
     parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--solver", default="dop853", choices=["dop853", "dopri5", "rosenbrock"])
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="gw-dop853-ab-") as tmp:
         for name in args.scenarios:
-            print("\n".join(run(name, args.ref.resolve(), Path(tmp), args.repeat)), flush=True)
+            print("\n".join(run(name, args.ref.resolve(), Path(tmp), args.repeat, args.solver)), flush=True)
     return 0
 
 

@@ -36,8 +36,9 @@ static void minimal_wheel_init(minimal_wheel *w, const double p[5]) {
     w->c_n = 1.0 + 1.0 / (1.0 + ka);
 }
 
-static inline void minimal_wheel_rhs(const minimal_wheel *w, const double *x, double *xd) {
-    const double sa = sin(x[2]), ca = cos(x[2]), sb = sin(x[3]), cb = cos(x[3]);
+/* the right-hand side given sin and cos of alpha (x[2]) and beta (x[3]) */
+static inline void minimal_wheel_rhs_trig(const minimal_wheel *w, const double *x, double *xd, double sa,
+                                          double ca, double sb, double cb) {
     const double ad = x[5], bd = x[6], wn = x[7] + ad * cb;
     const double add = bd * (w->ka * wn - w->kd2 * ad * cb) * w->inv_kd / sb;
     xd[0] = w->R * (ca * wn - bd * sa * sb);
@@ -48,6 +49,11 @@ static inline void minimal_wheel_rhs(const minimal_wheel *w, const double *x, do
     xd[5] = add;
     xd[6] = -(sb * ad * (w->ka1 * wn - w->kd * ad * cb) + w->g_R * cb) * w->inv_1kd;
     xd[7] = w->c_n * ad * bd * sb - add * cb;
+}
+
+/* with libm's sin and cos (the peer of issue 11's RHS target, and of plain_dop853.c) */
+static inline void minimal_wheel_rhs(const minimal_wheel *w, const double *x, double *xd) {
+    minimal_wheel_rhs_trig(w, x, xd, sin(x[2]), cos(x[2]), sin(x[3]), cos(x[3]));
 }
 
 #endif /* MINIMAL_WHEEL_H */

@@ -1,7 +1,8 @@
 /* Times one evaluation of the generated right-hand side gw_ode (ns per call) and, in the same
  * run, the minimal hand-written closed form of the base wheel (rhs_minimal.c, minimal_wheel.h)
- * at the same states: prints "<generated ns> <minimal ns>" (minimal: "nan" when the model is
- * not the base wheel: nx != 8 or np != 6).  Built by benchmarks/paper_cost.py, effect_costs.py
+ * at the same states, with libm's sin/cos and with the runtime's gw_sincos2 (the generated code's):
+ * prints "<generated ns> <minimal ns> <minimal with gw_sincos2 ns>" (minimal: "nan" when the
+ * model is not the base wheel: nx != 8 or np != 6).  Built by benchmarks/paper_cost.py, effect_costs.py
  * and work_precision.py against a scene's generated sources, with benchmarks/rhs_model.c and
  * rhs_minimal.c (each in a translation unit of its own, called through pointers). */
 #define _POSIX_C_SOURCE 199309L
@@ -12,6 +13,7 @@
 
 const gw_model *rhs_bench_model(void);
 void rhs_minimal(const void *w, const double *x, double *xdot);
+void rhs_minimal_fast(const void *w, const double *x, double *xdot);
 void rhs_minimal_init(void *w, const double *p);
 unsigned long rhs_minimal_size(void);
 
@@ -71,25 +73,27 @@ int main(int argc, char **argv) {
     }
     if (m->nx == 8 && m->np == 6) { /* the base wheel: p = (M, R, k_diam, k_axial, beta_min, g) */
         const double pm[5] = {m->p_start[0], m->p_start[1], m->p_start[2], m->p_start[3], m->p_start[5]};
-        double wbuf[64], best_min = 1e30, x1[64], xdot_min[8];
-        void (*volatile rhs)(const void *, const double *, double *) = rhs_minimal;
+        double wbuf[64], best_min[2] = {1e30, 1e30}, x1[64], xdot_min[8];
+        void (*volatile rhs[2])(const void *, const double *, double *) = {rhs_minimal, rhs_minimal_fast};
+        int v;
         if (rhs_minimal_size() > sizeof wbuf) return 3;
         rhs_minimal_init(wbuf, pm);
         for (rep = 0; rep < 8; rep++) x1[rep] = x0[rep];
-        for (rep = 0; rep < 5; rep++) {
+        for (rep = 0; rep < 10; rep++) { /* interleaved: libm, gw_sincos2, libm, ... */
             long i;
+            v = rep % 2;
             t0 = now();
             for (i = 0; i < n; i++) {
                 x1[7] += 1e-15;
-                rhs(wbuf, x1, xdot_min);
+                rhs[v](wbuf, x1, xdot_min);
                 acc += xdot_min[6];
             }
             t0 = (now() - t0) / (double)n * 1e9;
-            if (t0 < best_min) best_min = t0;
+            if (t0 < best_min[v]) best_min[v] = t0;
         }
-        printf("%.2f %.2f\n", best, best_min);
+        printf("%.2f %.2f %.2f\n", best, best_min[0], best_min[1]);
     } else {
-        printf("%.2f nan\n", best);
+        printf("%.2f nan nan\n", best);
     }
     fprintf(stderr, "checksum %g\n", acc);
     free(iw); free(w);

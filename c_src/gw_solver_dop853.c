@@ -24,19 +24,40 @@ static void gw_dop853_stages(const gw_instance *I, double *K[16]) {
     for (s = 13; s < 16; s++) K[s] = I->kx[s - 7];
 }
 
-/* xt = x + h * sum_{j<s} dop_a[s][j] K[j] */
+/* xt = x + h * sum_{j<s} dop_a[s][j] K[j], the nonzero terms only, summed in the order of j.
+ * One pass over the state, four components at a time with the sums in registers (the
+ * stage-by-stage form kept the partial sums in memory: a load and a store per term, 20% of a
+ * DOP853 run in perf); same arithmetic in the same order, so the same bits. */
 static void gw_dop853_arg(const gw_instance *I, double *const K[16], int s, double h, double *xt) {
-    int i, j, nx = I->m->nx;
-    const double *a = dop_a[s], *restrict x = I->x, *restrict K0 = K[0];
-    double *restrict acc = I->sacc; /* stage by stage over the state (vectorisable), the sum kept
-                                       apart from x */
-    for (i = 0; i < nx; i++) acc[i] = a[0] * K0[i];
-    for (j = 1; j < s; j++)
-        if (a[j] != 0.0) {
-            const double aj = a[j], *restrict Kj = K[j];
-            for (i = 0; i < nx; i++) acc[i] += aj * Kj[i];
+    int i, j, m, nz = 0, nx = I->m->nx;
+    const double *a = dop_a[s], *restrict x = I->x;
+    const double *Kz[16];
+    double az[16];
+    for (j = 0; j < s; j++)
+        if (j == 0 || a[j] != 0.0) {
+            az[nz] = a[j];
+            Kz[nz++] = K[j];
         }
-    for (i = 0; i < nx; i++) xt[i] = x[i] + h * acc[i];
+    for (i = 0; i + 4 <= nx; i += 4) { /* four components at a time: independent sums */
+        double c0 = az[0] * Kz[0][i], c1 = az[0] * Kz[0][i + 1], c2 = az[0] * Kz[0][i + 2],
+               c3 = az[0] * Kz[0][i + 3];
+        for (m = 1; m < nz; m++) {
+            const double am = az[m], *Km = Kz[m] + i;
+            c0 += am * Km[0];
+            c1 += am * Km[1];
+            c2 += am * Km[2];
+            c3 += am * Km[3];
+        }
+        xt[i] = x[i] + h * c0;
+        xt[i + 1] = x[i + 1] + h * c1;
+        xt[i + 2] = x[i + 2] + h * c2;
+        xt[i + 3] = x[i + 3] + h * c3;
+    }
+    for (; i < nx; i++) {
+        double acc = az[0] * Kz[0][i];
+        for (m = 1; m < nz; m++) acc += az[m] * Kz[m][i];
+        xt[i] = x[i] + h * acc;
+    }
 }
 
 /* DOP853 step (12 stages); *err = Hairer's combined 5th/3rd-order error norm with the
@@ -53,19 +74,14 @@ GW_INTERNAL int gw_dop853_step(gw_instance *I, double h, double t1, double *err)
         gw_dop853_arg(I, K, s, h, xt);
         if (gw_rhs_checked(I, s == 11 ? t1 : t + dop_c[s] * h, xt, K[s])) return -1;
     }
-    { /* the 8th-order increment (in sacc) and the 5th-order error estimate (in xt), stage by stage */
-        double *incr = I->sacc, *e5v = xt;
-        for (i = 0; i < nx; i++) {
-            incr[i] = dop_b[0] * K[0][i];
-            e5v[i] = dop_e5[0] * K[0][i];
-        }
+    for (i = 0; i < nx; i++) { /* the 8th-order increment (in sacc), the 5th-order error (in xt) */
+        double incr = dop_b[0] * K[0][i], e5 = dop_e5[0] * K[0][i];
         for (j = 5; j < 12; j++) {
-            const double bj = dop_b[j], ej = dop_e5[j], *Kj = K[j];
-            for (i = 0; i < nx; i++) {
-                incr[i] += bj * Kj[i];
-                e5v[i] += ej * Kj[i];
-            }
+            incr += dop_b[j] * K[j][i];
+            e5 += dop_e5[j] * K[j][i];
         }
+        I->sacc[i] = incr;
+        xt[i] = e5;
     }
     for (i = 0; i < nx; i++) {
         const double incr = I->sacc[i], e5 = xt[i];

@@ -19,6 +19,14 @@ names (issue 8, section 9), and the body functions ignore some of the standard a
     and those are never indexed), and the NULL tests split the body into branches that keep
     gcc from merging sin(x) and cos(x) into one sincos call (measured: one libm call, 5-7 ns,
     of a 28 ns right-hand side; docs/performance.md);
+  * each body's sin and cos come from c_src/gw_fastmath.h (static inline, at most 1 ulp;
+    docs/performance.md): a cos(aY) and a sin(aY) of the same variable, aY unchanged in
+    between, become one gw_sincos(aY, &gw_sN, &gw_cN) at the first of the two and reads of
+    gw_sN / gw_cN (compilers do not merge two inlined reductions by themselves: measured); two
+    such gw_sincos in a body (alpha and beta in gw_ode) become one gw_sincos2 at the second
+    when nothing in between uses the first's output or changes its argument (SSE2 lanes, the
+    same bits); any other sin / cos a gw_sin / gw_cos; the file includes gw_fastmath.h after
+    <math.h>;
   * the whole file is guarded by GW_UNITY_BUILD, so that compiled on its own it is empty.
 Anything it does not recognise (a function definition of another shape, a global left over)
 raises CodegenFormatError naming the line: a new CasADi version fails the build loudly rather
@@ -43,6 +51,10 @@ _SPARSITY = re.compile(r"^static const casadi_int (casadi_s\d+)\[\d+\] = \{[^;]*
 _BODY = re.compile(r"casadi_f\d+")
 _STANDARD_ARGS = ("arg", "res", "iw", "w", "mem")
 _INPUT_LOAD = re.compile(r"\barg\[(\d+)\]\? arg\[\1\]\[(\d+)\] : 0;")
+_TRIG = re.compile(r"(?<![\w.])(sin|cos)\(")
+_TRIG_LINE = re.compile(r"^(?P<indent>\s*)(?P<out>\w+)=(?P<fn>sin|cos)\((?P<arg>\w+)\);$")
+_MATH_INCLUDE = "#include <math.h>\n"
+FASTMATH_INCLUDE = '#include "gw_fastmath.h" /* gw_sin, gw_cos: see fmu_build/casadi_c.py */\n'
 
 
 class CodegenFormatError(RuntimeError):
@@ -86,6 +98,10 @@ def make_internal(text: str, keep: set[str]) -> str:
             if _BODY.fullmatch(name):
                 for k in range(first + 1, last + 1):
                     lines[k] = _INPUT_LOAD.sub(r"arg[\1][\2];", lines[k])
+                _merge_sincos(lines, first + 1, last)
+                _pair_sincos(lines, first + 1, last)
+                for k in range(first + 1, last + 1):
+                    lines[k] = _TRIG.sub(r"gw_\1(", lines[k])
                 body = "\n".join(lines[first + 1:last + 1])
                 unused = [a for a in _STANDARD_ARGS
                           if re.search(rf"\b{a}\b", m["params"]) and not re.search(rf"\b{a}\b", body)]
@@ -113,7 +129,59 @@ def make_internal(text: str, keep: set[str]) -> str:
         result.append(line)
     _check_no_globals(result)
     body = "\n".join(result).rstrip("\n") + "\n"
+    if re.search(r"\bgw_(sin|cos|sincos|sincos2)\(", body):
+        if _MATH_INCLUDE not in body:
+            raise CodegenFormatError("generated C lacks #include <math.h>")
+        body = body.replace(_MATH_INCLUDE, _MATH_INCLUDE + FASTMATH_INCLUDE, 1)
     return UNITY_GUARD_OPEN + "\n" + body + "\n" + UNITY_GUARD_CLOSE
+
+
+def _merge_sincos(lines: list[str], first: int, last: int) -> None:
+    """In lines[first:last+1] (one body), each pair `aX=cos(aY);` ... `aZ=sin(aY);` (either
+    order, aY not assigned in between) -> one gw_sincos at the first line, a read at the second."""
+    done: set[int] = set()
+    n_pairs = 0
+    for i in range(first, last + 1):
+        m = _TRIG_LINE.match(lines[i])
+        if not m or i in done:
+            continue
+        arg, other = m["arg"], "sin" if m["fn"] == "cos" else "cos"
+        if m["out"] == arg:  # aY=sin(aY): aY is gone after this line
+            continue
+        assign = re.compile(rf"^\s*{re.escape(arg)}=")
+        for j in range(i + 1, last + 1):
+            mj = _TRIG_LINE.match(lines[j])
+            if mj and j not in done and mj["fn"] == other and mj["arg"] == arg:
+                s, c = f"gw_s{n_pairs}", f"gw_c{n_pairs}"
+                mine, theirs = (c, s) if m["fn"] == "cos" else (s, c)
+                lines[i] = (f"{m['indent']}casadi_real {s}, {c}; gw_sincos({arg}, &{s}, &{c}); "
+                            f"{m['out']}={mine};")
+                lines[j] = f"{mj['indent']}{mj['out']}={theirs};"
+                done.update((i, j))
+                n_pairs += 1
+                break
+            if assign.match(lines[j]) or "{" in lines[j] or "}" in lines[j]:  # changed, or scope
+                break
+
+
+_SINCOS_LINE = re.compile(r"^(?P<indent>\s*)casadi_real (?P<s>gw_s\d+), (?P<c>gw_c\d+); "
+                          r"gw_sincos\((?P<arg>\w+), &(?P=s), &(?P=c)\); (?P<out>\w+)=(?P<val>gw_[sc]\d+);$")
+
+
+def _pair_sincos(lines: list[str], first: int, last: int) -> None:
+    """Two gw_sincos lines of one body -> one gw_sincos2 at the second (both arguments in the
+    two lanes of a register), if nothing in between reads or writes the first one's outputs,
+    writes its argument or opens or closes a block."""
+    found = [(i, m) for i in range(first, last + 1) if (m := _SINCOS_LINE.match(lines[i]))]
+    for (i, m), (j, mj) in zip(found[::2], found[1::2]):
+        between = "\n".join(lines[i + 1:j])
+        used = re.search(rf"\b({m['out']}|{m['s']}|{m['c']})\b", between)
+        if used or re.search(rf"^\s*{m['arg']}=", between, re.M) or "{" in between or "}" in between:
+            continue
+        lines[i] = ""
+        lines[j] = (f"{mj['indent']}casadi_real {m['s']}, {m['c']}, {mj['s']}, {mj['c']}; "
+                    f"gw_sincos2({m['arg']}, {mj['arg']}, &{m['s']}, &{m['c']}, &{mj['s']}, &{mj['c']}); "
+                    f"{m['out']}={m['val']}; {mj['out']}={mj['val']};")
 
 
 def _check_no_globals(lines: list[str]) -> None:

@@ -1,0 +1,125 @@
+"""DOP853 (or another adaptive solver) of this tree against the same solver of another checkout
+(default /work/main) and heyoka, one run.
+
+For each scenario of work_precision.py (paper, long, near_flat) both trees build the FMU of the
+same scene with their own fmu_build and c_src; every tolerance is timed for both FMUs in turn
+(interleaved, thread CPU time, best of --repeat), heyoka (taylor_adaptive on the FMU's own
+expression graph, as benchmarks/taylor_vs_heyoka.py) too.  Error = max abs error of the 8
+states at the stop time against heyoka in long double at tol 1e-19.  Prints the cheapest time
+to reach each target error and its ratio to heyoka's (< 1: faster than heyoka), plus the RHS
+evaluations and rejected steps at a few tolerances.  Ratios come from one run on a shared
+machine: re-measure on a quiet one.
+
+    python benchmarks/dop853_ab.py [--ref /work/main] [--scenarios paper long near_flat] [--solver dopri5]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent))
+
+from fmi_slave import FmuRunner, solver_counts  # noqa: E402
+from taylor_vs_heyoka import TARGETS, cheapest, to_heyoka  # noqa: E402
+from work_precision import SCENARIOS, SOLVER_CODES  # noqa: E402
+from work_precision import best_time as best  # noqa: E402
+
+from fmu_build import build_fmu, parse_scene  # noqa: E402
+from fmu_build.codegen import optimised  # noqa: E402
+
+TOLS = [10.0 ** -k for k in range(3, 15)]
+
+
+def build_ref(ref: Path, name: str, work: Path) -> Path:
+    """The scenario's FMU built by the reference checkout's own fmu_build (a subprocess)."""
+    text, _ = SCENARIOS[name]
+    scene = f'[model]\nname = "ab_{name}"\n' + text
+    fmu, bdir = str(work / "ref.fmu"), str(work / "refb")
+    code = ("from pathlib import Path; from fmu_build import build_fmu, parse_scene; "
+            f"build_fmu(parse_scene({scene!r}, {name + '.toml'!r}), Path({fmu!r}), build_dir=Path({bdir!r}))")
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ref,
+                   env=dict(os.environ, PYTHONPATH=str(ref)))
+    return work / "ref.fmu"
+
+
+def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853") -> list[str]:
+    import heyoka as hy
+    text, stop = SCENARIOS[name]
+    work = work / name
+    work.mkdir()
+    built = build_fmu(parse_scene(f'[model]\nname = "ab_{name}"\n' + text, f"{name}.toml"),
+                      work / "new.fmu", build_dir=work / "newb")
+    fmus = {"this tree": built.fmu, f"ref ({ref})": build_ref(ref, name, work)}
+    fns = built.spec.functions()
+    p = [q.start for q in built.spec.parameters]
+    x0 = np.array(fns["init"]([q.start for q in built.spec.starts], p)).ravel()
+    f = optimised(fns["ode"])
+    xs = hy.make_vars(*[f"x{i}" for i in range(x0.size)])
+    names = [q.name for q, _ in built.spec.outputs][:8]
+    rows = [[q.name for q, _ in built.spec.outputs].index(n) for n in names]
+    out = lambda x: np.array(fns["out"](stop, x, [], p)).ravel()[rows]  # noqa: E731
+    ld = np.longdouble
+    ta_ref = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p, ld))), x0.astype(ld), tol=ld(1e-19), fp_type=ld)
+    ta_ref.propagate_until(ld(stop))
+    ref_x = out(np.array(ta_ref.state, dtype=float))
+    runners = {k: FmuRunner(v) for k, v in fmus.items()}
+    pts: dict[str, list] = {k: [] for k in [*fmus, "heyoka"]}
+    for tol in TOLS:
+        secs = {k: float("inf") for k in fmus}
+        vals = {}
+        for _ in range(repeat):  # interleaved: both trees see the same machine load
+            for k, r in runners.items():
+                vals[k] = r.one_step(stop, names, solver=SOLVER_CODES[solver], rel_tol=tol, abs_tol=tol * 1e-2, max_step=stop)
+                secs[k] = min(secs[k], r.last_seconds)
+        for k in fmus:
+            pts[k].append((secs[k], float(np.max(np.abs(np.array(vals[k]) - ref_x)))))
+        ta = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p))), x0, tol=tol)
+
+        def prop():
+            ta.time, ta.state[:] = 0.0, x0
+            return ta.propagate_until(stop)
+        sec, _ = best(prop, repeat)
+        pts["heyoka"].append((sec, float(np.max(np.abs(out(ta.state) - ref_x)))))
+    for r in runners.values():
+        r.free()
+    lines = [f"### {name} ({stop:g} s): {solver} (abs_tol = rel_tol/100, max_step = T)", "",
+             "| method | " + " | ".join(f"err <= {t:g}" for t in TARGETS) + " | floor |",
+             "|---|" + "---|" * (len(TARGETS) + 1)]
+    for method, points in pts.items():
+        cells = []
+        for t in TARGETS:
+            s, peer = cheapest(points, t), cheapest(pts["heyoka"], t)
+            cells.append("-" if s is None else f"{s * 1e3:.3g} ms" + (f" ({s / peer:.2f}x)" if peer else ""))
+        lines.append(f"| {method} | " + " | ".join(cells) + f" | {min(e for _, e in points):.1e} |")
+    lines += ["", "In brackets: time / heyoka's.", ""]
+    for tol in (1e-4, 1e-7, 1e-10, 1e-13):
+        cnt = {k: solver_counts(v, stop, solver=SOLVER_CODES[solver], rel_tol=tol, abs_tol=tol * 1e-2, max_step=stop)
+               for k, v in fmus.items()}
+        lines.append(f"rel_tol {tol:g}: " + "; ".join(f"{k}: {c}" for k, c in cnt.items()))
+    return lines + [""]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ref", type=Path, default=Path("/work/main"), help="checkout to compare against")
+    parser.add_argument("--scenarios", nargs="*", default=["paper", "long", "near_flat"],
+                        choices=["paper", "long", "near_flat"])
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--solver", default="dop853", choices=["dop853", "dopri5", "rosenbrock"])
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory(prefix="gw-dop853-ab-") as tmp:
+        for name in args.scenarios:
+            print("\n".join(run(name, args.ref.resolve(), Path(tmp), args.repeat, args.solver)), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

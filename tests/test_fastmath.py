@@ -1,0 +1,91 @@
+"""gw_sin / gw_cos / gw_sincos (c_src/gw_fastmath.h), the sin and cos of the generated code.
+
+  test_ulp_error_against_long_double   tests/c/test_fastmath.c under gcc and clang with the
+      strict flags and the FMU's optimisation: at most 1 ulp from glibc's long double sinl/cosl
+      over 1.2e7 arguments (uniform in [-1e5, 1e5], every multiple of pi/2 below 2^20 and its
+      neighbours, [-pi, pi], tiny magnitudes, the bound); NaN, infinities, -0, libm beyond it
+      (and gw_sincos2, two arguments in SSE2 lanes, bit-equal to gw_sincos), also built with
+      -DGW_FASTMATH_NO_SIMD (the portable path of gw_sincos2)
+  test_generated_code_merges_sincos    the paper wheel's gw_ode computes sin and cos of alpha
+      and beta with one gw_sincos2, no libm sin or cos
+  test_merge_respects_reassignment     fmu_build.casadi_c pairs sin(a) with cos(a) only while
+      a keeps its value
+  test_pair_respects_uses              two gw_sincos become one gw_sincos2 only if the first's
+      output is not used or its argument changed before the second
+"""
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+
+import pytest
+
+from c_programs import C_SRC, STRICT, TESTS_C
+from fmu_build.casadi_c import _merge_sincos, _pair_sincos
+
+COMPILERS = [c for c in ("gcc", "clang") if shutil.which(c)]
+
+
+@pytest.mark.parametrize("cc,extra", [(cc, []) for cc in COMPILERS] + [("gcc", ["-DGW_FASTMATH_NO_SIMD"])])
+def test_ulp_error_against_long_double(cc, extra, tmp_path):
+    exe = tmp_path / "test_fastmath"
+    cmd = [cc, *STRICT, *extra, "-O2", "-fno-math-errno", f"-I{C_SRC}", str(TESTS_C / "test_fastmath.c"), "-lm",
+           "-o", str(exe)]
+    subprocess.run(cmd, check=True)
+    r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert re.search(r"test_fastmath: \d+ checks, 0 failures", r.stderr), r.stderr
+    sets = re.findall(r"^(\w+)\s+(\d+) points: max ulp gw_sin ([\d.]+) .* gw_cos ([\d.]+) ", r.stdout, re.M)
+    assert [s[0] for s in sets] == ["uniform", "halfpi", "small", "bound"], r.stdout
+    assert sum(int(s[1]) for s in sets) >= 10_000_000
+    assert max(max(float(s[2]), float(s[3])) for s in sets) <= 1.0, r.stdout
+    assert "gw_sincos2 against gw_sincos: 0 pairs not bit-equal" in r.stdout, r.stdout
+
+
+def test_generated_code_merges_sincos(tmp_path):
+    from fmu_build import build_fmu, load_scene
+    from pathlib import Path
+    scene = load_scene(Path(__file__).resolve().parent.parent / "examples" / "scenes" / "paper_earth.toml")
+    built = build_fmu(scene, tmp_path / "earth.fmu", build_dir=tmp_path / "b")
+    text = (built.sources / "gw_funcs.c").read_text()
+    assert '#include "gw_fastmath.h"' in text
+    ode = text[text.index("/* gw_ode:"):]
+    ode = ode[:ode.index("\n}\n")]
+    assert len(re.findall(r"\bgw_sincos2\(", ode)) == 1 and "gw_sincos(" not in ode, ode
+    assert not re.search(r"(?<![\w.])(sin|cos)\(", ode), ode
+
+
+def test_merge_respects_reassignment():
+    lines = ["  a1=cos(a0);", "  a0=(a0*a1);", "  a2=sin(a0);", "  a3=cos(a2);", "  a4=sin(a2);",
+             "  a5=sin(a6);", "  a6=cos(a6);"]
+    _merge_sincos(lines, 0, len(lines) - 1)
+    assert lines[0] == "  a1=cos(a0);"  # a0 changes before its sin
+    assert lines[2] == "  a2=sin(a0);"
+    assert lines[3] == "  casadi_real gw_s0, gw_c0; gw_sincos(a2, &gw_s0, &gw_c0); a3=gw_c0;"
+    assert lines[4] == "  a4=gw_s0;"
+    assert lines[5] == "  casadi_real gw_s1, gw_c1; gw_sincos(a6, &gw_s1, &gw_c1); a5=gw_s1;"
+    assert lines[6] == "  a6=gw_c1;"
+
+
+def test_pair_respects_uses():
+    one = "  casadi_real gw_s0, gw_c0; gw_sincos(a0, &gw_s0, &gw_c0); a1=gw_c0;"
+    two = "  casadi_real gw_s1, gw_c1; gw_sincos(a2, &gw_s1, &gw_c1); a3=gw_s1;"
+    lines = [one, "  a2=arg[1][3];", two]
+    _pair_sincos(lines, 0, 2)
+    assert lines == ["", "  a2=arg[1][3];", "  casadi_real gw_s0, gw_c0, gw_s1, gw_c1; gw_sincos2(a0, a2, &gw_s0, "
+                     "&gw_c0, &gw_s1, &gw_c1); a1=gw_c0; a3=gw_s1;"]
+    # the first's output read, its other result read, its argument written, a block
+    for middle in ("  a4=(a1*a2);", "  a4=gw_s0;", "  a0=arg[1][2];", "  }"):
+        lines = [one, middle, two]
+        _pair_sincos(lines, 0, 2)
+        assert lines == [one, middle, two]
+
+
+def test_include_with_sincos_only():
+    from fmu_build.casadi_c import make_internal
+    text = ("#include <math.h>\n\nstatic int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, "
+            "casadi_real* w, int mem) {\n  casadi_real a0, a1, a2;\n  a0=arg[0][0];\n  a1=cos(a0);\n  a2=sin(a0);\n"
+            "  if (res[0]!=0) res[0][0]=(a1*a2);\n  return 0;\n}\n")
+    out = make_internal(text, set())
+    assert "gw_sincos(a0, &gw_s0, &gw_c0)" in out and '#include "gw_fastmath.h"' in out, out

@@ -16,6 +16,9 @@
       the first's output (sin(cos x) beside sin x)
   test_rewritten_bodies_evaluate_as_casadi   CasADi functions with nested trig, if_else and
       reused work variables, rewritten, compiled strictly (gcc, clang) and run: CasADi's values
+  test_error_under_a_parent_projects_flags   tests/c/fastmath_unit.c compiled with IEEE flags
+      (1 ulp) and with -ffast-math -fno-finite-math-only (4 ulp: GW_FM_KEEP holds the reduction),
+      measured by tests/c/test_fastmath_flags.c compiled with IEEE semantics
 """
 from __future__ import annotations
 
@@ -156,3 +159,40 @@ int main(int argc, char **argv) {
             got = np.array([float(v) for v in out.stdout.split()])
             want = np.array(f(p)).ravel()
             np.testing.assert_allclose(got, want, rtol=1e-14, atol=1e-15, err_msg=f"{name} at {p}")
+
+
+FLAG_SETS = {
+    "ieee": ["-O2"],
+    "fast-math": ["-O2", "-ffast-math", "-fno-finite-math-only"],
+    "fast-math-O3-v3": ["-O3", "-ffast-math", "-fno-finite-math-only", "-march=x86-64-v3"],
+    "fast-math-no-simd": ["-O2", "-ffast-math", "-fno-finite-math-only", "-DGW_FASTMATH_NO_SIMD"],
+}
+
+
+@pytest.mark.parametrize("cc", COMPILERS)
+@pytest.mark.parametrize("flags", list(FLAG_SETS), ids=list(FLAG_SETS))
+def test_error_under_a_parent_projects_flags(cc, flags, tmp_path):
+    """gw_sincos / gw_sincos2 compiled with a parent project's -ffast-math (the C export allows
+    it with -fno-finite-math-only) keep the reduction's extra bits: at most 4 ulp (IEEE flags: 1)
+    over [-1e5, 1e5], [-3.5, 3.5] and next to multiples of pi/2.  Before GW_FM_KEEP the
+    reassociated reduction gave 1e6 ulp near pi and 1e12 ulp near multiples of pi around 5e4
+    (found in review)."""
+    if "x86-64-v3" in " ".join(FLAG_SETS[flags]):
+        import platform
+        if platform.machine() not in ("x86_64", "AMD64"):
+            pytest.skip("x86-64 only")
+    unit = tmp_path / "unit.o"
+    subprocess.run([cc, *STRICT, *FLAG_SETS[flags], f"-I{C_SRC}", "-c", str(TESTS_C / "fastmath_unit.c"),
+                    "-o", str(unit)], check=True)
+    exe = tmp_path / "flags"
+    subprocess.run(["gcc", *STRICT, "-O2", str(TESTS_C / "test_fastmath_flags.c"), str(unit), "-lm", "-o", str(exe)],
+                   check=True)
+    out = subprocess.run([str(exe)], capture_output=True, text=True, timeout=300, check=True).stdout
+    bound = 1.0 if flags == "ieee" else 4.0
+    rows = re.findall(r"^(\w+) max ulp ([\d.]+) ([\d.]+)$", out, re.M)
+    assert [r[0] for r in rows] == ["uniform", "small", "halfpi"], out
+    for name, es, ec in rows:
+        assert float(es) <= bound and float(ec) <= bound, out
+    assert "nan 1 1" in out and "inf 1 1" in out, out
+    if flags == "ieee":
+        assert "negzero 1 1" in out, out

@@ -57,6 +57,12 @@ def test_generated_code_merges_sincos(tmp_path):
     built = build_fmu(scene, tmp_path / "earth.fmu", build_dir=tmp_path / "b")
     text = (built.sources / "gw_funcs.c").read_text()
     assert '#include "gw_fastmath.h"' in text
+    # the vendored msun / fdlibm code travels with Sun's notice, which its terms require kept
+    notice = ("Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.",
+              "Permission to use, copy, modify, and distribute this software is freely granted,",
+              "provided that this notice is preserved.")
+    header = (built.sources / "gw_fastmath.h").read_text()
+    assert all(line in header for line in notice)
     ode = text[text.index("/* gw_ode:"):]
     ode = ode[:ode.index("\n}\n")]
     assert len(re.findall(r"\bgw_sincos2\(", ode)) == 1 and "gw_sincos(" not in ode, ode

@@ -1,4 +1,6 @@
-"""`gyrowheel bench --quick` runs end to end and writes its figure and table (no timing asserted)."""
+"""`gyrowheel bench --quick` runs end to end and writes its figure and table (no timing asserted);
+the benchmark scripts' helpers (dop853_ab reference tree, taylor_vs_heyoka.to_heyoka) refuse what they
+cannot do."""
 from __future__ import annotations
 
 import subprocess
@@ -45,3 +47,27 @@ def test_dop853_ab_reference_is_a_git_ref_or_a_directory(tmp_path):
     with pytest.raises(SystemExit, match="neither a directory nor a git ref"):
         dop853_ab.reference_tree("no-such-ref-xyz", tmp_path / "y")
     assert "/work/main" not in (bench / "dop853_ab.py").read_text()
+
+
+def test_to_heyoka_refuses_inputs_it_does_not_translate():
+    """benchmarks/taylor_vs_heyoka.py's to_heyoka read every input other than x and p as the time:
+    an ode with inputs u or hoisted constants c (model/hoist.py) would have been compared with
+    heyoka on a different system, silently (found in review)."""
+    pytest.importorskip("heyoka")
+    import casadi as ca
+    import heyoka as hy
+    from pathlib import Path
+    bench = Path(__file__).resolve().parent.parent / "benchmarks"
+    sys.path.insert(0, str(bench))
+    try:
+        from taylor_vs_heyoka import to_heyoka
+    finally:
+        sys.path.remove(str(bench))
+    t, x, u, p, c = (ca.SX.sym(n, k) for n, k in (("t", 1), ("x", 2), ("u", 0), ("p", 1), ("c", 1)))
+    xs = hy.make_vars("x0", "x1")
+    good = ca.Function("ode", [t, x, u, p], [ca.vertcat(x[1] * p, -ca.sin(x[0]) + t)], ["t", "x", "u", "p"], ["xdot"])
+    assert len(to_heyoka(good, xs, [2.0])) == 2
+    hoisted = ca.Function("ode", [t, x, u, p, c], [ca.vertcat(x[1] * c, -ca.sin(x[0]))], ["t", "x", "u", "p", "c"],
+                          ["xdot"])
+    with pytest.raises(ValueError, match="input 'c' of ode is neither t, x nor p"):
+        to_heyoka(hoisted, xs, [2.0])

@@ -215,11 +215,17 @@ class Ensemble:
     """The ensemble library of one FMU built by gyrowheel (compiled once, cached by content).
 
     fmu: path of the .fmu; lanes: trajectories advanced together; cache: where the library is
-    kept (default ~/.cache/gyrowheel/ensemble).  Raises EnsembleError if the FMU has no
-    sources or its model no Taylor kernel, CompileError if the compiler fails.
+    kept (default ~/.cache/gyrowheel/ensemble).  Raises ValueError for lanes not an integer >= 1,
+    EnsembleError if the FMU has no sources or its model no Taylor kernel, CompileError if the
+    compiler fails.
     """
 
     def __init__(self, fmu: str | Path, lanes: int = LANES, cache: str | Path | None = None):
+        # lanes becomes GW_ENSEMBLE_LANES: 0 or less failed in the compiler with its own message,
+        # 2.5 was truncated to 2 without a word
+        if isinstance(lanes, bool) or not isinstance(lanes, (int, np.integer)) or lanes < 1:
+            raise ValueError(f"lanes must be an integer >= 1 (trajectories advanced together), got {lanes!r}")
+        lanes = int(lanes)
         fmu = Path(fmu)
         digest = hashlib.sha256(fmu.read_bytes() + str(lanes).encode() + _UNITY.encode()
                                 + " ".join(FLAGS).encode()).hexdigest()[:20]

@@ -501,3 +501,7 @@ def test_ensemble_bad_job_names_the_field(paper, tmp_path):
             ens.run(t_end, **kwargs)
     res = ens.run(1.0, rel_tol=1e-8, grid=[0.5, 1.0])  # a good job still runs
     assert list(res.status) == [STATUS_OK]
+    # lanes: 0 or -1 failed in the compiler, 2.5 was truncated to 2 silently
+    for lanes in (0, -1, 2.5, "4", True):
+        with pytest.raises(ValueError, match="lanes must be an integer >= 1"):
+            Ensemble(built.fmu, lanes=lanes, cache=tmp_path)

@@ -1,5 +1,5 @@
 """DOP853 (or another adaptive solver) of this tree against the same solver of another checkout
-(default /work/main) and heyoka, one run.
+or git ref (default: the git ref main of this repository) and heyoka, one run.
 
 For each scenario of work_precision.py (paper, long, near_flat) both trees build the FMU of the
 same scene with their own fmu_build and c_src; every tolerance is timed for both FMUs in turn
@@ -10,7 +10,10 @@ to reach each target error and its ratio to heyoka's (< 1: faster than heyoka), 
 evaluations and rejected steps at a few tolerances.  Ratios come from one run on a shared
 machine: re-measure on a quiet one.
 
-    python benchmarks/dop853_ab.py [--ref /work/main] [--scenarios paper long near_flat] [--solver dopri5]
+    python benchmarks/dop853_ab.py [--ref main | --ref DIR] [--scenarios paper long near_flat] [--solver dopri5]
+
+--ref: a directory holding another checkout, or a git ref of this repository (exported with
+`git archive` into a temporary directory).
 """
 from __future__ import annotations
 
@@ -38,6 +41,22 @@ from fmu_build.codegen import optimised  # noqa: E402
 TOLS = [10.0 ** -k for k in range(3, 15)]
 
 
+def reference_tree(ref: str, tmp: Path) -> Path:
+    """The checkout to compare against: ref itself if it is a directory, else the git ref of this
+    repository exported into tmp/ref.  Raises SystemExit naming ref when it is neither."""
+    if Path(ref).is_dir():
+        return Path(ref).resolve()
+    root = HERE.parent
+    archive = subprocess.run(["git", "-C", str(root), "archive", "--format=tar", ref], capture_output=True)
+    if archive.returncode != 0:
+        raise SystemExit(f"dop853_ab: --ref {ref!r} is neither a directory nor a git ref of {root}: "
+                         f"{archive.stderr.decode(errors='replace').strip()}")
+    out = tmp / "ref"
+    out.mkdir(parents=True)
+    subprocess.run(["tar", "-x", "-C", str(out)], input=archive.stdout, check=True)
+    return out
+
+
 def build_ref(ref: Path, name: str, work: Path) -> Path:
     """The scenario's FMU built by the reference checkout's own fmu_build (a subprocess)."""
     text, _ = SCENARIOS[name]
@@ -50,14 +69,14 @@ def build_ref(ref: Path, name: str, work: Path) -> Path:
     return work / "ref.fmu"
 
 
-def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853") -> list[str]:
+def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853", label: str | None = None) -> list[str]:
     import heyoka as hy
     text, stop = SCENARIOS[name]
     work = work / name
     work.mkdir()
     built = build_fmu(parse_scene(f'[model]\nname = "ab_{name}"\n' + text, f"{name}.toml"),
                       work / "new.fmu", build_dir=work / "newb")
-    fmus = {"this tree": built.fmu, f"ref ({ref})": build_ref(ref, name, work)}
+    fmus = {"this tree": built.fmu, f"ref ({label or ref})": build_ref(ref, name, work)}
     fns = built.spec.functions()
     p = [q.start for q in built.spec.parameters]
     x0 = np.array(fns["init"]([q.start for q in built.spec.starts], p)).ravel()
@@ -109,15 +128,17 @@ def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853") -
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--ref", type=Path, default=Path("/work/main"), help="checkout to compare against")
+    parser.add_argument("--ref", default="main",
+                        help="checkout directory or git ref to compare against (default: main)")
     parser.add_argument("--scenarios", nargs="*", default=["paper", "long", "near_flat"],
                         choices=["paper", "long", "near_flat"])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--solver", default="dop853", choices=["dop853", "dopri5", "rosenbrock"])
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="gw-dop853-ab-") as tmp:
+        ref = reference_tree(args.ref, Path(tmp))
         for name in args.scenarios:
-            print("\n".join(run(name, args.ref.resolve(), Path(tmp), args.repeat, args.solver)), flush=True)
+            print("\n".join(run(name, ref, Path(tmp), args.repeat, args.solver, label=args.ref)), flush=True)
     return 0
 
 

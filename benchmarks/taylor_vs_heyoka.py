@@ -54,6 +54,9 @@ def to_heyoka(f, xs, p, fp=float):
     for k in range(f.n_instructions()):
         op, i, o = OP_NAMES[f.instruction_id(k)], f.instruction_input(k), f.instruction_output(k)
         if op == "input":
+            if i[0] not in (0, 1, 3):  # u, or a hoisted ode's constants c: not translated
+                raise ValueError(f"to_heyoka: input {f.name_in(i[0])!r} of {f.name()} is neither t, x nor p "
+                                 "(pass the whole right-hand side: fmu_build.codegen.taylor_ode)")
             work[o[0]] = xs[i[1]] if i[0] == 1 else (hy.expression(fp(p[i[1]])) if i[0] == 3 else hy.time)
         elif op == "const":
             work[o[0]] = hy.expression(fp(f.instruction_constant(k)))

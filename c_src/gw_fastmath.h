@@ -29,10 +29,11 @@
  *
  * Error measured against glibc's long double sinl/cosl (tests/c/test_fastmath.c, run by
  * tests/test_fastmath.py): at most 1 ulp over 10^7 points in [-1e5, 1e5], near every multiple
- * of pi/2 below 2^20, and on [-pi, pi] (0.78 ulp at most, 97% correctly rounded; glibc:
- * 0.52); docs/performance.md.  Deterministic: +, -, *, a bit read and one int-to-double
- * conversion, no tables, no state; a parent project's -ffast-math costs accuracy (the TwoSums
- * are reassociated away), not correctness of the quadrant.
+ * of pi/2 below 2^20, and on [-pi, pi] (0.78 ulp at most in that sample, 0.785 found at
+ * x = 0.7956032296848280; 97% correctly rounded; glibc: 0.52); docs/performance.md.  Deterministic: +, -, *, a bit read and one int-to-double
+ * conversion, no tables, no state.  Under a parent project's -ffast-math (-fno-finite-math-only:
+ * NaN checks kept) the exact differences and TwoSums are held by GW_FM_KEEP: at most 4 ulp
+ * (gw_sincos2 then not bit-equal to gw_sincos; tests/test_fastmath.py, gcc and clang).
  */
 #ifndef GW_FASTMATH_H
 #define GW_FASTMATH_H
@@ -49,6 +50,23 @@
 #define GW_FASTMATH_INLINE static inline
 #endif
 
+/* GW_FM_KEEP(v): v as computed, opaque to the optimiser.  Under a parent project's -ffast-math
+ * (the C export allows it with -fno-finite-math-only, which leaves __FAST_MATH__ undefined;
+ * clang has no macro for reassociation) the compiler folds the reduction's exact differences and
+ * TwoSums away, (a - (a - w)) - w = 0 and (x - k P1) - k P1T = x - k pi/2 rounded: measured
+ * 1e6 ulp on [-pi, pi] near pi and 1e12 ulp near multiples of pi around 5e4 (an absolute error
+ * of ulp(x)).  An empty asm with the value in its register stops that whatever the flags; under
+ * IEEE semantics (the FMU's own flags) it changes no result (tests/test_fastmath.py). */
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__SSE2_MATH__)
+#define GW_FM_KEEP(v) __asm__("" : "+x"(v))
+#elif (defined(__GNUC__) || defined(__clang__)) && defined(__aarch64__)
+#define GW_FM_KEEP(v) __asm__("" : "+w"(v))
+#elif (defined(__GNUC__) || defined(__clang__)) && (defined(__FAST_MATH__) || defined(__ASSOCIATIVE_MATH__))
+#define GW_FM_KEEP(v) __asm__("" : "+m"(v))
+#else
+#define GW_FM_KEEP(v) ((void)0)
+#endif
+
 /* beyond this |x| the reduction is libm's (k would need more than 20 bits) */
 #define GW_TRIG_FAST_MAX 1048576.0
 
@@ -59,20 +77,41 @@
 #define GW_PIO2_3 2.02226624871116645580e-21  /* third 33 bits */
 #define GW_PIO2_3T 8.47842766036889956997e-32 /* pi/2 - (P1 + P2 + P3) */
 
+/* TwoSum of a and -b: s + e = a - b exactly (|a| >= |b| not needed); every intermediate kept
+ * (GW_FM_KEEP) so that no reassociation merges it with its neighbours */
+GW_FASTMATH_INLINE double gw_two_diff(double a, double b, double *e) {
+    double s = a - b, bb, sb, ea, eb;
+    GW_FM_KEEP(s);
+    bb = s - a;
+    GW_FM_KEEP(bb);
+    sb = s - bb;
+    GW_FM_KEEP(sb);
+    ea = a - sb;
+    GW_FM_KEEP(ea);
+    eb = -b - bb;
+    GW_FM_KEEP(eb);
+    *e = ea + eb;
+    GW_FM_KEEP(*e);
+    return s;
+}
+
 /* the precise reduction (the rare case of gw_trig_reduce): r = x - kd pi/2 with pi/2 = P1 + P2 +
  * P3 + P3T, P1..P3 of 33 bits each so that kd Pi is exact; x - kd P1 is exact (both are multiples
  * of ulp(x), the difference is below 1 in magnitude), the two further subtractions are TwoSums:
  * r carries about 150 bits of pi/2 whatever the cancellation. */
 GW_FASTMATH_INLINE void gw_trig_reduce_precise(double x, double kd, double *rh, double *rl) {
-    const double a = x - kd * GW_PIO2_1;
-    const double t2 = kd * GW_PIO2_2, t3 = kd * GW_PIO2_3;
-    const double s1 = a - t2, b1 = s1 - a; /* TwoSum(a, -t2) = s1 + e1 */
-    const double e1 = (a - (s1 - b1)) + (-t2 - b1);
-    const double s2 = s1 - t3, b2 = s2 - s1; /* TwoSum(s1, -t3) = s2 + e2 */
-    const double e2 = (s1 - (s2 - b2)) + (-t3 - b2);
-    const double lo = (e1 + e2) - kd * GW_PIO2_3T, hi = s2 + lo;
+    double a = x - kd * GW_PIO2_1, e1, e2, lo, hi, d3;
+    GW_FM_KEEP(a);
+    const double s1 = gw_two_diff(a, kd * GW_PIO2_2, &e1); /* TwoSum(a, -t2) = s1 + e1 */
+    const double s2 = gw_two_diff(s1, kd * GW_PIO2_3, &e2); /* TwoSum(s1, -t3) = s2 + e2 */
+    lo = (e1 + e2) - kd * GW_PIO2_3T;
+    GW_FM_KEEP(lo);
+    hi = s2 + lo;
+    GW_FM_KEEP(hi);
+    d3 = hi - s2;
+    GW_FM_KEEP(d3);
     *rh = hi;
-    *rl = lo - (hi - s2);
+    *rl = lo - d3;
 }
 
 /* r = x - k pi/2 = rh + rl (|rh| <= pi/4 + a rounding); returns k mod 4.  x outside the fast
@@ -93,10 +132,16 @@ GW_FASTMATH_INLINE int gw_trig_reduce(double x, double *rh, double *rl) {
     memcpy(&bits, &t, sizeof bits);
     k = (int32_t)(uint32_t)bits;
     kd = (double)k;
-    const double a = xs - kd * GW_PIO2_1, w = kd * GW_PIO2_1T, r = a - w;
+    double a = xs - kd * GW_PIO2_1, r;
+    const double w = kd * GW_PIO2_1T;
+    GW_FM_KEEP(a);
+    r = a - w;
+    GW_FM_KEEP(r);
     if (fabs(r) >= fabs(xs) * 0x1p-16) {
+        double ar = a - r; /* exact */
+        GW_FM_KEEP(ar);
         *rh = r;
-        *rl = (a - r) - w;
+        *rl = ar - w;
     } else {
         gw_trig_reduce_precise(xs, kd, rh, rl);
     }
@@ -120,7 +165,9 @@ GW_FASTMATH_INLINE double gw_kernel_cos(double x, double y) {
                  C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
     const double z = x * x, w = z * z;
     const double r = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
-    const double hz = 0.5 * z, w1 = 1.0 - hz;
+    const double hz = 0.5 * z;
+    double w1 = 1.0 - hz;
+    GW_FM_KEEP(w1);
     return w1 + (((1.0 - w1) - hz) + (z * r - x * y));
 }
 
@@ -149,7 +196,10 @@ GW_FASTMATH_INLINE void gw_sincos(double x, double *s, double *c) {
 /* sin and cos of two arguments at once: the generated code pairs the sincos of alpha and of
  * beta.  With SSE2 (every x86-64) the two reductions and kernels run in the two lanes of one
  * register, the same IEEE operations in the same order as gw_sincos, so the same bits (checked
- * by tests/c/test_fastmath.c); elsewhere (or with -DGW_FASTMATH_NO_SIMD) two gw_sincos calls. */
+ * by tests/c/test_fastmath.c) when the compiler does not contract a * b + c into an FMA (the
+ * FMU's -std=c99 with GCC; with -mfma or -march=x86-64-v3 under GCC's GNU modes or clang the
+ * two paths contract differently and may differ by a rounding, at the same accuracy: measured
+ * 0.778 ulp, review of issue 11); elsewhere (or with -DGW_FASTMATH_NO_SIMD) two gw_sincos calls. */
 #if (defined(__SSE2__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 2)) && \
     !defined(GW_FASTMATH_NO_SIMD)
 #include <emmintrin.h>
@@ -162,9 +212,15 @@ GW_FASTMATH_INLINE void gw_sincos2(double x0, double x1, double *s0, double *c0,
     const __m128d t = _mm_add_pd(_mm_mul_pd(xs, _mm_set1_pd(GW_INVPIO2)), _mm_set1_pd(0x1.8p52));
     const __m128i kb = _mm_castpd_si128(t);
     const __m128d kd = _mm_cvtepi32_pd(_mm_shuffle_epi32(kb, 0x08)); /* dwords 0 and 2 */
-    const __m128d a = _mm_sub_pd(xs, _mm_mul_pd(kd, _mm_set1_pd(GW_PIO2_1)));
+    __m128d a = _mm_sub_pd(xs, _mm_mul_pd(kd, _mm_set1_pd(GW_PIO2_1)));
     const __m128d w0 = _mm_mul_pd(kd, _mm_set1_pd(GW_PIO2_1T));
-    __m128d rh = _mm_sub_pd(a, w0), rl = _mm_sub_pd(_mm_sub_pd(a, rh), w0);
+    __m128d rh, rl;
+    GW_FM_KEEP(a);
+    rh = _mm_sub_pd(a, w0);
+    GW_FM_KEEP(rh);
+    rl = _mm_sub_pd(a, rh);
+    GW_FM_KEEP(rl);
+    rl = _mm_sub_pd(rl, w0);
     __m128d z, w, v, sr, cr, ks, kc;
     int l;
     if (_mm_movemask_pd(_mm_cmpge_pd(_mm_and_pd(rh, absmask),
@@ -204,7 +260,9 @@ GW_FASTMATH_INLINE void gw_sincos2(double x0, double x1, double *s0, double *c0,
                               _mm_mul_pd(z, _mm_add_pd(_mm_set1_pd(2.08757232129817482790e-09),
                                                        _mm_mul_pd(z, _mm_set1_pd(-1.13596475577881948265e-11)))))));
     {
-        const __m128d hz = _mm_mul_pd(half, z), w1 = _mm_sub_pd(one, hz);
+        const __m128d hz = _mm_mul_pd(half, z);
+        __m128d w1 = _mm_sub_pd(one, hz);
+        GW_FM_KEEP(w1);
         kc = _mm_add_pd(w1, _mm_add_pd(_mm_sub_pd(_mm_sub_pd(one, w1), hz),
                                        _mm_sub_pd(_mm_mul_pd(z, cr), _mm_mul_pd(rh, rl))));
     }

@@ -24,8 +24,8 @@ names (issue 8, section 9), and the body functions ignore some of the standard a
     between, become one gw_sincos(aY, &gw_sN, &gw_cN) at the first of the two and reads of
     gw_sN / gw_cN (compilers do not merge two inlined reductions by themselves: measured); two
     such gw_sincos in a body (alpha and beta in gw_ode) become one gw_sincos2 at the second
-    when nothing in between uses the first's output or changes its argument (SSE2 lanes, the
-    same bits); any other sin / cos a gw_sin / gw_cos; the file includes gw_fastmath.h after
+    when nothing in between uses the first's output or changes its argument, and the
+    second's argument is not the first's output (SSE2 lanes, the same bits); any other sin / cos a gw_sin / gw_cos; the file includes gw_fastmath.h after
     <math.h>;
   * the whole file is guarded by GW_UNITY_BUILD, so that compiled on its own it is empty.
 Anything it does not recognise (a function definition of another shape, a global left over)
@@ -171,12 +171,15 @@ _SINCOS_LINE = re.compile(r"^(?P<indent>\s*)casadi_real (?P<s>gw_s\d+), (?P<c>gw
 def _pair_sincos(lines: list[str], first: int, last: int) -> None:
     """Two gw_sincos lines of one body -> one gw_sincos2 at the second (both arguments in the
     two lanes of a register), if nothing in between reads or writes the first one's outputs,
-    writes its argument or opens or closes a block."""
+    writes its argument or opens or closes a block, and the second's argument is not the first
+    one's output (sin(cos x) beside sin(x): the output is assigned only after the paired call,
+    so the second lane would read it before it is written)."""
     found = [(i, m) for i in range(first, last + 1) if (m := _SINCOS_LINE.match(lines[i]))]
     for (i, m), (j, mj) in zip(found[::2], found[1::2]):
         between = "\n".join(lines[i + 1:j])
         used = re.search(rf"\b({m['out']}|{m['s']}|{m['c']})\b", between)
-        if used or re.search(rf"^\s*{m['arg']}=", between, re.M) or "{" in between or "}" in between:
+        if (used or mj["arg"] == m["out"] or re.search(rf"^\s*{m['arg']}=", between, re.M)
+                or "{" in between or "}" in between):
             continue
         lines[i] = ""
         lines[j] = (f"{mj['indent']}casadi_real {m['s']}, {m['c']}, {mj['s']}, {mj['c']}; "

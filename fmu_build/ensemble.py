@@ -151,6 +151,42 @@ class EnsembleResult:
         return self.status == STATUS_TERMINATED
 
 
+def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
+    """The job's numbers checked before the C library sees them (it can only say "bad job"):
+    a ValueError naming the field.  Returns the grid as a contiguous float array (empty: none).
+    The ranges the instances check themselves (rel_tol within [10 eps, 1]) are reported per
+    trajectory by them."""
+    def number(name, v):
+        try:
+            return float(v)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} must be a number, got {v!r}") from None
+    t0, t1, rtol = number("t_start", t_start), number("t_end", t_end), number("rel_tol", rel_tol)
+    if not np.isfinite(t0) or not np.isfinite(t1):
+        raise ValueError(f"t_start and t_end must be finite, got {t0!r} and {t1!r}")
+    if not t1 > t0:
+        raise ValueError(f"t_end = {t1!r} must be greater than t_start = {t0!r}")
+    if not (np.isfinite(rtol) and rtol > 0):
+        raise ValueError(f"rel_tol must be a finite number > 0, got {rtol!r}")
+    if abs_tol is not None:
+        atol = number("abs_tol", abs_tol)
+        if not (np.isfinite(atol) and atol >= 0):
+            raise ValueError(f"abs_tol must be a finite number >= 0, got {atol!r}")
+    if max_step is not None:
+        hmax = number("max_step", max_step)
+        if not (np.isfinite(hmax) and hmax > 0):
+            raise ValueError(f"max_step must be a finite number > 0, got {hmax!r}")
+    g = np.ascontiguousarray(np.asarray([] if grid is None else grid, dtype=float).ravel())
+    if g.size:
+        if not np.all(np.isfinite(g)):
+            raise ValueError("grid: communication points must be finite")
+        if not (g[0] > t0 and np.all(np.diff(g) > 0)):
+            raise ValueError(f"grid: communication points must increase strictly after t_start = {t0!r}")
+        if g[-1] != t1:
+            raise ValueError(f"grid: the last communication point {float(g[-1])!r} must equal t_end = {t1!r}")
+    return g
+
+
 def _sources(fmu: Path, work: Path) -> tuple[Path, str, str]:
     """Extract sources/ and read (identifier, guid) from modelDescription.xml."""
     import xml.etree.ElementTree as ET
@@ -179,11 +215,17 @@ class Ensemble:
     """The ensemble library of one FMU built by gyrowheel (compiled once, cached by content).
 
     fmu: path of the .fmu; lanes: trajectories advanced together; cache: where the library is
-    kept (default ~/.cache/gyrowheel/ensemble).  Raises EnsembleError if the FMU has no
-    sources or its model no Taylor kernel, CompileError if the compiler fails.
+    kept (default ~/.cache/gyrowheel/ensemble).  Raises ValueError for lanes not an integer >= 1,
+    EnsembleError if the FMU has no sources or its model no Taylor kernel, CompileError if the
+    compiler fails.
     """
 
     def __init__(self, fmu: str | Path, lanes: int = LANES, cache: str | Path | None = None):
+        # lanes becomes GW_ENSEMBLE_LANES: 0 or less failed in the compiler with its own message,
+        # 2.5 was truncated to 2 without a word
+        if isinstance(lanes, bool) or not isinstance(lanes, (int, np.integer)) or lanes < 1:
+            raise ValueError(f"lanes must be an integer >= 1 (trajectories advanced together), got {lanes!r}")
+        lanes = int(lanes)
         fmu = Path(fmu)
         digest = hashlib.sha256(fmu.read_bytes() + str(lanes).encode() + _UNITY.encode()
                                 + " ".join(FLAGS).encode()).hexdigest()[:20]
@@ -268,6 +310,7 @@ class Ensemble:
         the outputs at t_start and at every point reached (y_grid, n_rows) and the fired events.
         Raises ValueError / KeyError naming a bad shape or name, EnsembleError for a refused job.
         """
+        g = _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid)
         P = self._table("parameter", parameters, self.parameter_names, self.default_parameters, None)
         S = self._table("start value", starts, self.start_names, self.default_starts,
                         None if P is None else P.shape[0])
@@ -287,7 +330,6 @@ class Ensemble:
         y_final = np.full((n, self.ny), np.nan)
         steps = np.zeros(n, dtype=np.uint64 if ctypes.sizeof(ctypes.c_ulong) == 8 else np.uint32)
         messages: list[str] = []
-        g = np.ascontiguousarray(np.asarray([] if grid is None else grid, dtype=float).ravel())
         y_grid = np.full((n, g.size + 1, self.ny), np.nan) if g.size else None
         n_rows = np.zeros(n, dtype=np.int_ if ctypes.sizeof(ctypes.c_long) == 8 else np.int32)
         flags = np.zeros((n, max(self.ne, 1)), dtype=np.intc)

@@ -1,8 +1,12 @@
-"""`gyrowheel bench --quick` runs end to end and writes its figure and table (no timing asserted)."""
+"""`gyrowheel bench --quick` runs end to end and writes its figure and table (no timing asserted);
+the benchmark scripts' helpers (dop853_ab reference tree, taylor_vs_heyoka.to_heyoka) refuse what they
+cannot do."""
 from __future__ import annotations
 
 import subprocess
 import sys
+
+import pytest
 
 from conftest import ROOT
 
@@ -17,3 +21,53 @@ def test_bench_quick_writes_figure_and_table(tmp_path):
         assert method in table, method
     assert "Constraint violation of the multiplier form" in table
     assert (tmp_path / "work_precision_paper.png").stat().st_size > 20_000
+
+
+def test_dop853_ab_reference_is_a_git_ref_or_a_directory(tmp_path):
+    """benchmarks/dop853_ab.py compared against /work/main by default, a path only the project's
+    own machine has: from a clean clone it failed.  The reference is now a git ref of the
+    repository (default main) exported with git archive, or a directory (found in review)."""
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+    bench = Path(__file__).resolve().parent.parent / "benchmarks"
+    sys.path.insert(0, str(bench))
+    try:
+        import dop853_ab
+    finally:
+        sys.path.remove(str(bench))
+    root = bench.parent
+    if shutil.which("git") is None or subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"],
+                                                      capture_output=True).returncode != 0:
+        pytest.skip("not a git checkout")
+    tree = dop853_ab.reference_tree("HEAD", tmp_path)
+    assert (tree / "fmu_build" / "builder.py").is_file() and (tree / "c_src" / "gw_fastmath.h").is_file()
+    assert dop853_ab.reference_tree(str(root), tmp_path / "x") == root
+    with pytest.raises(SystemExit, match="neither a directory nor a git ref"):
+        dop853_ab.reference_tree("no-such-ref-xyz", tmp_path / "y")
+    assert "/work/main" not in (bench / "dop853_ab.py").read_text()
+
+
+def test_to_heyoka_refuses_inputs_it_does_not_translate():
+    """benchmarks/taylor_vs_heyoka.py's to_heyoka read every input other than x and p as the time:
+    an ode with inputs u or hoisted constants c (model/hoist.py) would have been compared with
+    heyoka on a different system, silently (found in review)."""
+    pytest.importorskip("heyoka")
+    import casadi as ca
+    import heyoka as hy
+    from pathlib import Path
+    bench = Path(__file__).resolve().parent.parent / "benchmarks"
+    sys.path.insert(0, str(bench))
+    try:
+        from taylor_vs_heyoka import to_heyoka
+    finally:
+        sys.path.remove(str(bench))
+    t, x, u, p, c = (ca.SX.sym(n, k) for n, k in (("t", 1), ("x", 2), ("u", 0), ("p", 1), ("c", 1)))
+    xs = hy.make_vars("x0", "x1")
+    good = ca.Function("ode", [t, x, u, p], [ca.vertcat(x[1] * p, -ca.sin(x[0]) + t)], ["t", "x", "u", "p"], ["xdot"])
+    assert len(to_heyoka(good, xs, [2.0])) == 2
+    hoisted = ca.Function("ode", [t, x, u, p, c], [ca.vertcat(x[1] * c, -ca.sin(x[0]))], ["t", "x", "u", "p", "c"],
+                          ["xdot"])
+    with pytest.raises(ValueError, match="input 'c' of ode is neither t, x nor p"):
+        to_heyoka(hoisted, xs, [2.0])

@@ -9,12 +9,14 @@ ensemble path (c_src/gw_ensemble.c, fmu_build/ensemble.py).
   against DOP853 at rel_tol 1e-13);
 - every example scene's operations are supported; each builds and runs briefly with taylor;
 - an unsupported operation is refused loudly;
-- an ensemble equals N single-trajectory runs, falls included.
+- an ensemble equals N single-trajectory runs, falls included; a bad job is a ValueError naming
+  the field.
 """
 from __future__ import annotations
 
 import ctypes
 import math
+import re
 import subprocess
 import sys
 import tempfile
@@ -473,3 +475,33 @@ def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
         ens.run(1.0, parameters={"mass": [1.0]})
     with pytest.raises(ValueError, match=r"shape \(N, 6\)"):
         ens.run(1.0, parameters=np.ones((2, 3)))
+
+
+def test_ensemble_bad_job_names_the_field(paper, tmp_path):
+    """A bad t_end, tolerance, max_step or grid is a ValueError naming the field, not the C
+    library's catch-all 'ensemble: bad job (n >= 0, status, t_end > t_start, ...)' (found in
+    review)."""
+    built, _ = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    nan = float("nan")
+    cases = [({"t_end": -1.0}, "t_end = -1.0 must be greater than t_start"),
+             ({"t_end": nan}, "t_start and t_end must be finite"),
+             ({"t_end": float("inf")}, "t_start and t_end must be finite"),
+             ({"t_end": 1.0, "rel_tol": 0.0}, "rel_tol must be a finite number > 0"),
+             ({"t_end": 1.0, "rel_tol": nan}, "rel_tol must be a finite number > 0"),
+             ({"t_end": 1.0, "abs_tol": -1.0}, "abs_tol must be a finite number >= 0"),
+             ({"t_end": 1.0, "max_step": 0.0}, "max_step must be a finite number > 0"),
+             ({"t_end": 1.0, "grid": [0.5, 0.9]}, "last communication point 0.9 must equal t_end"),
+             ({"t_end": 1.0, "grid": [0.5, 0.4, 1.0]}, "must increase strictly"),
+             ({"t_end": 1.0, "grid": [0.0, 0.5, 1.0]}, "must increase strictly after t_start"),
+             ({"t_end": 1.0, "grid": [0.5, nan, 1.0]}, "must be finite")]
+    for kwargs, message in cases:
+        t_end = kwargs.pop("t_end")
+        with pytest.raises(ValueError, match=re.escape(message)):
+            ens.run(t_end, **kwargs)
+    res = ens.run(1.0, rel_tol=1e-8, grid=[0.5, 1.0])  # a good job still runs
+    assert list(res.status) == [STATUS_OK]
+    # lanes: 0 or -1 failed in the compiler, 2.5 was truncated to 2 silently
+    for lanes in (0, -1, 2.5, "4", True):
+        with pytest.raises(ValueError, match="lanes must be an integer >= 1"):
+            Ensemble(built.fmu, lanes=lanes, cache=tmp_path)

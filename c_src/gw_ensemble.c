@@ -351,32 +351,36 @@ typedef double gw_ens_v2 __attribute__((vector_size(16)));
 typedef double gw_ens_v2;
 #define GW_ENS_V 1
 #endif
+static gw_ens_v2 gw_ens_ld(const double *p) {
+    gw_ens_v2 v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+static void gw_ens_st(double *p, gw_ens_v2 v) { memcpy(p, &v, sizeof v); }
+
 static void gw_ens_increments(gw_ensemble *E, int order, const double *h) {
-    enum { W = GW_ENS_LANES, NV = GW_ENS_LANES / GW_ENS_V };
+    enum { W = GW_ENS_LANES, V = GW_ENS_V, NV = GW_ENS_LANES / GW_ENS_V };
     const size_t S = (size_t)(order + 1) * W;
     const int nx = E->m->nx;
     gw_ens_v2 hh[NV];
     int i, k, j;
-    memcpy(hh, h, sizeof hh);
-    for (i = 0; i < nx; i++) {
+    for (j = 0; j < NV; j++) hh[j] = gw_ens_ld(h + j * V);
+    for (i = 0; i < nx; i++) { /* kept in registers: the loops over j are unrolled */
         const double *x0 = E->w + (size_t)i * S;
         gw_ens_v2 q[NV], dq[NV];
-        memcpy(q, x0 + (size_t)order * W, sizeof q);
-        memset(dq, 0, sizeof dq);
-        for (k = order - 1; k >= 1; k--) {
-            gw_ens_v2 xk[NV];
-            memcpy(xk, x0 + (size_t)k * W, sizeof xk);
-            for (j = 0; j < NV; j++) {
-                dq[j] = dq[j] * hh[j] + q[j];
-                q[j] = q[j] * hh[j] + xk[j];
-            }
-        }
         for (j = 0; j < NV; j++) {
-            dq[j] = q[j] + hh[j] * dq[j];
-            q[j] = q[j] * hh[j];
+            q[j] = gw_ens_ld(x0 + (size_t)order * W + j * V);
+            dq[j] = q[j] * 0.0; /* zero where q is finite; the first sum below adds q */
         }
-        memcpy(E->qx + (size_t)i * W, q, sizeof q);
-        memcpy(E->qd + (size_t)i * W, dq, sizeof dq);
+        for (k = order - 1; k >= 1; k--)
+            for (j = 0; j < NV; j++) {
+                dq[j] = k == order - 1 ? q[j] : dq[j] * hh[j] + q[j];
+                q[j] = q[j] * hh[j] + gw_ens_ld(x0 + (size_t)k * W + j * V);
+            }
+        for (j = 0; j < NV; j++) {
+            gw_ens_st(E->qx + (size_t)i * W + j * V, q[j] * hh[j]);
+            gw_ens_st(E->qd + (size_t)i * W + j * V, q[j] + hh[j] * dq[j]);
+        }
     }
 }
 
@@ -417,14 +421,22 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
         int nf = 0;
         for (l = 0; l < W; l++)
             if (go[l]) dst[nf++] = E->lane[l].I->tl_w;
-        for (i = 0; i < nx && nf > 0; i++)
-            for (k = 0; k <= order; k++) {
-                const double *src = E->w + (size_t)i * S + (size_t)k * W;
-                const size_t at = (size_t)i * (size_t)(order + 1) + (size_t)k;
-                int f = 0;
-                for (l = 0; l < W; l++)
-                    if (go[l]) dst[f++][at] = src[l];
-            }
+        if (nf == W) /* the common case: every lane (no test per coefficient) */
+            for (i = 0; i < nx; i++)
+                for (k = 0; k <= order; k++) {
+                    const double *src = E->w + (size_t)i * S + (size_t)k * W;
+                    const size_t at = (size_t)i * (size_t)(order + 1) + (size_t)k;
+                    for (l = 0; l < W; l++) dst[l][at] = src[l];
+                }
+        else
+            for (i = 0; i < nx && nf > 0; i++)
+                for (k = 0; k <= order; k++) {
+                    const double *src = E->w + (size_t)i * S + (size_t)k * W;
+                    const size_t at = (size_t)i * (size_t)(order + 1) + (size_t)k;
+                    int f = 0;
+                    for (l = 0; l < W; l++)
+                        if (go[l]) dst[f++][at] = src[l];
+                }
     }
     for (l = 0; l < W; l++) {
         gw_lane *L = &E->lane[l];

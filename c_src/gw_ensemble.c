@@ -63,6 +63,12 @@ typedef struct {
 
 enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
 
+#if defined(__GNUC__) || defined(__clang__)
+#define GW_ENS_RESTRICT __restrict__
+#else
+#define GW_ENS_RESTRICT
+#endif
+
 /* With this many active lanes or fewer the batch runs each lane's series with the one-lane
  * kernel (gw_tl1_jet, as solver taylor does) instead of all GW_ENS_LANES lanes of gw_tlb_jet:
  * the tail of a job whose N is not a multiple of the lanes, or whose trajectories end at
@@ -78,6 +84,10 @@ typedef struct {
     const gw_ensemble_job *job;
     gw_lane lane[GW_ENS_LANES];
     double *w, *c, *x, *u, *p, t[GW_ENS_LANES]; /* batch kernel memory, lanes innermost */
+    /* the lane-innermost step passes (gw_ens_norms, _defects, _increments), nx x lanes each:
+     * (atol / rel_tol) nominal_i and atol nominal_i of each lane, the pending attempt's P'(h),
+     * the increment's Horner sums (then dx) and their derivatives (then P'(h)) */
+    double *fsn, *anom, *dp, *qx, *qd;
     long next;                                  /* next trajectory to start */
     int cst_dirty;                              /* a lane's parameters or inputs changed */
 } gw_ensemble;
@@ -173,6 +183,13 @@ static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
             gw_ens_finish(E, L, GW_ERROR);
             continue;
         }
+        { /* the error weights' floors of this lane, as gw_taylor_step and _defect form them */
+            const size_t l = (size_t)(L - E->lane);
+            for (i = 0; i < m->nx; i++) {
+                E->fsn[(size_t)i * GW_ENS_LANES + l] = I->atol_eff / I->rel_tol * I->nominal[i];
+                E->anom[(size_t)i * GW_ENS_LANES + l] = I->atol_eff * I->nominal[i];
+            }
+        }
         if (m->taylor.n_cst > 0) { /* this lane's constants (the kernel computes all lanes) */
             const int l = (int)(L - E->lane);
             for (i = 0; i < m->np; i++) E->p[(size_t)i * GW_ENS_LANES + l] = I->p[i];
@@ -217,6 +234,8 @@ static void gw_ens_point(gw_ensemble *E, int l) {
     int i;
     E->t[l] = L->pending ? L->t1 : L->I->t;
     for (i = 0; i < E->m->nx; i++) E->x[(size_t)i * GW_ENS_LANES + l] = x[i];
+    if (L->pending) /* the attempt's P'(h), for the defect pass */
+        for (i = 0; i < E->m->nx; i++) E->dp[(size_t)i * GW_ENS_LANES + l] = L->I->k[2][i];
 }
 
 /* Lane L, its series at its current point in I->tl_w: the next attempt.  A step that lands on
@@ -240,32 +259,24 @@ static void gw_ens_attempt(gw_ensemble *E, gw_lane *L) {
     gw_ens_after(E, L, r, target);
 }
 
-/* Lane l after the batch: conclude its pending attempt with f(t1, P(h)) from the batch's
- * series at that point (order 1 of state i at f1[i * stride]), then, if that series is the
- * lane's new current one, take it and attempt the next step. */
-static void gw_ens_advance(gw_ensemble *E, int l, const double *f1, size_t stride, int batch,
-                           int order) {
+/* Lane l after its one-lane kernel call (the tail of a job): conclude its pending attempt with
+ * f(t1, P(h)) from the series at that point (I->tl_wn), then, if that series is the lane's new
+ * current one, take it and attempt the next step. */
+static void gw_ens_advance(gw_ensemble *E, int l, int order) {
     gw_lane *L = &E->lane[l];
     gw_instance *I = L->I;
     const long traj = L->traj;
     int fresh = 1;
     if (L->pending) {
         const double target = gw_ens_target(E, L);
-        gw_int_result r = gw_taylor_conclude(I, target, &L->run, L->h, L->t1, f1, stride, &fresh);
+        gw_int_result r = gw_taylor_conclude(I, target, &L->run, L->h, L->t1, I->tl_wn + 1,
+                                             (size_t)order + 1, &fresh);
         L->pending = 0;
         if (!gw_ens_after(E, L, r, target)) fresh = 0;
     }
     if (L->traj != traj || L->traj < 0) return; /* ended (a new one, if any, needs its series) */
     if (!fresh) return;                          /* the state moved: a new series next batch */
-    if (batch) { /* the lane's polynomials, its dense output, from the batch layout */
-        const size_t S = (size_t)(order + 1) * GW_ENS_LANES;
-        int i, k;
-        for (i = 0; i < E->m->nx; i++) {
-            const double *src = E->w + (size_t)i * S + l;
-            double *dst = I->tl_w + (size_t)i * (size_t)(order + 1);
-            for (k = 0; k <= order; k++) dst[k] = src[(size_t)k * GW_ENS_LANES];
-        }
-    } else {
+    {
         double *tmp = I->tl_w;
         I->tl_w = I->tl_wn;
         I->tl_wn = tmp;
@@ -273,11 +284,208 @@ static void gw_ens_advance(gw_ensemble *E, int l, const double *f1, size_t strid
     gw_ens_attempt(E, L);
 }
 
+/* ---- the batch's step, lane-innermost -------------------------------------------------
+ * After the batch kernel every active lane concludes its pending attempt (the defect check)
+ * and attempts its next step from the new series.  The arithmetic over the series, the norms
+ * of the step size, the defects and the increments' Horner sums, runs here for all lanes at
+ * once, loops over the lanes innermost on the structure-of-arrays series, so that the compiler
+ * vectorises them; the same operations in the same order as the one-lane code of solver taylor
+ * (gw_taylor_step, gw_taylor_defect, gw_taylor_increment), so each lane's numbers are those of
+ * its single run bit for bit.  Compiled for the default target (no fused multiply-add, as the
+ * single FMU's step code).  The control (budget, max_step, landing, events, rejections,
+ * communication points, trajectory changes) stays per lane: gw_taylor_attempt_size and
+ * gw_taylor_conclude_err with the numbers of the passes. */
+
+/* 1: each lane's numbers from the one-lane code instead of the passes (through I->tl_w), for
+ * tests/test_taylor.py::test_ensemble_lane_innermost_passes_equal_the_per_lane_code */
+#ifndef GW_ENSEMBLE_LANE_STEPS
+#define GW_ENSEMBLE_LANE_STEPS 0
+#endif
+
+/* N_{p-1}, N_p of every lane (gw_taylor_step) */
+static void gw_ens_norms(const gw_ensemble *E, int order, double *n1, double *n2) {
+    enum { W = GW_ENS_LANES };
+    const size_t S = (size_t)(order + 1) * W;
+    const int nx = E->m->nx;
+    int i, l;
+    for (l = 0; l < W; l++) n1[l] = n2[l] = 0.0;
+    for (i = 0; i < nx; i++) {
+        const double *x0 = E->w + (size_t)i * S, *a = x0 + (size_t)(order - 1) * W,
+                     *b = x0 + (size_t)order * W, *fsn = E->fsn + (size_t)i * W;
+        for (l = 0; l < W; l++) {
+            const double rsc = 1.0 / (fabs(x0[l]) + fsn[l]);
+            const double r1 = fabs(a[l]) * rsc, r2 = fabs(b[l]) * rsc;
+            n1[l] = r1 > n1[l] ? r1 : n1[l];
+            n2[l] = r2 > n2[l] ? r2 : n2[l];
+        }
+    }
+}
+
+/* the defect of every lane's pending attempt with f(t1, P(h)) = order 1 of the batch's series
+ * (gw_taylor_defect); scale[l] = h / (p + 1) of lane l's attempt, xnew in E->x, P'(h) in E->dp */
+static void gw_ens_defects(const gw_ensemble *E, int order, const double *scale, double *err) {
+    enum { W = GW_ENS_LANES };
+    const size_t S = (size_t)(order + 1) * W;
+    const int nx = E->m->nx;
+    const double rtol = E->job->rel_tol;
+    int i, l;
+    for (l = 0; l < W; l++) err[l] = 0.0;
+    for (i = 0; i < nx; i++) {
+        const double *f1 = E->w + (size_t)i * S + W, *dp = E->dp + (size_t)i * W,
+                     *xn = E->x + (size_t)i * W, *an = E->anom + (size_t)i * W;
+        for (l = 0; l < W; l++) {
+            const double r = fabs(f1[l] - dp[l]) * scale[l] / (rtol * fabs(xn[l]) + an[l]);
+            err[l] = !(r <= err[l]) ? r : err[l]; /* NaN propagates as a rejection */
+        }
+    }
+    for (l = 0; l < W; l++) err[l] = isfinite(err[l]) ? err[l] : HUGE_VAL;
+}
+
+/* dx (E->qx) and P'(h) (E->qd) of every lane for its step size h[l] (gw_taylor_increment):
+ * for each component the lanes' Horner chains side by side, two lanes per vector of the
+ * GCC / clang vector extension (SSE2 on x86-64: GCC vectorised none of the plain loops) */
+#if (defined(__GNUC__) || defined(__clang__)) && GW_ENSEMBLE_LANES % 2 == 0
+typedef double gw_ens_v2 __attribute__((vector_size(16)));
+#define GW_ENS_V 2
+#else
+typedef double gw_ens_v2;
+#define GW_ENS_V 1
+#endif
+static gw_ens_v2 gw_ens_ld(const double *p) {
+    gw_ens_v2 v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+static void gw_ens_st(double *p, gw_ens_v2 v) { memcpy(p, &v, sizeof v); }
+
+static void gw_ens_increments(gw_ensemble *E, int order, const double *h) {
+    enum { W = GW_ENS_LANES, V = GW_ENS_V, NV = GW_ENS_LANES / GW_ENS_V };
+    const size_t S = (size_t)(order + 1) * W;
+    const int nx = E->m->nx;
+    gw_ens_v2 hh[NV];
+    int i, k, j;
+    for (j = 0; j < NV; j++) hh[j] = gw_ens_ld(h + j * V);
+    for (i = 0; i < nx; i++) { /* kept in registers: the loops over j are unrolled */
+        const double *x0 = E->w + (size_t)i * S;
+        gw_ens_v2 q[NV], dq[NV];
+        for (j = 0; j < NV; j++) {
+            q[j] = gw_ens_ld(x0 + (size_t)order * W + j * V);
+            dq[j] = q[j] * 0.0; /* zero where q is finite; the first sum below adds q */
+        }
+        for (k = order - 1; k >= 1; k--)
+            for (j = 0; j < NV; j++) {
+                dq[j] = k == order - 1 ? q[j] : dq[j] * hh[j] + q[j];
+                q[j] = q[j] * hh[j] + gw_ens_ld(x0 + (size_t)k * W + j * V);
+            }
+        for (j = 0; j < NV; j++) {
+            gw_ens_st(E->qx + (size_t)i * W + j * V, q[j] * hh[j]);
+            gw_ens_st(E->qd + (size_t)i * W + j * V, q[j] + hh[j] * dq[j]);
+        }
+    }
+}
+
+/* Every active lane after the batch kernel: conclude (defects from the pass), then, where the
+ * series is the lane's new one, its next attempt (norms and increments from the passes). */
+static void gw_ens_batch_steps(gw_ensemble *E, int order) {
+    enum { W = GW_ENS_LANES };
+    const size_t S = (size_t)(order + 1) * W;
+    const int nx = E->m->nx;
+    double n1[W], n2[W], scale[W], err[W], h[W];
+    int go[W], last[W], l, i, k, any = 0;
+    gw_ens_norms(E, order, n1, n2);
+    for (l = 0; l < W; l++) scale[l] = E->lane[l].pending ? E->lane[l].h / (order + 1) : 0.0;
+    gw_ens_defects(E, order, scale, err);
+    for (l = 0; l < W; l++) {
+        gw_lane *L = &E->lane[l];
+        gw_instance *I = L->I;
+        const long traj = L->traj;
+        int fresh = 1;
+        go[l] = 0;
+        h[l] = 0.0;
+        if (traj < 0) continue;
+        if (L->pending) {
+            const double target = gw_ens_target(E, L);
+            gw_int_result r =
+                GW_ENSEMBLE_LANE_STEPS
+                    ? gw_taylor_conclude(I, target, &L->run, L->h, L->t1, E->w + W + l, S, &fresh)
+                    : gw_taylor_conclude_err(I, target, &L->run, L->h, L->t1, err[l], 1, &fresh);
+            L->pending = 0;
+            if (!gw_ens_after(E, L, r, target)) fresh = 0;
+        }
+        if (L->traj != traj || !fresh) continue; /* ended, or the state moved: a new series */
+        go[l] = 1;
+    }
+    { /* the fresh lanes' polynomials, their dense output, out of the batch layout: one load
+       * of all lanes' coefficient, stored to each fresh lane */
+        double *dst[W];
+        int nf = 0;
+        for (l = 0; l < W; l++)
+            if (go[l]) dst[nf++] = E->lane[l].I->tl_w;
+        if (nf == W) /* the common case: every lane (no test per coefficient) */
+            for (i = 0; i < nx; i++)
+                for (k = 0; k <= order; k++) {
+                    const double *src = E->w + (size_t)i * S + (size_t)k * W;
+                    const size_t at = (size_t)i * (size_t)(order + 1) + (size_t)k;
+                    for (l = 0; l < W; l++) dst[l][at] = src[l];
+                }
+        else
+            for (i = 0; i < nx && nf > 0; i++)
+                for (k = 0; k <= order; k++) {
+                    const double *src = E->w + (size_t)i * S + (size_t)k * W;
+                    const size_t at = (size_t)i * (size_t)(order + 1) + (size_t)k;
+                    int f = 0;
+                    for (l = 0; l < W; l++)
+                        if (go[l]) dst[f++][at] = src[l];
+                }
+    }
+    for (l = 0; l < W; l++) {
+        gw_lane *L = &E->lane[l];
+        gw_instance *I = L->I;
+        if (!go[l]) continue;
+        go[l] = 0;
+        {
+            const double target = gw_ens_target(E, L), norms[2] = {n1[l], n2[l]};
+            gw_int_result r =
+                gw_taylor_attempt_size(I, target, &L->run, GW_ENSEMBLE_LANE_STEPS ? NULL : norms,
+                                       &L->h, &L->t1, &last[l]);
+            if (r != GW_INT_OK) {
+                gw_ens_after(E, L, r, target);
+                continue;
+            }
+        }
+        go[l] = 1;
+        h[l] = L->h;
+        any = 1;
+    }
+    if (!any) return;
+    gw_ens_increments(E, order, h);
+    for (l = 0; l < W; l++) {
+        gw_lane *L = &E->lane[l];
+        gw_instance *I = L->I;
+        if (!go[l]) continue;
+        if (GW_ENSEMBLE_LANE_STEPS)
+            gw_taylor_increment(I->tl_w, order, 1, 0, nx, L->h, I->dx, I->k[2]);
+        else
+            for (i = 0; i < nx; i++) {
+                I->dx[i] = E->qx[(size_t)i * W + l];
+                I->k[2][i] = E->qd[(size_t)i * W + l];
+            }
+        gw_sum_update(I);
+        if (!last[l]) {
+            L->pending = 1;
+        } else { /* a step landing on the call's target: checked with the right-hand side */
+            const double target = gw_ens_target(E, L);
+            int fresh;
+            gw_int_result r = gw_taylor_conclude(I, target, &L->run, L->h, L->t1, NULL, 1, &fresh);
+            gw_ens_after(E, L, r, target);
+        }
+    }
+}
+
 /* One batch: the series of every active lane at its point, then each lane's step.  Returns
  * the number of active lanes (0: the job is done). */
 static int gw_ens_step(gw_ensemble *E, int order) {
     const gw_model *m = E->m;
-    const size_t S = (size_t)(order + 1) * GW_ENS_LANES;
     int l, i, active = -1, n_active = 0;
     for (l = 0; l < GW_ENS_LANES; l++)
         if (E->lane[l].traj >= 0) {
@@ -295,7 +503,7 @@ static int gw_ens_step(gw_ensemble *E, int order) {
         }
         for (l = 0; l < GW_ENS_LANES; l++)
             if (E->lane[l].traj >= 0) {
-                gw_ens_advance(E, l, E->lane[l].I->tl_wn + 1, (size_t)order + 1, 0, order);
+                gw_ens_advance(E, l, order);
                 if (E->lane[l].traj < 0) gw_ens_fill(E, &E->lane[l]);
             }
         return n_active;
@@ -316,11 +524,9 @@ static int gw_ens_step(gw_ensemble *E, int order) {
     if (m->taylor.n_cst > 0 && E->cst_dirty) gw_tlb_cst(E->u, E->p, E->c);
     E->cst_dirty = 0;
     gw_tlb_jet(order, E->t, E->x, E->c, E->w);
+    gw_ens_batch_steps(E, order);
     for (l = 0; l < GW_ENS_LANES; l++)
-        if (E->lane[l].traj >= 0) {
-            gw_ens_advance(E, l, E->w + GW_ENS_LANES + l, S, 1, order);
-            if (E->lane[l].traj < 0) gw_ens_fill(E, &E->lane[l]);
-        }
+        if (E->lane[l].traj == -1) gw_ens_fill(E, &E->lane[l]);
     return n_active;
 }
 
@@ -360,6 +566,11 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
     E.x = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
     E.u = (double *)gw_ens_alloc(cb, (size_t)m->nu * L);
     E.p = (double *)gw_ens_alloc(cb, (size_t)m->np * L);
+    E.fsn = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
+    E.anom = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
+    E.dp = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
+    E.qx = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
+    E.qd = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
     for (l = 0; l < GW_ENS_LANES; l++) { /* instances for the lanes that will have work */
         char name[32];
         snprintf(name, sizeof name, "ensemble lane %d", l);
@@ -368,7 +579,10 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
         E.lane[l].I = gw_instance_new(m, name, cb, 0);
         if (!E.lane[l].I) st = GW_FATAL;
     }
-    if (!E.w || !E.c || !E.x || !E.u || !E.p) st = GW_FATAL;
+    if (!E.w || !E.c || !E.x || !E.u || !E.p || !E.fsn || !E.anom || !E.dp || !E.qx || !E.qd)
+        st = GW_FATAL;
+    else
+        for (j = 0; j < (long)((size_t)m->nx * L); j++) E.fsn[j] = E.anom[j] = 1.0; /* idle */
     if (st == GW_OK) {
         for (j = 0; j < job->n; j++) job->status[j] = (int)GW_FATAL; /* not run (yet) */
         for (l = 0; l < GW_ENS_LANES; l++) gw_ens_fill(&E, &E.lane[l]);
@@ -384,6 +598,11 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
     cb->free(E.x);
     cb->free(E.u);
     cb->free(E.p);
+    cb->free(E.fsn);
+    cb->free(E.anom);
+    cb->free(E.dp);
+    cb->free(E.qx);
+    cb->free(E.qd);
     return st;
 }
 

@@ -132,6 +132,9 @@ typedef struct {
  * of the states, lanes interleaved); 0 and *bad_order = j if order j is not finite. */
 GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run, const double *X,
                                   int order, int lanes, int lane, int *bad_order);
+/* the same from the norms N_{p-1} = n1, N_p = n2 (the ensemble's lane-innermost pass) */
+GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, double n1, double n2,
+                                       int *bad_order);
 /* dx = sum_{k>=1} X_k h^k of lane `lane` (the state's increment; gw_sum_update adds it) and,
  * unless dp is NULL, dp = P'(h), the polynomial's derivative (for the defect check) */
 GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int lane, int nx,
@@ -152,6 +155,16 @@ GW_INTERNAL gw_int_result gw_taylor_attempt(gw_instance *I, double t_end, gw_tay
 GW_INTERNAL gw_int_result gw_taylor_conclude(gw_instance *I, double t_end, gw_taylor_run *run,
                                              double h, double t1, const double *f1,
                                              size_t stride, int *fresh);
+/* The halves as the ensemble's batch uses them (its lane-innermost passes compute the norms of
+ * the step size, the increment and the defect for all lanes at once): gw_taylor_attempt
+ * without the increment (norms: N_{p-1}, N_p, or NULL: from I->tl_w); gw_taylor_conclude with
+ * the defect err of the first attempt given (from_series: f1 came from the series at t1). */
+GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
+                                                 gw_taylor_run *run, const double *norms,
+                                                 double *h, double *t1, int *last);
+GW_INTERNAL gw_int_result gw_taylor_conclude_err(gw_instance *I, double t_end, gw_taylor_run *run,
+                                                 double h, double t1, double err, int from_series,
+                                                 int *fresh);
 GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end);
 /* the Taylor polynomial of the last step at t */
 GW_INTERNAL void gw_taylor_dense_eval(const gw_instance *I, double t, double *x_out);

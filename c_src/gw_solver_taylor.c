@@ -74,9 +74,8 @@ GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run
     const size_t S = (size_t)(order + 1) * (size_t)lanes;
     const double floor_scale = I->atol_eff / I->rel_tol;
     const double *nominal = I->nominal;
-    double n1 = 0.0, n2 = 0.0, lr = HUGE_VAL;
+    double n1 = 0.0, n2 = 0.0;
     int i;
-    *bad_order = 0;
     for (i = 0; i < nx; i++) { /* N_j = max_i |x_i^[j]| / sc_i, j = p-1 and p, in one pass */
         const double *xi = X + (size_t)i * S + lane;
         const double rsc = 1.0 / (fabs(xi[0]) + floor_scale * nominal[i]);
@@ -85,6 +84,13 @@ GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run
         n1 = r1 > n1 ? r1 : n1;
         n2 = r2 > n2 ? r2 : n2;
     }
+    return gw_taylor_step_size(run, order, n1, n2, bad_order);
+}
+
+GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, double n1, double n2,
+                                       int *bad_order) {
+    double lr = HUGE_VAL;
+    *bad_order = 0;
     if (!(n1 <= DBL_MAX) || !(n2 <= DBL_MAX)) { /* NaN or inf: which order */
         *bad_order = !(n1 <= DBL_MAX) ? order - 1 : order;
         return 0.0;
@@ -183,8 +189,9 @@ static double gw_taylor_defect(gw_instance *I, double t1, double h, const double
     return isfinite(err) ? err : HUGE_VAL;
 }
 
-GW_INTERNAL gw_int_result gw_taylor_attempt(gw_instance *I, double t_end, gw_taylor_run *run,
-                                            double *h, double *t1, int *last) {
+GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
+                                                 gw_taylor_run *run, const double *norms,
+                                                 double *h, double *t1, int *last) {
     const int nx = I->m->nx, p = I->tl_order;
     double hs;
     int bad, i;
@@ -196,7 +203,8 @@ GW_INTERNAL gw_int_result gw_taylor_attempt(gw_instance *I, double t_end, gw_tay
             return GW_INT_ERROR;
         }
     }
-    hs = gw_taylor_step(I, run, I->tl_w, p, 1, 0, &bad);
+    hs = norms ? gw_taylor_step_size(run, p, norms[0], norms[1], &bad)
+               : gw_taylor_step(I, run, I->tl_w, p, 1, 0, &bad);
     if (bad) {
         GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g (the solution's "
                    "series diverges: a singularity of the right-hand side?)", bad, I->t);
@@ -204,7 +212,14 @@ GW_INTERNAL gw_int_result gw_taylor_attempt(gw_instance *I, double t_end, gw_tay
     }
     I->h_adapt = hs < I->max_step ? hs : I->max_step;
     if (gw_next_attempt(I, t_end, 0, &run->h_prev, &run->n_fast, h, t1, last)) return GW_INT_ERROR;
-    gw_taylor_increment(I->tl_w, p, 1, 0, nx, *h, I->dx, I->k[2]);
+    return GW_INT_OK;
+}
+
+GW_INTERNAL gw_int_result gw_taylor_attempt(gw_instance *I, double t_end, gw_taylor_run *run,
+                                            double *h, double *t1, int *last) {
+    gw_int_result r = gw_taylor_attempt_size(I, t_end, run, NULL, h, t1, last);
+    if (r != GW_INT_OK) return r;
+    gw_taylor_increment(I->tl_w, I->tl_order, 1, 0, I->m->nx, *h, I->dx, I->k[2]);
     gw_sum_update(I); /* xnew, xcnew; an event restarts the compensation (gw_accept_step) */
     return GW_INT_OK;
 }
@@ -212,9 +227,15 @@ GW_INTERNAL gw_int_result gw_taylor_attempt(gw_instance *I, double t_end, gw_tay
 GW_INTERNAL gw_int_result gw_taylor_conclude(gw_instance *I, double t_end, gw_taylor_run *run,
                                              double h, double t1, const double *f1,
                                              size_t stride, int *fresh) {
+    return gw_taylor_conclude_err(I, t_end, run, h, t1, gw_taylor_defect(I, t1, h, f1, stride),
+                                  f1 != NULL, fresh);
+}
+
+GW_INTERNAL gw_int_result gw_taylor_conclude_err(gw_instance *I, double t_end, gw_taylor_run *run,
+                                                 double h, double t1, double err, int from_series,
+                                                 int *fresh) {
     const int nx = I->m->nx, p = I->tl_order;
     gw_int_result r;
-    double err = gw_taylor_defect(I, t1, h, f1, stride);
     int last;
     *fresh = 0;
     while (err > 1.0) {
@@ -236,13 +257,13 @@ GW_INTERNAL gw_int_result gw_taylor_conclude(gw_instance *I, double t_end, gw_ta
             return GW_INT_ERROR;
         gw_taylor_increment(I->tl_w, p, 1, 0, nx, h, I->dx, I->k[2]);
         gw_sum_update(I);
-        f1 = NULL; /* retries: one right-hand side evaluation each */
+        from_series = 0; /* retries: one right-hand side evaluation each */
         err = gw_taylor_defect(I, t1, h, NULL, 1);
     }
     if (!(err >= 0.0)) return GW_INT_ERROR; /* the right-hand side failed (logged) */
     run->steps++;
     r = gw_accept_step(I, t1, &run->events);
-    *fresh = r == GW_INT_OK && f1 != NULL && I->t == t1;
+    *fresh = r == GW_INT_OK && from_series && I->t == t1;
     return r;
 }
 

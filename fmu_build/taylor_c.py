@@ -176,8 +176,10 @@ def _zero_lines(dec: Decomposition) -> list[str]:
     for n, node in dec.nodes.items():
         args = [_order0(a, True) for a in node.args]
         op = node.op
-        if op in ("sincos", "sinhcosh"):
-            f, g = ("sin", "cos") if op == "sincos" else ("sinh", "cosh")
+        if op == "sincos":  # gw_fastmath.h: inline, <= 1 ulp, one reduction for the pair
+            lines.append(f"        gw_sincos({args[0]}, &{_v0(n, True)}, &{_v0(node.extra[0], True)});")
+        elif op == "sinhcosh":
+            f, g = "sinh", "cosh"
             lines.append(f"        {_v0(n, True)} = {f}({args[0]});")
             lines.append(f"        {_v0(node.extra[0], True)} = {g}({args[0]});")
         elif op in ("tan", "tanh"):
@@ -398,6 +400,7 @@ def taylor_source(dec: Decomposition, model: str) -> str:
  * var ops: {ops}
  * interior sums: {len(plan.terms)} terms in {n_groups} loops of up to {GROUP} accumulators */
 #include "gw_taylor_ops.h" /* the lane vectors GW_TL(v), GW_TLZ, GW_TLFMA, ... for GW_TL_W lanes */
+#include "gw_fastmath.h" /* gw_sincos at order 0 (sin and cos of one argument, <= 1 ulp) */
 #define GW_TL_NX {dec.nx}
 #define GW_TL_NODES {plan.n_nodes} /* internal series: var nodes, then weighted series */
 /* series of w: the states' output, the nodes (aligned to a lane slice: one series of room) */

@@ -505,3 +505,29 @@ def test_ensemble_bad_job_names_the_field(paper, tmp_path):
     for lanes in (0, -1, 2.5, "4", True):
         with pytest.raises(ValueError, match="lanes must be an integer >= 1"):
             Ensemble(built.fmu, lanes=lanes, cache=tmp_path)
+
+
+def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path, monkeypatch):
+    """The batch's lane-innermost passes (gw_ensemble.c: the step size norms, the defects, the
+    increments' Horner sums of all lanes at once) give each lane the numbers of solver taylor's
+    one-lane code bit for bit: the same library built with GW_ENSEMBLE_LANE_STEPS=1 (every lane
+    through gw_taylor_step / _defect / _increment on its own copy of the series) returns equal
+    steps, times, states and grid outputs, with N not a multiple of the lanes, falls at
+    different times, refills and a communication grid."""
+    import fmu_build.ensemble as ensemble_mod
+    built, _ = paper
+    g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81])
+    spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 4.0, 6.1])
+    kw = dict(parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-7)
+    grid = np.linspace(0.5, 6.0, 12)
+    passes = Ensemble(built.fmu, lanes=4, cache=tmp_path)
+    monkeypatch.setattr(ensemble_mod, "_UNITY", "#define GW_ENSEMBLE_LANE_STEPS 1\n" + ensemble_mod._UNITY)
+    per_lane = Ensemble(built.fmu, lanes=4, cache=tmp_path)
+    for extra in ({}, {"grid": grid}):
+        a, b = passes.run(6.0, **kw, **extra), per_lane.run(6.0, **kw, **extra)
+        assert 0 < a.terminated.sum() < len(g)
+        assert list(a.status) == list(b.status) and list(a.steps) == list(b.steps)
+        np.testing.assert_array_equal(a.t_final, b.t_final)
+        np.testing.assert_array_equal(a.x_final, b.x_final)
+        if extra:
+            np.testing.assert_array_equal(a.y_grid, b.y_grid)

@@ -15,7 +15,9 @@
  *           (Biscani & Izzo, MNRAS 504 (2021) 2614, sect. 4), optimal when a step costs ~p^2;
  *           this kernel's cost per step grows nearly linearly with p (a fixed part, the linear
  *           nodes, few products), so fewer, longer steps of a higher order reach the same
- *           error sooner (paper scenario: 13-25% less time to each error, docs/taylor.md)
+ *           error sooner (paper scenario: 13-25% less time to each error, docs/taylor.md;
+ *           re-measured against + 2, + 3, + 5, + 6 with the present kernel, fewer orders at
+ *           loose tolerances included: benchmarks/taylor_order_ab.py)
  *   step    h = rho exp(c),  rho = min_{j = p-1, p} N_j^(-1/j),
  *           N_j = max_i |x_i^[j]| / sc_i,  sc_i = |x_i| + (atol / rel_tol) nominal_i,
  *           c = -(2 + 0.7 / (p0 - 1)) (p0 + 1) / (p + 1): the first neglected term
@@ -229,7 +231,10 @@ static double gw_taylor_defect(gw_instance *I, double t1, double h, const double
     for (i = 0; i < nx; i++) {
         const double r = fabs(f1[(size_t)i * stride] - dp[i]) * scale /
                          (rtol * fabs(xnew[i]) + atol * nominal[i]);
-        if (!(r <= err)) err = r; /* NaN propagates as a rejection */
+        if (!(r <= err)) {
+            err = r;
+            if (r != r) break; /* NaN: a rejection (a later finite r would have replaced it) */
+        }
     }
     return isfinite(err) ? err : HUGE_VAL;
 }

@@ -114,7 +114,7 @@ GW_INTERNAL void gw_rodas4_dense(gw_instance *I);
 /* ---- gw_solver_taylor.c ----------------------------------------------------------------------- */
 #define GW_TAYLOR_MAX_ORDER 30 /* the work memory holds series of this order */
 /* orders above the tolerance's p0 = ceil(-ln(rel_tol) / 2 + 1) (gw_solver_taylor.c: fewer,
- * longer steps for the same error, measured in benchmarks/taylor_vs_heyoka.py) */
+ * longer steps for the same error, measured in benchmarks/taylor_order_ab.py) */
 #ifndef GW_TAYLOR_EXTRA_ORDER
 #define GW_TAYLOR_EXTRA_ORDER 4
 #endif

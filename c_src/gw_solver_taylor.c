@@ -15,7 +15,9 @@
  *           (Biscani & Izzo, MNRAS 504 (2021) 2614, sect. 4), optimal when a step costs ~p^2;
  *           this kernel's cost per step grows nearly linearly with p (a fixed part, the linear
  *           nodes, few products), so fewer, longer steps of a higher order reach the same
- *           error sooner (paper scenario: 13-25% less time to each error, docs/taylor.md)
+ *           error sooner (paper scenario: 13-25% less time to each error, docs/taylor.md;
+ *           re-measured against + 2, + 3, + 5, + 6 with the present kernel, fewer orders at
+ *           loose tolerances included: benchmarks/taylor_order_ab.py)
  *   step    h = rho exp(c),  rho = min_{j = p-1, p} N_j^(-1/j),
  *           N_j = max_i |x_i^[j]| / sc_i,  sc_i = |x_i| + (atol / rel_tol) nominal_i,
  *           c = -(2 + 0.7 / (p0 - 1)) (p0 + 1) / (p + 1): the first neglected term
@@ -105,6 +107,45 @@ GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, doub
  * with Q(s) = sum_{k>=1} X_k s^(k-1), dx = h Q(h) and P'(h) = Q(h) + h Q'(h).  The order loop
  * is outside the component loop (blocks of 8 components): the components' Horner chains are
  * independent and overlap, where one chain after the other waited on each multiply-add. */
+#if defined(__GNUC__) || defined(__clang__)
+typedef double gw_tl_v2 __attribute__((vector_size(16))); /* one SSE2 register */
+/* a full block of 8 components as 4 pairs: the same multiplies and adds in the same order as
+ * the scalar loop below (bit for bit), half the instructions (the scalar loop was bound by the
+ * issue of its 4 operations per component and order, not by the chains' latency) */
+static void gw_taylor_increment8(const double *x0, size_t S, int order, int lanes, double h,
+                                 double *dx, double *dp) {
+    const gw_tl_v2 hv = {h, h};
+    gw_tl_v2 q[4], dq[4];
+    int c, k;
+    for (c = 0; c < 4; c++) {
+        const double *a = x0 + (size_t)(2 * c) * S + (size_t)order * lanes;
+        q[c] = (gw_tl_v2){a[0], a[S]};
+        dq[c] = (gw_tl_v2){0.0, 0.0};
+    }
+    for (k = order - 1; k >= 1; k--) {
+        const double *xk = x0 + (size_t)k * lanes;
+        for (c = 0; c < 4; c++) {
+            const double *a = xk + (size_t)(2 * c) * S;
+            dq[c] = dq[c] * hv + q[c];
+            q[c] = q[c] * hv + (gw_tl_v2){a[0], a[S]};
+        }
+    }
+    for (c = 0; c < 4; c++) {
+        const gw_tl_v2 d = q[c] * hv;
+        dx[2 * c] = d[0];
+        dx[2 * c + 1] = d[1];
+        if (dp) {
+            const gw_tl_v2 e = q[c] + hv * dq[c];
+            dp[2 * c] = e[0];
+            dp[2 * c + 1] = e[1];
+        }
+    }
+}
+#define GW_TL_INCREMENT8 1
+#else
+#define GW_TL_INCREMENT8 0
+#endif
+
 GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int lane, int nx,
                                      double h, double *dx, double *dp) {
     enum { B = 8 };
@@ -114,6 +155,12 @@ GW_INTERNAL void gw_taylor_increment(const double *X, int order, int lanes, int 
         const int nb = nx - i0 < B ? nx - i0 : B;
         const double *x0 = X + (size_t)i0 * S + lane;
         double q[B], dq[B];
+#if GW_TL_INCREMENT8
+        if (nb == B) {
+            gw_taylor_increment8(x0, S, order, lanes, h, dx + i0, dp ? dp + i0 : NULL);
+            continue;
+        }
+#endif
         for (b = 0; b < nb; b++) {
             q[b] = x0[(size_t)b * S + (size_t)order * lanes];
             dq[b] = 0.0;
@@ -184,7 +231,10 @@ static double gw_taylor_defect(gw_instance *I, double t1, double h, const double
     for (i = 0; i < nx; i++) {
         const double r = fabs(f1[(size_t)i * stride] - dp[i]) * scale /
                          (rtol * fabs(xnew[i]) + atol * nominal[i]);
-        if (!(r <= err)) err = r; /* NaN propagates as a rejection */
+        if (!(r <= err)) {
+            err = r;
+            if (r != r) break; /* NaN: a rejection (a later finite r would have replaced it) */
+        }
     }
     return isfinite(err) ? err : HUGE_VAL;
 }

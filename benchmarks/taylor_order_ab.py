@@ -1,0 +1,151 @@
+"""The order rule of solver taylor, measured: time to reach each error for several rules (issue 11).
+
+Builds each scenario's FMU once (taylor=True), then recompiles its own sources into variants:
+  base      the sources as they are (or, with --base REV, gw_solver_taylor.c and gw_solver.h of
+            git revision REV put in their place: the rule before a change, in the same run)
+  +k        the same sources with -DGW_TAYLOR_EXTRA_ORDER=k (a fixed k orders above p0)
+and times every variant at every (rel_tol, abs_tol) interleaved (one fmi2DoStep through fmpy,
+thread CPU time, best of --repeat), with heyoka on the same graph as the peer (the references and
+the graph translation of taylor_vs_heyoka.py).  Prints per variant: order, steps and error per
+rel_tol, and the cheapest time to each target error with its ratio to heyoka's.  Timings on a
+loaded machine are noisy; the ratios come from one run.
+
+    python benchmarks/taylor_order_ab.py [--scenarios paper near_flat long] [--extra 0 2 4]
+                                         [--base main] [--repeat 7]
+"""
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent))
+
+from fmi_slave import FmuRunner, solver_counts  # noqa: E402
+from taylor_vs_heyoka import cheapest, to_heyoka  # noqa: E402
+from work_precision import SCENARIOS  # noqa: E402
+from work_precision import best_time as best  # noqa: E402
+
+from fmu_build import build_fmu, parse_scene  # noqa: E402
+from fmu_build.codegen import optimised  # noqa: E402
+from fmu_build.compiler import UNITY_SOURCE, compile_shared  # noqa: E402
+
+TARGETS = (1e-4, 1e-7, 1e-10, 1e-12)
+TOLS = [10.0 ** -k for k in range(3, 15)]
+TAYLOR = 6
+
+
+def variant(fmu: Path, work: Path, name: str, flags: list[str], base: str | None) -> Path:
+    """The FMU with its binary recompiled from its own sources (plus `flags`, or the solver files
+    of git revision `base`), zipped as work/<name>.fmu."""
+    from fmpy import extract
+    d = Path(extract(str(fmu), unzipdir=str(work / name)))
+    src = d / "sources"
+    if base:
+        for f in ("gw_solver_taylor.c", "gw_solver.h"):
+            text = subprocess.run(["git", "show", f"{base}:c_src/{f}"], cwd=HERE.parent, check=True,
+                                  capture_output=True, text=True).stdout
+            (src / f).write_text(text)
+    so = next((d / "binaries").rglob("*.so"))
+    compile_shared(src / UNITY_SOURCE, [src], so, extra_flags=flags)
+    out = work / f"{name}.fmu"
+    shutil.make_archive(str(out.with_suffix("")), "zip", d)
+    out.with_suffix(".zip").rename(out)
+    return out
+
+
+def run(name: str, work: Path, variants: dict[str, tuple[list[str], str | None]], repeat: int) -> list[str]:
+    import heyoka as hy
+    text, stop = SCENARIOS[name]
+    built = build_fmu(parse_scene(f'[model]\nname = "ab_{name}"\n' + text, f"{name}.toml"),
+                      work / f"{name}.fmu", build_dir=work / name, taylor=True)
+    fns = built.spec.functions()
+    p = [q.start for q in built.spec.parameters]
+    x0 = np.array(fns["init"]([q.start for q in built.spec.starts], p)).ravel()
+    f = optimised(fns["ode"])
+    xs = hy.make_vars(*[f"x{i}" for i in range(x0.size)])
+    names = [q.name for q, _ in built.spec.outputs][:8]
+    rows = [[q.name for q, _ in built.spec.outputs].index(n) for n in names]
+    out = lambda x: np.array(fns["out"](stop, x, [], p)).ravel()[rows]  # noqa: E731
+    ld = np.longdouble
+    ta_ref = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p, ld))), x0.astype(ld), tol=ld(1e-19), fp_type=ld)
+    ta_ref.propagate_until(ld(stop))
+    ref = out(np.array(ta_ref.state, dtype=float))
+
+    fmus = {v: variant(built.fmu, work / name, f"{name}_{v.replace('+', 'x')}", fl, b)
+            for v, (fl, b) in variants.items()}
+    runners = {v: FmuRunner(path) for v, path in fmus.items()}
+    pts: dict[str, list] = {v: [] for v in fmus}
+    pts["heyoka"] = []
+    info: dict[str, list[str]] = {v: [] for v in fmus}
+    first = next(iter(fmus))
+    same = {v: 0 for v in fmus}  # settings whose final states equal the first variant's bit for bit
+    for tol in TOLS:
+        for atol in (tol * 1e-2, tol):
+            secs = {v: float("inf") for v in fmus}
+            vals = {}
+            for _ in range(repeat):  # interleaved: every variant once per round
+                for v, r in runners.items():
+                    vals[v] = r.one_step(stop, names, solver=TAYLOR, rel_tol=tol, abs_tol=atol, max_step=stop)
+                    secs[v] = min(secs[v], r.last_seconds)
+            for v in fmus:
+                same[v] += vals[v] == vals[first]
+                err = float(np.max(np.abs(np.array(vals[v]) - ref)))
+                pts[v].append((secs[v], err))
+                if atol == tol * 1e-2:
+                    c = solver_counts(fmus[v], stop, solver=TAYLOR, rel_tol=tol, abs_tol=atol, max_step=stop)
+                    info[v].append(f"{tol:.0e}: {c['accepted']} steps, err {err:.1e}, "
+                                   f"{secs[v] * 1e3:.3g} ms")
+        ta = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p))), x0, tol=tol)
+
+        def prop():
+            ta.time, ta.state[:] = 0.0, x0
+            return ta.propagate_until(stop)
+        sec, _ = best(prop, repeat)
+        pts["heyoka"].append((sec, float(np.max(np.abs(out(ta.state) - ref)))))
+    for r in runners.values():
+        r.free()
+    lines = [f"### {name} ({stop:g} s)", "", "| rule | " + " | ".join(f"err <= {t:g}" for t in TARGETS)
+             + " | floor |", "|---|" + "---|" * (len(TARGETS) + 1)]
+    for v, points in pts.items():
+        cells = []
+        for t in TARGETS:
+            s, peer = cheapest(points, t), cheapest(pts["heyoka"], t)
+            cells.append("-" if s is None else f"{s * 1e3:.3g} ms" + (f" ({s / peer:.2f}x)" if peer else ""))
+        lines.append(f"| {v} | " + " | ".join(cells) + f" | {min(e for _, e in points):.1e} |")
+    lines.append("")
+    lines += [f"{v}: final states bit for bit those of {first} at {same[v]} of {2 * len(TOLS)} settings"
+              for v in fmus if v != first]
+    for v, rows_ in info.items():
+        lines.append(f"{v} (abs_tol = rel_tol/100): " + "; ".join(rows_))
+    return lines + [""]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenarios", nargs="*", default=["paper", "near_flat"],
+                        choices=["paper", "long", "near_flat"])
+    parser.add_argument("--extra", nargs="*", type=int, default=[], help="fixed extra orders to time")
+    parser.add_argument("--base", help="git revision whose gw_solver_taylor.c / gw_solver.h are the 'main' row")
+    parser.add_argument("--repeat", type=int, default=7)
+    args = parser.parse_args()
+    variants: dict[str, tuple[list[str], str | None]] = {"now": ([], None)}
+    if args.base:
+        variants[args.base] = ([], args.base)
+    for k in args.extra:
+        variants[f"+{k}"] = ([f"-DGW_TAYLOR_EXTRA_ORDER={k}"], None)
+    with tempfile.TemporaryDirectory(prefix="gw-taylor-ab-") as tmp:
+        for name in args.scenarios:
+            print("\n".join(run(name, Path(tmp), variants, args.repeat)), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

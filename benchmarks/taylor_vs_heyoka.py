@@ -43,7 +43,15 @@ TOLS = [10.0 ** -k for k in range(3, 17)]
 
 
 def to_heyoka(f, xs, p, fp=float):
-    """The ode's SX algorithm as heyoka expressions (same graph, parameters as numbers)."""
+    """The ode's SX algorithm as heyoka expressions (same graph, parameters as numbers).
+
+    Raises ValueError, before heyoka is imported, for an input other than t, x and p (inputs u,
+    a hoisted ode's constants c): heyoka would otherwise integrate a different system.
+    """
+    for j in range(f.n_in()):
+        if j not in (0, 1, 3) and f.nnz_in(j) > 0:
+            raise ValueError(f"to_heyoka: input {f.name_in(j)!r} of {f.name()} is neither t, x nor p "
+                             "(pass the whole right-hand side: fmu_build.codegen.taylor_ode)")
     import heyoka as hy
     un = {"neg": lambda a: -a, "twice": lambda a: 2.0 * a, "sq": lambda a: a * a, "sqrt": hy.sqrt,
           "sin": hy.sin, "cos": hy.cos, "tanh": hy.tanh, "exp": hy.exp, "log": hy.log,
@@ -54,9 +62,6 @@ def to_heyoka(f, xs, p, fp=float):
     for k in range(f.n_instructions()):
         op, i, o = OP_NAMES[f.instruction_id(k)], f.instruction_input(k), f.instruction_output(k)
         if op == "input":
-            if i[0] not in (0, 1, 3):  # u, or a hoisted ode's constants c: not translated
-                raise ValueError(f"to_heyoka: input {f.name_in(i[0])!r} of {f.name()} is neither t, x nor p "
-                                 "(pass the whole right-hand side: fmu_build.codegen.taylor_ode)")
             work[o[0]] = xs[i[1]] if i[0] == 1 else (hy.expression(fp(p[i[1]])) if i[0] == 3 else hy.time)
         elif op == "const":
             work[o[0]] = hy.expression(fp(f.instruction_constant(k)))

@@ -32,7 +32,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include "gw_solver.h"
 
 #ifndef GW_ENSEMBLE_LANES
-#define GW_ENSEMBLE_LANES 8
+#define GW_ENSEMBLE_LANES 4 /* fmu_build/ensemble.py LANES */
 #endif
 
 #if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && !defined(GW_NO_CLONES) &&   \

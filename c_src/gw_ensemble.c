@@ -32,7 +32,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include "gw_solver.h"
 
 #ifndef GW_ENSEMBLE_LANES
-#define GW_ENSEMBLE_LANES 8
+#define GW_ENSEMBLE_LANES 4 /* fmu_build/ensemble.py LANES */
 #endif
 
 #if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && !defined(GW_NO_CLONES) &&   \
@@ -60,7 +60,6 @@ typedef struct {
                         the next batch is its end point, else the lane's current point */
     double h, t1;
 } gw_lane;
-
 enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
 
 #if defined(__GNUC__) || defined(__clang__)
@@ -342,8 +341,8 @@ static void gw_ens_defects(const gw_ensemble *E, int order, const double *scale,
 }
 
 /* dx (E->qx) and P'(h) (E->qd) of every lane for its step size h[l] (gw_taylor_increment):
- * for each component the lanes' Horner chains side by side, two lanes per vector of the
- * GCC / clang vector extension (SSE2 on x86-64: GCC vectorised none of the plain loops) */
+ * the lanes' Horner chains side by side, two lanes per vector (GCC / clang vector extension:
+ * GCC vectorised none of the plain loops), on up to 4 lanes two components at once (latency) */
 #if (defined(__GNUC__) || defined(__clang__)) && GW_ENSEMBLE_LANES % 2 == 0
 typedef double gw_ens_v2 __attribute__((vector_size(16)));
 #define GW_ENS_V 2
@@ -351,11 +350,7 @@ typedef double gw_ens_v2 __attribute__((vector_size(16)));
 typedef double gw_ens_v2;
 #define GW_ENS_V 1
 #endif
-static gw_ens_v2 gw_ens_ld(const double *p) {
-    gw_ens_v2 v;
-    memcpy(&v, p, sizeof v);
-    return v;
-}
+static gw_ens_v2 gw_ens_ld(const double *p) { gw_ens_v2 v; memcpy(&v, p, sizeof v); return v; }
 static void gw_ens_st(double *p, gw_ens_v2 v) { memcpy(p, &v, sizeof v); }
 
 static void gw_ens_increments(gw_ensemble *E, int order, const double *h) {
@@ -363,9 +358,31 @@ static void gw_ens_increments(gw_ensemble *E, int order, const double *h) {
     const size_t S = (size_t)(order + 1) * W;
     const int nx = E->m->nx;
     gw_ens_v2 hh[NV];
-    int i, k, j;
+    int i = 0, k, j;
     for (j = 0; j < NV; j++) hh[j] = gw_ens_ld(h + j * V);
-    for (i = 0; i < nx; i++) { /* kept in registers: the loops over j are unrolled */
+    for (i = 0; NV <= 2 && i + 1 < nx; i += 2) { /* two components: twice the chains */
+        const double *x0 = E->w + (size_t)i * S, *y0 = x0 + S;
+        gw_ens_v2 q[NV], dq[NV], r[NV], dr[NV];
+        for (j = 0; j < NV; j++) {
+            q[j] = gw_ens_ld(x0 + (size_t)order * W + j * V);
+            r[j] = gw_ens_ld(y0 + (size_t)order * W + j * V);
+            dq[j] = q[j] * 0.0, dr[j] = r[j] * 0.0;
+        }
+        for (k = order - 1; k >= 1; k--)
+            for (j = 0; j < NV; j++) {
+                dq[j] = k == order - 1 ? q[j] : dq[j] * hh[j] + q[j];
+                dr[j] = k == order - 1 ? r[j] : dr[j] * hh[j] + r[j];
+                q[j] = q[j] * hh[j] + gw_ens_ld(x0 + (size_t)k * W + j * V);
+                r[j] = r[j] * hh[j] + gw_ens_ld(y0 + (size_t)k * W + j * V);
+            }
+        for (j = 0; j < NV; j++) {
+            gw_ens_st(E->qx + (size_t)i * W + j * V, q[j] * hh[j]);
+            gw_ens_st(E->qd + (size_t)i * W + j * V, q[j] + hh[j] * dq[j]);
+            gw_ens_st(E->qx + (size_t)(i + 1) * W + j * V, r[j] * hh[j]);
+            gw_ens_st(E->qd + (size_t)(i + 1) * W + j * V, r[j] + hh[j] * dr[j]);
+        }
+    }
+    for (; i < nx; i++) { /* kept in registers: the loops over j are unrolled */
         const double *x0 = E->w + (size_t)i * S;
         gw_ens_v2 q[NV], dq[NV];
         for (j = 0; j < NV; j++) {
@@ -593,16 +610,10 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
     }
     for (l = 0; l < GW_ENS_LANES; l++)
         if (E.lane[l].I) gw_instance_free(E.lane[l].I);
-    cb->free(E.w);
-    cb->free(E.c);
-    cb->free(E.x);
-    cb->free(E.u);
-    cb->free(E.p);
-    cb->free(E.fsn);
-    cb->free(E.anom);
-    cb->free(E.dp);
-    cb->free(E.qx);
-    cb->free(E.qd);
+    {
+        double *const mem[] = {E.w, E.c, E.x, E.u, E.p, E.fsn, E.anom, E.dp, E.qx, E.qd};
+        for (l = 0; l < (int)(sizeof mem / sizeof mem[0]); l++) cb->free(mem[l]);
+    }
     return st;
 }
 

@@ -34,7 +34,11 @@ __all__ = ["Ensemble", "EnsembleResult", "EnsembleError", "STATUS_OK", "STATUS_T
            "STATUS_ERROR", "LANES"]
 
 STATUS_OK, STATUS_TERMINATED, STATUS_ERROR = 0, 2, 3  # gw_status values
-LANES = 8  # trajectories advanced together (GW_ENSEMBLE_LANES)
+# trajectories advanced together (GW_ENSEMBLE_LANES): 4, one AVX2 vector of doubles.  8 lanes are
+# no cheaper per trajectory on an AVX2 machine and much dearer for small N (paper scenario, quiet
+# machine: N = 16 at 1e-10 0.191 ms on 8 lanes, 0.178 ms on 4; N = 4 at 1e-4 0.172 against
+# 0.108 ms), docs/taylor.md "The ensemble path"
+LANES = 4
 KIND_PARAM, KIND_START, KIND_OUTPUT, KIND_EVENT = 0, 1, 3, 5  # gw_kind
 FLAGS = ["-O3", "-ffp-contract=fast"]  # portable: the x86-64-v3 kernel is a target clone
 

@@ -32,7 +32,7 @@ from fmu_build import build_fmu, load_scene, parse_scene
 from fmu_build.builder import model_spec
 from fmu_build.codegen import optimised
 from fmu_build.compiler import compiler
-from fmu_build.ensemble import STATUS_OK, STATUS_TERMINATED, Ensemble, EnsembleError
+from fmu_build.ensemble import LANES, STATUS_OK, STATUS_TERMINATED, Ensemble, EnsembleError
 from fmu_build.taylor_c import taylor_source, work_series
 from fmu_build.taylor_graph import TaylorUnsupportedError, decompose
 
@@ -399,9 +399,12 @@ def test_kernel_and_ensemble_sources_warning_clean(cc, paper, tmp_path):
 # ---- ensemble ----------------------------------------------------------------------------------
 
 def test_ensemble_equals_single_runs(paper, tmp_path):
-    """N trajectories (g, gamma_dot varied; some fall) equal N fmi2DoStep runs with taylor."""
+    """N trajectories (g, gamma_dot varied; some fall) equal N fmi2DoStep runs with taylor, on the
+    default lanes (4, one AVX2 vector: the library reports the GW_ENSEMBLE_LANES it was built with,
+    so the default reaches the C; the sweep engine uses it)."""
     built, runner = paper
     ens = Ensemble(built.fmu, cache=tmp_path)
+    assert ens.lanes == LANES == 4
     g = np.array([9.81, 3.721, 1.625, 9.81, 9.81, 0.0, 9.81, 5.0, 9.81, 2.0])
     spin = np.array([6.0, 6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 4.0, 0.2, 6.0])
     res = ens.run(20.0, parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-10)

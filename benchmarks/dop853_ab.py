@@ -31,12 +31,11 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))
 
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
-from taylor_vs_heyoka import TARGETS, cheapest, to_heyoka  # noqa: E402
+from taylor_vs_heyoka import TARGETS, SameGraph, cheapest  # noqa: E402
 from work_precision import SCENARIOS, SOLVER_CODES  # noqa: E402
 from work_precision import best_time as best  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
-from fmu_build.codegen import optimised  # noqa: E402
 
 TOLS = [10.0 ** -k for k in range(3, 15)]
 
@@ -70,25 +69,14 @@ def build_ref(ref: Path, name: str, work: Path) -> Path:
 
 
 def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853", label: str | None = None) -> list[str]:
-    import heyoka as hy
     text, stop = SCENARIOS[name]
     work = work / name
     work.mkdir()
     built = build_fmu(parse_scene(f'[model]\nname = "ab_{name}"\n' + text, f"{name}.toml"),
                       work / "new.fmu", build_dir=work / "newb")
     fmus = {"this tree": built.fmu, f"ref ({label or ref})": build_ref(ref, name, work)}
-    fns = built.spec.functions()
-    p = [q.start for q in built.spec.parameters]
-    x0 = np.array(fns["init"]([q.start for q in built.spec.starts], p)).ravel()
-    f = optimised(fns["ode"])
-    xs = hy.make_vars(*[f"x{i}" for i in range(x0.size)])
-    names = [q.name for q, _ in built.spec.outputs][:8]
-    rows = [[q.name for q, _ in built.spec.outputs].index(n) for n in names]
-    out = lambda x: np.array(fns["out"](stop, x, [], p)).ravel()[rows]  # noqa: E731
-    ld = np.longdouble
-    ta_ref = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p, ld))), x0.astype(ld), tol=ld(1e-19), fp_type=ld)
-    ta_ref.propagate_until(ld(stop))
-    ref_x = out(np.array(ta_ref.state, dtype=float))
+    g = SameGraph(built, stop)
+    x0, names, out, ref_x = g.x0, g.names, g.out, g.ref
     runners = {k: FmuRunner(v) for k, v in fmus.items()}
     pts: dict[str, list] = {k: [] for k in [*fmus, "heyoka"]}
     for tol in TOLS:
@@ -100,7 +88,7 @@ def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853", l
                 secs[k] = min(secs[k], r.last_seconds)
         for k in fmus:
             pts[k].append((secs[k], float(np.max(np.abs(np.array(vals[k]) - ref_x)))))
-        ta = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p))), x0, tol=tol)
+        ta = g.heyoka(tol)
 
         def prop():
             ta.time, ta.state[:] = 0.0, x0

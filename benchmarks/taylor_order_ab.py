@@ -29,12 +29,11 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))
 
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
-from taylor_vs_heyoka import cheapest, to_heyoka  # noqa: E402
+from taylor_vs_heyoka import SameGraph, cheapest  # noqa: E402
 from work_precision import SCENARIOS  # noqa: E402
 from work_precision import best_time as best  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
-from fmu_build.codegen import optimised  # noqa: E402
 from fmu_build.compiler import UNITY_SOURCE, compile_shared  # noqa: E402
 
 TARGETS = (1e-4, 1e-7, 1e-10, 1e-12)
@@ -62,22 +61,11 @@ def variant(fmu: Path, work: Path, name: str, flags: list[str], base: str | None
 
 
 def run(name: str, work: Path, variants: dict[str, tuple[list[str], str | None]], repeat: int) -> list[str]:
-    import heyoka as hy
     text, stop = SCENARIOS[name]
     built = build_fmu(parse_scene(f'[model]\nname = "ab_{name}"\n' + text, f"{name}.toml"),
                       work / f"{name}.fmu", build_dir=work / name, taylor=True)
-    fns = built.spec.functions()
-    p = [q.start for q in built.spec.parameters]
-    x0 = np.array(fns["init"]([q.start for q in built.spec.starts], p)).ravel()
-    f = optimised(fns["ode"])
-    xs = hy.make_vars(*[f"x{i}" for i in range(x0.size)])
-    names = [q.name for q, _ in built.spec.outputs][:8]
-    rows = [[q.name for q, _ in built.spec.outputs].index(n) for n in names]
-    out = lambda x: np.array(fns["out"](stop, x, [], p)).ravel()[rows]  # noqa: E731
-    ld = np.longdouble
-    ta_ref = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p, ld))), x0.astype(ld), tol=ld(1e-19), fp_type=ld)
-    ta_ref.propagate_until(ld(stop))
-    ref = out(np.array(ta_ref.state, dtype=float))
+    g = SameGraph(built, stop)
+    x0, names, out, ref = g.x0, g.names, g.out, g.ref
 
     fmus = {v: variant(built.fmu, work / name, f"{name}_{v.replace('+', 'x')}", fl, b)
             for v, (fl, b) in variants.items()}
@@ -103,7 +91,7 @@ def run(name: str, work: Path, variants: dict[str, tuple[list[str], str | None]]
                     c = solver_counts(fmus[v], stop, solver=TAYLOR, rel_tol=tol, abs_tol=atol, max_step=stop)
                     info[v].append(f"{tol:.0e}: {c['accepted']} steps, err {err:.1e}, "
                                    f"{secs[v] * 1e3:.3g} ms")
-        ta = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p))), x0, tol=tol)
+        ta = g.heyoka(tol)
 
         def prop():
             ta.time, ta.state[:] = 0.0, x0

@@ -74,6 +74,38 @@ def to_heyoka(f, xs, p, fp=float):
     return out
 
 
+class SameGraph:
+    """One scenario's FMU and heyoka on the FMU's own graph (to_heyoka), with the reference.
+
+    f: the ode (optimised SX Function); xs: heyoka's state variables; p: parameter values;
+    s0: start values; x0: initial state (nx,); out(x): the 8 state outputs (x, y, alpha, beta,
+    gamma and the rates) at the stop time; ref: out of heyoka in long double at tol 1e-19,
+    the reference every method's error is measured against.
+    """
+
+    def __init__(self, built, stop: float):
+        import heyoka as hy
+        fns = built.spec.functions()
+        self.p = [q.start for q in built.spec.parameters]
+        self.s0 = [q.start for q in built.spec.starts]
+        self.x0 = np.array(fns["init"](self.s0, self.p)).ravel()
+        self.f = optimised(fns["ode"])
+        self.xs = hy.make_vars(*[f"x{i}" for i in range(self.x0.size)])
+        self.names = [q.name for q, _ in built.spec.outputs][:8]
+        rows = [[q.name for q, _ in built.spec.outputs].index(n) for n in self.names]
+        self.out = lambda x: np.array(fns["out"](stop, x, [], self.p)).ravel()[rows]  # noqa: E731
+        ld = np.longdouble
+        ta_ref = hy.taylor_adaptive(list(zip(self.xs, to_heyoka(self.f, self.xs, self.p, ld))),
+                                    self.x0.astype(ld), tol=ld(1e-19), fp_type=ld)
+        ta_ref.propagate_until(ld(stop))
+        self.ref = self.out(np.array(ta_ref.state, dtype=float))
+
+    def heyoka(self, tol: float):
+        """heyoka.taylor_adaptive on the same graph at tolerance tol (JIT-compiled here)."""
+        import heyoka as hy
+        return hy.taylor_adaptive(list(zip(self.xs, to_heyoka(self.f, self.xs, self.p))), self.x0, tol=tol)
+
+
 def cheapest(points, target):
     ok = [s for s, e in points if e <= target]
     return min(ok) if ok else None
@@ -84,21 +116,8 @@ def run(name: str, work: Path, repeat: int, batch: int) -> list[str]:
     text, stop = SCENARIOS[name]
     built = build_fmu(parse_scene(f'[model]\nname = "tl_{name}"\n' + text, f"{name}.toml"),
                       work / f"{name}.fmu", build_dir=work / name, taylor=True)
-    fns = built.spec.functions()
-    p = [q.start for q in built.spec.parameters]
-    s0 = [q.start for q in built.spec.starts]
-    x0 = np.array(fns["init"](s0, p)).ravel()
-    f = optimised(fns["ode"])
-    xs = hy.make_vars(*[f"x{i}" for i in range(x0.size)])
-    names = [q.name for q, _ in built.spec.outputs][:8]
-    rows = [[q.name for q, _ in built.spec.outputs].index(n) for n in names]
-    out = lambda x: np.array(fns["out"](stop, x, [], p)).ravel()[rows]  # noqa: E731
-
-    ld = np.longdouble
-    ta_ref = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p, ld))), x0.astype(ld), tol=ld(1e-19),
-                                fp_type=ld)
-    ta_ref.propagate_until(ld(stop))
-    ref = out(np.array(ta_ref.state, dtype=float))
+    g = SameGraph(built, stop)
+    f, xs, p, s0, x0, names, out, ref = g.f, g.xs, g.p, g.s0, g.x0, g.names, g.out, g.ref
     lines = [f"### {name} ({stop:g} s)", ""]
 
     runner = FmuRunner(built.fmu)
@@ -119,7 +138,7 @@ def run(name: str, work: Path, repeat: int, batch: int) -> list[str]:
                     continue
                 pts[label].append((secs, float(np.max(np.abs(np.array(v) - ref)))))
         t0 = time.perf_counter()
-        ta = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p))), x0, tol=tol)
+        ta = g.heyoka(tol)
         setup = time.perf_counter() - t0  # wall time of the JIT compilation (not compared)
 
         def prop():

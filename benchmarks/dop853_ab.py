@@ -33,7 +33,6 @@ sys.path.insert(0, str(HERE.parent))
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
 from taylor_vs_heyoka import TARGETS, SameGraph, cheapest  # noqa: E402
 from work_precision import SCENARIOS, SOLVER_CODES  # noqa: E402
-from work_precision import best_time as best  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
 
@@ -76,7 +75,7 @@ def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853", l
                       work / "new.fmu", build_dir=work / "newb")
     fmus = {"this tree": built.fmu, f"ref ({label or ref})": build_ref(ref, name, work)}
     g = SameGraph(built, stop)
-    x0, names, out, ref_x = g.x0, g.names, g.out, g.ref
+    names, ref_x = g.names, g.ref
     runners = {k: FmuRunner(v) for k, v in fmus.items()}
     pts: dict[str, list] = {k: [] for k in [*fmus, "heyoka"]}
     for tol in TOLS:
@@ -88,13 +87,7 @@ def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853", l
                 secs[k] = min(secs[k], r.last_seconds)
         for k in fmus:
             pts[k].append((secs[k], float(np.max(np.abs(np.array(vals[k]) - ref_x)))))
-        ta = g.heyoka(tol)
-
-        def prop():
-            ta.time, ta.state[:] = 0.0, x0
-            return ta.propagate_until(stop)
-        sec, _ = best(prop, repeat)
-        pts["heyoka"].append((sec, float(np.max(np.abs(out(ta.state) - ref_x)))))
+        pts["heyoka"].append(g.time_heyoka(tol, stop, repeat)[:2])
     for r in runners.values():
         r.free()
     lines = [f"### {name} ({stop:g} s): {solver} (abs_tol = rel_tol/100, max_step = T)", "",

@@ -31,7 +31,6 @@ sys.path.insert(0, str(HERE.parent))
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
 from taylor_vs_heyoka import SameGraph, cheapest  # noqa: E402
 from work_precision import SCENARIOS  # noqa: E402
-from work_precision import best_time as best  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
 from fmu_build.compiler import UNITY_SOURCE, compile_shared  # noqa: E402
@@ -65,7 +64,7 @@ def run(name: str, work: Path, variants: dict[str, tuple[list[str], str | None]]
     built = build_fmu(parse_scene(f'[model]\nname = "ab_{name}"\n' + text, f"{name}.toml"),
                       work / f"{name}.fmu", build_dir=work / name, taylor=True)
     g = SameGraph(built, stop)
-    x0, names, out, ref = g.x0, g.names, g.out, g.ref
+    names, ref = g.names, g.ref
 
     fmus = {v: variant(built.fmu, work / name, f"{name}_{v.replace('+', 'x')}", fl, b)
             for v, (fl, b) in variants.items()}
@@ -91,13 +90,7 @@ def run(name: str, work: Path, variants: dict[str, tuple[list[str], str | None]]
                     c = solver_counts(fmus[v], stop, solver=TAYLOR, rel_tol=tol, abs_tol=atol, max_step=stop)
                     info[v].append(f"{tol:.0e}: {c['accepted']} steps, err {err:.1e}, "
                                    f"{secs[v] * 1e3:.3g} ms")
-        ta = g.heyoka(tol)
-
-        def prop():
-            ta.time, ta.state[:] = 0.0, x0
-            return ta.propagate_until(stop)
-        sec, _ = best(prop, repeat)
-        pts["heyoka"].append((sec, float(np.max(np.abs(out(ta.state) - ref)))))
+        pts["heyoka"].append(g.time_heyoka(tol, stop, repeat)[:2])
     for r in runners.values():
         r.free()
     lines = [f"### {name} ({stop:g} s)", "", "| rule | " + " | ".join(f"err <= {t:g}" for t in TARGETS)

@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -29,23 +28,18 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))
 
-from taylor_vs_heyoka import to_heyoka  # noqa: E402
-from work_precision import SCENARIOS  # noqa: E402
+from taylor_vs_heyoka import SameGraph, to_heyoka  # noqa: E402
+from work_precision import SCENARIOS, best_time  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
-from fmu_build.codegen import optimised  # noqa: E402
 from fmu_build.ensemble import Ensemble  # noqa: E402
 
 TOLS = [10.0 ** -(k / 2) for k in range(6, 30)]  # 1e-3 .. 10^-14.5
 
 
 def best(fn, repeat: int) -> float:
-    out = float("inf")
-    for _ in range(repeat):
-        t0 = time.thread_time()
-        fn()
-        out = min(out, time.thread_time() - t0)
-    return out
+    """CPU seconds of the calling thread, best of repeat (work_precision.best_time)."""
+    return best_time(fn, repeat)[0]
 
 
 def main() -> int:
@@ -62,22 +56,11 @@ def main() -> int:
         work = Path(tmp)
         built = build_fmu(parse_scene('[model]\nname = "ens_paper"\n' + text, "paper.toml"),
                           work / "paper.fmu", build_dir=work / "b", taylor=True)
-        fns = built.spec.functions()
-        p = [q.start for q in built.spec.parameters]
-        s0 = np.array([q.start for q in built.spec.starts])
-        x0 = np.array(fns["init"](s0, p)).ravel()
-        f = optimised(fns["ode"])
-        xs = hy.make_vars(*[f"x{i}" for i in range(x0.size)])
-        eqs = list(zip(xs, to_heyoka(f, xs, p)))
-        ld = np.longdouble
-        ta_ref = hy.taylor_adaptive(list(zip(xs, to_heyoka(f, xs, p, ld))), x0.astype(ld), tol=ld(1e-19),
-                                    fp_type=ld)
-        ta_ref.propagate_until(ld(stop))
-        ref = np.array(ta_ref.state, dtype=float)  # the 8 states are the first 8 of x
+        g = SameGraph(built, stop)  # heyoka on the FMU's graph and the long-double reference
+        fns, p, x0, s0 = built.spec.functions(), g.p, g.x0, np.array(g.s0)
+        eqs = list(zip(g.xs, to_heyoka(g.f, g.xs, p)))
         ens = {w: Ensemble(built.fmu, lanes=w, cache=work / "ens") for w in args.lanes}
         i_spin = [q.name for q in built.spec.starts].index("gamma_dot")
-        i_x = [ens[args.lanes[0]].state_names.index(n) for n in
-               ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")]
 
         # calibration: the cheapest tolerance per target, one trajectory each
         gw_pts, hy_pts = [], []
@@ -86,14 +69,9 @@ def main() -> int:
             for af in (1e-2, 1.0):
                 r = e1.run(stop, rel_tol=tol, abs_tol=tol * af)
                 sec = best(lambda: e1.run(stop, rel_tol=tol, abs_tol=tol * af), 2)
-                gw_pts.append((sec, float(np.max(np.abs(r.x_final[0, i_x] - ref[:8]))), tol, af))
-            ta = hy.taylor_adaptive(eqs, x0, tol=tol)
-
-            def prop():
-                ta.time, ta.state[:] = 0.0, x0
-                ta.propagate_until(stop)
-            sec = best(prop, 2)
-            hy_pts.append((sec, float(np.max(np.abs(ta.state[:8] - ref[:8]))), tol))
+                gw_pts.append((sec, float(np.max(np.abs(g.out(r.x_final[0]) - g.ref))), tol, af))
+            sec, err, _, _ = g.time_heyoka(tol, stop, 2)
+            hy_pts.append((sec, err, tol))
 
         def pick(points, target):
             ok = [q for q in points if q[1] <= target]

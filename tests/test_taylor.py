@@ -398,6 +398,18 @@ def test_kernel_and_ensemble_sources_warning_clean(cc, paper, tmp_path):
 
 # ---- ensemble ----------------------------------------------------------------------------------
 
+
+def _one_step_run(runner, stop: float, **values) -> float:
+    """Start `runner` with values and run one fmi2DoStep(0, stop): the time reached (stop, or
+    fmi2LastSuccessfulTime when the run ended early, a fall)."""
+    from fmpy.fmi2 import fmi2LastSuccessfulTime
+    runner.start(**values)
+    try:
+        runner.slave.doStep(0.0, stop)
+        return stop
+    except Exception:
+        return runner.slave.getRealStatus(fmi2LastSuccessfulTime)
+
 def test_ensemble_equals_single_runs(paper, tmp_path):
     """N trajectories (g, gamma_dot varied; some fall) equal N fmi2DoStep runs with taylor, on the
     default lanes (4, one AVX2 vector: the library reports the GW_ENSEMBLE_LANES it was built with,
@@ -409,15 +421,9 @@ def test_ensemble_equals_single_runs(paper, tmp_path):
     spin = np.array([6.0, 6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 4.0, 0.2, 6.0])
     res = ens.run(20.0, parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-10)
     assert set(res.status) <= {STATUS_OK, STATUS_TERMINATED} and res.terminated.any()
-    from fmpy.fmi2 import fmi2LastSuccessfulTime
     for j in range(len(g)):
-        runner.start(solver=TAYLOR, rel_tol=1e-10, abs_tol=1e-12, max_step=20.0, g=g[j], gamma_dot=spin[j],
-                     beta_min=0.1)
-        try:
-            runner.slave.doStep(0.0, 20.0)
-            t = 20.0
-        except Exception:
-            t = runner.slave.getRealStatus(fmi2LastSuccessfulTime)
+        t = _one_step_run(runner, 20.0, solver=TAYLOR, rel_tol=1e-10, abs_tol=1e-12, max_step=20.0, g=g[j],
+                          gamma_dot=spin[j], beta_min=0.1)
         x = np.array(runner.slave.getReal([runner.vr[n] for n in STATES + ["energy"]]))
         # the library is built with FMA contraction (rounding differs from the FMU's build)
         assert abs(res.t_final[j] - t) < 1e-9, j
@@ -449,15 +455,9 @@ def test_ensemble_lanes_tail_and_refill_equal_the_single_runs(paper, tmp_path):
     for w in (1, 4):
         assert list(runs[w].steps) == list(ref.steps)
     np.testing.assert_allclose(gridded[1].y_grid, gridded[4].y_grid, rtol=1e-9, atol=1e-8)
-    from fmpy.fmi2 import fmi2LastSuccessfulTime
     for j in (0, 2):  # one that runs to the end, one that falls: as one fmi2DoStep run
-        runner.start(solver=TAYLOR, rel_tol=1e-9, abs_tol=1e-11, max_step=6.0, g=g[j], gamma_dot=spin[j],
-                     beta_min=0.1)
-        try:
-            runner.slave.doStep(0.0, 6.0)
-            t = 6.0
-        except Exception:
-            t = runner.slave.getRealStatus(fmi2LastSuccessfulTime)
+        t = _one_step_run(runner, 6.0, solver=TAYLOR, rel_tol=1e-9, abs_tol=1e-11, max_step=6.0, g=g[j],
+                          gamma_dot=spin[j], beta_min=0.1)
         assert abs(ref.t_final[j] - t) < 1e-9
         np.testing.assert_allclose(ref.x_final[j], runner.slave.getReal([runner.vr[n] for n in STATES]),
                                    rtol=1e-9, atol=1e-8)

@@ -342,7 +342,7 @@ static void gw_ens_defects(const gw_ensemble *E, int order, const double *scale,
 
 /* dx (E->qx) and P'(h) (E->qd) of every lane for its step size h[l] (gw_taylor_increment):
  * the lanes' Horner chains side by side, two lanes per vector (GCC / clang vector extension:
- * GCC vectorised none of the plain loops), on up to 4 lanes two components at once (latency) */
+ * GCC vectorised none of the plain loops) */
 #if (defined(__GNUC__) || defined(__clang__)) && GW_ENSEMBLE_LANES % 2 == 0
 typedef double gw_ens_v2 __attribute__((vector_size(16)));
 #define GW_ENS_V 2
@@ -358,31 +358,9 @@ static void gw_ens_increments(gw_ensemble *E, int order, const double *h) {
     const size_t S = (size_t)(order + 1) * W;
     const int nx = E->m->nx;
     gw_ens_v2 hh[NV];
-    int i = 0, k, j;
+    int i, k, j;
     for (j = 0; j < NV; j++) hh[j] = gw_ens_ld(h + j * V);
-    for (i = 0; NV <= 2 && i + 1 < nx; i += 2) { /* two components: twice the chains */
-        const double *x0 = E->w + (size_t)i * S, *y0 = x0 + S;
-        gw_ens_v2 q[NV], dq[NV], r[NV], dr[NV];
-        for (j = 0; j < NV; j++) {
-            q[j] = gw_ens_ld(x0 + (size_t)order * W + j * V);
-            r[j] = gw_ens_ld(y0 + (size_t)order * W + j * V);
-            dq[j] = q[j] * 0.0, dr[j] = r[j] * 0.0;
-        }
-        for (k = order - 1; k >= 1; k--)
-            for (j = 0; j < NV; j++) {
-                dq[j] = k == order - 1 ? q[j] : dq[j] * hh[j] + q[j];
-                dr[j] = k == order - 1 ? r[j] : dr[j] * hh[j] + r[j];
-                q[j] = q[j] * hh[j] + gw_ens_ld(x0 + (size_t)k * W + j * V);
-                r[j] = r[j] * hh[j] + gw_ens_ld(y0 + (size_t)k * W + j * V);
-            }
-        for (j = 0; j < NV; j++) {
-            gw_ens_st(E->qx + (size_t)i * W + j * V, q[j] * hh[j]);
-            gw_ens_st(E->qd + (size_t)i * W + j * V, q[j] + hh[j] * dq[j]);
-            gw_ens_st(E->qx + (size_t)(i + 1) * W + j * V, r[j] * hh[j]);
-            gw_ens_st(E->qd + (size_t)(i + 1) * W + j * V, r[j] + hh[j] * dr[j]);
-        }
-    }
-    for (; i < nx; i++) { /* kept in registers: the loops over j are unrolled */
+    for (i = 0; i < nx; i++) { /* kept in registers: the loops over j are unrolled */
         const double *x0 = E->w + (size_t)i * S;
         gw_ens_v2 q[NV], dq[NV];
         for (j = 0; j < NV; j++) {

@@ -301,81 +301,122 @@ static void gw_ens_advance(gw_ensemble *E, int l, int order) {
 #define GW_ENSEMBLE_LANE_STEPS 0
 #endif
 
+/* The passes work on vectors of GW_ENS_V lanes (GCC / clang vector extension: GCC vectorised
+ * none of the plain loops): 4 lanes (one AVX2 register) where the lanes are a multiple of 4,
+ * else 2 or 1.  They are also compiled for AVX2 (target clones, chosen at load time) without
+ * FMA: the same IEEE multiplies, adds and divisions as the one-lane code, bit for bit. */
+#if defined(__GNUC__) || defined(__clang__)
+#if GW_ENSEMBLE_LANES % 4 == 0
+#define GW_ENS_V 4
+#elif GW_ENSEMBLE_LANES % 2 == 0
+#define GW_ENS_V 2
+#else
+#define GW_ENS_V 1
+#endif
+typedef double gw_ens_v __attribute__((vector_size(8 * GW_ENS_V)));
+typedef long long gw_ens_m __attribute__((vector_size(8 * GW_ENS_V))); /* lane masks: 0, -1 */
+#define GW_ENS_SEL(m, a, b) ((gw_ens_v)(((m) & (gw_ens_m)(a)) | (~(m) & (gw_ens_m)(b))))
+#define GW_ENS_NOT(m) (~(m))
+#define GW_ENS_ABS(a) ((gw_ens_v)((gw_ens_m)(a) & ((gw_ens_m){0} + 0x7fffffffffffffffLL)))
+/* unaligned loads and stores (the lanes of a coefficient are 8-byte aligned) */
+typedef double gw_ens_vu __attribute__((vector_size(8 * GW_ENS_V), aligned(8), may_alias));
+#define gw_ens_ld(p) (*(const gw_ens_vu *)(const void *)(p))
+#define gw_ens_st(p, v) (*(gw_ens_vu *)(void *)(p) = (v))
+#else
+#define GW_ENS_V 1
+typedef double gw_ens_v;
+typedef int gw_ens_m;
+#define GW_ENS_SEL(m, a, b) ((m) ? (a) : (b))
+#define GW_ENS_NOT(m) (!(m))
+#define GW_ENS_ABS(a) fabs(a)
+#define gw_ens_ld(p) (*(p))
+#define gw_ens_st(p, v) (*(p) = (v))
+#endif
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && !defined(GW_NO_CLONES) &&   \
+    ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && __GNUC__ >= 8))
+#define GW_ENS_PASS static __attribute__((target_clones("avx2", "default")))
+#else
+#define GW_ENS_PASS static
+#endif
+
 /* N_{p-1}, N_p of every lane (gw_taylor_step) */
-static void gw_ens_norms(const gw_ensemble *E, int order, double *n1, double *n2) {
-    enum { W = GW_ENS_LANES };
+GW_ENS_PASS void gw_ens_norms(const gw_ensemble *E, int order, double *n1, double *n2) {
+    enum { W = GW_ENS_LANES, V = GW_ENS_V };
     const size_t S = (size_t)(order + 1) * W;
     const int nx = E->m->nx;
-    int i, l;
-    for (l = 0; l < W; l++) n1[l] = n2[l] = 0.0;
-    for (i = 0; i < nx; i++) {
-        const double *x0 = E->w + (size_t)i * S, *a = x0 + (size_t)(order - 1) * W,
-                     *b = x0 + (size_t)order * W, *fsn = E->fsn + (size_t)i * W;
-        for (l = 0; l < W; l++) {
-            const double rsc = 1.0 / (fabs(x0[l]) + fsn[l]);
-            const double r1 = fabs(a[l]) * rsc, r2 = fabs(b[l]) * rsc;
-            n1[l] = r1 > n1[l] ? r1 : n1[l];
-            n2[l] = r2 > n2[l] ? r2 : n2[l];
+    int i, j;
+    for (j = 0; j < W; j += V) {
+        gw_ens_v m1 = {0.0}, m2 = {0.0};
+        for (i = 0; i < nx; i++) {
+            const double *x0 = E->w + (size_t)i * S + j;
+            const gw_ens_v rsc = 1.0 / (GW_ENS_ABS(gw_ens_ld(x0)) + gw_ens_ld(E->fsn + (size_t)i * W + j));
+            const gw_ens_v r1 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)(order - 1) * W)) * rsc;
+            const gw_ens_v r2 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)order * W)) * rsc;
+            m1 = GW_ENS_SEL(r1 > m1, r1, m1);
+            m2 = GW_ENS_SEL(r2 > m2, r2, m2);
         }
+        gw_ens_st(n1 + j, m1);
+        gw_ens_st(n2 + j, m2);
     }
 }
 
 /* the defect of every lane's pending attempt with f(t1, P(h)) = order 1 of the batch's series
  * (gw_taylor_defect); scale[l] = h / (p + 1) of lane l's attempt, xnew in E->x, P'(h) in E->dp */
-static void gw_ens_defects(const gw_ensemble *E, int order, const double *scale, double *err) {
-    enum { W = GW_ENS_LANES };
+GW_ENS_PASS void gw_ens_defects(const gw_ensemble *E, int order, const double *scale, double *err) {
+    enum { W = GW_ENS_LANES, V = GW_ENS_V };
     const size_t S = (size_t)(order + 1) * W;
     const int nx = E->m->nx;
     const double rtol = E->job->rel_tol;
-    int i, l;
-    for (l = 0; l < W; l++) err[l] = 0.0;
-    for (i = 0; i < nx; i++) {
-        const double *f1 = E->w + (size_t)i * S + W, *dp = E->dp + (size_t)i * W,
-                     *xn = E->x + (size_t)i * W, *an = E->anom + (size_t)i * W;
-        for (l = 0; l < W; l++) {
-            const double r = fabs(f1[l] - dp[l]) * scale[l] / (rtol * fabs(xn[l]) + an[l]);
-            err[l] = !(r <= err[l]) ? r : err[l]; /* NaN propagates as a rejection */
+    int i, j, l;
+    for (j = 0; j < W; j += V) {
+        const gw_ens_v sc = gw_ens_ld(scale + j);
+        gw_ens_v e = {0.0};
+        for (i = 0; i < nx; i++) {
+            const size_t at = (size_t)i * W + j;
+            const gw_ens_v r = GW_ENS_ABS(gw_ens_ld(E->w + (size_t)i * S + W + j) - gw_ens_ld(E->dp + at)) *
+                               sc / (rtol * GW_ENS_ABS(gw_ens_ld(E->x + at)) + gw_ens_ld(E->anom + at));
+            e = GW_ENS_SEL(GW_ENS_NOT(r <= e), r, e); /* NaN propagates as a rejection */
         }
+        gw_ens_st(err + j, e);
     }
     for (l = 0; l < W; l++) err[l] = isfinite(err[l]) ? err[l] : HUGE_VAL;
 }
 
 /* dx (E->qx) and P'(h) (E->qd) of every lane for its step size h[l] (gw_taylor_increment):
- * the lanes' Horner chains side by side, two lanes per vector (GCC / clang vector extension:
- * GCC vectorised none of the plain loops) */
-#if (defined(__GNUC__) || defined(__clang__)) && GW_ENSEMBLE_LANES % 2 == 0
-typedef double gw_ens_v2 __attribute__((vector_size(16)));
-#define GW_ENS_V 2
-#else
-typedef double gw_ens_v2;
-#define GW_ENS_V 1
-#endif
-static gw_ens_v2 gw_ens_ld(const double *p) { gw_ens_v2 v; memcpy(&v, p, sizeof v); return v; }
-static void gw_ens_st(double *p, gw_ens_v2 v) { memcpy(p, &v, sizeof v); }
-
-static void gw_ens_increments(gw_ensemble *E, int order, const double *h) {
-    enum { W = GW_ENS_LANES, V = GW_ENS_V, NV = GW_ENS_LANES / GW_ENS_V };
+ * the Horner chains of C components and all lanes side by side (independent chains overlap
+ * where one component after the other waited on each multiply and add) */
+GW_ENS_PASS void gw_ens_increments(gw_ensemble *E, int order, const double *h) {
+    enum { W = GW_ENS_LANES, V = GW_ENS_V, NV = GW_ENS_LANES / GW_ENS_V,
+           C = NV >= 4 ? 1 : 4 / NV }; /* at most 8 chains of q and dq */
     const size_t S = (size_t)(order + 1) * W;
     const int nx = E->m->nx;
-    gw_ens_v2 hh[NV];
-    int i, k, j;
+    gw_ens_v hh[NV];
+    int i0, i, k, j, c, nc;
     for (j = 0; j < NV; j++) hh[j] = gw_ens_ld(h + j * V);
-    for (i = 0; i < nx; i++) { /* kept in registers: the loops over j are unrolled */
-        const double *x0 = E->w + (size_t)i * S;
-        gw_ens_v2 q[NV], dq[NV];
-        for (j = 0; j < NV; j++) {
-            q[j] = gw_ens_ld(x0 + (size_t)order * W + j * V);
-            dq[j] = q[j] * 0.0; /* zero where q is finite; the first sum below adds q */
-        }
-        for (k = order - 1; k >= 1; k--)
+    for (i0 = 0; i0 < nx; i0 += nc) {
+        gw_ens_v q[C][NV], dq[C][NV];
+        nc = nx - i0 >= C ? C : 1; /* the last components one at a time */
+        for (c = 0; c < nc; c++)
             for (j = 0; j < NV; j++) {
-                dq[j] = k == order - 1 ? q[j] : dq[j] * hh[j] + q[j];
-                q[j] = q[j] * hh[j] + gw_ens_ld(x0 + (size_t)k * W + j * V);
+                q[c][j] = gw_ens_ld(E->w + (size_t)(i0 + c) * S + (size_t)order * W + j * V);
+                dq[c][j] = q[c][j]; /* the first sum below is dq = q (0 h + q) */
             }
-        for (j = 0; j < NV; j++) {
-            gw_ens_st(E->qx + (size_t)i * W + j * V, q[j] * hh[j]);
-            gw_ens_st(E->qd + (size_t)i * W + j * V, q[j] + hh[j] * dq[j]);
-        }
+        for (c = 0; c < nc; c++) /* k = order - 1 */
+            for (j = 0; j < NV; j++)
+                q[c][j] = q[c][j] * hh[j] +
+                          gw_ens_ld(E->w + (size_t)(i0 + c) * S + (size_t)(order - 1) * W + j * V);
+        for (k = order - 2; k >= 1; k--)
+            for (c = 0; c < nc; c++)
+                for (j = 0; j < NV; j++) {
+                    dq[c][j] = dq[c][j] * hh[j] + q[c][j];
+                    q[c][j] = q[c][j] * hh[j] + gw_ens_ld(E->w + (size_t)(i0 + c) * S + (size_t)k * W + j * V);
+                }
+        for (c = 0; c < nc; c++)
+            for (j = 0; j < NV; j++) {
+                i = i0 + c;
+                gw_ens_st(E->qx + (size_t)i * W + j * V, q[c][j] * hh[j]);
+                gw_ens_st(E->qd + (size_t)i * W + j * V, q[c][j] + hh[j] * dq[c][j]);
+            }
     }
 }
 

@@ -59,6 +59,8 @@ typedef struct {
     int pending;     /* an attempt (h, t1; I->xnew) awaits its defect check: the lane's point in
                         the next batch is its end point, else the lane's current point */
     double h, t1;
+    const double *ser; /* the series at the lane's current point in a batch block (lane
+                          innermost), not yet in I->tl_w (gw_ens_fetch); NULL: tl_w has it */
 } gw_lane;
 enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
 
@@ -83,6 +85,8 @@ typedef struct {
     const gw_ensemble_job *job;
     gw_lane lane[GW_ENS_LANES];
     double *w, *c, *x, *u, *p, t[GW_ENS_LANES]; /* batch kernel memory, lanes innermost */
+    double *wb[2]; /* the series blocks: w is one, the other keeps the previous batch's series,
+                      which a pending attempt's retries and event location read */
     /* the lane-innermost step passes (gw_ens_norms, _defects, _increments), nx x lanes each:
      * (atol / rel_tol) nominal_i and atol nominal_i of each lane, the pending attempt's P'(h),
      * the increment's Horner sums (then dx) and their derivatives (then P'(h)) */
@@ -90,6 +94,22 @@ typedef struct {
     long next;                                  /* next trajectory to start */
     int cst_dirty;                              /* a lane's parameters or inputs changed */
 } gw_ensemble;
+
+/* I->tl_fetch of a lane's instance: its series from the batch block into I->tl_w, where the
+ * solver code reads it (dense output, a rejected step's retries, a landing step).  Not copying
+ * every step saves a pass over every lane's series (about 7% of a run). */
+static void gw_ens_fetch(gw_instance *I, void *env) {
+    gw_lane *L = (gw_lane *)env;
+    const int nx = I->m->nx, p = I->tl_order;
+    const size_t S = (size_t)(p + 1) * GW_ENS_LANES;
+    int i, k;
+    if (!L->ser) return;
+    for (i = 0; i < nx; i++)
+        for (k = 0; k <= p; k++)
+            I->tl_w[(size_t)i * (size_t)(p + 1) + (size_t)k] =
+                L->ser[(size_t)i * S + (size_t)k * GW_ENS_LANES];
+    L->ser = NULL;
+}
 
 static void gw_ens_finish(gw_ensemble *E, gw_lane *L, gw_status status) {
     const gw_ensemble_job *job = E->job;
@@ -169,6 +189,7 @@ static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
         L->gi = 0;
         L->steps = 0;
         L->pending = 0;
+        L->ser = NULL;
         if (job->n_rows) job->n_rows[j] = 0;
         if (gw_setup_experiment(I, fn, 0, 0.0, job->t_start, 1, job->t_end) != GW_OK ||
             gw_initialize(I, fn) > GW_WARNING || gw_taylor_begin(I, &L->run)) {
@@ -301,124 +322,7 @@ static void gw_ens_advance(gw_ensemble *E, int l, int order) {
 #define GW_ENSEMBLE_LANE_STEPS 0
 #endif
 
-/* The passes work on vectors of GW_ENS_V lanes (GCC / clang vector extension: GCC vectorised
- * none of the plain loops): 4 lanes (one AVX2 register) where the lanes are a multiple of 4,
- * else 2 or 1.  They are also compiled for AVX2 (target clones, chosen at load time) without
- * FMA: the same IEEE multiplies, adds and divisions as the one-lane code, bit for bit. */
-#if defined(__GNUC__) || defined(__clang__)
-#if GW_ENSEMBLE_LANES % 4 == 0
-#define GW_ENS_V 4
-#elif GW_ENSEMBLE_LANES % 2 == 0
-#define GW_ENS_V 2
-#else
-#define GW_ENS_V 1
-#endif
-typedef double gw_ens_v __attribute__((vector_size(8 * GW_ENS_V)));
-typedef long long gw_ens_m __attribute__((vector_size(8 * GW_ENS_V))); /* lane masks: 0, -1 */
-#define GW_ENS_SEL(m, a, b) ((gw_ens_v)(((m) & (gw_ens_m)(a)) | (~(m) & (gw_ens_m)(b))))
-#define GW_ENS_NOT(m) (~(m))
-#define GW_ENS_ABS(a) ((gw_ens_v)((gw_ens_m)(a) & ((gw_ens_m){0} + 0x7fffffffffffffffLL)))
-/* unaligned loads and stores (the lanes of a coefficient are 8-byte aligned) */
-typedef double gw_ens_vu __attribute__((vector_size(8 * GW_ENS_V), aligned(8), may_alias));
-#define gw_ens_ld(p) (*(const gw_ens_vu *)(const void *)(p))
-#define gw_ens_st(p, v) (*(gw_ens_vu *)(void *)(p) = (v))
-#else
-#define GW_ENS_V 1
-typedef double gw_ens_v;
-typedef int gw_ens_m;
-#define GW_ENS_SEL(m, a, b) ((m) ? (a) : (b))
-#define GW_ENS_NOT(m) (!(m))
-#define GW_ENS_ABS(a) fabs(a)
-#define gw_ens_ld(p) (*(p))
-#define gw_ens_st(p, v) (*(p) = (v))
-#endif
-#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && !defined(GW_NO_CLONES) &&   \
-    ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && __GNUC__ >= 8))
-#define GW_ENS_PASS static __attribute__((target_clones("avx2", "default")))
-#else
-#define GW_ENS_PASS static
-#endif
-
-/* N_{p-1}, N_p of every lane (gw_taylor_step) */
-GW_ENS_PASS void gw_ens_norms(const gw_ensemble *E, int order, double *n1, double *n2) {
-    enum { W = GW_ENS_LANES, V = GW_ENS_V };
-    const size_t S = (size_t)(order + 1) * W;
-    const int nx = E->m->nx;
-    int i, j;
-    for (j = 0; j < W; j += V) {
-        gw_ens_v m1 = {0.0}, m2 = {0.0};
-        for (i = 0; i < nx; i++) {
-            const double *x0 = E->w + (size_t)i * S + j;
-            const gw_ens_v rsc = 1.0 / (GW_ENS_ABS(gw_ens_ld(x0)) + gw_ens_ld(E->fsn + (size_t)i * W + j));
-            const gw_ens_v r1 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)(order - 1) * W)) * rsc;
-            const gw_ens_v r2 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)order * W)) * rsc;
-            m1 = GW_ENS_SEL(r1 > m1, r1, m1);
-            m2 = GW_ENS_SEL(r2 > m2, r2, m2);
-        }
-        gw_ens_st(n1 + j, m1);
-        gw_ens_st(n2 + j, m2);
-    }
-}
-
-/* the defect of every lane's pending attempt with f(t1, P(h)) = order 1 of the batch's series
- * (gw_taylor_defect); scale[l] = h / (p + 1) of lane l's attempt, xnew in E->x, P'(h) in E->dp */
-GW_ENS_PASS void gw_ens_defects(const gw_ensemble *E, int order, const double *scale, double *err) {
-    enum { W = GW_ENS_LANES, V = GW_ENS_V };
-    const size_t S = (size_t)(order + 1) * W;
-    const int nx = E->m->nx;
-    const double rtol = E->job->rel_tol;
-    int i, j, l;
-    for (j = 0; j < W; j += V) {
-        const gw_ens_v sc = gw_ens_ld(scale + j);
-        gw_ens_v e = {0.0};
-        for (i = 0; i < nx; i++) {
-            const size_t at = (size_t)i * W + j;
-            const gw_ens_v r = GW_ENS_ABS(gw_ens_ld(E->w + (size_t)i * S + W + j) - gw_ens_ld(E->dp + at)) *
-                               sc / (rtol * GW_ENS_ABS(gw_ens_ld(E->x + at)) + gw_ens_ld(E->anom + at));
-            e = GW_ENS_SEL(GW_ENS_NOT(r <= e), r, e); /* NaN propagates as a rejection */
-        }
-        gw_ens_st(err + j, e);
-    }
-    for (l = 0; l < W; l++) err[l] = isfinite(err[l]) ? err[l] : HUGE_VAL;
-}
-
-/* dx (E->qx) and P'(h) (E->qd) of every lane for its step size h[l] (gw_taylor_increment):
- * the Horner chains of C components and all lanes side by side (independent chains overlap
- * where one component after the other waited on each multiply and add) */
-GW_ENS_PASS void gw_ens_increments(gw_ensemble *E, int order, const double *h) {
-    enum { W = GW_ENS_LANES, V = GW_ENS_V, NV = GW_ENS_LANES / GW_ENS_V,
-           C = NV >= 4 ? 1 : 4 / NV }; /* at most 8 chains of q and dq */
-    const size_t S = (size_t)(order + 1) * W;
-    const int nx = E->m->nx;
-    gw_ens_v hh[NV];
-    int i0, i, k, j, c, nc;
-    for (j = 0; j < NV; j++) hh[j] = gw_ens_ld(h + j * V);
-    for (i0 = 0; i0 < nx; i0 += nc) {
-        gw_ens_v q[C][NV], dq[C][NV];
-        nc = nx - i0 >= C ? C : 1; /* the last components one at a time */
-        for (c = 0; c < nc; c++)
-            for (j = 0; j < NV; j++) {
-                q[c][j] = gw_ens_ld(E->w + (size_t)(i0 + c) * S + (size_t)order * W + j * V);
-                dq[c][j] = q[c][j]; /* the first sum below is dq = q (0 h + q) */
-            }
-        for (c = 0; c < nc; c++) /* k = order - 1 */
-            for (j = 0; j < NV; j++)
-                q[c][j] = q[c][j] * hh[j] +
-                          gw_ens_ld(E->w + (size_t)(i0 + c) * S + (size_t)(order - 1) * W + j * V);
-        for (k = order - 2; k >= 1; k--)
-            for (c = 0; c < nc; c++)
-                for (j = 0; j < NV; j++) {
-                    dq[c][j] = dq[c][j] * hh[j] + q[c][j];
-                    q[c][j] = q[c][j] * hh[j] + gw_ens_ld(E->w + (size_t)(i0 + c) * S + (size_t)k * W + j * V);
-                }
-        for (c = 0; c < nc; c++)
-            for (j = 0; j < NV; j++) {
-                i = i0 + c;
-                gw_ens_st(E->qx + (size_t)i * W + j * V, q[c][j] * hh[j]);
-                gw_ens_st(E->qd + (size_t)i * W + j * V, q[c][j] + hh[j] * dq[c][j]);
-            }
-    }
-}
+#include "gw_ensemble_passes.h"
 
 /* Every active lane after the batch kernel: conclude (defects from the pass), then, where the
  * series is the lane's new one, its next attempt (norms and increments from the passes). */
@@ -427,10 +331,10 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
     const size_t S = (size_t)(order + 1) * W;
     const int nx = E->m->nx;
     double n1[W], n2[W], scale[W], err[W], h[W];
-    int go[W], last[W], l, i, k, any = 0;
-    gw_ens_norms(E, order, n1, n2);
+    int go[W], last[W], l, i, any = 0;
+    gw_ens_norms(E->w, E->fsn, nx, order, n1, n2);
     for (l = 0; l < W; l++) scale[l] = E->lane[l].pending ? E->lane[l].h / (order + 1) : 0.0;
-    gw_ens_defects(E, order, scale, err);
+    gw_ens_defects(E->w, E->dp, E->x, E->anom, nx, order, E->job->rel_tol, scale, err);
     for (l = 0; l < W; l++) {
         gw_lane *L = &E->lane[l];
         gw_instance *I = L->I;
@@ -441,44 +345,28 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
         if (traj < 0) continue;
         if (L->pending) {
             const double target = gw_ens_target(E, L);
-            gw_int_result r =
-                GW_ENSEMBLE_LANE_STEPS
+            gw_int_result r;
+            if (GW_ENSEMBLE_LANE_STEPS || err[l] > 1.0) gw_ens_fetch(I, L); /* retries read it */
+            r = GW_ENSEMBLE_LANE_STEPS
                     ? gw_taylor_conclude(I, target, &L->run, L->h, L->t1, E->w + W + l, S, &fresh)
                     : gw_taylor_conclude_err(I, target, &L->run, L->h, L->t1, err[l], 1, &fresh);
             L->pending = 0;
+            L->ser = NULL; /* the series of the point before: no longer the lane's */
             if (!gw_ens_after(E, L, r, target)) fresh = 0;
         }
         if (L->traj != traj || !fresh) continue; /* ended, or the state moved: a new series */
         go[l] = 1;
-    }
-    { /* the fresh lanes' polynomials, their dense output, out of the batch layout: one load
-       * of all lanes' coefficient, stored to each fresh lane */
-        double *dst[W];
-        int nf = 0;
-        for (l = 0; l < W; l++)
-            if (go[l]) dst[nf++] = E->lane[l].I->tl_w;
-        if (nf == W) /* the common case: every lane (no test per coefficient) */
-            for (i = 0; i < nx; i++)
-                for (k = 0; k <= order; k++) {
-                    const double *src = E->w + (size_t)i * S + (size_t)k * W;
-                    const size_t at = (size_t)i * (size_t)(order + 1) + (size_t)k;
-                    for (l = 0; l < W; l++) dst[l][at] = src[l];
-                }
-        else
-            for (i = 0; i < nx && nf > 0; i++)
-                for (k = 0; k <= order; k++) {
-                    const double *src = E->w + (size_t)i * S + (size_t)k * W;
-                    const size_t at = (size_t)i * (size_t)(order + 1) + (size_t)k;
-                    int f = 0;
-                    for (l = 0; l < W; l++)
-                        if (go[l]) dst[f++][at] = src[l];
-                }
+        L->ser = E->w + l;
     }
     for (l = 0; l < W; l++) {
         gw_lane *L = &E->lane[l];
         gw_instance *I = L->I;
         if (!go[l]) continue;
         go[l] = 0;
+        if (GW_ENSEMBLE_LANE_STEPS)
+            gw_ens_fetch(I, L);
+        else /* order 1, which gw_taylor_attempt_size checks (finite) */
+            for (i = 0; i < nx; i++) I->tl_w[(size_t)i * (size_t)(order + 1) + 1] = E->w[(size_t)i * S + W + l];
         {
             const double target = gw_ens_target(E, L), norms[2] = {n1[l], n2[l]};
             gw_int_result r =
@@ -494,7 +382,7 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
         any = 1;
     }
     if (!any) return;
-    gw_ens_increments(E, order, h);
+    gw_ens_increments(E->w, nx, order, h, E->qx, E->qd);
     for (l = 0; l < W; l++) {
         gw_lane *L = &E->lane[l];
         gw_instance *I = L->I;
@@ -512,8 +400,9 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
         } else { /* a step landing on the call's target: checked with the right-hand side */
             const double target = gw_ens_target(E, L);
             int fresh;
-            gw_int_result r = gw_taylor_conclude(I, target, &L->run, L->h, L->t1, NULL, 1, &fresh);
-            gw_ens_after(E, L, r, target);
+            gw_ens_fetch(I, L); /* its retries and event location read the series */
+            gw_ens_after(E, L, gw_taylor_conclude(I, target, &L->run, L->h, L->t1, NULL, 1, &fresh),
+                         target);
         }
     }
 }
@@ -535,6 +424,7 @@ static int gw_ens_step(gw_ensemble *E, int order) {
         for (l = 0; l < GW_ENS_LANES; l++) {
             gw_instance *I = E->lane[l].I;
             if (E->lane[l].traj < 0) continue;
+            gw_ens_fetch(I, &E->lane[l]); /* the lane's series from the last batch */
             m->taylor.jet(order, &E->t[l], E->lane[l].pending ? I->xnew : I->x, I->tl_c, I->tl_wn);
         }
         for (l = 0; l < GW_ENS_LANES; l++)
@@ -559,6 +449,7 @@ static int gw_ens_step(gw_ensemble *E, int order) {
     }
     if (m->taylor.n_cst > 0 && E->cst_dirty) gw_tlb_cst(E->u, E->p, E->c);
     E->cst_dirty = 0;
+    E->w = E->w == E->wb[0] ? E->wb[1] : E->wb[0]; /* the lanes' series stay in the other */
     gw_tlb_jet(order, E->t, E->x, E->c, E->w);
     gw_ens_batch_steps(E, order);
     for (l = 0; l < GW_ENS_LANES; l++)
@@ -597,7 +488,9 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
     E.m = m;
     E.job = job;
     order = gw_taylor_order(job->rel_tol);
-    E.w = (double *)gw_ens_alloc(cb, (size_t)m->taylor.n_var * (size_t)(order + 1) * L);
+    E.wb[0] = (double *)gw_ens_alloc(cb, (size_t)m->taylor.n_var * (size_t)(order + 1) * L);
+    E.wb[1] = (double *)gw_ens_alloc(cb, (size_t)m->taylor.n_var * (size_t)(order + 1) * L);
+    E.w = E.wb[0];
     E.c = (double *)gw_ens_alloc(cb, (size_t)m->taylor.n_cst * L);
     E.x = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
     E.u = (double *)gw_ens_alloc(cb, (size_t)m->nu * L);
@@ -613,9 +506,14 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
         E.lane[l].traj = -1;
         if (l >= job->n) continue;
         E.lane[l].I = gw_instance_new(m, name, cb, 0);
-        if (!E.lane[l].I) st = GW_FATAL;
+        if (!E.lane[l].I) {
+            st = GW_FATAL;
+            continue;
+        }
+        E.lane[l].I->tl_fetch = gw_ens_fetch;
+        E.lane[l].I->tl_fetch_env = &E.lane[l];
     }
-    if (!E.w || !E.c || !E.x || !E.u || !E.p || !E.fsn || !E.anom || !E.dp || !E.qx || !E.qd)
+    if (!E.wb[0] || !E.wb[1] || !E.c || !E.x || !E.u || !E.p || !E.fsn || !E.anom || !E.dp || !E.qx || !E.qd)
         st = GW_FATAL;
     else
         for (j = 0; j < (long)((size_t)m->nx * L); j++) E.fsn[j] = E.anom[j] = 1.0; /* idle */
@@ -630,7 +528,7 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
     for (l = 0; l < GW_ENS_LANES; l++)
         if (E.lane[l].I) gw_instance_free(E.lane[l].I);
     {
-        double *const mem[] = {E.w, E.c, E.x, E.u, E.p, E.fsn, E.anom, E.dp, E.qx, E.qd};
+        double *const mem[] = {E.wb[0], E.wb[1], E.c, E.x, E.u, E.p, E.fsn, E.anom, E.dp, E.qx, E.qd};
         for (l = 0; l < (int)(sizeof mem / sizeof mem[0]); l++) cb->free(mem[l]);
     }
     return st;

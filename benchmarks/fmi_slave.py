@@ -1,6 +1,8 @@
 """Time the FMU's own integrator: instantiate, initialise, one fmi2DoStep."""
 from __future__ import annotations
 
+import atexit
+import shutil
 import time
 from pathlib import Path
 
@@ -19,6 +21,7 @@ def _open(fmu: Path):
     if key not in _CACHE:
         md = read_model_description(key)
         _CACHE[key] = (md, extract(key))
+        atexit.register(shutil.rmtree, _CACHE[key][1], True)  # fmpy.extract's temporary directory
     return _CACHE[key]
 
 

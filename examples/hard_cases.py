@@ -8,7 +8,9 @@ hard-cases issue, including the long runs the test suite leaves out (10^4 s of r
 """
 from __future__ import annotations
 
+import atexit
 import math
+import shutil
 import sys
 import tempfile
 import time
@@ -36,7 +38,8 @@ class Fmu:
         self.md = read_model_description(str(path))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.types = {v.name: v.type for v in self.md.modelVariables}
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=extract(str(path)),
+        unzipdir = extract(str(path), str(path.with_name(path.stem + "_unzipped")))  # removed with tmp
+        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=unzipdir,
                                modelIdentifier=self.md.coSimulation.modelIdentifier)
         self.slave.instantiate()
         self.fresh = True
@@ -90,6 +93,7 @@ def main() -> int:
         print(f"{case:<34} {solver:<11} {result:<44} {error:<22} {seconds * 1e3:9.1f} ms", flush=True)
 
     tmp = Path(tempfile.mkdtemp(prefix="gyrowheel-hard-"))
+    atexit.register(shutil.rmtree, tmp, True)  # the FMUs and their unpacked copies
     paper_built = build_fmu(load_scene(HERE / "scenes" / "paper_earth.toml"), tmp / "paper.fmu")
     paper = Fmu(paper_built.fmu)
     disk_built = build_fmu(load_scene(HERE / "scenes" / "euler_disk.toml"), tmp / "disk.fmu")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ctypes
 import itertools
+import shutil
 import weakref
 from ctypes import byref
 from pathlib import Path
@@ -50,6 +51,8 @@ class _Instance:
         self.fmu = str(fmu)
         self.md = md or read_model_description(self.fmu)
         self.unzipdir = str(unzipdir or extract(self.fmu))
+        if unzipdir is None:  # fmpy.extract's temporary directory: ours to remove when we go
+            weakref.finalize(self, shutil.rmtree, self.unzipdir, True)
         self.vars = {v.name: v for v in self.md.modelVariables}
         self.messages: list[tuple[int, str, str]] = []
         self.env_id = next(_IDS)

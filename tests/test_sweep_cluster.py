@@ -163,3 +163,17 @@ def test_both_workers_run_batches(earth_fmu, scheduler, tmp_path):
     table = read_table(out)
     assert len(table) == 40 and (table["status"] == "ok").all()
     assert table["pid"].nunique() == 2
+
+
+@pytest.mark.parametrize("workers", ["0", "2"])
+def test_no_unpacked_fmu_is_left_in_the_temporary_directory(earth_fmu, tmp_path, workers):
+    """Each process unpacks the FMU once; the copy goes when the process does (in-process loop and
+    the LocalCluster's workers alike), so thousands of sweeps do not fill /tmp."""
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    done = subprocess.run([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu), "--grid", "beta_deg=70,80",
+                           "--stop-time", "0.5", "--workers", workers, "--no-progress", "-o", str(tmp_path / "t.csv")],
+                          capture_output=True, text=True, timeout=120, env={**os.environ, "TMPDIR": str(scratch)})
+    assert done.returncode == 0, done.stderr
+    assert len(read_table(tmp_path / "t.csv")) == 2
+    assert sorted(p.name for p in scratch.glob("gyrowheel-*")) == []

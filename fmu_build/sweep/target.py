@@ -22,7 +22,9 @@ FmuTarget drives a Co-Simulation FMU through fmpy's FMU2Slave and the raw fmi2 f
 """
 from __future__ import annotations
 
+import atexit
 import hashlib
+import shutil
 import tempfile
 import threading
 import zipfile
@@ -34,7 +36,7 @@ import numpy as np
 
 from cosim.fmi_log import forget_messages, logging_callbacks
 
-_UNPACKED: dict[str, str] = {}  # FMU digest -> extraction directory, per worker process
+_UNPACKED: dict[str, str] = {}  # FMU digest -> extraction directory, per worker process (removed at its exit)
 _LOCK = threading.Lock()  # fmpy's FMU2Slave() changes the working directory while loading
 
 
@@ -135,6 +137,7 @@ def _unpack(target: FmuTarget, payload: bytes | None) -> str:
         where = _UNPACKED.get(target.digest)
         if where is None:
             where = tempfile.mkdtemp(prefix=f"gyrowheel-sweep-{target.digest[:12]}-")
+            atexit.register(shutil.rmtree, where, True)
             if payload is not None:
                 import io
                 zipfile.ZipFile(io.BytesIO(payload)).extractall(where)

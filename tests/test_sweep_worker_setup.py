@@ -1,0 +1,94 @@
+"""The preload of the sweep's own workers: SIGINT ignored, and no traceback from a heartbeat that a
+closing worker cuts off (the race behind a CI failure of test_ctrl_c_leaves_a_readable_partial_table:
+"Failed to communicate with scheduler during heartbeat", CommClosedError "Stream is closed")."""
+from __future__ import annotations
+
+import asyncio
+import logging
+import signal
+
+import pytest
+from distributed import Scheduler, Worker
+
+from fmu_build.sweep import worker_setup
+from fmu_build.sweep.worker_setup import HEARTBEAT_FAILURE, HeartbeatWhileClosing
+
+
+def _tracebacks_of_a_heartbeat_cut_by_close(preload: bool) -> list[str]:
+    """A real scheduler and worker in this process: the scheduler holds the worker's heartbeat
+    for 2 s, the worker closes meanwhile (what Nanny.close does when the sweep closes its cluster).
+    Returns the messages distributed.worker logged with a traceback."""
+    records: list[logging.LogRecord] = []
+    handler = logging.Handler(logging.ERROR)
+    handler.emit = records.append
+    log = logging.getLogger("distributed.worker")
+
+    async def scene():
+        async with Scheduler(host="127.0.0.1", port=0, dashboard_address=":0") as scheduler:
+            async def held_heartbeat(*_, **__):
+                await asyncio.sleep(2)
+                return {"status": "OK", "time": 0.0, "heartbeat-interval": 1.0}
+
+            scheduler.handlers["heartbeat_worker"] = held_heartbeat
+            worker = await Worker(scheduler.address, nthreads=1, host="127.0.0.1", dashboard=False)
+            added = HeartbeatWhileClosing(worker) if preload else None
+            if added:
+                log.addFilter(added)
+            try:
+                beat = asyncio.create_task(worker.heartbeat())
+                await asyncio.sleep(0.2)
+                await worker.close()
+                await beat
+            finally:
+                if added:
+                    log.removeFilter(added)
+
+    log.addHandler(handler)
+    try:
+        asyncio.run(scene())
+    finally:
+        log.removeHandler(handler)
+    return [r.getMessage() for r in records if r.exc_info]
+
+
+def test_without_the_filter_the_race_prints_a_traceback():
+    """The race is real in the distributed we install (else the filter would guard nothing)."""
+    assert _tracebacks_of_a_heartbeat_cut_by_close(preload=False) == [HEARTBEAT_FAILURE]
+
+
+def test_the_preload_filter_drops_it():
+    assert _tracebacks_of_a_heartbeat_cut_by_close(preload=True) == []
+
+
+class _Status:
+    def __init__(self, name: str):
+        self.name = name
+
+
+class _Worker:
+    def __init__(self, status: str):
+        self.status = _Status(status)
+
+
+@pytest.mark.parametrize("status, kept", [("running", True), ("paused", True), ("closing", False), ("closed", False)])
+def test_a_heartbeat_failure_of_a_running_worker_is_kept(status, kept):
+    """Only a closing worker's record is dropped: losing the scheduler while running stays visible,
+    and no other record is touched."""
+    f = HeartbeatWhileClosing(_Worker(status))
+    record = logging.LogRecord("distributed.worker", logging.ERROR, __file__, 1, HEARTBEAT_FAILURE, None, None)
+    other = logging.LogRecord("distributed.worker", logging.ERROR, __file__, 1, "Compute Failed", None, None)
+    assert f.filter(record) is kept
+    assert f.filter(other) is True
+
+
+def test_dask_setup_ignores_sigint_and_installs_the_filter():
+    log = logging.getLogger("distributed.worker")
+    previous = signal.getsignal(signal.SIGINT)
+    before = list(log.filters)
+    try:
+        worker_setup.dask_setup(_Worker("running"))
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        assert [type(f) for f in log.filters if f not in before] == [HeartbeatWhileClosing]
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        log.filters[:] = before

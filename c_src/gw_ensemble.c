@@ -390,14 +390,20 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
         gw_lane *L = &E->lane[l];
         gw_instance *I = L->I;
         if (!go[l]) continue;
-        if (GW_ENSEMBLE_LANE_STEPS)
+        if (GW_ENSEMBLE_LANE_STEPS) {
             gw_taylor_increment(I->tl_w, order, 1, 0, nx, L->h, I->dx, I->k[2]);
-        else
+            gw_sum_update(I);
+        } else { /* gw_sum_update's TwoSum with dx read from the pass (I->dx not written: stored
+                  * element by element and read in pairs by gw_sum_update, it stalled the loads,
+                  * 3.7% of a run) */
+            const double *x = I->x, *xc = I->xc;
             for (i = 0; i < nx; i++) {
-                I->dx[i] = E->qx[(size_t)i * W + l];
+                const double y = E->qx[(size_t)i * W + l] + xc[i], sum = x[i] + y, bp = sum - x[i];
+                I->xnew[i] = sum;
+                I->xcnew[i] = (x[i] - (sum - bp)) + (y - bp);
                 I->k[2][i] = E->qd[(size_t)i * W + l];
             }
-        gw_sum_update(I);
+        }
         if (!last[l]) {
             L->pending = 1;
         } else { /* a step landing on the call's target: checked with the right-hand side */

@@ -7,11 +7,11 @@
  * the model's kernel instantiated with GW_ENSEMBLE_LANES lanes (gw_tlb_jet: structure of
  * arrays, the lane loops of gw_taylor_ops.h vectorise; on x86-64 with GCC or clang the kernel
  * is also compiled for x86-64-v3 (AVX2, FMA) and x86-64-v4 (AVX-512) and chosen at load time,
- * target_clones, with a portable default).  Each lane then takes its own step (gw_taylor_attempt / _conclude of
- * solver taylor: its own step size, defect check, dense output, event location, compensated
- * update); the batch runs each lane at its pending attempt's end point, so that the series of
- * the next step is also the defect check's f(t1, P(h)) (one kernel call per lane and step, as
- * in gw_integrate_taylor).  A lane whose trajectory reaches t_end or stops at a terminating
+ * target_clones, with a portable default).  Each lane then takes its own step
+ * (gw_taylor_attempt / _conclude of solver taylor: its own step size, defect check, dense
+ * output, event location, compensated update); the batch runs each lane at its pending
+ * attempt's end point, so that the series of the next step is also the defect check's
+ * f(t1, P(h)) (one kernel call per lane and step, as in gw_integrate_taylor).  A lane whose trajectory reaches t_end or stops at a terminating
  * event (a fall) takes the next trajectory of the job at once, while the others go on; with
  * few lanes left active (the tail of the job) the batch runs them with the one-lane kernel.
  * The order p is common (from rel_tol); the constants are recomputed only when a lane's
@@ -369,7 +369,8 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
         if (GW_ENSEMBLE_LANE_STEPS)
             gw_ens_fetch(I, L);
         else /* order 1, which gw_taylor_attempt_size checks (finite) */
-            for (i = 0; i < nx; i++) I->tl_w[(size_t)i * (size_t)(order + 1) + 1] = E->w[(size_t)i * S + W + l];
+            for (i = 0; i < nx; i++)
+                I->tl_w[(size_t)i * (size_t)(order + 1) + 1] = E->w[(size_t)i * S + W + l];
         {
             const double target = gw_ens_target(E, L), norms[2] = {n1[l], n2[l]};
             gw_int_result r =

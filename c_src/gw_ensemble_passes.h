@@ -120,7 +120,8 @@ GW_ENS_PASS void gw_ens_increments(const double *w, int nx, int order, const dou
             for (c = 0; c < nc; c++)
                 for (j = 0; j < NV; j++) {
                     dq[c][j] = dq[c][j] * hh[j] + q[c][j];
-                    q[c][j] = q[c][j] * hh[j] + gw_ens_ld(w + (size_t)(i0 + c) * S + (size_t)k * W + j * V);
+                    q[c][j] = q[c][j] * hh[j] +
+                              gw_ens_ld(w + (size_t)(i0 + c) * S + (size_t)k * W + j * V);
                 }
         for (c = 0; c < nc; c++)
             for (j = 0; j < NV; j++) {

@@ -400,7 +400,10 @@ class Ensemble:
         steps = np.zeros(n, dtype=np.uint64 if ctypes.sizeof(ctypes.c_ulong) == 8 else np.uint32)
         n_rows = np.zeros(n, dtype=np.int_ if ctypes.sizeof(ctypes.c_long) == 8 else np.int32) if G else None
         at, iat = f.ctypes.data, ints.ctypes.data
-        ctx = self._contexts.pop() if self._contexts else _Context(self._new_context())
+        try:  # (another thread may take the last one between a test and pop)
+            ctx = self._contexts.pop()
+        except IndexError:
+            ctx = _Context(self._new_context())
         messages = ctx.messages = []
         rc = self._run(ctx.ptr, n, P.ctypes.data, S.ctypes.data, at, at + 16, iat, at + 8 * ends[2],
                        at + 8 * ends[3], at + 8 * ends[4], steps.ctypes.data, ctx.logger, G,

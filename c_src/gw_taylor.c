@@ -1,7 +1,9 @@
 /*
  * gw_taylor.c -- the model's Taylor kernel for one trajectory (solver `taylor`): the
  * generated gw_taylor_model.h (with gw_taylor_ops.h) instantiated with one
- * lane, as gw_tl1_cst / gw_tl1_jet (the model's GW_MODEL.taylor points at them).  Part of the
+ * lane, as gw_tl1_cst / gw_tl1_jet (the model's GW_MODEL.taylor points at them) and
+ * gw_tl1_series (the series in the kernel's order-major layout, which gw_integrate_taylor
+ * reads as it is: GW_TL1_SERIES).  Part of the
  * unity build after gw_funcs.c, before model_desc.c.  The ensemble library instantiates the
  * same two templates with GW_ENSEMBLE_LANES lanes (gw_ensemble.c).
  */
@@ -36,6 +38,9 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #define GW_TL_W 1
 #define GW_TL(name) gw_tl1_##name
 #include "gw_taylor_model.h"
+#ifdef GW_TL_NX /* a kernel: solver taylor's steps take its series in the nodes' own layout */
+#define GW_TL1_SERIES 1
+#endif
 #undef GW_TL
 #undef GW_TL_W
 #undef GW_TL_INNER

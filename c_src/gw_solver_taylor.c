@@ -203,21 +203,26 @@ GW_INTERNAL void gw_taylor_dense_eval(const gw_instance *I, double t, double *x_
 
 GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run) {
     const gw_taylor_kernel *tk = &I->m->taylor;
-    int p0, p;
+    int p;
+    double q;
     if (!tk->jet || !I->tl_w) {
         GW_LOG_ERR(I, "solver taylor is not available in this model: %s",
                    tk->why_absent ? tk->why_absent : "it was built without a Taylor kernel");
         return -1;
     }
     memset(run, 0, sizeof *run);
-    p0 = gw_taylor_base_order(I->rel_tol);
     p = I->tl_order = gw_taylor_order(I->rel_tol);
     I->tl_si = p + 1; /* the layout of jet (the ensemble's); gw_integrate_taylor sets its own */
     I->tl_so = 1;
     /* (h / rho)^(p+1), the size of the first neglected term, as with Jorba & Zou's rule at the
-     * tolerance's order p0, h0 = rho / e^2 exp(-0.7 / (p0 - 1)): ln(h / rho) = ln(h0 / rho)
-     * (p0 + 1) / (p + 1); at p = p0 the rule itself */
-    run->log_c = -(2.0 + 0.7 / (p0 - 1)) * (p0 + 1) / (p + 1);
+     * order q, h0 = rho / e^2 exp(-0.7 / (q - 1)): ln(h / rho) = ln(h0 / rho) (q + 1) / (p + 1).
+     * q = -ln(eps) / 2 + 3/2 follows rel_tol continuously, where the integer p0 = ceil(q - 1/2)
+     * jumps (the neglected term then fell e^2 at once at each p0 and stayed put in between:
+     * rel_tol 3e-4 and 1e-4 gave the same steps); ln of the term is that of p0's rule averaged
+     * over rel_tol's range of p0 (q - 1/2 runs through (p0 - 1, p0]), equal to it mid-range */
+    q = -0.5 * log(I->rel_tol > DBL_EPSILON ? I->rel_tol : DBL_EPSILON) + 1.5;
+    if (q < 3.0) q = 3.0; /* rel_tol > e^-3: order 3's rule (p0 = 3 up to e^-4) */
+    run->log_c = -(2.0 + 0.7 / (q - 1.0)) * (q + 1.0) / (p + 1);
     return 0;
 }
 

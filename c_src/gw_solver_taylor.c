@@ -145,6 +145,48 @@ static inline void gw_taylor_increment8(const double *x0, size_t si, size_t so, 
 #define GW_TL_INCREMENT8 0
 #endif
 
+#ifndef GW_TL_CLONED
+#define GW_TL_CLONED
+#endif
+/* the one-lane path's series (gw_integrate_taylor: the kernel's order-major layout, si = 1),
+ * a block of 8 components: the same multiplies and adds per component as above, its 4 pairs
+ * held in registers (each order's 8 coefficients are contiguous: a pair is one load), and like
+ * the kernel an x86-64-v3 clone with fused multiply-adds (the Horner chains' latency bounds
+ * this loop) */
+#define GW_TL_LD2(p) (*(const gw_tl_v2u *)(const void *)(p))
+typedef double gw_tl_v2u __attribute__((vector_size(16), aligned(sizeof(double)), may_alias));
+static GW_TL_CLONED void gw_taylor_increment8_om(const double *x0, size_t so, int order, double h,
+                                                 double *dx, double *dp) {
+    const gw_tl_v2 hv = {h, h};
+    const double *a = x0 + (size_t)order * so;
+    gw_tl_v2 q0 = GW_TL_LD2(a), q1 = GW_TL_LD2(a + 2), q2 = GW_TL_LD2(a + 4),
+             q3 = GW_TL_LD2(a + 6);
+    gw_tl_v2 d0 = {0.0, 0.0}, d1 = d0, d2 = d0, d3 = d0;
+    int k;
+    for (k = order - 1; k >= 1; k--) {
+        a = x0 + (size_t)k * so;
+        d0 = d0 * hv + q0;
+        d1 = d1 * hv + q1;
+        d2 = d2 * hv + q2;
+        d3 = d3 * hv + q3;
+        q0 = q0 * hv + GW_TL_LD2(a);
+        q1 = q1 * hv + GW_TL_LD2(a + 2);
+        q2 = q2 * hv + GW_TL_LD2(a + 4);
+        q3 = q3 * hv + GW_TL_LD2(a + 6);
+    }
+    *(gw_tl_v2u *)(void *)dx = q0 * hv;
+    *(gw_tl_v2u *)(void *)(dx + 2) = q1 * hv;
+    *(gw_tl_v2u *)(void *)(dx + 4) = q2 * hv;
+    *(gw_tl_v2u *)(void *)(dx + 6) = q3 * hv;
+    if (dp) {
+        *(gw_tl_v2u *)(void *)dp = q0 + hv * d0;
+        *(gw_tl_v2u *)(void *)(dp + 2) = q1 + hv * d1;
+        *(gw_tl_v2u *)(void *)(dp + 4) = q2 + hv * d2;
+        *(gw_tl_v2u *)(void *)(dp + 6) = q3 + hv * d3;
+    }
+}
+#undef GW_TL_LD2
+
 /* gw_taylor_increment on the series X with state i's coefficient k at X[i si + k so] */
 static void gw_taylor_increment_strided(const double *X, size_t si, size_t so, int order, int nx,
                                         double h, double *dx, double *dp) {
@@ -156,8 +198,8 @@ static void gw_taylor_increment_strided(const double *X, size_t si, size_t so, i
         double q[B], dq[B];
 #if GW_TL_INCREMENT8
         if (nb == B) {
-            if (si == 1) /* the kernel's own layout: each pair one load */
-                gw_taylor_increment8(x0, 1, so, order, h, dx + i0, dp ? dp + i0 : NULL);
+            if (si == 1)
+                gw_taylor_increment8_om(x0, so, order, h, dx + i0, dp ? dp + i0 : NULL);
             else
                 gw_taylor_increment8(x0, si, so, order, h, dx + i0, dp ? dp + i0 : NULL);
             continue;

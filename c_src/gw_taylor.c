@@ -29,11 +29,12 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
     !defined(GW_NO_CLONES) &&                                                                      \
     ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && __GNUC__ >= 8))
 #if defined(__clang__)
-#define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v3", "default")))
+#define GW_TL_CLONED __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
-#define GW_TL_STATIC                                                                               \
-    static __attribute__((target_clones("arch=x86-64-v3", "default"), optimize("fp-contract=fast")))
+#define GW_TL_CLONED                                                                               \
+    __attribute__((target_clones("arch=x86-64-v3", "default"), optimize("fp-contract=fast")))
 #endif
+#define GW_TL_STATIC static GW_TL_CLONED /* GW_TL_CLONED stays: gw_solver_taylor.c's increment */
 #endif
 #define GW_TL_W 1
 #define GW_TL(name) gw_tl1_##name

@@ -90,6 +90,9 @@ GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run
 
 GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, double n1, double n2,
                                        int *bad_order) {
+    /* 1/j before the logarithms: off their chain (a division after each log was 13% of the
+     * step's own time in perf) */
+    const double r1 = 1.0 / (order - 1), r2 = 1.0 / order;
     double lr = HUGE_VAL;
     *bad_order = 0;
     if (!(n1 <= DBL_MAX) || !(n2 <= DBL_MAX)) { /* NaN or inf: which order */
@@ -97,8 +100,8 @@ GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, doub
         return 0.0;
     }
     /* ln rho = min_j ln(N_j^(-1/j)): two logarithms and one exponential (no pow) */
-    if (n1 > 0.0) lr = -log(n1) / (order - 1);
-    if (n2 > 0.0 && -log(n2) / order < lr) lr = -log(n2) / order;
+    if (n1 > 0.0) lr = -log(n1) * r1;
+    if (n2 > 0.0 && -log(n2) * r2 < lr) lr = -log(n2) * r2;
     return exp(lr + run->log_c);
 }
 

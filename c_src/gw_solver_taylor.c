@@ -20,11 +20,14 @@
  *           loose tolerances included: benchmarks/taylor_order_ab.py)
  *   step    h = rho exp(c),  rho = min_{j = p-1, p} N_j^(-1/j),
  *           N_j = max_i |x_i^[j]| / sc_i,  sc_i = |x_i| + (atol / rel_tol) nominal_i,
- *           c = -(2 + 0.7 / (p0 - 1)) (p0 + 1) / (p + 1): the first neglected term
- *           (h / rho)^(p+1) is the one of Jorba & Zou's step rho / e^2 exp(-0.7 / (p0 - 1))
- *           at order p0 (the rule itself when p = p0), about eps sc_i = rel_tol |x_i| + atol
+ *           c = -(2 + 0.7 / (q - 1)) (q + 1) / (p + 1), q = -ln(eps) / 2 + 3/2 (>= 3): the
+ *           first neglected term (h / rho)^(p+1) is the one of Jorba & Zou's step
+ *           rho / e^2 exp(-0.7 / (q - 1)) at order q, about eps sc_i = rel_tol |x_i| + atol
  *           nominal_i, the error weight of every solver (atol: abs_tol, or rel_tol / 100 when
- *           abs_tol = 0); two logarithms and one exponential, no pow;
+ *           abs_tol = 0); q follows eps continuously (at the integer p0 the term stayed put over
+ *           each p0's range of eps and fell e^2 at its end; q - 1/2 = the unrounded p0, so on
+ *           average over that range the term is the former one); two logarithms and one
+ *           exponential, no pow;
  *   update  dx_i = sum_{k=1..p} x_i^[k] h^k (Horner, with P'(h) in the same pass), added to
  *           the state with the TwoSum compensation every solver shares (gw_sum_update: x + xc,
  *           xc part of a saved state, layout v3), so that rounding does not accumulate;

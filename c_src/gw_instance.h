@@ -123,6 +123,7 @@ struct gw_instance {
     double *tl_wn;   /* the same at the step's end point, computed for its defect check */
     double *tl_c;    /* n_cst */
     int tl_order;    /* order of the series in tl_w */
+    int tl_si, tl_so; /* their layout: state i's coefficient k at [i tl_si + k tl_so] */
 };
 
 /* ---- gw_instance.c ------------------------------------------------------------------------ */

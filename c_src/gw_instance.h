@@ -128,6 +128,7 @@ struct gw_instance {
      * tl_w only where it is read (gw_events.c) */
     void (*tl_fetch)(gw_instance *I, void *env);
     void *tl_fetch_env;
+    int tl_si, tl_so; /* their layout: state i's coefficient k at [i tl_si + k tl_so] */
 };
 
 /* ---- gw_instance.c ------------------------------------------------------------------------ */

@@ -128,10 +128,10 @@ typedef struct {
     double h_prev;
     double log_c; /* ln(h / rho) of the step size rule (gw_taylor_begin) */
 } gw_taylor_run;
-/* Jorba-Zou step size from the coefficients of orders p-1 and p of lane `lane` of X (series
- * of the states, lanes interleaved); 0 and *bad_order = j if order j is not finite. */
+/* Jorba-Zou step size from the coefficients of orders p-1 and p of X, the states' series with
+ * state i's coefficient k at X[i si + k so]; 0 and *bad_order = j if order j is not finite. */
 GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run, const double *X,
-                                  int order, int lanes, int lane, int *bad_order);
+                                  size_t si, size_t so, int order, int *bad_order);
 /* the same from the norms N_{p-1} = n1, N_p = n2 (the ensemble's lane-innermost pass) */
 GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, double n1, double n2,
                                        int *bad_order);

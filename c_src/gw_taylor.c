@@ -1,7 +1,9 @@
 /*
  * gw_taylor.c -- the model's Taylor kernel for one trajectory (solver `taylor`): the
  * generated gw_taylor_model.h (with gw_taylor_ops.h) instantiated with one
- * lane, as gw_tl1_cst / gw_tl1_jet (the model's GW_MODEL.taylor points at them).  Part of the
+ * lane, as gw_tl1_cst / gw_tl1_jet (the model's GW_MODEL.taylor points at them) and
+ * gw_tl1_series (the series in the kernel's order-major layout, which gw_integrate_taylor
+ * reads as it is: GW_TL1_SERIES).  Part of the
  * unity build after gw_funcs.c, before model_desc.c.  The ensemble library instantiates the
  * same two templates with GW_ENSEMBLE_LANES lanes (gw_ensemble.c).
  */
@@ -27,15 +29,19 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
     !defined(GW_NO_CLONES) &&                                                                      \
     ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && __GNUC__ >= 8))
 #if defined(__clang__)
-#define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v3", "default")))
+#define GW_TL_CLONED __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
-#define GW_TL_STATIC                                                                               \
-    static __attribute__((target_clones("arch=x86-64-v3", "default"), optimize("fp-contract=fast")))
+#define GW_TL_CLONED                                                                               \
+    __attribute__((target_clones("arch=x86-64-v3", "default"), optimize("fp-contract=fast")))
 #endif
+#define GW_TL_STATIC static GW_TL_CLONED /* GW_TL_CLONED stays: gw_solver_taylor.c's increment */
 #endif
 #define GW_TL_W 1
 #define GW_TL(name) gw_tl1_##name
 #include "gw_taylor_model.h"
+#ifdef GW_TL_NX /* a kernel: solver taylor's steps take its series in the nodes' own layout */
+#define GW_TL1_SERIES 1
+#endif
 #undef GW_TL
 #undef GW_TL_W
 #undef GW_TL_INNER

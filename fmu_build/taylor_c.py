@@ -10,6 +10,10 @@ Writes gw_taylor_model.h, a template over the lane count W that the runtime inst
         the Taylor series of order `order` of the states at (t, x): state i's coefficient k
         of lane l at w[(i (order + 1) + k) W + l], the first nx (order + 1) W numbers of w
         (the solution's Taylor polynomials); w holds GW_TL_NVAR series of order `order`.
+    GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, const double *c,
+                           double *wi);
+        the same series in the kernel's own layout (below): state i's coefficient k of lane l
+        at wi[(k GW_TL_NODES + i) W + l]
 
 Vectors are lane-innermost: x[i W + l], u[j W + l], p[j W + l], c[j W + l], t[l].
 
@@ -26,8 +30,10 @@ right-hand side.  Each order k >= 1 then has two phases:
      the operands) and its finishing operation (divide by b_0, by k, ...); the states get
      x_i^[k+1] = f_i^[k] / (k + 1).  A node whose coefficients no interior sum reads is a local
      variable here (no store and reload).
-No function calls, and code size O(nodes), whatever the order.  At the end the states' series
-are copied to the output layout.
+No function calls, and code size O(nodes), whatever the order.  That is series(), the nodes'
+series in this order-major layout (solver taylor's one-lane steps read the states' coefficients
+there: GW_TL_NODES apart from one order to the next, c_src/gw_solver_taylor.c); jet() calls it
+and copies the states' series to the output layout above.
 """
 from __future__ import annotations
 
@@ -420,15 +426,16 @@ GW_TL_STATIC void GW_TL(cst)(const double *u, const double *p, double *c) {{
 #undef GW_LC
 }}
 
-/* Taylor series of order `order` (>= 1) of the states at (t, x); the structure: the top of
- * fmu_build/taylor_c.py */
-GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const double *c, double *w) {{
-    /* the nodes' block, order-major, behind the states' output, aligned to a lane slice
-     * (measured: 1.4x slower for 4 lanes at malloc's 16 bytes, 32-byte loads across lines) */
-    double *const wi = GW_TL_ALIGN(w + (size_t)GW_TL_NX * (size_t)(order + 1) * GW_TL_W);
+/* The Taylor series of order `order` (>= 1) of every node at (t, x), order-major: coefficient k
+ * of node n of lane l at wi[(k GW_TL_NODES + n) W + l], the states first (n = 0 .. NX - 1); wi
+ * aligned to a lane slice, room for GW_TL_NODES (order + 1) W numbers.  The structure: the top
+ * of fmu_build/taylor_c.py.  Solver taylor's one-lane steps read the states' series here
+ * (gw_solver_taylor.c): no copy to another layout. */
+GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, const double *c,
+                                double *wi) {{
     double *vk = wi, *vn = wi + GW_TL_NODES * GW_TL_W;
     double rk = 1.0, rk1 = 1.0, dk = 1.0;
-    int i, j, k, l;
+    int j, k, l;
     (void)t;
     (void)c;
     (void)j;
@@ -456,11 +463,6 @@ GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const 
 {chr(10).join(_interior_lines(plan))}
 {chr(10).join(_loops(_locals(plan, _boundary(plan) + _next(plan, False))))}
     }}
-    for (i = 0; i < GW_TL_NX; i++) /* the states' series, to the output layout */
-        for (k = 0; k <= order; k++)
-            for (l = 0; l < GW_TL_W; l++)
-                w[((size_t)i * (size_t)(order + 1) + (size_t)k) * GW_TL_W + l] =
-                    GW_ORD(k)[i * GW_TL_W + l];
     (void)rk;
     (void)rk1;
     (void)dk;
@@ -473,6 +475,21 @@ GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const 
 #undef GW_LK
 #undef GW_LN
 #undef GW_LC
+}}
+
+/* The states' Taylor series of order `order` at (t, x): state i's coefficient k of lane l at
+ * w[(i (order + 1) + k) W + l]; w holds GW_TL_NVAR series (the nodes' block of series() behind
+ * the states', aligned to a lane slice: measured 1.4x slower for 4 lanes at malloc's 16 bytes,
+ * 32-byte loads across cache lines). */
+GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const double *c, double *w) {{
+    double *const wi = GW_TL_ALIGN(w + (size_t)GW_TL_NX * (size_t)(order + 1) * GW_TL_W);
+    int i, k, l;
+    GW_TL(series)(order, t, x, c, wi);
+    for (i = 0; i < GW_TL_NX; i++) /* the states' series, to the output layout */
+        for (k = 0; k <= order; k++)
+            for (l = 0; l < GW_TL_W; l++)
+                w[((size_t)i * (size_t)(order + 1) + (size_t)k) * GW_TL_W + l] =
+                    wi[((size_t)k * GW_TL_NODES + (size_t)i) * GW_TL_W + l];
 }}
 #undef GW_TLZ
 #undef GW_TLFMA

@@ -1,6 +1,6 @@
 """The ensemble path's time per trajectory against heyoka's batch mode, measured in one run (issue 11).
 
-Paper scenario (earth, 20 s).  For each target error (max abs error of the 8 states at 20 s
+Scenario paper (earth, 20 s; --scenario long, near_flat: benchmarks/work_precision.py).  For each target error (max abs error of the 8 states at 20 s
 against heyoka in long double at tol 1e-19) the cheapest tolerance reaching it is found first,
 on one trajectory, for each method separately (a grid of half decades; gyrowheel: abs_tol =
 rel_tol * {1e-2, 1}); then N trajectories (gamma_dot spread over 6 +- 1 %, so that the lanes
@@ -12,14 +12,23 @@ take different steps) are timed at that tolerance:
 Every time is thread CPU time, best of --repeat, the methods interleaved; ratios compare
 per-trajectory times in this one run (absolute times on a loaded machine are not to be quoted).
 Also the fixed cost of one run: N = 1 to t_end = 1 ms (a handful of steps).
+--against REF (a git revision, e.g. main) also times REF's ensemble (its c_src/ and
+fmu_build/ensemble.py, on the same FMU, 4 lanes, at gyrowheel's tolerances), interleaved: before
+and after a change in the same run.
 
-    python benchmarks/ensemble_scaling.py [--n 1 4 16 64] [--lanes 1 4 8] [--targets 1e-4 1e-10]
+    python benchmarks/ensemble_scaling.py [--scenario paper] [--n 1 4 16 64] [--lanes 1 4 8]
+        [--targets 1e-4 1e-10] [--against main]
 """
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import io
+import subprocess
 import sys
+import tarfile
 import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -42,24 +51,56 @@ def best(fn, repeat: int) -> float:
     return best_time(fn, repeat)[0]
 
 
+def ensemble_at(ref: str, fmu: Path, work: Path, lanes: int = 4):
+    """The Ensemble of git revision ref (its c_src/ in a copy of fmu's sources/, its
+    fmu_build/ensemble.py) on the same model."""
+    root = HERE.parent
+    tar = subprocess.run(["git", "-C", str(root), "archive", ref, "c_src", "fmu_build/ensemble.py"],
+                         capture_output=True, check=True).stdout
+    src = work / f"ref-{ref}"
+    with tarfile.open(fileobj=io.BytesIO(tar)) as t:
+        t.extractall(src)
+    out = work / f"ref-{ref}.fmu"
+    with zipfile.ZipFile(fmu) as zi, zipfile.ZipFile(out, "w") as zo:
+        names = set(zi.namelist())
+        for item in zi.infolist():
+            c = src / "c_src" / item.filename[len("sources/"):]
+            zo.writestr(item, c.read_bytes() if item.filename.startswith("sources/") and c.is_file()
+                        else zi.read(item.filename))
+        for c in sorted((src / "c_src").glob("gw_ensemble*")):  # the revision's own ensemble files
+            if f"sources/{c.name}" not in names:
+                zo.writestr(f"sources/{c.name}", c.read_bytes())
+    spec = importlib.util.spec_from_file_location(f"ensemble_{ref}", src / "fmu_build" / "ensemble.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod.Ensemble(out, lanes=lanes, cache=work / "ens")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, nargs="*", default=[1, 4, 16, 64])
     ap.add_argument("--lanes", type=int, nargs="*", default=[1, 4, 8])
     ap.add_argument("--targets", type=float, nargs="*", default=[1e-4, 1e-7, 1e-10, 1e-12])
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--scenario", default="paper", choices=["paper", "long", "near_flat"])
+    ap.add_argument("--against", default=None, help="a git revision whose ensemble is timed too")
     args = ap.parse_args()
     import heyoka as hy
 
-    text, stop = SCENARIOS["paper"]
+    text, stop = SCENARIOS[args.scenario]
     with tempfile.TemporaryDirectory(prefix="gw-ens-scaling-") as tmp:
         work = Path(tmp)
-        built = build_fmu(parse_scene('[model]\nname = "ens_paper"\n' + text, "paper.toml"),
-                          work / "paper.fmu", build_dir=work / "b", taylor=True)
+        built = build_fmu(parse_scene(f'[model]\nname = "ens_{args.scenario}"\n' + text, "scene.toml"),
+                          work / "scene.fmu", build_dir=work / "b", taylor=True)
         g = SameGraph(built, stop)  # heyoka on the FMU's graph and the long-double reference
         fns, p, x0, s0 = built.spec.functions(), g.p, g.x0, np.array(g.s0)
         eqs = list(zip(g.xs, to_heyoka(g.f, g.xs, p)))
         ens = {w: Ensemble(built.fmu, lanes=w, cache=work / "ens") for w in args.lanes}
+        cols = [f"gyrowheel W={w}" for w in args.lanes]
+        if args.against:
+            ens[args.against] = ensemble_at(args.against, built.fmu, work)
+            cols.append(f"{args.against} W=4")
         i_spin = [q.name for q in built.spec.starts].index("gamma_dot")
 
         # calibration: the cheapest tolerance per target, one trajectory each
@@ -77,10 +118,10 @@ def main() -> int:
             ok = [q for q in points if q[1] <= target]
             return min(ok) if ok else None
 
-        print(f"### ensemble scaling, paper scenario ({stop:g} s), time per trajectory (ms)\n")
-        print("| target | N | " + " | ".join(f"gyrowheel W={w}" for w in args.lanes)
-              + " | heyoka batch N | best W / heyoka |")
-        print("|---|---|" + "---|" * (len(args.lanes) + 2))
+        print(f"### ensemble scaling, {args.scenario} scenario ({stop:g} s), time per trajectory (ms)\n")
+        print("| target | N | " + " | ".join(cols) + " | heyoka batch N | best W / heyoka |"
+              + (f" {args.against} / heyoka |" if args.against else ""))
+        print("|---|---|" + "---|" * (len(cols) + 2 + bool(args.against)))
         for target in args.targets:
             g, h = pick(gw_pts, target), pick(hy_pts, target)
             if g is None or h is None:
@@ -104,17 +145,18 @@ def main() -> int:
                         tb.set_time(0.0)
                         tb.state[:] = x0s
                         tb.propagate_until(stop)
-                times = {w: float("inf") for w in args.lanes}
+                times = {w: float("inf") for w in ens}
                 t_hy = float("inf")
                 for _ in range(args.repeat):  # interleaved
-                    for w in args.lanes:
+                    for w in ens:
                         times[w] = min(times[w], best(lambda: ens[w].run(stop, starts=starts, rel_tol=g[2],
                                                                          abs_tol=g[2] * g[3]), 1))
                     t_hy = min(t_hy, best(hy_run, 1))
-                bw = min(times.values())
-                cells = " | ".join(f"{times[w] / n * 1e3:.3f}" for w in args.lanes)
+                bw = min(times[w] for w in args.lanes)
+                cells = " | ".join(f"{times[w] / n * 1e3:.3f}" for w in ens)
                 print(f"| {target:g} (gw tol {g[2]:.1e}, heyoka {h[2]:.1e}) | {n} | {cells} | "
-                      f"{t_hy / n * 1e3:.4f} | {bw / t_hy:.2f}x |", flush=True)
+                      f"{t_hy / n * 1e3:.4f} | {bw / t_hy:.2f}x |"
+                      + (f" {times[args.against] / t_hy:.2f}x |" if args.against else ""), flush=True)
         print("\nfixed cost of one run (N = 1, t_end = 1 ms, rel_tol 1e-10):")
         for w in args.lanes:
             t = min(best(lambda: ens[w].run(1e-3, rel_tol=1e-10), 1) for _ in range(args.repeat * 4))

@@ -6,12 +6,12 @@
  * messages as one FMU run); only the Taylor coefficients are computed for all lanes at once by
  * the model's kernel instantiated with GW_ENSEMBLE_LANES lanes (gw_tlb_jet: structure of
  * arrays, the lane loops of gw_taylor_ops.h vectorise; on x86-64 with GCC or clang the kernel
- * is also compiled for x86-64-v3 (AVX2, FMA) and chosen at load time, target_clones, with a
- * portable default).  Each lane then takes its own step (gw_taylor_attempt / _conclude of
- * solver taylor: its own step size, defect check, dense output, event location, compensated
- * update); the batch runs each lane at its pending attempt's end point, so that the series of
- * the next step is also the defect check's f(t1, P(h)) (one kernel call per lane and step, as
- * in gw_integrate_taylor).  A lane whose trajectory reaches t_end or stops at a terminating
+ * is also compiled for x86-64-v3 (AVX2, FMA) and x86-64-v4 (AVX-512) and chosen at load time,
+ * target_clones, with a portable default).  Each lane then takes its own step
+ * (gw_taylor_attempt / _conclude of solver taylor: its own step size, defect check, dense
+ * output, event location, compensated update); the batch runs each lane at its pending
+ * attempt's end point, so that the series of the next step is also the defect check's
+ * f(t1, P(h)) (one kernel call per lane and step, as in gw_integrate_taylor).  A lane whose trajectory reaches t_end or stops at a terminating
  * event (a fall) takes the next trajectory of the job at once, while the others go on; with
  * few lanes left active (the tail of the job) the batch runs them with the one-lane kernel.
  * The order p is common (from rel_tol); the constants are recomputed only when a lane's
@@ -37,8 +37,11 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && !defined(GW_NO_CLONES) &&   \
     ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && __GNUC__ >= 8))
-/* used below, so no GW_MAYBE_UNUSED (clang refuses it beside target_clones) */
-#define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v3", "default")))
+/* used below, so no GW_MAYBE_UNUSED (clang refuses it beside target_clones); x86-64-v4
+ * (AVX-512): 3% less per trajectory than v3 with 4 lanes on an AVX-512 machine (32 vector
+ * registers), the same values */
+#define GW_TL_STATIC                                                                              \
+    static __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define GW_TL_STATIC static GW_MAYBE_UNUSED
 #endif
@@ -59,6 +62,8 @@ typedef struct {
     int pending;     /* an attempt (h, t1; I->xnew) awaits its defect check: the lane's point in
                         the next batch is its end point, else the lane's current point */
     double h, t1;
+    const double *ser; /* the series at the lane's current point in a batch block (lane
+                          innermost), not yet in I->tl_w (gw_ens_fetch); NULL: tl_w has it */
 } gw_lane;
 enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
 
@@ -83,6 +88,8 @@ typedef struct {
     const gw_ensemble_job *job;
     gw_lane lane[GW_ENS_LANES];
     double *w, *c, *x, *u, *p, t[GW_ENS_LANES]; /* batch kernel memory, lanes innermost */
+    double *wb[2]; /* the series blocks: w is one, the other keeps the previous batch's series,
+                      which a pending attempt's retries and event location read */
     /* the lane-innermost step passes (gw_ens_norms, _defects, _increments), nx x lanes each:
      * (atol / rel_tol) nominal_i and atol nominal_i of each lane, the pending attempt's P'(h),
      * the increment's Horner sums (then dx) and their derivatives (then P'(h)) */
@@ -90,6 +97,22 @@ typedef struct {
     long next;                                  /* next trajectory to start */
     int cst_dirty;                              /* a lane's parameters or inputs changed */
 } gw_ensemble;
+
+/* I->tl_fetch of a lane's instance: its series from the batch block into I->tl_w, where the
+ * solver code reads it (dense output, a rejected step's retries, a landing step).  Not copying
+ * every step saves a pass over every lane's series (about 7% of a run). */
+static void gw_ens_fetch(gw_instance *I, void *env) {
+    gw_lane *L = (gw_lane *)env;
+    const int nx = I->m->nx, p = I->tl_order;
+    const size_t S = (size_t)(p + 1) * GW_ENS_LANES;
+    int i, k;
+    if (!L->ser) return;
+    for (i = 0; i < nx; i++)
+        for (k = 0; k <= p; k++)
+            I->tl_w[(size_t)i * (size_t)(p + 1) + (size_t)k] =
+                L->ser[(size_t)i * S + (size_t)k * GW_ENS_LANES];
+    L->ser = NULL;
+}
 
 static void gw_ens_finish(gw_ensemble *E, gw_lane *L, gw_status status) {
     const gw_ensemble_job *job = E->job;
@@ -169,6 +192,7 @@ static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
         L->gi = 0;
         L->steps = 0;
         L->pending = 0;
+        L->ser = NULL;
         if (job->n_rows) job->n_rows[j] = 0;
         if (gw_setup_experiment(I, fn, 0, 0.0, job->t_start, 1, job->t_end) != GW_OK ||
             gw_initialize(I, fn) > GW_WARNING || gw_taylor_begin(I, &L->run)) {
@@ -301,83 +325,7 @@ static void gw_ens_advance(gw_ensemble *E, int l, int order) {
 #define GW_ENSEMBLE_LANE_STEPS 0
 #endif
 
-/* N_{p-1}, N_p of every lane (gw_taylor_step) */
-static void gw_ens_norms(const gw_ensemble *E, int order, double *n1, double *n2) {
-    enum { W = GW_ENS_LANES };
-    const size_t S = (size_t)(order + 1) * W;
-    const int nx = E->m->nx;
-    int i, l;
-    for (l = 0; l < W; l++) n1[l] = n2[l] = 0.0;
-    for (i = 0; i < nx; i++) {
-        const double *x0 = E->w + (size_t)i * S, *a = x0 + (size_t)(order - 1) * W,
-                     *b = x0 + (size_t)order * W, *fsn = E->fsn + (size_t)i * W;
-        for (l = 0; l < W; l++) {
-            const double rsc = 1.0 / (fabs(x0[l]) + fsn[l]);
-            const double r1 = fabs(a[l]) * rsc, r2 = fabs(b[l]) * rsc;
-            n1[l] = r1 > n1[l] ? r1 : n1[l];
-            n2[l] = r2 > n2[l] ? r2 : n2[l];
-        }
-    }
-}
-
-/* the defect of every lane's pending attempt with f(t1, P(h)) = order 1 of the batch's series
- * (gw_taylor_defect); scale[l] = h / (p + 1) of lane l's attempt, xnew in E->x, P'(h) in E->dp */
-static void gw_ens_defects(const gw_ensemble *E, int order, const double *scale, double *err) {
-    enum { W = GW_ENS_LANES };
-    const size_t S = (size_t)(order + 1) * W;
-    const int nx = E->m->nx;
-    const double rtol = E->job->rel_tol;
-    int i, l;
-    for (l = 0; l < W; l++) err[l] = 0.0;
-    for (i = 0; i < nx; i++) {
-        const double *f1 = E->w + (size_t)i * S + W, *dp = E->dp + (size_t)i * W,
-                     *xn = E->x + (size_t)i * W, *an = E->anom + (size_t)i * W;
-        for (l = 0; l < W; l++) {
-            const double r = fabs(f1[l] - dp[l]) * scale[l] / (rtol * fabs(xn[l]) + an[l]);
-            err[l] = !(r <= err[l]) ? r : err[l]; /* NaN propagates as a rejection */
-        }
-    }
-    for (l = 0; l < W; l++) err[l] = isfinite(err[l]) ? err[l] : HUGE_VAL;
-}
-
-/* dx (E->qx) and P'(h) (E->qd) of every lane for its step size h[l] (gw_taylor_increment):
- * the lanes' Horner chains side by side, two lanes per vector (GCC / clang vector extension:
- * GCC vectorised none of the plain loops) */
-#if (defined(__GNUC__) || defined(__clang__)) && GW_ENSEMBLE_LANES % 2 == 0
-typedef double gw_ens_v2 __attribute__((vector_size(16)));
-#define GW_ENS_V 2
-#else
-typedef double gw_ens_v2;
-#define GW_ENS_V 1
-#endif
-static gw_ens_v2 gw_ens_ld(const double *p) { gw_ens_v2 v; memcpy(&v, p, sizeof v); return v; }
-static void gw_ens_st(double *p, gw_ens_v2 v) { memcpy(p, &v, sizeof v); }
-
-static void gw_ens_increments(gw_ensemble *E, int order, const double *h) {
-    enum { W = GW_ENS_LANES, V = GW_ENS_V, NV = GW_ENS_LANES / GW_ENS_V };
-    const size_t S = (size_t)(order + 1) * W;
-    const int nx = E->m->nx;
-    gw_ens_v2 hh[NV];
-    int i, k, j;
-    for (j = 0; j < NV; j++) hh[j] = gw_ens_ld(h + j * V);
-    for (i = 0; i < nx; i++) { /* kept in registers: the loops over j are unrolled */
-        const double *x0 = E->w + (size_t)i * S;
-        gw_ens_v2 q[NV], dq[NV];
-        for (j = 0; j < NV; j++) {
-            q[j] = gw_ens_ld(x0 + (size_t)order * W + j * V);
-            dq[j] = q[j] * 0.0; /* zero where q is finite; the first sum below adds q */
-        }
-        for (k = order - 1; k >= 1; k--)
-            for (j = 0; j < NV; j++) {
-                dq[j] = k == order - 1 ? q[j] : dq[j] * hh[j] + q[j];
-                q[j] = q[j] * hh[j] + gw_ens_ld(x0 + (size_t)k * W + j * V);
-            }
-        for (j = 0; j < NV; j++) {
-            gw_ens_st(E->qx + (size_t)i * W + j * V, q[j] * hh[j]);
-            gw_ens_st(E->qd + (size_t)i * W + j * V, q[j] + hh[j] * dq[j]);
-        }
-    }
-}
+#include "gw_ensemble_passes.h"
 
 /* Every active lane after the batch kernel: conclude (defects from the pass), then, where the
  * series is the lane's new one, its next attempt (norms and increments from the passes). */
@@ -386,10 +334,10 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
     const size_t S = (size_t)(order + 1) * W;
     const int nx = E->m->nx;
     double n1[W], n2[W], scale[W], err[W], h[W];
-    int go[W], last[W], l, i, k, any = 0;
-    gw_ens_norms(E, order, n1, n2);
+    int go[W], last[W], l, i, any = 0;
+    gw_ens_norms(E->w, E->fsn, nx, order, n1, n2);
     for (l = 0; l < W; l++) scale[l] = E->lane[l].pending ? E->lane[l].h / (order + 1) : 0.0;
-    gw_ens_defects(E, order, scale, err);
+    gw_ens_defects(E->w, E->dp, E->x, E->anom, nx, order, E->job->rel_tol, scale, err);
     for (l = 0; l < W; l++) {
         gw_lane *L = &E->lane[l];
         gw_instance *I = L->I;
@@ -400,44 +348,29 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
         if (traj < 0) continue;
         if (L->pending) {
             const double target = gw_ens_target(E, L);
-            gw_int_result r =
-                GW_ENSEMBLE_LANE_STEPS
+            gw_int_result r;
+            if (GW_ENSEMBLE_LANE_STEPS || err[l] > 1.0) gw_ens_fetch(I, L); /* retries read it */
+            r = GW_ENSEMBLE_LANE_STEPS
                     ? gw_taylor_conclude(I, target, &L->run, L->h, L->t1, E->w + W + l, S, &fresh)
                     : gw_taylor_conclude_err(I, target, &L->run, L->h, L->t1, err[l], 1, &fresh);
             L->pending = 0;
+            L->ser = NULL; /* the series of the point before: no longer the lane's */
             if (!gw_ens_after(E, L, r, target)) fresh = 0;
         }
         if (L->traj != traj || !fresh) continue; /* ended, or the state moved: a new series */
         go[l] = 1;
-    }
-    { /* the fresh lanes' polynomials, their dense output, out of the batch layout: one load
-       * of all lanes' coefficient, stored to each fresh lane */
-        double *dst[W];
-        int nf = 0;
-        for (l = 0; l < W; l++)
-            if (go[l]) dst[nf++] = E->lane[l].I->tl_w;
-        if (nf == W) /* the common case: every lane (no test per coefficient) */
-            for (i = 0; i < nx; i++)
-                for (k = 0; k <= order; k++) {
-                    const double *src = E->w + (size_t)i * S + (size_t)k * W;
-                    const size_t at = (size_t)i * (size_t)(order + 1) + (size_t)k;
-                    for (l = 0; l < W; l++) dst[l][at] = src[l];
-                }
-        else
-            for (i = 0; i < nx && nf > 0; i++)
-                for (k = 0; k <= order; k++) {
-                    const double *src = E->w + (size_t)i * S + (size_t)k * W;
-                    const size_t at = (size_t)i * (size_t)(order + 1) + (size_t)k;
-                    int f = 0;
-                    for (l = 0; l < W; l++)
-                        if (go[l]) dst[f++][at] = src[l];
-                }
+        L->ser = E->w + l;
     }
     for (l = 0; l < W; l++) {
         gw_lane *L = &E->lane[l];
         gw_instance *I = L->I;
         if (!go[l]) continue;
         go[l] = 0;
+        if (GW_ENSEMBLE_LANE_STEPS)
+            gw_ens_fetch(I, L);
+        else /* order 1, which gw_taylor_attempt_size checks (finite) */
+            for (i = 0; i < nx; i++)
+                I->tl_w[(size_t)i * (size_t)(order + 1) + 1] = E->w[(size_t)i * S + W + l];
         {
             const double target = gw_ens_target(E, L), norms[2] = {n1[l], n2[l]};
             gw_int_result r =
@@ -453,26 +386,33 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
         any = 1;
     }
     if (!any) return;
-    gw_ens_increments(E, order, h);
+    gw_ens_increments(E->w, nx, order, h, E->qx, E->qd);
     for (l = 0; l < W; l++) {
         gw_lane *L = &E->lane[l];
         gw_instance *I = L->I;
         if (!go[l]) continue;
-        if (GW_ENSEMBLE_LANE_STEPS)
+        if (GW_ENSEMBLE_LANE_STEPS) {
             gw_taylor_increment(I->tl_w, order, 1, 0, nx, L->h, I->dx, I->k[2]);
-        else
+            gw_sum_update(I);
+        } else { /* gw_sum_update's TwoSum with dx read from the pass (I->dx not written: stored
+                  * element by element and read in pairs by gw_sum_update, it stalled the loads,
+                  * 3.7% of a run) */
+            const double *x = I->x, *xc = I->xc;
             for (i = 0; i < nx; i++) {
-                I->dx[i] = E->qx[(size_t)i * W + l];
+                const double y = E->qx[(size_t)i * W + l] + xc[i], sum = x[i] + y, bp = sum - x[i];
+                I->xnew[i] = sum;
+                I->xcnew[i] = (x[i] - (sum - bp)) + (y - bp);
                 I->k[2][i] = E->qd[(size_t)i * W + l];
             }
-        gw_sum_update(I);
+        }
         if (!last[l]) {
             L->pending = 1;
         } else { /* a step landing on the call's target: checked with the right-hand side */
             const double target = gw_ens_target(E, L);
             int fresh;
-            gw_int_result r = gw_taylor_conclude(I, target, &L->run, L->h, L->t1, NULL, 1, &fresh);
-            gw_ens_after(E, L, r, target);
+            gw_ens_fetch(I, L); /* its retries and event location read the series */
+            gw_ens_after(E, L, gw_taylor_conclude(I, target, &L->run, L->h, L->t1, NULL, 1, &fresh),
+                         target);
         }
     }
 }
@@ -494,6 +434,7 @@ static int gw_ens_step(gw_ensemble *E, int order) {
         for (l = 0; l < GW_ENS_LANES; l++) {
             gw_instance *I = E->lane[l].I;
             if (E->lane[l].traj < 0) continue;
+            gw_ens_fetch(I, &E->lane[l]); /* the lane's series from the last batch */
             m->taylor.jet(order, &E->t[l], E->lane[l].pending ? I->xnew : I->x, I->tl_c, I->tl_wn);
         }
         for (l = 0; l < GW_ENS_LANES; l++)
@@ -518,6 +459,7 @@ static int gw_ens_step(gw_ensemble *E, int order) {
     }
     if (m->taylor.n_cst > 0 && E->cst_dirty) gw_tlb_cst(E->u, E->p, E->c);
     E->cst_dirty = 0;
+    E->w = E->w == E->wb[0] ? E->wb[1] : E->wb[0]; /* the lanes' series stay in the other */
     gw_tlb_jet(order, E->t, E->x, E->c, E->w);
     gw_ens_batch_steps(E, order);
     for (l = 0; l < GW_ENS_LANES; l++)
@@ -531,11 +473,63 @@ static void *gw_ens_alloc(const gw_callbacks *cb, size_t n) {
     return p;
 }
 
-GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
-                                 const gw_ensemble_job *job) {
+/* What a run needs beyond the job, kept between runs (gw_ensemble_new): the lanes' instances
+ * (made when a job first needs them; each trajectory resets its lane's instance, as within a
+ * run) and the batch memory, its series blocks sized for orders up to GW_TAYLOR_MAX_ORDER.
+ * Made and freed by every run, they were most of a run's fixed cost (0.034 ms of C at N = 4,
+ * half of it allocating, zeroing and freeing). */
+struct gw_ensemble_ctx {
     gw_ensemble E;
-    const size_t L = GW_ENS_LANES;
-    gw_status st = GW_OK;
+    gw_callbacks cb; /* allocate and free of everything here; the logger is each run's */
+};
+enum { GW_ENS_ARRAYS = 11 };
+
+/* the batch memory's arrays and their lengths (doubles) */
+static void gw_ens_arrays(gw_ensemble *E, double **a[GW_ENS_ARRAYS], size_t n[GW_ENS_ARRAYS]) {
+    const gw_model *m = E->m;
+    const size_t L = GW_ENS_LANES, nx = (size_t)m->nx * L;
+    int k;
+    a[0] = &E->wb[0], a[1] = &E->wb[1], a[2] = &E->c, a[3] = &E->x, a[4] = &E->u, a[5] = &E->p;
+    a[6] = &E->fsn, a[7] = &E->anom, a[8] = &E->dp, a[9] = &E->qx, a[10] = &E->qd;
+    n[0] = n[1] = (size_t)m->taylor.n_var * (GW_TAYLOR_MAX_ORDER + 1) * L;
+    n[2] = (size_t)m->taylor.n_cst * L, n[4] = (size_t)m->nu * L, n[5] = (size_t)m->np * L;
+    for (k = 3; k < GW_ENS_ARRAYS; k++)
+        if (k != 4 && k != 5) n[k] = nx;
+}
+
+GW_API void gw_ensemble_free(gw_ensemble_ctx *C) {
+    double **a[GW_ENS_ARRAYS];
+    size_t n[GW_ENS_ARRAYS];
+    int k;
+    if (!C) return;
+    for (k = 0; k < GW_ENS_LANES; k++)
+        if (C->E.lane[k].I) gw_instance_free(C->E.lane[k].I);
+    gw_ens_arrays(&C->E, a, n);
+    for (k = 0; k < GW_ENS_ARRAYS; k++)
+        if (*a[k]) C->cb.free(*a[k]);
+    C->cb.free(C);
+}
+
+GW_API gw_ensemble_ctx *gw_ensemble_new(const gw_model *m, const gw_callbacks *cb) {
+    gw_ensemble_ctx *C = (gw_ensemble_ctx *)cb->allocate(1, sizeof *C);
+    double **a[GW_ENS_ARRAYS];
+    size_t n[GW_ENS_ARRAYS];
+    int k, ok = 1;
+    if (!C) return NULL;
+    memset(C, 0, sizeof *C);
+    C->cb = *cb;
+    C->E.m = m;
+    gw_ens_arrays(&C->E, a, n);
+    for (k = 0; k < GW_ENS_ARRAYS; k++) ok &= (*a[k] = (double *)gw_ens_alloc(cb, n[k])) != NULL;
+    if (ok) return C;
+    gw_ensemble_free(C);
+    return NULL;
+}
+
+GW_API gw_status gw_ensemble_run_in(gw_ensemble_ctx *C, gw_logger_fn logger, void *env,
+                                    const gw_ensemble_job *job) {
+    gw_ensemble *E = &C->E;
+    const gw_model *m = E->m;
     int l, order;
     long j;
     int bad_grid = job->n_grid < 0 || (job->n_grid > 0 && (!job->t_grid || !job->n_rows ||
@@ -544,54 +538,59 @@ GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
         bad_grid = !(job->t_grid[j] > (j > 0 ? job->t_grid[j - 1] : job->t_start));
     if (!m->taylor.jet || job->n < 0 || !job->status || !(job->t_end > job->t_start) ||
         !(job->rel_tol > 0.0) || !(job->abs_tol >= 0.0) || !(job->max_step > 0.0) || bad_grid) {
-        if (cb->logger)
-            cb->logger(cb->env, "ensemble", GW_ERROR, "logStatusError",
-                       !m->taylor.jet ? "ensemble: the model has no Taylor kernel"
-                                      : "ensemble: bad job (n >= 0, status, t_end > t_start, "
-                                        "rel_tol, max_step > 0, abs_tol >= 0, an increasing grid "
-                                        "ending at t_end with n_rows required)");
+        if (logger)
+            logger(env, "ensemble", GW_ERROR, "logStatusError",
+                   !m->taylor.jet ? "ensemble: the model has no Taylor kernel"
+                                  : "ensemble: bad job (n >= 0, status, t_end > t_start, "
+                                    "rel_tol, max_step > 0, abs_tol >= 0, an increasing grid "
+                                    "ending at t_end with n_rows required)");
         return GW_ERROR;
     }
-    memset(&E, 0, sizeof E);
-    E.m = m;
-    E.job = job;
+    E->job = job;
+    E->next = 0;
+    E->cst_dirty = 0;
+    E->w = E->wb[0];
     order = gw_taylor_order(job->rel_tol);
-    E.w = (double *)gw_ens_alloc(cb, (size_t)m->taylor.n_var * (size_t)(order + 1) * L);
-    E.c = (double *)gw_ens_alloc(cb, (size_t)m->taylor.n_cst * L);
-    E.x = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
-    E.u = (double *)gw_ens_alloc(cb, (size_t)m->nu * L);
-    E.p = (double *)gw_ens_alloc(cb, (size_t)m->np * L);
-    E.fsn = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
-    E.anom = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
-    E.dp = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
-    E.qx = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
-    E.qd = (double *)gw_ens_alloc(cb, (size_t)m->nx * L);
+    for (j = 0; j < (long)((size_t)m->nx * GW_ENS_LANES); j++) E->fsn[j] = E->anom[j] = 1.0; /* idle */
     for (l = 0; l < GW_ENS_LANES; l++) { /* instances for the lanes that will have work */
-        char name[32];
-        snprintf(name, sizeof name, "ensemble lane %d", l);
-        E.lane[l].traj = -1;
+        gw_lane *L = &E->lane[l];
+        L->traj = -1;
         if (l >= job->n) continue;
-        E.lane[l].I = gw_instance_new(m, name, cb, 0);
-        if (!E.lane[l].I) st = GW_FATAL;
-    }
-    if (!E.w || !E.c || !E.x || !E.u || !E.p || !E.fsn || !E.anom || !E.dp || !E.qx || !E.qd)
-        st = GW_FATAL;
-    else
-        for (j = 0; j < (long)((size_t)m->nx * L); j++) E.fsn[j] = E.anom[j] = 1.0; /* idle */
-    if (st == GW_OK) {
-        for (j = 0; j < job->n; j++) job->status[j] = (int)GW_FATAL; /* not run (yet) */
-        for (l = 0; l < GW_ENS_LANES; l++) gw_ens_fill(&E, &E.lane[l]);
-        while (gw_ens_step(&E, order) > 0) {
+        if (!L->I) {
+            char name[32];
+            gw_callbacks cb = C->cb;
+            cb.logger = logger;
+            cb.env = env;
+            snprintf(name, sizeof name, "ensemble lane %d", l);
+            if (!(L->I = gw_instance_new(m, name, &cb, 0))) {
+                if (logger)
+                    logger(env, "ensemble", GW_FATAL, "logStatusFatal", "ensemble: out of memory");
+                return GW_FATAL;
+            }
+            L->I->tl_fetch = gw_ens_fetch;
+            L->I->tl_fetch_env = L;
         }
-    } else if (cb->logger) {
-        cb->logger(cb->env, "ensemble", GW_FATAL, "logStatusFatal", "ensemble: out of memory");
+        L->I->cb.logger = logger; /* this run's messages */
+        L->I->cb.env = env;
     }
-    for (l = 0; l < GW_ENS_LANES; l++)
-        if (E.lane[l].I) gw_instance_free(E.lane[l].I);
-    {
-        double *const mem[] = {E.w, E.c, E.x, E.u, E.p, E.fsn, E.anom, E.dp, E.qx, E.qd};
-        for (l = 0; l < (int)(sizeof mem / sizeof mem[0]); l++) cb->free(mem[l]);
+    for (j = 0; j < job->n; j++) job->status[j] = (int)GW_FATAL; /* not run (yet) */
+    for (l = 0; l < GW_ENS_LANES; l++) gw_ens_fill(E, &E->lane[l]);
+    while (gw_ens_step(E, order) > 0) {
     }
+    return GW_OK;
+}
+
+GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
+                                 const gw_ensemble_job *job) {
+    gw_ensemble_ctx *C = gw_ensemble_new(m, cb);
+    gw_status st;
+    if (!C) {
+        if (cb->logger)
+            cb->logger(cb->env, "ensemble", GW_FATAL, "logStatusFatal", "ensemble: out of memory");
+        return GW_FATAL;
+    }
+    st = gw_ensemble_run_in(C, cb->logger, cb->env, job);
+    gw_ensemble_free(C);
     return st;
 }
 

@@ -42,4 +42,15 @@ typedef struct {
 GW_API gw_status gw_ensemble_run(const gw_model *m, const gw_callbacks *cb,
                                  const gw_ensemble_job *job);
 
+/* The same with the memory kept between runs (the lanes' instances, the batch's series): a run
+ * of a few trajectories costs less (Ensemble.run of 4 trajectories to 1 us: 0.051 -> 0.030 ms).  One
+ * context per thread at a time.  gw_ensemble_new: NULL if out of memory (cb->allocate and
+ * cb->free serve everything the context holds; cb->logger is not used); gw_ensemble_run_in:
+ * as gw_ensemble_run, messages to logger(env, ...). */
+typedef struct gw_ensemble_ctx gw_ensemble_ctx;
+GW_API gw_ensemble_ctx *gw_ensemble_new(const gw_model *m, const gw_callbacks *cb);
+GW_API gw_status gw_ensemble_run_in(gw_ensemble_ctx *ctx, gw_logger_fn logger, void *env,
+                                    const gw_ensemble_job *job);
+GW_API void gw_ensemble_free(gw_ensemble_ctx *ctx);
+
 #endif /* GW_ENSEMBLE_H */

@@ -198,6 +198,7 @@ GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, d
         if (I->e[i] > 0.0 && !(I->enew[i] > 0.0)) break;
     if (i == ne) return GW_EV_NONE;
 
+    if (I->tl_fetch) I->tl_fetch(I, I->tl_fetch_env); /* the step's series into I->tl_w */
     gw_dense_prepare(I);
     for (; i < ne; i++) {
         double te;

@@ -123,6 +123,11 @@ struct gw_instance {
     double *tl_wn;   /* the same at the step's end point, computed for its defect check */
     double *tl_c;    /* n_cst */
     int tl_order;    /* order of the series in tl_w */
+    /* NULL, or called (with tl_fetch_env) before the dense output of the last step is read:
+     * the ensemble path (gw_ensemble.c) leaves a lane's series in its batch block and fills
+     * tl_w only where it is read (gw_events.c) */
+    void (*tl_fetch)(gw_instance *I, void *env);
+    void *tl_fetch_env;
     int tl_si, tl_so; /* their layout: state i's coefficient k at [i tl_si + k tl_so] */
 };
 

@@ -562,3 +562,26 @@ def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path,
         np.testing.assert_array_equal(a.x_final, b.x_final)
         if extra:
             np.testing.assert_array_equal(a.y_grid, b.y_grid)
+
+
+def test_ensemble_rejected_steps_retry_on_the_lane_series(lunar, tmp_path, monkeypatch):
+    """The batch leaves each lane's series in its block and copies it into the lane's instance
+    only where solver code reads it (gw_ensemble.c, gw_ens_fetch): a rejected step's retries, a
+    landing step, event location (through I->tl_fetch).  On the near-pole case (steps rejected by
+    the defect check, in every lane of a full batch) the lazily fetched series give the numbers
+    of the build that copies every lane's series every step (GW_ENSEMBLE_LANE_STEPS=1) bit for
+    bit, and the error stays at the tolerance against DOP853 at rel_tol 1e-13."""
+    import fmu_build.ensemble as ensemble_mod
+    from fmi_slave import FmuRunner
+    T, tol = 0.004, 1e-9
+    assert _rejections(lunar.fmu, None, T, tol)  # the single run rejects steps here
+    runner = FmuRunner(lunar.fmu)
+    ref = _run(runner, T, STATES, solver=5, rel_tol=1e-13, abs_tol=1e-15, max_step=1e-5, **NEAR_FALL)
+    starts = {k: [v] * 4 for k, v in NEAR_FALL.items()}
+    starts["gamma_dot"] = [NEAR_FALL["gamma_dot"] * f for f in (1.0, 1.0001, 0.9999, 1.0002)]
+    lazy = Ensemble(lunar.fmu, lanes=4, cache=tmp_path).run(T, starts=starts, rel_tol=tol)
+    monkeypatch.setattr(ensemble_mod, "_UNITY", "#define GW_ENSEMBLE_LANE_STEPS 1\n" + ensemble_mod._UNITY)
+    eager = Ensemble(lunar.fmu, lanes=4, cache=tmp_path).run(T, starts=starts, rel_tol=tol)
+    assert list(lazy.status) == [STATUS_OK] * 4 and list(lazy.steps) == list(eager.steps)
+    np.testing.assert_array_equal(lazy.x_final, eager.x_final)
+    assert np.max(np.abs(lazy.x_final[0, :8] - ref)) < 100 * tol

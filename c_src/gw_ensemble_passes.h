@@ -1,0 +1,135 @@
+/*
+ * gw_ensemble_passes.h -- the ensemble's step arithmetic over all lanes at once (gw_ensemble.c):
+ * the step size norms, the defects and the increments' Horner sums of GW_ENSEMBLE_LANES lanes
+ * on the batch's series (structure of arrays: w[(var * (order + 1) + k) * lanes + lane]), loops
+ * with the lanes innermost, the same operations in the same order as solver taylor's one-lane
+ * code (gw_taylor_step, gw_taylor_defect, gw_taylor_increment), so each lane's numbers are those
+ * of its single run bit for bit.  Included by gw_ensemble.c only.
+ */
+#ifndef GW_ENSEMBLE_PASSES_H
+#define GW_ENSEMBLE_PASSES_H
+
+#include <math.h>
+#include <stddef.h>
+
+/* The passes work on vectors of GW_ENS_V lanes (GCC / clang vector extension: GCC vectorised
+ * none of the plain loops): 4 lanes (one AVX2 register) where the lanes are a multiple of 4,
+ * else 2 or 1.  They are also compiled for AVX2 (target clones, chosen at load time) without
+ * FMA: the same IEEE multiplies, adds and divisions as the one-lane code, bit for bit. */
+#if defined(__GNUC__) || defined(__clang__)
+#if GW_ENSEMBLE_LANES % 4 == 0
+#define GW_ENS_V 4
+#elif GW_ENSEMBLE_LANES % 2 == 0
+#define GW_ENS_V 2
+#else
+#define GW_ENS_V 1
+#endif
+typedef double gw_ens_v __attribute__((vector_size(8 * GW_ENS_V)));
+typedef long long gw_ens_m __attribute__((vector_size(8 * GW_ENS_V))); /* lane masks: 0, -1 */
+#define GW_ENS_SEL(m, a, b) ((gw_ens_v)(((m) & (gw_ens_m)(a)) | (~(m) & (gw_ens_m)(b))))
+#define GW_ENS_NOT(m) (~(m))
+#define GW_ENS_ABS(a) ((gw_ens_v)((gw_ens_m)(a) & ((gw_ens_m){0} + 0x7fffffffffffffffLL)))
+/* unaligned loads and stores (the lanes of a coefficient are 8-byte aligned) */
+typedef double gw_ens_vu __attribute__((vector_size(8 * GW_ENS_V), aligned(8), may_alias));
+#define gw_ens_ld(p) (*(const gw_ens_vu *)(const void *)(p))
+#define gw_ens_st(p, v) (*(gw_ens_vu *)(void *)(p) = (v))
+#else
+#define GW_ENS_V 1
+typedef double gw_ens_v;
+typedef int gw_ens_m;
+#define GW_ENS_SEL(m, a, b) ((m) ? (a) : (b))
+#define GW_ENS_NOT(m) (!(m))
+#define GW_ENS_ABS(a) fabs(a)
+#define gw_ens_ld(p) (*(p))
+#define gw_ens_st(p, v) (*(p) = (v))
+#endif
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && !defined(GW_NO_CLONES) &&   \
+    ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && __GNUC__ >= 8))
+#define GW_ENS_PASS static __attribute__((target_clones("avx2", "default")))
+#else
+#define GW_ENS_PASS static
+#endif
+
+/* N_{p-1}, N_p of every lane (gw_taylor_step) */
+GW_ENS_PASS void gw_ens_norms(const double *w, const double *fsn, int nx, int order, double *n1,
+                              double *n2) {
+    enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V };
+    const size_t S = (size_t)(order + 1) * W;
+    int i, j;
+    for (j = 0; j < W; j += V) {
+        gw_ens_v m1 = {0.0}, m2 = {0.0};
+        for (i = 0; i < nx; i++) {
+            const double *x0 = w + (size_t)i * S + j;
+            const gw_ens_v rsc = 1.0 / (GW_ENS_ABS(gw_ens_ld(x0)) + gw_ens_ld(fsn + (size_t)i * W + j));
+            const gw_ens_v r1 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)(order - 1) * W)) * rsc;
+            const gw_ens_v r2 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)order * W)) * rsc;
+            m1 = GW_ENS_SEL(r1 > m1, r1, m1);
+            m2 = GW_ENS_SEL(r2 > m2, r2, m2);
+        }
+        gw_ens_st(n1 + j, m1);
+        gw_ens_st(n2 + j, m2);
+    }
+}
+
+/* the defect of every lane's pending attempt with f(t1, P(h)) = order 1 of the batch's series
+ * (gw_taylor_defect); scale[l] = h / (p + 1) of lane l's attempt, its xnew in x, P'(h) in dp */
+GW_ENS_PASS void gw_ens_defects(const double *w, const double *dp, const double *x,
+                                const double *anom, int nx, int order, double rtol,
+                                const double *scale, double *err) {
+    enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V };
+    const size_t S = (size_t)(order + 1) * W;
+    int i, j, l;
+    for (j = 0; j < W; j += V) {
+        const gw_ens_v sc = gw_ens_ld(scale + j);
+        gw_ens_v e = {0.0};
+        for (i = 0; i < nx; i++) {
+            const size_t at = (size_t)i * W + j;
+            const gw_ens_v r = GW_ENS_ABS(gw_ens_ld(w + (size_t)i * S + W + j) - gw_ens_ld(dp + at)) *
+                               sc / (rtol * GW_ENS_ABS(gw_ens_ld(x + at)) + gw_ens_ld(anom + at));
+            e = GW_ENS_SEL(GW_ENS_NOT(r <= e), r, e); /* NaN propagates as a rejection */
+        }
+        gw_ens_st(err + j, e);
+    }
+    for (l = 0; l < W; l++) err[l] = isfinite(err[l]) ? err[l] : HUGE_VAL;
+}
+
+/* dx (qx) and P'(h) (qd) of every lane for its step size h[l] (gw_taylor_increment):
+ * the Horner chains of C components and all lanes side by side (independent chains overlap
+ * where one component after the other waited on each multiply and add) */
+GW_ENS_PASS void gw_ens_increments(const double *w, int nx, int order, const double *h, double *qx,
+                                   double *qd) {
+    enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V, NV = GW_ENSEMBLE_LANES / GW_ENS_V,
+           C = NV >= 4 ? 1 : 4 / NV }; /* at most 8 chains of q and dq */
+    const size_t S = (size_t)(order + 1) * W;
+    gw_ens_v hh[NV];
+    int i0, i, k, j, c, nc;
+    for (j = 0; j < NV; j++) hh[j] = gw_ens_ld(h + j * V);
+    for (i0 = 0; i0 < nx; i0 += nc) {
+        gw_ens_v q[C][NV], dq[C][NV];
+        nc = nx - i0 >= C ? C : 1; /* the last components one at a time */
+        for (c = 0; c < nc; c++)
+            for (j = 0; j < NV; j++) {
+                q[c][j] = gw_ens_ld(w + (size_t)(i0 + c) * S + (size_t)order * W + j * V);
+                dq[c][j] = q[c][j]; /* the first sum below is dq = q (0 h + q) */
+            }
+        for (c = 0; c < nc; c++) /* k = order - 1 */
+            for (j = 0; j < NV; j++)
+                q[c][j] = q[c][j] * hh[j] +
+                          gw_ens_ld(w + (size_t)(i0 + c) * S + (size_t)(order - 1) * W + j * V);
+        for (k = order - 2; k >= 1; k--)
+            for (c = 0; c < nc; c++)
+                for (j = 0; j < NV; j++) {
+                    dq[c][j] = dq[c][j] * hh[j] + q[c][j];
+                    q[c][j] = q[c][j] * hh[j] +
+                              gw_ens_ld(w + (size_t)(i0 + c) * S + (size_t)k * W + j * V);
+                }
+        for (c = 0; c < nc; c++)
+            for (j = 0; j < NV; j++) {
+                i = i0 + c;
+                gw_ens_st(qx + (size_t)i * W + j * V, q[c][j] * hh[j]);
+                gw_ens_st(qd + (size_t)i * W + j * V, q[c][j] + hh[j] * dq[c][j]);
+            }
+    }
+}
+
+#endif /* GW_ENSEMBLE_PASSES_H */

@@ -1,0 +1,144 @@
+"""The ensemble path's memory kept between runs (gw_ensemble_new / gw_ensemble_run_in, a context
+per run in flight, fmu_build/ensemble.py): runs of one Ensemble reuse the lanes' instances and
+the batch memory, so nothing of one run may reach the next, and runs from several threads at
+once must each have their own context."""
+from __future__ import annotations
+
+import os
+import subprocess
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+from conftest import SCENES
+from fmu_build import build_fmu, load_scene
+from fmu_build.ensemble import STATUS_ERROR, STATUS_OK, Ensemble
+
+
+@pytest.fixture(scope="module")
+def paper(tmp_path_factory):
+    work = tmp_path_factory.mktemp("ensemble")
+    return build_fmu(load_scene(SCENES / "paper_earth.toml"), work / "paper_earth.fmu",
+                     build_dir=work / "build", taylor=True)
+
+
+# 7 trajectories (some fall, at different times) on a grid, then jobs that leave a context in
+# another state: fewer lanes busy, a trajectory failing at initialisation and one in its steps,
+# another tolerance (another order: the series blocks' stride), no grid
+JOB = dict(parameters={"g": [9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0], "beta_min": 0.1},
+           starts={"gamma_dot": [6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2]}, rel_tol=1e-9,
+           grid=np.linspace(0.5, 6.0, 12))
+OTHERS = [dict(parameters={"M": [2.0, -1.0]}, rel_tol=1e-6),
+          dict(starts={"gamma_dot": [6.0, 1e9, 6.0]}, rel_tol=1e-12),
+          dict(starts={"gamma_dot": [4.0]}, rel_tol=1e-4)]
+
+
+def _same(a, b):
+    assert list(a.status) == list(b.status) and list(a.steps) == list(b.steps)
+    np.testing.assert_array_equal(a.t_final, b.t_final)
+    np.testing.assert_array_equal(a.x_final, b.x_final)
+    np.testing.assert_array_equal(a.y_grid, b.y_grid)
+    np.testing.assert_array_equal(a.flags, b.flags)
+    assert a.messages == b.messages
+
+
+def test_runs_reusing_a_context_equal_fresh_runs(paper, tmp_path):
+    """A job run after others on the same Ensemble (one context, reused) returns what it
+    returns on a fresh Ensemble, bit for bit, messages included; the other jobs' messages stay
+    with their own results."""
+    fresh = Ensemble(paper.fmu, cache=tmp_path).run(6.0, **JOB)
+    assert 0 < fresh.terminated.sum() < 7 and set(fresh.status) <= {STATUS_OK, 2}
+    ens = Ensemble(paper.fmu, cache=tmp_path)
+    first = ens.run(6.0, **JOB)
+    _same(first, fresh)
+    for other in OTHERS:
+        res = ens.run(2.0, **other)
+        assert len(ens._contexts) == 1  # the same context each time
+        assert all(m.startswith("ensemble trajectory ") for m in res.messages)
+        assert bool(res.messages) == (STATUS_ERROR in res.status)
+        _same(ens.run(6.0, **JOB), fresh)
+
+
+def test_runs_from_several_threads_have_their_own_contexts(paper, tmp_path):
+    """The sweep engine may call one Ensemble from several threads (the C call releases the
+    GIL): each run takes a context of its own from the pool, so concurrent runs return what
+    one run alone returns."""
+    ens = Ensemble(paper.fmu, cache=tmp_path)
+    alone = ens.run(6.0, **JOB)
+    with ThreadPoolExecutor(4) as pool:
+        results = list(pool.map(lambda _: ens.run(6.0, **JOB), range(8)))
+    for res in results:
+        _same(res, alone)
+    assert 1 <= len(ens._contexts) <= 4
+
+
+DRIVER = r"""
+#include <stdio.h>
+#include <string.h>
+static int n_log;
+static void logger(void *env, const char *who, gw_status st, const char *cat, const char *msg) {
+    (void)env, (void)who, (void)st, (void)cat, (void)msg;
+    n_log++;
+}
+static void set(int kind, int count, double *row, const char *name, double v) {
+    int i;
+    for (i = 0; i < count; i++)
+        if (!strcmp(ID(name)(kind, i), name)) row[i] = v;
+}
+int main(void) {
+    enum { N = 7, G = 12 };
+    const double g[N] = {9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0}, spin[N] = {6, 6, 1, 0.5, 3, 8, 0.2};
+    int sz[8], k, rep, status[N], flags[N * 16];
+    static double P[N * 64], S[N * 64], tf[N], xf[N * 64], yf[N * 256], yg[N * (G + 1) * 256];
+    double span[2] = {0.0, 6.0}, tol[3] = {1e-9, 1e-11, 6.0}, grid[G];
+    unsigned long steps[N];
+    long rows[N];
+    void *ctx = ID(new)();
+    ID(sizes)(sz);
+    for (k = 0; k < G; k++) grid[k] = 0.5 * (k + 1);
+    for (k = 0; k < N; k++) {
+        ID(defaults)(P + k * sz[3], S + k * sz[1]);
+        set(0, sz[3], P + k * sz[3], "g", g[k]);
+        set(0, sz[3], P + k * sz[3], "beta_min", 0.1);
+        set(1, sz[1], S + k * sz[1], "gamma_dot", spin[k]);
+    }
+    set(0, sz[3], P + 6 * sz[3], "M", -1.0); /* refused at initialisation */
+    for (rep = 0; rep < 3; rep++) { /* a context reused, another order, no context */
+        void *c = rep == 2 ? NULL : ctx;
+        tol[0] = 1e-9;
+        if (ID(run)(c, N, P, S, span, tol, status, tf, xf, yf, steps, logger, G, grid, yg, rows, flags))
+            return 1;
+        printf("%d %d %d %lu %.17g\n", status[0], status[2], status[6], steps[0], xf[0]);
+        tol[0] = rep == 0 ? 1e-12 : 1e-5;
+        if (ID(run)(c, 3, P, S, span, tol, status, tf, xf, yf, steps, logger, 0, NULL, NULL, NULL, flags))
+            return 1;
+    }
+    ID(free)(ctx);
+    return n_log > 0 ? 0 : 2;
+}
+"""
+
+
+def test_ensemble_library_clean_under_sanitizers(paper, tmp_path):
+    """The ensemble library (contexts reused across runs of other sizes and orders, the lanes'
+    series fetched lazily through event location, falls, a refused trajectory, a grid) runs clean
+    under AddressSanitizer, LeakSanitizer and UndefinedBehaviorSanitizer; each run gives the
+    same numbers."""
+    from c_programs import MODE_FLAGS, SANITIZER_ENV
+    from fmu_build.ensemble import _UNITY
+    src = paper.sources
+    prog = tmp_path / "ens.c"
+    prog.write_text(_UNITY.format(id=paper.identifier, lanes=4)
+                    + f"#define ID(name) {paper.identifier}_ensemble_##name\n" + DRIVER)
+    exe = tmp_path / "ens"
+    cmd = ["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", *MODE_FLAGS["sanitizers"], f"-I{src}",
+           str(prog), "-lm", "-o", str(exe)]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=600,
+                       env=dict(os.environ, **SANITIZER_ENV))
+    assert r.returncode == 0, r.stdout + r.stderr
+    lines = r.stdout.splitlines()
+    assert len(lines) == 3 and len(set(lines)) == 1, lines
+    assert lines[0].split()[:3] == ["0", "2", "3"]  # runs to the end, falls, refused

@@ -91,3 +91,22 @@ typedef double GW_TL(vu)
 #define GW_TLFMS3(s, pc, pa, pb) ((s) -= GW_TLR(pc) * GW_TLR(pa) * GW_TLR(pb))
 #define GW_TLST(p, s) (GW_TLX(p) = (s))
 #endif
+
+/* GW_TL_PACK: the one-lane kernel under GCC and clang sums 4 terms' products per vector
+ * operation from packed copies of their operands (fmu_build/taylor_c.py, _Packs):
+ *   GW_TL(p)               4 doubles (one AVX2 register; two SSE2 ones)
+ *   GW_TLPZ(s)             s = 0
+ *   GW_TLPFMA(s, pa, pb)   s += pa[0..3] pb[0..3] (loads at any double's address)
+ *   GW_TLPST(p, s)         p[0..3] = s */
+#if defined(__GNUC__) && GW_TL_W == 1
+#define GW_TL_PACK 1
+typedef double GW_TL(p) __attribute__((vector_size(4 * sizeof(double))));
+typedef double GW_TL(pu)
+    __attribute__((vector_size(4 * sizeof(double)), aligned(sizeof(double)), may_alias));
+#define GW_TLPR(p) (*(const GW_TL(pu) *)(const void *)(p))
+#define GW_TLPZ(s) ((s) = (GW_TL(p)){0.0})
+#define GW_TLPFMA(s, pa, pb) ((s) += GW_TLPR(pa) * GW_TLPR(pb))
+#define GW_TLPST(p, s) (*(GW_TL(pu) *)(void *)(p) = (s))
+#else
+#define GW_TL_PACK 0
+#endif

@@ -51,6 +51,7 @@ __all__ = ["TaylorKernel", "taylor_source", "write_taylor_kernel", "work_series"
 
 KERNEL_FILE = "gw_taylor_model.h"
 GROUP = 12  # accumulators of one interior loop (registers: 16 vector registers on x86-64)
+PACK_GROUP = 8  # accumulator vectors of one packed interior loop (one lane: _Packs)
 
 # ops whose order k >= 1 has an interior sum, and the weighted operands (j a_j) they need:
 # "a", "b": the first, second argument; "v": the node's own series
@@ -140,7 +141,7 @@ class _Plan:
 def work_series(dec: Decomposition) -> int:
     """Series of order `order` the kernel's work array w holds (GW_TL_NVAR): the states'
     output, then every internal node (var nodes and weighted series)."""
-    return dec.nx + _Plan(dec).n_nodes + 1  # + 1: room to align the nodes' block
+    return dec.nx + _Packs(_Plan(dec)).stride + 1  # + 1: room to align the nodes' block
 
 
 def _v0(n: int, lane: bool = False) -> str:
@@ -200,11 +201,10 @@ def _zero_lines(dec: Decomposition) -> list[str]:
     return lines
 
 
-def _interior_lines(plan: _Plan) -> list[str]:
-    """phase 1 of order k: the interior sums, GROUP accumulators per loop over j"""
-    # sum_j A_j B_{k-j} = sum_j B_j A_{k-j} over j = 1 .. k-1: each term reads its more
-    # frequent operand at j, and the accumulators are grouped by it, so that a group loads
-    # each shared coefficient once per j
+def _oriented(plan: _Plan) -> tuple[dict[int, list[_Term]], list[int]]:
+    """the terms of each target node, each reading its more frequent operand at j (sum_j A_j
+    B_{k-j} = sum_j B_j A_{k-j} over j = 1 .. k-1: both kernels sum in this one order, so the
+    lanes and the packed one-lane kernel agree bit for bit), and the targets grouped by it"""
     uses = Counter(n for t in plan.terms for n in (t.a, t.b))
     targets: dict[int, list[_Term]] = {}
     for t in plan.terms:
@@ -212,6 +212,13 @@ def _interior_lines(plan: _Plan) -> list[str]:
             t = _Term(t.target, t.sign, t.b, t.a, t.factor)
         targets.setdefault(t.target, []).append(t)
     order = sorted(targets, key=lambda n: (-uses[targets[n][0].a], targets[n][0].a, n))
+    return targets, order
+
+
+def _interior_lines(plan: _Plan) -> list[str]:
+    """phase 1 of order k (W lanes): the interior sums, GROUP accumulators per loop over j; the
+    accumulators of a loop share operands (a group loads each shared coefficient once per j)"""
+    targets, order = _oriented(plan)
     lines = []
     for g in range(0, len(order), GROUP):
         group = order[g:g + GROUP]
@@ -236,15 +243,109 @@ def _interior_lines(plan: _Plan) -> list[str]:
     return lines
 
 
-def _boundary(plan: _Plan) -> list[tuple[bool, str]]:
+class _Packs:
+    """The one-lane kernel's interior sums, 4 terms per vector operation (GW_TL_PACK).
+
+    At W = 1 a term's multiply-add is one scalar operation with its own loads: the interior
+    loops were load-bound.  Here every term has a slot in two packed rows kept behind each
+    order's nodes (row j of the a-operands, sign and constant factor applied: -c A_j; row j of
+    the b-operands: B_j), so that 4 terms are one vector multiply-add of two contiguous loads:
+    s += PA[j][4q .. 4q+3] PB[k-j][4q .. 4q+3].  Each target node has one lane of one
+    accumulator vector; a target with m terms adds them in m consecutive vectors of slots (the
+    same order as the lanes' kernel: bit for bit the same sums), padded with 0 x 0.  A node's
+    coefficient is copied to its slots right where it is computed (rows 1 .. order - 1)."""
+
+    def __init__(self, plan: _Plan):
+        targets, _ = _oriented(plan)
+        ranked = sorted(targets, key=lambda n: (-len(targets[n]), n))
+        self.base = -(-plan.n_nodes // 4) * 4  # slots start on a 4-double boundary of a row
+        self.groups: list[tuple[int, int]] = []  # per accumulator vector: (first slot, rows)
+        self.isum: dict[int, str] = {}  # target -> where its interior sum lands
+        self.writes: dict[int, list[tuple[int, str]]] = {}  # node -> (slot offset, scale)
+        self.pads: list[int] = []
+        slot = 0
+        for g in range(0, len(ranked), 4):
+            four = ranked[g:g + 4]
+            rows = max(len(targets[n]) for n in four)
+            self.groups.append((slot, rows))
+            for i in range(4):
+                n = four[i] if i < len(four) else None
+                if n is not None:
+                    self.isum[n] = f"GW_IS({g + i})"
+                for r in range(rows):
+                    at = slot + 4 * r + i
+                    if n is None or r >= len(targets[n]):
+                        self.pads.append(at)
+                        continue
+                    t = targets[n][r]
+                    scale = ("" if t.factor is None else f"GW_C({t.factor}) * ") + "{}"
+                    self.writes.setdefault(t.a, []).append((at, scale if t.sign > 0 else f"-({scale})"))
+                    self.writes.setdefault(t.b, []).append((-1 - at, "{}"))
+            slot += 4 * rows
+        self.slots = slot
+        self.stride = self.base + 2 * slot  # GW_TL_NODES of the packed kernel
+
+    def _offset(self, at: int) -> int:
+        return self.base + at if at >= 0 else self.base + self.slots + (-1 - at)
+
+    def copy(self, lane: bool, text: str) -> list[tuple[bool, str]]:
+        """the packed copies of the node a statement computes (GW_VK: row k, GW_VN: row k + 1)"""
+        m = re.fullmatch(r"GW_([VL])([KN])\((\d+)\)", text.split(" = ", 1)[0])
+        if m is None:
+            return []
+        n, row = int(m[3]), m[2]
+        return [(lane, f"GW_{'L' if lane else 'V'}P{row}({self._offset(at)}) = "
+                       f"{scale.format(f'GW_{m[1]}{row}({n})')};") for at, scale in self.writes.get(n, ())]
+
+    def copies(self, items: list[tuple[bool, str]]) -> list[tuple[bool, str]]:
+        """order k >= 1: items with each node's packed copies after its statement, and row k's
+        padding (0 x 0)"""
+        out: list[tuple[bool, str]] = []
+        done = set()
+        for lane, text in items:
+            out += [(lane, text)] + self.copy(lane, text)
+            done |= {int(m) for m in re.findall(r"^GW_[VL][KN]\((\d+)\) = ", text)}
+        assert set(self.writes) <= done, sorted(set(self.writes) - done)  # every operand, every k
+        for at in self.pads:
+            out += [(False, f"GW_VPK({self._offset(at)}) = 0.0;"),
+                    (False, f"GW_VPK({self._offset(-1 - at)}) = 0.0;")]
+        return out
+
+    def interior_lines(self) -> list[str]:
+        """phase 1 of order k: PACK_GROUP accumulator vectors per loop over j"""
+        lines = []
+        for g0 in range(0, len(self.groups), PACK_GROUP):
+            group = list(enumerate(self.groups))[g0:g0 + PACK_GROUP]
+            acc = [f"s{q}" for q, _ in group]
+            lines.append("    {")
+            lines.append(f"        GW_TL(p) {', '.join(acc)};")
+            lines += [f"        GW_TLPZ({a});" for a in acc]
+            lines.append("        for (j = 1; j < k; j++) {")
+            lines.append(f"            const double *a = GW_ORD(j) + {self.base}, "
+                         f"*b = GW_ORD(k - j) + {self.base + self.slots};")
+            for (q, (first, rows)), a in zip(group, acc):
+                for r in range(rows):
+                    lines.append(f"            GW_TLPFMA({a}, a + {first + 4 * r}, b + {first + 4 * r});")
+            lines.append("        }")
+            lines += [f"        GW_TLPST(gw_is + {4 * q}, {a});" for (q, _), a in zip(group, acc)]
+            lines.append("    }")
+        return lines
+
+
+def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[bool, str]]:
     """phase 2 of order k >= 1: boundary terms and finishing of every node, in program order
-    (GW_VK(n) holds node n's interior sum I when it has one; rk = 1/k, dk = k), as (lane-wise,
-    statement): whole W-lane vector statements, or one lane's (ternaries, constants)"""
+    (node n's interior sum I is isum[n], by default GW_VK(n), where phase 1 left it; rk = 1/k,
+    dk = k), as (lane-wise, statement): whole W-lane vector statements, or one lane's
+    (ternaries, constants)"""
     dec = plan.dec
     out: list[tuple[bool, str]] = []
+
+    def interior(m: int) -> str:
+        return (isum or {}).get(m, _vk(m))
+
     for n, node in dec.nodes.items():
         op, a = node.op, node.args
-        target, I = _vk(n), _vk(n)
+        target, I = _vk(n), interior(n)
         o0, ok = [_order0(x) for x in a], [_order_k(x) for x in a]
         lane = op in ("fabs", "fmin", "fmax", "if_else_zero") or op in PIECEWISE
         if lane:
@@ -277,7 +378,7 @@ def _boundary(plan: _Plan) -> list[tuple[bool, str]]:
             c = node.extra[0]
             out.append((False, f"{target} = {I} * rk + {ok[0]} * {_v0(c)};"))
             sign = "-" if op == "sincos" else ""
-            expr = f"{sign}({_vk(c)} * rk + {ok[0]} * {_v0(n)})"
+            expr = f"{sign}({interior(c)} * rk + {ok[0]} * {_v0(n)})"
             target = _vk(c)
         elif op == "exp":
             expr = f"{I} * rk + {ok[0]} * {_v0(n)}"
@@ -285,7 +386,7 @@ def _boundary(plan: _Plan) -> list[tuple[bool, str]]:
             q = node.extra[0]
             out.append((False, f"{target} = {I} * rk + {ok[0]} * {_v0(q)};"))
             sign = "" if op == "tan" else "-"
-            expr = f"{sign}({_vk(q)} + 2.0 * {_v0(n)} * {_vk(n)})"
+            expr = f"{sign}({interior(q)} + 2.0 * {_v0(n)} * {_vk(n)})"
             target = _vk(q)
         elif op == "log":
             expr = f"({ok[0]} - {I} * rk) / {o0[0]}"
@@ -340,13 +441,16 @@ def _next(plan: _Plan, order0: bool) -> list[tuple[bool, str]]:
     return out
 
 
-def _locals(plan: _Plan, items: list[tuple[bool, str]]) -> list[tuple[bool, str]]:
+def _locals(plan: _Plan, items: list[tuple[bool, str]], packed: bool = False) -> list[tuple[bool, str]]:
     """order k >= 1: a node whose coefficients no interior sum reads (and not a state or t)
     needs its coefficient k only in this order's statements: a local variable (a register, no
     store and reload) when its statement and all its uses are in one loop of whole statements
-    (its slot k still holds its interior sum, if it has one)"""
+    (its slot k still holds its interior sum, if it has one).  packed: the interior sums read
+    the packed copies (_Packs), so any node but the states and t may be local"""
     dec = plan.dec
-    read = {n for t in plan.terms for n in (t.a, t.b)} | set(range(dec.nx)) | {dec.t_node}
+    read = set(range(dec.nx)) | {dec.t_node}
+    if not packed:
+        read |= {n for t in plan.terms for n in (t.a, t.b)}
     run, r = [], 0
     for i, (lane, _) in enumerate(items):
         r += i > 0 and lane != items[i - 1][0]
@@ -396,6 +500,7 @@ def _loops(items: list[tuple[bool, str]]) -> list[str]:
 def taylor_source(dec: Decomposition, model: str) -> str:
     """The template text of gw_taylor_model.h for a decomposition."""
     plan = _Plan(dec)
+    packs = _Packs(plan)
     ops = ", ".join(f"{k} {v}" for k, v in sorted(dec.op_counts.items()))
     t_init = [] if dec.t_node is None else [f"        GW_L0({dec.t_node}) = t[l];"]
     n_groups = -(-len({t.target for t in plan.terms}) // GROUP)
@@ -408,9 +513,15 @@ def taylor_source(dec: Decomposition, model: str) -> str:
 #include "gw_taylor_ops.h" /* the lane vectors GW_TL(v), GW_TLZ, GW_TLFMA, ... for GW_TL_W lanes */
 #include "gw_fastmath.h" /* gw_sincos at order 0 (sin and cos of one argument, <= 1 ulp) */
 #define GW_TL_NX {dec.nx}
-#define GW_TL_NODES {plan.n_nodes} /* internal series: var nodes, then weighted series */
-/* series of w: the states' output, the nodes (aligned to a lane slice: one series of room) */
-#define GW_TL_NVAR (GW_TL_NX + GW_TL_NODES + 1)
+/* GW_TL_NODES: the numbers of a row (one order's coefficients): the internal series (var
+ * nodes, then weighted series); one lane (GW_TL_PACK), then the terms' packed operands */
+#if GW_TL_PACK
+#define GW_TL_NODES {packs.stride}
+#else
+#define GW_TL_NODES {plan.n_nodes}
+#endif
+/* series of w: the states' output, the rows (aligned to a lane slice: one series of room) */
+#define GW_TL_NVAR (GW_TL_NX + {packs.stride} + 1)
 #define GW_TL_NCST {dec.n_cst}
 #define GW_TL_HAS_T {1 if dec.t_node is not None else 0}
 
@@ -449,10 +560,21 @@ GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, con
 #define GW_LK(n) vk[(n) * GW_TL_W + l]
 #define GW_LN(n) vn[(n) * GW_TL_W + l]
 #define GW_LC(j) c[(j) * GW_TL_W + l]
+#if GW_TL_PACK /* slot o of the packed operands (row k, k + 1); interior sum i */
+#define GW_VPK(o) vk[o]
+#define GW_VPN(o) vn[o]
+#define GW_LPK(o) vk[o]
+#define GW_LPN(o) vn[o]
+#define GW_IS(i) gw_is[i]
+{f"    double gw_is[{4 * len(packs.groups)}];" if packs.groups else ""}
+#endif
     for (l = 0; l < GW_TL_W; l++) {{
 {chr(10).join([f"        GW_L0({i}) = x[{i} * GW_TL_W + l];" for i in range(dec.nx)] + t_init)}
 {chr(10).join(_zero_lines(dec))}
 {chr(10).join("        " + text for _, text in _next(plan, True))}
+#if GW_TL_PACK
+{chr(10).join("        " + text for item in _next(plan, True) for _, text in packs.copy(*item))}
+#endif
     }}
     for (k = 1; k < order; k++) {{
     vk = GW_ORD(k);
@@ -460,8 +582,13 @@ GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, con
     dk = k;
     rk = 1.0 / dk;
     rk1 = 1.0 / (dk + 1.0);
+#if GW_TL_PACK
+{chr(10).join(packs.interior_lines())}
+{chr(10).join(_loops(_locals(plan, packs.copies(_boundary(plan, packs.isum) + _next(plan, False)), True)))}
+#else
 {chr(10).join(_interior_lines(plan))}
 {chr(10).join(_loops(_locals(plan, _boundary(plan) + _next(plan, False))))}
+#endif
     }}
     (void)rk;
     (void)rk1;
@@ -475,6 +602,13 @@ GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, con
 #undef GW_LK
 #undef GW_LN
 #undef GW_LC
+#if GW_TL_PACK
+#undef GW_VPK
+#undef GW_VPN
+#undef GW_LPK
+#undef GW_LPN
+#undef GW_IS
+#endif
 }}
 
 /* The states' Taylor series of order `order` at (t, x): state i's coefficient k of lane l at
@@ -502,6 +636,11 @@ GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const 
 #undef GW_TL_ALIGN
 #undef GW_TLX
 #undef GW_TLR
+#undef GW_TL_PACK
+#undef GW_TLPR
+#undef GW_TLPZ
+#undef GW_TLPFMA
+#undef GW_TLPST
 """
 
 

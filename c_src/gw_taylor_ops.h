@@ -98,7 +98,12 @@ typedef double GW_TL(vu)
  *   GW_TLPZ(s)             s = 0
  *   GW_TLPFMA(s, pa, pb)   s += pa[0..3] pb[0..3] (loads at any double's address)
  *   GW_TLPST(p, s)         p[0..3] = s */
-#if defined(__GNUC__) && GW_TL_W == 1
+#if defined(__GNUC__) /* GW_TL_PACK1: the one-lane kernel packs (its row: GW_TL_NODES) */
+#define GW_TL_PACK1 1
+#else
+#define GW_TL_PACK1 0
+#endif
+#if GW_TL_PACK1 && GW_TL_W == 1
 #define GW_TL_PACK 1
 typedef double GW_TL(p) __attribute__((vector_size(4 * sizeof(double))));
 typedef double GW_TL(pu)

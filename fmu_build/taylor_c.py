@@ -13,7 +13,7 @@ Writes gw_taylor_model.h, a template over the lane count W that the runtime inst
     GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, const double *c,
                            double *wi);
         the same series in the kernel's own layout (below): state i's coefficient k of lane l
-        at wi[(k GW_TL_NODES + i) W + l]
+        at wi[(k GW_TL_ROW + i) W + l]
 
 Vectors are lane-innermost: x[i W + l], u[j W + l], p[j W + l], c[j W + l], t[l].
 
@@ -51,6 +51,8 @@ __all__ = ["TaylorKernel", "taylor_source", "write_taylor_kernel", "work_series"
 
 KERNEL_FILE = "gw_taylor_model.h"
 GROUP = 12  # accumulators of one interior loop (registers: 16 vector registers on x86-64)
+# ops whose order k divides by an order-0 value: the argument holding it (None: 2 v_0)
+RECIPROCAL = {"div": 1, "sqrt": None, "log": 0, "dq": 1, "atan2": 2, "pow": 0}
 PACK_GROUP = 8  # accumulator vectors of one packed interior loop (one lane: _Packs)
 
 # ops whose order k >= 1 has an interior sum, and the weighted operands (j a_j) they need:
@@ -89,7 +91,16 @@ class _Plan:
         self.terms: list[_Term] = []
         for n, node in dec.nodes.items():
             self._terms(n, node)
-        self.n_nodes = dec.n_var + len(self.weighted)
+        # node -> (internal node, its denominator at order 0): the reciprocal, computed once at
+        # order 0, so that each order k multiplies (no division on the path from one order's
+        # coefficients to the next)
+        self.recip: dict[int, tuple[int, str]] = {}
+        for n, node in dec.nodes.items():
+            if node.op in RECIPROCAL:
+                den = RECIPROCAL[node.op]
+                den = f"2.0 * {_v0(n, True)}" if den is None else _order0(node.args[den], True)
+                self.recip[n] = (dec.n_var + len(self.weighted) + len(self.recip), den)
+        self.n_nodes = dec.n_var + len(self.weighted) + len(self.recip)
 
     def d(self, a: Operand) -> int | None:
         """the weighted series j a_j of a var operand (None for a constant: no terms)"""
@@ -177,8 +188,10 @@ def _cst_lines(dec: Decomposition) -> list[str]:
     return lines
 
 
-def _zero_lines(dec: Decomposition) -> list[str]:
-    """order 0: the right-hand side itself, in program order"""
+def _zero_lines(plan: _Plan) -> list[str]:
+    """order 0: the right-hand side itself, in program order (and the reciprocals of the
+    denominators of orders k >= 1)"""
+    dec = plan.dec
     lines = []
     for n, node in dec.nodes.items():
         args = [_order0(a, True) for a in node.args]
@@ -198,6 +211,9 @@ def _zero_lines(dec: Decomposition) -> list[str]:
             lines.append(f"        {_v0(n, True)} = {C_EXPR[zop].format(_order0(za, True))};")
         else:
             lines.append(f"        {_v0(n, True)} = {C_EXPR[op].format(*args)};")
+        if n in plan.recip:  # after the node itself (sqrt's is 1 / (2 v_0))
+            r, den = plan.recip[n]
+            lines.append(f"        {_v0(r, True)} = 1.0 / ({den});")
     return lines
 
 
@@ -346,6 +362,7 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
     for n, node in dec.nodes.items():
         op, a = node.op, node.args
         target, I = _vk(n), interior(n)
+        rec = _v0(plan.recip[n][0]) if n in plan.recip else None
         o0, ok = [_order0(x) for x in a], [_order_k(x) for x in a]
         lane = op in ("fabs", "fmin", "fmax", "if_else_zero") or op in PIECEWISE
         if lane:
@@ -371,9 +388,9 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
             expr = f"{I} + 2.0 * {o0[0]} * {ok[0]}"
         elif op == "div":
             num = f"{ok[0]} - " if a[0][0] == "v" else "-"
-            expr = f"({num}{I} - {ok[1]} * {_v0(n)}) / {o0[1]}"
+            expr = f"({num}{I} - {ok[1]} * {_v0(n)}) * {rec}"
         elif op == "sqrt":
-            expr = f"({ok[0]} - {I}) / (2.0 * {_v0(n)})"
+            expr = f"({ok[0]} - {I}) * {rec}"
         elif op in ("sincos", "sinhcosh"):
             c = node.extra[0]
             out.append((False, f"{target} = {I} * rk + {ok[0]} * {_v0(c)};"))
@@ -389,13 +406,13 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
             expr = f"{sign}({interior(q)} + 2.0 * {_v0(n)} * {_vk(n)})"
             target = _vk(q)
         elif op == "log":
-            expr = f"({ok[0]} - {I} * rk) / {o0[0]}"
+            expr = f"({ok[0]} - {I} * rk) * {rec}"
         elif op == "dq":
-            expr = f"({ok[0]} - {I} * rk) / {o0[1]}"
+            expr = f"({ok[0]} - {I} * rk) * {rec}"
         elif op == "atan2":
-            expr = f"({I} * rk + {ok[0]} * {o0[1]} - {ok[1]} * {o0[0]}) / {o0[2]}"
+            expr = f"({I} * rk + {ok[0]} * {o0[1]} - {ok[1]} * {o0[0]}) * {rec}"
         elif op == "pow":
-            expr = f"({I} * rk + {o0[1]} * {ok[0]} * {_v0(n)}) / {o0[0]}"
+            expr = f"({I} * rk + {o0[1]} * {ok[0]} * {_v0(n)}) * {rec}"
         elif op == "fabs":
             expr = f"{o0[0]} < 0.0 ? -{ok[0]} : {ok[0]}"
         elif op in ("fmin", "fmax"):
@@ -513,12 +530,19 @@ def taylor_source(dec: Decomposition, model: str) -> str:
 #include "gw_taylor_ops.h" /* the lane vectors GW_TL(v), GW_TLZ, GW_TLFMA, ... for GW_TL_W lanes */
 #include "gw_fastmath.h" /* gw_sincos at order 0 (sin and cos of one argument, <= 1 ulp) */
 #define GW_TL_NX {dec.nx}
-/* GW_TL_NODES: the numbers of a row (one order's coefficients): the internal series (var
- * nodes, then weighted series); one lane (GW_TL_PACK), then the terms' packed operands */
-#if GW_TL_PACK
+/* GW_TL_ROW: the numbers of a row (one order's coefficients): the internal series (var
+ * nodes, weighted series, reciprocals); with GW_TL_PACK (one lane) then the terms' packed
+ * operands.  GW_TL_NODES: the one-lane kernel's row, whatever W (solver taylor reads its states
+ * there; the same text in every instance of one translation unit) */
+#if GW_TL_PACK1
 #define GW_TL_NODES {packs.stride}
 #else
 #define GW_TL_NODES {plan.n_nodes}
+#endif
+#if GW_TL_PACK
+#define GW_TL_ROW {packs.stride}
+#else
+#define GW_TL_ROW {plan.n_nodes}
 #endif
 /* series of w: the states' output, the rows (aligned to a lane slice: one series of room) */
 #define GW_TL_NVAR (GW_TL_NX + {packs.stride} + 1)
@@ -538,19 +562,19 @@ GW_TL_STATIC void GW_TL(cst)(const double *u, const double *p, double *c) {{
 }}
 
 /* The Taylor series of order `order` (>= 1) of every node at (t, x), order-major: coefficient k
- * of node n of lane l at wi[(k GW_TL_NODES + n) W + l], the states first (n = 0 .. NX - 1); wi
- * aligned to a lane slice, room for GW_TL_NODES (order + 1) W numbers.  The structure: the top
+ * of node n of lane l at wi[(k GW_TL_ROW + n) W + l], the states first (n = 0 .. NX - 1); wi
+ * aligned to a lane slice, room for GW_TL_ROW (order + 1) W numbers.  The structure: the top
  * of fmu_build/taylor_c.py.  Solver taylor's one-lane steps read the states' series here
  * (gw_solver_taylor.c): no copy to another layout. */
 GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, const double *c,
                                 double *wi) {{
-    double *vk = wi, *vn = wi + GW_TL_NODES * GW_TL_W;
+    double *vk = wi, *vn = wi + GW_TL_ROW * GW_TL_W;
     double rk = 1.0, rk1 = 1.0, dk = 1.0;
     int j, k, l;
     (void)t;
     (void)c;
     (void)j;
-#define GW_ORD(k) (wi + (size_t)(k) * (GW_TL_NODES * GW_TL_W))
+#define GW_ORD(k) (wi + (size_t)(k) * (GW_TL_ROW * GW_TL_W))
 /* coefficient 0, k, k + 1 of node n and constant j: slice l (GW_TLX), or lane l (GW_L*) */
 #define GW_V0(n) GW_TLR(wi + (n) * GW_TL_W + l * GW_TL_VW)
 #define GW_VK(n) GW_TLX(vk + (n) * GW_TL_W + l * GW_TL_VW)
@@ -570,7 +594,7 @@ GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, con
 #endif
     for (l = 0; l < GW_TL_W; l++) {{
 {chr(10).join([f"        GW_L0({i}) = x[{i} * GW_TL_W + l];" for i in range(dec.nx)] + t_init)}
-{chr(10).join(_zero_lines(dec))}
+{chr(10).join(_zero_lines(plan))}
 {chr(10).join("        " + text for _, text in _next(plan, True))}
 #if GW_TL_PACK
 {chr(10).join("        " + text for item in _next(plan, True) for _, text in packs.copy(*item))}
@@ -623,7 +647,7 @@ GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const 
         for (k = 0; k <= order; k++)
             for (l = 0; l < GW_TL_W; l++)
                 w[((size_t)i * (size_t)(order + 1) + (size_t)k) * GW_TL_W + l] =
-                    wi[((size_t)k * GW_TL_NODES + (size_t)i) * GW_TL_W + l];
+                    wi[((size_t)k * GW_TL_ROW + (size_t)i) * GW_TL_W + l];
 }}
 #undef GW_TLZ
 #undef GW_TLFMA
@@ -637,6 +661,8 @@ GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const 
 #undef GW_TLX
 #undef GW_TLR
 #undef GW_TL_PACK
+#undef GW_TL_PACK1
+#undef GW_TL_ROW
 #undef GW_TLPR
 #undef GW_TLPZ
 #undef GW_TLPFMA

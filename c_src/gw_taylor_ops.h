@@ -31,6 +31,8 @@
  *         I = sum (da_j b_{k-j} - db_j a_{k-j} - dv_j r_{k-j}),
  *         v_k = (I / k + a_k b_0 - b_k a_0) / r_0
  *   linear ops, fabs, fmin, fmax, if_else: boundary terms only; piecewise constants: 0.
+ * The kernel divides by none of the order-0 denominators (b_0, 2 v_0, a_0, r_0) at k >= 1: it
+ * multiplies by their reciprocals, computed once at order 0.
  *
  * The lanes: GW_TL(v) holds one slice of GW_TL_VW lanes (W = GW_TL_BLK slices); the interior
  * loops use only

@@ -30,6 +30,9 @@ right-hand side.  Each order k >= 1 then has two phases:
      the operands) and its finishing operation (divide by b_0, by k, ...); the states get
      x_i^[k+1] = f_i^[k] / (k + 1).  A node whose coefficients no interior sum reads is a local
      variable here (no store and reload).
+The one-lane kernel (GW_TL_PACK: GCC and clang) sums 4 terms per vector operation in phase 1,
+from packed copies of the terms' operands behind each order's nodes (_Packs); the denominators'
+reciprocals are computed once at order 0 (RECIPROCAL).
 No function calls, and code size O(nodes), whatever the order.  That is series(), the nodes'
 series in this order-major layout (solver taylor's one-lane steps read the states' coefficients
 there: GW_TL_NODES apart from one order to the next, c_src/gw_solver_taylor.c); jet() calls it
@@ -526,7 +529,8 @@ def taylor_source(dec: Decomposition, model: str) -> str:
  * (W lanes) with GW_TL_W and GW_TL(name) defined.  {dec.n_var} var nodes ({dec.nx} states
  * first{', t at ' + str(dec.t_node) if dec.t_node is not None else ''}), {len(plan.weighted)} weighted series, {dec.n_cst} constants.
  * var ops: {ops}
- * interior sums: {len(plan.terms)} terms in {n_groups} loops of up to {GROUP} accumulators */
+ * interior sums: {len(plan.terms)} terms in {n_groups} loops of up to {GROUP} accumulators (one lane:
+ * {packs.slots} packed slots, {len(packs.groups)} vectors of 4, loops of up to {PACK_GROUP}) */
 #include "gw_taylor_ops.h" /* the lane vectors GW_TL(v), GW_TLZ, GW_TLFMA, ... for GW_TL_W lanes */
 #include "gw_fastmath.h" /* gw_sincos at order 0 (sin and cos of one argument, <= 1 ulp) */
 #define GW_TL_NX {dec.nx}

@@ -30,7 +30,7 @@ right-hand side.  Each order k >= 1 then has two phases:
      the operands) and its finishing operation (divide by b_0, by k, ...); the states get
      x_i^[k+1] = f_i^[k] / (k + 1).  A node whose coefficients no interior sum reads is a local
      variable here (no store and reload).
-The one-lane kernel (GW_TL_PACK: GCC and clang) sums 4 terms per vector operation in phase 1,
+The one-lane kernel (GW_TL_PACK: GCC and clang) sums 4 terms per two 2-wide vector operations in phase 1,
 from packed copies of the terms' operands behind each order's nodes (_Packs); the denominators'
 reciprocals are computed once at order 0 (RECIPROCAL).
 No function calls, and code size O(nodes), whatever the order.  That is series(), the nodes'
@@ -263,12 +263,12 @@ def _interior_lines(plan: _Plan) -> list[str]:
 
 
 class _Packs:
-    """The one-lane kernel's interior sums, 4 terms per vector operation (GW_TL_PACK).
+    """The one-lane kernel's interior sums, 4 terms per two 2-wide vector operations (GW_TL_PACK).
 
     At W = 1 a term's multiply-add is one scalar operation with its own loads: the interior
     loops were load-bound.  Here every term has a slot in two packed rows kept behind each
     order's nodes (row j of the a-operands, sign and constant factor applied: -c A_j; row j of
-    the b-operands: B_j), so that 4 terms are one vector multiply-add of two contiguous loads:
+    the b-operands: B_j), so that 4 terms are vector multiply-adds of contiguous loads:
     s += PA[j][4q .. 4q+3] PB[k-j][4q .. 4q+3].  Each target node has one lane of one
     accumulator vector; a target with m terms adds them in m consecutive vectors of slots (the
     same order as the lanes' kernel: bit for bit the same sums), padded with 0 x 0.  A node's

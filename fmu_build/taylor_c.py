@@ -56,7 +56,7 @@ KERNEL_FILE = "gw_taylor_model.h"
 GROUP = 12  # accumulators of one interior loop (registers: 16 vector registers on x86-64)
 # ops whose order k divides by an order-0 value: the argument holding it (None: 2 v_0)
 RECIPROCAL = {"div": 1, "sqrt": None, "log": 0, "dq": 1, "atan2": 2, "pow": 0}
-PACK_GROUP = 7  # accumulators (pairs of 2-double vectors) of one packed interior loop (one lane: _Packs)
+PACK_GROUP = 8  # accumulators (pairs of 2-double vectors) of one packed interior loop (one lane: _Packs)
 
 # ops whose order k >= 1 has an interior sum, and the weighted operands (j a_j) they need:
 # "a", "b": the first, second argument; "v": the node's own series

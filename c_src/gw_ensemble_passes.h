@@ -12,6 +12,8 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "gw_fastmath.h" /* gw_fm_log4, gw_fm_exp4: the lanes' step sizes */
+
 /* The passes work on vectors of GW_ENS_V lanes (GCC / clang vector extension: GCC vectorised
  * none of the plain loops): 4 lanes (one AVX2 register) where the lanes are a multiple of 4,
  * else 2 or 1.  They are also compiled for AVX2 (target clones, chosen at load time) without
@@ -69,6 +71,44 @@ GW_ENS_PASS void gw_ens_norms(const double *w, const double *fsn, int nx, int or
         gw_ens_st(n1 + j, m1);
         gw_ens_st(n2 + j, m2);
     }
+}
+
+/* h[l] = the step size of lane l from its norms n1[l], n2[l] and ln c = lc[l] (gw_taylor_step_size:
+ * the same operations in the same order, gw_fm_log4 / gw_fm_exp4 bit-equal lane by lane to its
+ * gw_fm_log / gw_fm_exp; non-finite norms give any h, refused by gw_taylor_attempt_size) */
+GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const double *lc, int order,
+                                   double *h) {
+    enum { W = GW_ENSEMBLE_LANES };
+    const double r1 = 1.0 / (order - 1), r2 = 1.0 / order;
+    int j, l;
+#if GW_FASTMATH_V4
+    for (j = 0; j < W; j += 4) {
+        const int nl = W - j < 4 ? W - j : 4;
+        gw_fm_v4 a = {1.0, 1.0, 1.0, 1.0}, b = a, c = a, la, lb, e, hv;
+        gw_fm_m4 pa, pb;
+        for (l = 0; l < nl; l++) {
+            a[l] = n1[j + l];
+            b[l] = n2[j + l];
+            c[l] = lc[j + l];
+        }
+        pa = a > 0.0;
+        pb = b > 0.0;
+        gw_fm_log4(&la, &a);
+        gw_fm_log4(&lb, &b);
+        la = GW_FM_SEL4(pa, -la * r1, (gw_fm_v4){0} + HUGE_VAL);
+        lb = GW_FM_SEL4(pb, -lb * r2, (gw_fm_v4){0} + HUGE_VAL);
+        e = GW_FM_SEL4(lb < la, lb, la) + c;
+        gw_fm_exp4(&hv, &e);
+        for (l = 0; l < nl; l++) h[j + l] = hv[l];
+    }
+#else
+    for (l = 0; l < W; l++) {
+        const double l1 = n1[l] > 0.0 ? -gw_fm_log(n1[l]) * r1 : HUGE_VAL,
+                     l2 = n2[l] > 0.0 ? -gw_fm_log(n2[l]) * r2 : HUGE_VAL;
+        h[l] = gw_fm_exp((l2 < l1 ? l2 : l1) + lc[l]);
+    }
+    (void)j;
+#endif
 }
 
 /* the defect of every lane's pending attempt with f(t1, P(h)) = order 1 of the batch's series

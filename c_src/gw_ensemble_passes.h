@@ -74,14 +74,17 @@ GW_ENS_PASS void gw_ens_norms(const double *w, const double *fsn, int nx, int or
 }
 
 /* h[l] = the step size of lane l from its norms n1[l], n2[l] and ln c = lc[l] (gw_taylor_step_size:
- * the same operations in the same order, gw_fm_log4 / gw_fm_exp4 bit-equal lane by lane to its
- * gw_fm_log / gw_fm_exp; non-finite norms give any h, refused by gw_taylor_attempt_size) */
+ * the same operations in the same order; with GW_TAYLOR_STEP_FM 4 lanes at a time by gw_fm_log4 /
+ * gw_fm_exp4, bit-equal lane by lane to gw_fm_log / gw_fm_exp, else a loop of libm calls, the
+ * lanes' independent chains side by side); non-finite norms give any h, refused by
+ * gw_taylor_attempt_size */
 GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const double *lc, int order,
                                    double *h) {
     enum { W = GW_ENSEMBLE_LANES };
     const double r1 = 1.0 / (order - 1), r2 = 1.0 / order;
-    int j, l;
-#if GW_FASTMATH_V4
+    int l;
+#if GW_FASTMATH_V4 && GW_TAYLOR_STEP_FM
+    int j;
     for (j = 0; j < W; j += 4) {
         const int nl = W - j < 4 ? W - j : 4;
         gw_fm_v4 a = {1.0, 1.0, 1.0, 1.0}, b = a, c = a, la, lb, e, hv;
@@ -103,11 +106,10 @@ GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const dou
     }
 #else
     for (l = 0; l < W; l++) {
-        const double l1 = n1[l] > 0.0 ? -gw_fm_log(n1[l]) * r1 : HUGE_VAL,
-                     l2 = n2[l] > 0.0 ? -gw_fm_log(n2[l]) * r2 : HUGE_VAL;
-        h[l] = gw_fm_exp((l2 < l1 ? l2 : l1) + lc[l]);
+        const double l1 = n1[l] > 0.0 ? -GW_TL_LN(n1[l]) * r1 : HUGE_VAL,
+                     l2 = n2[l] > 0.0 ? -GW_TL_LN(n2[l]) * r2 : HUGE_VAL;
+        h[l] = GW_TL_EXP((l2 < l1 ? l2 : l1) + lc[l]);
     }
-    (void)j;
 #endif
 }
 

@@ -316,29 +316,33 @@ GW_FASTMATH_INLINE double gw_cos(double x) {
 }
 
 /* ---- ln and exp: one definition for a double and for a vector of 4 -------------------------
- * The Taylor step size (gw_solver_taylor.c: two logarithms and one exponential per step, per
- * lane in the ensemble) needs ln and exp that are cheap, deterministic and the same bit for
- * bit whether one trajectory calls them on a double (gw_fm_log, gw_fm_exp) or the ensemble on the
- * 4 lanes of a GNU vector (gw_fm_log4, gw_fm_exp4): the bodies below are macros over the value type
- * D, its 64-bit unsigned integer twin U, the bit casts and a lane select, instantiated for
- * both, so the two perform the same IEEE operations in the same order (no libm, no tables, no
- * int-to-double conversion instruction: the exponent is read and written as bits).
+ * The ensemble's Taylor step size (gw_ensemble_passes.h gw_ens_step_sizes: two logarithms and
+ * one exponential per lane and step) needs ln and exp that are deterministic and the same bit
+ * for bit whether its one-lane code calls them on a double (gw_fm_log, gw_fm_exp) or its pass on
+ * the 4 lanes of a GNU vector (gw_fm_log4, gw_fm_exp4): the bodies below are macros over the
+ * value type D, its 64-bit unsigned integer twin U, the bit casts, a lane select and GW_FM_KEEP,
+ * instantiated for both, so that the two perform the same IEEE operations in the same order (no
+ * libm, no tables, no int-to-double conversion: the exponent is read and written as bits).
  *
  * gw_fm_log: fdlibm's e_log.c in musl's branch-free form (x = 2^k (1 + f), 1 + f in
  * [sqrt(2)/2, sqrt(2)), s = f / (2 + f), ln(1 + f) = f - f^2/2 + s (f^2/2 + R(s^2)), R the
- * degree-14 minimax Lg1..Lg7, error below 2^-58.45); subnormals scaled by 2^54 first; 0 gives
- * -inf, inf inf, x < 0 and NaN NaN.
+ * minimax Lg1..Lg7, error below 2^-58.45); subnormals scaled by 2^54 first; 0 gives -inf, inf
+ * inf, x < 0 and NaN NaN.
  * gw_fm_exp: k = nearest integer to x / ln 2, r = x - k ln2 as hi - lo (fdlibm's ln2 split: k
  * ln2_hi and hi exact), e^r - 1 - r by its Taylor polynomial of degree 13 (truncation below
- * 6e-18 relative on |r| <= ln2 / 2), 1 + r + the polynomial with the roundings of r = hi - lo
- * and of both sums added back before the last (error-free transformations), then 2^k as
- * two exact powers of two (k in [-1077, 1025] for x clamped to [-746, 710]: overflow to inf
- * and gradual underflow as the IEEE product rounds them); NaN gives NaN.
- * Measured against long double (tests/c/test_fastexp.c, tests/test_fastmath.py): below 1 ulp
- * over the step size's ranges (bound asserted there; printed maxima in docs/taylor.md).  Under a
- * parent project's -ffast-math the bodies stay within a few ulp (their exactness tricks are
- * integer bit operations the optimiser cannot reassociate), but the scalar and vector forms
- * may then contract or reassociate differently: bit-equality holds under the FMU's flags. */
+ * 6e-18 relative on |r| <= ln2 / 2; Estrin's scheme), 1 + r + the polynomial with the roundings
+ * of r = hi - lo and of both sums added back before the last (error-free transformations), then
+ * 2^k as 2^floor(k/2) added to the exponent and a product by 2^ceil(k/2) (x clamped to [-746,
+ * 710]: overflow to inf and gradual underflow as that product rounds them); NaN gives NaN.
+ * Measured against long double (tests/c/test_fastexp.c, tests/test_fastmath.py, 1e7 points):
+ * ln 0.84 ulp at most, exp 0.68 over ln h in [-60, 10] and 0.76 over every finite result
+ * (glibc: 0.52); every lane of the 4-lane forms bit-equal to the scalar ones (gcc, clang; SSE2,
+ * AVX2, x86-64-v3).  Under a parent project's -ffast-math -fno-finite-math-only at most 2.2 ulp
+ * (GW_FM_KEEP holds the reduction; the exponent tricks are integer operations the optimiser
+ * cannot reassociate), the scalar and vector forms then not bit-equal.
+ * Cost: without FMA a scalar gw_fm_exp takes about 22 ns of latency where glibc's table-driven
+ * exp (FMA where the CPU has it) takes 11, so the FMU's solver taylor keeps libm's
+ * (GW_TAYLOR_STEP_FM, gw_solver_taylor.c); the ensemble gains from 4 lanes per call. */
 #define GW_FM_LN2_HI 6.93147180369123816490e-01 /* 0x3fe62e42fee00000: k ln2_hi exact */
 #define GW_FM_LN2_LO 1.90821492927058770002e-10
 #define GW_FM_TWO52 4503599627370496.0 /* 2^52: bits 0x4330000000000000 */
@@ -387,14 +391,16 @@ GW_FASTMATH_INLINE double gw_cos(double x) {
             KEEP(hi);                                                                            \
             {                                                                                    \
                 const D lo = kd * GW_FM_LN2_LO, r = hi - lo, rc = (hi - r) - lo; /* r + rc */    \
-                const D z = r * r;                                                               \
-                const D e = 1.0 / 2 + z * (1.0 / 24 + z * (1.0 / 720 + z * (1.0 / 40320 +       \
-                            z * (1.0 / 3628800 + z * (1.0 / 479001600)))));                      \
-                const D o = 1.0 / 6 + z * (1.0 / 120 + z * (1.0 / 5040 + z * (1.0 / 362880 +     \
-                            z * (1.0 / 39916800 + z * (1.0 / 6227020800.0)))));                  \
+                /* sum_{n=2..13} r^n / n! = z P(r), P of degree 11 by Estrin's scheme (a     \
+                 * shorter chain than Horner's: the latency is what a step waits for) */       \
+                const D z = r * r, z2 = z * z, z4 = z2 * z2;                                     \
+                const D q0 = (1.0 / 2 + r * (1.0 / 6)) + z * (1.0 / 24 + r * (1.0 / 120));      \
+                const D q1 = (1.0 / 720 + r * (1.0 / 5040)) + z * (1.0 / 40320 + r * (1.0 / 362880)); \
+                const D q2 = (1.0 / 3628800 + r * (1.0 / 39916800)) +                            \
+                             z * (1.0 / 479001600 + r * (1.0 / 6227020800.0));                   \
                 /* e^r = 1 + s, |r| <= ln2/2; the roundings of s and 1 + s (Fast2Sum: |r| >     \
                  * |tl|, 1 > |s|) added back before the last addition */                         \
-                const D tl = z * (e + r * o), s = r + tl, m = 1.0 + s;                           \
+                const D tl = z * ((q0 + z2 * q1) + z4 * q2), s = r + tl, m = 1.0 + s;                           \
                 const D mm = m + ((s - (m - 1.0)) + ((tl - (s - r)) + rc));                      \
                 /* 2^floor(k/2) into mm's exponent (an integer addition: mm in [0.7, 1.42],     \
                  * the result normal), then times 2^ceil(k/2), whose rounding is the result's   \

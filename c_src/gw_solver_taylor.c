@@ -57,8 +57,23 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include <math.h>
 #include <string.h>
 
-#include "gw_fastmath.h" /* gw_fm_log, gw_fm_exp: the step size's, bit-equal to the ensemble's lanes */
+#include "gw_fastmath.h" /* gw_fm_log, gw_fm_exp: the ensemble's step size (GW_TAYLOR_STEP_FM) */
 #include "gw_solver.h"
+
+/* The step size's ln and exp (gw_taylor_step_size, the rejection rule): libm's in the FMU (glibc's
+ * are table-driven with FMA where the CPU has it: 11 ns per exp against 22 ns for gw_fm_exp, the
+ * step's latency); gw_fastmath.h's where a 4-lane pass must equal this code bit for bit, lane
+ * by lane (the ensemble library, fmu_build/ensemble.py: GW_TAYLOR_STEP_FM 1, gw_ens_step_sizes) */
+#ifndef GW_TAYLOR_STEP_FM
+#define GW_TAYLOR_STEP_FM 0
+#endif
+#if GW_TAYLOR_STEP_FM
+#define GW_TL_LN gw_fm_log
+#define GW_TL_EXP gw_fm_exp
+#else
+#define GW_TL_LN log
+#define GW_TL_EXP exp
+#endif
 
 /* p0 = ceil(-ln(eps) / 2 + 1) in [3, MAX], the order of Jorba & Zou's rule for eps */
 static int gw_taylor_base_order(double rel_tol) {
@@ -105,13 +120,12 @@ GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, doub
     double l1, l2, lr;
     *bad_order = gw_taylor_bad_order(order, n1, n2);
     if (*bad_order) return 0.0;
-    /* ln rho = min_j ln(N_j^(-1/j)): two logarithms and one exponential (no pow), gw_fastmath.h's
-     * (below 1 ulp, inline; glibc's were out-of-line calls, ~8% of a run in perf).  The same
-     * operations in the same order as the ensemble's 4-lane pass (gw_ens_step_sizes). */
-    l1 = n1 > 0.0 ? -gw_fm_log(n1) * r1 : HUGE_VAL;
-    l2 = n2 > 0.0 ? -gw_fm_log(n2) * r2 : HUGE_VAL;
+    /* ln rho = min_j ln(N_j^(-1/j)): two logarithms and one exponential (no pow).  The same
+     * operations in the same order as the ensemble's pass over its lanes (gw_ens_step_sizes). */
+    l1 = n1 > 0.0 ? -GW_TL_LN(n1) * r1 : HUGE_VAL;
+    l2 = n2 > 0.0 ? -GW_TL_LN(n2) * r2 : HUGE_VAL;
     lr = l2 < l1 ? l2 : l1;
-    return gw_fm_exp(lr + run->log_c);
+    return GW_TL_EXP(lr + run->log_c);
 }
 
 /* dx = P(h) - x0 = sum_{k>=1} X_k h^k and, if dp is not NULL, dp = P'(h), in one Horner pass:
@@ -380,7 +394,7 @@ GW_INTERNAL gw_int_result gw_taylor_conclude_err(gw_instance *I, double t_end, g
         if (gw_log_enabled(I, GW_LOG_SOLVER))
             gw_log(I, GW_OK, GW_LOG_SOLVER, "taylor step rejected at t=%.17g: h=%.17g defect %g",
                    I->t, h, err);
-        h *= err < 1e30 ? fmax(0.2, 0.9 * gw_fm_exp(-gw_fm_log(err) / p)) : 0.2;
+        h *= err < 1e30 ? fmax(0.2, 0.9 * GW_TL_EXP(-GW_TL_LN(err) / p)) : 0.2;
         I->h_adapt = h;
         if (h < gw_h_min(I->t)) {
             GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, solver taylor: defect %g of "

@@ -19,7 +19,7 @@
   test_error_under_a_parent_projects_flags   tests/c/fastmath_unit.c compiled with IEEE flags
       (1 ulp) and with -ffast-math -fno-finite-math-only (4 ulp: GW_FM_KEEP holds the reduction),
       measured by tests/c/test_fastmath_flags.c compiled with IEEE semantics
-  test_log_exp_error_and_lanes   gw_fm_log / gw_fm_exp (the Taylor step size's ln and exp) against
+  test_log_exp_error_and_lanes   gw_fm_log / gw_fm_exp (the ensemble's Taylor step size ln and exp) against
       glibc's long double logl / expl over the step size's ranges and beyond (tests/c/
       test_fastexp.c, 1e7 points): below 0.9 ulp with the FMU's flags (measured 0.84 / 0.76),
       specials, and gw_fm_log4 / gw_fm_exp4 bit-equal to them lane by lane (gcc, clang; SSE2,
@@ -221,8 +221,8 @@ LOG_EXP_FLAGS = {
 @pytest.mark.parametrize("cc", COMPILERS)
 @pytest.mark.parametrize("flags", list(LOG_EXP_FLAGS), ids=list(LOG_EXP_FLAGS))
 def test_log_exp_error_and_lanes(cc, flags, tmp_path):
-    """gw_fm_log / gw_fm_exp (c_src/gw_fastmath.h), the step size's ln and exp (solver taylor and
-    the ensemble's lanes), in ulps against long double over 1e7 points: the norms' range
+    """gw_fm_log / gw_fm_exp (c_src/gw_fastmath.h), the ensemble's step size ln and exp (its
+    one-lane code and its 4-lane pass), in ulps against long double over 1e7 points: the norms' range
     [1e-300, 1e300], [0.5, 2], subnormals, ln h in [-60, 10], every finite exp; the 4-lane forms
     bit-equal lane by lane with the FMU's flags (the ensemble's bit-identity with its one-lane
     path rests on it).  Compiled as a separate unit (tests/c/fastexp_unit.c) with the flags

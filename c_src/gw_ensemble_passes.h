@@ -52,14 +52,16 @@ typedef int gw_ens_m;
 #define GW_ENS_PASS static
 #endif
 
-/* N_{p-1}, N_p of every lane (gw_taylor_step) */
+/* N_{p-1}, N_p of every lane (gw_taylor_step), and d1[l] = 0 where every derivative (order 1) of
+ * lane l is finite, NaN otherwise (the sum of x_i^[1] * 0: NaN from an infinity or a NaN), the
+ * check gw_taylor_attempt_size would otherwise make on a copy of them */
 GW_ENS_PASS void gw_ens_norms(const double *w, const double *fsn, int nx, int order, double *n1,
-                              double *n2) {
+                              double *n2, double *d1) {
     enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V };
     const size_t S = (size_t)(order + 1) * W;
     int i, j;
     for (j = 0; j < W; j += V) {
-        gw_ens_v m1 = {0.0}, m2 = {0.0};
+        gw_ens_v m1 = {0.0}, m2 = {0.0}, z = {0.0};
         for (i = 0; i < nx; i++) {
             const double *x0 = w + (size_t)i * S + j;
             const gw_ens_v rsc = 1.0 / (GW_ENS_ABS(gw_ens_ld(x0)) + gw_ens_ld(fsn + (size_t)i * W + j));
@@ -67,9 +69,11 @@ GW_ENS_PASS void gw_ens_norms(const double *w, const double *fsn, int nx, int or
             const gw_ens_v r2 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)order * W)) * rsc;
             m1 = GW_ENS_SEL(r1 > m1, r1, m1);
             m2 = GW_ENS_SEL(r2 > m2, r2, m2);
+            z = z + gw_ens_ld(x0 + W) * 0.0;
         }
         gw_ens_st(n1 + j, m1);
         gw_ens_st(n2 + j, m2);
+        gw_ens_st(d1 + j, z);
     }
 }
 

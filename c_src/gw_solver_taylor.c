@@ -338,7 +338,7 @@ GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
     const int nx = I->m->nx, p = I->tl_order;
     double hs;
     int bad, i;
-    for (i = 0; i < nx; i++) {
+    for (i = norms && norms[3] != 0.0 ? nx : 0; i < nx; i++) { /* unless checked by the caller */
         const double f = I->tl_w[(size_t)i * (size_t)I->tl_si + (size_t)I->tl_so];
         if (!isfinite(f)) {
             GW_LOG_ERR(I, "derivative of state %s is not finite (%g) at t=%.17g", gw_x_name(I, i),
@@ -346,7 +346,8 @@ GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
             return GW_INT_ERROR;
         }
     }
-    if (norms) { /* the ensemble's pass: N_{p-1}, N_p and the step size from them */
+    if (norms) { /* the ensemble's passes: N_{p-1}, N_p, the step size from them, and whether
+                  * every derivative (order 1) is finite */
         bad = gw_taylor_bad_order(p, norms[0], norms[1]);
         hs = norms[2];
     } else {

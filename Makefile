@@ -13,9 +13,10 @@ STAMP  := $(VENV)/.installed
 SCENES := paper_earth paper_mars paper_moon
 
 # Debian packages the C tests use: clang (the sources must build warning-free under gcc and
-# clang), cmake (fmpy's build of an FMU's sources), valgrind (memory checks).  Installed when
-# missing and we are root with apt-get (CI); otherwise named, and the tests needing them say so.
-C_TOOLS := clang cmake valgrind
+# clang), cmake (fmpy's build of an FMU's sources), valgrind (memory checks), tcc (a C99 compiler
+# without GCC's extensions: the portable paths).  Installed when missing and we are root with
+# apt-get (CI); otherwise named, and the tests needing them say so.
+C_TOOLS := clang cmake valgrind tcc
 
 .PHONY: demo test bench realtime venv browser clean c-tools tbb
 

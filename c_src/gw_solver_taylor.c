@@ -166,10 +166,6 @@ static inline void gw_taylor_increment8(const double *x0, size_t si, size_t so, 
         }
     }
 }
-#define GW_TL_INCREMENT8 1
-#else
-#define GW_TL_INCREMENT8 0
-#endif
 
 #ifndef GW_TL_CLONED
 #define GW_TL_CLONED
@@ -212,6 +208,10 @@ static GW_TL_CLONED void gw_taylor_increment8_om(const double *x0, size_t so, in
     }
 }
 #undef GW_TL_LD2
+#define GW_TL_INCREMENT8 1
+#else /* other C99 compilers: no vector extension, the scalar loop below (same operations) */
+#define GW_TL_INCREMENT8 0
+#endif
 
 /* gw_taylor_increment on the series X with state i's coefficient k at X[i si + k so] */
 static void gw_taylor_increment_strided(const double *X, size_t si, size_t so, int order, int nx,

@@ -424,6 +424,71 @@ def test_kernel_and_ensemble_sources_warning_clean(cc, paper, tmp_path):
         assert r.returncode == 0, f"{cc} {source.name}:\n{r.stderr}"
 
 
+
+def _final_states(fmu, unzipdir=None, **values):
+    """The 8 states and the accepted-step count after one fmi2DoStep(0, 20) of `fmu` (optionally
+    its binary from `unzipdir`)."""
+    from fmi_helpers import Slave
+    s = Slave(fmu, unzipdir=unzipdir)
+    try:
+        s.init(**values)
+        s.slave.doStep(0.0, 20.0)
+        log = " ".join(m for _, _, m in s.messages)
+        return np.array(s.get(*STATES)), int(re.findall(r"accepted=(\d+)", log)[-1])
+    finally:
+        s.free()
+
+
+def _rebuilt(built, tmp_path: Path, cmd: list[str]) -> Path:
+    """The FMU unpacked into tmp_path with its binary rebuilt from its sources by `cmd` (the
+    compiler and its flags; the source, includes and output are added).  Returns the directory."""
+    unz = tmp_path / "fmu"
+    with zipfile.ZipFile(built.fmu) as z:
+        z.extractall(unz)
+    lib = next((unz / "binaries" / "linux64").glob("*.so"))
+    lib.unlink()
+    r = subprocess.run([*cmd, "-shared", "-fPIC", f"-I{built.sources}", str(built.sources / "gw_fmu.c"),
+                        "-o", str(lib), "-lm"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return unz
+
+
+_SETTINGS = dict(solver=TAYLOR, rel_tol=1e-10, abs_tol=1e-12, max_step=20.0)
+
+
+def test_sources_build_and_run_without_gnu_vector_extensions(paper, tmp_path):
+    """The FMU's sources are plain C99 for a compiler without GCC's vector extension (tcc here,
+    MSVC alike): the increment's SSE2 pairs and their x86-64-v3 clone (loose4) stood outside the
+    __GNUC__ guard, so no FMU, with or without the kernel, compiled there ("';' expected (got
+    "hv")").  Built by tcc, the portable path (scalar increment on the kernel's order-major
+    series) gives the gcc build's trajectory to rounding, with the same steps."""
+    import shutil
+    tcc = shutil.which("tcc")
+    if tcc is None:
+        pytest.skip("tcc is not installed (make test installs it: Debian package tcc)")
+    unz = _rebuilt(paper[0], tmp_path, [tcc, "-std=c99", "-Wall"])
+    x_tcc, n_tcc = _final_states(paper[0].fmu, unz, **_SETTINGS)
+    x_gcc, n_gcc = _final_states(paper[0].fmu, **_SETTINGS)
+    assert n_tcc == n_gcc
+    np.testing.assert_allclose(x_tcc, x_gcc, rtol=1e-11, atol=1e-11)
+
+
+def test_generic_clone_equals_the_x86_64_v3_one_to_rounding(paper, tmp_path):
+    """A CPU without AVX2/FMA runs the target clones' portable default (kernel and increment):
+    built with GW_NO_CLONES (what the default clone compiles to: SSE2, no contraction) the run
+    takes the same steps and ends within rounding of the FMU's own binary (on this machine its
+    x86-64-v3 clone, fused multiply-adds), and within rel_tol of scipy's DOP853 at 1e-13."""
+    from fmu_build.compiler import OPTIMISE, STANDARD
+    unz = _rebuilt(paper[0], tmp_path, [compiler(), *STANDARD, *OPTIMISE, "-DGW_NO_CLONES"])
+    x_generic, n_generic = _final_states(paper[0].fmu, unz, **_SETTINGS)
+    x_own, n_own = _final_states(paper[0].fmu, **_SETTINGS)
+    assert abs(n_generic - n_own) <= 1  # a step count a rounding apart at most
+    np.testing.assert_allclose(x_generic, x_own, rtol=1e-11, atol=1e-11)
+    wheel = CasadiWheel()
+    sol = wheel.integrate(wheel.x0(), 20.0, rtol=1e-13, atol=1e-15)
+    ref = np.array([wheel.out(sol.y[:, -1])[n] for n in STATES])
+    assert np.max(np.abs(x_generic - ref)) < 30 * 1e-10
+
 # ---- ensemble ----------------------------------------------------------------------------------
 
 

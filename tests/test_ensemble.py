@@ -157,7 +157,8 @@ def test_step_size_passes_equal_the_one_lane_formulas(cc, step_fm, tmp_path):
     against scalar calls, or libm's), and the order-1 flag that spares gw_taylor_attempt_size
     its copy zero exactly where the lane's derivatives are finite."""
     exe = tmp_path / "passes"
-    subprocess.run([cc, *STRICT, "-O2", f"-DGW_TAYLOR_STEP_FM={step_fm}", f"-I{C_SRC}",
+    fns = ["-DGW_TL_LN=gw_fm_log", "-DGW_TL_EXP=gw_fm_exp"] if step_fm else ["-DGW_TL_LN=log", "-DGW_TL_EXP=exp"]
+    subprocess.run([cc, *STRICT, "-O2", f"-DGW_TAYLOR_STEP_FM={step_fm}", *fns, f"-I{C_SRC}",
                     str(TESTS_C / "test_ens_passes.c"), "-lm", "-o", str(exe)], check=True)
     r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0 and "test_ens_passes: 0 failures" in r.stderr, r.stderr

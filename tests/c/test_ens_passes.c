@@ -16,17 +16,9 @@
 
 #include "gw_fastmath.h"
 
+/* GW_TAYLOR_STEP_FM and its GW_TL_LN, GW_TL_EXP (gw_solver_taylor.c) from the command line:
+ * 1, gw_fm_log, gw_fm_exp or 0, log, exp */
 #define GW_ENSEMBLE_LANES 4
-#ifndef GW_TAYLOR_STEP_FM
-#define GW_TAYLOR_STEP_FM 1
-#endif
-#if GW_TAYLOR_STEP_FM
-#define GW_TL_LN gw_fm_log
-#define GW_TL_EXP gw_fm_exp
-#else
-#define GW_TL_LN log
-#define GW_TL_EXP exp
-#endif
 #include "gw_ensemble_passes.h"
 
 enum { W = 4, NX = 5, ORDER = 9 };

@@ -318,7 +318,7 @@ static double gw_taylor_defect(gw_instance *I, double t1, double h, const double
     for (i = 0; i < nx; i++) { /* the usual case first, without divisions: every r <= 1 */
         const double num = fabs(f1[(size_t)i * stride] - dp[i]) * scale,
                      den = rtol * fabs(xnew[i]) + atol * nominal[i];
-        if (!(num <= den && den > 0.0)) break;
+        if (!(num <= den && den > 0.0 && den < HUGE_VAL)) break; /* inf <= inf: NaN below */
     }
     if (i == nx) return 0.0; /* num <= den, so r = num / den <= 1 exactly (monotone rounding) */
     for (i = 0; i < nx; i++) {

@@ -333,9 +333,11 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
     enum { W = GW_ENS_LANES };
     const size_t S = (size_t)(order + 1) * W;
     const int nx = E->m->nx;
-    double n1[W], n2[W], scale[W], err[W], h[W];
+    double n1[W], n2[W], d1[W], lc[W], hs[W], scale[W], err[W], h[W];
     int go[W], last[W], l, i, any = 0;
-    gw_ens_norms(E->w, E->fsn, nx, order, n1, n2);
+    gw_ens_norms(E->w, E->fsn, nx, order, n1, n2, d1);
+    for (l = 0; l < W; l++) lc[l] = E->lane[l].run.log_c;
+    gw_ens_step_sizes(n1, n2, lc, order, hs);
     for (l = 0; l < W; l++) scale[l] = E->lane[l].pending ? E->lane[l].h / (order + 1) : 0.0;
     gw_ens_defects(E->w, E->dp, E->x, E->anom, nx, order, E->job->rel_tol, scale, err);
     for (l = 0; l < W; l++) {
@@ -368,11 +370,12 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
         go[l] = 0;
         if (GW_ENSEMBLE_LANE_STEPS)
             gw_ens_fetch(I, L);
-        else /* order 1, which gw_taylor_attempt_size checks (finite) */
+        else if (d1[l] != 0.0) /* a derivative not finite: gw_taylor_attempt_size names it */
             for (i = 0; i < nx; i++)
                 I->tl_w[(size_t)i * (size_t)(order + 1) + 1] = E->w[(size_t)i * S + W + l];
         {
-            const double target = gw_ens_target(E, L), norms[2] = {n1[l], n2[l]};
+            const double target = gw_ens_target(E, L),
+                         norms[4] = {n1[l], n2[l], hs[l], d1[l] == 0.0};
             gw_int_result r =
                 gw_taylor_attempt_size(I, target, &L->run, GW_ENSEMBLE_LANE_STEPS ? NULL : norms,
                                        &L->h, &L->t1, &last[l]);

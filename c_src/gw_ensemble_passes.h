@@ -12,6 +12,8 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "gw_fastmath.h" /* gw_fm_log4, gw_fm_exp4: the lanes' step sizes */
+
 /* The passes work on vectors of GW_ENS_V lanes (GCC / clang vector extension: GCC vectorised
  * none of the plain loops): 4 lanes (one AVX2 register) where the lanes are a multiple of 4,
  * else 2 or 1.  They are also compiled for AVX2 (target clones, chosen at load time) without
@@ -50,14 +52,16 @@ typedef int gw_ens_m;
 #define GW_ENS_PASS static
 #endif
 
-/* N_{p-1}, N_p of every lane (gw_taylor_step) */
+/* N_{p-1}, N_p of every lane (gw_taylor_step), and d1[l] = 0 where every derivative (order 1) of
+ * lane l is finite, NaN otherwise (the sum of x_i^[1] * 0: NaN from an infinity or a NaN), the
+ * check gw_taylor_attempt_size would otherwise make on a copy of them */
 GW_ENS_PASS void gw_ens_norms(const double *w, const double *fsn, int nx, int order, double *n1,
-                              double *n2) {
+                              double *n2, double *d1) {
     enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V };
     const size_t S = (size_t)(order + 1) * W;
     int i, j;
     for (j = 0; j < W; j += V) {
-        gw_ens_v m1 = {0.0}, m2 = {0.0};
+        gw_ens_v m1 = {0.0}, m2 = {0.0}, z = {0.0};
         for (i = 0; i < nx; i++) {
             const double *x0 = w + (size_t)i * S + j;
             const gw_ens_v rsc = 1.0 / (GW_ENS_ABS(gw_ens_ld(x0)) + gw_ens_ld(fsn + (size_t)i * W + j));
@@ -65,10 +69,52 @@ GW_ENS_PASS void gw_ens_norms(const double *w, const double *fsn, int nx, int or
             const gw_ens_v r2 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)order * W)) * rsc;
             m1 = GW_ENS_SEL(r1 > m1, r1, m1);
             m2 = GW_ENS_SEL(r2 > m2, r2, m2);
+            z = z + gw_ens_ld(x0 + W) * 0.0;
         }
         gw_ens_st(n1 + j, m1);
         gw_ens_st(n2 + j, m2);
+        gw_ens_st(d1 + j, z);
     }
+}
+
+/* h[l] = the step size of lane l from its norms n1[l], n2[l] and ln c = lc[l] (gw_taylor_step_size:
+ * the same operations in the same order; with GW_TAYLOR_STEP_FM 4 lanes at a time by gw_fm_log4 /
+ * gw_fm_exp4, bit-equal lane by lane to gw_fm_log / gw_fm_exp, else a loop of libm calls, the
+ * lanes' independent chains side by side); non-finite norms give any h, refused by
+ * gw_taylor_attempt_size */
+GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const double *lc, int order,
+                                   double *h) {
+    enum { W = GW_ENSEMBLE_LANES };
+    const double r1 = 1.0 / (order - 1), r2 = 1.0 / order;
+    int l;
+#if GW_FASTMATH_V4 && GW_TAYLOR_STEP_FM
+    int j;
+    for (j = 0; j < W; j += 4) {
+        const int nl = W - j < 4 ? W - j : 4;
+        gw_fm_v4 a = {1.0, 1.0, 1.0, 1.0}, b = a, c = a, la, lb, e, hv;
+        gw_fm_m4 pa, pb;
+        for (l = 0; l < nl; l++) {
+            a[l] = n1[j + l];
+            b[l] = n2[j + l];
+            c[l] = lc[j + l];
+        }
+        pa = a > 0.0;
+        pb = b > 0.0;
+        gw_fm_log4(&la, &a);
+        gw_fm_log4(&lb, &b);
+        la = GW_FM_SEL4(pa, -la * r1, (gw_fm_v4){0} + HUGE_VAL);
+        lb = GW_FM_SEL4(pb, -lb * r2, (gw_fm_v4){0} + HUGE_VAL);
+        e = GW_FM_SEL4(lb < la, lb, la) + c;
+        gw_fm_exp4(&hv, &e);
+        for (l = 0; l < nl; l++) h[j + l] = hv[l];
+    }
+#else
+    for (l = 0; l < W; l++) {
+        const double l1 = n1[l] > 0.0 ? -GW_TL_LN(n1[l]) * r1 : HUGE_VAL,
+                     l2 = n2[l] > 0.0 ? -GW_TL_LN(n2[l]) * r2 : HUGE_VAL;
+        h[l] = GW_TL_EXP((l2 < l1 ? l2 : l1) + lc[l]);
+    }
+#endif
 }
 
 /* the defect of every lane's pending attempt with f(t1, P(h)) = order 1 of the batch's series

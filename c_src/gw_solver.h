@@ -157,7 +157,9 @@ GW_INTERNAL gw_int_result gw_taylor_conclude(gw_instance *I, double t_end, gw_ta
                                              size_t stride, int *fresh);
 /* The halves as the ensemble's batch uses them (its lane-innermost passes compute the norms of
  * the step size, the increment and the defect for all lanes at once): gw_taylor_attempt
- * without the increment (norms: N_{p-1}, N_p, or NULL: from I->tl_w); gw_taylor_conclude with
+ * without the increment (norms: N_{p-1}, N_p, the step size gw_taylor_step_size computes from
+ * them and 1 if order 1 is known finite (0: checked here on I->tl_w), or NULL: all from
+ * I->tl_w); gw_taylor_conclude with
  * the defect err of the first attempt given (from_series: f1 came from the series at t1). */
 GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
                                                  gw_taylor_run *run, const double *norms,

@@ -57,7 +57,23 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include <math.h>
 #include <string.h>
 
+#include "gw_fastmath.h" /* gw_fm_log, gw_fm_exp: the ensemble's step size (GW_TAYLOR_STEP_FM) */
 #include "gw_solver.h"
+
+/* The step size's ln and exp (gw_taylor_step_size, the rejection rule): libm's in the FMU (glibc's
+ * are table-driven with FMA where the CPU has it: 11 ns per exp against 22 ns for gw_fm_exp, the
+ * step's latency); gw_fastmath.h's where a 4-lane pass must equal this code bit for bit, lane
+ * by lane (the ensemble library, fmu_build/ensemble.py: GW_TAYLOR_STEP_FM 1, gw_ens_step_sizes) */
+#ifndef GW_TAYLOR_STEP_FM
+#define GW_TAYLOR_STEP_FM 0
+#endif
+#if GW_TAYLOR_STEP_FM
+#define GW_TL_LN gw_fm_log
+#define GW_TL_EXP gw_fm_exp
+#else
+#define GW_TL_LN log
+#define GW_TL_EXP exp
+#endif
 
 /* p0 = ceil(-ln(eps) / 2 + 1) in [3, MAX], the order of Jorba & Zou's rule for eps */
 static int gw_taylor_base_order(double rel_tol) {
@@ -91,21 +107,25 @@ GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run
     return gw_taylor_step_size(run, order, n1, n2, bad_order);
 }
 
+/* the order whose norm is not finite (NaN or inf), else 0 */
+static int gw_taylor_bad_order(int order, double n1, double n2) {
+    return !(n1 <= DBL_MAX) ? order - 1 : !(n2 <= DBL_MAX) ? order : 0;
+}
+
 GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, double n1, double n2,
                                        int *bad_order) {
     /* 1/j before the logarithms: off their chain (a division after each log was 13% of the
      * step's own time in perf) */
     const double r1 = 1.0 / (order - 1), r2 = 1.0 / order;
-    double lr = HUGE_VAL;
-    *bad_order = 0;
-    if (!(n1 <= DBL_MAX) || !(n2 <= DBL_MAX)) { /* NaN or inf: which order */
-        *bad_order = !(n1 <= DBL_MAX) ? order - 1 : order;
-        return 0.0;
-    }
-    /* ln rho = min_j ln(N_j^(-1/j)): two logarithms and one exponential (no pow) */
-    if (n1 > 0.0) lr = -log(n1) * r1;
-    if (n2 > 0.0 && -log(n2) * r2 < lr) lr = -log(n2) * r2;
-    return exp(lr + run->log_c);
+    double l1, l2, lr;
+    *bad_order = gw_taylor_bad_order(order, n1, n2);
+    if (*bad_order) return 0.0;
+    /* ln rho = min_j ln(N_j^(-1/j)): two logarithms and one exponential (no pow).  The same
+     * operations in the same order as the ensemble's pass over its lanes (gw_ens_step_sizes). */
+    l1 = n1 > 0.0 ? -GW_TL_LN(n1) * r1 : HUGE_VAL;
+    l2 = n2 > 0.0 ? -GW_TL_LN(n2) * r2 : HUGE_VAL;
+    lr = l2 < l1 ? l2 : l1;
+    return GW_TL_EXP(lr + run->log_c);
 }
 
 /* dx = P(h) - x0 = sum_{k>=1} X_k h^k and, if dp is not NULL, dp = P'(h), in one Horner pass:
@@ -298,7 +318,7 @@ static double gw_taylor_defect(gw_instance *I, double t1, double h, const double
     for (i = 0; i < nx; i++) { /* the usual case first, without divisions: every r <= 1 */
         const double num = fabs(f1[(size_t)i * stride] - dp[i]) * scale,
                      den = rtol * fabs(xnew[i]) + atol * nominal[i];
-        if (!(num <= den && den > 0.0)) break;
+        if (!(num <= den && den > 0.0 && den < HUGE_VAL)) break; /* inf <= inf: NaN below */
     }
     if (i == nx) return 0.0; /* num <= den, so r = num / den <= 1 exactly (monotone rounding) */
     for (i = 0; i < nx; i++) {
@@ -318,7 +338,7 @@ GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
     const int nx = I->m->nx, p = I->tl_order;
     double hs;
     int bad, i;
-    for (i = 0; i < nx; i++) {
+    for (i = norms && norms[3] != 0.0 ? nx : 0; i < nx; i++) { /* unless checked by the caller */
         const double f = I->tl_w[(size_t)i * (size_t)I->tl_si + (size_t)I->tl_so];
         if (!isfinite(f)) {
             GW_LOG_ERR(I, "derivative of state %s is not finite (%g) at t=%.17g", gw_x_name(I, i),
@@ -326,8 +346,13 @@ GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
             return GW_INT_ERROR;
         }
     }
-    hs = norms ? gw_taylor_step_size(run, p, norms[0], norms[1], &bad)
-               : gw_taylor_step(I, run, I->tl_w, (size_t)I->tl_si, (size_t)I->tl_so, p, &bad);
+    if (norms) { /* the ensemble's passes: N_{p-1}, N_p, the step size from them, and whether
+                  * every derivative (order 1) is finite */
+        bad = gw_taylor_bad_order(p, norms[0], norms[1]);
+        hs = norms[2];
+    } else {
+        hs = gw_taylor_step(I, run, I->tl_w, (size_t)I->tl_si, (size_t)I->tl_so, p, &bad);
+    }
     if (bad) {
         GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g (the solution's "
                    "series diverges: a singularity of the right-hand side?)", bad, I->t);
@@ -370,7 +395,7 @@ GW_INTERNAL gw_int_result gw_taylor_conclude_err(gw_instance *I, double t_end, g
         if (gw_log_enabled(I, GW_LOG_SOLVER))
             gw_log(I, GW_OK, GW_LOG_SOLVER, "taylor step rejected at t=%.17g: h=%.17g defect %g",
                    I->t, h, err);
-        h *= err < 1e30 ? fmax(0.2, 0.9 * exp(-log(err) / p)) : 0.2;
+        h *= err < 1e30 ? fmax(0.2, 0.9 * GW_TL_EXP(-GW_TL_LN(err) / p)) : 0.2;
         I->h_adapt = h;
         if (h < gw_h_min(I->t)) {
             GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, solver taylor: defect %g of "

@@ -5,7 +5,7 @@
  * gw_tl1_series (the series in the kernel's order-major layout, which gw_integrate_taylor
  * reads as it is: GW_TL1_SERIES).  Part of the
  * unity build after gw_funcs.c, before model_desc.c.  The ensemble library instantiates the
- * same two templates with GW_ENSEMBLE_LANES lanes (gw_ensemble.c).
+ * cst and jet templates with GW_ENSEMBLE_LANES lanes (gw_ensemble.c).
  */
 #ifndef GW_UNITY_BUILD
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */

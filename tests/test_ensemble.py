@@ -1,16 +1,19 @@
 """The ensemble path's memory kept between runs (gw_ensemble_new / gw_ensemble_run_in, a context
 per run in flight, fmu_build/ensemble.py): runs of one Ensemble reuse the lanes' instances and
 the batch memory, so nothing of one run may reach the next, and runs from several threads at
-once must each have their own context."""
+once must each have their own context.  Also the step size passes on made-up series
+(tests/c/test_ens_passes.c)."""
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
 
+from c_programs import C_SRC, STRICT, TESTS_C
 from conftest import SCENES
 from fmu_build import build_fmu, load_scene
 from fmu_build.ensemble import STATUS_ERROR, STATUS_OK, Ensemble
@@ -142,3 +145,20 @@ def test_ensemble_library_clean_under_sanitizers(paper, tmp_path):
     lines = r.stdout.splitlines()
     assert len(lines) == 3 and len(set(lines)) == 1, lines
     assert lines[0].split()[:3] == ["0", "2", "3"]  # runs to the end, falls, refused
+
+
+@pytest.mark.parametrize("cc", [c for c in ("gcc", "clang") if shutil.which(c)])
+@pytest.mark.parametrize("step_fm", [1, 0], ids=["fastmath-step", "libm-step"])
+def test_step_size_passes_equal_the_one_lane_formulas(cc, step_fm, tmp_path):
+    """gw_ens_norms and gw_ens_step_sizes (c_src/gw_ensemble_passes.h) on 200 made-up series of 4
+    lanes (coefficients over 40 decades, zero norms, an infinite or NaN derivative in a lane):
+    every lane's norms and step size bit for bit those of solver taylor's one-lane formulas
+    (gw_taylor_step, gw_taylor_step_size; the library's gw_fastmath.h ln/exp in 4-lane vectors
+    against scalar calls, or libm's), and the order-1 flag that spares gw_taylor_attempt_size
+    its copy zero exactly where the lane's derivatives are finite."""
+    exe = tmp_path / "passes"
+    fns = ["-DGW_TL_LN=gw_fm_log", "-DGW_TL_EXP=gw_fm_exp"] if step_fm else ["-DGW_TL_LN=log", "-DGW_TL_EXP=exp"]
+    subprocess.run([cc, *STRICT, "-O2", f"-DGW_TAYLOR_STEP_FM={step_fm}", *fns, f"-I{C_SRC}",
+                    str(TESTS_C / "test_ens_passes.c"), "-lm", "-o", str(exe)], check=True)
+    r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and "test_ens_passes: 0 failures" in r.stderr, r.stderr

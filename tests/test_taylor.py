@@ -603,14 +603,20 @@ def test_ensemble_bad_job_names_the_field(paper, tmp_path):
             Ensemble(built.fmu, lanes=lanes, cache=tmp_path)
 
 
-def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path, monkeypatch):
-    """The batch's lane-innermost passes (gw_ensemble.c: the step size norms, the defects, the
-    increments' Horner sums of all lanes at once) give each lane the numbers of solver taylor's
-    one-lane code bit for bit: the same library built with GW_ENSEMBLE_LANE_STEPS=1 (every lane
-    through gw_taylor_step / _defect / _increment on its own copy of the series) returns equal
-    steps, times, states and grid outputs, with N not a multiple of the lanes, falls at
-    different times, refills and a communication grid."""
+@pytest.mark.parametrize("step_fm", [1, 0], ids=["fastmath-step", "libm-step"])
+def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path, monkeypatch, step_fm):
+    """The batch's lane-innermost passes (gw_ensemble.c: the step size norms, the step sizes, the
+    defects, the increments' Horner sums of all lanes at once) give each lane the numbers of
+    solver taylor's one-lane code bit for bit: the same library built with
+    GW_ENSEMBLE_LANE_STEPS=1 (every lane through gw_taylor_step / _defect / _increment on its own
+    copy of the series) returns equal steps, times, states and grid outputs, with N not a
+    multiple of the lanes, falls at different times, refills and a communication grid.  Both
+    step size forms: the library's gw_fastmath.h ln and exp (4 lanes per vector call against
+    the scalar calls), and libm's (GW_TAYLOR_STEP_FM 0, the FMU's: a loop over the lanes)."""
     import fmu_build.ensemble as ensemble_mod
+    assert "#define GW_TAYLOR_STEP_FM 1" in ensemble_mod._UNITY  # the library's default
+    if not step_fm:
+        monkeypatch.setattr(ensemble_mod, "_UNITY", "#define GW_TAYLOR_STEP_FM 0\n" + ensemble_mod._UNITY)
     built, _ = paper
     g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81])
     spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 4.0, 6.1])

@@ -18,9 +18,9 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "fm_check.h"
 #include "gw_fastmath.h"
 
-static int n_checks, n_failures;
 static long n_pair_differ; /* gw_sincos2 results not bit-equal to gw_sincos's */
 static double prev_x = 0.5;
 
@@ -70,23 +70,6 @@ static void report(const tally *t) {
     if (!(t->max_sin <= 1.0 && t->max_cos <= 1.0)) {
         n_failures++;
         fprintf(stderr, "%s: error above 1 ulp\n", t->name);
-    }
-}
-
-/* xorshift64*: a fixed, portable sequence of uniform doubles in [0, 1) */
-static unsigned long long rng_state = 0x9E3779B97F4A7C15ULL;
-static double uniform01(void) {
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return (double)((rng_state * 0x2545F4914F6CDD1DULL) >> 11) * 0x1.0p-53;
-}
-
-static void check(int ok, const char *what, double x) {
-    n_checks++;
-    if (!ok) {
-        n_failures++;
-        fprintf(stderr, "%s (x=%.17g)\n", what, x);
     }
 }
 

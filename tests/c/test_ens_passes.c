@@ -1,0 +1,84 @@
+/*
+ * test_ens_passes.c -- the ensemble's step size passes (c_src/gw_ensemble_passes.h) on made-up
+ * series of 4 lanes, against the one-lane formulas of solver taylor (gw_taylor_step and
+ * gw_taylor_step_size, written out here operation by operation):
+ *   gw_ens_norms       N_{p-1}, N_p of every lane bit for bit, and d1 = 0 exactly where every
+ *                      order-1 coefficient of the lane is finite (NaN where one is inf or NaN)
+ *   gw_ens_step_sizes  every lane's step size bit for bit (gw_fm_log / gw_fm_exp against the
+ *                      4-lane gw_fm_log4 / gw_fm_exp4 with GW_TAYLOR_STEP_FM 1; libm in a loop
+ *                      with 0), zero norms (no bound from that order) included
+ * Run by tests/test_ensemble.py (gcc and clang, both step forms).
+ */
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "gw_fastmath.h"
+
+/* GW_TAYLOR_STEP_FM and its GW_TL_LN, GW_TL_EXP (gw_solver_taylor.c) from the command line:
+ * 1, gw_fm_log, gw_fm_exp or 0, log, exp */
+#define GW_ENSEMBLE_LANES 4
+#include "gw_ensemble_passes.h"
+
+enum { W = 4, NX = 5, ORDER = 9 };
+
+static int failures;
+
+static void expect(int ok, const char *what, int lane) {
+    if (!ok) {
+        failures++;
+        fprintf(stderr, "%s (lane %d)\n", what, lane);
+    }
+}
+
+static int same(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+/* the other passes are tested through the library (tests/test_taylor.py) */
+void (*const unused_passes[])(void) = {(void (*)(void))gw_ens_defects, (void (*)(void))gw_ens_increments};
+
+int main(void) {
+    static double w[NX * (ORDER + 1) * W], fsn[NX * W];
+    double n1[W], n2[W], d1[W], h[W], lc[W];
+    const double r1 = 1.0 / (ORDER - 1), r2 = 1.0 / ORDER;
+    int i, k, l, round;
+    for (round = 0; round < 200; round++) {
+        for (i = 0; i < NX; i++)
+            for (l = 0; l < W; l++) {
+                fsn[i * W + l] = 1e-3 * (1 + l) * (1 + i);
+                for (k = 0; k <= ORDER; k++) /* coefficients spread over many decades */
+                    w[(i * (ORDER + 1) + k) * W + l] =
+                        sin(1.0 + round * 0.37 + i * 1.3 + k * 0.71 + l * 2.9) *
+                        pow(10.0, -((round * 7 + k * 3 + l) % 40) + 5.0);
+            }
+        if (round % 5 == 1) /* lane 1: orders p-1 and p zero (no bound from them) */
+            for (i = 0; i < NX; i++) w[(i * (ORDER + 1) + ORDER - 1) * W + 1] = w[(i * (ORDER + 1) + ORDER) * W + 1] = 0.0;
+        if (round % 3 == 0) w[(2 * (ORDER + 1) + 1) * W + 2] = round % 2 ? INFINITY : -INFINITY;
+        if (round % 4 == 0) w[(4 * (ORDER + 1) + 1) * W + 3] = NAN;
+        gw_ens_norms(w, fsn, NX, ORDER, n1, n2, d1);
+        for (l = 0; l < W; l++) {
+            double m1 = 0.0, m2 = 0.0;
+            int finite = 1;
+            for (i = 0; i < NX; i++) { /* gw_taylor_step */
+                const double *xi = w + (size_t)i * (ORDER + 1) * W + l;
+                const double rsc = 1.0 / (fabs(xi[0]) + fsn[i * W + l]);
+                const double a = fabs(xi[(ORDER - 1) * W]) * rsc, b = fabs(xi[ORDER * W]) * rsc;
+                m1 = a > m1 ? a : m1;
+                m2 = b > m2 ? b : m2;
+                finite &= isfinite(xi[W]) != 0;
+            }
+            expect(same(n1[l], m1) && same(n2[l], m2), "norms differ from gw_taylor_step's", l);
+            expect(finite ? d1[l] == 0.0 : isnan(d1[l]), "order-1 finiteness flag wrong", l);
+            lc[l] = -2.5 - 0.1 * l;
+        }
+        gw_ens_step_sizes(n1, n2, lc, ORDER, h);
+        for (l = 0; l < W; l++) { /* gw_taylor_step_size */
+            const double l1 = n1[l] > 0.0 ? -GW_TL_LN(n1[l]) * r1 : HUGE_VAL,
+                         l2 = n2[l] > 0.0 ? -GW_TL_LN(n2[l]) * r2 : HUGE_VAL;
+            const double ref = GW_TL_EXP((l2 < l1 ? l2 : l1) + lc[l]);
+            expect(same(h[l], ref), "step size differs from gw_taylor_step_size's", l);
+        }
+    }
+    fprintf(stderr, "test_ens_passes: %d failures\n", failures);
+    return failures != 0;
+}

@@ -2,7 +2,9 @@
 
 Builds each scenario's FMU once (taylor=True), then recompiles its own sources into variants:
   base      the sources as they are (or, with --base REV, gw_solver_taylor.c and gw_solver.h of
-            git revision REV put in their place: the rule before a change, in the same run)
+            git revision REV put in their place, and the Taylor kernel of REV's generator:
+            gw_taylor_model.h from its fmu_build/taylor_c.py, its gw_taylor_ops.h and
+            gw_taylor.c; the step rule and the kernel before a change, in the same run)
   +k        the same sources with -DGW_TAYLOR_EXTRA_ORDER=k (a fixed k orders above p0)
 and times every variant at every (rel_tol, abs_tol) interleaved (one fmi2DoStep through fmpy,
 thread CPU time, best of --repeat), with heyoka on the same graph as the peer (the references and
@@ -33,6 +35,7 @@ from taylor_vs_heyoka import SameGraph, cheapest  # noqa: E402
 from work_precision import SCENARIOS  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
+from fmu_build.codegen import taylor_ode  # noqa: E402
 from fmu_build.compiler import UNITY_SOURCE, compile_shared  # noqa: E402
 
 TARGETS = (1e-4, 1e-7, 1e-10, 1e-12)
@@ -40,10 +43,11 @@ TOLS = [10.0 ** -k for k in range(3, 15)]
 TAYLOR = 6
 
 
-def variant(fmu: Path, work: Path, name: str, flags: list[str], base: str | None) -> Path:
+def variant(fmu: Path, work: Path, name: str, flags: list[str], base: str | None, built=None) -> Path:
     """The FMU with its binary recompiled from its own sources (plus `flags`, or the solver files
-    of git revision `base`), zipped as work/<name>.fmu."""
+    and the kernel of git revision `base`), zipped as work/<name>.fmu."""
     from fmpy import extract
+    from taylor_kernel_bench import baseline_source
     d = Path(extract(str(fmu), unzipdir=str(work / name)))
     src = d / "sources"
     if base:
@@ -51,6 +55,12 @@ def variant(fmu: Path, work: Path, name: str, flags: list[str], base: str | None
             text = subprocess.run(["git", "show", f"{base}:c_src/{f}"], cwd=HERE.parent, check=True,
                                   capture_output=True, text=True).stdout
             (src / f).write_text(text)
+        kernel = work / f"{name}_kernel"
+        baseline_source(base, taylor_ode(built.spec.functions()), built.spec.name, kernel)
+        for f in ("gw_taylor_model.h", "gw_taylor_ops.h", "gw_taylor.c"):
+            shutil.copy(kernel / f, src / f)
+        # (model_desc.c keeps this tree's work size n_var: REV's kernel must need no more, true
+        # of every revision before the packed rows)
     so = next((d / "binaries").rglob("*.so"))
     compile_shared(src / UNITY_SOURCE, [src], so, extra_flags=flags)
     out = work / f"{name}.fmu"
@@ -66,7 +76,7 @@ def run(name: str, work: Path, variants: dict[str, tuple[list[str], str | None]]
     g = SameGraph(built, stop)
     names, ref = g.names, g.ref
 
-    fmus = {v: variant(built.fmu, work / name, f"{name}_{v.replace('+', 'x')}", fl, b)
+    fmus = {v: variant(built.fmu, work / name, f"{name}_{v.replace('+', 'x')}", fl, b, built)
             for v, (fl, b) in variants.items()}
     runners = {v: FmuRunner(path) for v, path in fmus.items()}
     pts: dict[str, list] = {v: [] for v in fmus}
@@ -114,7 +124,8 @@ def main() -> int:
     parser.add_argument("--scenarios", nargs="*", default=["paper", "near_flat"],
                         choices=["paper", "long", "near_flat"])
     parser.add_argument("--extra", nargs="*", type=int, default=[], help="fixed extra orders to time")
-    parser.add_argument("--base", help="git revision whose gw_solver_taylor.c / gw_solver.h are the 'main' row")
+    parser.add_argument("--base", help="git revision whose gw_solver_taylor.c / gw_solver.h and "
+                        "Taylor kernel are the REV row")
     parser.add_argument("--repeat", type=int, default=7)
     args = parser.parse_args()
     variants: dict[str, tuple[list[str], str | None]] = {"now": ([], None)}

@@ -13,7 +13,7 @@ Writes gw_taylor_model.h, a template over the lane count W that the runtime inst
     GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, const double *c,
                            double *wi);
         the same series in the kernel's own layout (below): state i's coefficient k of lane l
-        at wi[(k GW_TL_NODES + i) W + l]
+        at wi[(k GW_TL_ROW + i) W + l]
 
 Vectors are lane-innermost: x[i W + l], u[j W + l], p[j W + l], c[j W + l], t[l].
 
@@ -30,6 +30,9 @@ right-hand side.  Each order k >= 1 then has two phases:
      the operands) and its finishing operation (divide by b_0, by k, ...); the states get
      x_i^[k+1] = f_i^[k] / (k + 1).  A node whose coefficients no interior sum reads is a local
      variable here (no store and reload).
+The one-lane kernel (GW_TL_PACK: GCC and clang) sums 4 terms per two 2-wide vector operations in phase 1,
+from packed copies of the terms' operands behind each order's nodes (_Packs); the denominators'
+reciprocals are computed once at order 0 (RECIPROCAL).
 No function calls, and code size O(nodes), whatever the order.  That is series(), the nodes'
 series in this order-major layout (solver taylor's one-lane steps read the states' coefficients
 there: GW_TL_NODES apart from one order to the next, c_src/gw_solver_taylor.c); jet() calls it
@@ -51,6 +54,9 @@ __all__ = ["TaylorKernel", "taylor_source", "write_taylor_kernel", "work_series"
 
 KERNEL_FILE = "gw_taylor_model.h"
 GROUP = 12  # accumulators of one interior loop (registers: 16 vector registers on x86-64)
+# ops whose order k divides by an order-0 value: the argument holding it (None: 2 v_0)
+RECIPROCAL = {"div": 1, "sqrt": None, "log": 0, "dq": 1, "atan2": 2, "pow": 0}
+PACK_GROUP = 8  # accumulators (pairs of 2-double vectors) of one packed interior loop (one lane: _Packs)
 
 # ops whose order k >= 1 has an interior sum, and the weighted operands (j a_j) they need:
 # "a", "b": the first, second argument; "v": the node's own series
@@ -88,7 +94,16 @@ class _Plan:
         self.terms: list[_Term] = []
         for n, node in dec.nodes.items():
             self._terms(n, node)
-        self.n_nodes = dec.n_var + len(self.weighted)
+        # node -> (internal node, its denominator at order 0): the reciprocal, computed once at
+        # order 0, so that each order k multiplies (no division on the path from one order's
+        # coefficients to the next)
+        self.recip: dict[int, tuple[int, str]] = {}
+        for n, node in dec.nodes.items():
+            if node.op in RECIPROCAL:
+                den = RECIPROCAL[node.op]
+                den = f"2.0 * {_v0(n, True)}" if den is None else _order0(node.args[den], True)
+                self.recip[n] = (dec.n_var + len(self.weighted) + len(self.recip), den)
+        self.n_nodes = dec.n_var + len(self.weighted) + len(self.recip)
 
     def d(self, a: Operand) -> int | None:
         """the weighted series j a_j of a var operand (None for a constant: no terms)"""
@@ -140,7 +155,7 @@ class _Plan:
 def work_series(dec: Decomposition) -> int:
     """Series of order `order` the kernel's work array w holds (GW_TL_NVAR): the states'
     output, then every internal node (var nodes and weighted series)."""
-    return dec.nx + _Plan(dec).n_nodes + 1  # + 1: room to align the nodes' block
+    return dec.nx + _Packs(_Plan(dec)).stride + 1  # + 1: room to align the nodes' block
 
 
 def _v0(n: int, lane: bool = False) -> str:
@@ -176,8 +191,10 @@ def _cst_lines(dec: Decomposition) -> list[str]:
     return lines
 
 
-def _zero_lines(dec: Decomposition) -> list[str]:
-    """order 0: the right-hand side itself, in program order"""
+def _zero_lines(plan: _Plan) -> list[str]:
+    """order 0: the right-hand side itself, in program order (and the reciprocals of the
+    denominators of orders k >= 1)"""
+    dec = plan.dec
     lines = []
     for n, node in dec.nodes.items():
         args = [_order0(a, True) for a in node.args]
@@ -197,14 +214,16 @@ def _zero_lines(dec: Decomposition) -> list[str]:
             lines.append(f"        {_v0(n, True)} = {C_EXPR[zop].format(_order0(za, True))};")
         else:
             lines.append(f"        {_v0(n, True)} = {C_EXPR[op].format(*args)};")
+        if n in plan.recip:  # after the node itself (sqrt's is 1 / (2 v_0))
+            r, den = plan.recip[n]
+            lines.append(f"        {_v0(r, True)} = 1.0 / ({den});")
     return lines
 
 
-def _interior_lines(plan: _Plan) -> list[str]:
-    """phase 1 of order k: the interior sums, GROUP accumulators per loop over j"""
-    # sum_j A_j B_{k-j} = sum_j B_j A_{k-j} over j = 1 .. k-1: each term reads its more
-    # frequent operand at j, and the accumulators are grouped by it, so that a group loads
-    # each shared coefficient once per j
+def _oriented(plan: _Plan) -> tuple[dict[int, list[_Term]], list[int]]:
+    """the terms of each target node, each reading its more frequent operand at j (sum_j A_j
+    B_{k-j} = sum_j B_j A_{k-j} over j = 1 .. k-1: both kernels sum in this one order, so the
+    lanes and the packed one-lane kernel agree bit for bit), and the targets grouped by it"""
     uses = Counter(n for t in plan.terms for n in (t.a, t.b))
     targets: dict[int, list[_Term]] = {}
     for t in plan.terms:
@@ -212,6 +231,13 @@ def _interior_lines(plan: _Plan) -> list[str]:
             t = _Term(t.target, t.sign, t.b, t.a, t.factor)
         targets.setdefault(t.target, []).append(t)
     order = sorted(targets, key=lambda n: (-uses[targets[n][0].a], targets[n][0].a, n))
+    return targets, order
+
+
+def _interior_lines(plan: _Plan) -> list[str]:
+    """phase 1 of order k (W lanes): the interior sums, GROUP accumulators per loop over j; the
+    accumulators of a loop share operands (a group loads each shared coefficient once per j)"""
+    targets, order = _oriented(plan)
     lines = []
     for g in range(0, len(order), GROUP):
         group = order[g:g + GROUP]
@@ -236,15 +262,110 @@ def _interior_lines(plan: _Plan) -> list[str]:
     return lines
 
 
-def _boundary(plan: _Plan) -> list[tuple[bool, str]]:
+class _Packs:
+    """The one-lane kernel's interior sums, 4 terms per two 2-wide vector operations (GW_TL_PACK).
+
+    At W = 1 a term's multiply-add is one scalar operation with its own loads: the interior
+    loops were load-bound.  Here every term has a slot in two packed rows kept behind each
+    order's nodes (row j of the a-operands, sign and constant factor applied: -c A_j; row j of
+    the b-operands: B_j), so that 4 terms are vector multiply-adds of contiguous loads:
+    s += PA[j][4q .. 4q+3] PB[k-j][4q .. 4q+3].  Each target node has one lane of one
+    accumulator vector; a target with m terms adds them in m consecutive vectors of slots (the
+    same order as the lanes' kernel: bit for bit the same sums), padded with 0 x 0.  A node's
+    coefficient is copied to its slots right where it is computed (rows 1 .. order - 1)."""
+
+    def __init__(self, plan: _Plan):
+        targets, _ = _oriented(plan)
+        ranked = sorted(targets, key=lambda n: (-len(targets[n]), n))
+        self.base = -(-plan.n_nodes // 4) * 4  # slots start on a 4-double boundary of a row
+        self.groups: list[tuple[int, int]] = []  # per accumulator vector: (first slot, rows)
+        self.isum: dict[int, str] = {}  # target -> where its interior sum lands
+        self.writes: dict[int, list[tuple[int, str]]] = {}  # node -> (slot offset, scale)
+        self.pads: list[int] = []
+        slot = 0
+        for g in range(0, len(ranked), 4):
+            four = ranked[g:g + 4]
+            rows = max(len(targets[n]) for n in four)
+            self.groups.append((slot, rows))
+            for i in range(4):
+                n = four[i] if i < len(four) else None
+                if n is not None:
+                    self.isum[n] = f"GW_IS({g + i})"
+                for r in range(rows):
+                    at = slot + 4 * r + i
+                    if n is None or r >= len(targets[n]):
+                        self.pads.append(at)
+                        continue
+                    t = targets[n][r]
+                    scale = ("" if t.factor is None else f"GW_C({t.factor}) * ") + "{}"
+                    self.writes.setdefault(t.a, []).append((at, scale if t.sign > 0 else f"-({scale})"))
+                    self.writes.setdefault(t.b, []).append((-1 - at, "{}"))
+            slot += 4 * rows
+        self.slots = slot
+        self.stride = self.base + 2 * slot  # GW_TL_NODES of the packed kernel
+
+    def _offset(self, at: int) -> int:
+        return self.base + at if at >= 0 else self.base + self.slots + (-1 - at)
+
+    def copy(self, lane: bool, text: str) -> list[tuple[bool, str]]:
+        """the packed copies of the node a statement computes (GW_VK: row k, GW_VN: row k + 1)"""
+        m = re.fullmatch(r"GW_([VL])([KN])\((\d+)\)", text.split(" = ", 1)[0])
+        if m is None:
+            return []
+        n, row = int(m[3]), m[2]
+        return [(lane, f"GW_{'L' if lane else 'V'}P{row}({self._offset(at)}) = "
+                       f"{scale.format(f'GW_{m[1]}{row}({n})')};") for at, scale in self.writes.get(n, ())]
+
+    def copies(self, items: list[tuple[bool, str]]) -> list[tuple[bool, str]]:
+        """order k >= 1: items with each node's packed copies after its statement, and row k's
+        padding (0 x 0)"""
+        out: list[tuple[bool, str]] = []
+        done = set()
+        for lane, text in items:
+            out += [(lane, text)] + self.copy(lane, text)
+            done |= {int(m) for m in re.findall(r"^GW_[VL][KN]\((\d+)\) = ", text)}
+        assert set(self.writes) <= done, sorted(set(self.writes) - done)  # every operand, every k
+        for at in self.pads:
+            out += [(False, f"GW_VPK({self._offset(at)}) = 0.0;"),
+                    (False, f"GW_VPK({self._offset(-1 - at)}) = 0.0;")]
+        return out
+
+    def interior_lines(self) -> list[str]:
+        """phase 1 of order k: PACK_GROUP accumulator vectors per loop over j"""
+        lines = []
+        for g0 in range(0, len(self.groups), PACK_GROUP):
+            group = list(enumerate(self.groups))[g0:g0 + PACK_GROUP]
+            acc = [f"s{q}" for q, _ in group]
+            lines.append("    {")
+            lines.append(f"        GW_TL(p) {', '.join(acc)};")
+            lines += [f"        GW_TLPZ({a});" for a in acc]
+            lines.append("        for (j = 1; j < k; j++) {")
+            lines.append(f"            const double *a = GW_ORD(j) + {self.base}, "
+                         f"*b = GW_ORD(k - j) + {self.base + self.slots};")
+            for (q, (first, rows)), a in zip(group, acc):
+                for r in range(rows):
+                    lines.append(f"            GW_TLPFMA({a}, a + {first + 4 * r}, b + {first + 4 * r});")
+            lines.append("        }")
+            lines += [f"        GW_TLPST(gw_is + {4 * q}, {a});" for (q, _), a in zip(group, acc)]
+            lines.append("    }")
+        return lines
+
+
+def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[bool, str]]:
     """phase 2 of order k >= 1: boundary terms and finishing of every node, in program order
-    (GW_VK(n) holds node n's interior sum I when it has one; rk = 1/k, dk = k), as (lane-wise,
-    statement): whole W-lane vector statements, or one lane's (ternaries, constants)"""
+    (node n's interior sum I is isum[n], by default GW_VK(n), where phase 1 left it; rk = 1/k,
+    dk = k), as (lane-wise, statement): whole W-lane vector statements, or one lane's
+    (ternaries, constants)"""
     dec = plan.dec
     out: list[tuple[bool, str]] = []
+
+    def interior(m: int) -> str:
+        return (isum or {}).get(m, _vk(m))
+
     for n, node in dec.nodes.items():
         op, a = node.op, node.args
-        target, I = _vk(n), _vk(n)
+        target, I = _vk(n), interior(n)
+        rec = _v0(plan.recip[n][0]) if n in plan.recip else None
         o0, ok = [_order0(x) for x in a], [_order_k(x) for x in a]
         lane = op in ("fabs", "fmin", "fmax", "if_else_zero") or op in PIECEWISE
         if lane:
@@ -270,14 +391,14 @@ def _boundary(plan: _Plan) -> list[tuple[bool, str]]:
             expr = f"{I} + 2.0 * {o0[0]} * {ok[0]}"
         elif op == "div":
             num = f"{ok[0]} - " if a[0][0] == "v" else "-"
-            expr = f"({num}{I} - {ok[1]} * {_v0(n)}) / {o0[1]}"
+            expr = f"({num}{I} - {ok[1]} * {_v0(n)}) * {rec}"
         elif op == "sqrt":
-            expr = f"({ok[0]} - {I}) / (2.0 * {_v0(n)})"
+            expr = f"({ok[0]} - {I}) * {rec}"
         elif op in ("sincos", "sinhcosh"):
             c = node.extra[0]
             out.append((False, f"{target} = {I} * rk + {ok[0]} * {_v0(c)};"))
             sign = "-" if op == "sincos" else ""
-            expr = f"{sign}({_vk(c)} * rk + {ok[0]} * {_v0(n)})"
+            expr = f"{sign}({interior(c)} * rk + {ok[0]} * {_v0(n)})"
             target = _vk(c)
         elif op == "exp":
             expr = f"{I} * rk + {ok[0]} * {_v0(n)}"
@@ -285,16 +406,16 @@ def _boundary(plan: _Plan) -> list[tuple[bool, str]]:
             q = node.extra[0]
             out.append((False, f"{target} = {I} * rk + {ok[0]} * {_v0(q)};"))
             sign = "" if op == "tan" else "-"
-            expr = f"{sign}({_vk(q)} + 2.0 * {_v0(n)} * {_vk(n)})"
+            expr = f"{sign}({interior(q)} + 2.0 * {_v0(n)} * {_vk(n)})"
             target = _vk(q)
         elif op == "log":
-            expr = f"({ok[0]} - {I} * rk) / {o0[0]}"
+            expr = f"({ok[0]} - {I} * rk) * {rec}"
         elif op == "dq":
-            expr = f"({ok[0]} - {I} * rk) / {o0[1]}"
+            expr = f"({ok[0]} - {I} * rk) * {rec}"
         elif op == "atan2":
-            expr = f"({I} * rk + {ok[0]} * {o0[1]} - {ok[1]} * {o0[0]}) / {o0[2]}"
+            expr = f"({I} * rk + {ok[0]} * {o0[1]} - {ok[1]} * {o0[0]}) * {rec}"
         elif op == "pow":
-            expr = f"({I} * rk + {o0[1]} * {ok[0]} * {_v0(n)}) / {o0[0]}"
+            expr = f"({I} * rk + {o0[1]} * {ok[0]} * {_v0(n)}) * {rec}"
         elif op == "fabs":
             expr = f"{o0[0]} < 0.0 ? -{ok[0]} : {ok[0]}"
         elif op in ("fmin", "fmax"):
@@ -340,13 +461,16 @@ def _next(plan: _Plan, order0: bool) -> list[tuple[bool, str]]:
     return out
 
 
-def _locals(plan: _Plan, items: list[tuple[bool, str]]) -> list[tuple[bool, str]]:
+def _locals(plan: _Plan, items: list[tuple[bool, str]], packed: bool = False) -> list[tuple[bool, str]]:
     """order k >= 1: a node whose coefficients no interior sum reads (and not a state or t)
     needs its coefficient k only in this order's statements: a local variable (a register, no
     store and reload) when its statement and all its uses are in one loop of whole statements
-    (its slot k still holds its interior sum, if it has one)"""
+    (its slot k still holds its interior sum, if it has one).  packed: the interior sums read
+    the packed copies (_Packs), so any node but the states and t may be local"""
     dec = plan.dec
-    read = {n for t in plan.terms for n in (t.a, t.b)} | set(range(dec.nx)) | {dec.t_node}
+    read = set(range(dec.nx)) | {dec.t_node}
+    if not packed:
+        read |= {n for t in plan.terms for n in (t.a, t.b)}
     run, r = [], 0
     for i, (lane, _) in enumerate(items):
         r += i > 0 and lane != items[i - 1][0]
@@ -396,6 +520,7 @@ def _loops(items: list[tuple[bool, str]]) -> list[str]:
 def taylor_source(dec: Decomposition, model: str) -> str:
     """The template text of gw_taylor_model.h for a decomposition."""
     plan = _Plan(dec)
+    packs = _Packs(plan)
     ops = ", ".join(f"{k} {v}" for k, v in sorted(dec.op_counts.items()))
     t_init = [] if dec.t_node is None else [f"        GW_L0({dec.t_node}) = t[l];"]
     n_groups = -(-len({t.target for t in plan.terms}) // GROUP)
@@ -404,13 +529,27 @@ def taylor_source(dec: Decomposition, model: str) -> str:
  * (W lanes) with GW_TL_W and GW_TL(name) defined.  {dec.n_var} var nodes ({dec.nx} states
  * first{', t at ' + str(dec.t_node) if dec.t_node is not None else ''}), {len(plan.weighted)} weighted series, {dec.n_cst} constants.
  * var ops: {ops}
- * interior sums: {len(plan.terms)} terms in {n_groups} loops of up to {GROUP} accumulators */
+ * interior sums: {len(plan.terms)} terms in {n_groups} loops of up to {GROUP} accumulators (one lane:
+ * {packs.slots} packed slots, {len(packs.groups)} vectors of 4, loops of up to {PACK_GROUP}) */
 #include "gw_taylor_ops.h" /* the lane vectors GW_TL(v), GW_TLZ, GW_TLFMA, ... for GW_TL_W lanes */
 #include "gw_fastmath.h" /* gw_sincos at order 0 (sin and cos of one argument, <= 1 ulp) */
 #define GW_TL_NX {dec.nx}
-#define GW_TL_NODES {plan.n_nodes} /* internal series: var nodes, then weighted series */
-/* series of w: the states' output, the nodes (aligned to a lane slice: one series of room) */
-#define GW_TL_NVAR (GW_TL_NX + GW_TL_NODES + 1)
+/* GW_TL_ROW: the numbers of a row (one order's coefficients): the internal series (var
+ * nodes, weighted series, reciprocals); with GW_TL_PACK (one lane) then the terms' packed
+ * operands.  GW_TL_NODES: the one-lane kernel's row, whatever W (solver taylor reads its states
+ * there; the same text in every instance of one translation unit) */
+#if GW_TL_PACK1
+#define GW_TL_NODES {packs.stride}
+#else
+#define GW_TL_NODES {plan.n_nodes}
+#endif
+#if GW_TL_PACK
+#define GW_TL_ROW {packs.stride}
+#else
+#define GW_TL_ROW {plan.n_nodes}
+#endif
+/* series of w: the states' output, the rows (aligned to a lane slice: one series of room) */
+#define GW_TL_NVAR (GW_TL_NX + {packs.stride} + 1)
 #define GW_TL_NCST {dec.n_cst}
 #define GW_TL_HAS_T {1 if dec.t_node is not None else 0}
 
@@ -427,19 +566,19 @@ GW_TL_STATIC void GW_TL(cst)(const double *u, const double *p, double *c) {{
 }}
 
 /* The Taylor series of order `order` (>= 1) of every node at (t, x), order-major: coefficient k
- * of node n of lane l at wi[(k GW_TL_NODES + n) W + l], the states first (n = 0 .. NX - 1); wi
- * aligned to a lane slice, room for GW_TL_NODES (order + 1) W numbers.  The structure: the top
+ * of node n of lane l at wi[(k GW_TL_ROW + n) W + l], the states first (n = 0 .. NX - 1); wi
+ * aligned to a lane slice, room for GW_TL_ROW (order + 1) W numbers.  The structure: the top
  * of fmu_build/taylor_c.py.  Solver taylor's one-lane steps read the states' series here
  * (gw_solver_taylor.c): no copy to another layout. */
 GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, const double *c,
                                 double *wi) {{
-    double *vk = wi, *vn = wi + GW_TL_NODES * GW_TL_W;
+    double *vk = wi, *vn = wi + GW_TL_ROW * GW_TL_W;
     double rk = 1.0, rk1 = 1.0, dk = 1.0;
     int j, k, l;
     (void)t;
     (void)c;
     (void)j;
-#define GW_ORD(k) (wi + (size_t)(k) * (GW_TL_NODES * GW_TL_W))
+#define GW_ORD(k) (wi + (size_t)(k) * (GW_TL_ROW * GW_TL_W))
 /* coefficient 0, k, k + 1 of node n and constant j: slice l (GW_TLX), or lane l (GW_L*) */
 #define GW_V0(n) GW_TLR(wi + (n) * GW_TL_W + l * GW_TL_VW)
 #define GW_VK(n) GW_TLX(vk + (n) * GW_TL_W + l * GW_TL_VW)
@@ -449,10 +588,21 @@ GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, con
 #define GW_LK(n) vk[(n) * GW_TL_W + l]
 #define GW_LN(n) vn[(n) * GW_TL_W + l]
 #define GW_LC(j) c[(j) * GW_TL_W + l]
+#if GW_TL_PACK /* slot o of the packed operands (row k, k + 1); interior sum i */
+#define GW_VPK(o) vk[o]
+#define GW_VPN(o) vn[o]
+#define GW_LPK(o) vk[o]
+#define GW_LPN(o) vn[o]
+#define GW_IS(i) gw_is[i]
+{f"    double gw_is[{4 * len(packs.groups)}];" if packs.groups else ""}
+#endif
     for (l = 0; l < GW_TL_W; l++) {{
 {chr(10).join([f"        GW_L0({i}) = x[{i} * GW_TL_W + l];" for i in range(dec.nx)] + t_init)}
-{chr(10).join(_zero_lines(dec))}
+{chr(10).join(_zero_lines(plan))}
 {chr(10).join("        " + text for _, text in _next(plan, True))}
+#if GW_TL_PACK
+{chr(10).join("        " + text for item in _next(plan, True) for _, text in packs.copy(*item))}
+#endif
     }}
     for (k = 1; k < order; k++) {{
     vk = GW_ORD(k);
@@ -460,8 +610,13 @@ GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, con
     dk = k;
     rk = 1.0 / dk;
     rk1 = 1.0 / (dk + 1.0);
+#if GW_TL_PACK
+{chr(10).join(packs.interior_lines())}
+{chr(10).join(_loops(_locals(plan, packs.copies(_boundary(plan, packs.isum) + _next(plan, False)), True)))}
+#else
 {chr(10).join(_interior_lines(plan))}
 {chr(10).join(_loops(_locals(plan, _boundary(plan) + _next(plan, False))))}
+#endif
     }}
     (void)rk;
     (void)rk1;
@@ -475,6 +630,13 @@ GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, con
 #undef GW_LK
 #undef GW_LN
 #undef GW_LC
+#if GW_TL_PACK
+#undef GW_VPK
+#undef GW_VPN
+#undef GW_LPK
+#undef GW_LPN
+#undef GW_IS
+#endif
 }}
 
 /* The states' Taylor series of order `order` at (t, x): state i's coefficient k of lane l at
@@ -489,7 +651,7 @@ GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const 
         for (k = 0; k <= order; k++)
             for (l = 0; l < GW_TL_W; l++)
                 w[((size_t)i * (size_t)(order + 1) + (size_t)k) * GW_TL_W + l] =
-                    wi[((size_t)k * GW_TL_NODES + (size_t)i) * GW_TL_W + l];
+                    wi[((size_t)k * GW_TL_ROW + (size_t)i) * GW_TL_W + l];
 }}
 #undef GW_TLZ
 #undef GW_TLFMA
@@ -502,6 +664,13 @@ GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const 
 #undef GW_TL_ALIGN
 #undef GW_TLX
 #undef GW_TLR
+#undef GW_TL_PACK
+#undef GW_TL_PACK1
+#undef GW_TL_ROW
+#undef GW_TLPR
+#undef GW_TLPZ
+#undef GW_TLPFMA
+#undef GW_TLPST
 """
 
 

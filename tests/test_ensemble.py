@@ -162,3 +162,64 @@ def test_step_size_passes_equal_the_one_lane_formulas(cc, step_fm, tmp_path):
                     str(TESTS_C / "test_ens_passes.c"), "-lm", "-o", str(exe)], check=True)
     r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0 and "test_ens_passes: 0 failures" in r.stderr, r.stderr
+
+
+class _Interrupt(Exception):
+    """What the test's SIGINT handler raises (Ctrl-C's KeyboardInterrupt would stop pytest)."""
+
+
+def test_context_back_in_the_pool_after_an_interrupted_run(paper, tmp_path):
+    """Ctrl-C during a run: the signal's exception is raised as the C call returns, inside
+    Ensemble.run; the context it took must go back to the pool (it was lost at each interrupt:
+    never freed, a new one made by the next run), and the next run reuses it and equals a fresh
+    run."""
+    import signal
+    import threading
+
+    ens = Ensemble(paper.fmu, cache=tmp_path)
+    fresh = Ensemble(paper.fmu, cache=tmp_path).run(6.0, **JOB)
+    ens.run(6.0, **JOB)
+    assert len(ens._contexts) == 1
+
+    def interrupt(signum, frame):
+        raise _Interrupt
+
+    previous = signal.signal(signal.SIGINT, interrupt)
+    try:
+        timer = threading.Timer(0.02, signal.pthread_kill, (threading.main_thread().ident, signal.SIGINT))
+        timer.start()
+        with pytest.raises(_Interrupt):
+            # about 0.1-0.5 s of C: the signal arrives inside the call
+            ens.run(200.0, starts={"gamma_dot": np.full(64, 6.0)}, rel_tol=1e-12)
+            timer.join()  # (a very fast machine: the signal after the run, still inside this block)
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGINT, previous)
+    assert len(ens._contexts) == 1
+    _same(ens.run(6.0, **JOB), fresh)
+    assert len(ens._contexts) == 1
+
+
+def test_default_tables_cache_cleared_by_another_thread(paper, tmp_path):
+    """The defaults' tables are cached per N and the cache is cleared past 16 sizes; another
+    thread's run may clear it between this run's test for a key and its read of it (a KeyError
+    out of Ensemble.run).  The interleaving made deterministic: a cache whose membership test
+    clears it, as the other thread would."""
+    ens = Ensemble(paper.fmu, cache=tmp_path)
+    alone = ens.run(2.0, starts={"gamma_dot": [6.0, 4.0, 2.0]}, rel_tol=1e-8)
+
+    class ClearedMeanwhile(dict):
+        def __contains__(self, key):
+            found = dict.__contains__(self, key)
+            self.clear()
+            return found
+
+        def get(self, key, default=None):
+            found = dict.get(self, key, default)
+            self.clear()
+            return found
+
+    ens._default_tables = ClearedMeanwhile(ens._default_tables)
+    for _ in range(2):  # a table made by this run, then one found in the cache
+        res = ens.run(2.0, starts={"gamma_dot": [6.0, 4.0, 2.0]}, rel_tol=1e-8)
+        _same(res, alone)

@@ -22,6 +22,7 @@ import ctypes
 import hashlib
 import os
 import tempfile
+import threading
 import weakref
 import zipfile
 from dataclasses import dataclass, field
@@ -289,7 +290,10 @@ class Ensemble:
             if not lib.exists():
                 unity = src / f"{self.identifier}_ensemble.c"
                 unity.write_text(_UNITY.format(id=self.identifier, lanes=int(lanes)))
-                part = lib.with_suffix(f".{os.getpid()}.part")
+                # a name of this process and thread: Ensembles made at once by threads of one
+                # process (a cold cache) compiled into one .part file, and one's replace() then
+                # failed (FileNotFoundError) or moved another's half-written library
+                part = lib.with_suffix(f".{os.getpid()}.{threading.get_ident()}.part")
                 compile_shared(unity, [src], part, extra_flags=FLAGS)
                 part.replace(lib)
         self.library = lib

@@ -223,3 +223,30 @@ def test_default_tables_cache_cleared_by_another_thread(paper, tmp_path):
     for _ in range(2):  # a table made by this run, then one found in the cache
         res = ens.run(2.0, starts={"gamma_dot": [6.0, 4.0, 2.0]}, rel_tol=1e-8)
         _same(res, alone)
+
+
+def test_ensembles_made_at_once_by_threads_on_a_cold_cache(paper, tmp_path, monkeypatch):
+    """Two threads of one process make an Ensemble of the same FMU at once, the library not yet
+    in the cache: both compile it, and both must end with a working library (they shared one
+    temporary file name, so the second's rename failed with FileNotFoundError, or could move
+    the other's half-written library into the cache).  Both compilers made to finish before
+    either renames, the interleaving that failed."""
+    import threading
+
+    import fmu_build.ensemble as ensemble_mod
+
+    barrier = threading.Barrier(2, timeout=300)
+    compile_shared = ensemble_mod.compile_shared
+
+    def compile_then_wait(*args, **kwargs):
+        out = compile_shared(*args, **kwargs)
+        barrier.wait()
+        return out
+
+    monkeypatch.setattr(ensemble_mod, "compile_shared", compile_then_wait)
+    cache = tmp_path / "cold"
+    with ThreadPoolExecutor(2) as pool:
+        runs = list(pool.map(lambda _: Ensemble(paper.fmu, cache=cache).run(2.0, **OTHERS[2]), range(2)))
+    _same(runs[0], runs[1])
+    assert runs[0].status[0] == STATUS_OK
+    assert [p.name for p in cache.rglob("*") if p.is_file()] == ["libensemble.so"]

@@ -155,7 +155,9 @@ def test_step_size_passes_equal_the_one_lane_formulas(cc, step_fm, tmp_path):
     every lane's norms and step size bit for bit those of solver taylor's one-lane formulas
     (gw_taylor_step, gw_taylor_step_size; the library's gw_fastmath.h ln/exp in 4-lane vectors
     against scalar calls, or libm's), and the order-1 flag that spares gw_taylor_attempt_size
-    its copy zero exactly where the lane's derivatives are finite."""
+    its copy zero exactly where the lane's derivatives are finite; gw_ens_defects bit for bit
+    gw_taylor_defect's loop, a NaN defect component before finite ones included (the pass let
+    the later finite one replace it: a step accepted that solver taylor rejects)."""
     exe = tmp_path / "passes"
     fns = ["-DGW_TL_LN=gw_fm_log", "-DGW_TL_EXP=gw_fm_exp"] if step_fm else ["-DGW_TL_LN=log", "-DGW_TL_EXP=exp"]
     subprocess.run([cc, *STRICT, "-O2", f"-DGW_TAYLOR_STEP_FM={step_fm}", *fns, f"-I{C_SRC}",

@@ -132,7 +132,9 @@ GW_ENS_PASS void gw_ens_defects(const double *w, const double *dp, const double 
             const size_t at = (size_t)i * W + j;
             const gw_ens_v r = GW_ENS_ABS(gw_ens_ld(w + (size_t)i * S + W + j) - gw_ens_ld(dp + at)) *
                                sc / (rtol * GW_ENS_ABS(gw_ens_ld(x + at)) + gw_ens_ld(anom + at));
-            e = GW_ENS_SEL(GW_ENS_NOT(r <= e), r, e); /* NaN propagates as a rejection */
+            /* a NaN r stays (a rejection, as gw_taylor_defect's break at a NaN): r <= NaN is
+             * false, so without the e == e test a later finite r replaced it */
+            e = GW_ENS_SEL(GW_ENS_NOT(r <= e) & (e == e), r, e);
         }
         gw_ens_st(err + j, e);
     }

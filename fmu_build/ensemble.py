@@ -22,6 +22,7 @@ import ctypes
 import hashlib
 import os
 import tempfile
+import threading
 import weakref
 import zipfile
 from dataclasses import dataclass, field
@@ -289,7 +290,10 @@ class Ensemble:
             if not lib.exists():
                 unity = src / f"{self.identifier}_ensemble.c"
                 unity.write_text(_UNITY.format(id=self.identifier, lanes=int(lanes)))
-                part = lib.with_suffix(f".{os.getpid()}.part")
+                # a name of this process and thread: Ensembles made at once by threads of one
+                # process (a cold cache) compiled into one .part file, and one's replace() then
+                # failed (FileNotFoundError) or moved another's half-written library
+                part = lib.with_suffix(f".{os.getpid()}.{threading.get_ident()}.part")
                 compile_shared(unity, [src], part, extra_flags=FLAGS)
                 part.replace(lib)
         self.library = lib
@@ -336,12 +340,14 @@ class Ensemble:
             if n is None:
                 return None
             key = (what, n)  # the defaults' table of N rows, made once (the C side only reads it)
-            if key not in self._default_tables:
+            table = self._default_tables.get(key)  # one look-up: another thread may clear the
+            if table is None:                      # cache between a test and a read (KeyError)
                 if len(self._default_tables) > 16:
                     self._default_tables.clear()
-                self._default_tables[key] = np.tile(default, (n, 1))
-                self._default_tables[key].flags.writeable = False
-            return self._default_tables[key]
+                table = np.tile(default, (n, 1))
+                table.flags.writeable = False
+                self._default_tables[key] = table
+            return table
         if isinstance(values, dict):
             cols = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in values.items()}
             for k in cols:
@@ -408,11 +414,14 @@ class Ensemble:
         except IndexError:
             ctx = _Context(self._new_context())
         messages = ctx.messages = []
-        rc = self._run(ctx.ptr, n, P.ctypes.data, S.ctypes.data, at, at + 16, iat, at + 8 * ends[2],
-                       at + 8 * ends[3], at + 8 * ends[4], steps.ctypes.data, ctx.logger, G,
-                       at + 40 if G else None, at + 8 * ends[5] if G else None,
-                       n_rows.ctypes.data if G else None, iat + ints.itemsize * n)
-        self._contexts.append(ctx)
+        try:  # back to the pool also when Ctrl-C's KeyboardInterrupt, raised as the C call returns,
+            # cuts the run short (else the context, never freed, was lost at each interrupt)
+            rc = self._run(ctx.ptr, n, P.ctypes.data, S.ctypes.data, at, at + 16, iat, at + 8 * ends[2],
+                           at + 8 * ends[3], at + 8 * ends[4], steps.ctypes.data, ctx.logger, G,
+                           at + 40 if G else None, at + 8 * ends[5] if G else None,
+                           n_rows.ctypes.data if G else None, iat + ints.itemsize * n)
+        finally:
+            self._contexts.append(ctx)
         if rc >= STATUS_ERROR:
             raise EnsembleError("; ".join(messages) or f"ensemble run failed (status {rc})")
         return EnsembleResult(status=status.astype(int), t_final=t_final, x_final=x_final,

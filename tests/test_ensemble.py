@@ -155,10 +155,100 @@ def test_step_size_passes_equal_the_one_lane_formulas(cc, step_fm, tmp_path):
     every lane's norms and step size bit for bit those of solver taylor's one-lane formulas
     (gw_taylor_step, gw_taylor_step_size; the library's gw_fastmath.h ln/exp in 4-lane vectors
     against scalar calls, or libm's), and the order-1 flag that spares gw_taylor_attempt_size
-    its copy zero exactly where the lane's derivatives are finite."""
+    its copy zero exactly where the lane's derivatives are finite; gw_ens_defects bit for bit
+    gw_taylor_defect's loop, a NaN defect component before finite ones included (the pass let
+    the later finite one replace it: a step accepted that solver taylor rejects)."""
     exe = tmp_path / "passes"
     fns = ["-DGW_TL_LN=gw_fm_log", "-DGW_TL_EXP=gw_fm_exp"] if step_fm else ["-DGW_TL_LN=log", "-DGW_TL_EXP=exp"]
     subprocess.run([cc, *STRICT, "-O2", f"-DGW_TAYLOR_STEP_FM={step_fm}", *fns, f"-I{C_SRC}",
                     str(TESTS_C / "test_ens_passes.c"), "-lm", "-o", str(exe)], check=True)
     r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0 and "test_ens_passes: 0 failures" in r.stderr, r.stderr
+
+
+class _Interrupt(Exception):
+    """What the test's SIGINT handler raises (Ctrl-C's KeyboardInterrupt would stop pytest)."""
+
+
+def test_context_back_in_the_pool_after_an_interrupted_run(paper, tmp_path):
+    """Ctrl-C during a run: the signal's exception is raised as the C call returns, inside
+    Ensemble.run; the context it took must go back to the pool (it was lost at each interrupt:
+    never freed, a new one made by the next run), and the next run reuses it and equals a fresh
+    run."""
+    import signal
+    import threading
+
+    ens = Ensemble(paper.fmu, cache=tmp_path)
+    fresh = Ensemble(paper.fmu, cache=tmp_path).run(6.0, **JOB)
+    ens.run(6.0, **JOB)
+    assert len(ens._contexts) == 1
+
+    def interrupt(signum, frame):
+        raise _Interrupt
+
+    previous = signal.signal(signal.SIGINT, interrupt)
+    try:
+        timer = threading.Timer(0.02, signal.pthread_kill, (threading.main_thread().ident, signal.SIGINT))
+        timer.start()
+        with pytest.raises(_Interrupt):
+            # about 0.1-0.5 s of C: the signal arrives inside the call
+            ens.run(200.0, starts={"gamma_dot": np.full(64, 6.0)}, rel_tol=1e-12)
+            timer.join()  # (a very fast machine: the signal after the run, still inside this block)
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGINT, previous)
+    assert len(ens._contexts) == 1
+    _same(ens.run(6.0, **JOB), fresh)
+    assert len(ens._contexts) == 1
+
+
+def test_default_tables_cache_cleared_by_another_thread(paper, tmp_path):
+    """The defaults' tables are cached per N and the cache is cleared past 16 sizes; another
+    thread's run may clear it between this run's test for a key and its read of it (a KeyError
+    out of Ensemble.run).  The interleaving made deterministic: a cache whose membership test
+    clears it, as the other thread would."""
+    ens = Ensemble(paper.fmu, cache=tmp_path)
+    alone = ens.run(2.0, starts={"gamma_dot": [6.0, 4.0, 2.0]}, rel_tol=1e-8)
+
+    class ClearedMeanwhile(dict):
+        def __contains__(self, key):
+            found = dict.__contains__(self, key)
+            self.clear()
+            return found
+
+        def get(self, key, default=None):
+            found = dict.get(self, key, default)
+            self.clear()
+            return found
+
+    ens._default_tables = ClearedMeanwhile(ens._default_tables)
+    for _ in range(2):  # a table made by this run, then one found in the cache
+        res = ens.run(2.0, starts={"gamma_dot": [6.0, 4.0, 2.0]}, rel_tol=1e-8)
+        _same(res, alone)
+
+
+def test_ensembles_made_at_once_by_threads_on_a_cold_cache(paper, tmp_path, monkeypatch):
+    """Two threads of one process make an Ensemble of the same FMU at once, the library not yet
+    in the cache: both compile it, and both must end with a working library (they shared one
+    temporary file name, so the second's rename failed with FileNotFoundError, or could move
+    the other's half-written library into the cache).  Both compilers made to finish before
+    either renames, the interleaving that failed."""
+    import threading
+
+    import fmu_build.ensemble as ensemble_mod
+
+    barrier = threading.Barrier(2, timeout=300)
+    compile_shared = ensemble_mod.compile_shared
+
+    def compile_then_wait(*args, **kwargs):
+        out = compile_shared(*args, **kwargs)
+        barrier.wait()
+        return out
+
+    monkeypatch.setattr(ensemble_mod, "compile_shared", compile_then_wait)
+    cache = tmp_path / "cold"
+    with ThreadPoolExecutor(2) as pool:
+        runs = list(pool.map(lambda _: Ensemble(paper.fmu, cache=cache).run(2.0, **OTHERS[2]), range(2)))
+    _same(runs[0], runs[1])
+    assert runs[0].status[0] == STATUS_OK
+    assert [p.name for p in cache.rglob("*") if p.is_file()] == ["libensemble.so"]

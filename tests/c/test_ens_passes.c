@@ -7,6 +7,10 @@
  *   gw_ens_step_sizes  every lane's step size bit for bit (gw_fm_log / gw_fm_exp against the
  *                      4-lane gw_fm_log4 / gw_fm_exp4 with GW_TAYLOR_STEP_FM 1; libm in a loop
  *                      with 0), zero norms (no bound from that order) included
+ *   gw_ens_defects     every lane's defect bit for bit as gw_taylor_defect's division loop (the
+ *                      largest r_i, HUGE_VAL when one is NaN or infinite), a NaN r_i before a
+ *                      finite one included (the pass kept the later finite r: a step accepted
+ *                      that solver taylor rejects and retries shorter)
  * Run by tests/test_ensemble.py (gcc and clang, both step forms).
  */
 #include <float.h>
@@ -34,11 +38,13 @@ static void expect(int ok, const char *what, int lane) {
 
 static int same(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
 
-/* the other passes are tested through the library (tests/test_taylor.py) */
-void (*const unused_passes[])(void) = {(void (*)(void))gw_ens_defects, (void (*)(void))gw_ens_increments};
+/* the increments are tested through the library (tests/test_taylor.py) */
+void (*const unused_passes[])(void) = {(void (*)(void))gw_ens_increments};
 
 int main(void) {
-    static double w[NX * (ORDER + 1) * W], fsn[NX * W];
+    static double w[NX * (ORDER + 1) * W], fsn[NX * W], dp[NX * W], x[NX * W], anom[NX * W];
+    double scale[W], err[W];
+    const double rtol = 1e-9;
     double n1[W], n2[W], d1[W], h[W], lc[W];
     const double r1 = 1.0 / (ORDER - 1), r2 = 1.0 / ORDER;
     int i, k, l, round;
@@ -77,6 +83,35 @@ int main(void) {
                          l2 = n2[l] > 0.0 ? -GW_TL_LN(n2[l]) * r2 : HUGE_VAL;
             const double ref = GW_TL_EXP((l2 < l1 ? l2 : l1) + lc[l]);
             expect(same(h[l], ref), "step size differs from gw_taylor_step_size's", l);
+        }
+        for (l = 0; l < W; l++) { /* an attempt's P'(h), xnew and weights near f(t1, P(h)) */
+            scale[l] = 1e-3 * (1 + l) / (ORDER + 1);
+            for (i = 0; i < NX; i++) {
+                const double f1 = w[(i * (ORDER + 1) + 1) * W + l];
+                dp[i * W + l] = f1 * (1.0 + 1e-9 * sin(round + i + 3.0 * l));
+                x[i * W + l] = cos(round * 0.3 + i + l);
+                anom[i * W + l] = 1e-11 * (1 + i);
+            }
+        }
+        /* a NaN r in one component before finite ones: xnew NaN (lane 0), P'(h) NaN (lane 1),
+         * inf / inf (lane 2: xnew and the difference infinite); lane 3 as made above */
+        x[1 * W + 0] = NAN;
+        dp[0 * W + 1] = round % 2 ? NAN : dp[0 * W + 1];
+        x[2 * W + 2] = INFINITY;
+        dp[2 * W + 2] = round % 3 ? -INFINITY : dp[2 * W + 2];
+        gw_ens_defects(w, dp, x, anom, NX, ORDER, rtol, scale, err);
+        for (l = 0; l < W; l++) { /* gw_taylor_defect's loop over the components */
+            double e = 0.0;
+            for (i = 0; i < NX; i++) {
+                const double r = fabs(w[(i * (ORDER + 1) + 1) * W + l] - dp[i * W + l]) * scale[l] /
+                                 (rtol * fabs(x[i * W + l]) + anom[i * W + l]);
+                if (!(r <= e)) {
+                    e = r;
+                    if (r != r) break;
+                }
+            }
+            e = isfinite(e) ? e : HUGE_VAL;
+            expect(same(err[l], e), "defect differs from gw_taylor_defect's", l);
         }
     }
     fprintf(stderr, "test_ens_passes: %d failures\n", failures);

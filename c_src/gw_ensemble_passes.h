@@ -67,8 +67,8 @@ GW_ENS_PASS void gw_ens_norms(const double *w, const double *fsn, int nx, int or
             const gw_ens_v rsc = 1.0 / (GW_ENS_ABS(gw_ens_ld(x0)) + gw_ens_ld(fsn + (size_t)i * W + j));
             const gw_ens_v r1 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)(order - 1) * W)) * rsc;
             const gw_ens_v r2 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)order * W)) * rsc;
-            m1 = GW_ENS_SEL(r1 > m1, r1, m1);
-            m2 = GW_ENS_SEL(r2 > m2, r2, m2);
+            m1 = GW_ENS_SEL((r1 > m1) | (r1 != r1), r1, m1); /* a NaN sticks (gw_taylor_step) */
+            m2 = GW_ENS_SEL((r2 > m2) | (r2 != r2), r2, m2);
             z = z + gw_ens_ld(x0 + W) * 0.0;
         }
         gw_ens_st(n1 + j, m1);

@@ -101,8 +101,8 @@ GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run
         const double rsc = 1.0 / (fabs(xi[0]) + floor_scale * nominal[i]);
         const double r1 = fabs(xi[(size_t)(order - 1) * so]) * rsc;
         const double r2 = fabs(xi[(size_t)order * so]) * rsc;
-        n1 = r1 > n1 ? r1 : n1;
-        n2 = r2 > n2 ? r2 : n2;
+        n1 = r1 > n1 || r1 != r1 ? r1 : n1; /* a NaN sticks: gw_taylor_bad_order names it */
+        n2 = r2 > n2 || r2 != r2 ? r2 : n2;
     }
     return gw_taylor_step_size(run, order, n1, n2, bad_order);
 }

@@ -2,7 +2,8 @@
  * test_ens_passes.c -- the ensemble's step size passes (c_src/gw_ensemble_passes.h) on made-up
  * series of 4 lanes, against the one-lane formulas of solver taylor (gw_taylor_step and
  * gw_taylor_step_size, written out here operation by operation):
- *   gw_ens_norms       N_{p-1}, N_p of every lane bit for bit, and d1 = 0 exactly where every
+ *   gw_ens_norms       N_{p-1}, N_p of every lane bit for bit (a NaN coefficient sticks as the
+ *                      norm), and d1 = 0 exactly where every
  *                      order-1 coefficient of the lane is finite (NaN where one is inf or NaN)
  *   gw_ens_step_sizes  every lane's step size bit for bit (gw_fm_log / gw_fm_exp against the
  *                      4-lane gw_fm_log4 / gw_fm_exp4 with GW_TAYLOR_STEP_FM 1; libm in a loop
@@ -61,6 +62,8 @@ int main(void) {
             for (i = 0; i < NX; i++) w[(i * (ORDER + 1) + ORDER - 1) * W + 1] = w[(i * (ORDER + 1) + ORDER) * W + 1] = 0.0;
         if (round % 3 == 0) w[(2 * (ORDER + 1) + 1) * W + 2] = round % 2 ? INFINITY : -INFINITY;
         if (round % 4 == 0) w[(4 * (ORDER + 1) + 1) * W + 3] = NAN;
+        if (round % 6 == 2) /* a NaN coefficient of order p-1 (lane 0) or p (lane 2) before finite ones */
+            w[(1 * (ORDER + 1) + ORDER - 1) * W + 0] = w[(0 * (ORDER + 1) + ORDER) * W + 2] = NAN;
         gw_ens_norms(w, fsn, NX, ORDER, n1, n2, d1);
         for (l = 0; l < W; l++) {
             double m1 = 0.0, m2 = 0.0;
@@ -69,11 +72,14 @@ int main(void) {
                 const double *xi = w + (size_t)i * (ORDER + 1) * W + l;
                 const double rsc = 1.0 / (fabs(xi[0]) + fsn[i * W + l]);
                 const double a = fabs(xi[(ORDER - 1) * W]) * rsc, b = fabs(xi[ORDER * W]) * rsc;
-                m1 = a > m1 ? a : m1;
-                m2 = b > m2 ? b : m2;
+                m1 = a > m1 || a != a ? a : m1;
+                m2 = b > m2 || b != b ? b : m2;
                 finite &= isfinite(xi[W]) != 0;
             }
             expect(same(n1[l], m1) && same(n2[l], m2), "norms differ from gw_taylor_step's", l);
+            if (round % 6 == 2 && (l == 0 || l == 2)) /* the NaN is the norm, not a later finite value */
+                expect(l == 0 ? isnan(n1[l]) && !isnan(n2[l]) : isnan(n2[l]) && !isnan(n1[l]),
+                       "a NaN coefficient did not stick as the norm", l);
             expect(finite ? d1[l] == 0.0 : isnan(d1[l]), "order-1 finiteness flag wrong", l);
             lc[l] = -2.5 - 0.1 * l;
         }

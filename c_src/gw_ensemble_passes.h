@@ -141,42 +141,56 @@ GW_ENS_PASS void gw_ens_defects(const double *w, size_t si, size_t so, const dou
     for (l = 0; l < W; l++) err[l] = isfinite(err[l]) ? err[l] : HUGE_VAL;
 }
 
+/* The Horner chains of components i0 .. i0 + nc - 1 (nc <= C) of all lanes (gw_ens_increments);
+ * inlined with a constant nc, so that the chains stay in registers (with a variable count GCC
+ * kept them on the stack and recomputed each coefficient's address: about half of the pass) */
+#if defined(__GNUC__) || defined(__clang__)
+#define GW_ENS_INLINE static inline __attribute__((always_inline))
+#else
+#define GW_ENS_INLINE static
+#endif
+enum { GW_ENS_NV = GW_ENSEMBLE_LANES / GW_ENS_V, GW_ENS_C = GW_ENS_NV >= 4 ? 1 : 4 / GW_ENS_NV };
+GW_ENS_INLINE void gw_ens_horner(const double *w, size_t si, size_t so, int order,
+                                 const gw_ens_v *hh, int i0, int nc, double *qx, double *qd) {
+    enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V, NV = GW_ENS_NV, C = GW_ENS_C };
+    gw_ens_v q[C][NV], dq[C][NV];
+    const double *wk = w + (size_t)i0 * si + (size_t)order * so;
+    int k, j, c;
+    for (c = 0; c < nc; c++)
+        for (j = 0; j < NV; j++) {
+            q[c][j] = gw_ens_ld(wk + (size_t)c * si + j * V);
+            dq[c][j] = q[c][j]; /* the first sum below is dq = q (0 h + q) */
+        }
+    wk -= so; /* k = order - 1 */
+    for (c = 0; c < nc; c++)
+        for (j = 0; j < NV; j++) q[c][j] = q[c][j] * hh[j] + gw_ens_ld(wk + (size_t)c * si + j * V);
+    for (k = order - 2; k >= 1; k--) {
+        wk -= so;
+        for (c = 0; c < nc; c++)
+            for (j = 0; j < NV; j++) {
+                dq[c][j] = dq[c][j] * hh[j] + q[c][j];
+                q[c][j] = q[c][j] * hh[j] + gw_ens_ld(wk + (size_t)c * si + j * V);
+            }
+    }
+    for (c = 0; c < nc; c++)
+        for (j = 0; j < NV; j++) {
+            const size_t at = (size_t)(i0 + c) * W + (size_t)(j * V);
+            gw_ens_st(qx + at, q[c][j] * hh[j]);
+            gw_ens_st(qd + at, q[c][j] + hh[j] * dq[c][j]);
+        }
+}
+
 /* dx (qx) and P'(h) (qd) of every lane for its step size h[l] (gw_taylor_increment):
  * the Horner chains of C components and all lanes side by side (independent chains overlap
  * where one component after the other waited on each multiply and add) */
 GW_ENS_PASS void gw_ens_increments(const double *w, size_t si, size_t so, int nx, int order,
                                    const double *h, double *qx, double *qd) {
-    enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V, NV = GW_ENSEMBLE_LANES / GW_ENS_V,
-           C = NV >= 4 ? 1 : 4 / NV }; /* at most 8 chains of q and dq */
+    enum { V = GW_ENS_V, NV = GW_ENS_NV, C = GW_ENS_C }; /* at most 8 chains of q and dq */
     gw_ens_v hh[NV];
-    int i0, i, k, j, c, nc;
+    int i0, j;
     for (j = 0; j < NV; j++) hh[j] = gw_ens_ld(h + j * V);
-    for (i0 = 0; i0 < nx; i0 += nc) {
-        gw_ens_v q[C][NV], dq[C][NV];
-        nc = nx - i0 >= C ? C : 1; /* the last components one at a time */
-        for (c = 0; c < nc; c++)
-            for (j = 0; j < NV; j++) {
-                q[c][j] = gw_ens_ld(w + (size_t)(i0 + c) * si + (size_t)order * so + j * V);
-                dq[c][j] = q[c][j]; /* the first sum below is dq = q (0 h + q) */
-            }
-        for (c = 0; c < nc; c++) /* k = order - 1 */
-            for (j = 0; j < NV; j++)
-                q[c][j] = q[c][j] * hh[j] +
-                          gw_ens_ld(w + (size_t)(i0 + c) * si + (size_t)(order - 1) * so + j * V);
-        for (k = order - 2; k >= 1; k--)
-            for (c = 0; c < nc; c++)
-                for (j = 0; j < NV; j++) {
-                    dq[c][j] = dq[c][j] * hh[j] + q[c][j];
-                    q[c][j] = q[c][j] * hh[j] +
-                              gw_ens_ld(w + (size_t)(i0 + c) * si + (size_t)k * so + j * V);
-                }
-        for (c = 0; c < nc; c++)
-            for (j = 0; j < NV; j++) {
-                i = i0 + c;
-                gw_ens_st(qx + (size_t)i * W + j * V, q[c][j] * hh[j]);
-                gw_ens_st(qd + (size_t)i * W + j * V, q[c][j] + hh[j] * dq[c][j]);
-            }
-    }
+    for (i0 = 0; i0 + C <= nx; i0 += C) gw_ens_horner(w, si, so, order, hh, i0, C, qx, qd);
+    for (; i0 < nx; i0++) gw_ens_horner(w, si, so, order, hh, i0, 1, qx, qd); /* the last ones */
 }
 
 #endif /* GW_ENSEMBLE_PASSES_H */

@@ -53,6 +53,14 @@ typedef int gw_ens_m;
 #else
 #define GW_ENS_PASS static
 #endif
+/* the increments' Horner sums: fused multiply-adds where the machine has them, in the same
+ * clones (GW_TL_CLONED: x86-64-v3 and default, fp-contract=fast) as the one-lane code they equal
+ * lane by lane (gw_taylor_increment8 in gw_solver_taylor.c) */
+#ifdef GW_TL_CLONED
+#define GW_ENS_PASS_FMA static GW_TL_CLONED
+#else
+#define GW_ENS_PASS_FMA static
+#endif
 
 /* N_{p-1}, N_p of every lane (gw_taylor_step), and d1[l] = 0 where every derivative (order 1) of
  * lane l is finite, NaN otherwise (the sum of x_i^[1] * 0: NaN from an infinity or a NaN), the
@@ -183,7 +191,7 @@ GW_ENS_INLINE void gw_ens_horner(const double *w, size_t si, size_t so, int orde
 /* dx (qx) and P'(h) (qd) of every lane for its step size h[l] (gw_taylor_increment):
  * the Horner chains of C components and all lanes side by side (independent chains overlap
  * where one component after the other waited on each multiply and add) */
-GW_ENS_PASS void gw_ens_increments(const double *w, size_t si, size_t so, int nx, int order,
+GW_ENS_PASS_FMA void gw_ens_increments(const double *w, size_t si, size_t so, int nx, int order,
                                    const double *h, double *qx, double *qd) {
     enum { V = GW_ENS_V, NV = GW_ENS_NV, C = GW_ENS_C }; /* at most 8 chains of q and dq */
     gw_ens_v hh[NV];

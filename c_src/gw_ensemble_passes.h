@@ -13,6 +13,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "gw_fastmath.h" /* gw_fm_log4, gw_fm_exp4: the lanes' step sizes */
 
@@ -102,10 +103,16 @@ GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const dou
         const int nl = W - j < 4 ? W - j : 4;
         gw_fm_v4 a = {1.0, 1.0, 1.0, 1.0}, b = a, c = a, la, lb, e, hv;
         gw_fm_m4 pa, pb;
-        for (l = 0; l < nl; l++) {
-            a[l] = n1[j + l];
-            b[l] = n2[j + l];
-            c[l] = lc[j + l];
+        if (nl == 4) { /* whole vectors (the lane-by-lane gather: about 1% of a run) */
+            memcpy(&a, n1 + j, sizeof a);
+            memcpy(&b, n2 + j, sizeof b);
+            memcpy(&c, lc + j, sizeof c);
+        } else {
+            for (l = 0; l < nl; l++) {
+                a[l] = n1[j + l];
+                b[l] = n2[j + l];
+                c[l] = lc[j + l];
+            }
         }
         pa = a > 0.0;
         pb = b > 0.0;
@@ -115,7 +122,10 @@ GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const dou
         lb = GW_FM_SEL4(pb, -lb * r2, (gw_fm_v4){0} + HUGE_VAL);
         e = GW_FM_SEL4(lb < la, lb, la) + c;
         gw_fm_exp4(&hv, &e);
-        for (l = 0; l < nl; l++) h[j + l] = hv[l];
+        if (nl == 4)
+            memcpy(h + j, &hv, sizeof hv);
+        else
+            for (l = 0; l < nl; l++) h[j + l] = hv[l];
     }
 #else
     for (l = 0; l < W; l++) {

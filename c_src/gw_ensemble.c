@@ -4,7 +4,7 @@
  *
  * Each lane is a full gw_instance (the same checks, initialisation, events, outputs and error
  * messages as one FMU run); only the Taylor coefficients are computed for all lanes at once by
- * the model's kernel instantiated with GW_ENSEMBLE_LANES lanes (gw_tlb_jet: structure of
+ * the model's kernel instantiated with GW_ENSEMBLE_LANES lanes (gw_tlb_series: structure of
  * arrays, the lane loops of gw_taylor_ops.h vectorise; on x86-64 with GCC or clang the kernel
  * is also compiled for x86-64-v3 (AVX2, FMA) and x86-64-v4 (AVX-512) and chosen at load time,
  * target_clones, with a portable default).  Each lane then takes its own step
@@ -25,6 +25,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #else
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -60,12 +61,20 @@ typedef struct {
     int gi;          /* next communication point (job->t_grid), if the job has a grid */
     unsigned long steps; /* Taylor steps of this trajectory */
     int pending;     /* an attempt (h, t1; I->xnew) awaits its defect check: the lane's point in
-                        the next batch is its end point, else the lane's current point */
+                        the next batch is its end point, else the lane's current point; 2: made
+                        by the batch's passes, its end point and P'(h) already in the batch's
+                        columns E->x, E->dp, I->k[2] not written (gw_ens_dp) */
     double h, t1;
     const double *ser; /* the series at the lane's current point in a batch block (lane
                           innermost), not yet in I->tl_w (gw_ens_fetch); NULL: tl_w has it */
 } gw_lane;
 enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
+/* The batch's series where the kernel leaves them (gw_tlb_series: order-major, a row of its
+ * nodes per order, the states first): state i's coefficient k of lane l at
+ * w[i GW_ENS_SI + k GW_ENS_SO + l].  Read in place: gw_tlb_jet's copy of the states' series into
+ * a state-major block was 4% of a run (N = 4, 4 lanes). */
+#define GW_ENS_SI ((size_t)GW_ENS_LANES)
+#define GW_ENS_SO ((size_t)gw_tlb_row * GW_ENS_LANES)
 
 #if defined(__GNUC__) || defined(__clang__)
 #define GW_ENS_RESTRICT __restrict__
@@ -90,10 +99,11 @@ typedef struct {
     double *w, *c, *x, *u, *p, t[GW_ENS_LANES]; /* batch kernel memory, lanes innermost */
     double *wb[2]; /* the series blocks: w is one, the other keeps the previous batch's series,
                       which a pending attempt's retries and event location read */
+    double *wa[2]; /* wb[0], wb[1] aligned to 32 bytes (the kernel's vectors of 4 lanes) */
     /* the lane-innermost step passes (gw_ens_norms, _defects, _increments), nx x lanes each:
      * (atol / rel_tol) nominal_i and atol nominal_i of each lane, the pending attempt's P'(h),
      * the increment's Horner sums (then dx) and their derivatives (then P'(h)) */
-    double *fsn, *anom, *dp, *qx, *qd;
+    double *fsn, *anom, *dp, *qx;
     long next;                                  /* next trajectory to start */
     int cst_dirty;                              /* a lane's parameters or inputs changed */
 } gw_ensemble;
@@ -104,13 +114,12 @@ typedef struct {
 static void gw_ens_fetch(gw_instance *I, void *env) {
     gw_lane *L = (gw_lane *)env;
     const int nx = I->m->nx, p = I->tl_order;
-    const size_t S = (size_t)(p + 1) * GW_ENS_LANES;
     int i, k;
     if (!L->ser) return;
     for (i = 0; i < nx; i++)
         for (k = 0; k <= p; k++)
             I->tl_w[(size_t)i * (size_t)(p + 1) + (size_t)k] =
-                L->ser[(size_t)i * S + (size_t)k * GW_ENS_LANES];
+                L->ser[(size_t)i * GW_ENS_SI + (size_t)k * GW_ENS_SO];
     L->ser = NULL;
 }
 
@@ -256,9 +265,20 @@ static void gw_ens_point(gw_ensemble *E, int l) {
     const double *x = L->pending ? L->I->xnew : L->I->x;
     int i;
     E->t[l] = L->pending ? L->t1 : L->I->t;
+    if (L->pending == 2) return; /* the passes wrote its point and P'(h) in place */
     for (i = 0; i < E->m->nx; i++) E->x[(size_t)i * GW_ENS_LANES + l] = x[i];
     if (L->pending) /* the attempt's P'(h), for the defect pass */
         for (i = 0; i < E->m->nx; i++) E->dp[(size_t)i * GW_ENS_LANES + l] = L->I->k[2][i];
+}
+
+/* Lane l's pending attempt's P'(h) from the batch's column into I->k[2], where the solver
+ * code's defect check reads it (an attempt of the passes concluded by the one-lane code). */
+static void gw_ens_dp(gw_ensemble *E, int l) {
+    gw_lane *L = &E->lane[l];
+    int i;
+    if (L->pending != 2) return;
+    for (i = 0; i < E->m->nx; i++) L->I->k[2][i] = E->dp[(size_t)i * GW_ENS_LANES + l];
+    L->pending = 1;
 }
 
 /* Lane L, its series at its current point in I->tl_w: the next attempt.  A step that lands on
@@ -331,15 +351,15 @@ static void gw_ens_advance(gw_ensemble *E, int l, int order) {
  * series is the lane's new one, its next attempt (norms and increments from the passes). */
 static void gw_ens_batch_steps(gw_ensemble *E, int order) {
     enum { W = GW_ENS_LANES };
-    const size_t S = (size_t)(order + 1) * W;
+    const size_t SI = GW_ENS_SI, SO = GW_ENS_SO;
     const int nx = E->m->nx;
     double n1[W], n2[W], d1[W], lc[W], hs[W], scale[W], err[W], h[W];
     int go[W], last[W], l, i, any = 0;
-    gw_ens_norms(E->w, E->fsn, nx, order, n1, n2, d1);
+    gw_ens_norms(E->w, SI, SO, E->fsn, nx, order, n1, n2, d1);
     for (l = 0; l < W; l++) lc[l] = E->lane[l].run.log_c;
     gw_ens_step_sizes(n1, n2, lc, order, hs);
     for (l = 0; l < W; l++) scale[l] = E->lane[l].pending ? E->lane[l].h / (order + 1) : 0.0;
-    gw_ens_defects(E->w, E->dp, E->x, E->anom, nx, order, E->job->rel_tol, scale, err);
+    gw_ens_defects(E->w, SI, SO, E->dp, E->x, E->anom, nx, E->job->rel_tol, scale, err);
     for (l = 0; l < W; l++) {
         gw_lane *L = &E->lane[l];
         gw_instance *I = L->I;
@@ -353,7 +373,7 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
             gw_int_result r;
             if (GW_ENSEMBLE_LANE_STEPS || err[l] > 1.0) gw_ens_fetch(I, L); /* retries read it */
             r = GW_ENSEMBLE_LANE_STEPS
-                    ? gw_taylor_conclude(I, target, &L->run, L->h, L->t1, E->w + W + l, S, &fresh)
+                    ? gw_taylor_conclude(I, target, &L->run, L->h, L->t1, E->w + SO + l, SI, &fresh)
                     : gw_taylor_conclude_err(I, target, &L->run, L->h, L->t1, err[l], 1, &fresh);
             L->pending = 0;
             L->ser = NULL; /* the series of the point before: no longer the lane's */
@@ -372,7 +392,7 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
             gw_ens_fetch(I, L);
         else if (d1[l] != 0.0) /* a derivative not finite: gw_taylor_attempt_size names it */
             for (i = 0; i < nx; i++)
-                I->tl_w[(size_t)i * (size_t)(order + 1) + 1] = E->w[(size_t)i * S + W + l];
+                I->tl_w[(size_t)i * (size_t)(order + 1) + 1] = E->w[(size_t)i * SI + SO + l];
         {
             const double target = gw_ens_target(E, L),
                          norms[4] = {n1[l], n2[l], hs[l], d1[l] == 0.0};
@@ -389,7 +409,10 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
         any = 1;
     }
     if (!any) return;
-    gw_ens_increments(E->w, nx, order, h, E->qx, E->qd);
+    /* P'(h) of every lane into E->dp, where the next batch's defect pass reads it: E->dp's
+     * columns were read by this batch's defects above (and the lanes' not going on are not
+     * pending, so their columns are written again by gw_ens_point before they are read) */
+    gw_ens_increments(E->w, SI, SO, nx, order, h, E->qx, E->dp);
     for (l = 0; l < W; l++) {
         gw_lane *L = &E->lane[l];
         gw_instance *I = L->I;
@@ -404,16 +427,18 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
             for (i = 0; i < nx; i++) {
                 const double y = E->qx[(size_t)i * W + l] + xc[i], sum = x[i] + y, bp = sum - x[i];
                 I->xnew[i] = sum;
+                E->x[(size_t)i * W + l] = sum; /* the lane's point in the next batch */
                 I->xcnew[i] = (x[i] - (sum - bp)) + (y - bp);
-                I->k[2][i] = E->qd[(size_t)i * W + l];
             }
         }
-        if (!last[l]) {
-            L->pending = 1;
+        if (!last[l]) { /* its point and P'(h) in the batch's columns already (2) */
+            L->pending = GW_ENSEMBLE_LANE_STEPS ? 1 : 2;
         } else { /* a step landing on the call's target: checked with the right-hand side */
             const double target = gw_ens_target(E, L);
             int fresh;
             gw_ens_fetch(I, L); /* its retries and event location read the series */
+            if (!GW_ENSEMBLE_LANE_STEPS) /* P'(h) for gw_taylor_defect */
+                for (i = 0; i < nx; i++) I->k[2][i] = E->dp[(size_t)i * W + l];
             gw_ens_after(E, L, gw_taylor_conclude(I, target, &L->run, L->h, L->t1, NULL, 1, &fresh),
                          target);
         }
@@ -438,6 +463,7 @@ static int gw_ens_step(gw_ensemble *E, int order) {
             gw_instance *I = E->lane[l].I;
             if (E->lane[l].traj < 0) continue;
             gw_ens_fetch(I, &E->lane[l]); /* the lane's series from the last batch */
+            gw_ens_dp(E, l);              /* its pending attempt's P'(h) for gw_taylor_defect */
             m->taylor.jet(order, &E->t[l], E->lane[l].pending ? I->xnew : I->x, I->tl_c, I->tl_wn);
         }
         for (l = 0; l < GW_ENS_LANES; l++)
@@ -462,8 +488,8 @@ static int gw_ens_step(gw_ensemble *E, int order) {
     }
     if (m->taylor.n_cst > 0 && E->cst_dirty) gw_tlb_cst(E->u, E->p, E->c);
     E->cst_dirty = 0;
-    E->w = E->w == E->wb[0] ? E->wb[1] : E->wb[0]; /* the lanes' series stay in the other */
-    gw_tlb_jet(order, E->t, E->x, E->c, E->w);
+    E->w = E->w == E->wa[0] ? E->wa[1] : E->wa[0]; /* the lanes' series stay in the other */
+    gw_tlb_series(order, E->t, E->x, E->c, E->w);
     gw_ens_batch_steps(E, order);
     for (l = 0; l < GW_ENS_LANES; l++)
         if (E->lane[l].traj == -1) gw_ens_fill(E, &E->lane[l]);
@@ -485,7 +511,7 @@ struct gw_ensemble_ctx {
     gw_ensemble E;
     gw_callbacks cb; /* allocate and free of everything here; the logger is each run's */
 };
-enum { GW_ENS_ARRAYS = 11 };
+enum { GW_ENS_ARRAYS = 10 };
 
 /* the batch memory's arrays and their lengths (doubles) */
 static void gw_ens_arrays(gw_ensemble *E, double **a[GW_ENS_ARRAYS], size_t n[GW_ENS_ARRAYS]) {
@@ -493,7 +519,7 @@ static void gw_ens_arrays(gw_ensemble *E, double **a[GW_ENS_ARRAYS], size_t n[GW
     const size_t L = GW_ENS_LANES, nx = (size_t)m->nx * L;
     int k;
     a[0] = &E->wb[0], a[1] = &E->wb[1], a[2] = &E->c, a[3] = &E->x, a[4] = &E->u, a[5] = &E->p;
-    a[6] = &E->fsn, a[7] = &E->anom, a[8] = &E->dp, a[9] = &E->qx, a[10] = &E->qd;
+    a[6] = &E->fsn, a[7] = &E->anom, a[8] = &E->dp, a[9] = &E->qx;
     n[0] = n[1] = (size_t)m->taylor.n_var * (GW_TAYLOR_MAX_ORDER + 1) * L;
     n[2] = (size_t)m->taylor.n_cst * L, n[4] = (size_t)m->nu * L, n[5] = (size_t)m->np * L;
     for (k = 3; k < GW_ENS_ARRAYS; k++)
@@ -518,12 +544,15 @@ GW_API gw_ensemble_ctx *gw_ensemble_new(const gw_model *m, const gw_callbacks *c
     double **a[GW_ENS_ARRAYS];
     size_t n[GW_ENS_ARRAYS];
     int k, ok = 1;
+    (void)gw_tlb_jet; /* unused: the batch reads gw_tlb_series's layout in place (GW_ENS_SO) */
     if (!C) return NULL;
     memset(C, 0, sizeof *C);
     C->cb = *cb;
     C->E.m = m;
     gw_ens_arrays(&C->E, a, n);
     for (k = 0; k < GW_ENS_ARRAYS; k++) ok &= (*a[k] = (double *)gw_ens_alloc(cb, n[k])) != NULL;
+    for (k = 0; ok && k < 2; k++) /* room: n_var >= the kernel's row + 1 series (gw_tlb_jet) */
+        C->E.wa[k] = (double *)(void *)(((uintptr_t)C->E.wb[k] + 31u) & ~(uintptr_t)31u);
     if (ok) return C;
     gw_ensemble_free(C);
     return NULL;
@@ -552,7 +581,7 @@ GW_API gw_status gw_ensemble_run_in(gw_ensemble_ctx *C, gw_logger_fn logger, voi
     E->job = job;
     E->next = 0;
     E->cst_dirty = 0;
-    E->w = E->wb[0];
+    E->w = E->wa[0];
     order = gw_taylor_order(job->rel_tol);
     for (j = 0; j < (long)((size_t)m->nx * GW_ENS_LANES); j++) E->fsn[j] = E->anom[j] = 1.0; /* idle */
     for (l = 0; l < GW_ENS_LANES; l++) { /* instances for the lanes that will have work */

@@ -1,7 +1,9 @@
 /*
  * gw_ensemble_passes.h -- the ensemble's step arithmetic over all lanes at once (gw_ensemble.c):
  * the step size norms, the defects and the increments' Horner sums of GW_ENSEMBLE_LANES lanes
- * on the batch's series (structure of arrays: w[(var * (order + 1) + k) * lanes + lane]), loops
+ * on the batch's series (structure of arrays: state i's coefficient k of a lane at
+ * w[i si + k so + lane], lanes contiguous; the batch passes the kernel's own order-major layout,
+ * si = lanes, so = a row of the kernel's nodes times lanes), loops
  * with the lanes innermost, the same operations in the same order as solver taylor's one-lane
  * code (gw_taylor_step, gw_taylor_defect, gw_taylor_increment), so each lane's numbers are those
  * of its single run bit for bit.  Included by gw_ensemble.c only.
@@ -11,6 +13,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "gw_fastmath.h" /* gw_fm_log4, gw_fm_exp4: the lanes' step sizes */
 
@@ -51,25 +54,32 @@ typedef int gw_ens_m;
 #else
 #define GW_ENS_PASS static
 #endif
+/* the increments' Horner sums: fused multiply-adds where the machine has them, in the same
+ * clones (GW_TL_CLONED: x86-64-v3 and default, fp-contract=fast) as the one-lane code they equal
+ * lane by lane (gw_taylor_increment8 in gw_solver_taylor.c) */
+#ifdef GW_TL_CLONED
+#define GW_ENS_PASS_FMA static GW_TL_CLONED
+#else
+#define GW_ENS_PASS_FMA static
+#endif
 
 /* N_{p-1}, N_p of every lane (gw_taylor_step), and d1[l] = 0 where every derivative (order 1) of
  * lane l is finite, NaN otherwise (the sum of x_i^[1] * 0: NaN from an infinity or a NaN), the
  * check gw_taylor_attempt_size would otherwise make on a copy of them */
-GW_ENS_PASS void gw_ens_norms(const double *w, const double *fsn, int nx, int order, double *n1,
-                              double *n2, double *d1) {
+GW_ENS_PASS void gw_ens_norms(const double *w, size_t si, size_t so, const double *fsn, int nx,
+                              int order, double *n1, double *n2, double *d1) {
     enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V };
-    const size_t S = (size_t)(order + 1) * W;
     int i, j;
     for (j = 0; j < W; j += V) {
         gw_ens_v m1 = {0.0}, m2 = {0.0}, z = {0.0};
         for (i = 0; i < nx; i++) {
-            const double *x0 = w + (size_t)i * S + j;
+            const double *x0 = w + (size_t)i * si + j;
             const gw_ens_v rsc = 1.0 / (GW_ENS_ABS(gw_ens_ld(x0)) + gw_ens_ld(fsn + (size_t)i * W + j));
-            const gw_ens_v r1 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)(order - 1) * W)) * rsc;
-            const gw_ens_v r2 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)order * W)) * rsc;
+            const gw_ens_v r1 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)(order - 1) * so)) * rsc;
+            const gw_ens_v r2 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)order * so)) * rsc;
             m1 = GW_ENS_SEL((r1 > m1) | (r1 != r1), r1, m1); /* a NaN sticks (gw_taylor_step) */
             m2 = GW_ENS_SEL((r2 > m2) | (r2 != r2), r2, m2);
-            z = z + gw_ens_ld(x0 + W) * 0.0;
+            z = z + gw_ens_ld(x0 + so) * 0.0;
         }
         gw_ens_st(n1 + j, m1);
         gw_ens_st(n2 + j, m2);
@@ -93,10 +103,16 @@ GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const dou
         const int nl = W - j < 4 ? W - j : 4;
         gw_fm_v4 a = {1.0, 1.0, 1.0, 1.0}, b = a, c = a, la, lb, e, hv;
         gw_fm_m4 pa, pb;
-        for (l = 0; l < nl; l++) {
-            a[l] = n1[j + l];
-            b[l] = n2[j + l];
-            c[l] = lc[j + l];
+        if (nl == 4) { /* whole vectors (the lane-by-lane gather: about 1% of a run) */
+            memcpy(&a, n1 + j, sizeof a);
+            memcpy(&b, n2 + j, sizeof b);
+            memcpy(&c, lc + j, sizeof c);
+        } else {
+            for (l = 0; l < nl; l++) {
+                a[l] = n1[j + l];
+                b[l] = n2[j + l];
+                c[l] = lc[j + l];
+            }
         }
         pa = a > 0.0;
         pb = b > 0.0;
@@ -106,7 +122,10 @@ GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const dou
         lb = GW_FM_SEL4(pb, -lb * r2, (gw_fm_v4){0} + HUGE_VAL);
         e = GW_FM_SEL4(lb < la, lb, la) + c;
         gw_fm_exp4(&hv, &e);
-        for (l = 0; l < nl; l++) h[j + l] = hv[l];
+        if (nl == 4)
+            memcpy(h + j, &hv, sizeof hv);
+        else
+            for (l = 0; l < nl; l++) h[j + l] = hv[l];
     }
 #else
     for (l = 0; l < W; l++) {
@@ -119,18 +138,17 @@ GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const dou
 
 /* the defect of every lane's pending attempt with f(t1, P(h)) = order 1 of the batch's series
  * (gw_taylor_defect); scale[l] = h / (p + 1) of lane l's attempt, its xnew in x, P'(h) in dp */
-GW_ENS_PASS void gw_ens_defects(const double *w, const double *dp, const double *x,
-                                const double *anom, int nx, int order, double rtol,
+GW_ENS_PASS void gw_ens_defects(const double *w, size_t si, size_t so, const double *dp,
+                                const double *x, const double *anom, int nx, double rtol,
                                 const double *scale, double *err) {
     enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V };
-    const size_t S = (size_t)(order + 1) * W;
     int i, j, l;
     for (j = 0; j < W; j += V) {
         const gw_ens_v sc = gw_ens_ld(scale + j);
         gw_ens_v e = {0.0};
         for (i = 0; i < nx; i++) {
             const size_t at = (size_t)i * W + j;
-            const gw_ens_v r = GW_ENS_ABS(gw_ens_ld(w + (size_t)i * S + W + j) - gw_ens_ld(dp + at)) *
+            const gw_ens_v r = GW_ENS_ABS(gw_ens_ld(w + (size_t)i * si + so + j) - gw_ens_ld(dp + at)) *
                                sc / (rtol * GW_ENS_ABS(gw_ens_ld(x + at)) + gw_ens_ld(anom + at));
             /* a NaN r stays (a rejection, as gw_taylor_defect's break at a NaN): r <= NaN is
              * false, so without the e == e test a later finite r replaced it */
@@ -141,43 +159,56 @@ GW_ENS_PASS void gw_ens_defects(const double *w, const double *dp, const double 
     for (l = 0; l < W; l++) err[l] = isfinite(err[l]) ? err[l] : HUGE_VAL;
 }
 
+/* The Horner chains of components i0 .. i0 + nc - 1 (nc <= C) of all lanes (gw_ens_increments);
+ * inlined with a constant nc, so that the chains stay in registers (with a variable count GCC
+ * kept them on the stack and recomputed each coefficient's address: about half of the pass) */
+#if defined(__GNUC__) || defined(__clang__)
+#define GW_ENS_INLINE static inline __attribute__((always_inline))
+#else
+#define GW_ENS_INLINE static
+#endif
+enum { GW_ENS_NV = GW_ENSEMBLE_LANES / GW_ENS_V, GW_ENS_C = GW_ENS_NV >= 4 ? 1 : 4 / GW_ENS_NV };
+GW_ENS_INLINE void gw_ens_horner(const double *w, size_t si, size_t so, int order,
+                                 const gw_ens_v *hh, int i0, int nc, double *qx, double *qd) {
+    enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V, NV = GW_ENS_NV, C = GW_ENS_C };
+    gw_ens_v q[C][NV], dq[C][NV];
+    const double *wk = w + (size_t)i0 * si + (size_t)order * so;
+    int k, j, c;
+    for (c = 0; c < nc; c++)
+        for (j = 0; j < NV; j++) {
+            q[c][j] = gw_ens_ld(wk + (size_t)c * si + j * V);
+            dq[c][j] = q[c][j]; /* the first sum below is dq = q (0 h + q) */
+        }
+    wk -= so; /* k = order - 1 */
+    for (c = 0; c < nc; c++)
+        for (j = 0; j < NV; j++) q[c][j] = q[c][j] * hh[j] + gw_ens_ld(wk + (size_t)c * si + j * V);
+    for (k = order - 2; k >= 1; k--) {
+        wk -= so;
+        for (c = 0; c < nc; c++)
+            for (j = 0; j < NV; j++) {
+                dq[c][j] = dq[c][j] * hh[j] + q[c][j];
+                q[c][j] = q[c][j] * hh[j] + gw_ens_ld(wk + (size_t)c * si + j * V);
+            }
+    }
+    for (c = 0; c < nc; c++)
+        for (j = 0; j < NV; j++) {
+            const size_t at = (size_t)(i0 + c) * W + (size_t)(j * V);
+            gw_ens_st(qx + at, q[c][j] * hh[j]);
+            gw_ens_st(qd + at, q[c][j] + hh[j] * dq[c][j]);
+        }
+}
+
 /* dx (qx) and P'(h) (qd) of every lane for its step size h[l] (gw_taylor_increment):
  * the Horner chains of C components and all lanes side by side (independent chains overlap
  * where one component after the other waited on each multiply and add) */
-GW_ENS_PASS void gw_ens_increments(const double *w, int nx, int order, const double *h, double *qx,
-                                   double *qd) {
-    enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V, NV = GW_ENSEMBLE_LANES / GW_ENS_V,
-           C = NV >= 4 ? 1 : 4 / NV }; /* at most 8 chains of q and dq */
-    const size_t S = (size_t)(order + 1) * W;
+GW_ENS_PASS_FMA void gw_ens_increments(const double *w, size_t si, size_t so, int nx, int order,
+                                   const double *h, double *qx, double *qd) {
+    enum { V = GW_ENS_V, NV = GW_ENS_NV, C = GW_ENS_C }; /* at most 8 chains of q and dq */
     gw_ens_v hh[NV];
-    int i0, i, k, j, c, nc;
+    int i0, j;
     for (j = 0; j < NV; j++) hh[j] = gw_ens_ld(h + j * V);
-    for (i0 = 0; i0 < nx; i0 += nc) {
-        gw_ens_v q[C][NV], dq[C][NV];
-        nc = nx - i0 >= C ? C : 1; /* the last components one at a time */
-        for (c = 0; c < nc; c++)
-            for (j = 0; j < NV; j++) {
-                q[c][j] = gw_ens_ld(w + (size_t)(i0 + c) * S + (size_t)order * W + j * V);
-                dq[c][j] = q[c][j]; /* the first sum below is dq = q (0 h + q) */
-            }
-        for (c = 0; c < nc; c++) /* k = order - 1 */
-            for (j = 0; j < NV; j++)
-                q[c][j] = q[c][j] * hh[j] +
-                          gw_ens_ld(w + (size_t)(i0 + c) * S + (size_t)(order - 1) * W + j * V);
-        for (k = order - 2; k >= 1; k--)
-            for (c = 0; c < nc; c++)
-                for (j = 0; j < NV; j++) {
-                    dq[c][j] = dq[c][j] * hh[j] + q[c][j];
-                    q[c][j] = q[c][j] * hh[j] +
-                              gw_ens_ld(w + (size_t)(i0 + c) * S + (size_t)k * W + j * V);
-                }
-        for (c = 0; c < nc; c++)
-            for (j = 0; j < NV; j++) {
-                i = i0 + c;
-                gw_ens_st(qx + (size_t)i * W + j * V, q[c][j] * hh[j]);
-                gw_ens_st(qd + (size_t)i * W + j * V, q[c][j] + hh[j] * dq[c][j]);
-            }
-    }
+    for (i0 = 0; i0 + C <= nx; i0 += C) gw_ens_horner(w, si, so, order, hh, i0, C, qx, qd);
+    for (; i0 < nx; i0++) gw_ens_horner(w, si, so, order, hh, i0, 1, qx, qd); /* the last ones */
 }
 
 #endif /* GW_ENSEMBLE_PASSES_H */

@@ -134,10 +134,15 @@ GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, doub
  * independent and overlap, where one chain after the other waited on each multiply-add. */
 #if defined(__GNUC__) || defined(__clang__)
 typedef double gw_tl_v2 __attribute__((vector_size(16))); /* one SSE2 register */
+#ifndef GW_TL_CLONED
+#define GW_TL_CLONED
+#endif
 /* a full block of 8 components as 4 pairs: the same multiplies and adds in the same order as
- * the scalar loop below (bit for bit), half the instructions (the scalar loop was bound by the
- * issue of its 4 operations per component and order, not by the chains' latency) */
-static inline void gw_taylor_increment8(const double *x0, size_t si, size_t so, int order,
+ * the scalar loop below, half the instructions (the scalar loop was bound by the issue of its 4
+ * operations per component and order, not by the chains' latency); the ensemble's layout, cloned
+ * as its increments pass (gw_ens_increments, fused multiply-adds on x86-64-v3), which equals
+ * this lane by lane bit for bit */
+static GW_TL_CLONED void gw_taylor_increment8(const double *x0, size_t si, size_t so, int order,
                                         double h, double *dx, double *dp) {
     const gw_tl_v2 hv = {h, h};
     gw_tl_v2 q[4], dq[4];
@@ -167,9 +172,6 @@ static inline void gw_taylor_increment8(const double *x0, size_t si, size_t so, 
     }
 }
 
-#ifndef GW_TL_CLONED
-#define GW_TL_CLONED
-#endif
 /* the one-lane path's series (gw_integrate_taylor: the kernel's order-major layout, si = 1),
  * a block of 8 components: the same multiplies and adds per component as above, its 4 pairs
  * held in registers (each order's 8 coefficients are contiguous: a pair is one load), and like

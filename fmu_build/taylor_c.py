@@ -653,6 +653,8 @@ GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const 
                 w[((size_t)i * (size_t)(order + 1) + (size_t)k) * GW_TL_W + l] =
                     wi[((size_t)k * GW_TL_ROW + (size_t)i) * GW_TL_W + l];
 }}
+/* the row's length, for a caller of series() that reads its layout in place (gw_ensemble.c) */
+enum {{ GW_TL(row) = GW_TL_ROW }};
 #undef GW_TLZ
 #undef GW_TLFMA
 #undef GW_TLFMS

@@ -64,7 +64,7 @@ int main(void) {
         if (round % 4 == 0) w[(4 * (ORDER + 1) + 1) * W + 3] = NAN;
         if (round % 6 == 2) /* a NaN coefficient of order p-1 (lane 0) or p (lane 2) before finite ones */
             w[(1 * (ORDER + 1) + ORDER - 1) * W + 0] = w[(0 * (ORDER + 1) + ORDER) * W + 2] = NAN;
-        gw_ens_norms(w, fsn, NX, ORDER, n1, n2, d1);
+        gw_ens_norms(w, (ORDER + 1) * W, W, fsn, NX, ORDER, n1, n2, d1);
         for (l = 0; l < W; l++) {
             double m1 = 0.0, m2 = 0.0;
             int finite = 1;
@@ -105,7 +105,7 @@ int main(void) {
         dp[0 * W + 1] = round % 2 ? NAN : dp[0 * W + 1];
         x[2 * W + 2] = INFINITY;
         dp[2 * W + 2] = round % 3 ? -INFINITY : dp[2 * W + 2];
-        gw_ens_defects(w, dp, x, anom, NX, ORDER, rtol, scale, err);
+        gw_ens_defects(w, (ORDER + 1) * W, W, dp, x, anom, NX, rtol, scale, err);
         for (l = 0; l < W; l++) { /* gw_taylor_defect's loop over the components */
             double e = 0.0;
             for (i = 0; i < NX; i++) {

@@ -496,67 +496,7 @@ static int gw_ens_step(gw_ensemble *E, int order) {
     return n_active;
 }
 
-static void *gw_ens_alloc(const gw_callbacks *cb, size_t n) {
-    void *p = cb->allocate(n > 0 ? n : 1, sizeof(double));
-    if (p) memset(p, 0, (n > 0 ? n : 1) * sizeof(double));
-    return p;
-}
-
-/* What a run needs beyond the job, kept between runs (gw_ensemble_new): the lanes' instances
- * (made when a job first needs them; each trajectory resets its lane's instance, as within a
- * run) and the batch memory, its series blocks sized for orders up to GW_TAYLOR_MAX_ORDER.
- * Made and freed by every run, they were most of a run's fixed cost (0.034 ms of C at N = 4,
- * half of it allocating, zeroing and freeing). */
-struct gw_ensemble_ctx {
-    gw_ensemble E;
-    gw_callbacks cb; /* allocate and free of everything here; the logger is each run's */
-};
-enum { GW_ENS_ARRAYS = 10 };
-
-/* the batch memory's arrays and their lengths (doubles) */
-static void gw_ens_arrays(gw_ensemble *E, double **a[GW_ENS_ARRAYS], size_t n[GW_ENS_ARRAYS]) {
-    const gw_model *m = E->m;
-    const size_t L = GW_ENS_LANES, nx = (size_t)m->nx * L;
-    int k;
-    a[0] = &E->wb[0], a[1] = &E->wb[1], a[2] = &E->c, a[3] = &E->x, a[4] = &E->u, a[5] = &E->p;
-    a[6] = &E->fsn, a[7] = &E->anom, a[8] = &E->dp, a[9] = &E->qx;
-    n[0] = n[1] = (size_t)m->taylor.n_var * (GW_TAYLOR_MAX_ORDER + 1) * L;
-    n[2] = (size_t)m->taylor.n_cst * L, n[4] = (size_t)m->nu * L, n[5] = (size_t)m->np * L;
-    for (k = 3; k < GW_ENS_ARRAYS; k++)
-        if (k != 4 && k != 5) n[k] = nx;
-}
-
-GW_API void gw_ensemble_free(gw_ensemble_ctx *C) {
-    double **a[GW_ENS_ARRAYS];
-    size_t n[GW_ENS_ARRAYS];
-    int k;
-    if (!C) return;
-    for (k = 0; k < GW_ENS_LANES; k++)
-        if (C->E.lane[k].I) gw_instance_free(C->E.lane[k].I);
-    gw_ens_arrays(&C->E, a, n);
-    for (k = 0; k < GW_ENS_ARRAYS; k++)
-        if (*a[k]) C->cb.free(*a[k]);
-    C->cb.free(C);
-}
-
-GW_API gw_ensemble_ctx *gw_ensemble_new(const gw_model *m, const gw_callbacks *cb) {
-    gw_ensemble_ctx *C = (gw_ensemble_ctx *)cb->allocate(1, sizeof *C);
-    double **a[GW_ENS_ARRAYS];
-    size_t n[GW_ENS_ARRAYS];
-    int k, ok = 1;
-    (void)gw_tlb_jet; /* unused: the batch reads gw_tlb_series's layout in place (GW_ENS_SO) */
-    if (!C) return NULL;
-    memset(C, 0, sizeof *C);
-    C->cb = *cb;
-    C->E.m = m;
-    gw_ens_arrays(&C->E, a, n);
-    for (k = 0; k < GW_ENS_ARRAYS; k++) ok &= (*a[k] = (double *)gw_ens_alloc(cb, n[k])) != NULL;
-    for (k = 0; ok && k < 2; k++) /* room: n_var >= the kernel's row + 1 series (gw_tlb_jet) */
-        C->E.wa[k] = (double *)(void *)(((uintptr_t)C->E.wb[k] + 31u) & ~(uintptr_t)31u);
-    if (ok) return C;
-    gw_ensemble_free(C);
-    return NULL;
-}
+#include "gw_ensemble_ctx.h" /* gw_ensemble_new, gw_ensemble_free: the context kept between runs */
 
 GW_API gw_status gw_ensemble_run_in(gw_ensemble_ctx *C, gw_logger_fn logger, void *env,
                                     const gw_ensemble_job *job) {

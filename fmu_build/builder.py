@@ -45,7 +45,8 @@ def runtime_sources() -> list[Path]:
 # runtime files only an FMU with the Taylor kernel carries: the recurrences the kernel includes,
 # and the ensemble path's sources (fmu_build.ensemble builds them from the FMU's sources/; not part
 # of the FMU's unity build, compiled on their own they are empty)
-TAYLOR_ONLY = {"gw_taylor_ops.h", "gw_ensemble.c", "gw_ensemble.h", "gw_ensemble_passes.h"}
+TAYLOR_ONLY = {"gw_taylor_ops.h", "gw_ensemble.c", "gw_ensemble.h", "gw_ensemble_passes.h",
+               "gw_ensemble_ctx.h"}
 
 
 def model_spec(scene: Scene) -> ModelSpec:

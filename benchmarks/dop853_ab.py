@@ -31,7 +31,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))
 
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
-from taylor_vs_heyoka import TARGETS, SameGraph, cheapest  # noqa: E402
+from taylor_vs_heyoka import TARGETS, SameGraph, rows_against_heyoka  # noqa: E402
 from work_precision import SCENARIOS, SOLVER_CODES  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
@@ -93,12 +93,7 @@ def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853", l
     lines = [f"### {name} ({stop:g} s): {solver} (abs_tol = rel_tol/100, max_step = T)", "",
              "| method | " + " | ".join(f"err <= {t:g}" for t in TARGETS) + " | floor |",
              "|---|" + "---|" * (len(TARGETS) + 1)]
-    for method, points in pts.items():
-        cells = []
-        for t in TARGETS:
-            s, peer = cheapest(points, t), cheapest(pts["heyoka"], t)
-            cells.append("-" if s is None else f"{s * 1e3:.3g} ms" + (f" ({s / peer:.2f}x)" if peer else ""))
-        lines.append(f"| {method} | " + " | ".join(cells) + f" | {min(e for _, e in points):.1e} |")
+    lines += rows_against_heyoka(pts, TARGETS)
     lines += ["", "In brackets: time / heyoka's.", ""]
     for tol in (1e-4, 1e-7, 1e-10, 1e-13):
         cnt = {k: solver_counts(v, stop, solver=SOLVER_CODES[solver], rel_tol=tol, abs_tol=tol * 1e-2, max_step=stop)

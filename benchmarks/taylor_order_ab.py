@@ -31,7 +31,7 @@ sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))
 
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
-from taylor_vs_heyoka import SameGraph, cheapest  # noqa: E402
+from taylor_vs_heyoka import SameGraph, rows_against_heyoka  # noqa: E402
 from work_precision import SCENARIOS  # noqa: E402
 
 from fmu_build import build_fmu, parse_scene  # noqa: E402
@@ -105,12 +105,7 @@ def run(name: str, work: Path, variants: dict[str, tuple[list[str], str | None]]
         r.free()
     lines = [f"### {name} ({stop:g} s)", "", "| rule | " + " | ".join(f"err <= {t:g}" for t in TARGETS)
              + " | floor |", "|---|" + "---|" * (len(TARGETS) + 1)]
-    for v, points in pts.items():
-        cells = []
-        for t in TARGETS:
-            s, peer = cheapest(points, t), cheapest(pts["heyoka"], t)
-            cells.append("-" if s is None else f"{s * 1e3:.3g} ms" + (f" ({s / peer:.2f}x)" if peer else ""))
-        lines.append(f"| {v} | " + " | ".join(cells) + f" | {min(e for _, e in points):.1e} |")
+    lines += rows_against_heyoka(pts, TARGETS)
     lines.append("")
     lines += [f"{v}: final states bit for bit those of {first} at {same[v]} of {2 * len(TOLS)} settings"
               for v in fmus if v != first]

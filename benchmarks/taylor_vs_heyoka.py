@@ -122,6 +122,19 @@ def cheapest(points, target):
     return min(ok) if ok else None
 
 
+def rows_against_heyoka(pts: dict, targets) -> list[str]:
+    """Markdown rows: each method's cheapest time to reach each target error (ms, ratio to the
+    "heyoka" entry of pts) and its error floor; pts maps a method to (seconds, error) points."""
+    lines = []
+    for method, points in pts.items():
+        cells = []
+        for t in targets:
+            s, peer = cheapest(points, t), cheapest(pts["heyoka"], t)
+            cells.append("-" if s is None else f"{s * 1e3:.3g} ms" + (f" ({s / peer:.2f}x)" if peer else ""))
+        lines.append(f"| {method} | " + " | ".join(cells) + f" | {min(e for _, e in points):.1e} |")
+    return lines
+
+
 def run(name: str, work: Path, repeat: int, batch: int) -> list[str]:
     import heyoka as hy
     text, stop = SCENARIOS[name]

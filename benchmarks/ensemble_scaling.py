@@ -14,9 +14,9 @@ cheapest at N), the best of them counted:
 Every time is thread CPU time, best of --repeat, the methods interleaved; ratios compare
 per-trajectory times in this one run (absolute times on a loaded machine are not to be quoted).
 Also the fixed cost of one run: N = 1 to t_end = 1 ms (a handful of steps).
---against REF (a git revision, e.g. main) also times REF's ensemble (its c_src/ and
-fmu_build/ensemble.py, on the same FMU, 4 lanes, at gyrowheel's tolerances), interleaved: before
-and after a change in the same run.
+--against REF (a git revision, e.g. main) also times REF's ensemble (the same scene built by
+REF's whole tree: its generator, c_src/ and fmu_build/ensemble.py; 4 lanes, at gyrowheel's
+tolerances), interleaved: before and after a change in the same run.
 
     python benchmarks/ensemble_scaling.py [--scenario paper] [--n 1 4 16 64] [--lanes 1 4 8]
         [--targets 1e-4 1e-10] [--against main]
@@ -26,11 +26,11 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import io
+import os
 import subprocess
 import sys
 import tarfile
 import tempfile
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -56,25 +56,23 @@ def best(fn, repeat: int) -> float:
     return best_time(fn, repeat)[0]
 
 
-def ensemble_at(ref: str, fmu: Path, work: Path, lanes: int = 4):
-    """The Ensemble of git revision ref (its c_src/ in a copy of fmu's sources/, its
-    fmu_build/ensemble.py) on the same model."""
+def ensemble_at(ref: str, scene: str, work: Path, lanes: int = 4):
+    """The Ensemble of git revision ref on the same scene: its whole tree (git archive), its
+    generator building the FMU (in a subprocess: the generated C and the runtime change
+    together, e.g. the event indicators' hoisted part), its fmu_build/ensemble.py compiling and
+    running it."""
     root = HERE.parent
-    tar = subprocess.run(["git", "-C", str(root), "archive", ref, "c_src", "fmu_build/ensemble.py"],
-                         capture_output=True, check=True).stdout
+    tar = subprocess.run(["git", "-C", str(root), "archive", ref], capture_output=True, check=True).stdout
     src = work / f"ref-{ref}"
     with tarfile.open(fileobj=io.BytesIO(tar)) as t:
         t.extractall(src)
     out = work / f"ref-{ref}.fmu"
-    with zipfile.ZipFile(fmu) as zi, zipfile.ZipFile(out, "w") as zo:
-        names = set(zi.namelist())
-        for item in zi.infolist():
-            c = src / "c_src" / item.filename[len("sources/"):]
-            zo.writestr(item, c.read_bytes() if item.filename.startswith("sources/") and c.is_file()
-                        else zi.read(item.filename))
-        for c in sorted((src / "c_src").glob("gw_ensemble*")):  # the revision's own ensemble files
-            if f"sources/{c.name}" not in names:
-                zo.writestr(f"sources/{c.name}", c.read_bytes())
+    build = ("import sys; from pathlib import Path; from fmu_build import build_fmu, parse_scene; "
+             "build_fmu(parse_scene(sys.argv[1], 'scene.toml'), Path(sys.argv[2]), "
+             "build_dir=Path(sys.argv[3]), taylor=True)")
+    subprocess.run([sys.executable, "-c", build, scene, str(out), str(work / f"ref-{ref}-build")],
+                   cwd=src, env={**os.environ, "PYTHONPATH": str(src), "PYTHONDONTWRITEBYTECODE": "1"},
+                   check=True)
     spec = importlib.util.spec_from_file_location(f"ensemble_{ref}", src / "fmu_build" / "ensemble.py")
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod
@@ -96,15 +94,15 @@ def main() -> int:
     text, stop = SCENARIOS[args.scenario]
     with tempfile.TemporaryDirectory(prefix="gw-ens-scaling-") as tmp:
         work = Path(tmp)
-        built = build_fmu(parse_scene(f'[model]\nname = "ens_{args.scenario}"\n' + text, "scene.toml"),
-                          work / "scene.fmu", build_dir=work / "b", taylor=True)
+        scene = f'[model]\nname = "ens_{args.scenario}"\n' + text
+        built = build_fmu(parse_scene(scene, "scene.toml"), work / "scene.fmu", build_dir=work / "b", taylor=True)
         g = SameGraph(built, stop)  # heyoka on the FMU's graph and the long-double reference
         fns, p, x0, s0 = built.spec.functions(), g.p, g.x0, np.array(g.s0)
         eqs = list(zip(g.xs, to_heyoka(g.f, g.xs, p)))
         ens = {w: Ensemble(built.fmu, lanes=w, cache=work / "ens") for w in args.lanes}
         cols = [f"gyrowheel W={w}" for w in args.lanes]
         if args.against:
-            ens[args.against] = ensemble_at(args.against, built.fmu, work)
+            ens[args.against] = ensemble_at(args.against, scene, work)
             cols.append(f"{args.against} W=4")
         i_spin = [q.name for q in built.spec.starts].index("gamma_dot")
 

@@ -422,14 +422,8 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
             gw_sum_update(I);
         } else { /* gw_sum_update's TwoSum with dx read from the pass (I->dx not written: stored
                   * element by element and read in pairs by gw_sum_update, it stalled the loads,
-                  * 3.7% of a run) */
-            const double *x = I->x, *xc = I->xc;
-            for (i = 0; i < nx; i++) {
-                const double y = E->qx[(size_t)i * W + l] + xc[i], sum = x[i] + y, bp = sum - x[i];
-                I->xnew[i] = sum;
-                E->x[(size_t)i * W + l] = sum; /* the lane's point in the next batch */
-                I->xcnew[i] = (x[i] - (sum - bp)) + (y - bp);
-            }
+                  * 3.7% of a run); the new point also the lane's in the next batch */
+            gw_ens_sum_update(E->qx, l, nx, I->x, I->xc, I->xnew, I->xcnew, E->x);
         }
         if (!last[l]) { /* its point and P'(h) in the batch's columns already (2) */
             L->pending = GW_ENSEMBLE_LANE_STEPS ? 1 : 2;

@@ -52,9 +52,20 @@ GW_INTERNAL void gw_fun_bind(gw_instance *I) {
     gw_fun_bind_up(&I->f_dir, I->u, I->p);
     gw_fun_bind_up(&I->f_upd, I->u, I->p);
     if (I->f_pre.eval && I->f_ode.eval) I->f_ode.arg[4] = I->pre_c;
+    if (I->f_pre.eval && I->f_evt.eval) I->f_evt.arg[4] = I->pre_c;
 }
 
 static int gw_fun_call(gw_fun *f) { return f->eval(f->arg, f->res, f->iw, f->w, 0); }
+
+/* pre_c = ode_pre(p), the parameter-only part of ode and evt, once per parameter change */
+static int gw_pre_ready(gw_instance *I) {
+    if (!I->f_pre.eval || I->pre_valid) return 0;
+    I->f_pre.arg[0] = I->p;
+    I->f_pre.res[0] = I->pre_c;
+    if (gw_fun_call(&I->f_pre) != 0) return -1;
+    I->pre_valid = 1;
+    return 0;
+}
 
 /* f(t, x, u, p) -> out; the pointer to t never outlives the call */
 static int gw_fun_call_txup(gw_fun *f, double t, const double *x, double *out) {
@@ -84,6 +95,7 @@ GW_API int gw_eval_out(gw_instance *I, double t, const double *x, double *y_out)
 GW_API int gw_eval_evt(gw_instance *I, double t, const double *x, double *e_out) {
     if (!I->f_evt.eval) return I->m->ne == 0 ? 0 : -1;
     I->n_evt++;
+    if (gw_pre_ready(I) != 0) return -1;
     return gw_fun_call_txup(&I->f_evt, t, x, e_out);
 }
 
@@ -142,12 +154,7 @@ GW_INTERNAL int gw_eval_upd(gw_instance *I, double t, const double *x, int k, do
 
 GW_API int gw_rhs(gw_instance *I, double t, const double *x, double *xdot) {
     I->n_rhs++;
-    if (I->f_pre.eval && !I->pre_valid) { /* the parameter-only part, once per parameter change */
-        I->f_pre.arg[0] = I->p;
-        I->f_pre.res[0] = I->pre_c;
-        if (gw_fun_call(&I->f_pre) != 0) return -1;
-        I->pre_valid = 1;
-    }
+    if (gw_pre_ready(I) != 0) return -1;
     return gw_fun_call_txup(&I->f_ode, t, x, xdot);
 }
 

@@ -89,7 +89,8 @@ GW_API gw_instance *gw_instance_new_with(const gw_model *m, const char *name,
     if (gw_fun_alloc(I, &I->f_pre, &m->ode_pre, 1, 1)) goto fail;
     if (gw_fun_alloc(I, &I->f_init, &m->init, 2, 1) ||
         gw_fun_alloc(I, &I->f_ode, &m->ode, m->ode_pre.eval ? 5 : 4, 1) ||
-        gw_fun_alloc(I, &I->f_out, &m->out, 4, 1) || gw_fun_alloc(I, &I->f_evt, &m->evt, 4, 1) ||
+        gw_fun_alloc(I, &I->f_out, &m->out, 4, 1) ||
+        gw_fun_alloc(I, &I->f_evt, &m->evt, m->ode_pre.eval ? 5 : 4, 1) ||
         gw_fun_alloc(I, &I->f_chk, &m->chk, 2, 1) || gw_fun_alloc(I, &I->f_nom, &m->nom, 1, 1) ||
         gw_fun_alloc(I, &I->f_jac, &m->jac, 4, 1))
         goto fail;

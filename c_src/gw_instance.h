@@ -94,7 +94,7 @@ struct gw_instance {
     /* CasADi functions with per-instance buffers */
     gw_fun f_init, f_ode, f_out, f_evt, f_chk, f_nom, f_jac;
     gw_fun f_pre;   /* ode_pre(p) -> pre_c, if the model has it */
-    double *pre_c;  /* n_pre: the parameter-only subexpressions of ode at the current p */
+    double *pre_c;  /* n_pre: the parameter-only subexpressions of ode, evt at the current p */
     int pre_valid;  /* pre_c == ode_pre(p) */
 
     /* state derivatives and directional derivatives (front end: Model Exchange, Jacobians) */

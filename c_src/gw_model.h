@@ -28,7 +28,7 @@
  *   init(s, p)       -> x0          consistent initial state from the start values
  *   ode (t, x, u, p) -> xdot        right-hand side (ode(t, x, u, p, c) with ode_pre, below)
  *   out (t, x, u, p) -> y           outputs
- *   evt (t, x, u, p) -> e           event indicators          (NULL eval if ne == 0)
+ *   evt (t, x, u, p) -> e           event indicators (NULL eval if ne == 0; c too, below)
  *   chk (s, p)       -> c           validity checks           (NULL eval if nc == 0)
  *   nom (p)          -> x_nominal   state scales for absolute tolerances (NULL -> ones)
  *   jac (t, x, u, p) -> J           dense d xdot / d x, column-major nx*nx (NULL if absent)
@@ -160,9 +160,10 @@ typedef struct {
     const int *init_rows; /* n_vars: row of vars[k] in dini's result, or -1 */
     gw_function upd; /* state update of GW_EVENT_UPDATE events ({NULL, NULL}: none) */
     double default_max_internal_steps; /* 0: GW_DEFAULT_MAX_INTERNAL_STEPS */
-    /* Optional: ode_pre(p) -> c (n_pre values), the subexpressions of ode that depend on the
-     * parameters alone (model/hoist.py), computed by the runtime when p changes.  When present,
-     * ode takes c as a fifth argument: ode(t, x, u, p, c) -> xdot. */
+    /* Optional: ode_pre(p) -> c (n_pre values), the subexpressions of ode and evt that depend
+     * on the parameters alone (model/hoist.py), computed by the runtime when p changes.  When
+     * present, ode and evt take c as a fifth argument: ode(t, x, u, p, c) -> xdot,
+     * evt(t, x, u, p, c) -> e. */
     gw_function ode_pre;
     int n_pre;
     gw_taylor_kernel taylor; /* zero: the model has no Taylor kernel */

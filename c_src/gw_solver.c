@@ -89,7 +89,9 @@ GW_INTERNAL const char *gw_x_name(const gw_instance *I, int i) {
 }
 
 GW_INTERNAL int gw_first_nonfinite(const double *v, int n) {
-    int i;
+    int i, bad = 0;
+    for (i = 0; i < n; i++) bad |= !(fabs(v[i]) <= DBL_MAX); /* branch-free: every step's check */
+    if (!bad) return -1;
     for (i = 0; i < n; i++)
         if (!isfinite(v[i])) return i;
     return -1;

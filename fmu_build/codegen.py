@@ -70,13 +70,20 @@ def init_jacobian(spec: ModelSpec, table: list[Variable]) -> ca.Function | None:
 
 
 def hoisted(spec: ModelSpec) -> dict[str, ca.Function]:
-    """spec.functions() with the parameter-only subexpressions of ode moved to ode_pre(p) -> c
-    (model/hoist.py): ode(t, x, u, p, c), evaluated by the runtime once per parameter change."""
+    """spec.functions() with the parameter-only subexpressions of ode and of the event indicators
+    evt moved to ode_pre(p) -> c (model/hoist.py): ode(t, x, u, p, c) and evt(t, x, u, p, c),
+    c evaluated by the runtime once per parameter change (the fall event sin(beta) - sin(beta_min)
+    then costs one sine per call, not two).  Both are split together, so a value both use is
+    hoisted once; when anything is hoisted both take c (each may leave some of it unused)."""
     fns = spec.functions()
-    c, ode_c, c_sym = split_parameters(ca.cse(spec.ode), [spec.t, spec.x, spec.u], spec.p)
+    evt = "evt" in fns
+    rows = ca.vertcat(spec.ode, *[e.expr for e in spec.events]) if evt else spec.ode
+    c, rows_c, c_sym = split_parameters(ca.cse(rows), [spec.t, spec.x, spec.u], spec.p)
     if c.numel() > 0:
-        fns["ode"] = ca.Function("gw_ode", [spec.t, spec.x, spec.u, spec.p, c_sym], [ode_c],
-                                 ["t", "x", "u", "p", "c"], ["xdot"])
+        nx, txupc = spec.x.numel(), [spec.t, spec.x, spec.u, spec.p, c_sym]
+        fns["ode"] = ca.Function("gw_ode", txupc, [rows_c[:nx]], ["t", "x", "u", "p", "c"], ["xdot"])
+        if evt:
+            fns["evt"] = ca.Function("gw_evt", txupc, [rows_c[nx:]], ["t", "x", "u", "p", "c"], ["e"])
         fns["ode_pre"] = ca.Function("gw_ode_pre", [spec.p], [c], ["p"], ["c"])
     return fns
 

@@ -9,7 +9,9 @@ on the state uses, and returns
     f(t, x, u, p, c) = f(t, x, u, p)       the expression with those nodes replaced by c_j
 
 The runtime evaluates `pre` when the parameters change (c_src/gw_eval.c, model function
-`ode_pre`), so an evaluation of f costs only what depends on the state. Constants and bare
+`ode_pre`), so an evaluation of f costs only what depends on the state. The FMU splits the
+right-hand side and the event indicators together (fmu_build/codegen.py `hoisted`: the fall
+event sin(beta) - sin(beta_min) then costs one sine per evaluation). Constants and bare
 parameter symbols are never hoisted (nothing to save).
 """
 from __future__ import annotations

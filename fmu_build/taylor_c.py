@@ -48,6 +48,7 @@ from pathlib import Path
 import casadi as ca
 
 from fmu_build.taylor_graph import C_EXPR, PIECEWISE, Decomposition, Operand, decompose
+from fmu_build.taylor_rewrite import lin_order0, lin_order_k
 
 __all__ = ["TaylorKernel", "taylor_source", "write_taylor_kernel", "work_series", "KERNEL_FILE",
            "GROUP"]
@@ -212,6 +213,8 @@ def _zero_lines(plan: _Plan) -> list[str]:
         elif op == "dq":
             zop, za = node.zero
             lines.append(f"        {_v0(n, True)} = {C_EXPR[zop].format(_order0(za, True))};")
+        elif op == "lin":
+            lines.append(f"        {_v0(n, True)} = {lin_order0(node, *[lambda x: _order0(x, True)] * 2)};")
         else:
             lines.append(f"        {_v0(n, True)} = {C_EXPR[op].format(*args)};")
         if n in plan.recip:  # after the node itself (sqrt's is 1 / (2 v_0))
@@ -377,6 +380,8 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
                 expr = f"{first} {sign} {second}"
             else:
                 expr = first if a[1][0] == "c" else (second if op == "add" else f"-{second}")
+        elif op == "lin":
+            expr = lin_order_k(node, _order_k, _order0)
         elif op == "neg":
             expr = f"-{ok[0]}"
         elif op == "twice":
@@ -447,13 +452,16 @@ def _next(plan: _Plan, order0: bool) -> list[tuple[bool, str]]:
             out.append((False, f"GW_VN({n}) = {f}{scale};"))
 
     for i, o in enumerate(dec.outputs):
+        s = dec.output_scales[i] if dec.output_scales else None  # x_i' = s output_i
         if order0:
             f = None if o is None else _order0(o, True)
+            f = f if f is None or s is None else f"{_order0(s, True)} * {f}"
         else:
             f = None if o is None or o[0] == "c" else _vk(o[1])
-        put(i, f, " * rk1")
+        scaled = f is None or s is None or order0
+        put(i, f, " * rk1" if scaled else f" * ({_order0(s)} * rk1)")
         if i in plan.weighted:
-            put(plan.weighted[i], f)
+            put(plan.weighted[i], f if scaled else f"{_order0(s)} * {f}")
     if dec.t_node is not None:
         T = dec.t_node
         for n in [T] + ([plan.weighted[T]] if T in plan.weighted else []):

@@ -1,0 +1,239 @@
+"""Cheaper Taylor decompositions: rewrites of fmu_build.taylor_graph's graph, exact in real arithmetic.
+
+Every var node of a decomposition costs its recurrence at every order of every step (interior
+sum of a product: k - 1 multiply-adds at order k; a linear node: one operation, a store and its
+packed copies).  CasADi's graph of a Lagrangian's equations carries constant factors through
+chains of linear nodes (c*x, 2*x, -x), squares written x*(c*x), and reciprocals c/(2 c' sin b)
+used only as factors of products.  This pass rewrites the graph, node by node in program order,
+with each var node's value held as
+
+    value = s * B   (or s / B: a reciprocal not yet computed)
+
+s a constant (a cst node: computed once per integration call; None for 1), B a var node of the
+new graph.  Constant factors ride on the node's consumers until something needs the value
+itself:
+  * c x, 2 x, -x, x / c: no node, the factor joins s;
+  * (s1 B1) (s2 B2) = (s1 s2) (B1 B2); B1 = B2: (s1 s2) sq(B1) (recurrence with half the terms'
+    boundary work);
+  * s1 B1 / (s2 / B2) and (s1 B1) (s2 / B2) = (s1 / s2) div(B1, B2): a reciprocal used as a factor
+    becomes a division (one interior sum, not the reciprocal's plus the product's);
+  * sums of scaled terms: one `lin` node  sum_i +-[c_i] B_i [+- c0]  (a multiply-add per term),
+    or s (B1 + B2) when both terms share the factor s;
+  * the state derivatives keep their factor: x_i^[k+1] = s_i B_i^[k] / (k + 1) (output_scales);
+  * any other operation gets its operand's value (s B or s / B) as a node, made once.
+No division by a factor is introduced (s2 / s1 with s1 a parameter that may be 0 would turn a
+finite value into NaN): factors are only multiplied together, and divided where the original
+graph divides.  Identical nodes are made once (products commutatively), nodes no output needs
+are dropped.  Rounding differs from the original graph's (products reassociated), values are
+equal in real arithmetic: tests/test_taylor_rewrite.py compares the series of both kernels.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fmu_build.taylor_graph import Decomposition, Node, Operand
+
+__all__ = ["rewrite", "lin_order0", "lin_order_k"]
+
+Scale = Operand | None  # a cst operand, or None for 1
+LINEAR = {"add", "sub", "neg", "twice"}
+
+
+@dataclass(frozen=True)
+class _Val:
+    """value = s * base (recip: s / base); base a var operand of the new graph"""
+
+    s: Scale
+    base: Operand
+    recip: bool = False
+
+
+class _Rewriter:
+    def __init__(self, dec: Decomposition):
+        self.dec = dec
+        self.cst = list(dec.cst)
+        self.cst_keys = {self._ckey(kind, payload): j for j, (kind, payload) in enumerate(self.cst)}
+        self.nodes: dict[int, Node] = {}
+        self.n_fixed = dec.nx + (dec.t_node is not None)  # the states and t: their own series
+        self.n_var = self.n_fixed
+        self.keys: dict[tuple, Operand] = {}
+        self.val: dict[int, _Val] = {n: _Val(None, ("v", n)) for n in range(self.n_fixed)}
+
+    # ---- constants ----
+    @staticmethod
+    def _ckey(kind: str, payload) -> tuple:
+        return (kind, tuple(payload) if isinstance(payload, list) else payload)
+
+    def constant(self, kind: str, payload) -> Operand:
+        if kind == "mul":
+            payload = sorted(payload)
+        key = self._ckey(kind, payload)
+        if key not in self.cst_keys:
+            self.cst_keys[key] = len(self.cst)
+            self.cst.append((kind, payload))
+        return ("c", self.cst_keys[key])
+
+    def smul(self, a: Scale, b: Scale) -> Scale:
+        if a is None or b is None:
+            return b if a is None else a
+        return self.constant("mul", [a, b])
+
+    def sdiv(self, a: Scale, b: Scale) -> Scale:
+        if b is None:
+            return a
+        return self.constant("inv", [b]) if a is None else self.constant("div", [a, b])
+
+    def sneg(self, a: Scale) -> Scale:
+        return self.constant("k", -1.0) if a is None else self.constant("neg", [a])
+
+    # ---- var nodes ----
+    def var(self, op: str, args: list[Operand], **kw) -> Operand:
+        key = (op, tuple(sorted(args) if op == "mul" else args), repr(sorted(kw.items())))
+        if key not in self.keys:
+            n = self.n_var
+            self.n_var += 1
+            self.nodes[n] = Node(op, list(args), **kw)
+            self.keys[key] = ("v", n)
+        return self.keys[key]
+
+    def value(self, v: _Val) -> Operand:
+        """the node holding v's value itself"""
+        if v.recip:
+            return self.var("div", [self.constant("k", 1.0) if v.s is None else v.s, v.base])
+        return v.base if v.s is None else self.var("mul", [v.s, v.base])
+
+    def arg(self, a: Operand) -> Operand:
+        return a if a[0] == "c" else self.value(self.val[a[1]])
+
+    def terms(self, a: Operand, sign: int) -> list[tuple[Scale, int, Operand]]:
+        """a as linear terms (factor, sign, operand): a constant is one term with no factor"""
+        if a[0] == "c":
+            return [(None, sign, a)]
+        v = self.val[a[1]]
+        if v.recip:
+            return [(None, sign, self.value(v))]
+        return [(v.s, sign, v.base)]
+
+    # ---- the rules ----
+    def product(self, x: _Val, y: _Val) -> _Val:
+        s = self.smul(x.s, y.s)
+        if x.recip and y.recip:
+            return _Val(s, self.product(_Val(None, x.base), _Val(None, y.base)).base, True)
+        if x.recip or y.recip:
+            num, den = (y, x) if x.recip else (x, y)
+            return _Val(s, self.var("div", [num.base, den.base]))
+        if x.base == y.base:
+            return _Val(s, self.var("sq", [x.base]))
+        return _Val(s, self.var("mul", [x.base, y.base]))
+
+    def linear(self, op: str, a: list[Operand]) -> _Val:
+        if op in ("neg", "twice"):
+            v = self.val[a[0][1]]
+            s = self.sneg(v.s) if op == "neg" else self.smul(self.constant("k", 2.0), v.s)
+            return _Val(s, v.base, v.recip)
+        terms = self.terms(a[0], 1) + self.terms(a[1], 1 if op == "add" else -1)
+        (s1, g1, b1), (s2, g2, b2) = terms
+        if s1 == s2 and b1[0] == b2[0] == "v":  # s (B1 +- B2): the factor rides on
+            return _Val(s1, self.var(op, [b1, b2]))
+        if s1 is None and s2 is None:
+            return _Val(None, self.var(op, [b1, b2]))
+        if b1[0] == "c":  # a constant first: the var term leads
+            terms = terms[::-1]
+        return _Val(None, self.var("lin", [b for _, _, b in terms],
+                                   coefs=tuple((s, g) for s, g, _ in terms)))
+
+    def node(self, n: int, nd: Node) -> None:
+        op, a = nd.op, nd.args
+        if op == "mul" and a[0][0] == "c" or op == "mul" and a[1][0] == "c":
+            c, v = (a[0], self.val[a[1][1]]) if a[0][0] == "c" else (a[1], self.val[a[0][1]])
+            self.val[n] = _Val(self.smul(c, v.s), v.base, v.recip)
+        elif op in ("mul", "sq"):
+            x = self.val[a[0][1]]
+            self.val[n] = self.product(x, self.val[a[-1][1]])
+        elif op == "div" and a[0][0] == "c":
+            y = self.val[a[1][1]]
+            self.val[n] = _Val(self.sdiv(a[0], y.s), y.base, not y.recip)
+        elif op == "div":
+            x, y = self.val[a[0][1]], self.val[a[1][1]]
+            inv = _Val(self.sdiv(None, y.s), y.base, not y.recip)
+            self.val[n] = self.product(x, inv)
+        elif op in LINEAR:
+            self.val[n] = self.linear(op, a)
+        else:  # every other operation: on its operands' values
+            args = [self.arg(x) for x in a]
+            zero = None if nd.zero is None else (nd.zero[0], self.arg(nd.zero[1]))
+            first = self.n_var
+            self.n_var += 1 + len(nd.extra)
+            self.nodes[first] = Node(op, args, [first + 1 + i for i in range(len(nd.extra))], zero)
+            self.val[n] = _Val(None, ("v", first))
+            for i, e in enumerate(nd.extra):
+                self.val[e] = _Val(None, ("v", first + 1 + i))
+
+
+def _needed(nodes: dict[int, Node], roots: list[int]) -> set[int]:
+    """the program nodes the roots depend on (a node writing extras is needed if one of them is)"""
+    owner = {e: n for n, nd in nodes.items() for e in nd.extra}
+    need, stack = set(), list(roots)
+    while stack:
+        m = stack.pop()
+        n = owner.get(m, m)
+        if n not in nodes or n in need:  # a state or t, or done
+            continue
+        need.add(n)
+        nd = nodes[n]
+        stack += [x[1] for x in nd.args if x[0] == "v"]
+        if nd.zero is not None and nd.zero[1][0] == "v":
+            stack.append(nd.zero[1][1])
+    return need
+
+
+def rewrite(dec: Decomposition) -> Decomposition:
+    """The decomposition rewritten as in the module docstring: the same values in real
+    arithmetic, fewer and cheaper nodes.  The states (and t) keep their node numbers."""
+    r = _Rewriter(dec)
+    for n, nd in dec.nodes.items():
+        r.node(n, nd)
+    outputs: list[Operand | None] = []
+    scales: list[Scale] = []
+    for o in dec.outputs:
+        v = None if o is None or o[0] == "c" else r.val[o[1]]
+        outputs.append(o if v is None else r.value(v) if v.recip else v.base)
+        scales.append(None if v is None or v.recip else v.s)
+    need = _needed(r.nodes, [o[1] for o in outputs if o is not None and o[0] == "v"])
+    new = {m: m for m in range(r.n_fixed)}
+    for n in sorted(need):  # renumbered in program order, each node's extras right after it
+        new[n] = len(new)
+        for e in r.nodes[n].extra:
+            new[e] = len(new)
+
+    def ren(a: Operand) -> Operand:
+        return a if a[0] == "c" else ("v", new[a[1]])
+
+    nodes: dict[int, Node] = {}
+    counts: dict[str, int] = {}
+    for n in sorted(need):
+        nd = r.nodes[n]
+        zero = None if nd.zero is None else (nd.zero[0], ren(nd.zero[1]))
+        nodes[new[n]] = Node(nd.op, [ren(a) for a in nd.args], [new[e] for e in nd.extra], zero,
+                             nd.coefs)
+        counts[nd.op] = counts.get(nd.op, 0) + 1
+    return Decomposition(nx=dec.nx, t_node=dec.t_node, nodes=nodes, n_var=len(new), cst=r.cst,
+                         outputs=[None if o is None else ren(o) for o in outputs],
+                         op_counts=counts, output_scales=scales)
+
+
+def _factor(coef: Scale, sign: int, x: str, cst) -> str:
+    term = x if coef is None else f"{cst(coef)} * {x}"
+    return term if sign > 0 else f"-{term}" if coef is None else f"-({term})"
+
+
+def lin_order0(nd: Node, order0, cst) -> str:
+    """C of a lin node's value: sum_i +-[c_i] a_i (order0(a): an operand's value, cst(c): a
+    constant's)"""
+    return " + ".join(_factor(c, g, order0(a), cst) for (c, g), a in zip(nd.coefs, nd.args))
+
+
+def lin_order_k(nd: Node, order_k, cst) -> str:
+    """C of a lin node's coefficient k >= 1: its var terms' (a constant's coefficients are 0)"""
+    return " + ".join(_factor(c, g, order_k(a), cst) for (c, g), a in zip(nd.coefs, nd.args)
+                      if a[0] == "v")

@@ -48,6 +48,7 @@ from pathlib import Path
 import casadi as ca
 
 from fmu_build.taylor_graph import C_EXPR, PIECEWISE, Decomposition, Operand, decompose
+from fmu_build.taylor_latency import ready
 from fmu_build.taylor_rewrite import lin_order0, lin_order_k
 
 __all__ = ["TaylorKernel", "taylor_source", "write_taylor_kernel", "work_series", "KERNEL_FILE",
@@ -58,6 +59,23 @@ GROUP = 12  # accumulators of one interior loop (registers: 16 vector registers 
 # ops whose order k divides by an order-0 value: the argument holding it (None: 2 v_0)
 RECIPROCAL = {"div": 1, "sqrt": None, "log": 0, "dq": 1, "atan2": 2, "pow": 0}
 PACK_GROUP = 8  # accumulators (pairs of 2-double vectors) of one packed interior loop (one lane: _Packs)
+
+
+
+def _interior_loop(a: str, b: str, body: list[str], index: bool = False) -> list[str]:
+    """the loop of interior terms: j = 2 .. k - 1, then j = 1, whose b_{k-1} is the newest
+    coefficient (from the end of order k - 1): the other terms need not wait for it; pointers
+    a, b at rows j, k - j plus offsets a, b.  index: one loop, j = 1 as its last iteration
+    (measured best for the packed one-lane kernel), else the body again after the loop (best
+    for W lanes)"""
+    rows = "            const double *a = GW_ORD({0}) + {1}, *b = GW_ORD(k - {0}) + {2};"
+    if index:
+        return (["        for (j = 2; j <= k; j++) {", "            const int i = j < k ? j : 1;",
+                 rows.format("i", a, b)] + body + ["        }"])
+    return (["        for (j = 2; j < k; j++) {", rows.format("j", a, b)] + body
+            + ["        }", "        if (k > 1) {", "            j = 1;", rows.format("j", a, b)]
+            + body + ["        }"])
+
 
 # ops whose order k >= 1 has an interior sum, and the weighted operands (j a_j) they need:
 # "a", "b": the first, second argument; "v": the node's own series
@@ -248,18 +266,16 @@ def _interior_lines(plan: _Plan) -> list[str]:
         lines.append("    for (l = 0; l < GW_TL_BLK; l++) {")
         lines.append(f"        GW_TL(v) {', '.join(acc.values())};")
         lines += [f"        GW_TLZ({s});" for s in acc.values()]
-        lines.append("        for (j = 1; j < k; j++) {")
-        lines.append("            const double *a = GW_ORD(j) + l * GW_TL_VW, "
-                     "*b = GW_ORD(k - j) + l * GW_TL_VW;")
+        body = []
         for n in group:
             for t in targets[n]:
                 op = "GW_TLFMA" if t.sign > 0 else "GW_TLFMS"
                 if t.factor is None:
-                    lines.append(f"            {op}({acc[n]}, a + {t.a} * GW_TL_W, b + {t.b} * GW_TL_W);")
+                    body.append(f"            {op}({acc[n]}, a + {t.a} * GW_TL_W, b + {t.b} * GW_TL_W);")
                 else:
-                    lines.append(f"            {op}3({acc[n]}, c + {t.factor} * GW_TL_W + l * GW_TL_VW, "
-                                 f"a + {t.a} * GW_TL_W, b + {t.b} * GW_TL_W);")
-        lines.append("        }")
+                    body.append(f"            {op}3({acc[n]}, c + {t.factor} * GW_TL_W + l * GW_TL_VW, "
+                                f"a + {t.a} * GW_TL_W, b + {t.b} * GW_TL_W);")
+        lines += _interior_loop("l * GW_TL_VW", "l * GW_TL_VW", body)
         lines += [f"        GW_TLST(vk + {n} * GW_TL_W + l * GW_TL_VW, {s});" for n, s in acc.items()]
         lines.append("    }")
     return lines
@@ -342,13 +358,9 @@ class _Packs:
             lines.append("    {")
             lines.append(f"        GW_TL(p) {', '.join(acc)};")
             lines += [f"        GW_TLPZ({a});" for a in acc]
-            lines.append("        for (j = 1; j < k; j++) {")
-            lines.append(f"            const double *a = GW_ORD(j) + {self.base}, "
-                         f"*b = GW_ORD(k - j) + {self.base + self.slots};")
-            for (q, (first, rows)), a in zip(group, acc):
-                for r in range(rows):
-                    lines.append(f"            GW_TLPFMA({a}, a + {first + 4 * r}, b + {first + 4 * r});")
-            lines.append("        }")
+            body = [f"            GW_TLPFMA({a}, a + {first + 4 * r}, b + {first + 4 * r});"
+                    for (q, (first, rows)), a in zip(group, acc) for r in range(rows)]
+            lines += _interior_loop(str(self.base), str(self.base + self.slots), body, True)
             lines += [f"        GW_TLPST(gw_is + {4 * q}, {a});" for (q, _), a in zip(group, acc)]
             lines.append("    }")
         return lines
@@ -361,6 +373,7 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
     (ternaries, constants)"""
     dec = plan.dec
     out: list[tuple[bool, str]] = []
+    when = ready(dec)  # each sum's terms in the order their operands are ready
 
     def interior(m: int) -> str:
         return (isum or {}).get(m, _vk(m))
@@ -381,22 +394,27 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
             else:
                 expr = first if a[1][0] == "c" else (second if op == "add" else f"-{second}")
         elif op == "lin":
-            expr = lin_order_k(node, _order_k, _order0)
+            expr = lin_order_k(node, _order_k, _order0, lambda x: when[x[1]])
         elif op == "neg":
             expr = f"-{ok[0]}"
         elif op == "twice":
             expr = f"2.0 * {ok[0]}"
         elif op == "mul":
-            if a[0][0] == a[1][0] == "v":
-                expr = f"{I} + {o0[0]} * {ok[1]} + {ok[0]} * {o0[1]}"
+            if a[0][0] == a[1][0] == "v":  # the later operand's coefficient k last
+                e, f = (1, 0) if when[a[0][1]] >= when[a[1][1]] else (0, 1)
+                expr = f"{I} + {o0[f]} * {ok[e]} + {ok[f]} * {o0[e]}"
             else:
                 c, v = (a[0], a[1]) if a[0][0] == "c" else (a[1], a[0])
                 expr = f"{_order0(c)} * {_order_k(v)}"
         elif op == "sq":
             expr = f"{I} + 2.0 * {o0[0]} * {ok[0]}"
         elif op == "div":
-            num = f"{ok[0]} - " if a[0][0] == "v" else "-"
-            expr = f"({num}{I} - {ok[1]} * {_v0(n)}) * {rec}"
+            if a[0][0] == "c":
+                expr = f"(-{I} - {ok[1]} * {_v0(n)}) * {rec}"
+            elif when[a[0][1]] >= when[a[1][1]]:  # the numerator's coefficient k last
+                expr = f"({ok[0]} - ({I} + {ok[1]} * {_v0(n)})) * {rec}"
+            else:
+                expr = f"({ok[0]} - {I} - {ok[1]} * {_v0(n)}) * {rec}"
         elif op == "sqrt":
             expr = f"({ok[0]} - {I}) * {rec}"
         elif op in ("sincos", "sinhcosh"):

@@ -408,13 +408,12 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
                 expr = f"{_order0(c)} * {_order_k(v)}"
         elif op == "sq":
             expr = f"{I} + 2.0 * {o0[0]} * {ok[0]}"
-        elif op == "div":
-            if a[0][0] == "c":
-                expr = f"(-{I} - {ok[1]} * {_v0(n)}) * {rec}"
-            elif when[a[0][1]] >= when[a[1][1]]:  # the numerator's coefficient k last
-                expr = f"({ok[0]} - ({I} + {ok[1]} * {_v0(n)})) * {rec}"
+        elif op == "div":  # (a_k - I - b_k v_0) / b_0, the later of a_k, b_k in one multiply-add
+            if a[0][0] == "v" and when[a[0][1]] >= when[a[1][1]]:
+                expr = f"{ok[0]} * {rec} - ({I} + {ok[1]} * {_v0(n)}) * {rec}"
             else:
-                expr = f"({ok[0]} - {I} - {ok[1]} * {_v0(n)}) * {rec}"
+                num = f"({ok[0]} - {I})" if a[0][0] == "v" else f"-{I}"
+                expr = f"{num} * {rec} - {ok[1]} * ({_v0(n)} * {rec})"
         elif op == "sqrt":
             expr = f"({ok[0]} - {I}) * {rec}"
         elif op in ("sincos", "sinhcosh"):

@@ -38,13 +38,13 @@ def ready(dec: Decomposition) -> dict[int, float]:
         ins = [x for a in nd.args for x in at(a)]
         if nd.op == "mul" and len(ins) == 2 or nd.op == "lin":
             r = _chain([0.0] + ins, 0.0) if nd.op == "mul" else _chain(ins)
-        elif nd.op == "div":
-            r = (_chain([0.0] + ins, 0.0) if len(ins) == 2 else max(ins) + LATENCY) + LATENCY
+        elif nd.op == "div":  # a_k rec - (I + b_k v_0) rec, or (a_k - I) rec - b_k (v_0 rec)
+            r = _chain([0.0] + ins, 0.0)
         elif nd.op in ("add", "sub", "neg", "twice", "mul", "sq", "sincos", "sinhcosh", "exp"):
             r = max(ins) + LATENCY
         else:
             r = max(ins, default=0.0) + 2 * LATENCY
         t[n] = r
-        for e in nd.extra:
-            t[e] = r + LATENCY
+        for e in nd.extra:  # sincos: the pair at once; tan: q after v
+            t[e] = r + (0.0 if nd.op in ("sincos", "sinhcosh") else LATENCY)
     return t

@@ -32,6 +32,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from fmu_build.taylor_graph import Decomposition, Node, Operand
+from fmu_build.taylor_latency import ready
 
 __all__ = ["rewrite", "lin_order0", "lin_order_k"]
 
@@ -170,8 +171,126 @@ class _Rewriter:
                 self.val[e] = _Val(None, ("v", first + 1 + i))
 
 
-def _needed(nodes: dict[int, Node], roots: list[int]) -> set[int]:
-    """the program nodes the roots depend on (a node writing extras is needed if one of them is)"""
+def _uses(nodes: dict[int, Node], roots: list[int]) -> dict[int, list[int]]:
+    """var node -> the nodes reading it (an output: -1), with repeats"""
+    users: dict[int, list[int]] = {m: [-1] for m in roots}
+    owner = {e: n for n, nd in nodes.items() for e in nd.extra}
+    for n, nd in nodes.items():
+        read = [a[1] for a in nd.args if a[0] == "v"]
+        read += [nd.zero[1][1]] if nd.zero is not None and nd.zero[1][0] == "v" else []
+        for m in read:
+            users.setdefault(owner.get(m, m), []).append(n)
+    return users
+
+
+class _Products:
+    """Products and quotients of several factors, shared and re-paired.  Every maximal tree of
+    var * var products and var / var quotients (inner ones read once) is one monomial: a
+    multiset of factors x and inverse factors ~x (1 / x).  A pair of them common to several
+    monomials (or already a node) becomes one node, x y or x / d, that they all use (CSE modulo
+    associativity and commutativity: a x / d and b x / d share x / d).  Each monomial is then
+    multiplied out earliest-ready factors first (taylor_latency: the shortest chain), divided by
+    the product of its inverse factors last."""
+
+    def __init__(self, nodes: dict[int, Node], roots: list[int], fresh: int, when: dict[int, float]):
+        self.nodes, self.fresh, self.when = nodes, fresh, dict(when)
+        users = _uses(nodes, roots)
+        self.absorbed = {m for m in nodes if self.product(m) and len(users.get(m, ())) == 1
+                         and users[m][0] >= 0 and self.product(users[m][0])
+                         and not (self.nodes[users[m][0]].op == "div"
+                                  and self.nodes[users[m][0]].args[1] == ("v", m))}
+        self.mono = {n: sorted(self.leaves(n)) for n in nodes
+                     if self.product(n) and n not in self.absorbed}
+        self.made = {tuple(m): n for n, m in self.mono.items() if len(m) == 2}
+        self.defs: dict[int, Node] = {}
+        self.share()
+
+    def product(self, n: int) -> bool:
+        nd = self.nodes.get(n)
+        return nd is not None and nd.op in ("mul", "sq", "div") and all(a[0] == "v" for a in nd.args)
+
+    def leaves(self, n: int) -> list[int]:
+        nd = self.nodes[n]
+        if nd.op == "div":
+            return self.leaves_of(nd.args[0][1]) + [~nd.args[1][1]]
+        return [x for a in nd.args * (2 if nd.op == "sq" else 1) for x in self.leaves_of(a[1])]
+
+    def leaves_of(self, m: int) -> list[int]:
+        return self.leaves(m) if m in self.absorbed else [m]
+
+    def at(self, x: int) -> float:
+        return self.when[x if x >= 0 else ~x]
+
+    def pair(self, p: tuple[int, int]) -> int:
+        """the node of x y (x x: sq) or, p = (~d, x), x / d"""
+        if p not in self.made:
+            a, b = p
+            self.made[p] = n = self.fresh
+            self.defs[n] = (Node("div", [("v", b), ("v", ~a)]) if a < 0 else
+                            Node("sq", [("v", a)]) if a == b else Node("mul", [("v", a), ("v", b)]))
+            self.when[n] = max(self.at(a), self.at(b)) + 1.0
+            self.fresh += 1
+        return self.made[p]
+
+    def share(self) -> None:
+        while True:
+            count: dict[tuple[int, int], int] = {}
+            for n, m in self.mono.items():
+                if len(m) >= 3:
+                    for p in {(m[i], m[j]) for i in range(len(m)) for j in range(i + 1, len(m))
+                              if m[j] >= 0}:
+                        count[p] = count.get(p, 0) + 1
+            score = {p: c + (p in self.made) for p, c in count.items()}
+            best = max(sorted(score), key=lambda p: score[p], default=None)
+            if best is None or score[best] < 2:
+                return
+            pid = self.pair(best)
+            for n, m in self.mono.items():
+                rest = list(m)
+                if len(m) >= 3 and n != pid and best[0] in rest and (rest.remove(best[0]) or best[1] in rest):
+                    rest.remove(best[1])
+                    m[:] = sorted(rest + [pid])
+
+    def multiplied(self, xs: list[int]) -> int:
+        """the product of factors xs (var nodes), the two earliest-ready first"""
+        heap = sorted(xs, key=lambda x: (self.when[x], x))
+        while len(heap) > 1:
+            a, b = heap.pop(0), heap.pop(0)
+            heap.append(self.pair((min(a, b), max(a, b))))
+            heap.sort(key=lambda x: (self.when[x], x))
+        return heap[0]
+
+    def result(self) -> dict[int, Node]:
+        """the program: node -> definition, new nodes first where they are needed"""
+        for n, m in self.mono.items():
+            num = [x for x in m if x >= 0]
+            den = [~x for x in m if x < 0]
+            if den:
+                self.defs[n] = Node("div", [("v", self.multiplied(num)), ("v", self.multiplied(den))])
+                continue
+            heap = sorted(num, key=lambda x: (self.when[x], x))
+            a, b = sorted([heap[0], self.multiplied(heap[1:])] if len(heap) > 2 else heap)
+            self.defs[n] = Node("sq", [("v", a)]) if a == b else Node("mul", [("v", a), ("v", b)])
+        program: dict[int, Node] = {}
+        owner = {e: n for n, nd in self.nodes.items() for e in nd.extra}
+
+        def emit(n: int) -> None:
+            n = owner.get(n, n)
+            if n in program or n in self.absorbed or n not in self.defs and n not in self.nodes:
+                return
+            nd = self.defs.get(n, self.nodes.get(n))
+            program[n] = nd  # (no cycle: a product reads only its factors)
+            for a in nd.args + ([nd.zero[1]] if nd.zero is not None else []):
+                if a[0] == "v":
+                    emit(a[1])
+            program[n] = program.pop(n)  # after its operands
+        for n in self.nodes:
+            emit(n)
+        return program
+
+
+def _needed(nodes: dict[int, Node], roots: list[int]) -> list[int]:
+    """the program nodes the roots depend on, in program order"""
     owner = {e: n for n, nd in nodes.items() for e in nd.extra}
     need, stack = set(), list(roots)
     while stack:
@@ -184,12 +303,13 @@ def _needed(nodes: dict[int, Node], roots: list[int]) -> set[int]:
         stack += [x[1] for x in nd.args if x[0] == "v"]
         if nd.zero is not None and nd.zero[1][0] == "v":
             stack.append(nd.zero[1][1])
-    return need
+    return [n for n in nodes if n in need]
 
 
-def rewrite(dec: Decomposition) -> Decomposition:
+def rewrite(dec: Decomposition, share: bool = True) -> Decomposition:
     """The decomposition rewritten as in the module docstring: the same values in real
-    arithmetic, fewer and cheaper nodes.  The states (and t) keep their node numbers."""
+    arithmetic, fewer and cheaper nodes (share: products shared and re-paired, _Products).
+    The states (and t) keep their node numbers."""
     r = _Rewriter(dec)
     for n, nd in dec.nodes.items():
         r.node(n, nd)
@@ -199,11 +319,16 @@ def rewrite(dec: Decomposition) -> Decomposition:
         v = None if o is None or o[0] == "c" else r.val[o[1]]
         outputs.append(o if v is None else r.value(v) if v.recip else v.base)
         scales.append(None if v is None or v.recip else v.s)
-    need = _needed(r.nodes, [o[1] for o in outputs if o is not None and o[0] == "v"])
+    roots = [o[1] for o in outputs if o is not None and o[0] == "v"]
+    program = r.nodes
+    if share:
+        when = ready(Decomposition(dec.nx, dec.t_node, r.nodes, r.n_var, r.cst, outputs))
+        program = _Products(r.nodes, roots, r.n_var, when).result()
+    need = _needed(program, roots)
     new = {m: m for m in range(r.n_fixed)}
-    for n in sorted(need):  # renumbered in program order, each node's extras right after it
+    for n in need:  # renumbered in program order, each node's extras right after it
         new[n] = len(new)
-        for e in r.nodes[n].extra:
+        for e in program[n].extra:
             new[e] = len(new)
 
     def ren(a: Operand) -> Operand:
@@ -211,8 +336,8 @@ def rewrite(dec: Decomposition) -> Decomposition:
 
     nodes: dict[int, Node] = {}
     counts: dict[str, int] = {}
-    for n in sorted(need):
-        nd = r.nodes[n]
+    for n in need:
+        nd = program[n]
         zero = None if nd.zero is None else (nd.zero[0], ren(nd.zero[1]))
         nodes[new[n]] = Node(nd.op, [ren(a) for a in nd.args], [new[e] for e in nd.extra], zero,
                              nd.coefs)

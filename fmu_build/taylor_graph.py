@@ -15,6 +15,10 @@ turns it into such a decomposition:
     one number each, computed once per integration call.
   * outputs: for each state, the operand of its derivative (x_i^[k+1] = f_i^[k] / (k + 1)).
 
+decompose() then rewrites the graph (fmu_build/taylor_rewrite.py, exact in real arithmetic:
+constant factors carried to the consumers, `lin` nodes for scaled sums, squares, reciprocal
+factors as divisions, products shared modulo associativity): what every kernel is built from.
+
 Operations (CasADi OP_* code -> recurrence; fmu_build/taylor_c.py has the formulas):
   add sub neg twice mul (linear when one factor is constant) div inv sq sqrt sin/cos (one
   pair per argument) sinh/cosh (pair) tan tanh exp log pow/constpow (constant exponent; a

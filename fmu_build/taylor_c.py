@@ -48,7 +48,6 @@ from pathlib import Path
 import casadi as ca
 
 from fmu_build.taylor_graph import C_EXPR, PIECEWISE, Decomposition, Operand, decompose
-from fmu_build.taylor_latency import ready
 from fmu_build.taylor_rewrite import lin_order0, lin_order_k
 
 __all__ = ["TaylorKernel", "taylor_source", "write_taylor_kernel", "work_series", "KERNEL_FILE",
@@ -373,7 +372,6 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
     (ternaries, constants)"""
     dec = plan.dec
     out: list[tuple[bool, str]] = []
-    when = ready(dec)  # each sum's terms in the order their operands are ready
 
     def interior(m: int) -> str:
         return (isum or {}).get(m, _vk(m))
@@ -394,26 +392,22 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
             else:
                 expr = first if a[1][0] == "c" else (second if op == "add" else f"-{second}")
         elif op == "lin":
-            expr = lin_order_k(node, _order_k, _order0, lambda x: when[x[1]])
+            expr = lin_order_k(node, _order_k, _order0)
         elif op == "neg":
             expr = f"-{ok[0]}"
         elif op == "twice":
             expr = f"2.0 * {ok[0]}"
         elif op == "mul":
-            if a[0][0] == a[1][0] == "v":  # the later operand's coefficient k last
-                e, f = (1, 0) if when[a[0][1]] >= when[a[1][1]] else (0, 1)
-                expr = f"{I} + {o0[f]} * {ok[e]} + {ok[f]} * {o0[e]}"
+            if a[0][0] == a[1][0] == "v":
+                expr = f"{I} + {o0[0]} * {ok[1]} + {ok[0]} * {o0[1]}"
             else:
                 c, v = (a[0], a[1]) if a[0][0] == "c" else (a[1], a[0])
                 expr = f"{_order0(c)} * {_order_k(v)}"
         elif op == "sq":
             expr = f"{I} + 2.0 * {o0[0]} * {ok[0]}"
-        elif op == "div":  # (a_k - I - b_k v_0) / b_0, the later of a_k, b_k in one multiply-add
-            if a[0][0] == "v" and when[a[0][1]] >= when[a[1][1]]:
-                expr = f"{ok[0]} * {rec} - ({I} + {ok[1]} * {_v0(n)}) * {rec}"
-            else:
-                num = f"({ok[0]} - {I})" if a[0][0] == "v" else f"-{I}"
-                expr = f"{num} * {rec} - {ok[1]} * ({_v0(n)} * {rec})"
+        elif op == "div":  # (a_k - I - b_k v_0) / b_0: a_k through one multiply-add
+            num = f"{ok[0]} * {rec} - " if a[0][0] == "v" else "-"
+            expr = f"{num}({I} + {ok[1]} * {_v0(n)}) * {rec}"
         elif op == "sqrt":
             expr = f"({ok[0]} - {I}) * {rec}"
         elif op in ("sincos", "sinhcosh"):

@@ -358,10 +358,7 @@ def lin_order0(nd: Node, order0, cst) -> str:
     return " + ".join(_factor(c, g, order0(a), cst) for (c, g), a in zip(nd.coefs, nd.args))
 
 
-def lin_order_k(nd: Node, order_k, cst, when=None) -> str:
-    """C of a lin node's coefficient k >= 1: its var terms' (a constant's coefficients are 0),
-    in ascending when(operand) (fmu_build/taylor_latency.py: the latest last)"""
-    terms = [(a, c, g) for (c, g), a in zip(nd.coefs, nd.args) if a[0] == "v"]
-    if when is not None:
-        terms.sort(key=lambda x: when(x[0]))
-    return " + ".join(_factor(c, g, order_k(a), cst) for a, c, g in terms)
+def lin_order_k(nd: Node, order_k, cst) -> str:
+    """C of a lin node's coefficient k >= 1: its var terms' (a constant's coefficients are 0)"""
+    return " + ".join(_factor(c, g, order_k(a), cst) for (c, g), a in zip(nd.coefs, nd.args)
+                      if a[0] == "v")

@@ -9,7 +9,7 @@ calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8 at orde
 cost of W trajectories against one: 1 would be perfect vectorisation, W none at all).
 
 With --baseline REF the kernel generator of that git ref (fmu_build/taylor_c.py, taylor_graph.py
-and, where REF has them, taylor_rewrite.py, taylor_latency.py; c_src/gw_taylor_ops.h, gw_taylor.c) is timed in the same rounds, and its states' series are compared with
+and, where REF has it, taylor_rewrite.py; c_src/gw_taylor_ops.h, gw_taylor.c) is timed in the same rounds, and its states' series are compared with
 this tree's (they differ by rounding only: the summation order).  Timings on a loaded machine
 are noisy: compare ratios from one run; re-measure absolute times on a quiet machine.
 
@@ -93,7 +93,7 @@ def baseline_source(ref: str, ode, model: str, out: Path) -> None:
     tag = "gwbase_" + "".join(ch for ch in ref if ch.isalnum())
     have = subprocess.run(["git", "-C", str(ROOT), "ls-tree", "--name-only", ref, "fmu_build/"],
                           check=True, capture_output=True, text=True).stdout.split()
-    parts = [m for m in ("graph", "c", "rewrite", "latency") if f"fmu_build/taylor_{m}.py" in have]
+    parts = [m for m in ("graph", "c", "rewrite") if f"fmu_build/taylor_{m}.py" in have]
     for m in parts:  # the generator's modules of ref, importing each other, not this tree's
         text = show(f"fmu_build/taylor_{m}.py")
         for other in parts:

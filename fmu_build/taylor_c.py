@@ -406,8 +406,8 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
         elif op == "sq":
             expr = f"{I} + 2.0 * {o0[0]} * {ok[0]}"
         elif op == "div":  # (a_k - I - b_k v_0) / b_0: a_k through one multiply-add
-            num = f"{ok[0]} * {rec} - " if a[0][0] == "v" else "-"
-            expr = f"{num}({I} + {ok[1]} * {_v0(n)}) * {rec}"
+            num = f"{ok[0]} - " if a[0][0] == "v" else "-"
+            expr = f"({num}{I} - {ok[1]} * {_v0(n)}) * {rec}"
         elif op == "sqrt":
             expr = f"({ok[0]} - {I}) * {rec}"
         elif op in ("sincos", "sinhcosh"):

@@ -32,7 +32,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from fmu_build.taylor_graph import Decomposition, Node, Operand
-from fmu_build.taylor_latency import ready
 
 __all__ = ["rewrite", "lin_order0", "lin_order_k"]
 
@@ -189,11 +188,11 @@ class _Products:
     multiset of factors x and inverse factors ~x (1 / x).  A pair of them common to several
     monomials (or already a node) becomes one node, x y or x / d, that they all use (CSE modulo
     associativity and commutativity: a x / d and b x / d share x / d).  Each monomial is then
-    multiplied out earliest-ready factors first (taylor_latency: the shortest chain), divided by
-    the product of its inverse factors last."""
+    multiplied out in program order (measured as fast as earliest-ready-first pairing on the
+    paper wheel), divided by the product of its inverse factors last."""
 
-    def __init__(self, nodes: dict[int, Node], roots: list[int], fresh: int, when: dict[int, float]):
-        self.nodes, self.fresh, self.when = nodes, fresh, dict(when)
+    def __init__(self, nodes: dict[int, Node], roots: list[int], fresh: int):
+        self.nodes, self.fresh = nodes, fresh
         users = _uses(nodes, roots)
         self.absorbed = {m for m in nodes if self.product(m) and len(users.get(m, ())) == 1
                          and users[m][0] >= 0 and self.product(users[m][0])
@@ -218,9 +217,6 @@ class _Products:
     def leaves_of(self, m: int) -> list[int]:
         return self.leaves(m) if m in self.absorbed else [m]
 
-    def at(self, x: int) -> float:
-        return self.when[x if x >= 0 else ~x]
-
     def pair(self, p: tuple[int, int]) -> int:
         """the node of x y (x x: sq) or, p = (~d, x), x / d"""
         if p not in self.made:
@@ -228,7 +224,6 @@ class _Products:
             self.made[p] = n = self.fresh
             self.defs[n] = (Node("div", [("v", b), ("v", ~a)]) if a < 0 else
                             Node("sq", [("v", a)]) if a == b else Node("mul", [("v", a), ("v", b)]))
-            self.when[n] = max(self.at(a), self.at(b)) + 1.0
             self.fresh += 1
         return self.made[p]
 
@@ -252,13 +247,11 @@ class _Products:
                     m[:] = sorted(rest + [pid])
 
     def multiplied(self, xs: list[int]) -> int:
-        """the product of factors xs (var nodes), the two earliest-ready first"""
-        heap = sorted(xs, key=lambda x: (self.when[x], x))
-        while len(heap) > 1:
-            a, b = heap.pop(0), heap.pop(0)
-            heap.append(self.pair((min(a, b), max(a, b))))
-            heap.sort(key=lambda x: (self.when[x], x))
-        return heap[0]
+        """the product of factors xs (var nodes), in program order"""
+        xs = sorted(xs)
+        while len(xs) > 1:
+            xs = [self.pair((xs[0], xs[1]))] + xs[2:]
+        return xs[0]
 
     def result(self) -> dict[int, Node]:
         """the program: node -> definition, new nodes first where they are needed"""
@@ -268,8 +261,7 @@ class _Products:
             if den:
                 self.defs[n] = Node("div", [("v", self.multiplied(num)), ("v", self.multiplied(den))])
                 continue
-            heap = sorted(num, key=lambda x: (self.when[x], x))
-            a, b = sorted([heap[0], self.multiplied(heap[1:])] if len(heap) > 2 else heap)
+            a, b = sorted([self.multiplied(num[:-1]), num[-1]] if len(num) > 2 else num)
             self.defs[n] = Node("sq", [("v", a)]) if a == b else Node("mul", [("v", a), ("v", b)])
         program: dict[int, Node] = {}
         owner = {e: n for n, nd in self.nodes.items() for e in nd.extra}
@@ -322,8 +314,7 @@ def rewrite(dec: Decomposition, share: bool = True) -> Decomposition:
     roots = [o[1] for o in outputs if o is not None and o[0] == "v"]
     program = r.nodes
     if share:
-        when = ready(Decomposition(dec.nx, dec.t_node, r.nodes, r.n_var, r.cst, outputs))
-        program = _Products(r.nodes, roots, r.n_var, when).result()
+        program = _Products(r.nodes, roots, r.n_var).result()
     need = _needed(program, roots)
     new = {m: m for m in range(r.n_fixed)}
     for n in need:  # renumbered in program order, each node's extras right after it

@@ -58,6 +58,12 @@ class _Rewriter:
         self.n_var = self.n_fixed
         self.keys: dict[tuple, Operand] = {}
         self.val: dict[int, _Val] = {n: _Val(None, ("v", n)) for n in range(self.n_fixed)}
+        # old nodes read once (by a node or an output): a sum among them is merged into its
+        # reader (sum_of: its terms), a product with it distributed over its terms
+        reads = [a[1] for nd in dec.nodes.values() for a in nd.args + ([nd.zero[1]] if nd.zero else [])
+                 if a[0] == "v"] + [o[1] for o in dec.outputs if o is not None and o[0] == "v"]
+        self.once = {m for m in set(reads) if reads.count(m) == 1}
+        self.sum_of: dict[int, list[tuple[Scale, int, Operand]]] = {}
 
     # ---- constants ----
     @staticmethod
@@ -106,9 +112,12 @@ class _Rewriter:
         return a if a[0] == "c" else self.value(self.val[a[1]])
 
     def terms(self, a: Operand, sign: int) -> list[tuple[Scale, int, Operand]]:
-        """a as linear terms (factor, sign, operand): a constant is one term with no factor"""
+        """a as linear terms (factor, sign, operand): a constant is one term with no factor; a
+        sum read only here, its terms"""
         if a[0] == "c":
             return [(None, sign, a)]
+        if a[1] in self.once and a[1] in self.sum_of:
+            return [(c, g * sign, b) for c, g, b in self.sum_of[a[1]]]
         v = self.val[a[1]]
         if v.recip:
             return [(None, sign, self.value(v))]
@@ -126,27 +135,48 @@ class _Rewriter:
             return _Val(s, self.var("sq", [x.base]))
         return _Val(s, self.var("mul", [x.base, y.base]))
 
-    def linear(self, op: str, a: list[Operand]) -> _Val:
+    def linear(self, n: int, op: str, a: list[Operand]) -> _Val:
         if op in ("neg", "twice"):
             v = self.val[a[0][1]]
             s = self.sneg(v.s) if op == "neg" else self.smul(self.constant("k", 2.0), v.s)
             return _Val(s, v.base, v.recip)
-        terms = self.terms(a[0], 1) + self.terms(a[1], 1 if op == "add" else -1)
-        (s1, g1, b1), (s2, g2, b2) = terms
-        if s1 == s2 and b1[0] == b2[0] == "v":  # s (B1 +- B2): the factor rides on
-            return _Val(s1, self.var(op, [b1, b2]))
-        if s1 is None and s2 is None:
-            return _Val(None, self.var(op, [b1, b2]))
-        if b1[0] == "c":  # a constant first: the var term leads
-            terms = terms[::-1]
+        return self.sum(n, self.terms(a[0], 1) + self.terms(a[1], 1 if op == "add" else -1))
+
+    def sum(self, n: int, terms: list[tuple[Scale, int, Operand]]) -> _Val:
+        """old node n's value, the sum of terms (factor, sign, operand)"""
+        self.sum_of[n] = terms
+        if len(terms) == 2:
+            (s1, g1, b1), (s2, g2, b2) = terms
+            op = "add" if g1 * g2 > 0 else "sub"
+            if g1 > 0 and s1 == s2 and b1[0] == b2[0] == "v":  # s (B1 +- B2): the factor rides on
+                return _Val(s1, self.var(op, [b1, b2]))
+            if g1 > 0 and s1 is None and s2 is None:
+                return _Val(None, self.var(op, [b1, b2]))
+        terms = sorted(terms, key=lambda x: x[2][0] == "c")  # the var terms lead
         return _Val(None, self.var("lin", [b for _, _, b in terms],
                                    coefs=tuple((s, g) for s, g, _ in terms)))
+
+    def distributed(self, n: int, x: Operand, y: Operand) -> _Val | None:
+        """x y with y = c B + d read only here: c (x B) + d x (one product as before; x B may be
+        shared, and the sum merged into its reader), else None"""
+        if y[0] != "v" or y[1] not in self.once or x[0] != "v" or self.val[x[1]].recip:
+            return None
+        t = self.sum_of.get(y[1], [])
+        var = [u for u in t if u[2][0] == "v"]
+        if len(var) != 1 or len(t) != 2:
+            return None
+        (c, g, b), (_, gd, d) = var[0], next(u for u in t if u[2][0] == "c")
+        v = self.val[x[1]]
+        p = self.product(_Val(None, v.base), _Val(None, b))
+        return self.sum(n, [(self.smul(v.s, self.smul(c, p.s)), g, p.base), (self.smul(v.s, d), gd, v.base)])
 
     def node(self, n: int, nd: Node) -> None:
         op, a = nd.op, nd.args
         if op == "mul" and a[0][0] == "c" or op == "mul" and a[1][0] == "c":
             c, v = (a[0], self.val[a[1][1]]) if a[0][0] == "c" else (a[1], self.val[a[0][1]])
             self.val[n] = _Val(self.smul(c, v.s), v.base, v.recip)
+        elif op == "mul" and (d := self.distributed(n, a[0], a[1]) or self.distributed(n, a[1], a[0])):
+            self.val[n] = d
         elif op in ("mul", "sq"):
             x = self.val[a[0][1]]
             self.val[n] = self.product(x, self.val[a[-1][1]])
@@ -158,7 +188,7 @@ class _Rewriter:
             inv = _Val(self.sdiv(None, y.s), y.base, not y.recip)
             self.val[n] = self.product(x, inv)
         elif op in LINEAR:
-            self.val[n] = self.linear(op, a)
+            self.val[n] = self.linear(n, op, a)
         else:  # every other operation: on its operands' values
             args = [self.arg(x) for x in a]
             zero = None if nd.zero is None else (nd.zero[0], self.arg(nd.zero[1]))
@@ -312,9 +342,9 @@ def rewrite(dec: Decomposition, share: bool = True) -> Decomposition:
         outputs.append(o if v is None else r.value(v) if v.recip else v.base)
         scales.append(None if v is None or v.recip else v.s)
     roots = [o[1] for o in outputs if o is not None and o[0] == "v"]
-    program = r.nodes
+    program = {n: r.nodes[n] for n in _needed(r.nodes, roots)}  # (sums merged: unread nodes)
     if share:
-        program = _Products(r.nodes, roots, r.n_var).result()
+        program = _Products(program, roots, r.n_var).result()
     need = _needed(program, roots)
     new = {m: m for m in range(r.n_fixed)}
     for n in need:  # renumbered in program order, each node's extras right after it

@@ -29,6 +29,7 @@ equal in real arithmetic: tests/test_taylor_rewrite.py compares the series of bo
 """
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
 
 from fmu_build.taylor_graph import Decomposition, Node, Operand
@@ -60,9 +61,12 @@ class _Rewriter:
         self.val: dict[int, _Val] = {n: _Val(None, ("v", n)) for n in range(self.n_fixed)}
         # old nodes read once (by a node or an output): a sum among them is merged into its
         # reader (sum_of: its terms), a product with it distributed over its terms
-        reads = [a[1] for nd in dec.nodes.values() for a in nd.args + ([nd.zero[1]] if nd.zero else [])
-                 if a[0] == "v"] + [o[1] for o in dec.outputs if o is not None and o[0] == "v"]
-        self.once = {m for m in set(reads) if reads.count(m) == 1}
+        reads = [(a[1], nd.op) for nd in dec.nodes.values()
+                 for a in nd.args + ([nd.zero[1]] if nd.zero else []) if a[0] == "v"]
+        reads += [(o[1], "add") for o in dec.outputs if o is not None and o[0] == "v"]
+        n_reads = Counter(m for m, _ in reads)
+        self.once = {m for m in n_reads if n_reads[m] == 1}
+        self.into_sum = {m for m, op in reads if m in self.once and op in ("add", "sub")}
         self.sum_of: dict[int, list[tuple[Scale, int, Operand]]] = {}
 
     # ---- constants ----
@@ -157,9 +161,12 @@ class _Rewriter:
                                    coefs=tuple((s, g) for s, g, _ in terms)))
 
     def distributed(self, n: int, x: Operand, y: Operand) -> _Val | None:
-        """x y with y = c B + d read only here: c (x B) + d x (one product as before; x B may be
-        shared, and the sum merged into its reader), else None"""
-        if y[0] != "v" or y[1] not in self.once or x[0] != "v" or self.val[x[1]].recip:
+        """x y with y = c B + d read only here, x y read only by a sum (or as an output):
+        c (x B) + d x (one product as before; x B may be shared, and the sum merged into its
+        reader), else None (a product read by a product or quotient stays one: its factors
+        may be shared there)"""
+        if (y[0] != "v" or y[1] not in self.once or n not in self.into_sum or x[0] != "v"
+                or self.val[x[1]].recip):
             return None
         t = self.sum_of.get(y[1], [])
         var = [u for u in t if u[2][0] == "v"]

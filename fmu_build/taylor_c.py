@@ -23,7 +23,8 @@ var nodes plus the weighted series j a_j some recurrences use), so that coeffici
 nodes is one block at a compile-time offset from one pointer.  Order 0 is the plain
 right-hand side.  Each order k >= 1 then has two phases:
   1. interior sums: every recurrence's sum over j = 1 .. k-1 of products of coefficients known
-     before order k (a_j b_{k-j}, ...), all nodes at once: one loop over j per group of
+     before order k (a_j b_{k-j}, ...), all nodes at once: one loop over j (j = 2 .. k-1, then
+     j = 1: _interior_loop) per group of
      GROUP accumulators, its body straight-line independent multiply-adds (one per term, a
      W-wide vector operation for W lanes); the sums land in slot k of their nodes;
   2. in program order, each node's boundary terms (j = 0 and j = k: they need coefficient k of
@@ -59,6 +60,10 @@ GROUP = 12  # accumulators of one interior loop (registers: 16 vector registers 
 RECIPROCAL = {"div": 1, "sqrt": None, "log": 0, "dq": 1, "atan2": 2, "pow": 0}
 PACK_GROUP = 8  # accumulators (pairs of 2-double vectors) of one packed interior loop (one lane: _Packs)
 
+# ops whose order k >= 1 has an interior sum, and the weighted operands (j a_j) they need:
+# "a", "b": the first, second argument; "v": the node's own series
+WEIGHTED = {"sincos": "a", "sinhcosh": "a", "exp": "a", "tan": "a", "tanh": "a", "pow": "av",
+            "log": "v", "dq": "v", "atan2": "abv"}
 
 
 def _interior_loop(a: str, b: str, body: list[str], index: bool = False) -> list[str]:
@@ -74,12 +79,6 @@ def _interior_loop(a: str, b: str, body: list[str], index: bool = False) -> list
     return (["        for (j = 2; j < k; j++) {", rows.format("j", a, b)] + body
             + ["        }", "        if (k > 1) {", "            j = 1;", rows.format("j", a, b)]
             + body + ["        }"])
-
-
-# ops whose order k >= 1 has an interior sum, and the weighted operands (j a_j) they need:
-# "a", "b": the first, second argument; "v": the node's own series
-WEIGHTED = {"sincos": "a", "sinhcosh": "a", "exp": "a", "tan": "a", "tanh": "a", "pow": "av",
-            "log": "v", "dq": "v", "atan2": "abv"}
 
 
 @dataclass
@@ -231,7 +230,8 @@ def _zero_lines(plan: _Plan) -> list[str]:
             zop, za = node.zero
             lines.append(f"        {_v0(n, True)} = {C_EXPR[zop].format(_order0(za, True))};")
         elif op == "lin":
-            lines.append(f"        {_v0(n, True)} = {lin_order0(node, *[lambda x: _order0(x, True)] * 2)};")
+            lane0 = lambda x: _order0(x, True)  # noqa: E731  (operands' and constants' values)
+            lines.append(f"        {_v0(n, True)} = {lin_order0(node, lane0, lane0)};")
         else:
             lines.append(f"        {_v0(n, True)} = {C_EXPR[op].format(*args)};")
         if n in plan.recip:  # after the node itself (sqrt's is 1 / (2 v_0))
@@ -405,7 +405,7 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
                 expr = f"{_order0(c)} * {_order_k(v)}"
         elif op == "sq":
             expr = f"{I} + 2.0 * {o0[0]} * {ok[0]}"
-        elif op == "div":  # (a_k - I - b_k v_0) / b_0: a_k through one multiply-add
+        elif op == "div":
             num = f"{ok[0]} - " if a[0][0] == "v" else "-"
             expr = f"({num}{I} - {ok[1]} * {_v0(n)}) * {rec}"
         elif op == "sqrt":

@@ -18,14 +18,19 @@ itself:
   * s1 B1 / (s2 / B2) and (s1 B1) (s2 / B2) = (s1 / s2) div(B1, B2): a reciprocal used as a factor
     becomes a division (one interior sum, not the reciprocal's plus the product's);
   * sums of scaled terms: one `lin` node  sum_i +-[c_i] B_i [+- c0]  (a multiply-add per term),
-    or s (B1 + B2) when both terms share the factor s;
+    or s (B1 + B2) when both terms share the factor s; a sum read once (in CasADi's graph) is
+    merged into the sum reading it;
+  * x (c B + d), the sum read only here and the product only by a sum: c (x B) + d x (as many
+    products, and x B may be shared below);
   * the state derivatives keep their factor: x_i^[k+1] = s_i B_i^[k] / (k + 1) (output_scales);
   * any other operation gets its operand's value (s B or s / B) as a node, made once.
 No division by a factor is introduced (s2 / s1 with s1 a parameter that may be 0 would turn a
 finite value into NaN): factors are only multiplied together, and divided where the original
 graph divides.  Identical nodes are made once (products commutatively), nodes no output needs
-are dropped.  Rounding differs from the original graph's (products reassociated), values are
-equal in real arithmetic: tests/test_taylor_rewrite.py compares the series of both kernels.
+are dropped, then products and quotients are shared modulo associativity (_Products).  Rounding
+differs from the original graph's (products reassociated), values are equal in real arithmetic:
+tests/test_taylor_rewrite.py checks them against CasADi's derivatives and the un-rewritten
+kernel; docs/taylor.md has the counts and timings.
 """
 from __future__ import annotations
 
@@ -50,6 +55,8 @@ class _Val:
 
 
 class _Rewriter:
+    """CasADi's decomposition, node by node in program order, into values s B of a new graph"""
+
     def __init__(self, dec: Decomposition):
         self.dec = dec
         self.cst = list(dec.cst)
@@ -172,7 +179,8 @@ class _Rewriter:
         var = [u for u in t if u[2][0] == "v"]
         if len(var) != 1 or len(t) != 2:
             return None
-        (c, g, b), (_, gd, d) = var[0], next(u for u in t if u[2][0] == "c")
+        (c, g, b), (cd, gd, d) = var[0], next(u for u in t if u[2][0] == "c")
+        d = self.smul(cd, d)
         v = self.val[x[1]]
         p = self.product(_Val(None, v.base), _Val(None, b))
         return self.sum(n, [(self.smul(v.s, self.smul(c, p.s)), g, p.base), (self.smul(v.s, d), gd, v.base)])

@@ -70,7 +70,7 @@ def _rules_system() -> ca.Function:
     sa = a * (0.7 * a)  # x (c x)
     e = -(2.0 * (p[0] * b)) * (p[1] * a)  # factors through neg, twice and a product
     f = [
-        r * (p[0] * sa) - (b * r) * 1.3 + e,  # reciprocal factors -> divisions; lin of scaled terms
+        r * (p[0] * sa) - (b * r) * 1.3 + e + ca.exp(-(a * b)),  # reciprocals -> divisions; lin
         ca.sin(0.5 * (a - p[1] * d)) * (c * r) / (0.25 * b * b + 1.0),  # scaled sincos argument
         (p[0] * a) / (p[1] * (c + 2.0)) + 1.0 / (r * (d * d + 1.0)) - 2.0 * ca.sqrt(3.0 * (c + 2.5)),
         ca.atan2(p[0] * a + 0.3, 2.0 * b - 4.0) + (0.5 * (d + 2.0)) ** 1.5 - t * (p[0] * c)

@@ -8,8 +8,8 @@ calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8 at orde
 15 (rel_tol 1e-4, 1e-7, 1e-10, 1e-12) and the ratio of a W-lane call to a one-lane call (the
 cost of W trajectories against one: 1 would be perfect vectorisation, W none at all).
 
-With --baseline REF the kernel generator of that git ref (fmu_build/taylor_c.py, taylor_graph.py,
-c_src/gw_taylor_ops.h, gw_taylor.c) is timed in the same rounds, and its states' series are compared with
+With --baseline REF the kernel generator of that git ref (fmu_build/taylor_c.py, taylor_graph.py
+and, where REF has it, taylor_rewrite.py; c_src/gw_taylor_ops.h, gw_taylor.c) is timed in the same rounds, and its states' series are compared with
 this tree's (they differ by rounding only: the summation order).  Timings on a loaded machine
 are noisy: compare ratios from one run; re-measure absolute times on a quiet machine.
 
@@ -91,9 +91,15 @@ def baseline_source(ref: str, ode, model: str, out: Path) -> None:
     pkg = out / "py"
     pkg.mkdir(parents=True)
     tag = "gwbase_" + "".join(ch for ch in ref if ch.isalnum())
-    (pkg / f"{tag}_graph.py").write_text(show("fmu_build/taylor_graph.py"))
-    (pkg / f"{tag}_c.py").write_text(show("fmu_build/taylor_c.py").replace(
-        "fmu_build.taylor_graph", f"{tag}_graph"))
+    have = subprocess.run(["git", "-C", str(ROOT), "ls-tree", "--name-only", ref, "fmu_build/"],
+                          check=True, capture_output=True, text=True).stdout.split()
+    parts = [m for m in ("graph", "c", "rewrite") if f"fmu_build/taylor_{m}.py" in have]
+    for m in parts:  # the generator's modules of ref, importing each other, not this tree's
+        text = show(f"fmu_build/taylor_{m}.py")
+        for other in parts:
+            text = text.replace(f"fmu_build.taylor_{other} ", f"{tag}_{other} ").replace(
+                f"fmu_build.taylor_{other}\n", f"{tag}_{other}\n")
+        (pkg / f"{tag}_{m}.py").write_text(text)
     for name in ("gw_taylor_ops.h", "gw_taylor.c"):
         (out / name).write_text(show(f"c_src/{name}"))
     sys.path.insert(0, str(pkg))

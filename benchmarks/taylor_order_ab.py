@@ -18,6 +18,7 @@ loaded machine are noisy; the ratios come from one run.
 from __future__ import annotations
 
 import argparse
+import re
 import shutil
 import subprocess
 import sys
@@ -59,8 +60,16 @@ def variant(fmu: Path, work: Path, name: str, flags: list[str], base: str | None
         baseline_source(base, taylor_ode(built.spec.functions()), built.spec.name, kernel)
         for f in ("gw_taylor_model.h", "gw_taylor_ops.h", "gw_taylor.c"):
             shutil.copy(kernel / f, src / f)
-        # (model_desc.c keeps this tree's work size n_var: REV's kernel must need no more, true
-        # of every revision before the packed rows)
+        # model_desc.c's work size n_var and constants n_cst: the larger of this tree's and REV's
+        # kernel's (a REV with more nodes wrote past this tree's work array: a heap corruption)
+        head = (kernel / "gw_taylor_model.h").read_text()
+        nx = int(re.search(r"#define GW_TL_NX (\d+)", head)[1])
+        need = nx + int(re.search(r"#define GW_TL_NVAR \(GW_TL_NX \+ (\d+) \+ 1\)", head)[1]) + 1
+        desc = (src / "model_desc.c").read_text()
+        ncst = int(re.search(r"#define GW_TL_NCST (\d+)", head)[1])
+        desc = re.sub(r"(\.taylor = \{gw_tl1_jet, gw_tl1_cst, )(\d+), (\d+)",
+                      lambda m: f"{m[1]}{max(int(m[2]), need)}, {max(int(m[3]), ncst)}", desc)
+        (src / "model_desc.c").write_text(desc)
     so = next((d / "binaries").rglob("*.so"))
     compile_shared(src / UNITY_SOURCE, [src], so, extra_flags=flags)
     out = work / f"{name}.fmu"

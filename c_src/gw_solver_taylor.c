@@ -215,8 +215,15 @@ static GW_TL_CLONED void gw_taylor_increment8_om(const double *x0, size_t so, in
 #define GW_TL_INCREMENT8 0
 #endif
 
-/* gw_taylor_increment on the series X with state i's coefficient k at X[i si + k so] */
-static void gw_taylor_increment_strided(const double *X, size_t si, size_t so, int order, int nx,
+/* gw_taylor_increment on the series X with state i's coefficient k at X[i si + k so]; cloned
+ * like the blocks of 8 and the ensemble's increments pass (gw_ens_increments fuses the last
+ * nx mod 8 components' multiply-adds too: unfused here, those components of a single run were
+ * 1 ulp off the ensemble's lane, tests/test_taylor.py::
+ * test_ensemble_rejected_steps_retry_on_the_lane_series, lunar_rover's 9th state) */
+#ifndef GW_TL_CLONED
+#define GW_TL_CLONED
+#endif
+static GW_TL_CLONED void gw_taylor_increment_strided(const double *X, size_t si, size_t so, int order, int nx,
                                         double h, double *dx, double *dp) {
     enum { B = 8 };
     int i0, b, k;

@@ -23,7 +23,8 @@ var nodes plus the weighted series j a_j some recurrences use), so that coeffici
 nodes is one block at a compile-time offset from one pointer.  Order 0 is the plain
 right-hand side.  Each order k >= 1 then has two phases:
   1. interior sums: every recurrence's sum over j = 1 .. k-1 of products of coefficients known
-     before order k (a_j b_{k-j}, ...), all nodes at once: one loop over j per group of
+     before order k (a_j b_{k-j}, ...), all nodes at once: one loop over j (j = 2 .. k-1, then
+     j = 1: _interior_loop) per group of
      GROUP accumulators, its body straight-line independent multiply-adds (one per term, a
      W-wide vector operation for W lanes); the sums land in slot k of their nodes;
   2. in program order, each node's boundary terms (j = 0 and j = k: they need coefficient k of
@@ -48,6 +49,7 @@ from pathlib import Path
 import casadi as ca
 
 from fmu_build.taylor_graph import C_EXPR, PIECEWISE, Decomposition, Operand, decompose
+from fmu_build.taylor_rewrite import lin_order0, lin_order_k
 
 __all__ = ["TaylorKernel", "taylor_source", "write_taylor_kernel", "work_series", "KERNEL_FILE",
            "GROUP"]
@@ -62,6 +64,21 @@ PACK_GROUP = 8  # accumulators (pairs of 2-double vectors) of one packed interio
 # "a", "b": the first, second argument; "v": the node's own series
 WEIGHTED = {"sincos": "a", "sinhcosh": "a", "exp": "a", "tan": "a", "tanh": "a", "pow": "av",
             "log": "v", "dq": "v", "atan2": "abv"}
+
+
+def _interior_loop(a: str, b: str, body: list[str], index: bool = False) -> list[str]:
+    """the loop of interior terms: j = 2 .. k - 1, then j = 1, whose b_{k-1} is the newest
+    coefficient (from the end of order k - 1): the other terms need not wait for it; pointers
+    a, b at rows j, k - j plus offsets a, b.  index: one loop, j = 1 as its last iteration
+    (measured best for the packed one-lane kernel), else the body again after the loop (best
+    for W lanes)"""
+    rows = "            const double *a = GW_ORD({0}) + {1}, *b = GW_ORD(k - {0}) + {2};"
+    if index:
+        return (["        for (j = 2; j <= k; j++) {", "            const int i = j < k ? j : 1;",
+                 rows.format("i", a, b)] + body + ["        }"])
+    return (["        for (j = 2; j < k; j++) {", rows.format("j", a, b)] + body
+            + ["        }", "        if (k > 1) {", "            j = 1;", rows.format("j", a, b)]
+            + body + ["        }"])
 
 
 @dataclass
@@ -212,6 +229,9 @@ def _zero_lines(plan: _Plan) -> list[str]:
         elif op == "dq":
             zop, za = node.zero
             lines.append(f"        {_v0(n, True)} = {C_EXPR[zop].format(_order0(za, True))};")
+        elif op == "lin":
+            lane0 = lambda x: _order0(x, True)  # noqa: E731  (operands' and constants' values)
+            lines.append(f"        {_v0(n, True)} = {lin_order0(node, lane0, lane0)};")
         else:
             lines.append(f"        {_v0(n, True)} = {C_EXPR[op].format(*args)};")
         if n in plan.recip:  # after the node itself (sqrt's is 1 / (2 v_0))
@@ -245,18 +265,16 @@ def _interior_lines(plan: _Plan) -> list[str]:
         lines.append("    for (l = 0; l < GW_TL_BLK; l++) {")
         lines.append(f"        GW_TL(v) {', '.join(acc.values())};")
         lines += [f"        GW_TLZ({s});" for s in acc.values()]
-        lines.append("        for (j = 1; j < k; j++) {")
-        lines.append("            const double *a = GW_ORD(j) + l * GW_TL_VW, "
-                     "*b = GW_ORD(k - j) + l * GW_TL_VW;")
+        body = []
         for n in group:
             for t in targets[n]:
                 op = "GW_TLFMA" if t.sign > 0 else "GW_TLFMS"
                 if t.factor is None:
-                    lines.append(f"            {op}({acc[n]}, a + {t.a} * GW_TL_W, b + {t.b} * GW_TL_W);")
+                    body.append(f"            {op}({acc[n]}, a + {t.a} * GW_TL_W, b + {t.b} * GW_TL_W);")
                 else:
-                    lines.append(f"            {op}3({acc[n]}, c + {t.factor} * GW_TL_W + l * GW_TL_VW, "
-                                 f"a + {t.a} * GW_TL_W, b + {t.b} * GW_TL_W);")
-        lines.append("        }")
+                    body.append(f"            {op}3({acc[n]}, c + {t.factor} * GW_TL_W + l * GW_TL_VW, "
+                                f"a + {t.a} * GW_TL_W, b + {t.b} * GW_TL_W);")
+        lines += _interior_loop("l * GW_TL_VW", "l * GW_TL_VW", body)
         lines += [f"        GW_TLST(vk + {n} * GW_TL_W + l * GW_TL_VW, {s});" for n, s in acc.items()]
         lines.append("    }")
     return lines
@@ -339,13 +357,9 @@ class _Packs:
             lines.append("    {")
             lines.append(f"        GW_TL(p) {', '.join(acc)};")
             lines += [f"        GW_TLPZ({a});" for a in acc]
-            lines.append("        for (j = 1; j < k; j++) {")
-            lines.append(f"            const double *a = GW_ORD(j) + {self.base}, "
-                         f"*b = GW_ORD(k - j) + {self.base + self.slots};")
-            for (q, (first, rows)), a in zip(group, acc):
-                for r in range(rows):
-                    lines.append(f"            GW_TLPFMA({a}, a + {first + 4 * r}, b + {first + 4 * r});")
-            lines.append("        }")
+            body = [f"            GW_TLPFMA({a}, a + {first + 4 * r}, b + {first + 4 * r});"
+                    for (q, (first, rows)), a in zip(group, acc) for r in range(rows)]
+            lines += _interior_loop(str(self.base), str(self.base + self.slots), body, True)
             lines += [f"        GW_TLPST(gw_is + {4 * q}, {a});" for (q, _), a in zip(group, acc)]
             lines.append("    }")
         return lines
@@ -377,6 +391,8 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
                 expr = f"{first} {sign} {second}"
             else:
                 expr = first if a[1][0] == "c" else (second if op == "add" else f"-{second}")
+        elif op == "lin":
+            expr = lin_order_k(node, _order_k, _order0)
         elif op == "neg":
             expr = f"-{ok[0]}"
         elif op == "twice":
@@ -447,13 +463,16 @@ def _next(plan: _Plan, order0: bool) -> list[tuple[bool, str]]:
             out.append((False, f"GW_VN({n}) = {f}{scale};"))
 
     for i, o in enumerate(dec.outputs):
+        s = dec.output_scales[i] if dec.output_scales else None  # x_i' = s output_i
         if order0:
             f = None if o is None else _order0(o, True)
+            f = f if f is None or s is None else f"{_order0(s, True)} * {f}"
         else:
             f = None if o is None or o[0] == "c" else _vk(o[1])
-        put(i, f, " * rk1")
+        scaled = f is None or s is None or order0
+        put(i, f, " * rk1" if scaled else f" * ({_order0(s)} * rk1)")
         if i in plan.weighted:
-            put(plan.weighted[i], f)
+            put(plan.weighted[i], f if scaled else f"{_order0(s)} * {f}")
     if dec.t_node is not None:
         T = dec.t_node
         for n in [T] + ([plan.weighted[T]] if T in plan.weighted else []):

@@ -15,6 +15,10 @@ turns it into such a decomposition:
     one number each, computed once per integration call.
   * outputs: for each state, the operand of its derivative (x_i^[k+1] = f_i^[k] / (k + 1)).
 
+decompose() then rewrites the graph (fmu_build/taylor_rewrite.py, exact in real arithmetic:
+constant factors carried to the consumers, `lin` nodes for scaled sums, squares, reciprocal
+factors as divisions, products shared modulo associativity): what every kernel is built from.
+
 Operations (CasADi OP_* code -> recurrence; fmu_build/taylor_c.py has the formulas):
   add sub neg twice mul (linear when one factor is constant) div inv sq sqrt sin/cos (one
   pair per argument) sinh/cosh (pair) tan tanh exp log pow/constpow (constant exponent; a
@@ -71,6 +75,7 @@ class Node:
     args: list[Operand]
     extra: list[int] = field(default_factory=list)  # sincos: [cos node]; tan/tanh: [aux q]
     zero: tuple[str, Operand] | None = None  # dq: the op giving order 0 (atan, asin, acos)
+    coefs: tuple = ()  # lin (fmu_build/taylor_rewrite.py): per operand (factor or None, sign)
 
 
 @dataclass
@@ -84,6 +89,7 @@ class Decomposition:
     cst: list[tuple[str, list]]  # ("p"|"u", index) | ("k", value) | (op, [Operand...])
     outputs: list[Operand | None]  # per state: derivative operand (None: structural zero)
     op_counts: dict[str, int] = field(default_factory=dict)
+    output_scales: list[Operand | None] = field(default_factory=list)  # x_i' = s_i output_i
 
     @property
     def n_cst(self) -> int:
@@ -189,8 +195,10 @@ class _Builder:
             "supported: " + ", ".join(sorted(set(C_EXPR) - {"constpow"})))
 
 
-def decompose(ode: ca.Function) -> Decomposition:
-    """The Taylor decomposition of ode(t, x, u, p) -> xdot (an SX casadi.Function).
+def decompose(ode: ca.Function, rewrite: bool = True) -> Decomposition:
+    """The Taylor decomposition of ode(t, x, u, p) -> xdot (an SX casadi.Function); rewrite:
+    with the exact rewrites of fmu_build/taylor_rewrite.py (constant factors carried to the
+    consumers, squares, reciprocals folded into divisions), as every kernel is built.
 
     Inputs must be, in order, t (1), x (nx), u (nu), p (np) dense vectors; the output xdot
     (nx).  Raises TaylorUnsupportedError for an operation without a recurrence, ValueError
@@ -234,6 +242,10 @@ def decompose(ode: ca.Function) -> Decomposition:
             n_args = 1 if op in UNARY else 2
             args = [work[i] for i in ins[:n_args]]
             work[outs[0]] = b.apply(op, args)
-    return Decomposition(nx=nx, t_node=b.t_node, nodes=b.nodes, n_var=b.n_var, cst=b.cst,
-                         outputs=outputs, op_counts=dict(b.counts))
+    dec = Decomposition(nx=nx, t_node=b.t_node, nodes=b.nodes, n_var=b.n_var, cst=b.cst,
+                        outputs=outputs, op_counts=dict(b.counts))
+    if not rewrite:
+        return dec
+    from fmu_build.taylor_rewrite import rewrite as rewritten  # it builds on this module's types
+    return rewritten(dec)
 

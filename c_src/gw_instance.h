@@ -150,7 +150,7 @@ GW_INTERNAL int gw_eval_jac(gw_instance *I, double t, const double *x, double *J
 GW_INTERNAL int gw_eval_upd(gw_instance *I, double t, const double *x, int k, double *x_out);
 /* I->pre_c = ode_pre(p) if the parameters changed since (the hoisted part of ode and evt);
  * non-zero if it failed */
-GW_INTERNAL int gw_eval_pre(gw_instance *I);
+GW_INTERNAL GW_MAYBE_UNUSED int gw_eval_pre(gw_instance *I);
 
 /* ---- gw_values.c ---------------------------------------------------------------------------- */
 #define GW_N_SETTINGS 5 /* gw_setting: solver, rel_tol, abs_tol, max_step, max_internal_steps */

@@ -116,12 +116,13 @@ def test_an_operation_without_c_here_keeps_gw_evt():
     (GW_TL_HAS_EVT 0): the runtime evaluates gw_evt; so do indicators that read nothing from
     the kernel (no gain)."""
     t, x, u, p = ca.SX.sym("t"), ca.SX.sym("x", 2), ca.SX.sym("u", 0), ca.SX.sym("p", 1)
-    ode = ca.Function("gw_ode", [t, x, u, p], [ca.vertcat(x[1], -ca.sin(x[0]))], ["t", "x", "u", "p"], ["xdot"])
+    names = ["t", "x", "u", "p"]
+    ode = ca.Function("gw_ode", [t, x, u, p], [ca.vertcat(x[1], -ca.sin(x[0]))], names, ["xdot"])
     dec = decompose(optimised(ode))
     assert ("sin", 0) in kernel_nodes(dec)
 
     def source(e):
-        return event_source(optimised(ca.Function("gw_evt", [t, x, u, p], [e], ["t", "x", "u", "p"], ["e"])), dec)
+        return event_source(optimised(ca.Function("gw_evt", [t, x, u, p], [e], names, ["e"])), dec)
     assert "GW_TL_HAS_EVT 1" in source(ca.sin(x[0]) - p[0])
     assert "GW_TL_HAS_EVT 0" in source(ca.erf(x[1]) + ca.sin(x[0]))
     assert "GW_TL_HAS_EVT 0" in source(x[1] - p[0])  # nothing from the kernel

@@ -372,9 +372,16 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
             const double target = gw_ens_target(E, L);
             gw_int_result r;
             if (GW_ENSEMBLE_LANE_STEPS || err[l] > 1.0) gw_ens_fetch(I, L); /* retries read it */
+#if defined(GW_TL_HAS_EVT) && GW_TL_HAS_EVT && GW_TAYLOR_KERNEL_EVT
+            if (E->m->ne > 0 && gw_eval_pre(I) == 0) { /* the indicators at (t1, xnew) */
+                gw_tlb_evt(E->w + l, L->t1, I->u, I->p, I->pre_c, I->enew);
+                I->enew_ready = 1;
+            }
+#endif
             r = GW_ENSEMBLE_LANE_STEPS
                     ? gw_taylor_conclude(I, target, &L->run, L->h, L->t1, E->w + SO + l, SI, &fresh)
                     : gw_taylor_conclude_err(I, target, &L->run, L->h, L->t1, err[l], 1, &fresh);
+            I->enew_ready = 0;
             L->pending = 0;
             L->ser = NULL; /* the series of the point before: no longer the lane's */
             if (!gw_ens_after(E, L, r, target)) fresh = 0;

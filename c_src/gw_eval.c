@@ -79,6 +79,8 @@ static int gw_fun_call_txup(gw_fun *f, double t, const double *x, double *out) {
     return r;
 }
 
+GW_INTERNAL GW_MAYBE_UNUSED int gw_eval_pre(gw_instance *I) { return gw_pre_ready(I); }
+
 GW_API int gw_eval_init(gw_instance *I, double *x_out) {
     if (!I->f_init.eval) return -1;
     I->f_init.arg[0] = I->s;

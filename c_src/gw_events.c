@@ -190,7 +190,10 @@ GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, d
     const gw_model *m = I->m;
     int i, ne = m->ne, winner = -1, jumped = 0;
     double best = t1;
-    if (gw_eval_evt(I, t1, I->xnew, I->enew) != 0) {
+    if (I->enew_ready) { /* from the Taylor kernel's series at (t1, xnew), GW_TL(evt) */
+        I->enew_ready = 0;
+        I->n_evt++;
+    } else if (gw_eval_evt(I, t1, I->xnew, I->enew) != 0) {
         GW_LOG_ERR(I, "evaluation of the event indicators failed at t=%.17g", t1);
         return GW_EV_ERROR;
     }

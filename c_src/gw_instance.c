@@ -226,6 +226,7 @@ GW_API void gw_instance_reset(gw_instance *I) {
     I->last_successful_time = 0.0;
     I->y_valid = 0;
     I->pre_valid = 0;
+    I->enew_ready = 0;
     I->fcur_valid = 0;
     I->xdot_valid = 0;
     I->dir_valid = 0;

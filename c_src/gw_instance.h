@@ -69,6 +69,8 @@ struct gw_instance {
     int k7_valid;                      /* k[6] == ode(t0 + h, xnew) */
     int dense_ready;                   /* rcont holds the dense output of that step */
     double *enew, *eev;                /* ne */
+    int enew_ready; /* enew holds the indicators at the pending attempt's end (t1, xnew), read
+                       from the Taylor kernel's order-0 row (gw_taylor_model.h: GW_TL(evt)) */
     /* compensated summation of the state (TwoSum): x + xc is the state to twice the working
      * precision; xcnew goes with xnew; xc_x is the x that xc belongs to (a front end that
      * writes x makes xc stale) */
@@ -146,6 +148,9 @@ GW_INTERNAL void gw_fun_bind(gw_instance *I);
 GW_INTERNAL int gw_eval_jac(gw_instance *I, double t, const double *x, double *J);
 /* x_out = upd(t, x, u, p, k); non-zero if failed or absent */
 GW_INTERNAL int gw_eval_upd(gw_instance *I, double t, const double *x, int k, double *x_out);
+/* I->pre_c = ode_pre(p) if the parameters changed since (the hoisted part of ode and evt);
+ * non-zero if it failed */
+GW_INTERNAL GW_MAYBE_UNUSED int gw_eval_pre(gw_instance *I);
 
 /* ---- gw_values.c ---------------------------------------------------------------------------- */
 #define GW_N_SETTINGS 5 /* gw_setting: solver, rel_tol, abs_tol, max_step, max_internal_steps */

@@ -397,6 +397,7 @@ GW_INTERNAL gw_int_result gw_taylor_conclude_err(gw_instance *I, double t_end, g
     int last;
     *fresh = 0;
     while (err > 1.0) {
+        I->enew_ready = 0; /* xnew moves: gw_evt at the retry's end */
         /* the coefficients' step was too long (a near pole the last two orders do not show, a
          * stiff mode): shorter steps on the same series, as a rejected step of any solver */
         I->n_rejected++;
@@ -476,9 +477,16 @@ GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end) {
             double tt = t1;
             GW_TL_SERIES(I->tl_order, &tt, I->xnew, I->tl_c, I->tl_wn);
             I->n_rhs++;
+#if defined(GW_TL1_SERIES) && defined(GW_TL_HAS_EVT) && GW_TL_HAS_EVT && GW_TAYLOR_KERNEL_EVT
+            if (I->m->ne > 0 && gw_eval_pre(I) == 0) { /* the indicators there: its order 0 */
+                gw_tl1_evt(I->tl_wn, t1, I->u, I->p, I->pre_c, I->enew);
+                I->enew_ready = 1;
+            }
+#endif
         }
         result = gw_taylor_conclude(I, t_end, &run, h, t1, last ? NULL : I->tl_wn + I->tl_so,
                                     (size_t)I->tl_si, &fresh);
+        I->enew_ready = 0;
         if (result != GW_INT_OK) break;
         have = fresh;
         if (have) gw_swap_series(&I->tl_w, &I->tl_wn);

@@ -145,7 +145,7 @@ def generate_taylor(fns: dict[str, ca.Function], model: str, out_dir: Path,
     if not wanted:
         (out_dir / KERNEL_FILE).write_text(f"/* no Taylor kernel: {NO_KERNEL} */\n")
         return NO_KERNEL
-    return write_taylor_kernel(taylor_ode(fns), model, out_dir)
+    return write_taylor_kernel(taylor_ode(fns), model, out_dir, fns.get("evt"))
 
 
 def _c_string(text: str) -> str:

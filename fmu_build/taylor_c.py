@@ -49,6 +49,7 @@ from pathlib import Path
 import casadi as ca
 
 from fmu_build.taylor_graph import C_EXPR, PIECEWISE, Decomposition, Operand, decompose
+from fmu_build.taylor_events import event_source
 from fmu_build.taylor_rewrite import lin_order0, lin_order_k
 
 __all__ = ["TaylorKernel", "taylor_source", "write_taylor_kernel", "work_series", "KERNEL_FILE",
@@ -536,8 +537,9 @@ def _loops(items: list[tuple[bool, str]]) -> list[str]:
     return lines
 
 
-def taylor_source(dec: Decomposition, model: str) -> str:
-    """The template text of gw_taylor_model.h for a decomposition."""
+def taylor_source(dec: Decomposition, model: str, evt: ca.Function | None = None) -> str:
+    """The template text of gw_taylor_model.h for a decomposition (evt: the model's event
+    indicators, read from the kernel's order-0 row where they can be: taylor_events.py)."""
     plan = _Plan(dec)
     packs = _Packs(plan)
     ops = ", ".join(f"{k} {v}" for k, v in sorted(dec.op_counts.items()))
@@ -674,7 +676,7 @@ GW_TL_STATIC void GW_TL(jet)(int order, const double *t, const double *x, const 
 }}
 /* the row's length, for a caller of series() that reads its layout in place (gw_ensemble.c) */
 enum {{ GW_TL(row) = GW_TL_ROW }};
-#undef GW_TLZ
+{event_source(evt, dec)}#undef GW_TLZ
 #undef GW_TLFMA
 #undef GW_TLFMS
 #undef GW_TLFMA3
@@ -695,12 +697,14 @@ enum {{ GW_TL(row) = GW_TL_ROW }};
 """
 
 
-def write_taylor_kernel(ode: ca.Function, model: str, out_dir: Path) -> TaylorKernel:
-    """Decompose `ode` and write gw_taylor_model.h into out_dir.
+def write_taylor_kernel(ode: ca.Function, model: str, out_dir: Path,
+                        evt: ca.Function | None = None) -> TaylorKernel:
+    """Decompose `ode` and write gw_taylor_model.h into out_dir (evt: the event indicators as
+    code-generated, taylor_events.event_source).
 
     Raises fmu_build.taylor_graph.TaylorUnsupportedError for an operation without a recurrence.
     """
     dec = decompose(ode)
-    (out_dir / KERNEL_FILE).write_text(taylor_source(dec, model))
+    (out_dir / KERNEL_FILE).write_text(taylor_source(dec, model, evt))
     return TaylorKernel(n_var=work_series(dec), n_cst=dec.n_cst, has_t=dec.t_node is not None,
                         op_counts=dict(dec.op_counts))

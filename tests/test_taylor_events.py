@@ -1,0 +1,158 @@
+"""The event indicators read from the Taylor kernel's order-0 row (fmu_build/taylor_events.py).
+
+Solver taylor and the ensemble evaluate the indicators at each accepted step's end from the
+series the kernel has just computed there (GW_TL(evt)) instead of calling gw_evt: the values
+must be gw_evt's (to a rounding of the kernel's own sine), the events at the same times, and a
+model whose indicators use an operation the generator does not write keeps gw_evt.
+"""
+from __future__ import annotations
+
+import ctypes
+import subprocess
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from conftest import SCENES
+from fmu_build import build_fmu, load_scene, parse_scene
+from fmu_build.builder import model_spec
+from fmu_build.codegen import hoisted, optimised, taylor_ode
+from fmu_build.compiler import compiler
+from fmu_build.ensemble import Ensemble
+from fmu_build.taylor_c import taylor_source
+from fmu_build.taylor_events import event_source, kernel_nodes
+from fmu_build.taylor_graph import decompose
+
+ROOT = Path(__file__).resolve().parent.parent
+_HARNESS = """#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#define GW_MAYBE_UNUSED __attribute__((unused))
+#define GW_TL_W 1
+#define GW_TL(name) gw_tl1_##name
+#include "gw_taylor_model.h"
+int evt(int order, double t, const double *x, const double *u, const double *p, const double *pc,
+        double *e);
+/* the kernel's series at (t, x), then the indicators from its order-0 row */
+int evt(int order, double t, const double *x, const double *u, const double *p, const double *pc,
+        double *e) {
+    double c[GW_TL_NCST + 1];
+    double *w = (double *)malloc(sizeof(double) * ((size_t)GW_TL_NVAR * (size_t)(order + 1) + 8));
+    double *wi = (double *)(void *)(((uintptr_t)w + 31u) & ~(uintptr_t)31u);
+    if (!w) return -1;
+    gw_tl1_cst(u, p, c);
+    gw_tl1_series(order, &t, x, c, wi);
+#if GW_TL_HAS_EVT
+    gw_tl1_evt(wi, t, u, p, pc, e);
+#endif
+    free(w);
+    return GW_TL_HAS_EVT;
+}
+"""
+
+
+def _functions(spec) -> dict[str, ca.Function]:
+    """The functions as the FMU's build generates them (codegen.generate_functions)."""
+    return {slot: optimised(f) for slot, f in hoisted(spec).items()}
+
+
+def _library(fns: dict[str, ca.Function], tmp: Path) -> ctypes.CDLL:
+    dec = decompose(taylor_ode(fns))
+    (tmp / "gw_taylor_model.h").write_text(taylor_source(dec, "m", fns.get("evt")))
+    (tmp / "evt.c").write_text(_HARNESS)
+    lib = tmp / "evt.so"
+    subprocess.run([compiler(), "-std=c99", "-O2", "-shared", "-fPIC", "-Wall", "-Wextra", "-Werror",
+                    f"-I{ROOT / 'c_src'}", f"-I{tmp}", str(tmp / "evt.c"), "-o", str(lib), "-lm"],
+                   check=True, capture_output=True)
+    return ctypes.CDLL(str(lib))
+
+
+def _ptr(a: np.ndarray):
+    return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+SCENE_FILES = sorted(SCENES.glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", SCENE_FILES, ids=lambda p: p.stem)
+def test_kernel_indicators_equal_the_event_function(path, tmp_path):
+    """At random states (the scene's parameters), every indicator from the kernel's row equals
+    gw_evt's function (CasADi evaluating it) to a rounding of a sine; every scene's fall event
+    reads sin(beta) from the kernel, so each scene with events has the function.  (The C of
+    gw_evt's own operations is checked bit for bit by the ensemble tests below and in
+    test_taylor.py, which compare whole runs.)"""
+    spec = model_spec(load_scene(path))
+    fns = _functions(spec)
+    if "evt" not in fns:
+        pytest.skip("no events")
+    evt, nx = fns["evt"], spec.x.numel()
+    lib = _library(fns, tmp_path)
+    rng = np.random.default_rng(7)
+    p = np.array([q.start for q in spec.parameters], dtype=float)
+    u = np.array([q.start or 0.0 for q in spec.inputs] or [0.0], dtype=float)
+    pc = np.array(fns["ode_pre"](p), dtype=float).ravel() if "ode_pre" in fns else np.zeros(1)
+    ne, exact, n = evt.nnz_out(0), 0, 0
+    for _ in range(50):
+        x, t = rng.uniform(-2.0, 2.0, nx), float(rng.uniform(0.0, 10.0))
+        args = [t, x, u[: spec.u.numel()], p] + ([pc] if evt.n_in() == 5 else [])
+        ref = np.array(evt(*args), dtype=float).ravel()
+        e = np.full(ne, np.nan)
+        has = lib.evt(3, ctypes.c_double(t), _ptr(x), _ptr(u), _ptr(p), _ptr(pc), _ptr(e))
+        assert has == 1, "the fall event's sin(beta) is a kernel node: the function exists"
+        ok = np.isfinite(ref)
+        assert np.array_equal(np.isfinite(e), ok)
+        # (several roundings where an indicator's terms cancel: slope_descent's 1.09 to 5e-15)
+        np.testing.assert_allclose(e[ok], ref[ok], rtol=0, atol=1e-13 * (1.0 + np.abs(ref[ok]).max()))
+        exact += int(np.sum(e[ok] == ref[ok]))
+        n += int(ok.sum())
+    assert exact > 0  # libm's sin here, gw_sin's in gw_evt: mostly the same bits
+
+
+def test_an_operation_without_c_here_keeps_gw_evt():
+    """An indicator using an operation the generator does not write (erf) gives no function
+    (GW_TL_HAS_EVT 0): the runtime evaluates gw_evt; so do indicators that read nothing from
+    the kernel (no gain)."""
+    t, x, u, p = ca.SX.sym("t"), ca.SX.sym("x", 2), ca.SX.sym("u", 0), ca.SX.sym("p", 1)
+    names = ["t", "x", "u", "p"]
+    ode = ca.Function("gw_ode", [t, x, u, p], [ca.vertcat(x[1], -ca.sin(x[0]))], names, ["xdot"])
+    dec = decompose(optimised(ode))
+    assert ("sin", 0) in kernel_nodes(dec)
+
+    def source(e):
+        return event_source(optimised(ca.Function("gw_evt", [t, x, u, p], [e], names, ["e"])), dec)
+    assert "GW_TL_HAS_EVT 1" in source(ca.sin(x[0]) - p[0])
+    assert "GW_TL_HAS_EVT 0" in source(ca.erf(x[1]) + ca.sin(x[0]))
+    assert "GW_TL_HAS_EVT 0" in source(x[1] - p[0])  # nothing from the kernel
+
+
+FALLS = """[model]
+name = "falls"
+[effects.gravity]
+g = 9.81
+[initial]
+beta_deg = 80.0
+gamma_dot = 1.0
+"""
+
+
+def test_fall_times_as_with_the_event_function(tmp_path, monkeypatch):
+    """Trajectories that fall at different times (the ensemble, 9 on 4 lanes, refills and the
+    one-lane tail): the same steps and fall times as the same library evaluating gw_evt at every
+    step (GW_TAYLOR_KERNEL_EVT 0), to the event location's tolerance (1e-12 s relative; the
+    kernel's sin(beta) may differ from gw_sin's by a rounding), and the same states to 1e-9."""
+    import fmu_build.ensemble as ensemble_mod
+    built = build_fmu(parse_scene(FALLS, "scene.toml"), tmp_path / "f.fmu", build_dir=tmp_path / "b",
+                      taylor=True)
+    assert "GW_TL_HAS_EVT 1" in (tmp_path / "b" / "fmu" / "sources" / "gw_taylor_model.h").read_text()
+    kw = dict(parameters={"g": [9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81], "beta_min": 0.1},
+              starts={"gamma_dot": [6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 4.0, 6.1]}, rel_tol=1e-8)
+    kernel = Ensemble(built.fmu, lanes=4, cache=tmp_path).run(20.0, **kw)
+    monkeypatch.setattr(ensemble_mod, "_UNITY", "#define GW_TAYLOR_KERNEL_EVT 0\n" + ensemble_mod._UNITY)
+    evt = Ensemble(built.fmu, lanes=4, cache=tmp_path).run(20.0, **kw)
+    assert kernel.terminated.sum() >= 3 and list(kernel.status) == list(evt.status)
+    assert list(kernel.steps) == list(evt.steps)
+    np.testing.assert_allclose(kernel.t_final, evt.t_final, rtol=0, atol=2e-12 * 20.0)
+    np.testing.assert_allclose(kernel.x_final, evt.x_final, rtol=1e-9, atol=1e-9)

@@ -639,6 +639,8 @@ GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, con
 {chr(10).join(_loops(_locals(plan, _boundary(plan) + _next(plan, False))))}
 #endif
     }}
+    (void)vk; /* unread when no node has a series (every derivative constant: x' = p) */
+    (void)vn;
     (void)rk;
     (void)rk1;
     (void)dk;

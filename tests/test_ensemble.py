@@ -252,3 +252,34 @@ def test_ensembles_made_at_once_by_threads_on_a_cold_cache(paper, tmp_path, monk
     _same(runs[0], runs[1])
     assert runs[0].status[0] == STATUS_OK
     assert [p.name for p in cache.rglob("*") if p.is_file()] == ["libensemble.so"]
+
+
+def test_runs_of_other_sizes_equal_fresh_runs_and_keep_their_results(paper, tmp_path):
+    """Ensemble.run keeps its buffer layout per (N, grid size) and the C side writes status and
+    flags into the buffer in the types handed out: a sequence of jobs with other N, with and
+    without a grid, other starts and parameters, on one Ensemble returns what each returns on
+    a fresh Ensemble (bit for bit, the same dtypes), and a later run leaves the arrays of an
+    earlier result as they were (each result owns its buffer)."""
+    jobs = [JOB, *OTHERS, dict(starts={"gamma_dot": [6.0, 5.0, 4.0, 3.0]}, rel_tol=1e-4),
+            dict(parameters=np.tile(Ensemble(paper.fmu, cache=tmp_path).default_parameters, (5, 1)),
+                 rel_tol=1e-7, grid=[0.5, 1.0, 2.0]),
+            dict(starts={"gamma_dot": [6.0, 5.0, 4.0, 3.0]}, rel_tol=1e-4, grid=[1.0, 2.0]), JOB]
+    ens = Ensemble(paper.fmu, cache=tmp_path)
+    kept = []
+    for job in jobs:
+        t_end = 6.0 if job is JOB else 2.0
+        res, fresh = ens.run(t_end, **job), Ensemble(paper.fmu, cache=tmp_path).run(t_end, **job)
+        _same(res, fresh)
+        for name in ("status", "steps", "flags", "t_final", "x_final", "y_final", "n_rows", "y_grid"):
+            a, b = getattr(res, name), getattr(fresh, name)
+            assert (a is None) == (b is None) and (a is None or (a.dtype == b.dtype and a.shape == b.shape))
+        assert res.status.dtype == np.int_ and res.steps.dtype == np.int64 and res.flags.dtype == bool
+        assert res.flags.shape == (len(res.status), len(ens.event_names)) and res.x_final.flags.writeable
+        np.testing.assert_array_equal(res.y_final, fresh.y_final)
+        np.testing.assert_array_equal(res.n_rows, fresh.n_rows)
+        kept.append((res, {k: np.copy(getattr(res, k)) for k in ("status", "steps", "flags", "t_final",
+                                                                 "x_final", "y_final", "y_grid")}))
+    assert sorted(ens._layouts) == [(1, 0), (2, 0), (3, 0), (4, 0), (4, 2), (5, 3), (7, 12)]
+    for res, copies in kept:
+        for name, value in copies.items():
+            np.testing.assert_array_equal(getattr(res, name), value)

@@ -78,6 +78,7 @@ def test_runs_from_several_threads_have_their_own_contexts(paper, tmp_path):
 
 DRIVER = r"""
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 static int n_log;
 static void logger(void *env, const char *who, gw_status st, const char *cat, const char *msg) {
@@ -113,6 +114,26 @@ int main(void) {
         if (ID(run)(c, N, P, S, span, tol, status, tf, xf, yf, steps, logger, G, grid, yg, rows, flags))
             return 1;
         printf("%d %d %d %lu %.17g\n", status[0], status[2], status[6], steps[0], xf[0]);
+        if (rep == 0) { /* the same job through run_packed, in a buffer of exactly its layout */
+            const size_t ne = sz[7] > 0 ? (size_t)sz[7] : 1, nf = 5 + G + (size_t)N * (sz[3] + sz[1] + 1
+                             + sz[0] + sz[4]) + (size_t)N * (G + 1) * sz[4];
+            const size_t bytes = 8 * nf + sizeof(long) * 3 * N + sizeof(int) * N * (1 + ne) + N * ne;
+            double *f = malloc(bytes);
+            long *lg = (long *)(f + nf);
+            unsigned char *fl = (unsigned char *)((int *)(lg + 3 * N) + N * (1 + ne));
+            memcpy(f, span, sizeof span);
+            memcpy(f + 2, tol, sizeof tol);
+            memcpy(f + 5, grid, sizeof grid);
+            memcpy(f + 5 + G, P, sizeof(double) * N * sz[3]);
+            memcpy(f + 5 + G + N * sz[3], S, sizeof(double) * N * sz[1]);
+            if (!f || ID(run_packed)(ctx, N, G, f, logger)) return 1;
+            for (k = 0; k < N; k++)
+                if (lg[2 * N + k] != status[k] || (unsigned long)lg[k] != steps[k] || lg[N + k] != rows[k]
+                    || fl[k * ne] != (flags[k * sz[7]] != 0) || f[5 + G + N * (sz[3] + sz[1] + 1) + k * sz[0]]
+                    != xf[k * sz[0]] || f[5 + G + N * (sz[3] + sz[1]) + k] != tf[k])
+                    return 3;
+            free(f);
+        }
         tol[0] = rep == 0 ? 1e-12 : 1e-5;
         if (ID(run)(c, 3, P, S, span, tol, status, tf, xf, yf, steps, logger, 0, NULL, NULL, NULL, flags))
             return 1;
@@ -125,7 +146,8 @@ int main(void) {
 
 def test_ensemble_library_clean_under_sanitizers(paper, tmp_path):
     """The ensemble library (contexts reused across runs of other sizes and orders, the lanes'
-    series fetched lazily through event location, falls, a refused trajectory, a grid) runs clean
+    series fetched lazily through event location, falls, a refused trajectory, a grid; the
+    same job through run_packed in a buffer of exactly its layout, equal) runs clean
     under AddressSanitizer, LeakSanitizer and UndefinedBehaviorSanitizer; each run gives the
     same numbers."""
     from c_programs import MODE_FLAGS, SANITIZER_ENV

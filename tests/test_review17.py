@@ -40,3 +40,70 @@ def test_kernel_indicators_take_casadis_sign_of_nan_and_negative_zero(tmp_path):
         ok = ~np.isnan(ref)
         np.testing.assert_allclose(e[ok], ref[ok], rtol=1e-15, atol=0)
         assert np.array_equal(np.signbit(e[ok]), np.signbit(ref[ok])), (x1, e, ref)
+
+
+def _events_and_state(fmu, unzipdir, h: float, stop: float, tol: float):
+    """Communication steps of h (the last step of each fmi2DoStep checks with gw_evt, the others
+    read the kernel's indicators) until the run ends: ([(event message shape, t)], t reached,
+    the states)."""
+    import re
+
+    from fmi_helpers import Slave
+    from fmpy.fmi2 import fmi2LastSuccessfulTime
+    s = Slave(fmu, unzipdir=unzipdir)
+    try:
+        s.fmu2.setDebugLogging(True, [])
+        s.init(solver=6, rel_tol=tol, abs_tol=tol * 1e-2, max_step=stop)
+        t = 0.0
+        while t < stop - 1e-12:
+            try:
+                s.slave.doStep(t, min(h, stop - t))
+            except Exception:
+                t = s.slave.getRealStatus(fmi2LastSuccessfulTime)
+                break
+            t += min(h, stop - t)
+        events = [(re.sub(r"t=\S+", "t=", m), float(re.search(r"t=([-+0-9.e]+)", m)[1]))
+                  for _, _, m in s.messages if "event " in m and "t=" in m]
+        return events, t, np.array(s.get("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot",
+                                         "gamma_dot", "rolling_mode"))
+    finally:
+        s.free()
+
+
+def test_single_run_update_warning_and_terminal_events_as_with_gw_evt(tmp_path):
+    """Solver taylor's single run reads the indicators from the kernel at every step's end but
+    the last of each fmi2DoStep (c_src/gw_solver_taylor.c); test_taylor_events.py compares only
+    the ensemble against gw_evt, on falls.  slope_hold has all three kinds: the stiction update
+    (rolling_mode -1 -> 0, a jump of the state, the run goes on), the slip warning, the lift-off
+    that ends the run.  Built with the kernel's indicators and rebuilt with gw_evt at every step
+    (GW_TAYLOR_KERNEL_EVT 0), many communication steps and one: the same events in the same
+    order at the same times, the same end, the same states (to the rounding by which the
+    kernel's sine may differ from gw_sin's)."""
+    import subprocess
+    import zipfile
+
+    from conftest import SCENES
+    from fmu_build import build_fmu, load_scene
+    from fmu_build.compiler import compiler
+    built = build_fmu(load_scene(SCENES / "slope_hold.toml"), tmp_path / "s.fmu", build_dir=tmp_path / "b",
+                      taylor=True)
+    assert "#define GW_TL_HAS_EVT 1" in (built.sources / "gw_taylor_model.h").read_text()
+    dirs = {}
+    for flag in (1, 0):
+        unz = dirs[flag] = tmp_path / f"k{flag}"
+        with zipfile.ZipFile(built.fmu) as z:
+            z.extractall(unz)
+        lib = next((unz / "binaries" / "linux64").glob("*.so"))
+        lib.unlink()
+        subprocess.run([compiler(), "-std=c99", "-O2", f"-DGW_TAYLOR_KERNEL_EVT={flag}", "-shared", "-fPIC",
+                        f"-I{built.sources}", str(built.sources / "gw_fmu.c"), "-o", str(lib), "-lm"],
+                       check=True, capture_output=True)
+    for h, tol in ((0.0137, 1e-9), (10.0, 1e-7)):
+        (ek, tk, xk), (e0, t0, x0) = (_events_and_state(built.fmu, dirs[f], h, 10.0, tol) for f in (1, 0))
+        kinds = [k for k, _ in ek]
+        assert any("state updated" in k for k in kinds) and any("warning" in k for k in kinds)
+        assert any("terminated" in k for k in kinds) and tk < 10.0
+        assert kinds == [k for k, _ in e0]
+        np.testing.assert_allclose([t for _, t in ek], [t for _, t in e0], rtol=0, atol=1e-11)
+        assert abs(tk - t0) < 1e-11
+        np.testing.assert_allclose(xk, x0, rtol=1e-9, atol=1e-10)

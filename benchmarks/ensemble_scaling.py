@@ -13,7 +13,8 @@ cheapest at N), the best of them counted:
              included; its JIT compilation is not counted
 Every time is thread CPU time, best of --repeat, the methods interleaved; ratios compare
 per-trajectory times in this one run (absolute times on a loaded machine are not to be quoted).
-Also the fixed cost of one run: N = 1 to t_end = 1 ms (a handful of steps).
+Also the fixed cost of one run: N = 1 to t_end = 1 ms (a handful of steps), and N = 4 to
+1e-9 s at rel_tol 1e-4 (what a run of the 1e-4 rows pays besides its steps).
 --against REF (a git revision, e.g. main) also times REF's ensemble (the same scene built by
 REF's whole tree: its generator, c_src/ and fmu_build/ensemble.py; 4 lanes, at gyrowheel's
 tolerances), interleaved: before and after a change in the same run.
@@ -54,6 +55,16 @@ CALIBRATION_REPEAT, CANDIDATES = 5, 3
 def best(fn, repeat: int) -> float:
     """CPU seconds of the calling thread, best of repeat (work_precision.best_time)."""
     return best_time(fn, repeat)[0]
+
+
+def best_of_many(fn, k: int) -> float:
+    """CPU seconds of the calling thread per call, k calls in a row (a call of a few us is
+    below the clock's resolution)."""
+    import time
+    t0 = time.thread_time()
+    for _ in range(k):
+        fn()
+    return (time.thread_time() - t0) / k
 
 
 def ensemble_at(ref: str, scene: str, work: Path, lanes: int = 4):
@@ -167,10 +178,21 @@ def main() -> int:
                 print(f"| {target:g} (gw tol {g_tol:.1e}, heyoka {h_tol:.1e}) | {n} | {cells} | "
                       f"{t_hy / n * 1e3:.4f} | {bw / t_hy:.2f}x |"
                       + (f" {per_w[args.against][0] / t_hy:.2f}x |" if args.against else ""), flush=True)
-        print("\nfixed cost of one run (N = 1, t_end = 1 ms, rel_tol 1e-10):")
-        for w in args.lanes:
-            t = min(best(lambda: ens[w].run(1e-3, rel_tol=1e-10), 1) for _ in range(args.repeat * 4))
-            print(f"  W = {w}: {t * 1e3:.3f} ms")
+        print("\nfixed cost of one run (N = 1, t_end = 1 ms, rel_tol 1e-10; N = 4 as at 1e-4 above, "
+              "t_end = 1e-9 s: Python, marshalling, the lanes' initialisation, one step):")
+        starts4 = np.tile(s0, (4, 1))
+        starts4[:, i_spin] = s0[i_spin] * (1.0 + 0.01 * np.linspace(-1.0, 1.0, 4))
+        fixed = {w: (lambda w=w: ens[w].run(1e-3, rel_tol=1e-10)) for w in ens}
+        short = {w: (lambda w=w: ens[w].run(1e-9, starts=starts4, rel_tol=1e-4, abs_tol=1e-6))
+                 for w in ens}
+        t1, t4 = dict.fromkeys(ens, float("inf")), dict.fromkeys(ens, float("inf"))
+        for _ in range(args.repeat * 4):  # interleaved, best of
+            for w in ens:
+                t1[w] = min(t1[w], best(fixed[w], 1))
+                t4[w] = min(t4[w], best_of_many(short[w], 200))
+        for w in ens:
+            name = f"W = {w}" if w in args.lanes else f"{w} (W = 4)"
+            print(f"  {name}: {t1[w] * 1e3:.3f} ms; N = 4 to 1e-9 s: {t4[w] * 1e6:.1f} us")
     return 0
 
 

@@ -143,6 +143,35 @@ GW_EXPORT int {id}_ensemble_run(void *ctx, long n, const double *p, const double
     return (int)(ctx ? gw_ensemble_run_in((gw_ensemble_ctx *)ctx, logger, NULL, &job)
                      : gw_ensemble_run(&GW_MODEL, &cb, &job));
 }}
+
+/* The same run with its arrays at fixed places in one buffer (what Ensemble.run passes: five
+ * arguments instead of seventeen, ctypes converting each at about 0.1 us).  f: t_start, t_end,
+ * rel_tol, abs_tol, max_step, the grid (n_grid), p (n x np), s (n x ns), then the outputs
+ * t_final (n), x_final (n x nx), y_final (n x ny), y_grid (n x (n_grid + 1) x ny, with a grid);
+ * after them the C longs steps (n), n_rows (n, with a grid), status (n), then the C ints
+ * status (n), flags (n x max(ne, 1)) the run writes, then flags as bytes (0 or 1, n x
+ * max(ne, 1)): status and flags in the types Python hands out, without a conversion there. */
+GW_EXPORT int {id}_ensemble_run_packed(void *ctx, long n, int n_grid, double *f,
+                                       gw_logger_fn logger);
+GW_EXPORT int {id}_ensemble_run_packed(void *ctx, long n, int n_grid, double *f,
+                                       gw_logger_fn logger) {{
+    const size_t N = n > 0 ? (size_t)n : 0, G = n_grid > 0 ? (size_t)n_grid : 0;
+    const size_t ne = GW_MODEL.ne > 0 ? (size_t)GW_MODEL.ne : 1;
+    double *p = f + 5 + G, *s = p + N * GW_MODEL.np, *t_final = s + N * GW_MODEL.ns;
+    double *x_final = t_final + N, *y_final = x_final + N * GW_MODEL.nx;
+    double *y_grid = y_final + N * GW_MODEL.ny;
+    long *steps = (long *)(y_grid + (G ? N * (G + 1) * GW_MODEL.ny : 0));
+    long *status = steps + (G ? 2 * N : N);
+    int *ints = (int *)(status + N);
+    unsigned char *flags = (unsigned char *)(ints + N * (1 + ne));
+    size_t j;
+    int rc = {id}_ensemble_run(ctx, n, p, s, f, f + 2, ints, t_final, x_final, y_final,
+                               (unsigned long *)steps, logger, n_grid, G ? f + 5 : NULL,
+                               G ? y_grid : NULL, G ? steps + N : NULL, ints + N);
+    for (j = 0; j < N; j++) status[j] = ints[j];
+    for (j = 0; j < N * ne; j++) flags[j] = ints[N + j] != 0;
+    return rc;
+}}
 """
 
 
@@ -180,6 +209,12 @@ class EnsembleResult:
     def terminated(self) -> np.ndarray:
         """(N,) bool: stopped by a terminating event (the wheel fell, a lift-off...)."""
         return self.status == STATUS_TERMINATED
+
+
+def _address(a: np.ndarray) -> int:
+    """The address of a contiguous writable array's data (a quarter of ndarray.ctypes.data's
+    cost; the array stays alive with the caller's reference)."""
+    return ctypes.addressof(ctypes.c_char.from_buffer(a))
 
 
 _NO_GRID = np.zeros(0)
@@ -329,12 +364,13 @@ class Ensemble:
         p0, s0 = np.zeros(max(self.np, 1)), np.zeros(max(self.ns, 1))
         fn("defaults")(p0.ctypes.data_as(_D), s0.ctypes.data_as(_D))
         self.default_parameters, self.default_starts = p0[: self.np], s0[: self.ns]
-        self._run = fn("run")
+        # the run with its arrays in one buffer at places both sides compute (_run_packed in
+        # _UNITY): five arguments, the buffer passed as an address
+        self._run = fn("run_packed")
         self._run.restype = ctypes.c_int
-        # arrays passed as addresses (ndarray.ctypes.data): data_as() cost ~2 us per array
         vp = ctypes.c_void_p
-        self._run.argtypes = [vp, ctypes.c_long, vp, vp, vp, vp, vp, vp, vp, vp, vp, _LOGGER, ctypes.c_int,
-                              vp, vp, vp, vp]
+        self._run.argtypes = [vp, ctypes.c_long, ctypes.c_int, vp, _LOGGER]
+        self._layouts: dict[tuple[int, int], tuple] = {}
         # C contexts (gw_ensemble_new: the lanes' instances and the batch memory kept between
         # runs, 0.017 ms less per run), each with its logger; a run takes one from the pool, so
         # runs from several threads at once each have their own
@@ -400,30 +436,23 @@ class Ensemble:
                             1 if S is None else S.shape[0])
         if S is None:
             S = self._table("start value", None, self.start_names, self.default_starts, P.shape[0])
-        n, G, ne = P.shape[0], g.size, max(self.ne, 1)
-        # two buffers, one address each (ndarray.ctypes.data costs about 1 us, a twentieth of a
-        # small run): the scalars, the grid, P and S (copied: cheaper than their addresses) and
-        # the float outputs; the C longs (steps, n_rows) then the C ints (status, flags)
-        e = list(itertools.accumulate((5, G, P.size, S.size, n, n * self.nx, n * self.ny,
-                                       n * (G + 1) * self.ny if G else 0)))
-        f = np.empty(e[-1])
+        n, G = P.shape[0], g.size
+        lay = self._layouts.get((n, G))
+        if lay is None:
+            lay = self._layout(n, G)
+        e, at, size = lay
+        # one buffer, one address (ctypes.c_char.from_buffer: 0.25 us, ndarray.ctypes.data
+        # 1 us): the scalars, the grid, P and S (copied: cheaper than their addresses), the
+        # float outputs (NaN until written), then the C longs and ints, which the C side writes
+        # for every trajectory of a run it accepts (_run_packed)
+        f = np.empty(size)
         f[:5] = (t_start, t_end, rel_tol, rel_tol * 1e-2 if abs_tol is None else abs_tol,
                  (t_end - t_start) if max_step is None else max_step)
-        f[5:e[1]] = g
-        f[e[1]:e[2]] = P.reshape(-1)
-        f[e[2]:e[3]] = S.reshape(-1)
-        f[e[3]:] = np.nan
-        t_final = f[e[3]:e[4]]
-        x_final = f[e[4]:e[5]].reshape(n, self.nx)
-        y_final = f[e[5]:e[6]].reshape(n, self.ny)
-        y_grid = f[e[6]:].reshape(n, G + 1, self.ny) if G else None
-        n_long = n * (2 if G else 1)  # steps, n_rows
-        iw = np.zeros(n_long + -(-n * (1 + ne) * _INT // _LONG), dtype=_LONG_DTYPE)
-        steps, n_rows = iw[:n], iw[n:n_long] if G else None
-        ints = iw[n_long:].view(np.intc)
-        status, flags = ints[:n], ints[n:n * (1 + ne)].reshape(n, ne)
-        at, iat = f.ctypes.data, iw.ctypes.data
-        at_int = iat + _LONG * n_long
+        if G:
+            f[5:e[1]] = g
+        f[e[1]:e[2]] = P.ravel()
+        f[e[2]:e[3]] = S.ravel()
+        f[e[3]:e[-1]] = np.nan
         try:  # (another thread may take the last one between a test and pop)
             ctx = self._contexts.pop()
         except IndexError:
@@ -431,19 +460,41 @@ class Ensemble:
         messages = ctx.messages = []
         try:  # back to the pool also when Ctrl-C's KeyboardInterrupt, raised as the C call returns,
             # cuts the run short (else the context, never freed, was lost at each interrupt)
-            rc = self._run(ctx.ptr, n, at + 8 * e[1], at + 8 * e[2], at, at + 16, at_int, at + 8 * e[3],
-                           at + 8 * e[4], at + 8 * e[5], iat, ctx.logger, G,
-                           at + 40 if G else None, at + 8 * e[6] if G else None,
-                           iat + _LONG * n if G else None, at_int + _INT * n)
+            rc = self._run(ctx.ptr, n, G, _address(f), ctx.logger)
         finally:
             self._contexts.append(ctx)
         if rc >= STATUS_ERROR:
             raise EnsembleError("; ".join(messages) or f"ensemble run failed (status {rc})")
-        return EnsembleResult(status=status.astype(int), t_final=t_final, x_final=x_final,
-                              y_final=y_final, steps=steps if _LONG == 8 else steps.astype(np.int64),
+        nd, ne = np.ndarray, max(self.ne, 1)
+        steps, status = nd(n, _LONG_DTYPE, f, at[0]), nd(n, _LONG_DTYPE, f, at[2])
+        n_rows = nd(n, _LONG_DTYPE, f, at[1]) if G else None
+        if _LONG != 8:
+            steps, status = steps.astype(np.int64), status.astype(int)
+            n_rows = None if n_rows is None else n_rows.astype(np.int64)
+        flags = nd((n, ne), np.bool_, f, at[3])
+        return EnsembleResult(status=status, t_final=f[e[3]:e[4]],
+                              x_final=nd((n, self.nx), np.float64, f, 8 * e[4]),
+                              y_final=nd((n, self.ny), np.float64, f, 8 * e[5]), steps=steps,
                               output_names=self.output_names, state_names=self.state_names,
                               messages=messages,
                               grid=np.concatenate([[t_start], g]) if G else None,
-                              y_grid=y_grid,
-                              n_rows=None if not G else n_rows if _LONG == 8 else n_rows.astype(np.int64),
-                              flags=flags[:, : self.ne].astype(bool), event_names=self.event_names)
+                              y_grid=nd((n, G + 1, self.ny), np.float64, f, 8 * e[6]) if G else None,
+                              n_rows=n_rows, flags=flags if self.ne else flags[:, :0],
+                              event_names=self.event_names)
+
+    def _layout(self, n: int, G: int) -> tuple:
+        """The buffer's layout of a run of n trajectories with G communication points (as
+        _run_packed reads it): the float sections' ends, the byte offsets of steps, n_rows,
+        status and the flags' bytes, the buffer's size in doubles.  Kept per (n, G), a few."""
+        ne = max(self.ne, 1)
+        e = tuple(itertools.accumulate((5, G, n * self.np, n * self.ns, n, n * self.nx, n * self.ny,
+                                        n * (G + 1) * self.ny if G else 0)))
+        steps = 8 * e[-1]
+        n_rows = steps + _LONG * n
+        status = n_rows + (_LONG * n if G else 0)
+        flags = status + _LONG * n + _INT * n * (1 + ne)
+        lay = (e, (steps, n_rows, status, flags), -(-(flags + n * ne) // 8))
+        if len(self._layouts) > 16:
+            self._layouts.clear()
+        self._layouts[(n, G)] = lay
+        return lay

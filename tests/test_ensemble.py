@@ -78,6 +78,7 @@ def test_runs_from_several_threads_have_their_own_contexts(paper, tmp_path):
 
 DRIVER = r"""
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 static int n_log;
 static void logger(void *env, const char *who, gw_status st, const char *cat, const char *msg) {
@@ -113,6 +114,26 @@ int main(void) {
         if (ID(run)(c, N, P, S, span, tol, status, tf, xf, yf, steps, logger, G, grid, yg, rows, flags))
             return 1;
         printf("%d %d %d %lu %.17g\n", status[0], status[2], status[6], steps[0], xf[0]);
+        if (rep == 0) { /* the same job through run_packed, in a buffer of exactly its layout */
+            const size_t ne = sz[7] > 0 ? (size_t)sz[7] : 1, nf = 5 + G + (size_t)N * (sz[3] + sz[1] + 1
+                             + sz[0] + sz[4]) + (size_t)N * (G + 1) * sz[4];
+            const size_t bytes = 8 * nf + sizeof(long) * 3 * N + sizeof(int) * N * (1 + ne) + N * ne;
+            double *f = malloc(bytes);
+            long *lg = (long *)(f + nf);
+            unsigned char *fl = (unsigned char *)((int *)(lg + 3 * N) + N * (1 + ne));
+            memcpy(f, span, sizeof span);
+            memcpy(f + 2, tol, sizeof tol);
+            memcpy(f + 5, grid, sizeof grid);
+            memcpy(f + 5 + G, P, sizeof(double) * N * sz[3]);
+            memcpy(f + 5 + G + N * sz[3], S, sizeof(double) * N * sz[1]);
+            if (!f || ID(run_packed)(ctx, N, G, f, logger)) return 1;
+            for (k = 0; k < N; k++)
+                if (lg[2 * N + k] != status[k] || (unsigned long)lg[k] != steps[k] || lg[N + k] != rows[k]
+                    || fl[k * ne] != (flags[k * sz[7]] != 0) || f[5 + G + N * (sz[3] + sz[1] + 1) + k * sz[0]]
+                    != xf[k * sz[0]] || f[5 + G + N * (sz[3] + sz[1]) + k] != tf[k])
+                    return 3;
+            free(f);
+        }
         tol[0] = rep == 0 ? 1e-12 : 1e-5;
         if (ID(run)(c, 3, P, S, span, tol, status, tf, xf, yf, steps, logger, 0, NULL, NULL, NULL, flags))
             return 1;
@@ -125,7 +146,8 @@ int main(void) {
 
 def test_ensemble_library_clean_under_sanitizers(paper, tmp_path):
     """The ensemble library (contexts reused across runs of other sizes and orders, the lanes'
-    series fetched lazily through event location, falls, a refused trajectory, a grid) runs clean
+    series fetched lazily through event location, falls, a refused trajectory, a grid; the
+    same job through run_packed in a buffer of exactly its layout, equal) runs clean
     under AddressSanitizer, LeakSanitizer and UndefinedBehaviorSanitizer; each run gives the
     same numbers."""
     from c_programs import MODE_FLAGS, SANITIZER_ENV
@@ -252,3 +274,34 @@ def test_ensembles_made_at_once_by_threads_on_a_cold_cache(paper, tmp_path, monk
     _same(runs[0], runs[1])
     assert runs[0].status[0] == STATUS_OK
     assert [p.name for p in cache.rglob("*") if p.is_file()] == ["libensemble.so"]
+
+
+def test_runs_of_other_sizes_equal_fresh_runs_and_keep_their_results(paper, tmp_path):
+    """Ensemble.run keeps its buffer layout per (N, grid size) and the C side writes status and
+    flags into the buffer in the types handed out: a sequence of jobs with other N, with and
+    without a grid, other starts and parameters, on one Ensemble returns what each returns on
+    a fresh Ensemble (bit for bit, the same dtypes), and a later run leaves the arrays of an
+    earlier result as they were (each result owns its buffer)."""
+    jobs = [JOB, *OTHERS, dict(starts={"gamma_dot": [6.0, 5.0, 4.0, 3.0]}, rel_tol=1e-4),
+            dict(parameters=np.tile(Ensemble(paper.fmu, cache=tmp_path).default_parameters, (5, 1)),
+                 rel_tol=1e-7, grid=[0.5, 1.0, 2.0]),
+            dict(starts={"gamma_dot": [6.0, 5.0, 4.0, 3.0]}, rel_tol=1e-4, grid=[1.0, 2.0]), JOB]
+    ens = Ensemble(paper.fmu, cache=tmp_path)
+    kept = []
+    for job in jobs:
+        t_end = 6.0 if job is JOB else 2.0
+        res, fresh = ens.run(t_end, **job), Ensemble(paper.fmu, cache=tmp_path).run(t_end, **job)
+        _same(res, fresh)
+        for name in ("status", "steps", "flags", "t_final", "x_final", "y_final", "n_rows", "y_grid"):
+            a, b = getattr(res, name), getattr(fresh, name)
+            assert (a is None) == (b is None) and (a is None or (a.dtype == b.dtype and a.shape == b.shape))
+        assert res.status.dtype == np.int_ and res.steps.dtype == np.int64 and res.flags.dtype == bool
+        assert res.flags.shape == (len(res.status), len(ens.event_names)) and res.x_final.flags.writeable
+        np.testing.assert_array_equal(res.y_final, fresh.y_final)
+        np.testing.assert_array_equal(res.n_rows, fresh.n_rows)
+        kept.append((res, {k: np.copy(getattr(res, k)) for k in ("status", "steps", "flags", "t_final",
+                                                                 "x_final", "y_final", "y_grid")}))
+    assert sorted(ens._layouts) == [(1, 0), (2, 0), (3, 0), (4, 0), (4, 2), (5, 3), (7, 12)]
+    for res, copies in kept:
+        for name, value in copies.items():
+            np.testing.assert_array_equal(getattr(res, name), value)

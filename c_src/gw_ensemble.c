@@ -282,14 +282,18 @@ static void gw_ens_point(gw_ensemble *E, int l) {
         for (i = 0; i < E->m->nx; i++) E->dp[(size_t)i * GW_ENS_LANES + l] = L->I->k[2][i];
 }
 
-/* Lane l's pending attempt's P'(h) from the batch's column into I->k[2], where the solver
- * code's defect check reads it (an attempt of the passes concluded by the one-lane code). */
-static void gw_ens_dp(gw_ensemble *E, int l) {
-    gw_lane *L = &E->lane[l];
+/* Lane l's attempt's P'(h) from the batch's column into I->k[2], where the solver code's defect
+ * check reads it (an attempt of the passes concluded by the one-lane code) */
+static void gw_ens_dp_copy(gw_ensemble *E, int l) {
     int i;
-    if (L->pending != 2) return;
-    for (i = 0; i < E->m->nx; i++) L->I->k[2][i] = E->dp[(size_t)i * GW_ENS_LANES + l];
-    L->pending = 1;
+    for (i = 0; i < E->m->nx; i++) E->lane[l].I->k[2][i] = E->dp[(size_t)i * GW_ENS_LANES + l];
+}
+
+/* the same for a pending attempt whose P'(h) is only in the batch's column (pending 2) */
+static void gw_ens_dp(gw_ensemble *E, int l) {
+    if (E->lane[l].pending != 2) return;
+    gw_ens_dp_copy(E, l);
+    E->lane[l].pending = 1;
 }
 
 /* Lane L, its series at its current point in I->tl_w: the next attempt.  A step that lands on
@@ -449,8 +453,7 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
             const double target = gw_ens_target(E, L);
             int fresh;
             gw_ens_fetch(I, L); /* its retries and event location read the series */
-            if (!GW_ENSEMBLE_LANE_STEPS) /* P'(h) for gw_taylor_defect */
-                for (i = 0; i < nx; i++) I->k[2][i] = E->dp[(size_t)i * W + l];
+            if (!GW_ENSEMBLE_LANE_STEPS) gw_ens_dp_copy(E, l); /* P'(h) for gw_taylor_defect */
             gw_ens_after(E, L, gw_taylor_conclude(I, target, &L->run, L->h, L->t1, NULL, 1, &fresh),
                          target);
         }

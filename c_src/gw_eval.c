@@ -58,7 +58,7 @@ GW_INTERNAL void gw_fun_bind(gw_instance *I) {
 static int gw_fun_call(gw_fun *f) { return f->eval(f->arg, f->res, f->iw, f->w, 0); }
 
 /* pre_c = ode_pre(p), the parameter-only part of ode and evt, once per parameter change */
-static int gw_pre_ready(gw_instance *I) {
+GW_INTERNAL int gw_eval_pre(gw_instance *I) {
     if (!I->f_pre.eval || I->pre_valid) return 0;
     I->f_pre.arg[0] = I->p;
     I->f_pre.res[0] = I->pre_c;
@@ -79,8 +79,6 @@ static int gw_fun_call_txup(gw_fun *f, double t, const double *x, double *out) {
     return r;
 }
 
-GW_INTERNAL GW_MAYBE_UNUSED int gw_eval_pre(gw_instance *I) { return gw_pre_ready(I); }
-
 GW_API int gw_eval_init(gw_instance *I, double *x_out) {
     if (!I->f_init.eval) return -1;
     I->f_init.arg[0] = I->s;
@@ -97,7 +95,7 @@ GW_API int gw_eval_out(gw_instance *I, double t, const double *x, double *y_out)
 GW_API int gw_eval_evt(gw_instance *I, double t, const double *x, double *e_out) {
     if (!I->f_evt.eval) return I->m->ne == 0 ? 0 : -1;
     I->n_evt++;
-    if (gw_pre_ready(I) != 0) return -1;
+    if (gw_eval_pre(I) != 0) return -1;
     return gw_fun_call_txup(&I->f_evt, t, x, e_out);
 }
 
@@ -156,7 +154,7 @@ GW_INTERNAL int gw_eval_upd(gw_instance *I, double t, const double *x, int k, do
 
 GW_API int gw_rhs(gw_instance *I, double t, const double *x, double *xdot) {
     I->n_rhs++;
-    if (gw_pre_ready(I) != 0) return -1;
+    if (gw_eval_pre(I) != 0) return -1;
     return gw_fun_call_txup(&I->f_ode, t, x, xdot);
 }
 

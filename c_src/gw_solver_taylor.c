@@ -132,11 +132,13 @@ GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, doub
  * with Q(s) = sum_{k>=1} X_k s^(k-1), dx = h Q(h) and P'(h) = Q(h) + h Q'(h).  The order loop
  * is outside the component loop (blocks of 8 components): the components' Horner chains are
  * independent and overlap, where one chain after the other waited on each multiply-add. */
-#if defined(__GNUC__) || defined(__clang__)
-typedef double gw_tl_v2 __attribute__((vector_size(16))); /* one SSE2 register */
+/* GW_TL_CLONED: gw_taylor.c's target clones of the kernel (x86-64-v3 with FMA, and default) for
+ * the increments too, else plain functions */
 #ifndef GW_TL_CLONED
 #define GW_TL_CLONED
 #endif
+#if defined(__GNUC__) || defined(__clang__)
+typedef double gw_tl_v2 __attribute__((vector_size(16))); /* one SSE2 register */
 /* a full block of 8 components as 4 pairs: the same multiplies and adds in the same order as
  * the scalar loop below, half the instructions (the scalar loop was bound by the issue of its 4
  * operations per component and order, not by the chains' latency); the ensemble's layout, cloned
@@ -220,9 +222,6 @@ static GW_TL_CLONED void gw_taylor_increment8_om(const double *x0, size_t so, in
  * nx mod 8 components' multiply-adds too: unfused here, those components of a single run were
  * 1 ulp off the ensemble's lane, tests/test_taylor.py::
  * test_ensemble_rejected_steps_retry_on_the_lane_series, lunar_rover's 9th state) */
-#ifndef GW_TL_CLONED
-#define GW_TL_CLONED
-#endif
 static GW_TL_CLONED void gw_taylor_increment_strided(const double *X, size_t si, size_t so, int order, int nx,
                                         double h, double *dx, double *dp) {
     enum { B = 8 };

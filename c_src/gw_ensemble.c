@@ -107,6 +107,7 @@ typedef struct {
      * (atol / rel_tol) nominal_i and atol nominal_i of each lane, the pending attempt's P'(h),
      * the increment's Horner sums (then dx) and their derivatives (then P'(h)) */
     double *fsn, *anom, *dp, *qx;
+    double lc[GW_ENS_LANES]; /* log2 c of the step size rule, each lane's (run.log2_c) */
     double *xa, *xca, *xcn; /* the states x, xc, xcnew of lanes with soa (gw_ens_sync) */
     long next;                                  /* next trajectory to start */
     int cst_dirty;                              /* a lane's parameters or inputs changed */
@@ -233,6 +234,7 @@ static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
         }
         { /* the error weights' floors of this lane, as gw_taylor_step and _defect form them */
             const size_t l = (size_t)(L - E->lane);
+            E->lc[l] = L->run.log2_c;
             for (i = 0; i < m->nx; i++) {
                 E->fsn[(size_t)i * GW_ENS_LANES + l] = I->atol_eff / I->rel_tol * I->nominal[i];
                 E->anom[(size_t)i * GW_ENS_LANES + l] = I->atol_eff * I->nominal[i];

@@ -118,11 +118,9 @@ static void gw_ens_batch_steps(gw_ensemble *E, int order) {
     enum { W = GW_ENS_LANES };
     const size_t SI = GW_ENS_SI, SO = GW_ENS_SO;
     const int nx = E->m->nx;
-    double n1[W], n2[W], d1[W], lc[W], hs[W], scale[W], err[W], h[W], acc[W];
+    double n1[W], n2[W], d1[W], hs[W], scale[W], err[W], h[W], acc[W];
     int go[W], last[W], l, i, any = 0;
-    gw_ens_norms(E->w, SI, SO, E->fsn, nx, order, n1, n2, d1);
-    for (l = 0; l < W; l++) lc[l] = E->lane[l].run.log2_c;
-    gw_ens_step_sizes(n1, n2, lc, order, hs);
+    gw_ens_norms(E->w, SI, SO, E->fsn, nx, order, E->lc, n1, n2, d1, hs);
     for (l = 0; l < W; l++) scale[l] = E->lane[l].pending ? E->lane[l].h / (order + 1) : 0.0;
     gw_ens_defects(E->w, SI, SO, E->dp, E->x, E->anom, nx, E->job->rel_tol, scale, err);
     for (l = 0; l < W; l++) {

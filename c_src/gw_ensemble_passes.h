@@ -63,13 +63,19 @@ typedef int gw_ens_m;
 #define GW_ENS_PASS_FMA static
 #endif
 
-/* N_{p-1}, N_p of every lane (gw_taylor_step), and d1[l] = 0 where every state and derivative
- * (orders 0 and 1) of lane l is finite, NaN otherwise (the sum of x_i^[0] * 0 + x_i^[1] * 0: NaN
- * from an infinity or a NaN), the checks gw_accept_step and gw_taylor_attempt_size would
- * otherwise make on copies of them */
+/* N_{p-1}, N_p of every lane (gw_taylor_step), n1, n2; its step size from them and log2 c =
+ * lc[l] (gw_taylor_step_size: gw_fm_step4 on 4 lanes at once, bit-equal lane by lane to
+ * gw_fm_step; non-finite norms give any h, refused by gw_taylor_attempt_size), hs; and d1[l] = 0
+ * where every state and derivative (orders 0 and 1) of lane l is finite, NaN otherwise (the sum
+ * of x_i^[0] * 0 + x_i^[1] * 0: NaN from an infinity or a NaN), the checks gw_accept_step and
+ * gw_taylor_attempt_size would otherwise make on copies of them.  The step sizes in the same
+ * pass, the norms still in registers: a pass of their own was 6% of the C of a run (N = 16,
+ * rel_tol 1e-4), their chain's latency not overlapped. */
 GW_ENS_PASS void gw_ens_norms(const double *w, size_t si, size_t so, const double *fsn, int nx,
-                              int order, double *n1, double *n2, double *d1) {
+                              int order, const double *lc, double *n1, double *n2, double *d1,
+                              double *hs) {
     enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V };
+    const double q1 = 1.0 / (order - 1), q2 = 1.0 / order;
     int i, j;
     for (j = 0; j < W; j += V) {
         gw_ens_v m1 = {0.0}, m2 = {0.0}, z = {0.0};
@@ -85,42 +91,17 @@ GW_ENS_PASS void gw_ens_norms(const double *w, size_t si, size_t so, const doubl
         gw_ens_st(n1 + j, m1);
         gw_ens_st(n2 + j, m2);
         gw_ens_st(d1 + j, z);
-    }
-}
-
-/* h[l] = the step size of lane l from its norms n1[l], n2[l] and log2 c = lc[l]
- * (gw_taylor_step_size): gw_fm_step4 on 4 lanes at a time, bit-equal lane by lane to gw_fm_step
- * (gw_fastmath.h); non-finite norms give any h, refused by gw_taylor_attempt_size */
-GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const double *lc, int order,
-                                   double *h) {
-    enum { W = GW_ENSEMBLE_LANES };
-    const double r1 = 1.0 / (order - 1), r2 = 1.0 / order;
-    int l;
-#if GW_FASTMATH_V4
-    int j;
-    for (j = 0; j < W; j += 4) {
-        const int nl = W - j < 4 ? W - j : 4;
-        gw_fm_v4 a = {1.0, 1.0, 1.0, 1.0}, b = a, c = a, hv;
-        if (nl == 4) { /* whole vectors (the lane-by-lane gather: about 1% of a run) */
-            memcpy(&a, n1 + j, sizeof a);
-            memcpy(&b, n2 + j, sizeof b);
-            memcpy(&c, lc + j, sizeof c);
-        } else {
-            for (l = 0; l < nl; l++) {
-                a[l] = n1[j + l];
-                b[l] = n2[j + l];
-                c[l] = lc[j + l];
-            }
+#if GW_ENS_V == 4 && GW_FASTMATH_V4
+        {
+            const gw_fm_v4 c = gw_ens_ld(lc + j);
+            gw_fm_v4 hv;
+            gw_fm_step4(&hv, &m1, &m2, q1, q2, &c);
+            gw_ens_st(hs + j, hv);
         }
-        gw_fm_step4(&hv, &a, &b, r1, r2, &c);
-        if (nl == 4)
-            memcpy(h + j, &hv, sizeof hv);
-        else
-            for (l = 0; l < nl; l++) h[j + l] = hv[l];
-    }
 #else
-    for (l = 0; l < W; l++) h[l] = gw_fm_step(n1[l], n2[l], r1, r2, lc[l]);
+        for (i = j; i < j + V; i++) hs[i] = gw_fm_step(n1[i], n2[i], q1, q2, lc[i]);
 #endif
+    }
 }
 
 /* the defect of every lane's pending attempt with f(t1, P(h)) = order 1 of the batch's series

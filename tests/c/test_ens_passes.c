@@ -5,7 +5,7 @@
  *   gw_ens_norms       N_{p-1}, N_p of every lane bit for bit (a NaN coefficient sticks as the
  *                      norm), and d1 = 0 exactly where every order-0 and order-1 coefficient of
  *                      the lane is finite (NaN where one is inf or NaN)
- *   gw_ens_step_sizes  every lane's step size bit for bit gw_fm_step's (the 4-lane gw_fm_step4
+ *                      and every lane's step size bit for bit gw_fm_step's (the 4-lane gw_fm_step4
  *                      against the scalar form), zero norms (no bound from that order) included,
  *                      and within 4e-7 of the exact rule computed with libm's log and exp
  *   gw_ens_defects     every lane's defect bit for bit as gw_taylor_defect's division loop (the
@@ -70,7 +70,8 @@ int main(void) {
         if (round % 4 == 0) w[(4 * (ORDER + 1) + 1) * W + 3] = NAN;
         if (round % 6 == 2) /* a NaN coefficient of order p-1 (lane 0) or p (lane 2) before finite ones */
             w[(1 * (ORDER + 1) + ORDER - 1) * W + 0] = w[(0 * (ORDER + 1) + ORDER) * W + 2] = NAN;
-        gw_ens_norms(w, (ORDER + 1) * W, W, fsn, NX, ORDER, n1, n2, d1);
+        for (l = 0; l < W; l++) lc[l] = -2.5 - 0.1 * l;
+        gw_ens_norms(w, (ORDER + 1) * W, W, fsn, NX, ORDER, lc, n1, n2, d1, h);
         for (l = 0; l < W; l++) {
             double m1 = 0.0, m2 = 0.0;
             int finite = 1;
@@ -87,9 +88,7 @@ int main(void) {
                 expect(l == 0 ? isnan(n1[l]) && !isnan(n2[l]) : isnan(n2[l]) && !isnan(n1[l]),
                        "a NaN coefficient did not stick as the norm", l);
             expect(finite ? d1[l] == 0.0 : isnan(d1[l]), "orders 0, 1 finiteness flag wrong", l);
-            lc[l] = -2.5 - 0.1 * l;
         }
-        gw_ens_step_sizes(n1, n2, lc, ORDER, h);
         for (l = 0; l < W; l++) { /* gw_taylor_step_size, and the exact rule in libm */
             const double l1 = n1[l] > 0.0 ? -log(n1[l]) * r1 : HUGE_VAL,
                          l2 = n2[l] > 0.0 ? -log(n2[l]) * r2 : HUGE_VAL;

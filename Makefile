@@ -70,8 +70,16 @@ tbb:
 	    echo "libtbb12 is missing and apt-get is not usable here: install Debian's libtbb12 for ecospy (tests/test_importers.py)"; \
 	  fi; }
 
+# The suite on every core (pytest-xdist, one worker per logical CPU, at most 4).  --dist loadfile
+# keeps a file's tests on one worker, so a module fixture is built once; the FMUs several files
+# share are built once per run for all workers (tests/conftest.py, shared_build).  One file, no
+# workers: .venv/bin/python -m pytest tests/test_cli.py.  TEST_WORKERS=0: the whole suite in one process.
+# --max-worker-restart 0: a test that kills its worker (a crash in C) fails the run at once, named;
+# restarting workers re-ran it until the limit, and a crash in mid-file hung --dist loadfile
+# (pytest-xdist 3.8's scheduler; one process would have died without any report).
+TEST_WORKERS ?= logical
 test: $(STAMP) browser c-tools tbb
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --maxprocesses 4 --dist loadfile --max-worker-restart 0
 
 bench: $(STAMP)
 	$(PY) -m pip install --quiet -e ".[bench]"

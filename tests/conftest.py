@@ -1,7 +1,11 @@
 """Shared fixtures: the paper model, built FMUs (once per session) and integration helpers."""
 from __future__ import annotations
 
+import fcntl
 import math
+import os
+import pickle
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -86,25 +90,91 @@ def paper_model() -> CasadiWheel:
     return CasadiWheel(**PAPER)
 
 
-@pytest.fixture(scope="session")
-def fmu_dir(tmp_path_factory) -> Path:
-    return tmp_path_factory.mktemp("fmus")
+def _run_dir(tmp_path_factory) -> Path:
+    """The directory of this test run that all of its pytest-xdist workers share: a worker's
+    basetemp is <run>/popen-gwN, a run without xdist has its basetemp alone."""
+    base = tmp_path_factory.getbasetemp()
+    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+
+def shared_build(tmp_path_factory, key: str, make):
+    """make(directory) run once per test run, whichever worker asks first; its result (pickled)
+    for every worker.  The others wait on a lock file (fcntl.flock) meanwhile, so a build is
+    never read half-written, and never made twice at once.  The directory lives in this run's
+    basetemp only: nothing is reused from an earlier run (no stale FMU after an edit of model/,
+    fmu_build/ or c_src/).  A make that raises leaves no result: the next asker tries again and
+    fails in its own test too.  Results are read-only for the tests (several modules, and both
+    workers, use the same files)."""
+    root = _run_dir(tmp_path_factory) / "shared_builds"
+    root.mkdir(exist_ok=True)
+    out, done = root / key, root / f"{key}.pickle"
+    with open(root / f"{key}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if done.exists():
+            return pickle.loads(done.read_bytes())
+        if out.exists():
+            shutil.rmtree(out)  # left by a make that raised
+        out.mkdir()
+        result = make(out)
+        part = done.with_suffix(".part")
+        part.write_bytes(pickle.dumps(result))
+        part.replace(done)
+        return result
+
+
+class _Built:
+    """A BuildResult passed between workers: its spec (CasADi SX, not picklable) is made again
+    from the scene (cheap, deterministic: the same model_spec the build used)."""
+
+    def __init__(self, built, scene_text: str, scene_name: str):
+        self.fmu, self.sources, self.identifier = built.fmu, built.sources, built.identifier
+        self.scene_text, self.scene_name = scene_text, scene_name
+
+    def result(self):
+        from fmu_build.builder import BuildResult, model_spec
+        from fmu_build.scene import parse_scene
+        spec = model_spec(parse_scene(self.scene_text, self.scene_name))
+        return BuildResult(fmu=self.fmu, spec=spec, sources=self.sources, identifier=self.identifier)
 
 
 @pytest.fixture(scope="session")
-def earth_fmu(fmu_dir) -> Path:
-    """The paper's earth scene, built once (sources kept under fmu_dir/earth_build)."""
-    scene = load_scene(SCENES / "paper_earth.toml")
-    return build_fmu(scene, fmu_dir / "paper_earth.fmu", build_dir=fmu_dir / "earth_build").fmu
+def example_build(tmp_path_factory):
+    """example_build("euler_disk", taylor=False): the BuildResult of examples/scenes/<name>.toml,
+    built once per test run (for every module and xdist worker that asks; sources kept beside).
+    Several modules test the same example FMU; the build is the same call, made once."""
+    cache: dict = {}
+
+    def _build(name: str, taylor: bool = False):
+        key = f"{name}{'_taylor' if taylor else ''}"
+        if key not in cache:
+            path = SCENES / f"{name}.toml"
+
+            def make(out: Path):
+                built = build_fmu(load_scene(path), out / f"{name}.fmu", build_dir=out / "build", taylor=taylor)
+                return _Built(built, path.read_text(), path.name)
+            cache[key] = shared_build(tmp_path_factory, key, make).result()
+        return cache[key]
+    return _build
 
 
 @pytest.fixture(scope="session")
-def earth_loop(fmu_dir):
+def earth_build(example_build):
+    """The paper's earth scene, built once (sources kept: earth_build.sources)."""
+    return example_build("paper_earth")
+
+
+@pytest.fixture(scope="session")
+def earth_fmu(earth_build) -> Path:
+    return earth_build.fmu
+
+
+@pytest.fixture(scope="session")
+def earth_loop(tmp_path_factory):
     """The Gyrover closed loop on earth (wheel + controller FMUs, .ssp) on the earth's course, built once."""
     from controller.closed_loop import build_closed_loop
     from controller.mission import course
-    return build_closed_loop(load_scene(SCENES / "gyrover_mission_earth.toml"), fmu_dir / "closed_loop",
-                             course("earth"))
+    return shared_build(tmp_path_factory, "closed_loop_earth", lambda out: build_closed_loop(
+        load_scene(SCENES / "gyrover_mission_earth.toml"), out, course("earth")))
 
 
 @pytest.fixture(scope="session")
@@ -124,11 +194,13 @@ def earth(tmp_path_factory) -> Path:
     """paper_earth exported through the command line (with its strict compile check)."""
     from export_c_helpers import gyrowheel
 
-    out = tmp_path_factory.mktemp("export") / "paper_earth"
-    r = gyrowheel("export-c", SCENES / "paper_earth.toml", "-o", out)
-    assert r.returncode == 0, r.stderr
-    assert r.stdout.startswith(f"wrote {out}/") and r.stderr == ""
-    return out
+    def make(d: Path) -> Path:
+        out = d / "paper_earth"
+        r = gyrowheel("export-c", SCENES / "paper_earth.toml", "-o", out)
+        assert r.returncode == 0, r.stderr
+        assert r.stdout.startswith(f"wrote {out}/") and r.stderr == ""
+        return out
+    return shared_build(tmp_path_factory, "export_paper_earth", make)
 
 
 @pytest.fixture(scope="session")
@@ -136,11 +208,12 @@ def earth_gcc(earth, tmp_path_factory) -> dict:
     """The export's library object and both examples, gcc -O2, strict; and what gcc printed."""
     from export_c_helpers import STRICT, cc
 
-    out = tmp_path_factory.mktemp("earth_gcc")
-    built = {"obj": out / "paper_earth.o", "example": out / "example", "realtime": out / "realtime"}
-    diagnostics = cc("gcc", *STRICT, "-O2", "-c", earth / "paper_earth.c", "-o", built["obj"]).stderr
-    for name in ("example", "realtime"):
-        src = earth / "examples" / ("main.c" if name == "example" else "realtime.c")
-        diagnostics += cc("gcc", *STRICT, "-O2", f"-I{earth}", src, built["obj"], "-lm", "-o", built[name]).stderr
-    built["diagnostics"] = diagnostics
-    return built
+    def make(out: Path) -> dict:
+        built = {"obj": out / "paper_earth.o", "example": out / "example", "realtime": out / "realtime"}
+        diagnostics = cc("gcc", *STRICT, "-O2", "-c", earth / "paper_earth.c", "-o", built["obj"]).stderr
+        for name in ("example", "realtime"):
+            src = earth / "examples" / ("main.c" if name == "example" else "realtime.c")
+            diagnostics += cc("gcc", *STRICT, "-O2", f"-I{earth}", src, built["obj"], "-lm", "-o", built[name]).stderr
+        built["diagnostics"] = diagnostics
+        return built
+    return shared_build(tmp_path_factory, "export_paper_earth_gcc", make)

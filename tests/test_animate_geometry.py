@@ -14,8 +14,6 @@ import pytest
 from fmpy.util import write_csv
 
 from animate_data import R, rolling_csv
-from conftest import SCENES
-from fmu_build import build_fmu, load_scene
 from fmu_build.animate import AnimationError, Options, build_timeline, read_result, resolve_parameters
 from fmu_build.animate.geometry import circle_points, wheel_poses
 from fmu_build.simulate import run
@@ -77,10 +75,10 @@ def test_marks_turn_forward_over_the_top_as_the_wheel_rolls_forward():
 
 
 @pytest.fixture(scope="module")
-def gyrover_run(tmp_path_factory):
+def gyrover_run(tmp_path_factory, example_build):
     """The Gyrover scene's FMU steered by a tilt command from a leaned start, 3 s, as CSV."""
     d = tmp_path_factory.mktemp("animate_gyrover")
-    fmu = build_fmu(load_scene(SCENES / "gyrover_steering.toml"), d / "gyrover.fmu").fmu
+    fmu = example_build("gyrover_steering").fmu
     result = run(fmu, stop_time=3.0, output_interval=0.01,
                  start_values={"beta": 1.35, "gamma_dot": 9.0, "alpha_dot": 0.4, "tilt_cmd": 0.3, "theta_p": 0.2})
     write_csv(str(d / "gyrover.csv"), result)

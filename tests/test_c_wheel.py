@@ -15,8 +15,8 @@ from c_programs import FMI_HEADERS, SANITIZER_ENV, STRICT, TESTS_C, VALGRIND, ru
 
 
 @pytest.fixture(scope="module")
-def wheel_sources(earth_fmu, fmu_dir) -> Path:
-    return fmu_dir / "earth_build" / "fmu" / "sources"
+def wheel_sources(earth_build) -> Path:
+    return earth_build.sources
 
 
 def _compile(sources: Path, out: Path, extra: list[str]) -> Path:

@@ -31,10 +31,8 @@ def build(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def euler_fmu(tmp_path_factory):
-    from fmu_build import load_scene
-    root = tmp_path_factory.mktemp("euler")
-    return str(build_fmu(load_scene(SCENES / "euler_disk.toml"), root / "euler_disk.fmu").fmu)
+def euler_fmu(example_build):
+    return str(example_build("euler_disk").fmu)
 
 
 def _run(fmu, stop, dt, **start):
@@ -354,16 +352,16 @@ def test_pendulum_static_and_dynamic_limits(build):
 
 # -- only what a scene asks for --------------------------------------------------------
 
-def test_every_example_scene_builds_validates_and_simulates(tmp_path):
+@pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.stem)
+def test_every_example_scene_builds_validates_and_simulates(example_build, path):
+    """One scene a test (xdist spreads them); the build is the run's shared one (example_build:
+    the same build_fmu call, made once for every module that uses the scene)."""
     from fmpy.validation import validate_fmu
-    from fmu_build import load_scene
-    for path in sorted(SCENES.glob("*.toml")):
-        scene = load_scene(path)
-        fmu = build_fmu(scene, tmp_path / f"{scene.name}.fmu").fmu
-        assert validate_fmu(str(fmu)) == [], path.name
-        r = simulate_fmu(str(fmu))
-        names = r.dtype.names
-        for n in names:
-            if n != "time":
-                assert np.all(np.isfinite(r[n].astype(float))), (path.name, n)
-        assert r["time"][-1] > 0
+    fmu = example_build(path.stem).fmu
+    assert validate_fmu(str(fmu)) == [], path.name
+    r = simulate_fmu(str(fmu))
+    names = r.dtype.names
+    for n in names:
+        if n != "time":
+            assert np.all(np.isfinite(r[n].astype(float))), (path.name, n)
+    assert r["time"][-1] > 0

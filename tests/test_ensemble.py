@@ -14,16 +14,12 @@ import numpy as np
 import pytest
 
 from c_programs import C_SRC, STRICT, TESTS_C
-from conftest import SCENES
-from fmu_build import build_fmu, load_scene
 from fmu_build.ensemble import STATUS_ERROR, STATUS_OK, Ensemble
 
 
 @pytest.fixture(scope="module")
-def paper(tmp_path_factory):
-    work = tmp_path_factory.mktemp("ensemble")
-    return build_fmu(load_scene(SCENES / "paper_earth.toml"), work / "paper_earth.fmu",
-                     build_dir=work / "build", taylor=True)
+def paper(example_build):
+    return example_build("paper_earth", taylor=True)
 
 
 # 7 trajectories (some fall, at different times) on a grid, then jobs that leave a context in

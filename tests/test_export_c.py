@@ -136,12 +136,11 @@ def test_capi(mode, earth, earth_gcc, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def lunar(tmp_path_factory) -> tuple[Path, Path]:
+def lunar(tmp_path_factory, example_build) -> tuple[Path, Path]:
     """lunar_rover (slip: a warning event; lift-off and fall: terminating) as export and FMU."""
     out = tmp_path_factory.mktemp("lunar")
-    scene = load_scene(SCENES / "lunar_rover.toml")
-    export_c(scene, out / "lunar_rover", check=False)
-    return out / "lunar_rover", build_fmu(scene, out / "lunar_rover.fmu").fmu
+    export_c(load_scene(SCENES / "lunar_rover.toml"), out / "lunar_rover", check=False)
+    return out / "lunar_rover", example_build("lunar_rover").fmu
 
 
 def test_two_models_side_by_side(earth, earth_gcc, earth_reference, lunar, tmp_path):

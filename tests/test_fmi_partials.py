@@ -31,9 +31,8 @@ from fmu_build.variables import build_table
 
 
 @pytest.fixture(scope="module")
-def disk_fmu(tmp_path_factory):
-    root = tmp_path_factory.mktemp("disk_partials")
-    return build_fmu(load_scene(SCENES / "euler_disk.toml"), root / "euler_disk.fmu").fmu
+def disk_fmu(example_build):
+    return example_build("euler_disk").fmu
 
 
 @pytest.fixture(scope="module")

@@ -25,15 +25,14 @@ from fmpy import read_model_description
 
 from conftest import SCENES, STATES
 from fmi_helpers import Slave
-from fmu_build import build_fmu, load_scene
+from fmu_build import load_scene
 
 H = 0.01
 
 
 @pytest.fixture(scope="module")
-def lunar_fmu(tmp_path_factory):
-    root = tmp_path_factory.mktemp("lunar")
-    return build_fmu(load_scene(SCENES / "lunar_rover.toml"), root / "lunar_rover.fmu").fmu
+def lunar_fmu(example_build):
+    return example_build("lunar_rover").fmu
 
 
 def _final(fmu, tolerance=None, before_setup=None, after_setup=None, read=("rel_tol", "abs_tol")):

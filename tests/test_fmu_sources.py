@@ -28,8 +28,6 @@ import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 
 from c_programs import FMI_HEADERS, writable_symbols
-from conftest import SCENES
-from fmu_build import build_fmu, load_scene
 from fmu_build.casadi_c import CodegenFormatError, make_internal
 
 STRICT_C99 = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror"]
@@ -45,9 +43,8 @@ def fmi2_function_names() -> set[str]:
 
 
 @pytest.fixture(scope="module")
-def disk_fmu(tmp_path_factory) -> Path:
-    root = tmp_path_factory.mktemp("disk_sources")
-    return build_fmu(load_scene(SCENES / "euler_disk.toml"), root / "euler_disk.fmu").fmu
+def disk_fmu(example_build) -> Path:
+    return example_build("euler_disk").fmu
 
 
 def _unzip(fmu: Path, where: Path) -> Path:

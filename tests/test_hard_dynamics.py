@@ -14,7 +14,7 @@ from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 
 from conftest import CasadiWheel, PAPER, SCENES, STATES
 from fmi_helpers import Slave
-from fmu_build import build_fmu, load_scene, parse_scene
+from fmu_build import build_fmu, parse_scene
 from fmu_build.scipy_reference import solve_hybrid
 from model.build import BETA_MIN_DEFAULT
 
@@ -83,9 +83,8 @@ def test_near_flat_spinning_disc_precesses_without_blowing_up(earth_fmu, solver)
 # -- 2. Euler's disk ----------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def euler_disk(tmp_path_factory):
-    scene = load_scene(SCENES / "euler_disk.toml")
-    return build_fmu(scene, tmp_path_factory.mktemp("disk") / "euler_disk.fmu")
+def euler_disk(example_build):
+    return example_build("euler_disk")
 
 
 def test_euler_disk_precession_grows_like_beta_to_the_minus_half(euler_disk):

@@ -8,8 +8,6 @@ import math
 import numpy as np
 import pytest
 
-from conftest import SCENES
-from fmu_build import build_fmu, load_scene
 from fmu_build.ensemble import Ensemble
 from fmu_build.sweep import SweepSpecError, sweep
 
@@ -18,10 +16,8 @@ METRICS = ["survived", "fall_time", "end_time", "event", "min_beta", "max:beta",
 
 
 @pytest.fixture(scope="module")
-def taylor_fmu(tmp_path_factory):
-    work = tmp_path_factory.mktemp("sweep_ens")
-    return build_fmu(load_scene(SCENES / "paper_earth.toml"), work / "paper_earth.fmu", build_dir=work / "b",
-                     taylor=True).fmu
+def taylor_fmu(example_build):
+    return example_build("paper_earth", taylor=True).fmu
 
 
 @pytest.fixture

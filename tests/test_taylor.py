@@ -122,11 +122,9 @@ def test_unsupported_operation_is_refused_by_name(tmp_path):
 # ---- the wheel -------------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def paper(tmp_path_factory):
+def paper(example_build):
     from fmi_slave import FmuRunner
-    work = tmp_path_factory.mktemp("taylor")
-    scene = load_scene(SCENES / "paper_earth.toml")
-    built = build_fmu(scene, work / "paper_earth.fmu", build_dir=work / "build", taylor=True)
+    built = example_build("paper_earth", taylor=True)
     return built, FmuRunner(built.fmu)
 
 

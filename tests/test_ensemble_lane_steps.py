@@ -11,26 +11,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import SCENES
-from test_ensemble import _same  # every result field equal, messages too
-from fmu_build import build_fmu, load_scene
 from fmu_build.ensemble import STATUS_ERROR, STATUS_OK, STATUS_TERMINATED, Ensemble
-
-
-def _built(tmp_path_factory, scene: str):
-    work = tmp_path_factory.mktemp(scene)
-    return build_fmu(load_scene(SCENES / f"{scene}.toml"), work / f"{scene}.fmu", build_dir=work / "build",
-                     taylor=True)
+from test_ensemble import _same  # every result field equal, messages too
 
 
 @pytest.fixture(scope="module")
-def paper(tmp_path_factory):
-    return _built(tmp_path_factory, "paper_earth")
+def paper(example_build):
+    return example_build("paper_earth", taylor=True)
 
 
 @pytest.fixture(scope="module")
-def slope(tmp_path_factory):
-    return _built(tmp_path_factory, "slope_hold")
+def slope(example_build):
+    return example_build("slope_hold", taylor=True)
 
 
 def _both(fmu, tmp_path, monkeypatch):

@@ -24,6 +24,7 @@
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
 #else
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -67,6 +68,8 @@ typedef struct {
     double h, t1;
     const double *ser; /* the series at the lane's current point in a batch block (lane
                           innermost), not yet in I->tl_w (gw_ens_fetch); NULL: tl_w has it */
+    int soa; /* 0: the lane's states in its instance; 1, 2: in the batch's columns, not yet in
+                the instance (gw_ensemble_batch.h, gw_ens_sync) */
 } gw_lane;
 enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
 /* The batch's series where the kernel leaves them (gw_tlb_series: order-major, a row of its
@@ -104,6 +107,8 @@ typedef struct {
      * (atol / rel_tol) nominal_i and atol nominal_i of each lane, the pending attempt's P'(h),
      * the increment's Horner sums (then dx) and their derivatives (then P'(h)) */
     double *fsn, *anom, *dp, *qx;
+    double lc[GW_ENS_LANES]; /* log2 c of the step size rule, each lane's (run.log2_c) */
+    double *xa, *xca, *xcn; /* the states x, xc, xcnew of lanes with soa (gw_ens_sync) */
     long next;                                  /* next trajectory to start */
     int cst_dirty;                              /* a lane's parameters or inputs changed */
 } gw_ensemble;
@@ -213,6 +218,7 @@ static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
         L->steps = 0;
         L->pending = 0;
         L->ser = NULL;
+        L->soa = 0;
         if (job->n_rows) job->n_rows[j] = 0;
         if (gw_setup_experiment(I, fn, 0, 0.0, job->t_start, 1, job->t_end) != GW_OK ||
             gw_initialize(I, fn) > GW_WARNING || gw_taylor_begin(I, &L->run)) {
@@ -228,6 +234,7 @@ static void gw_ens_fill(gw_ensemble *E, gw_lane *L) {
         }
         { /* the error weights' floors of this lane, as gw_taylor_step and _defect form them */
             const size_t l = (size_t)(L - E->lane);
+            E->lc[l] = L->run.log2_c;
             for (i = 0; i < m->nx; i++) {
                 E->fsn[(size_t)i * GW_ENS_LANES + l] = I->atol_eff / I->rel_tol * I->nominal[i];
                 E->anom[(size_t)i * GW_ENS_LANES + l] = I->atol_eff * I->nominal[i];
@@ -289,13 +296,6 @@ static void gw_ens_dp_copy(gw_ensemble *E, int l) {
     for (i = 0; i < E->m->nx; i++) E->lane[l].I->k[2][i] = E->dp[(size_t)i * GW_ENS_LANES + l];
 }
 
-/* the same for a pending attempt whose P'(h) is only in the batch's column (pending 2) */
-static void gw_ens_dp(gw_ensemble *E, int l) {
-    if (E->lane[l].pending != 2) return;
-    gw_ens_dp_copy(E, l);
-    E->lane[l].pending = 1;
-}
-
 /* Lane L, its series at its current point in I->tl_w: the next attempt.  A step that lands on
  * the call's target is checked at once (one right-hand side evaluation, as solver taylor
  * does); the lane then needs the series at its new point (or a new trajectory). */
@@ -342,122 +342,14 @@ static void gw_ens_advance(gw_ensemble *E, int l, int order) {
     gw_ens_attempt(E, L);
 }
 
-/* ---- the batch's step, lane-innermost -------------------------------------------------
- * After the batch kernel every active lane concludes its pending attempt (the defect check)
- * and attempts its next step from the new series.  The arithmetic over the series, the norms
- * of the step size, the defects and the increments' Horner sums, runs here for all lanes at
- * once, loops over the lanes innermost on the structure-of-arrays series, so that the compiler
- * vectorises them; the same operations in the same order as the one-lane code of solver taylor
- * (gw_taylor_step, gw_taylor_defect, gw_taylor_increment), so each lane's numbers are those of
- * its single run bit for bit.  Compiled for the default target (no fused multiply-add, as the
- * single FMU's step code).  The control (budget, max_step, landing, events, rejections,
- * communication points, trajectory changes) stays per lane: gw_taylor_attempt_size and
- * gw_taylor_conclude_err with the numbers of the passes. */
+#include "gw_ensemble_batch.h" /* gw_ens_batch_steps: every lane's step after the batch kernel */
 
-/* 1: each lane's numbers from the one-lane code instead of the passes (through I->tl_w), for
- * tests/test_taylor.py::test_ensemble_lane_innermost_passes_equal_the_per_lane_code */
-#ifndef GW_ENSEMBLE_LANE_STEPS
-#define GW_ENSEMBLE_LANE_STEPS 0
-#endif
-
-#include "gw_ensemble_passes.h"
-
-/* Every active lane after the batch kernel: conclude (defects from the pass), then, where the
- * series is the lane's new one, its next attempt (norms and increments from the passes). */
-static void gw_ens_batch_steps(gw_ensemble *E, int order) {
-    enum { W = GW_ENS_LANES };
-    const size_t SI = GW_ENS_SI, SO = GW_ENS_SO;
-    const int nx = E->m->nx;
-    double n1[W], n2[W], d1[W], lc[W], hs[W], scale[W], err[W], h[W];
-    int go[W], last[W], l, i, any = 0;
-    gw_ens_norms(E->w, SI, SO, E->fsn, nx, order, n1, n2, d1);
-    for (l = 0; l < W; l++) lc[l] = E->lane[l].run.log_c;
-    gw_ens_step_sizes(n1, n2, lc, order, hs);
-    for (l = 0; l < W; l++) scale[l] = E->lane[l].pending ? E->lane[l].h / (order + 1) : 0.0;
-    gw_ens_defects(E->w, SI, SO, E->dp, E->x, E->anom, nx, E->job->rel_tol, scale, err);
-    for (l = 0; l < W; l++) {
-        gw_lane *L = &E->lane[l];
-        gw_instance *I = L->I;
-        const long traj = L->traj;
-        int fresh = 1;
-        go[l] = 0;
-        h[l] = 0.0;
-        if (traj < 0) continue;
-        if (L->pending) {
-            const double target = gw_ens_target(E, L);
-            gw_int_result r;
-            if (GW_ENSEMBLE_LANE_STEPS || err[l] > 1.0) gw_ens_fetch(I, L); /* retries read it */
-#if defined(GW_TL_HAS_EVT) && GW_TL_HAS_EVT && GW_TAYLOR_KERNEL_EVT
-            if (E->m->ne > 0 && gw_eval_pre(I) == 0) { /* the indicators at (t1, xnew) */
-                gw_tlb_evt(E->w + l, L->t1, I->u, I->p, I->pre_c, I->enew);
-                I->enew_ready = 1;
-            }
-#endif
-            r = GW_ENSEMBLE_LANE_STEPS
-                    ? gw_taylor_conclude(I, target, &L->run, L->h, L->t1, E->w + SO + l, SI, &fresh)
-                    : gw_taylor_conclude_err(I, target, &L->run, L->h, L->t1, err[l], 1, &fresh);
-            I->enew_ready = 0;
-            L->pending = 0;
-            L->ser = NULL; /* the series of the point before: no longer the lane's */
-            if (!gw_ens_after(E, L, r, target)) fresh = 0;
-        }
-        if (L->traj != traj || !fresh) continue; /* ended, or the state moved: a new series */
-        go[l] = 1;
-        L->ser = E->w + l;
-    }
-    for (l = 0; l < W; l++) {
-        gw_lane *L = &E->lane[l];
-        gw_instance *I = L->I;
-        if (!go[l]) continue;
-        go[l] = 0;
-        if (GW_ENSEMBLE_LANE_STEPS)
-            gw_ens_fetch(I, L);
-        else if (d1[l] != 0.0) /* a derivative not finite: gw_taylor_attempt_size names it */
-            for (i = 0; i < nx; i++)
-                I->tl_w[(size_t)i * (size_t)(order + 1) + 1] = E->w[(size_t)i * SI + SO + l];
-        {
-            const double target = gw_ens_target(E, L),
-                         norms[4] = {n1[l], n2[l], hs[l], d1[l] == 0.0};
-            gw_int_result r =
-                gw_taylor_attempt_size(I, target, &L->run, GW_ENSEMBLE_LANE_STEPS ? NULL : norms,
-                                       &L->h, &L->t1, &last[l]);
-            if (r != GW_INT_OK) {
-                gw_ens_after(E, L, r, target);
-                continue;
-            }
-        }
-        go[l] = 1;
-        h[l] = L->h;
-        any = 1;
-    }
-    if (!any) return;
-    /* P'(h) of every lane into E->dp, where the next batch's defect pass reads it: E->dp's
-     * columns were read by this batch's defects above (and the lanes' not going on are not
-     * pending, so their columns are written again by gw_ens_point before they are read) */
-    gw_ens_increments(E->w, SI, SO, nx, order, h, E->qx, E->dp);
-    for (l = 0; l < W; l++) {
-        gw_lane *L = &E->lane[l];
-        gw_instance *I = L->I;
-        if (!go[l]) continue;
-        if (GW_ENSEMBLE_LANE_STEPS) {
-            gw_taylor_increment(I->tl_w, order, 1, 0, nx, L->h, I->dx, I->k[2]);
-            gw_sum_update(I);
-        } else { /* gw_sum_update's TwoSum with dx read from the pass (I->dx not written: stored
-                  * element by element and read in pairs by gw_sum_update, it stalled the loads,
-                  * 3.7% of a run); the new point also the lane's in the next batch */
-            gw_ens_sum_update(E->qx, l, nx, I->x, I->xc, I->xnew, I->xcnew, E->x);
-        }
-        if (!last[l]) { /* its point and P'(h) in the batch's columns already (2) */
-            L->pending = GW_ENSEMBLE_LANE_STEPS ? 1 : 2;
-        } else { /* a step landing on the call's target: checked with the right-hand side */
-            const double target = gw_ens_target(E, L);
-            int fresh;
-            gw_ens_fetch(I, L); /* its retries and event location read the series */
-            if (!GW_ENSEMBLE_LANE_STEPS) gw_ens_dp_copy(E, l); /* P'(h) for gw_taylor_defect */
-            gw_ens_after(E, L, gw_taylor_conclude(I, target, &L->run, L->h, L->t1, NULL, 1, &fresh),
-                         target);
-        }
-    }
+/* the same for a pending attempt of the passes (pending 2), its states into the instance too */
+static void gw_ens_dp(gw_ensemble *E, int l) {
+    if (E->lane[l].pending != 2) return;
+    gw_ens_sync(E, l);
+    gw_ens_dp_copy(E, l);
+    E->lane[l].pending = 1;
 }
 
 /* One batch: the series of every active lane at its point, then each lane's step.  Returns

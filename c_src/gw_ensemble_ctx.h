@@ -22,7 +22,7 @@ struct gw_ensemble_ctx {
     gw_ensemble E;
     gw_callbacks cb; /* allocate and free of everything here; the logger is each run's */
 };
-enum { GW_ENS_ARRAYS = 10 };
+enum { GW_ENS_ARRAYS = 13 };
 
 /* the batch memory's arrays and their lengths (doubles) */
 static void gw_ens_arrays(gw_ensemble *E, double **a[GW_ENS_ARRAYS], size_t n[GW_ENS_ARRAYS]) {
@@ -31,6 +31,7 @@ static void gw_ens_arrays(gw_ensemble *E, double **a[GW_ENS_ARRAYS], size_t n[GW
     int k;
     a[0] = &E->wb[0], a[1] = &E->wb[1], a[2] = &E->c, a[3] = &E->x, a[4] = &E->u, a[5] = &E->p;
     a[6] = &E->fsn, a[7] = &E->anom, a[8] = &E->dp, a[9] = &E->qx;
+    a[10] = &E->xa, a[11] = &E->xca, a[12] = &E->xcn;
     n[0] = n[1] = (size_t)m->taylor.n_var * (GW_TAYLOR_MAX_ORDER + 1) * L;
     n[2] = (size_t)m->taylor.n_cst * L, n[4] = (size_t)m->nu * L, n[5] = (size_t)m->np * L;
     for (k = 3; k < GW_ENS_ARRAYS; k++)

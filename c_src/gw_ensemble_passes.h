@@ -15,7 +15,7 @@
 #include <stddef.h>
 #include <string.h>
 
-#include "gw_fastmath.h" /* gw_fm_log4, gw_fm_exp4: the lanes' step sizes */
+#include "gw_fastmath.h" /* gw_fm_step4: the lanes' step sizes */
 
 /* The passes work on vectors of GW_ENS_V lanes (GCC / clang vector extension: GCC vectorised
  * none of the plain loops): 4 lanes (one AVX2 register) where the lanes are a multiple of 4,
@@ -63,12 +63,19 @@ typedef int gw_ens_m;
 #define GW_ENS_PASS_FMA static
 #endif
 
-/* N_{p-1}, N_p of every lane (gw_taylor_step), and d1[l] = 0 where every derivative (order 1) of
- * lane l is finite, NaN otherwise (the sum of x_i^[1] * 0: NaN from an infinity or a NaN), the
- * check gw_taylor_attempt_size would otherwise make on a copy of them */
+/* N_{p-1}, N_p of every lane (gw_taylor_step), n1, n2; its step size from them and log2 c =
+ * lc[l] (gw_taylor_step_size: gw_fm_step4 on 4 lanes at once, bit-equal lane by lane to
+ * gw_fm_step; non-finite norms give any h, refused by gw_taylor_attempt_size), hs; and d1[l] = 0
+ * where every state and derivative (orders 0 and 1) of lane l is finite, NaN otherwise (the sum
+ * of x_i^[0] * 0 + x_i^[1] * 0: NaN from an infinity or a NaN), the checks gw_accept_step and
+ * gw_taylor_attempt_size would otherwise make on copies of them.  The step sizes in the same
+ * pass, the norms still in registers: a pass of their own was 6% of the C of a run (N = 16,
+ * rel_tol 1e-4), their chain's latency not overlapped. */
 GW_ENS_PASS void gw_ens_norms(const double *w, size_t si, size_t so, const double *fsn, int nx,
-                              int order, double *n1, double *n2, double *d1) {
+                              int order, const double *lc, double *n1, double *n2, double *d1,
+                              double *hs) {
     enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V };
+    const double q1 = 1.0 / (order - 1), q2 = 1.0 / order;
     int i, j;
     for (j = 0; j < W; j += V) {
         gw_ens_v m1 = {0.0}, m2 = {0.0}, z = {0.0};
@@ -79,61 +86,22 @@ GW_ENS_PASS void gw_ens_norms(const double *w, size_t si, size_t so, const doubl
             const gw_ens_v r2 = GW_ENS_ABS(gw_ens_ld(x0 + (size_t)order * so)) * rsc;
             m1 = GW_ENS_SEL((r1 > m1) | (r1 != r1), r1, m1); /* a NaN sticks (gw_taylor_step) */
             m2 = GW_ENS_SEL((r2 > m2) | (r2 != r2), r2, m2);
-            z = z + gw_ens_ld(x0 + so) * 0.0;
+            z = z + gw_ens_ld(x0) * 0.0 + gw_ens_ld(x0 + so) * 0.0;
         }
         gw_ens_st(n1 + j, m1);
         gw_ens_st(n2 + j, m2);
         gw_ens_st(d1 + j, z);
-    }
-}
-
-/* h[l] = the step size of lane l from its norms n1[l], n2[l] and ln c = lc[l] (gw_taylor_step_size:
- * the same operations in the same order; with GW_TAYLOR_STEP_FM 4 lanes at a time by gw_fm_log4 /
- * gw_fm_exp4, bit-equal lane by lane to gw_fm_log / gw_fm_exp, else a loop of libm calls, the
- * lanes' independent chains side by side); non-finite norms give any h, refused by
- * gw_taylor_attempt_size */
-GW_ENS_PASS void gw_ens_step_sizes(const double *n1, const double *n2, const double *lc, int order,
-                                   double *h) {
-    enum { W = GW_ENSEMBLE_LANES };
-    const double r1 = 1.0 / (order - 1), r2 = 1.0 / order;
-    int l;
-#if GW_FASTMATH_V4 && GW_TAYLOR_STEP_FM
-    int j;
-    for (j = 0; j < W; j += 4) {
-        const int nl = W - j < 4 ? W - j : 4;
-        gw_fm_v4 a = {1.0, 1.0, 1.0, 1.0}, b = a, c = a, la, lb, e, hv;
-        gw_fm_m4 pa, pb;
-        if (nl == 4) { /* whole vectors (the lane-by-lane gather: about 1% of a run) */
-            memcpy(&a, n1 + j, sizeof a);
-            memcpy(&b, n2 + j, sizeof b);
-            memcpy(&c, lc + j, sizeof c);
-        } else {
-            for (l = 0; l < nl; l++) {
-                a[l] = n1[j + l];
-                b[l] = n2[j + l];
-                c[l] = lc[j + l];
-            }
+#if GW_ENS_V == 4 && GW_FASTMATH_V4
+        {
+            const gw_fm_v4 c = gw_ens_ld(lc + j);
+            gw_fm_v4 hv;
+            gw_fm_step4(&hv, &m1, &m2, q1, q2, &c);
+            gw_ens_st(hs + j, hv);
         }
-        pa = a > 0.0;
-        pb = b > 0.0;
-        gw_fm_log4(&la, &a);
-        gw_fm_log4(&lb, &b);
-        la = GW_FM_SEL4(pa, -la * r1, (gw_fm_v4){0} + HUGE_VAL);
-        lb = GW_FM_SEL4(pb, -lb * r2, (gw_fm_v4){0} + HUGE_VAL);
-        e = GW_FM_SEL4(lb < la, lb, la) + c;
-        gw_fm_exp4(&hv, &e);
-        if (nl == 4)
-            memcpy(h + j, &hv, sizeof hv);
-        else
-            for (l = 0; l < nl; l++) h[j + l] = hv[l];
-    }
 #else
-    for (l = 0; l < W; l++) {
-        const double l1 = n1[l] > 0.0 ? -GW_TL_LN(n1[l]) * r1 : HUGE_VAL,
-                     l2 = n2[l] > 0.0 ? -GW_TL_LN(n2[l]) * r2 : HUGE_VAL;
-        h[l] = GW_TL_EXP((l2 < l1 ? l2 : l1) + lc[l]);
-    }
+        for (i = j; i < j + V; i++) hs[i] = gw_fm_step(n1[i], n2[i], q1, q2, lc[i]);
 #endif
+    }
 }
 
 /* the defect of every lane's pending attempt with f(t1, P(h)) = order 1 of the batch's series
@@ -211,44 +179,29 @@ GW_ENS_PASS_FMA void gw_ens_increments(const double *w, size_t si, size_t so, in
     for (; i0 < nx; i0++) gw_ens_horner(w, si, so, order, hh, i0, 1, qx, qd); /* the last ones */
 }
 
-/* One lane's compensated update (gw_sum_update's TwoSum, element by element, so the same
- * values), 4 components at a time: xnew = x + (dx + xc), its rounding in xcnew, dx read from the
- * increments pass (qx[i W + l]), xnew also into the batch's column l of bx (the lane's point in
- * the next batch).  Scalar, the loads of x waited on the stores of the step before (2.7% of a
- * run, N = 4 at rel_tol 1e-6). */
-#if defined(__GNUC__) || defined(__clang__)
-typedef double gw_ens_v4u __attribute__((vector_size(32), aligned(8), may_alias));
-#endif
-#ifndef GW_ENS_RESTRICT
-#define GW_ENS_RESTRICT
-#endif
-static inline void gw_ens_sum_update(const double *GW_ENS_RESTRICT qx, int l, int nx,
-                                     const double *GW_ENS_RESTRICT x,
-                                     const double *GW_ENS_RESTRICT xc,
-                                     double *GW_ENS_RESTRICT xnew, double *GW_ENS_RESTRICT xcnew,
-                                     double *GW_ENS_RESTRICT bx) {
-    enum { W = GW_ENSEMBLE_LANES };
-    int i = 0;
-#if defined(__GNUC__) || defined(__clang__)
-    for (; i + 4 <= nx; i += 4) {
-        const gw_ens_v4u d = {qx[(size_t)i * W + l], qx[(size_t)(i + 1) * W + l],
-                              qx[(size_t)(i + 2) * W + l], qx[(size_t)(i + 3) * W + l]};
-        const gw_ens_v4u xv = *(const gw_ens_v4u *)(const void *)(x + i);
-        const gw_ens_v4u y = d + *(const gw_ens_v4u *)(const void *)(xc + i), sum = xv + y,
-                         bp = sum - xv;
-        *(gw_ens_v4u *)(void *)(xnew + i) = sum;
-        *(gw_ens_v4u *)(void *)(xcnew + i) = (xv - (sum - bp)) + (y - bp);
-        bx[(size_t)i * W + l] = sum[0];
-        bx[(size_t)(i + 1) * W + l] = sum[1];
-        bx[(size_t)(i + 2) * W + l] = sum[2];
-        bx[(size_t)(i + 3) * W + l] = sum[3];
-    }
-#endif
-    for (; i < nx; i++) {
-        const double y = qx[(size_t)i * W + l] + xc[i], sum = x[i] + y, bp = sum - x[i];
-        xnew[i] = sum;
-        bx[(size_t)i * W + l] = sum;
-        xcnew[i] = (x[i] - (sum - bp)) + (y - bp);
+/* Every lane's compensated update (gw_sum_update's TwoSum, element by element, so the same
+ * values): xnew = x + (dx + xc), its rounding in xcnew, dx from the increments pass (qx); lane l's
+ * x, xc are the columns bx, xcn where acc[l] != 0 (a step accepted in the batch: its end point
+ * and rounding), else xa, xca; either is left in xa, xca (the lane's current state), xnew in bx
+ * (its point in the next batch), xcnew in xcn.  The lanes innermost: one lane at a time, the
+ * strided stores of its new point into bx were 3.5% of a run (N = 16 at rel_tol 1e-4). */
+GW_ENS_PASS void gw_ens_sum_updates(const double *qx, const double *acc, int nx, double *xa,
+                                    double *xca, double *bx, double *xcn) {
+    enum { W = GW_ENSEMBLE_LANES, V = GW_ENS_V };
+    int i, j;
+    for (j = 0; j < W; j += V) {
+        const gw_ens_v zero = {0.0};
+        const gw_ens_m m = gw_ens_ld(acc + j) != zero;
+        for (i = 0; i < nx; i++) {
+            const size_t at = (size_t)i * W + (size_t)j;
+            const gw_ens_v x = GW_ENS_SEL(m, gw_ens_ld(bx + at), gw_ens_ld(xa + at)),
+                           xc = GW_ENS_SEL(m, gw_ens_ld(xcn + at), gw_ens_ld(xca + at));
+            const gw_ens_v y = gw_ens_ld(qx + at) + xc, sum = x + y, bp = sum - x;
+            gw_ens_st(xa + at, x);
+            gw_ens_st(xca + at, xc);
+            gw_ens_st(bx + at, sum);
+            gw_ens_st(xcn + at, (x - (sum - bp)) + (y - bp));
+        }
     }
 }
 

@@ -132,7 +132,7 @@ typedef struct {
     int events;
     unsigned long n_fast, steps, rejected;
     double h_prev;
-    double log_c; /* ln(h / rho) of the step size rule (gw_taylor_begin) */
+    double log2_c; /* log2(h / rho) of the step size rule (gw_taylor_begin) */
 } gw_taylor_run;
 /* Jorba-Zou step size from the coefficients of orders p-1 and p of X, the states' series with
  * state i's coefficient k at X[i si + k so]; 0 and *bad_order = j if order j is not finite. */

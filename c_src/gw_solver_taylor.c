@@ -26,8 +26,8 @@
  *           nominal_i, the error weight of every solver (atol: abs_tol, or rel_tol / 100 when
  *           abs_tol = 0); q follows eps continuously (at the integer p0 the term stayed put over
  *           each p0's range of eps and fell e^2 at its end; q - 1/2 = the unrounded p0, so on
- *           average over that range the term is the former one); two logarithms and one
- *           exponential, no pow;
+ *           average over that range the term is the former one); log2 and 2^y to 4e-7
+ *           (gw_fm_step: exponent bits and short polynomials, no pow, no libm);
  *   update  dx_i = sum_{k=1..p} x_i^[k] h^k (Horner, with P'(h) in the same pass), added to
  *           the state with the TwoSum compensation every solver shares (gw_sum_update: x + xc,
  *           xc part of a saved state, layout v3), so that rounding does not accumulate;
@@ -57,13 +57,12 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include <math.h>
 #include <string.h>
 
-#include "gw_fastmath.h" /* gw_fm_log, gw_fm_exp: the ensemble's step size (GW_TAYLOR_STEP_FM) */
+#include "gw_fastmath.h" /* gw_fm_step: the step size; gw_fm_log, gw_fm_exp (GW_TAYLOR_STEP_FM) */
 #include "gw_solver.h"
 
-/* The step size's ln and exp (gw_taylor_step_size, the rejection rule): libm's in the FMU (glibc's
- * are table-driven with FMA where the CPU has it: 11 ns per exp against 22 ns for gw_fm_exp, the
- * step's latency); gw_fastmath.h's where a 4-lane pass must equal this code bit for bit, lane
- * by lane (the ensemble library, fmu_build/ensemble.py: GW_TAYLOR_STEP_FM 1, gw_ens_step_sizes) */
+/* The rejection rule's ln and exp (a rejected step's shorter retry; the step size itself is
+ * gw_fm_step's, gw_taylor_step_size): libm's in the FMU, gw_fastmath.h's in the ensemble library
+ * (fmu_build/ensemble.py: GW_TAYLOR_STEP_FM 1) */
 #ifndef GW_TAYLOR_STEP_FM
 #define GW_TAYLOR_STEP_FM 0
 #endif
@@ -114,18 +113,12 @@ static int gw_taylor_bad_order(int order, double n1, double n2) {
 
 GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, double n1, double n2,
                                        int *bad_order) {
-    /* 1/j before the logarithms: off their chain (a division after each log was 13% of the
-     * step's own time in perf) */
-    const double r1 = 1.0 / (order - 1), r2 = 1.0 / order;
-    double l1, l2, lr;
     *bad_order = gw_taylor_bad_order(order, n1, n2);
     if (*bad_order) return 0.0;
-    /* ln rho = min_j ln(N_j^(-1/j)): two logarithms and one exponential (no pow).  The same
-     * operations in the same order as the ensemble's pass over its lanes (gw_ens_step_sizes). */
-    l1 = n1 > 0.0 ? -GW_TL_LN(n1) * r1 : HUGE_VAL;
-    l2 = n2 > 0.0 ? -GW_TL_LN(n2) * r2 : HUGE_VAL;
-    lr = l2 < l1 ? l2 : l1;
-    return GW_TL_EXP(lr + run->log_c);
+    /* log2 rho = min_j log2(N_j^(-1/j)), h = 2^(log2 rho + log2 c): gw_fm_step's short log2 and
+     * exp2 (gw_fastmath.h, 3e-7 of the exact rule), the same body as the ensemble's pass over
+     * its lanes (gw_ens_step_sizes) */
+    return gw_fm_step(n1, n2, 1.0 / (order - 1), 1.0 / order, run->log2_c);
 }
 
 /* dx = P(h) - x0 = sum_{k>=1} X_k h^k and, if dp is not NULL, dp = P'(h), in one Horner pass:
@@ -298,7 +291,7 @@ GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run) {
      * over rel_tol's range of p0 (q - 1/2 runs through (p0 - 1, p0]), equal to it mid-range */
     q = -0.5 * log(I->rel_tol > DBL_EPSILON ? I->rel_tol : DBL_EPSILON) + 1.5;
     if (q < 3.0) q = 3.0; /* rel_tol > e^-3: order 3's rule (p0 = 3 up to e^-4) */
-    run->log_c = -(2.0 + 0.7 / (q - 1.0)) * (q + 1.0) / (p + 1);
+    run->log2_c = -(2.0 + 0.7 / (q - 1.0)) * (q + 1.0) / (p + 1) / log(2.0);
     return 0;
 }
 

@@ -46,7 +46,7 @@ def runtime_sources() -> list[Path]:
 # and the ensemble path's sources (fmu_build.ensemble builds them from the FMU's sources/; not part
 # of the FMU's unity build, compiled on their own they are empty)
 TAYLOR_ONLY = {"gw_taylor_ops.h", "gw_ensemble.c", "gw_ensemble.h", "gw_ensemble_passes.h",
-               "gw_ensemble_ctx.h"}
+               "gw_ensemble_ctx.h", "gw_ensemble_batch.h"}
 
 
 def model_spec(scene: Scene) -> ModelSpec:

@@ -38,6 +38,7 @@ def _same(a, b):
     np.testing.assert_array_equal(a.t_final, b.t_final)
     np.testing.assert_array_equal(a.x_final, b.x_final)
     np.testing.assert_array_equal(a.y_grid, b.y_grid)
+    np.testing.assert_array_equal(a.n_rows, b.n_rows)
     np.testing.assert_array_equal(a.flags, b.flags)
     assert a.messages == b.messages
 

@@ -3,11 +3,11 @@
  * series of 4 lanes, against the one-lane formulas of solver taylor (gw_taylor_step and
  * gw_taylor_step_size, written out here operation by operation):
  *   gw_ens_norms       N_{p-1}, N_p of every lane bit for bit (a NaN coefficient sticks as the
- *                      norm), and d1 = 0 exactly where every
- *                      order-1 coefficient of the lane is finite (NaN where one is inf or NaN)
- *   gw_ens_step_sizes  every lane's step size bit for bit (gw_fm_log / gw_fm_exp against the
- *                      4-lane gw_fm_log4 / gw_fm_exp4 with GW_TAYLOR_STEP_FM 1; libm in a loop
- *                      with 0), zero norms (no bound from that order) included
+ *                      norm), and d1 = 0 exactly where every order-0 and order-1 coefficient of
+ *                      the lane is finite (NaN where one is inf or NaN)
+ *                      and every lane's step size bit for bit gw_fm_step's (the 4-lane gw_fm_step4
+ *                      against the scalar form), zero norms (no bound from that order) included,
+ *                      and within 4e-7 of the exact rule computed with libm's log and exp
  *   gw_ens_defects     every lane's defect bit for bit as gw_taylor_defect's division loop (the
  *                      largest r_i, HUGE_VAL when one is NaN or infinite), a NaN r_i before a
  *                      finite one included (the pass kept the later finite r: a step accepted
@@ -39,14 +39,16 @@ static void expect(int ok, const char *what, int lane) {
 
 static int same(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
 
-/* the increments are tested through the library (tests/test_taylor.py) */
-void (*const unused_passes[])(void) = {(void (*)(void))gw_ens_increments};
+/* the increments and updates are tested through the library (tests/test_taylor.py) */
+void (*const unused_passes[])(void) = {(void (*)(void))gw_ens_increments,
+                                       (void (*)(void))gw_ens_sum_updates};
 
 int main(void) {
     static double w[NX * (ORDER + 1) * W], fsn[NX * W], dp[NX * W], x[NX * W], anom[NX * W];
     double scale[W], err[W];
     const double rtol = 1e-9;
-    double n1[W], n2[W], d1[W], h[W], lc[W];
+    double n1[W], n2[W], d1[W], h[W], lc[W], worst = 0.0;
+    int n_zero = 0, n_sub = 0;
     const double r1 = 1.0 / (ORDER - 1), r2 = 1.0 / ORDER;
     int i, k, l, round;
     for (round = 0; round < 200; round++) {
@@ -60,11 +62,16 @@ int main(void) {
             }
         if (round % 5 == 1) /* lane 1: orders p-1 and p zero (no bound from them) */
             for (i = 0; i < NX; i++) w[(i * (ORDER + 1) + ORDER - 1) * W + 1] = w[(i * (ORDER + 1) + ORDER) * W + 1] = 0.0;
+        if (round % 5 == 3) /* lane 3: orders p-1 and p subnormal (the norms too) */
+            for (i = 0; i < NX; i++) w[(i * (ORDER + 1) + ORDER - 1) * W + 3] = w[(i * (ORDER + 1) + ORDER) * W + 3] = 3e-318 * (i + 1);
+        if (round % 7 == 5 && round % 6 != 2) /* lane 0: a state (order 0) not finite */
+            w[(3 * (ORDER + 1) + 0) * W + 0] = round % 2 ? INFINITY : NAN;
         if (round % 3 == 0) w[(2 * (ORDER + 1) + 1) * W + 2] = round % 2 ? INFINITY : -INFINITY;
         if (round % 4 == 0) w[(4 * (ORDER + 1) + 1) * W + 3] = NAN;
         if (round % 6 == 2) /* a NaN coefficient of order p-1 (lane 0) or p (lane 2) before finite ones */
             w[(1 * (ORDER + 1) + ORDER - 1) * W + 0] = w[(0 * (ORDER + 1) + ORDER) * W + 2] = NAN;
-        gw_ens_norms(w, (ORDER + 1) * W, W, fsn, NX, ORDER, n1, n2, d1);
+        for (l = 0; l < W; l++) lc[l] = -2.5 - 0.1 * l;
+        gw_ens_norms(w, (ORDER + 1) * W, W, fsn, NX, ORDER, lc, n1, n2, d1, h);
         for (l = 0; l < W; l++) {
             double m1 = 0.0, m2 = 0.0;
             int finite = 1;
@@ -74,21 +81,26 @@ int main(void) {
                 const double a = fabs(xi[(ORDER - 1) * W]) * rsc, b = fabs(xi[ORDER * W]) * rsc;
                 m1 = a > m1 || a != a ? a : m1;
                 m2 = b > m2 || b != b ? b : m2;
-                finite &= isfinite(xi[W]) != 0;
+                finite &= isfinite(xi[0]) && isfinite(xi[W]);
             }
             expect(same(n1[l], m1) && same(n2[l], m2), "norms differ from gw_taylor_step's", l);
             if (round % 6 == 2 && (l == 0 || l == 2)) /* the NaN is the norm, not a later finite value */
                 expect(l == 0 ? isnan(n1[l]) && !isnan(n2[l]) : isnan(n2[l]) && !isnan(n1[l]),
                        "a NaN coefficient did not stick as the norm", l);
-            expect(finite ? d1[l] == 0.0 : isnan(d1[l]), "order-1 finiteness flag wrong", l);
-            lc[l] = -2.5 - 0.1 * l;
+            expect(finite ? d1[l] == 0.0 : isnan(d1[l]), "orders 0, 1 finiteness flag wrong", l);
         }
-        gw_ens_step_sizes(n1, n2, lc, ORDER, h);
-        for (l = 0; l < W; l++) { /* gw_taylor_step_size */
-            const double l1 = n1[l] > 0.0 ? -GW_TL_LN(n1[l]) * r1 : HUGE_VAL,
-                         l2 = n2[l] > 0.0 ? -GW_TL_LN(n2[l]) * r2 : HUGE_VAL;
-            const double ref = GW_TL_EXP((l2 < l1 ? l2 : l1) + lc[l]);
-            expect(same(h[l], ref), "step size differs from gw_taylor_step_size's", l);
+        for (l = 0; l < W; l++) { /* gw_taylor_step_size, and the exact rule in libm */
+            const double l1 = n1[l] > 0.0 ? -log(n1[l]) * r1 : HUGE_VAL,
+                         l2 = n2[l] > 0.0 ? -log(n2[l]) * r2 : HUGE_VAL;
+            const double exact = exp((l2 < l1 ? l2 : l1) + lc[l] * log(2.0));
+            expect(same(h[l], gw_fm_step(n1[l], n2[l], r1, r2, lc[l])),
+                   "step size differs from gw_taylor_step_size's", l);
+            if (isfinite(n1[l]) && isfinite(n2[l])) {
+                const double rel = isinf(exact) ? (isinf(h[l]) ? 0.0 : 1.0) : fabs(h[l] / exact - 1.0);
+                worst = rel > worst ? rel : worst;
+                n_zero += n1[l] == 0.0 && n2[l] == 0.0;
+                n_sub += n1[l] > 0.0 && n1[l] < DBL_MIN;
+            }
         }
         for (l = 0; l < W; l++) { /* an attempt's P'(h), xnew and weights near f(t1, P(h)) */
             scale[l] = 1e-3 * (1 + l) / (ORDER + 1);
@@ -120,6 +132,10 @@ int main(void) {
             expect(same(err[l], e), "defect differs from gw_taylor_defect's", l);
         }
     }
+    /* the short log2 and 2^y against the exact rule (order 9 here; zero norms: h = inf;
+     * subnormal norms scaled) */
+    expect(worst > 0.0 && worst < 4e-7 && n_zero > 0 && n_sub > 0, "step size off the exact rule", -1);
+    fprintf(stderr, "step size within %.3g of the exact rule\n", worst);
     fprintf(stderr, "test_ens_passes: %d failures\n", failures);
     return failures != 0;
 }

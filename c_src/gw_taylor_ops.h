@@ -65,6 +65,15 @@
 #define GW_TL_VW 1
 #endif
 #define GW_TL_BLK (GW_TL_W / GW_TL_VW)
+/* GW_TL_UNROLL: before each loop over the slices, so that W > VW lanes (8, 16) run their
+ * slices' statements straight-line rather than as a loop over them (measured on the paper
+ * kernel at order 10, AVX-512 machine: 8 lanes 1.15x the per-lane time of 4 as a loop, 1.04x
+ * unrolled) */
+#if defined(__GNUC__) && !defined(__clang__) && GW_TL_BLK > 1
+#define GW_TL_UNROLL _Pragma("GCC unroll 4")
+#else
+#define GW_TL_UNROLL
+#endif
 /* p rounded up to a slice's alignment (VW doubles) */
 #define GW_TL_ALIGN(p)                                                                             \
     ((p) + (GW_TL_VW - (size_t)((uintptr_t)(p) / sizeof(double) % GW_TL_VW)) % GW_TL_VW)

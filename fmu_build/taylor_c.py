@@ -296,7 +296,7 @@ def _interior_lines(plan: _Plan) -> list[str]:
     for g in range(0, len(order), GROUP):
         group = order[g:g + GROUP]
         acc = {n: f"s{i}" for i, n in enumerate(group)}
-        lines.append("    for (l = 0; l < GW_TL_BLK; l++) {")
+        lines.append("    GW_TL_UNROLL for (l = 0; l < GW_TL_BLK; l++) {")
         lines.append(f"        GW_TL(v) {', '.join(acc.values())};")
         lines += [f"        GW_TLZ({s});" for s in acc.values()]
         body = []
@@ -564,7 +564,7 @@ def _loops(items: list[tuple[bool, str]]) -> list[str]:
         j = i
         while j < len(items) and items[j][0] == lane:
             j += 1
-        lines.append(f"    for (l = 0; l < {'GW_TL_W' if lane else 'GW_TL_BLK'}; l++) {{")
+        lines.append(f"    {'' if lane else 'GW_TL_UNROLL '}for (l = 0; l < {'GW_TL_W' if lane else 'GW_TL_BLK'}; l++) {{")
         lines += ["        " + text for _, text in items[i:j]]
         lines.append("    }")
         i = j
@@ -726,6 +726,7 @@ enum {{ GW_TL(row) = GW_TL_ROW }};
 #undef GW_TLST
 #undef GW_TL_VW
 #undef GW_TL_BLK
+#undef GW_TL_UNROLL
 #undef GW_TL_ALIGN
 #undef GW_TLX
 #undef GW_TLR

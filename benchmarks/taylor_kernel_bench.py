@@ -2,9 +2,9 @@
 
 Builds a scene's FMU with the Taylor kernel, compiles its gw_taylor_model.h into small C
 drivers the way the runtime does (W = 1: the FMU's c_src/gw_taylor.c with its flags, -std=c99
--O2 -fno-math-errno; W > 1 as in the ensemble library: -O3 -ffp-contract=fast, the kernel a
-target clone for x86-64-v3 beside the portable default) and times jet at the scene's initial state: thread CPU time of a batch of
-calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8 at orders 6, 10, 13,
+-O2 -fno-math-errno; W > 1 as in the ensemble library: -O3 -ffp-contract=fast, the kernel
+target clones for x86-64-v4 and x86-64-v3 beside the portable default, as c_src/gw_ensemble.c) and times jet at the scene's initial state: thread CPU time of a batch of
+calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8, 16 at orders 6, 10, 13,
 15 (rel_tol 1e-4, 1e-7, 1e-10, 1e-12) and the ratio of a W-lane call to a one-lane call (the
 cost of W trajectories against one: 1 would be perfect vectorisation, W none at all).
 
@@ -14,7 +14,7 @@ this tree's (they differ by rounding only: the summation order).  Timings on a l
 are noisy: compare ratios from one run; re-measure absolute times on a quiet machine.
 
     python benchmarks/taylor_kernel_bench.py [--scene examples/scenes/paper_earth.toml]
-        [--baseline main] [--lanes 1 4 8] [--orders 6 10 13 15] [--rounds 15]
+        [--baseline main] [--lanes 1 4 8 16] [--orders 6 10 13 15] [--rounds 15]
 """
 from __future__ import annotations
 
@@ -51,7 +51,7 @@ DRIVER = r"""#define _POSIX_C_SOURCE 199309L
 #define GW_TL_W {lanes}
 #define GW_TL(name) gw_tlb_##name
 #if defined(__x86_64__) && !defined(__clang__)
-#define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v3", "default")))
+#define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #endif
 #include "gw_taylor_model.h"
 #endif
@@ -152,7 +152,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scene", default=str(ROOT / "examples/scenes/paper_earth.toml"))
     parser.add_argument("--baseline", help="git ref whose kernel generator to time alongside")
-    parser.add_argument("--lanes", type=int, nargs="*", default=[1, 4, 8])
+    parser.add_argument("--lanes", type=int, nargs="*", default=[1, 4, 8, 16])
     parser.add_argument("--orders", type=int, nargs="*", default=[6, 10, 13, 15])
     parser.add_argument("--rounds", type=int, default=15)
     parser.add_argument("--seconds", type=float, default=0.004, help="per timed batch")

@@ -38,10 +38,13 @@ __all__ = ["Ensemble", "EnsembleResult", "EnsembleError", "STATUS_OK", "STATUS_T
            "STATUS_ERROR", "LANES"]
 
 STATUS_OK, STATUS_TERMINATED, STATUS_ERROR = 0, 2, 3  # gw_status values
-# trajectories advanced together (GW_ENSEMBLE_LANES): 4, one AVX2 vector of doubles.  8 lanes are
-# no cheaper per trajectory on an AVX2 machine and much dearer for small N (paper scenario, quiet
-# machine: N = 16 at 1e-10 0.191 ms on 8 lanes, 0.178 ms on 4; N = 4 at 1e-4 0.172 against
-# 0.108 ms), docs/taylor.md "The ensemble path"
+# trajectories advanced together (GW_ENSEMBLE_LANES): 4, one AVX2 vector of doubles.  Wider
+# batches do not pay per trajectory: the kernel is throughput-bound (its interior sums' loads and
+# multiply-adds), so 8 lanes cost what two 4-lane slices cost (per lane-step 1.0x of 4 lanes with
+# the slices unrolled, 1.15x before; 16 lanes 1.1x, their series outgrow L1), and the per-lane
+# control does not shrink with the width; a job of N < 8 leaves lanes idle (paper, 1e-4, loaded
+# machine, one run: N = 16 0.041 ms per trajectory on 4 and 8 lanes, N = 64 0.041 / 0.040, N = 4
+# 0.044 / 0.073).  docs/taylor_performance.md "Wider batches"
 LANES = 4
 KIND_PARAM, KIND_START, KIND_OUTPUT, KIND_EVENT = 0, 1, 3, 5  # gw_kind
 FLAGS = ["-O3", "-ffp-contract=fast"]  # portable: the x86-64-v3 kernel is a target clone
@@ -308,7 +311,9 @@ def _free_contexts(free, contexts: list) -> None:
 class Ensemble:
     """The ensemble library of one FMU built by gyrowheel (compiled once, cached by content).
 
-    fmu: path of the .fmu; lanes: trajectories advanced together; cache: where the library is
+    fmu: path of the .fmu; lanes: trajectories advanced together (default LANES, 4: as cheap
+    per trajectory as 8 or 16 at N >= 16 and much cheaper below, measured; any integer >= 1 is
+    built, each width its own cached library); cache: where the library is
     kept (default ~/.cache/gyrowheel/ensemble).  Raises ValueError for lanes not an integer >= 1,
     EnsembleError if the FMU has no sources or its model no Taylor kernel, CompileError if the
     compiler fails.

@@ -209,36 +209,69 @@ def _cst_lines(dec: Decomposition) -> list[str]:
     return lines
 
 
-def _zero_lines(plan: _Plan) -> list[str]:
+# order-0 ops whose C (taylor_graph.C_EXPR) is arithmetic, valid on GW_TL(v) slices as written
+SLICE0 = {"add", "sub", "mul", "div", "neg", "twice", "sq", "inv", "lin"}
+
+
+def _zero_items(plan: _Plan, slices: bool = False) -> list[tuple[bool, str]]:
     """order 0: the right-hand side itself, in program order (and the reciprocals of the
-    denominators of orders k >= 1)"""
+    denominators of orders k >= 1), as (lane-wise, statement) items; slices: the arithmetic
+    and sincos nodes as slice statements (GW_TL_V0: GW_X0 the slice lvalue, GW_TL(sincos)),
+    the others lane by lane"""
     dec = plan.dec
-    lines = []
+    items: list[tuple[bool, str]] = []
+
+    def ptr(a: Operand) -> str:
+        return f"{'wi' if a[0] == 'v' else 'c'} + {a[1]} * GW_TL_W + l * GW_TL_VW"
+
     for n, node in dec.nodes.items():
-        args = [_order0(a, True) for a in node.args]
         op = node.op
-        if op == "sincos":  # gw_fastmath.h: inline, <= 1 ulp, one reduction for the pair
-            lines.append(f"        gw_sincos({args[0]}, &{_v0(n, True)}, &{_v0(node.extra[0], True)});")
+        vec = slices and (op in SLICE0 or op == "sincos")
+        args = [_order0(a, not vec) for a in node.args]
+        if op == "sincos" and vec:
+            items.append((False, f"GW_TL(sincos)({ptr(node.args[0])}, {ptr(('v', n))}, "
+                                 f"{ptr(('v', node.extra[0]))});"))
+        elif op == "sincos":  # gw_fastmath.h: inline, <= 1 ulp, one reduction for the pair
+            items.append((True, f"gw_sincos({args[0]}, &{_v0(n, True)}, &{_v0(node.extra[0], True)});"))
         elif op == "sinhcosh":
-            f, g = "sinh", "cosh"
-            lines.append(f"        {_v0(n, True)} = {f}({args[0]});")
-            lines.append(f"        {_v0(node.extra[0], True)} = {g}({args[0]});")
+            items.append((True, f"{_v0(n, True)} = sinh({args[0]});"))
+            items.append((True, f"{_v0(node.extra[0], True)} = cosh({args[0]});"))
         elif op in ("tan", "tanh"):
-            lines.append(f"        {_v0(n, True)} = {op}({args[0]});")
             sign = "+" if op == "tan" else "-"
-            lines.append(f"        {_v0(node.extra[0], True)} = 1.0 {sign} {_v0(n, True)} * {_v0(n, True)};")
+            items.append((True, f"{_v0(n, True)} = {op}({args[0]});"))
+            items.append((True, f"{_v0(node.extra[0], True)} = 1.0 {sign} {_v0(n, True)} * {_v0(n, True)};"))
         elif op == "dq":
             zop, za = node.zero
-            lines.append(f"        {_v0(n, True)} = {C_EXPR[zop].format(_order0(za, True))};")
+            items.append((True, f"{_v0(n, True)} = {C_EXPR[zop].format(_order0(za, True))};"))
         elif op == "lin":
-            lane0 = lambda x: _order0(x, True)  # noqa: E731  (operands' and constants' values)
-            lines.append(f"        {_v0(n, True)} = {lin_order0(node, lane0, lane0)};")
+            val = lambda x: _order0(x, not vec)  # noqa: E731  (operands' and constants' values)
+            items.append((not vec, f"{_x0(n, vec)} = {lin_order0(node, val, val)};"))
         else:
-            lines.append(f"        {_v0(n, True)} = {C_EXPR[op].format(*args)};")
+            items.append((not vec, f"{_x0(n, vec)} = {C_EXPR[op].format(*args)};"))
         if n in plan.recip:  # after the node itself (sqrt's is 1 / (2 v_0))
             r, den = plan.recip[n]
-            lines.append(f"        {_v0(r, True)} = 1.0 / ({den});")
-    return lines
+            if vec:
+                den = _order0(node.args[RECIPROCAL[node.op]])
+            items.append((not vec, f"{_x0(r, vec)} = 1.0 / ({den});"))
+    return items
+
+
+def _x0(n: int, vec: bool) -> str:
+    """coefficient 0 of node n as an lvalue: slice l (GW_X0) or lane l"""
+    return f"GW_X0({n})" if vec else _v0(n, True)
+
+
+def _order0_slices(plan: _Plan) -> list[tuple[bool, str]]:
+    """order 0 of W lanes under GW_TL_V0: the states and t, the right-hand side and the states'
+    coefficient 1, slice statements where _zero_items and _next make them"""
+    t = [] if plan.dec.t_node is None else [(False, f"GW_X0({plan.dec.t_node}) = GW_TLR(t + l * GW_TL_VW);")]
+    x = [(False, f"GW_X0({i}) = GW_TLR(x + {i} * GW_TL_W + l * GW_TL_VW);") for i in range(plan.dec.nx)]
+    return x + t + _zero_items(plan, True) + _next(plan, True, True)
+
+
+def _zero_lines(plan: _Plan) -> list[str]:
+    """order 0 lane by lane (the body of a loop over the lanes)"""
+    return ["        " + text for _, text in _zero_items(plan)]
 
 
 def _oriented(plan: _Plan) -> tuple[dict[int, list[_Term]], list[int]]:
@@ -263,7 +296,7 @@ def _interior_lines(plan: _Plan) -> list[str]:
     for g in range(0, len(order), GROUP):
         group = order[g:g + GROUP]
         acc = {n: f"s{i}" for i, n in enumerate(group)}
-        lines.append("    for (l = 0; l < GW_TL_BLK; l++) {")
+        lines.append("    GW_TL_UNROLL for (l = 0; l < GW_TL_BLK; l++) {")
         lines.append(f"        GW_TL(v) {', '.join(acc.values())};")
         lines += [f"        GW_TLZ({s});" for s in acc.values()]
         body = []
@@ -451,23 +484,24 @@ def _boundary(plan: _Plan, isum: dict[int, str] | None = None) -> list[tuple[boo
     return out
 
 
-def _next(plan: _Plan, order0: bool) -> list[tuple[bool, str]]:
+def _next(plan: _Plan, order0: bool, slices: bool = False) -> list[tuple[bool, str]]:
     """coefficient k + 1 of the states (x_i^[k+1] = f_i^[k] / (k + 1)) and of t, and their
-    weighted series (j x_j at j = k + 1 is f_i^[k]); order 0: one lane's statements"""
+    weighted series (j x_j at j = k + 1 is f_i^[k]); order 0: one lane's statements (slices:
+    slice statements where the value is not a number)"""
     dec = plan.dec
     out: list[tuple[bool, str]] = []
 
     def put(n: int, f: str | None, scale: str = "") -> None:
-        if order0 or f is None:
+        if f is None or (order0 and not slices):
             out.append((True, f"GW_LN({n}) = {'0.0' if f is None else f};"))
         else:
-            out.append((False, f"GW_VN({n}) = {f}{scale};"))
+            out.append((False, f"GW_VN({n}) = {f}{'' if order0 else scale};"))
 
     for i, o in enumerate(dec.outputs):
         s = dec.output_scales[i] if dec.output_scales else None  # x_i' = s output_i
         if order0:
-            f = None if o is None else _order0(o, True)
-            f = f if f is None or s is None else f"{_order0(s, True)} * {f}"
+            f = None if o is None else _order0(o, not slices)
+            f = f if f is None or s is None else f"{_order0(s, not slices)} * {f}"
         else:
             f = None if o is None or o[0] == "c" else _vk(o[1])
         scaled = f is None or s is None or order0
@@ -530,7 +564,7 @@ def _loops(items: list[tuple[bool, str]]) -> list[str]:
         j = i
         while j < len(items) and items[j][0] == lane:
             j += 1
-        lines.append(f"    for (l = 0; l < {'GW_TL_W' if lane else 'GW_TL_BLK'}; l++) {{")
+        lines.append(f"    {'' if lane else 'GW_TL_UNROLL '}for (l = 0; l < {'GW_TL_W' if lane else 'GW_TL_BLK'}; l++) {{")
         lines += ["        " + text for _, text in items[i:j]]
         lines.append("    }")
         i = j
@@ -617,6 +651,11 @@ GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, con
 #define GW_IS(i) gw_is[i]
 {f"    double gw_is[{4 * len(packs.groups)}];" if packs.groups else ""}
 #endif
+#if GW_TL_V0 /* order 0 in slices where its operations allow: gw_taylor_ops.h */
+#define GW_X0(n) GW_TLX(wi + (n) * GW_TL_W + l * GW_TL_VW)
+{chr(10).join(_loops(_order0_slices(plan)))}
+#undef GW_X0
+#else
     for (l = 0; l < GW_TL_W; l++) {{
 {chr(10).join([f"        GW_L0({i}) = x[{i} * GW_TL_W + l];" for i in range(dec.nx)] + t_init)}
 {chr(10).join(_zero_lines(plan))}
@@ -625,6 +664,7 @@ GW_TL_STATIC void GW_TL(series)(int order, const double *t, const double *x, con
 {chr(10).join("        " + text for item in _next(plan, True) for _, text in packs.copy(*item))}
 #endif
     }}
+#endif
     for (k = 1; k < order; k++) {{
     vk = GW_ORD(k);
     vn = GW_ORD(k + 1);
@@ -686,6 +726,7 @@ enum {{ GW_TL(row) = GW_TL_ROW }};
 #undef GW_TLST
 #undef GW_TL_VW
 #undef GW_TL_BLK
+#undef GW_TL_UNROLL
 #undef GW_TL_ALIGN
 #undef GW_TLX
 #undef GW_TLR
@@ -696,6 +737,7 @@ enum {{ GW_TL(row) = GW_TL_ROW }};
 #undef GW_TLPZ
 #undef GW_TLPFMA
 #undef GW_TLPST
+#undef GW_TL_V0
 """
 
 

@@ -148,7 +148,7 @@ def test_every_recurrence_to_order_20_against_mpmath(system, tmp_path):
                                    rtol=1e-13, atol=0)
 
 
-@pytest.mark.parametrize("lanes", [2, 3, 4, 8])
+@pytest.mark.parametrize("lanes", [2, 3, 4, 8, 16])
 def test_lanes_equal_one_lane_bit_for_bit(system, tmp_path, lanes):
     """Each lane of a W-lane kernel equals the one-lane kernel at its point, bit for bit
     (same operations per lane; no contraction in either build), at work arrays of every
@@ -169,10 +169,10 @@ def test_lanes_equal_one_lane_bit_for_bit(system, tmp_path, lanes):
 
 @pytest.mark.parametrize("cc", ["gcc", "clang"])
 def test_every_lane_count_warning_clean(system, tmp_path, cc):
-    """The kernel template instantiated with 1, 2, 3, 4, 8 lanes compiles under -std=c99 -Wall
+    """The kernel template instantiated with 1, 2, 3, 4, 8, 16 lanes compiles under -std=c99 -Wall
     -Wextra -Wpedantic -Werror (the assertion in _library shows the compiler's output)."""
     if shutil.which(cc) is None:
         pytest.skip(f"{cc} is not installed (make test installs it: Debian package {cc})")
     f, _ = system
-    for lanes in (1, 2, 3, 4, 8):
+    for lanes in (1, 2, 3, 4, 8, 16):
         _library(f, lanes, tmp_path, cc)

@@ -149,6 +149,27 @@ def test_ctrl_c_leaves_a_readable_partial_table(earth_fmu, scheduler, tmp_path, 
     assert (table["status"] == "ok").all() and table["point"].is_unique
 
 
+
+@pytest.mark.parametrize("where", ["scheduler", "local_cluster"])
+def test_ctrl_c_while_the_sweep_starts(earth_fmu, scheduler, tmp_path, where):
+    """Ctrl-C as soon as the command says what it will run: the client connecting, the
+    LocalCluster starting, the first batches going out. Exit 130, an empty readable table, no
+    traceback, and no point run to its end first (the stop does not wait for the sweep)."""
+    out = tmp_path / "early.parquet"
+    execution = ["--scheduler", scheduler] if where == "scheduler" else ["--workers", "2"]
+    proc = subprocess.Popen([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu),
+                             "--grid", "beta_deg=60:89:40", "--grid", "gamma_dot=0:15:50", "--stop-time", "20",
+                             *execution, "--batch-size", "10", "--no-progress", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **AS_FROM_A_TERMINAL)
+    first = proc.stderr.readline()
+    assert first.startswith("sweep: 2000 points"), first + proc.stderr.read()
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, first + err
+    assert "Traceback" not in err and f"interrupted: 0 of 2000 points written to {out}" in err, err
+    assert read_table(out).empty
+
+
 def test_both_workers_run_batches(earth_fmu, scheduler, tmp_path):
     """The FMU's bytes are one task's result that every batch depends on; a batch prefers a worker
     holding its inputs, so before they were replicated every batch ran on the worker that had

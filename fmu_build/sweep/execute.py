@@ -158,14 +158,14 @@ def _cancel(client, futures, timeout: float = 5.0) -> None:
     scheduler reporting results (and recomputing lost ones, the payload) to a closed connection,
     with tracebacks on our stderr for a LocalCluster (a Ctrl-C that is not clean).
     """
-    client.cancel(futures)
     keys = [f.key for f in futures]
     deadline = time.monotonic() + timeout
     try:
+        client.cancel(futures)
         while client.run_on_scheduler(_still_known, keys) and time.monotonic() < deadline:
             time.sleep(0.02)
-    except Exception:  # noqa: BLE001 - a scheduler that refuses to run functions: nothing to wait for
-        pass
+    except Exception:  # noqa: BLE001 - a scheduler gone or refusing to run functions: nothing to wait
+        pass  # for, and the error that brought us here is the one to report
 
 
 def probe_scheduler(address: str, timeout: float | None = None) -> None:

@@ -7,7 +7,7 @@
  *                      the lane is finite (NaN where one is inf or NaN)
  *                      and every lane's step size bit for bit gw_fm_step's (the 4-lane gw_fm_step4
  *                      against the scalar form), zero norms (no bound from that order) included,
- *                      and within 4e-7 of the exact rule computed with libm's log and exp
+ *                      and within 6e-6 of the exact rule computed with libm's log and exp
  *   gw_ens_defects     every lane's defect bit for bit as gw_taylor_defect's (0 where every
  *                      component's num <= den, without a division; else the
  *                      largest r_i, HUGE_VAL when one is NaN or infinite), a NaN r_i before a
@@ -145,7 +145,7 @@ int main(void) {
     /* the short log2 and 2^y against the exact rule (order 9 here; zero norms: h = inf;
      * subnormal norms scaled) */
     expect(n_quick > 0 && n_big > 0, "defects: both the quick case and a defect > 1 tested", -1);
-    expect(worst > 0.0 && worst < 4e-7 && n_zero > 0 && n_sub > 0, "step size off the exact rule", -1);
+    expect(worst > 0.0 && worst < 6e-6 && n_zero > 0 && n_sub > 0, "step size off the exact rule", -1);
     fprintf(stderr, "step size within %.3g of the exact rule\n", worst);
     fprintf(stderr, "test_ens_passes: %d failures\n", failures);
     return failures != 0;

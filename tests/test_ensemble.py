@@ -302,3 +302,37 @@ def test_runs_of_other_sizes_equal_fresh_runs_and_keep_their_results(paper, tmp_
     for res, copies in kept:
         for name, value in copies.items():
             np.testing.assert_array_equal(getattr(res, name), value)
+
+
+def _rows(res, idx):
+    """The result of trajectories idx as a result of their own (for _same)."""
+    from types import SimpleNamespace
+    return SimpleNamespace(status=res.status[idx], steps=res.steps[idx], t_final=res.t_final[idx],
+                           x_final=res.x_final[idx], n_rows=None if res.n_rows is None else res.n_rows[idx],
+                           y_grid=None if res.y_grid is None else res.y_grid[idx], flags=res.flags[idx],
+                           messages=[])
+
+
+@pytest.mark.parametrize("lanes", [4, 8])
+def test_a_trajectory_has_the_same_bits_in_any_batch(paper, tmp_path, lanes):
+    """A trajectory's steps and values depend on it alone, not on the trajectories beside it
+    (docs/sweeps.md 'Determinism': a sweep's ensemble path gives a point the same bits whatever
+    the batch size and the order): 11 trajectories (falls at different times, so the job ends
+    with few lanes active) each equal, bit for bit, to its run alone and in the reversed job,
+    with and without a grid.  The one-lane kernel for a job's tail (GW_ENSEMBLE_SINGLE_MAX > 0)
+    broke this: the library's FMA contraction rounds it unlike the lane kernel (found by review18:
+    a lone trajectory differed at 1e-13 from itself in a batch; a sweep's fall_time, min_beta,
+    final_x ... differed between batch_size 14 and 1)."""
+    ens = Ensemble(paper.fmu, lanes=lanes, cache=tmp_path)
+    g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81, 2.0, 9.81])
+    spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 11.0, 0.8, 6.0, 2.5])
+    n = len(g)
+    for extra in ({}, {"grid": np.linspace(0.3, 6.0, 20)}):
+        kw = dict(rel_tol=1e-9, **extra)
+        full = ens.run(6.0, parameters={"g": g, "beta_min": 0.3}, starts={"gamma_dot": spin}, **kw)
+        assert 2 <= full.terminated.sum() < n
+        back = ens.run(6.0, parameters={"g": g[::-1], "beta_min": 0.3}, starts={"gamma_dot": spin[::-1]}, **kw)
+        _same(_rows(back, slice(None, None, -1)), _rows(full, slice(None)))
+        for j in range(n):
+            alone = ens.run(6.0, parameters={"g": g[j:j + 1], "beta_min": 0.3}, starts={"gamma_dot": spin[j:j + 1]}, **kw)
+            _same(_rows(alone, slice(0, 1)), _rows(full, slice(j, j + 1)))

@@ -7,6 +7,7 @@
     batch    one task: a batch of points in one instance (reset, set, step)
     metrics  fall time, survived, lean extremes, final position, energy drift, user functions
     execute  plain loop, LocalCluster or a scheduler address; progress bar; Ctrl-C
+    interrupt  Ctrl-C as a stop request while Dask is at work, acted on between steps
     output   the tidy table, kept complete on disk while it grows (Parquet or CSV)
     plot     a first look at a table
     steady   steady motions of the wheel (eqs. 49, 52, 53) and their linearised stability

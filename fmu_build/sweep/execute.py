@@ -10,7 +10,9 @@
 - client=distributed.Client: an existing client (Python API).
 The FMU's bytes travel once, as a task's result; each task is one batch (fmu_build.sweep.batch).
 Rows are handed to the writer as batches finish; Ctrl-C cancels what is left (and waits until the
-scheduler has let go of it) and re-raises after the rows done so far are written.
+scheduler has let go of it) and re-raises after the rows done so far are written. While Dask is
+in use a Ctrl-C only asks for that stop, acted on between steps (fmu_build.sweep.interrupt): a
+KeyboardInterrupt inside Dask's own blocking calls printed tracebacks from its IO loop.
 """
 from __future__ import annotations
 
@@ -25,6 +27,7 @@ import time
 import uuid
 
 from fmu_build.sweep.batch import run_batch
+from fmu_build.sweep.interrupt import deferred_sigint
 
 MAX_BATCH = 500
 # The workers' statistical profiler samples every thread's stack every 10 ms: ~4% of the CPU of
@@ -35,6 +38,7 @@ WORKER_PRELOAD = "fmu_build.sweep.worker_setup"
 LOCAL_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.worker.preload": [WORKER_PRELOAD]}
 TASKS_PER_THREAD = 4
 CONNECT_TIMEOUT = 20.0  # s, for a scheduler address to connect and answer Dask's handshake
+POLL = 0.02  # s, the longest a Ctrl-C waits for the batch collector to see it
 
 
 def auto_batch_size(n_points: int, n_threads: int) -> int:
@@ -84,42 +88,62 @@ def run_loop(plan, writer, batch_size: int | None = None, progress: bool = False
 
 
 def run_dask(plan, writer, *, client, batch_size: int | None = None, progress: bool = False) -> None:
-    """Submit one task per batch to `client`, collect rows as tasks finish (any order)."""
+    """Submit one task per batch to `client`, collect rows as tasks finish (any order).
+
+    A Ctrl-C (fmu_build.sweep.interrupt) is acted on between submissions and between batches
+    collected: the tasks left are cancelled and KeyboardInterrupt raised, the rows so far with
+    the writer.
+    """
+    with deferred_sigint() as interrupt:
+        futures: dict = {}
+        shipped = None
+        try:
+            nthreads = client.nthreads()  # {worker: threads}
+            threads = sum(nthreads.values()) or 1
+            size = batch_size or auto_batch_size(len(plan.values), threads)
+            payload = plan.target.payload()
+            tag = uuid.uuid4().hex[:8]
+            # The bytes travel once, as a task's result, not scattered: if every worker holding
+            # them dies (killed, or a unit that crashes its process), the scheduler computes them
+            # again; scattered data would be lost and every batch still waiting cancelled with it.
+            if payload is not None:
+                shipped = client.submit(_payload, payload, key=f"gyrowheel-sweep-{tag}-payload", pure=False)
+            if shipped is not None and len(nthreads) > 1:  # more than one worker process
+                # ... and are copied to every worker before the batches go out: a batch prefers a
+                # worker holding its input, so with the bytes on one worker the others sat idle
+                # (1 -> 2 workers gave 1.0-1.6x instead of 1.9x, benchmarks/sweep_scaling.py).
+                interrupt.check()
+                client.replicate([shipped])
+            for i, batch in enumerate(plan.tasks(size)):
+                interrupt.check()
+                futures[client.submit(run_batch, plan.target, shipped, plan.settings, plan.metrics, batch,
+                                      key=f"gyrowheel-sweep-{tag}-{i}", pure=False)] = batch
+            _collect(futures, writer, interrupt, len(plan.values), progress)
+        except BaseException:
+            _cancel(client, [*futures, *([shipped] if shipped is not None else [])])
+            raise
+
+
+def _collect(futures: dict, writer, interrupt, total: int, progress: bool) -> None:
+    """Hand each batch's rows to `writer` as it finishes; KeyboardInterrupt between batches on a Ctrl-C."""
     from distributed import as_completed
 
-    nthreads = client.nthreads()  # {worker: threads}
-    threads = sum(nthreads.values()) or 1
-    size = batch_size or auto_batch_size(len(plan.values), threads)
-    tasks = plan.tasks(size)
-    payload = plan.target.payload()
-    tag = uuid.uuid4().hex[:8]
-    # The bytes travel once, as a task's result, not scattered: if every worker holding them dies
-    # (killed, or a unit that crashes its process), the scheduler computes them again; scattered
-    # data would be lost and every batch still waiting would be cancelled with it.
-    shipped = (client.submit(_payload, payload, key=f"gyrowheel-sweep-{tag}-payload", pure=False)
-               if payload is not None else None)
-    if shipped is not None and len(nthreads) > 1:  # more than one worker process
-        # ... and are copied to every worker before the batches go out: a batch prefers a worker
-        # holding its input, so with the bytes on one worker the others sat idle (1 -> 2 workers
-        # gave 1.0-1.6x instead of 1.9x, benchmarks/sweep_scaling.py).
-        client.replicate([shipped])
-    futures = {client.submit(run_batch, plan.target, shipped, plan.settings, plan.metrics, batch,
-                             key=f"gyrowheel-sweep-{tag}-{i}", pure=False): batch
-               for i, batch in enumerate(tasks)}
-    try:
-        with _progress(len(plan.values), progress) as bar:
-            for future in as_completed(futures):
-                batch = futures[future]
-                try:
-                    rows = future.result()
-                except Exception as exc:  # a worker died, a batch could not be unpickled...
-                    rows = _failed_rows(batch, exc)
-                writer.add(rows)
-                bar.update(len(rows))
-                future.release()
-    except BaseException:
-        _cancel(client, [*futures, *([shipped] if shipped is not None else [])])
-        raise
+    done = as_completed(futures)
+    with _progress(total, progress) as bar:
+        while not done.is_empty():
+            interrupt.check()
+            if not done.has_ready():
+                interrupt.wait(POLL)
+                continue
+            future = next(done)
+            batch = futures[future]
+            try:
+                rows = future.result()
+            except Exception as exc:  # a worker died, a batch could not be unpickled...
+                rows = _failed_rows(batch, exc)
+            writer.add(rows)
+            bar.update(len(rows))
+            future.release()
 
 
 def _still_known(keys, dask_scheduler=None) -> int:
@@ -134,14 +158,14 @@ def _cancel(client, futures, timeout: float = 5.0) -> None:
     scheduler reporting results (and recomputing lost ones, the payload) to a closed connection,
     with tracebacks on our stderr for a LocalCluster (a Ctrl-C that is not clean).
     """
-    client.cancel(futures)
     keys = [f.key for f in futures]
     deadline = time.monotonic() + timeout
     try:
+        client.cancel(futures)
         while client.run_on_scheduler(_still_known, keys) and time.monotonic() < deadline:
             time.sleep(0.02)
-    except Exception:  # noqa: BLE001 - a scheduler that refuses to run functions: nothing to wait for
-        pass
+    except Exception:  # noqa: BLE001 - a scheduler gone or refusing to run functions: nothing to wait
+        pass  # for, and the error that brought us here is the one to report
 
 
 def probe_scheduler(address: str, timeout: float | None = None) -> None:
@@ -237,23 +261,26 @@ def execute(plan, writer, *, workers: int | None = None, scheduler: str | None =
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
-        probe_scheduler(scheduler)
-        with Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s") as c:
+        probe_scheduler(scheduler)  # a Ctrl-C here is plain: no client, no IO loop yet
+        with deferred_sigint() as interrupt, Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s") as c:
+            interrupt.check()  # a Ctrl-C while the client connected
             return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
     n = workers or os.cpu_count() or 1
-    with dask.config.set(LOCAL_CONFIG), _children_ignore_sigint() as startup:
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=":0")
-    # the cluster closes before the client: its scheduler, told of workers going or of a last
-    # result, still finds the client there to tell (else it logs CommClosedError tracebacks)
-    with cluster, Client(cluster) as c:
-        try:
-            if startup.interrupted:
-                raise KeyboardInterrupt
-            return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
-        except KeyboardInterrupt:
-            _close_workers(cluster)
-            raise
+    with deferred_sigint() as interrupt:
+        with dask.config.set(LOCAL_CONFIG), _children_ignore_sigint() as startup:
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                   dashboard_address=":0")
+        if startup.interrupted:
+            interrupt.request()
+        # the cluster closes before the client: its scheduler, told of workers going or of a last
+        # result, still finds the client there to tell (else it logs CommClosedError tracebacks)
+        with cluster, Client(cluster) as c:
+            try:
+                interrupt.check()  # a Ctrl-C while the cluster started or the client connected
+                return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
+            except KeyboardInterrupt:
+                _close_workers(cluster)
+                raise
 
 
 def _close_workers(cluster, timeout: float = 10.0) -> None:

@@ -86,13 +86,17 @@ enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
 #endif
 
 /* With this many active lanes or fewer the batch runs each lane's series with the one-lane
- * kernel (gw_tl1_jet, as solver taylor does) instead of all GW_ENS_LANES lanes of gw_tlb_jet:
- * the tail of a job whose N is not a multiple of the lanes, or whose trajectories end at
- * different times.  The 8-lane kernel costs about 3.3 one-lane kernels (paper scenario, rel_tol
- * 1e-10, x86-64-v3: N = 1 took 3.3 ms per trajectory on 8 lanes, 1.07 ms with the one-lane
- * kernel; N = 2, 3: 1.67, 1.14 ms against 1.04, 1.03 ms; from N = 4 the 8-lane kernel wins). */
+ * kernel (gw_tl1_jet, as solver taylor does) instead of all GW_ENS_LANES lanes of gw_tlb_jet.
+ * Default 0 (never): the library is compiled with FMA contraction, which rounds the one-lane
+ * kernel unlike the lane kernel (1e-13 on the paper's states), so a trajectory of a job's tail
+ * (N not a multiple of the lanes, or trajectories ending at different times) took other bits
+ * than in a full batch, and a sweep's points depended on the batch size
+ * (tests/test_ensemble.py::test_a_trajectory_has_the_same_bits_in_any_batch).  Its cost at 4
+ * lanes: none measured (N = 1, 5, 64, rel_tol 1e-4 and 1e-10: 0.99-1.03x, one slice is one
+ * vector); at 8 lanes the lone lane's kernel costs about 3.3 one-lane kernels (N = 1: 3.3 ms
+ * per trajectory against 1.07 ms with the one-lane kernel, paper, rel_tol 1e-10). */
 #ifndef GW_ENSEMBLE_SINGLE_MAX
-#define GW_ENSEMBLE_SINGLE_MAX (3 * GW_ENSEMBLE_LANES / 8)
+#define GW_ENSEMBLE_SINGLE_MAX 0
 #endif
 
 typedef struct {

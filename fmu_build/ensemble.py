@@ -313,7 +313,8 @@ class Ensemble:
 
     fmu: path of the .fmu; lanes: trajectories advanced together (default LANES, 4: as cheap
     per trajectory as 8 or 16 at N >= 16 and much cheaper below, measured; any integer >= 1 is
-    built, each width its own cached library); cache: where the library is
+    built, each width its own cached library; a trajectory's result is the same bit for bit in
+    any job and on 2 to 16 lanes; on 1 lane equal to rounding); cache: where the library is
     kept (default ~/.cache/gyrowheel/ensemble).  Raises ValueError for lanes not an integer >= 1,
     EnsembleError if the FMU has no sources or its model no Taylor kernel, CompileError if the
     compiler fails.

@@ -302,3 +302,73 @@ def test_runs_of_other_sizes_equal_fresh_runs_and_keep_their_results(paper, tmp_
     for res, copies in kept:
         for name, value in copies.items():
             np.testing.assert_array_equal(getattr(res, name), value)
+
+
+def _rows(res, idx):
+    """The result of trajectories idx as a result of their own (for _same)."""
+    from types import SimpleNamespace
+    return SimpleNamespace(status=res.status[idx], steps=res.steps[idx], t_final=res.t_final[idx],
+                           x_final=res.x_final[idx], n_rows=None if res.n_rows is None else res.n_rows[idx],
+                           y_grid=None if res.y_grid is None else res.y_grid[idx], flags=res.flags[idx],
+                           messages=[])
+
+
+@pytest.mark.parametrize("lanes", [4, 8])
+def test_a_trajectory_has_the_same_bits_in_any_batch(paper, tmp_path, lanes):
+    """A trajectory's steps and values depend on it alone, not on the trajectories beside it
+    (docs/sweeps.md 'Determinism': a sweep's ensemble path gives a point the same bits whatever
+    the batch size and the order): 11 trajectories (falls at different times, so the job ends
+    with few lanes active) each equal, bit for bit, to its run alone and in the reversed job,
+    with and without a grid.  The one-lane kernel for a job's tail (GW_ENSEMBLE_SINGLE_MAX > 0)
+    broke this: the library's FMA contraction rounds it unlike the lane kernel (found by review18:
+    a lone trajectory differed at 1e-13 from itself in a batch; a sweep's fall_time, min_beta,
+    final_x ... differed between batch_size 14 and 1)."""
+    ens = Ensemble(paper.fmu, lanes=lanes, cache=tmp_path)
+    g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81, 2.0, 9.81])
+    spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 11.0, 0.8, 6.0, 2.5])
+    n = len(g)
+    for extra in ({}, {"grid": np.linspace(0.3, 6.0, 20)}):
+        kw = dict(rel_tol=1e-9, **extra)
+        full = ens.run(6.0, parameters={"g": g, "beta_min": 0.3}, starts={"gamma_dot": spin}, **kw)
+        assert 2 <= full.terminated.sum() < n
+        back = ens.run(6.0, parameters={"g": g[::-1], "beta_min": 0.3}, starts={"gamma_dot": spin[::-1]}, **kw)
+        _same(_rows(back, slice(None, None, -1)), _rows(full, slice(None)))
+        for j in range(n):
+            alone = ens.run(6.0, parameters={"g": g[j:j + 1], "beta_min": 0.3}, starts={"gamma_dot": spin[j:j + 1]}, **kw)
+            _same(_rows(alone, slice(0, 1)), _rows(full, slice(j, j + 1)))
+
+
+@pytest.mark.parametrize("cc", [c for c in ("gcc", "clang") if shutil.which(c)])
+def test_increments_pass_equals_the_one_lane_increment(paper, tmp_path, cc):
+    """gw_ens_increments (dx and P'(h) of all lanes) bit for bit gw_taylor_increment lane by lane,
+    compiled as the ensemble library is (its unity file and flags: FMA contraction in the
+    x86-64-v3 clones), on random series (tests/c/test_ens_increments.c).  Before the fix the
+    pass fused two sums fewer: dx differed in 1.2% of the components, P'(h) in 20%, and the
+    inline lane-steps left those of the GW_ENSEMBLE_LANE_STEPS=1 build (paper, gamma_dot 1e5 at
+    rel_tol 1e-4, slope_hold at 1e-3: 1-2 ulp, found by review18)."""
+    from fmu_build.ensemble import _UNITY, FLAGS
+    prog = tmp_path / "incr.c"
+    prog.write_text(_UNITY.format(id=paper.identifier, lanes=4) + '#include "test_ens_increments.c"\n')
+    exe = tmp_path / "incr"
+    subprocess.run([cc, *STRICT, *FLAGS, f"-I{paper.sources}", f"-I{TESTS_C}", str(prog), "-lm", "-o", str(exe)],
+                   check=True)
+    r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr
+    assert "dx differ 0, P'(h) differ 0" in r.stdout
+
+
+def test_lane_counts_two_and_more_give_the_same_bits(paper, tmp_path):
+    """Ensemble(fmu, lanes=3 / 16) and the default 4: the same steps and values bit for bit (each
+    lane's kernel slice and passes do the same operations, and a job's tail stays in the lane
+    kernel: with the one-lane tail kernel, GW_ENSEMBLE_SINGLE_MAX 1 of 3 and 6 of 16, the widths
+    were 1e-13 apart in some trajectories).  lanes = 1 runs the scalar kernel, contracted
+    otherwise: equal to rounding
+    (tests/test_taylor.py::test_ensemble_lanes_tail_and_refill_equal_the_single_runs)."""
+    rng = np.random.default_rng(5)  # 13 trajectories, 5 of which were apart at 8 or 16 lanes
+    starts = {"gamma_dot": rng.uniform(0.5, 12.0, 13), "beta": rng.uniform(0.9, 1.55, 13)}
+    for extra in ({}, {"grid": np.linspace(0.3, 6.0, 20)}):
+        kw = dict(parameters={"beta_min": np.full(13, 0.3)}, starts=starts, rel_tol=1e-9, **extra)
+        ref = Ensemble(paper.fmu, cache=tmp_path).run(6.0, **kw)
+        assert 0 < ref.terminated.sum() < 13
+        for lanes in (3, 16):
+            _same(Ensemble(paper.fmu, lanes=lanes, cache=tmp_path).run(6.0, **kw), ref)

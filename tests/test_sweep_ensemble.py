@@ -91,3 +91,18 @@ def test_ensemble_path_leaves_no_file_in_the_temp_directory(taylor_fmu, ensemble
                   solver="taylor", workers=0)
     assert (table["status"] == "ok").all() and len(ensemble_calls) == 1
     assert list(shared.iterdir()) == []
+
+
+def test_ensemble_path_points_do_not_depend_on_the_batch(taylor_fmu, ensemble_calls):
+    """docs/sweeps.md 'Determinism' on the ensemble path: a point's metrics are the same bits
+    whatever the batch size and the order of the points (a point alone in its batch, or left
+    alone at a batch's end, ran on the one-lane kernel, which the library's FMA contraction
+    rounds otherwise: fall_time, min_beta, final_x ... differed at 1e-14, found by review18)."""
+    kw = dict(metrics=METRICS, workers=0, stop_time=3.0, output_interval=0.5, solver="taylor", rel_tol=1e-9)
+    whole = sweep(taylor_fmu, points=POINTS[:10], batch_size=10, **kw)
+    single = sweep(taylor_fmu, points=POINTS[:10], batch_size=1, **kw)
+    back = sweep(taylor_fmu, points=POINTS[9::-1], batch_size=3, **kw).iloc[::-1].reset_index(drop=True)
+    assert len(ensemble_calls) == 1 + 10 + 4 and (~whole["survived"]).sum() >= 2
+    for other in (single, back):
+        for col in METRICS[:2] + ["end_time", "event", "min_beta", "max_beta", "final_x", "final_alpha", "energy_drift"]:
+            np.testing.assert_array_equal(other[col].to_numpy(), whole[col].to_numpy(), err_msg=col)

@@ -524,12 +524,12 @@ def test_ensemble_equals_single_runs(paper, tmp_path):
 
 def test_ensemble_lanes_tail_and_refill_equal_the_single_runs(paper, tmp_path):
     """N not a multiple of the lanes and trajectories ending at different times (falls): the
-    lanes take the next trajectory as soon as theirs ends, and when few lanes are left active
-    the batch runs them with the one-lane kernel (gw_ensemble.c, GW_ENSEMBLE_SINGLE_MAX).  7
-    trajectories on 1, 4 and 8 lanes (the 4-lane run ends with 3 on the one-lane kernel, the
-    8-lane one starts with 7 of 8 lanes; on a grid, each lane's calls end at every point) equal
+    lanes take the next trajectory as soon as theirs ends, and the job's tail runs with idle
+    lanes (gw_ensemble.c, GW_ENSEMBLE_SINGLE_MAX 0).  7 trajectories on 1, 4 and 8 lanes (the
+    4-lane run ends with 3 lanes idle, the 8-lane one starts with 7 of 8 lanes; on a grid, each
+    lane's calls end at every point) equal
     the 8-lane run of test_ensemble_equals_single_runs's kind: the same steps, the same values
-    to rounding (the one-lane and the lane kernels round differently)."""
+    to rounding (each lane count's kernel rounds its own way under FMA contraction)."""
     built, runner = paper
     g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0])
     spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2])

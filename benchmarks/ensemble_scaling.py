@@ -174,7 +174,7 @@ def main() -> int:
                 t_hy, h_tol = min((t, tol) for tol, t in t_hys.items())
                 per_w = {w: min((t, tol) for (v, tol, _), t in times.items() if v == w) for w in ens}
                 bw, g_tol = min(per_w[w] for w in args.lanes)
-                cells = " | ".join(f"{per_w[w][0] / n * 1e3:.3f}" for w in ens)
+                cells = " | ".join(f"{per_w[w][0] / n * 1e3:.4f}" for w in ens)
                 print(f"| {target:g} (gw tol {g_tol:.1e}, heyoka {h_tol:.1e}) | {n} | {cells} | "
                       f"{t_hy / n * 1e3:.4f} | {bw / t_hy:.2f}x |"
                       + (f" {per_w[args.against][0] / t_hy:.2f}x |" if args.against else ""), flush=True)

@@ -414,12 +414,14 @@ GW_FASTMATH_INLINE double gw_cos(double x) {
 /* ---- the Taylor step size: h = 2^(min(-log2(n1) r1, -log2(n2) r2) + lc) ------------------------
  * Solver taylor's step size rule (gw_taylor_step_size; the ensemble's pass gw_ens_step_sizes, 4
  * lanes at once) needs no full precision: a relative error d of h moves the first neglected
- * term by (p + 1) d.  So log2 by the exponent's bits and a polynomial of degree 6 on the
- * mantissa, 1 + f in [sqrt(2)/2, sqrt(2)) (no division; absolute error below 2.2e-6, measured
+ * term by (p + 1) d.  So log2 by the exponent's bits and a polynomial of degree 5 on the
+ * mantissa, 1 + f in [sqrt(2)/2, sqrt(2)) (no division; absolute error below 1.5e-5, measured
  * on 4e5 points), and 2^y by k = nearest integer to y into the exponent's bits and 2^r, |r| <=
- * 1/2, by a polynomial of degree 5 (relative error below 1e-7): h within 4e-7 of the exact rule
- * for the orders >= 7 used (tests/c/test_ens_passes.c), about 20 IEEE operations against two
- * fdlibm logarithms and an exponential (9% of an ensemble run at rel_tol 1e-4).  The same body
+ * 1/2, by a polynomial of degree 4 (relative error below 3.8e-6): h within 6e-6 of the exact
+ * rule for the orders >= 7 used (tests/c/test_ens_passes.c; a degree lower each than the
+ * 4e-7 forms before: about 1.5% less time of an ensemble run at N = 16, rel_tol 1e-4, the
+ * same step count; the first neglected term moves by 6e-5 at most), about 16 IEEE operations
+ * against two fdlibm logarithms and an exponential (9% of an ensemble run at rel_tol 1e-4).  The same body
  * for a double and a vector of 4 (GW_FM_LOG_BODY's scheme): bit for bit equal lane by lane.
  * n = 0 bounds nothing (its term +inf); y clamped to [-1000, 1000] (2^-1000: an underflow the
  * caller refuses), +inf above 1000 (no bound at all); non-finite norms give an unspecified h
@@ -433,9 +435,9 @@ GW_FASTMATH_INLINE double gw_cos(double x) {
                      SEL(x < 0x1p-1022, (D){0} + 54.0, (D){0});                                  \
         const D f = DBL(((((hx & 0xfffffu) + 0x3fe6a09eu)) << 32) | (ix & 0xffffffffu)) - 1.0;  \
         const D f2 = f * f;                                                                      \
-        out = kd + f * ((1.4427134813689315 + f * -0.7211318577662793) +                         \
-                        f2 * ((0.4793480211220281 + f * -0.36748999397559023) +                  \
-                              f2 * (0.3221547752194063 + f * -0.20659163846865253)));            \
+        out = kd + f * ((1.4425780070863066 + f * -0.720241803743346) +                          \
+                        f2 * ((0.48668617629839483 + f * -0.3945753472072584) +                  \
+                              f2 * 0.2526600960867279));                                         \
     }
 #define GW_FM_STEP_BODY(D, U, BITS, DBL, SEL, RET, KEEP)                                        \
     {                                                                                            \
@@ -452,9 +454,8 @@ GW_FASTMATH_INLINE double gw_cos(double x) {
         {                                                                                        \
             const U kk = (BITS(t) + (1u << 20)) & ((1u << 21) - 1u); /* k + 2^20 */             \
             const D r = yc - (DBL(kk | 0x4330000000000000u) - (GW_FM_TWO52 + 1048576.0)), z = r * r; \
-            const D q = 1.0 + r * ((0.6931469775984709 + r * 0.24022242084919296) +             \
-                                   z * ((0.055507337442444675 + r * 0.00967151266055998) +       \
-                                        z * 0.001326472689907245));                              \
+            const D q = 1.0 + r * ((0.6931215289235051 + r * 0.24022020974121439) +             \
+                                   z * (0.05591968876485047 + r * 0.009681909414623472));        \
             RET(SEL(y > 1000.0, zero + HUGE_VAL, DBL(BITS(q) + ((kk - (1u << 20)) << 52))));     \
         }                                                                                        \
     }

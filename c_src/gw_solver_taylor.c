@@ -26,7 +26,7 @@
  *           nominal_i, the error weight of every solver (atol: abs_tol, or rel_tol / 100 when
  *           abs_tol = 0); q follows eps continuously (at the integer p0 the term stayed put over
  *           each p0's range of eps and fell e^2 at its end; q - 1/2 = the unrounded p0, so on
- *           average over that range the term is the former one); log2 and 2^y to 4e-7
+ *           average over that range the term is the former one); log2 and 2^y to 6e-6
  *           (gw_fm_step: exponent bits and short polynomials, no pow, no libm);
  *   update  dx_i = sum_{k=1..p} x_i^[k] h^k (Horner, with P'(h) in the same pass), added to
  *           the state with the TwoSum compensation every solver shares (gw_sum_update: x + xc,

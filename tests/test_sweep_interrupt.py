@@ -7,6 +7,7 @@ import time
 
 import pytest
 
+from fmu_build.sweep import read_table
 from fmu_build.sweep.interrupt import deferred_sigint
 
 
@@ -59,3 +60,29 @@ def test_a_programs_own_handler_is_left_alone():
     finally:
         handler = signal.signal(signal.SIGINT, previous)
     assert handler is not signal.default_int_handler and handler is not signal.SIG_IGN
+
+
+def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, monkeypatch):
+    """workers=0 (`--workers 0`): a KeyboardInterrupt in the second batch leaves the first one's
+    rows in the table on disk. The loop ran every point as one batch: 0 rows kept, however long
+    the sweep had run (gyrowheel sweep ... --workers 0, Ctrl-C after 8 s of 1200 points)."""
+    from fmu_build.sweep import execute as ex
+
+    calls = []
+    real = ex.run_batch
+
+    def run_batch(*args):
+        calls.append(len(args[-1]))
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(ex, "run_batch", run_batch)
+    from fmu_build.sweep import sweep
+    out = tmp_path / "t.csv"
+    with pytest.raises(KeyboardInterrupt):
+        sweep(earth_fmu, grid={"beta_deg": "70:80:4", "gamma_dot": "5:6:5"}, stop_time=0.1, workers=0,
+              output=out, metrics="survived")
+    table = read_table(out)
+    assert calls[0] == ex.auto_batch_size(20, 1) == 5 and len(table) == calls[0]
+    assert (table["status"] == "ok").all()

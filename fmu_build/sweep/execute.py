@@ -77,8 +77,12 @@ def _payload(data):
 
 
 def run_loop(plan, writer, batch_size: int | None = None, progress: bool = False) -> None:
-    """The plain in-process loop: the same batches, the same function, no Dask."""
-    tasks = plan.tasks(batch_size or len(plan.values) or 1)
+    """The plain in-process loop: the same batches, the same function, no Dask.
+
+    The default batches are those of a one-thread cluster (auto_batch_size), not one batch of
+    every point: rows reach the writer (the table on disk, the progress bar) as batches end, so
+    one batch left a Ctrl-C with no row at all however long the sweep had run."""
+    tasks = plan.tasks(batch_size or auto_batch_size(len(plan.values), 1))
     payload = plan.target.payload()
     with _progress(len(plan.values), progress) as bar:
         for batch in tasks:

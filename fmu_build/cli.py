@@ -329,7 +329,10 @@ def make_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from fmu_build.scene import SceneError
 
-    parser = make_parser()
+    try:  # make_parser imports the subcommands (pandas, dask): a Ctrl-C there is exit 130 too
+        parser = make_parser()
+    except KeyboardInterrupt:
+        return 130
     args = parser.parse_args(argv)
     try:
         return args.func(args)

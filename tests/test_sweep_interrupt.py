@@ -86,3 +86,17 @@ def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, mo
     table = read_table(out)
     assert calls[0] == ex.auto_batch_size(20, 1) == 5 and len(table) == calls[0]
     assert (table["status"] == "ok").all()
+
+
+def test_ctrl_c_while_the_command_starts_is_exit_130(monkeypatch, capsys):
+    """Ctrl-C in the first ~0.5 s of `gyrowheel sweep`, while make_parser imports the subcommands
+    (pandas, dask): exit 130 without a traceback. It came before main's handler: Python's own
+    traceback through fmu_build/sweep/api.py's `import pandas` and death by SIGINT (status -2)."""
+    from fmu_build import cli
+
+    def make_parser():
+        raise KeyboardInterrupt  # where the Ctrl-C lands: inside an import
+
+    monkeypatch.setattr(cli, "make_parser", make_parser)
+    assert cli.main(["sweep", "x.fmu"]) == 130
+    assert "Traceback" not in capsys.readouterr().err

@@ -100,3 +100,21 @@ def test_ctrl_c_while_the_command_starts_is_exit_130(monkeypatch, capsys):
     monkeypatch.setattr(cli, "make_parser", make_parser)
     assert cli.main(["sweep", "x.fmu"]) == 130
     assert "Traceback" not in capsys.readouterr().err
+
+
+def test_after_a_ctrl_c_the_command_exits_130_whatever_ctrl_c_follows(monkeypatch, default_sigint):
+    """`gyrowheel sweep --scheduler ...`, Ctrl-C twice 50 ms apart: 'interrupted: 280 of 1200 points
+    written', then status -2 (killed by the second SIGINT while Python exited, joining Dask's
+    threads) instead of 130, 3 times in 4. Once the command returns 130 as the program (argv from
+    sys.argv), further SIGINTs are ignored; called with argv (a library caller) nothing changes."""
+    from fmu_build import cli
+
+    def make_parser():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "make_parser", make_parser)
+    assert cli.main(["sweep", "x.fmu"]) == 130
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    monkeypatch.setattr("sys.argv", ["gyrowheel", "sweep", "x.fmu"])
+    assert cli.main() == 130
+    assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN  # default_sigint restores it

@@ -81,10 +81,10 @@ def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, mo
     from fmu_build.sweep import sweep
     out = tmp_path / "t.csv"
     with pytest.raises(KeyboardInterrupt):
-        sweep(earth_fmu, grid={"beta_deg": "70:80:4", "gamma_dot": "5:6:5"}, stop_time=0.1, workers=0,
+        sweep(earth_fmu, grid={"beta_deg": "70:80:20", "gamma_dot": "5:6:10"}, stop_time=0.1, workers=0,
               output=out, metrics="survived")
     table = read_table(out)
-    assert calls[0] == ex.auto_batch_size(20, 1) == 5 and len(table) == calls[0]
+    assert calls[0] == ex.LOOP_MIN_BATCH == 64 and len(table) == calls[0]
     assert (table["status"] == "ok").all()
 
 

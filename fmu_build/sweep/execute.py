@@ -37,6 +37,7 @@ MAX_BATCH = 500
 WORKER_PRELOAD = "fmu_build.sweep.worker_setup"
 LOCAL_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.worker.preload": [WORKER_PRELOAD]}
 TASKS_PER_THREAD = 4
+LOOP_MIN_BATCH = 64  # points, the in-process loop's smallest default batch (run_loop)
 CONNECT_TIMEOUT = 20.0  # s, for a scheduler address to connect and answer Dask's handshake
 POLL = 0.02  # s, the longest a Ctrl-C waits for the batch collector to see it
 
@@ -79,10 +80,12 @@ def _payload(data):
 def run_loop(plan, writer, batch_size: int | None = None, progress: bool = False) -> None:
     """The plain in-process loop: the same batches, the same function, no Dask.
 
-    The default batches are those of a one-thread cluster (auto_batch_size), not one batch of
+    The default batches are those of a one-thread cluster (auto_batch_size), of LOOP_MIN_BATCH
+    points at least (the ensemble path advances a batch's points together), not one batch of
     every point: rows reach the writer (the table on disk, the progress bar) as batches end, so
     one batch left a Ctrl-C with no row at all however long the sweep had run."""
-    tasks = plan.tasks(batch_size or auto_batch_size(len(plan.values), 1))
+    n = len(plan.values)
+    tasks = plan.tasks(batch_size or min(max(n, 1), max(LOOP_MIN_BATCH, auto_batch_size(n, 1))))
     payload = plan.target.payload()
     with _progress(len(plan.values), progress) as bar:
         for batch in tasks:

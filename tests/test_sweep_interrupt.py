@@ -84,7 +84,7 @@ def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, mo
         sweep(earth_fmu, grid={"beta_deg": "70:80:20", "gamma_dot": "5:6:10"}, stop_time=0.1, workers=0,
               output=out, metrics="survived")
     table = read_table(out)
-    assert calls[0] == ex.LOOP_MIN_BATCH == 64 and len(table) == calls[0]
+    assert calls[0] == ex.LOOP_BATCH == 64 and len(table) == calls[0]
     assert (table["status"] == "ok").all()
 
 

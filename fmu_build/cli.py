@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import signal
 import sys
+import threading
 from pathlib import Path
 
 EXIT_BAD_INPUT = 2
@@ -327,9 +329,23 @@ def make_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The `gyrowheel` command; returns its exit status (130 after a Ctrl-C)."""
+    code = _main(argv)
+    if code == 130 and argv is None and threading.current_thread() is threading.main_thread():
+        # The program is stopping as asked. A second Ctrl-C while Python exits (joining Dask's
+        # client threads: ~0.3 s after `gyrowheel sweep --scheduler ...` is interrupted) killed
+        # it by SIGINT, status -2 instead of 130: further Ctrl-Cs ask for the same stop, ignored.
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return code
+
+
+def _main(argv: list[str] | None) -> int:
     from fmu_build.scene import SceneError
 
-    parser = make_parser()
+    try:  # make_parser imports the subcommands (pandas, dask): a Ctrl-C there is exit 130 too
+        parser = make_parser()
+    except KeyboardInterrupt:
+        return 130
     args = parser.parse_args(argv)
     try:
         return args.func(args)

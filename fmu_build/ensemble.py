@@ -224,6 +224,16 @@ _NO_GRID = np.zeros(0)
 _NO_GRID.flags.writeable = False
 
 
+def _numbers(v):
+    """v as an array of numbers, ValueError otherwise (np.asarray(v, float) made None a NaN)."""
+    a = np.asarray(v)
+    if a.dtype.kind == "O" and not any(x is None for x in a.flat):  # numbers as objects
+        return a.astype(float)  # (ValueError from a string among them)
+    if a.dtype.kind not in "biuf":
+        raise ValueError(v)
+    return a
+
+
 def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
     """The job's numbers checked before the C library sees them (it can only say "bad job"):
     a ValueError naming the field.  Returns the grid as a contiguous float array (empty: none).
@@ -251,7 +261,10 @@ def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
             raise ValueError(f"max_step must be a finite number > 0, got {hmax!r}")
     if grid is None:
         return _NO_GRID
-    g = np.ascontiguousarray(np.asarray(grid, dtype=float).ravel())
+    try:
+        g = np.ascontiguousarray(np.asarray(_numbers(grid), dtype=float).ravel())
+    except ValueError:
+        raise ValueError(f"grid must be a sequence of communication points (numbers, s), got {grid!r}") from None
     if g.size:
         if not np.all(np.isfinite(g)):
             raise ValueError("grid: communication points must be finite")
@@ -402,10 +415,17 @@ class Ensemble:
                 self._default_tables[key] = table
             return table
         if isinstance(values, dict):
-            cols = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in values.items()}
-            for k in cols:
+            cols = {}
+            for k, v in values.items():
                 if k not in names:
                     raise KeyError(f"unknown {what} {k!r}; {what}s: {', '.join(names)}")
+                try:  # (a string, None, a 2-D array: numpy's message named no field, or none came)
+                    cols[k] = np.atleast_1d(_numbers(v).astype(float))
+                    if cols[k].ndim != 1:
+                        raise ValueError(v)
+                except ValueError:
+                    raise ValueError(f"{what} {k!r} must be a number or a 1-D sequence of numbers "
+                                     f"(one per trajectory), got {v!r}") from None
             sizes = {len(c) for c in cols.values() if len(c) != 1}
             if len(sizes) > 1 or (n is not None and sizes and sizes != {n}):
                 raise ValueError(f"{what}s: columns of different lengths {sorted(sizes | {n or 0})}")
@@ -414,7 +434,11 @@ class Ensemble:
             for k, c in cols.items():
                 table[:, names.index(k)] = c
             return table
-        table = np.asarray(values, dtype=float)
+        try:
+            table = _numbers(values).astype(float)
+        except ValueError:
+            raise ValueError(f"{what}s must be an (N, {len(names)}) array of numbers ({', '.join(names)}) "
+                             f"or a {{name: values}} dict, got {values!r}") from None
         if table.ndim != 2 or table.shape[1] != len(names) or (n is not None and table.shape[0] != n):
             raise ValueError(f"{what}s must have shape (N, {len(names)}) ({', '.join(names)}), "
                              f"got {table.shape}")
@@ -434,6 +458,7 @@ class Ensemble:
         Raises ValueError / KeyError naming a bad shape or name, EnsembleError for a refused job.
         """
         g = _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid)
+        t_start, t_end, rel_tol = float(t_start), float(t_end), float(rel_tol)  # "1.0" passed the check
         P = self._table("parameter", parameters, self.parameter_names, self.default_parameters, None)
         S = self._table("start value", starts, self.start_names, self.default_starts,
                         None if P is None else P.shape[0])
@@ -452,8 +477,8 @@ class Ensemble:
         # float outputs (NaN until written), then the C longs and ints, which the C side writes
         # for every trajectory of a run it accepts (_run_packed)
         f = np.empty(size)
-        f[:5] = (t_start, t_end, rel_tol, rel_tol * 1e-2 if abs_tol is None else abs_tol,
-                 (t_end - t_start) if max_step is None else max_step)
+        f[:5] = (t_start, t_end, rel_tol, rel_tol * 1e-2 if abs_tol is None else float(abs_tol),
+                 (t_end - t_start) if max_step is None else float(max_step))
         if G:
             f[5:e[1]] = g
         f[e[1]:e[2]] = P.ravel()

@@ -144,6 +144,7 @@ def test_ctrl_c_leaves_a_readable_partial_table(earth_fmu, scheduler, tmp_path, 
     assert proc.returncode == 130, err
     assert "interrupted:" in err and f"of {total} points written to {out}" in err
     assert "Traceback" not in err
+    assert "CancelledError" not in err  # the workers closed under a running batch (worker_setup)
     table = read_table(out)
     assert 0 < len(table) < total
     assert (table["status"] == "ok").all() and table["point"].is_unique

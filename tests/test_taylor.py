@@ -601,6 +601,31 @@ def test_ensemble_bad_job_names_the_field(paper, tmp_path):
             Ensemble(built.fmu, lanes=lanes, cache=tmp_path)
 
 
+def test_ensemble_bad_values_name_the_field(paper, tmp_path):
+    """A value that is not a number names its field (found in review19): {'M': 'heavy'} gave
+    numpy's "could not convert string to float: 'heavy'", a 2-D column a broadcast error,
+    {'gamma_dot': None} ran silently with a NaN start, grid='abc' numpy's message, and
+    t_end='1.0' passed the check and failed in the arithmetic (TypeError)."""
+    built, _ = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    cases = [({"parameters": {"M": "heavy"}}, "parameter 'M' must be a number"),
+             ({"parameters": {"M": [[1.0, 2.0], [3.0, 4.0]]}}, "parameter 'M' must be a number"),
+             ({"starts": {"gamma_dot": None}}, "start value 'gamma_dot' must be a number"),
+             ({"starts": {"gamma_dot": [5.0, None]}}, "start value 'gamma_dot' must be a number"),
+             ({"parameters": [["a"] * len(ens.parameter_names)]}, "parameters must be an (N, 6) array of numbers"),
+             ({"grid": "abc"}, "grid must be a sequence of communication points")]
+    for kwargs, message in cases:
+        with pytest.raises(ValueError, match=re.escape(message)):
+            ens.run(1.0, **kwargs)
+    as_text = ens.run("1.0", t_start="0", rel_tol="1e-8", max_step="0.5", grid=[0.5, 1.0])
+    as_numbers = ens.run(1.0, rel_tol=1e-8, max_step=0.5, grid=[0.5, 1.0])
+    assert list(as_text.status) == [STATUS_OK]
+    assert np.array_equal(as_text.x_final, as_numbers.x_final)
+    objects = np.array([ens.default_parameters], dtype=object)  # numbers held as objects still run
+    assert np.array_equal(ens.run(1.0, parameters=objects, rel_tol=1e-8).x_final,
+                          ens.run(1.0, rel_tol=1e-8).x_final)
+
+
 @pytest.mark.parametrize("step_fm", [1, 0], ids=["fastmath-step", "libm-step"])
 def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path, monkeypatch, step_fm):
     """The batch's lane-innermost passes (gw_ensemble.c: the step size norms, the step sizes, the

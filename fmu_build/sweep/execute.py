@@ -37,6 +37,7 @@ MAX_BATCH = 500
 WORKER_PRELOAD = "fmu_build.sweep.worker_setup"
 LOCAL_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.worker.preload": [WORKER_PRELOAD]}
 TASKS_PER_THREAD = 4
+LOOP_BATCH = 64  # points, the in-process loop's default batch (run_loop)
 CONNECT_TIMEOUT = 20.0  # s, for a scheduler address to connect and answer Dask's handshake
 POLL = 0.02  # s, the longest a Ctrl-C waits for the batch collector to see it
 
@@ -77,8 +78,14 @@ def _payload(data):
 
 
 def run_loop(plan, writer, batch_size: int | None = None, progress: bool = False) -> None:
-    """The plain in-process loop: the same batches, the same function, no Dask."""
-    tasks = plan.tasks(batch_size or len(plan.values) or 1)
+    """The plain in-process loop: the same batches, the same function, no Dask.
+
+    Default batches of LOOP_BATCH points, not one batch of every point: rows reach the writer
+    (the table on disk, the progress bar) as batches end, so one batch left a Ctrl-C with no row
+    at all however long the sweep had run. 64 points: enough for the ensemble path (it advances
+    a batch's points together, 4 lanes at a time), and no slower than one batch (1200 points of
+    the paper's moon scene: 8.1 s in batches of 50, 300 or 1200 alike)."""
+    tasks = plan.tasks(batch_size or LOOP_BATCH)
     payload = plan.target.payload()
     with _progress(len(plan.values), progress) as bar:
         for batch in tasks:

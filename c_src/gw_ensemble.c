@@ -79,12 +79,6 @@ enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
 #define GW_ENS_SI ((size_t)GW_ENS_LANES)
 #define GW_ENS_SO ((size_t)gw_tlb_row * GW_ENS_LANES)
 
-#if defined(__GNUC__) || defined(__clang__)
-#define GW_ENS_RESTRICT __restrict__
-#else
-#define GW_ENS_RESTRICT
-#endif
-
 /* With this many active lanes or fewer the batch runs each lane's series with the one-lane
  * kernel (gw_tl1_jet, as solver taylor does) instead of all GW_ENS_LANES lanes of gw_tlb_jet.
  * Default 0 (never): the library is compiled with FMA contraction, which rounds the one-lane

@@ -316,10 +316,12 @@ GW_FASTMATH_INLINE double gw_cos(double x) {
 }
 
 /* ---- ln and exp: one definition for a double and for a vector of 4 -------------------------
- * The ensemble's Taylor step size (gw_ensemble_passes.h gw_ens_step_sizes: two logarithms and
- * one exponential per lane and step) needs ln and exp that are deterministic and the same bit
- * for bit whether its one-lane code calls them on a double (gw_fm_log, gw_fm_exp) or its pass on
- * the 4 lanes of a GNU vector (gw_fm_log4, gw_fm_exp4): the bodies below are macros over the
+ * Written for the ensemble's Taylor step size when it took two logarithms and one exponential per
+ * lane and step (now gw_fm_step below; gw_fm_log and gw_fm_exp remain the ensemble library's ln
+ * and exp of a rejected step's shorter retry, GW_TAYLOR_STEP_FM): ln and exp that are
+ * deterministic and the same bit for bit whether called on a double (gw_fm_log, gw_fm_exp) or on
+ * the 4 lanes of a GNU vector (gw_fm_log4, gw_fm_exp4, used by no runtime code since: tested by
+ * tests/c/test_fastexp.c): the bodies below are macros over the
  * value type D, its 64-bit unsigned integer twin U, the bit casts, a lane select and GW_FM_KEEP,
  * instantiated for both, so that the two perform the same IEEE operations in the same order (no
  * libm, no tables, no int-to-double conversion: the exponent is read and written as bits).
@@ -342,7 +344,7 @@ GW_FASTMATH_INLINE double gw_cos(double x) {
  * cannot reassociate), the scalar and vector forms then not bit-equal.
  * Cost: without FMA a scalar gw_fm_exp takes about 22 ns of latency where glibc's table-driven
  * exp (FMA where the CPU has it) takes 11, so the FMU's solver taylor keeps libm's
- * (GW_TAYLOR_STEP_FM, gw_solver_taylor.c); the ensemble gains from 4 lanes per call. */
+ * (GW_TAYLOR_STEP_FM, gw_solver_taylor.c). */
 #define GW_FM_LN2_HI 6.93147180369123816490e-01 /* 0x3fe62e42fee00000: k ln2_hi exact */
 #define GW_FM_LN2_LO 1.90821492927058770002e-10
 #define GW_FM_TWO52 4503599627370496.0 /* 2^52: bits 0x4330000000000000 */
@@ -412,8 +414,8 @@ GW_FASTMATH_INLINE double gw_cos(double x) {
     }
 
 /* ---- the Taylor step size: h = 2^(min(-log2(n1) r1, -log2(n2) r2) + lc) ------------------------
- * Solver taylor's step size rule (gw_taylor_step_size; the ensemble's pass gw_ens_step_sizes, 4
- * lanes at once) needs no full precision: a relative error d of h moves the first neglected
+ * Solver taylor's step size rule (gw_taylor_step_size; the ensemble's norms pass gw_ens_norms, 4
+ * lanes at once by gw_fm_step4) needs no full precision: a relative error d of h moves the first neglected
  * term by (p + 1) d.  So log2 by the exponent's bits and a polynomial of degree 5 on the
  * mantissa, 1 + f in [sqrt(2)/2, sqrt(2)) (no division; absolute error below 1.5e-5, measured
  * on 4e5 points), and 2^y by k = nearest integer to y into the exponent's bits and 2^r, |r| <=

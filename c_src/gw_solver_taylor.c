@@ -116,8 +116,8 @@ GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, doub
     *bad_order = gw_taylor_bad_order(order, n1, n2);
     if (*bad_order) return 0.0;
     /* log2 rho = min_j log2(N_j^(-1/j)), h = 2^(log2 rho + log2 c): gw_fm_step's short log2 and
-     * exp2 (gw_fastmath.h, 3e-7 of the exact rule), the same body as the ensemble's pass over
-     * its lanes (gw_ens_step_sizes) */
+     * exp2 (gw_fastmath.h, 6e-6 of the exact rule), the same body as the ensemble's norms pass
+     * over its lanes (gw_ens_norms, gw_fm_step4) */
     return gw_fm_step(n1, n2, 1.0 / (order - 1), 1.0 / order, run->log2_c);
 }
 

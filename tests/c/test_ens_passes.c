@@ -13,7 +13,7 @@
  *                      largest r_i, HUGE_VAL when one is NaN or infinite), a NaN r_i before a
  *                      finite one included (the pass kept the later finite r: a step accepted
  *                      that solver taylor rejects and retries shorter)
- * Run by tests/test_ensemble.py (gcc and clang, both step forms).
+ * Run by tests/test_ensemble.py (gcc and clang).
  */
 #include <float.h>
 #include <math.h>
@@ -22,8 +22,6 @@
 
 #include "gw_fastmath.h"
 
-/* GW_TAYLOR_STEP_FM and its GW_TL_LN, GW_TL_EXP (gw_solver_taylor.c) from the command line:
- * 1, gw_fm_log, gw_fm_exp or 0, log, exp */
 #define GW_ENSEMBLE_LANES 4
 #include "gw_ensemble_passes.h"
 

@@ -33,13 +33,13 @@ venv: $(STAMP)
 demo: $(STAMP)
 	$(PY) examples/paper_demo.py --out results
 	$(PY) examples/gyrover_control.py --out results/system
-	$(PY) -m fmu_build animate results/system/closed_loop_earth_wheel.csv --fmu results/system/earth/gyrover_earth.fmu \
+	$(PY) -m gyrowheel animate results/system/closed_loop_earth_wheel.csv --fmu results/system/earth/gyrover_earth.fmu \
 	    -o results/system/closed_loop_earth.gif --fps 10 --speed 4 --size 480x360 --trail 30
-	$(PY) -m fmu_build animate results/system/closed_loop_moon_wheel.csv --fmu results/system/moon/gyrover_moon.fmu \
+	$(PY) -m gyrowheel animate results/system/closed_loop_moon_wheel.csv --fmu results/system/moon/gyrover_moon.fmu \
 	    -o results/system/closed_loop_moon.gif --fps 10 --speed 8 --size 480x360 --trail 60
-	$(PY) -m fmu_build animate results/paper_earth.csv --fmu results/fmus/paper_earth.fmu \
+	$(PY) -m gyrowheel animate results/paper_earth.csv --fmu results/fmus/paper_earth.fmu \
 	    -o results/paper_earth.gif --fps 12 --speed 2 --size 480x360 --trail 5
-	$(PY) -m fmu_build animate results/paper_earth.csv --fmu results/fmus/paper_earth.fmu \
+	$(PY) -m gyrowheel animate results/paper_earth.csv --fmu results/fmus/paper_earth.fmu \
 	    -o results/paper_earth.html --trail 5
 
 # tests/test_animate_html.py drives a real headless browser: Debian's chromium

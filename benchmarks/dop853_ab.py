@@ -34,7 +34,7 @@ from fmi_slave import FmuRunner, solver_counts  # noqa: E402
 from taylor_vs_heyoka import TARGETS, SameGraph, rows_against_heyoka  # noqa: E402
 from work_precision import SCENARIOS, SOLVER_CODES  # noqa: E402
 
-from fmu_build import build_fmu, parse_scene  # noqa: E402
+from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
 
 TOLS = [10.0 ** -k for k in range(3, 15)]
 

@@ -35,10 +35,10 @@ sys.path.insert(0, str(HERE))
 from fmi_slave import _open, many_steps_seconds  # noqa: E402
 from paper_cost import best_of  # noqa: E402
 
-from fmu_build import build_fmu  # noqa: E402
+from gyrowheel.fmu_build import build_fmu  # noqa: E402
 import rhs_timing  # noqa: E402
-from fmu_build.scene import parse_scene  # noqa: E402
-from model.effects import CATALOGUE  # noqa: E402
+from gyrowheel.fmu_build.scene import parse_scene  # noqa: E402
+from gyrowheel.model.effects import CATALOGUE  # noqa: E402
 
 STEP = 1e-3  # communication step [s]
 N_STEPS = 10000  # 10 s of simulated time: with rolling resistance the wheel falls at 10.7 s

@@ -7,7 +7,7 @@ rel_tol * {1e-2, 1}); then N trajectories (gamma_dot spread over 6 +- 1 %, so th
 take different steps) are timed at each method's 3 cheapest settings reaching the target (the
 same for both methods: one trajectory's timing is noisy, and the cheapest at N = 1 need not be the
 cheapest at N), the best of them counted:
-  gyrowheel  fmu_build.ensemble.Ensemble(lanes=W).run, W = 1, 4, 8 (the whole call: marshalling,
+  gyrowheel  gyrowheel.taylor.ensemble.Ensemble(lanes=W).run, W = 1, 4, 8 (the whole call: marshalling,
              instances' initialisation, integration)
   heyoka     taylor_adaptive_batch of N (N = 1: taylor_adaptive), propagate_until, state reset
              included; its JIT compilation is not counted
@@ -16,7 +16,7 @@ per-trajectory times in this one run (absolute times on a loaded machine are not
 Also the fixed cost of one run: N = 1 to t_end = 1 ms (a handful of steps), and N = 4 to
 1e-9 s at rel_tol 1e-4 (what a run of the 1e-4 rows pays besides its steps).
 --against REF (a git revision, e.g. main) also times REF's ensemble (the same scene built by
-REF's whole tree: its generator, c_src/ and fmu_build/ensemble.py; 4 lanes, at gyrowheel's
+REF's whole tree: its generator, c_src/ and taylor/ensemble.py; 4 lanes, at gyrowheel's
 tolerances), interleaved: before and after a change in the same run.
 
     python benchmarks/ensemble_scaling.py [--scenario paper] [--n 1 4 16 64] [--lanes 1 4 8]
@@ -43,8 +43,8 @@ sys.path.insert(0, str(HERE.parent))
 from taylor_vs_heyoka import SameGraph, to_heyoka  # noqa: E402
 from work_precision import SCENARIOS, best_time  # noqa: E402
 
-from fmu_build import build_fmu, parse_scene  # noqa: E402
-from fmu_build.ensemble import Ensemble  # noqa: E402
+from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
+from gyrowheel.taylor.ensemble import Ensemble  # noqa: E402
 
 TOLS = [10.0 ** -(k / 2) for k in range(6, 30)]  # 1e-3 .. 10^-14.5
 # the calibration's timing is one trajectory, best of CALIBRATION_REPEAT; its CANDIDATES cheapest settings
@@ -70,7 +70,7 @@ def best_of_many(fn, k: int) -> float:
 def ensemble_at(ref: str, scene: str, work: Path, lanes: int = 4):
     """The Ensemble of git revision ref on the same scene: its whole tree (git archive), its
     generator building the FMU (in a subprocess: the generated C and the runtime change
-    together, e.g. the event indicators' hoisted part), its fmu_build/ensemble.py compiling and
+    together, e.g. the event indicators' hoisted part), its taylor/ensemble.py compiling and
     running it."""
     root = HERE.parent
     tar = subprocess.run(["git", "-C", str(root), "archive", ref], capture_output=True, check=True).stdout

@@ -19,7 +19,7 @@ import casadi as ca
 import numpy as np
 from fmpy import simulate_fmu
 
-from fmu_build import build_fmu, load_scene
+from gyrowheel.fmu_build import build_fmu, load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 

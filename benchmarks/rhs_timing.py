@@ -7,8 +7,8 @@ import math
 import subprocess
 from pathlib import Path
 
-from fmu_build.builder import RUNTIME_DIR
-from fmu_build.compiler import OPTIMISE, compiler
+from gyrowheel.fmu_build.runtime import RUNTIME_DIR
+from gyrowheel.fmu_build.compiler import OPTIMISE, compiler
 
 HERE = Path(__file__).resolve().parent
 

@@ -24,10 +24,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from fmu_build.sweep import plan_sweep  # noqa: E402
-from fmu_build.sweep.execute import run_dask, run_loop  # noqa: E402
-from fmu_build.sweep.output import TableWriter  # noqa: E402
-from fmu_build.sweep.target import FmuTarget  # noqa: E402
+from gyrowheel.studies import plan_sweep  # noqa: E402
+from gyrowheel.studies.execute import run_dask, run_loop  # noqa: E402
+from gyrowheel.studies.output import TableWriter  # noqa: E402
+from gyrowheel.studies.target import FmuTarget  # noqa: E402
 
 ONE_MS = dict(stop_time=20.0, output_interval=1.0)
 
@@ -75,7 +75,7 @@ def cluster(n: int):
     import dask
     from distributed import Client, LocalCluster
 
-    from fmu_build.sweep.execute import LOCAL_CONFIG
+    from gyrowheel.studies.execute import LOCAL_CONFIG
     t0 = time.perf_counter()
     with dask.config.set(LOCAL_CONFIG):
         c = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
@@ -94,7 +94,7 @@ def main() -> int:
     args = ap.parse_args()
     import tempfile
 
-    from fmu_build import build_fmu, load_scene
+    from gyrowheel.fmu_build import build_fmu, load_scene
     with tempfile.TemporaryDirectory() as tmp:
         fmu = args.fmu or build_fmu(load_scene(ROOT / "examples/scenes/paper_earth.toml"), Path(tmp) / "e.fmu").fmu
         target = FmuTarget(fmu)

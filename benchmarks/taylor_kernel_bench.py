@@ -8,7 +8,7 @@ calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8, 16 at 
 15 (rel_tol 1e-4, 1e-7, 1e-10, 1e-12) and the ratio of a W-lane call to a one-lane call (the
 cost of W trajectories against one: 1 would be perfect vectorisation, W none at all).
 
-With --baseline REF the kernel generator of that git ref (fmu_build/taylor_c.py, taylor_graph.py
+With --baseline REF the kernel generator of that git ref (taylor/kernel_c.py, taylor_graph.py
 and, where REF has it, taylor_rewrite.py; c_src/gw_taylor_ops.h, gw_taylor.c) is timed in the same rounds, and its states' series are compared with
 this tree's (they differ by rounding only: the summation order).  Timings on a loaded machine
 are noisy: compare ratios from one run; re-measure absolute times on a quiet machine.
@@ -32,10 +32,10 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(ROOT))
 
-from fmu_build import build_fmu, load_scene  # noqa: E402
-from fmu_build.codegen import taylor_ode  # noqa: E402
-from fmu_build.compiler import OPTIMISE, STANDARD, compiler  # noqa: E402
-from fmu_build.ensemble import FLAGS as ENSEMBLE_FLAGS  # noqa: E402
+from gyrowheel.fmu_build import build_fmu, load_scene  # noqa: E402
+from gyrowheel.fmu_build.codegen import taylor_ode  # noqa: E402
+from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, compiler  # noqa: E402
+from gyrowheel.taylor.ensemble import FLAGS as ENSEMBLE_FLAGS  # noqa: E402
 
 DRIVER = r"""#define _POSIX_C_SOURCE 199309L
 #include <math.h>
@@ -97,8 +97,8 @@ def baseline_source(ref: str, ode, model: str, out: Path) -> None:
     for m in parts:  # the generator's modules of ref, importing each other, not this tree's
         text = show(f"fmu_build/taylor_{m}.py")
         for other in parts:
-            text = text.replace(f"fmu_build.taylor_{other} ", f"{tag}_{other} ").replace(
-                f"fmu_build.taylor_{other}\n", f"{tag}_{other}\n")
+            text = text.replace(f"gyrowheel.fmu_build.taylor_{other} ", f"{tag}_{other} ").replace(
+                f"gyrowheel.fmu_build.taylor_{other}\n", f"{tag}_{other}\n")
         (pkg / f"{tag}_{m}.py").write_text(text)
     for name in ("gw_taylor_ops.h", "gw_taylor.c"):
         (out / name).write_text(show(f"c_src/{name}"))

@@ -3,7 +3,7 @@
 Builds each scenario's FMU once (taylor=True), then recompiles its own sources into variants:
   base      the sources as they are (or, with --base REV, gw_solver_taylor.c and gw_solver.h of
             git revision REV put in their place, and the Taylor kernel of REV's generator:
-            gw_taylor_model.h from its fmu_build/taylor_c.py, its gw_taylor_ops.h and
+            gw_taylor_model.h from its taylor/kernel_c.py, its gw_taylor_ops.h and
             gw_taylor.c; the step rule and the kernel before a change, in the same run)
   +k        the same sources with -DGW_TAYLOR_EXTRA_ORDER=k (a fixed k orders above p0)
 and times every variant at every (rel_tol, abs_tol) interleaved (one fmi2DoStep through fmpy,
@@ -35,9 +35,9 @@ from fmi_slave import FmuRunner, solver_counts  # noqa: E402
 from taylor_vs_heyoka import SameGraph, rows_against_heyoka  # noqa: E402
 from work_precision import SCENARIOS  # noqa: E402
 
-from fmu_build import build_fmu, parse_scene  # noqa: E402
-from fmu_build.codegen import taylor_ode  # noqa: E402
-from fmu_build.compiler import UNITY_SOURCE, compile_shared  # noqa: E402
+from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
+from gyrowheel.fmu_build.codegen import taylor_ode  # noqa: E402
+from gyrowheel.fmu_build.compiler import UNITY_SOURCE, compile_shared  # noqa: E402
 
 TARGETS = (1e-4, 1e-7, 1e-10, 1e-12)
 TOLS = [10.0 ** -k for k in range(3, 15)]

@@ -33,10 +33,10 @@ from fmi_slave import FmuRunner  # noqa: E402
 from work_precision import SCENARIOS  # noqa: E402
 from work_precision import best_time as best  # noqa: E402  (thread CPU time, as fmi_slave's)
 
-from fmu_build import build_fmu, parse_scene  # noqa: E402
-from fmu_build.codegen import optimised  # noqa: E402
-from fmu_build.ensemble import Ensemble  # noqa: E402
-from fmu_build.taylor_graph import OP_NAMES  # noqa: E402
+from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
+from gyrowheel.fmu_build.codegen import optimised  # noqa: E402
+from gyrowheel.taylor.ensemble import Ensemble  # noqa: E402
+from gyrowheel.taylor.graph import OP_NAMES  # noqa: E402
 
 TARGETS = (1e-4, 1e-7, 1e-10, 1e-12)
 TOLS = [10.0 ** -k for k in range(3, 17)]
@@ -51,7 +51,7 @@ def to_heyoka(f, xs, p, fp=float):
     for j in range(f.n_in()):
         if j not in (0, 1, 3) and f.nnz_in(j) > 0:
             raise ValueError(f"to_heyoka: input {f.name_in(j)!r} of {f.name()} is neither t, x nor p "
-                             "(pass the whole right-hand side: fmu_build.codegen.taylor_ode)")
+                             "(pass the whole right-hand side: gyrowheel.fmu_build.codegen.taylor_ode)")
     import heyoka as hy
     un = {"neg": lambda a: -a, "twice": lambda a: 2.0 * a, "sq": lambda a: a * a, "sqrt": hy.sqrt,
           "sin": hy.sin, "cos": hy.cos, "tanh": hy.tanh, "exp": hy.exp, "log": hy.log,

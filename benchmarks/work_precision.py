@@ -48,7 +48,7 @@ sys.path.insert(0, str(HERE))
 import peers  # noqa: E402
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
 
-from fmu_build import build_fmu, parse_scene  # noqa: E402
+from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
 
 WHEEL = ""  # [wheel] at the scene defaults: the paper wheel (M 2 kg, R 0.17 m, k 0.25 / 0.4, beta_min 0.02)
 SCENARIOS = {

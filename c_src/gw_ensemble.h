@@ -1,8 +1,8 @@
 /*
  * gw_ensemble.h -- the ensemble path's API (gw_ensemble.c): N trajectories of one model with
  * solver taylor, GW_ENSEMBLE_LANES at a time, each stopping at its own terminating event.
- * Called by the ensemble library (fmu_build/ensemble.py builds it next to an FMU, Python
- * wrapper fmu_build.ensemble.Ensemble) and, later, by the plain C API of `gyrowheel export-c`.
+ * Called by the ensemble library (taylor/ensemble.py builds it next to an FMU, Python
+ * wrapper gyrowheel.taylor.ensemble.Ensemble) and, later, by the plain C API of `gyrowheel export-c`.
  */
 #ifndef GW_ENSEMBLE_H
 #define GW_ENSEMBLE_H
@@ -26,7 +26,7 @@ typedef struct {
     /* Optional communication grid (n_grid = 0: none).  Each trajectory then advances from
      * point to point as through fmi2DoStep(t_k, t_(k+1) - t_k) (the budget, the event count and
      * the step size guard start anew at each point; each step lands on it) and records its
-     * outputs there: the sweep engine's path (fmu_build/sweep/ensemble_path.py). */
+     * outputs there: the sweep engine's path (studies/ensemble_path.py). */
     int n_grid;             /* communication points after t_start */
     const double *t_grid;   /* n_grid: increasing, in (t_start, t_end], the last == t_end */
     double *y_grid;         /* n x (n_grid + 1) x ny: outputs at t_start and at each point

@@ -101,7 +101,7 @@ typedef enum {
     GW_SOLVER_TAYLOR = 6      /* Taylor series of adaptive order (needs the model's taylor kernel) */
 } gw_solver;
 
-/* The Taylor kernel of solver `taylor`, generated from the ode (fmu_build/taylor_c.py,
+/* The Taylor kernel of solver `taylor`, generated from the ode (taylor/kernel_c.py,
  * template gw_taylor_model.h instantiated by gw_taylor.c): cst(u, p, c) computes the n_cst
  * quantities that depend on u and p only; jet(order, t, x, c, w) the Taylor series of order
  * `order` of the states at (t, x), state i's coefficient k at w[i (order + 1) + k]

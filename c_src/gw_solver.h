@@ -121,7 +121,7 @@ GW_INTERNAL void gw_rodas4_dense(gw_instance *I);
 /* order of the series for a relative tolerance: p0 in [3, MAX] plus GW_TAYLOR_EXTRA_ORDER */
 GW_INTERNAL int gw_taylor_order(double rel_tol);
 /* 1: an accepted step's event indicators at its end (t1, xnew) are read from the kernel's
- * series there (GW_TL(evt) of gw_taylor_model.h, fmu_build/taylor_events.py) where the model
+ * series there (GW_TL(evt) of gw_taylor_model.h, taylor/events.py) where the model
  * has it, instead of evaluating gw_evt; 0: gw_evt always (tests compare the two) */
 #ifndef GW_TAYLOR_KERNEL_EVT
 #define GW_TAYLOR_KERNEL_EVT 1

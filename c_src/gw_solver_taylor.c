@@ -1,6 +1,6 @@
 /*
  * gw_solver_taylor.c -- GW_SOLVER_TAYLOR: the Taylor series method of adaptive order with the
- * model's generated Taylor kernel (GW_MODEL.taylor; gw_taylor.c, fmu_build/taylor_c.py).
+ * model's generated Taylor kernel (GW_MODEL.taylor; gw_taylor.c, taylor/kernel_c.py).
  *
  * One step from (t, x): the kernel computes the Taylor coefficients x_i^[k], k = 0..p, of the
  * solution through t (automatic differentiation of the right-hand side's expression graph);
@@ -62,7 +62,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 /* The rejection rule's ln and exp (a rejected step's shorter retry; the step size itself is
  * gw_fm_step's, gw_taylor_step_size): libm's in the FMU, gw_fastmath.h's in the ensemble library
- * (fmu_build/ensemble.py: GW_TAYLOR_STEP_FM 1) */
+ * (taylor/ensemble.py: GW_TAYLOR_STEP_FM 1) */
 #ifndef GW_TAYLOR_STEP_FM
 #define GW_TAYLOR_STEP_FM 0
 #endif

@@ -1,6 +1,6 @@
 /*
  * gw_taylor_ops.h -- the Taylor-coefficient recurrences of the generated kernels
- * (gw_taylor_model.h, fmu_build/taylor_c.py) and the W-lane vectors they are computed with (a
+ * (gw_taylor_model.h, taylor/kernel_c.py) and the W-lane vectors they are computed with (a
  * template: included once per lane count, before the model's kernel).
  *
  * Coefficients are the normalised derivatives a_k = a^(k)(t0) / k!.  Coefficient k >= 1 of a
@@ -104,7 +104,7 @@ typedef double GW_TL(vu)
 #endif
 
 /* GW_TL_PACK: the one-lane kernel under GCC and clang sums 4 terms' products per vector
- * operation from packed copies of their operands (fmu_build/taylor_c.py, _Packs):
+ * operation from packed copies of their operands (taylor/kernel_c.py, _Packs):
  *   GW_TL(p)               4 doubles, two 2-double vectors (SSE2 and NEON registers; a 4-double
  *                          vector lives in memory where no register holds it: the portable
  *                          default clone beside x86-64-v3 ran 0.79-0.85x the former scalar

@@ -3,7 +3,7 @@
 build_closed_loop(scene) builds the wheel from its scene (the same path as `gyrowheel build`),
 designs the gain-scheduled controller on the scene's own model (controller/schedule.py) unless a
 schedule is given, builds the controller FMU through the general path (model/system.py ->
-fmu_build.builder.build_spec_fmu) and writes <name>.ssp. Connections are by name:
+gyrowheel.fmu_build.builder.build_spec_fmu) and writes <name>.ssp. Connections are by name:
 wheel outputs alpha, alpha_dot, beta, beta_dot, vx, vy, tilt -> controller inputs;
 controller outputs tilt_cmd, drive_torque -> wheel inputs.
 """
@@ -13,13 +13,13 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from controller.compensator import EXPERIMENT, controller_spec
-from controller.mission import Mission, standard
-from controller.schedule import Schedule, design_schedule, uniform
-from cosim.system import Component, SystemDescription, connect_by_name, write_ssp
-from fmu_build.builder import build_fmu, build_spec_fmu, model_spec
-from fmu_build.scene import Scene
-from model.spec import ModelSpec
+from gyrowheel.controller.compensator import EXPERIMENT, controller_spec
+from gyrowheel.controller.mission import Mission, standard
+from gyrowheel.controller.schedule import Schedule, design_schedule, uniform
+from gyrowheel.cosim.system import Component, SystemDescription, connect_by_name, write_ssp
+from gyrowheel.fmu_build.builder import build_fmu, build_spec_fmu, model_spec
+from gyrowheel.fmu_build.scene import Scene
+from gyrowheel.model.spec import ModelSpec
 
 MEASURED = ("alpha", "alpha_dot", "beta", "beta_dot", "vx", "vy", "tilt")
 COMMANDS = ("tilt_cmd", "drive_torque")

@@ -24,13 +24,13 @@ import math
 
 import casadi as ca
 
-from controller.mission import Mission, integrate, interpolate
-from controller.operating_point import measurement_exprs
-from controller.schedule import Schedule
-from fmu_build.scene import Experiment
-from model.linearise import parameter_values
-from model.spec import ModelSpec
-from model.system import System
+from gyrowheel.controller.mission import Mission, integrate, interpolate
+from gyrowheel.controller.operating_point import measurement_exprs
+from gyrowheel.controller.schedule import Schedule
+from gyrowheel.fmu_build.scene import Experiment
+from gyrowheel.model.linearise import parameter_values
+from gyrowheel.model.spec import ModelSpec
+from gyrowheel.model.system import System
 
 WHEEL_SIGNALS = (("alpha", 0.0, "rad", "heading (wheel output alpha)"),
                  ("alpha_dot", 0.0, "rad/s", "heading rate (wheel output alpha_dot)"),

@@ -52,10 +52,10 @@ import casadi as ca
 import numpy as np
 from scipy.linalg import expm, orth, solve_continuous_are
 
-from controller.operating_point import MEASUREMENTS, measurement_exprs, steady_turn
-from controller.operating_point import plant_model as _plant_model
-from model.linearise import LinearModel, parameter_values
-from model.spec import ModelSpec
+from gyrowheel.controller.operating_point import MEASUREMENTS, measurement_exprs, steady_turn
+from gyrowheel.controller.operating_point import plant_model as _plant_model
+from gyrowheel.model.linearise import LinearModel, parameter_values
+from gyrowheel.model.spec import ModelSpec
 
 COMMANDS = ("tilt_cmd", "drive_torque")
 REFERENCES = ("heading", "heading_rate", "speed", "yaw_momentum")

@@ -10,7 +10,7 @@ pendulum swing and drive torque balance (beta_dot = theta_p_dot = tilt_rate = 0)
 For every (r, t) there is one (lean, theta_p, drive): the tilt is free because no internal torque
 changes the yaw momentum (the fourth equation, d alpha_dot / dt = 0, then holds by itself; it is
 checked). steady_turn() solves the three by Newton (scipy least_squares, residual <= 1e-10) from the
-upright guess; r = 0 is straight upright rolling (model.linearise.upright_rolling, exact).
+upright guess; r = 0 is straight upright rolling (gyrowheel.model.linearise.upright_rolling, exact).
 plant_model() linearises the wheel's own expressions there (model/linearise.py) with the
 controller's measurements.
 """
@@ -23,9 +23,9 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import least_squares
 
-from model.linearise import (LinearisationError, LinearModel, initial_state, linearise, output_expr,
+from gyrowheel.model.linearise import (LinearisationError, LinearModel, initial_state, linearise, output_expr,
                              parameter_values, upright_rolling)
-from model.spec import ModelSpec
+from gyrowheel.model.spec import ModelSpec
 
 MEASUREMENTS = ("lean", "lean_rate", "heading", "heading_rate", "speed", "tilt")
 

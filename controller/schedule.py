@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from controller.design import Design, design
-from model.spec import ModelSpec
+from gyrowheel.controller.design import Design, design
+from gyrowheel.model.spec import ModelSpec
 
 
 @dataclass

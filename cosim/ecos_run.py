@@ -2,7 +2,7 @@
 
 ecos reads the .ssp itself (SystemStructure.ssd, parameter bindings, connections) and steps every
 component with the fixed step; identifiers are "<component>::<variable>". Samples are taken at
-every communication point and returned like cosim.master.run's result (time,
+every communication point and returned like gyrowheel.cosim.master.run's result (time,
 <component>.<variable>). ecospy needs Debian's libtbb12 (.ci/run and `make test` install it).
 """
 from __future__ import annotations
@@ -14,8 +14,8 @@ def run(ssp: str, step: float, stop_time: float, variables: dict[str, list[str]]
         parameter_set: str | None = None) -> np.ndarray:
     """Simulate the .ssp with ecos at fixed step `step` [s] to stop_time and sample `variables`
     ({component: [names]}). ecos applies parameter bindings only of the set named at
-    initialisation: parameter_set (the files cosim.system.write_ssp writes name every set
-    cosim.system.PARAMETER_SET, "start"). Raises RuntimeError if ecos refuses the file or a step."""
+    initialisation: parameter_set (the files gyrowheel.cosim.system.write_ssp writes name every set
+    gyrowheel.cosim.system.PARAMETER_SET, "start"). Raises RuntimeError if ecos refuses the file or a step."""
     from ecospy import EcosSimulation
 
     names = [(c, v) for c, vs in variables.items() for v in vs]

@@ -5,7 +5,7 @@ FMU's variadic message and calls the last callback registered). So every instanc
 same process-lived dispatcher and tells itself apart by its componentEnvironment (FMI 2.0.4
 section 2.1.5): its messages of status fmi2Error and fmi2Fatal (which the FMU always logs,
 docs/fmi.md) land in its own list. Used by gyrowheel's master (cosim/master.py) and the sweeps
-(fmu_build/sweep/target.py).
+(studies/target.py).
 """
 from __future__ import annotations
 

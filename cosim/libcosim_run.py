@@ -1,14 +1,14 @@
 """Run a system in libcosim (libcosimpy): from the .ssp itself or from OspSystemStructure.xml.
 
 libcosim counts time in integer nanoseconds. Samples are taken every step with a time-series
-observer and returned like cosim.master.run's result (time, <component>.<variable>).
+observer and returned like gyrowheel.cosim.master.run's result (time, <component>.<variable>).
 """
 from __future__ import annotations
 
 import numpy as np
 from fmpy import read_model_description
 
-from cosim.system import SystemDescription
+from gyrowheel.cosim.system import SystemDescription
 
 NS = 1_000_000_000
 

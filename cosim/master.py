@@ -21,8 +21,8 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Discard
 
-from cosim.system import SystemDescription, SystemFileError, coerce_value
-from cosim.fmi_log import forget_messages, logging_callbacks
+from gyrowheel.cosim.system import SystemDescription, SystemFileError, coerce_value
+from gyrowheel.cosim.fmi_log import forget_messages, logging_callbacks
 
 
 class MasterError(RuntimeError):

@@ -20,9 +20,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, compiler  # noqa: E402
-from fmu_build.export_c import export_c  # noqa: E402
-from fmu_build.scene import load_scene, parse_scene  # noqa: E402
+from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, compiler  # noqa: E402
+from gyrowheel.fmu_build.export_c import export_c  # noqa: E402
+from gyrowheel.fmu_build.scene import load_scene, parse_scene  # noqa: E402
 
 SCENE = Path(__file__).resolve().parent / "scenes" / "paper_earth.toml"
 

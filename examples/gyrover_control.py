@@ -37,12 +37,12 @@ from scipy.linalg import expm  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
-from controller.closed_loop import build_closed_loop, schedule_for  # noqa: E402
-from controller.design import closed_loop_matrix, controllable_basis, plant_model, sampled_spectral_radius  # noqa: E402
-from controller.mission import COURSES, standard  # noqa: E402
-from cosim.master import MasterError, run  # noqa: E402
-from fmu_build import load_scene  # noqa: E402
-from fmu_build.builder import model_spec  # noqa: E402
+from gyrowheel.controller.closed_loop import build_closed_loop, schedule_for  # noqa: E402
+from gyrowheel.controller.design import closed_loop_matrix, controllable_basis, plant_model, sampled_spectral_radius  # noqa: E402
+from gyrowheel.controller.mission import COURSES, standard  # noqa: E402
+from gyrowheel.cosim.master import MasterError, run  # noqa: E402
+from gyrowheel.fmu_build import load_scene  # noqa: E402
+from gyrowheel.fmu_build.builder import model_spec  # noqa: E402
 
 SPEED = 1.5
 STEPS = (0.001, 0.002, 0.005, 0.01, 0.02, 0.03, 0.05)  # docs/system.md: it breaks between 20 and 30 ms

@@ -27,7 +27,7 @@ import numpy as np  # noqa: E402
 from fmpy import simulate_fmu  # noqa: E402
 from fmpy.util import write_csv  # noqa: E402
 
-from fmu_build import build_fmu, load_scene  # noqa: E402
+from gyrowheel.fmu_build import build_fmu, load_scene  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 # (time, tilt_cmd): slow ramps, so that the open-loop tilt excites little wobble

@@ -21,9 +21,9 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2LastSuccessfulTime
 
-from fmu_build import build_fmu, load_scene, parse_scene
-from fmu_build.scipy_reference import solve_hybrid
-from model.build import BETA_MIN_DEFAULT
+from gyrowheel.fmu_build import build_fmu, load_scene, parse_scene
+from gyrowheel.studies.scipy_reference import solve_hybrid
+from gyrowheel.model.build import BETA_MIN_DEFAULT
 
 HERE = Path(__file__).resolve().parent
 STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]

@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 from fmpy.util import write_csv
 
-from fmu_build import build_fmu, load_scene
-from fmu_build.analysis import fit_circle, relative_energy_drift
-from fmu_build.plotting import plot_trajectories
-from fmu_build.simulate import run
+from gyrowheel.fmu_build import build_fmu, load_scene
+from gyrowheel.studies.analysis import fit_circle, relative_energy_drift
+from gyrowheel.plotting import plot_trajectories
+from gyrowheel.simulation import run
 
 HERE = Path(__file__).resolve().parent
 SCENES = {"earth": "paper_earth.toml", "Mars": "paper_mars.toml", "moon": "paper_moon.toml"}

@@ -13,16 +13,16 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
-from fmu_build.compiler import UNITY_SOURCE, compile_shared, fmi_headers_dir
-from fmu_build.documentation import write_index_html
-from fmu_build.model_description import write_model_description
-from fmu_build.scene import Experiment, Scene
-from fmu_build.variables import build_table
-from model.build import build_model
-from model.spec import ModelSpec
+from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
+from gyrowheel.fmu_build.compiler import UNITY_SOURCE, compile_shared, fmi_headers_dir
+from gyrowheel.fmu_build.documentation import write_index_html
+from gyrowheel.fmu_build.model_description import write_model_description
+from gyrowheel.fmu_build.runtime import runtime_sources
+from gyrowheel.fmu_build.scene import Experiment, Scene
+from gyrowheel.fmu_build.variables import build_table
+from gyrowheel.model.build import build_model
+from gyrowheel.model.spec import ModelSpec
 
-RUNTIME_DIR = Path(__file__).resolve().parent.parent / "c_src"
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 PLATFORM = "linux64"
 
@@ -35,15 +35,8 @@ class BuildResult:
     identifier: str
 
 
-def runtime_sources() -> list[Path]:
-    """Every file of the C runtime (copied into sources/; gw_fmu.c includes the .c files)."""
-    if not RUNTIME_DIR.is_dir():
-        raise FileNotFoundError(f"C runtime not found at {RUNTIME_DIR}; install gyrowheel from its source tree")
-    return sorted(RUNTIME_DIR.glob("*.c")) + sorted(RUNTIME_DIR.glob("*.h"))
-
-
 # runtime files only an FMU with the Taylor kernel carries: the recurrences the kernel includes,
-# and the ensemble path's sources (fmu_build.ensemble builds them from the FMU's sources/; not part
+# and the ensemble path's sources (gyrowheel.taylor.ensemble builds them from the FMU's sources/; not part
 # of the FMU's unity build, compiled on their own they are empty)
 TAYLOR_ONLY = {"gw_taylor_ops.h", "gw_ensemble.c", "gw_ensemble.h", "gw_ensemble_passes.h",
                "gw_ensemble_ctx.h", "gw_ensemble_batch.h"}
@@ -79,7 +72,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     (the scene file, the gains); taylor: generate the Taylor kernel of solver taylor and the
     ensemble path even if experiment.solver is not "taylor" (only those FMUs carry it).
     Sources stay in build_dir if given. Raises ValueError for a bad table,
-    fmu_build.taylor_graph.TaylorUnsupportedError (a ValueError) for a kernel the ode's
+    gyrowheel.taylor.graph.TaylorUnsupportedError (a ValueError) for a kernel the ode's
     operations do not allow, CompileError if the C compiler fails.
     """
     experiment = experiment or Experiment()

@@ -1,6 +1,6 @@
 """C code of one model: CasADi-generated functions plus model_desc.c (GW_MODEL).
 
-gw_funcs.c comes from casadi.CodeGenerator, rewritten by fmu_build.casadi_c so that every
+gw_funcs.c comes from casadi.CodeGenerator, rewritten by gyrowheel.fmu_build.casadi_c so that every
 function in it is static and warning-clean; model_desc.c is the constant the runtime reads
 (c_src/gw_model.h), `static const gw_model GW_MODEL`, written from the same variable table as
 modelDescription.xml.  Both are parts of the FMU's single translation unit c_src/gw_fmu.c
@@ -13,12 +13,12 @@ from pathlib import Path
 
 import casadi as ca
 
-from fmu_build.casadi_c import UNITY_GUARD_CLOSE, UNITY_GUARD_OPEN, make_internal
-from fmu_build.scene import SOLVERS, Experiment
-from fmu_build.taylor_c import KERNEL_FILE, TaylorKernel, write_taylor_kernel
-from fmu_build.variables import KIND, TYPE, Variable
-from model.hoist import split_parameters
-from model.spec import ModelSpec
+from gyrowheel.fmu_build.casadi_c import UNITY_GUARD_CLOSE, UNITY_GUARD_OPEN, make_internal
+from gyrowheel.fmu_build.scene import SOLVERS, Experiment
+from gyrowheel.taylor.kernel_c import KERNEL_FILE, TaylorKernel, write_taylor_kernel
+from gyrowheel.fmu_build.variables import KIND, TYPE, Variable
+from gyrowheel.model.hoist import split_parameters
+from gyrowheel.model.spec import ModelSpec
 
 FUNCTION_FILE = "gw_funcs"
 DESC_FILE = "model_desc.c"

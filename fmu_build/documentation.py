@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import html
 
-from fmu_build.scene import Experiment
-from fmu_build.variables import Variable
-from model.spec import ModelSpec
+from gyrowheel.fmu_build.scene import Experiment
+from gyrowheel.fmu_build.variables import Variable
+from gyrowheel.model.spec import ModelSpec
 
 
 def write_index_html(spec: ModelSpec, exp: Experiment, table: list[Variable], identifier: str, guid: str,

@@ -22,15 +22,15 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from fmu_build import c_names
-from fmu_build.builder import RUNTIME_DIR, _guid, model_spec
-from fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
-from fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
-from fmu_build.scene import Scene
-from fmu_build.variables import Variable, build_table
-from model.spec import ModelSpec
+from gyrowheel.fmu_build import c_names
+from gyrowheel.fmu_build.builder import _guid, model_spec
+from gyrowheel.fmu_build.runtime import EXPORT_DIR, runtime_sources
+from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
+from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
+from gyrowheel.fmu_build.scene import Scene
+from gyrowheel.fmu_build.variables import Variable, build_table
+from gyrowheel.model.spec import ModelSpec
 
-EXPORT_DIR = RUNTIME_DIR / "export"
 API_SOURCES = ("gw_capi.h", "gw_capi.c", "gw_capi_names.c", "gw_capi_state.c")
 MARKER = ".gyrowheel-export"
 KINDS = ("PARAMETER", "INITIAL", "INPUT", "STATE", "OUTPUT", "EVENT")  # gyrowheel_kind order
@@ -71,8 +71,7 @@ def check_identifier(name: str) -> str:
 
 def core_sources() -> list[Path]:
     """The simulation core: every c_src file but the FMI 2.0 layer (gw_fmi2_*, gw_fmu.c)."""
-    files = sorted(RUNTIME_DIR.glob("*.c")) + sorted(RUNTIME_DIR.glob("*.h"))
-    return [f for f in files if not f.name.startswith("gw_fmi2") and f.name != "gw_fmu.c"]
+    return [f for f in runtime_sources() if not f.name.startswith("gw_fmi2") and f.name != "gw_fmu.c"]
 
 
 def api_table(spec: ModelSpec, table: list[Variable]) -> dict[str, list[Row]]:

@@ -4,8 +4,8 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from datetime import datetime, timezone
 
-from fmu_build.scene import SOLVERS, Experiment
-from fmu_build.variables import Variable
+from gyrowheel.fmu_build.scene import SOLVERS, Experiment
+from gyrowheel.fmu_build.variables import Variable
 
 LOG_CATEGORIES = {  # must match c_src/gw_log.c
     "logEvents": "events: fall, warnings at located event times",
@@ -97,7 +97,7 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
     used = sorted({u for v in table if (u := _unit_of(v))})
     unknown = [u for u in used if u not in UNITS]
     if unknown:
-        raise ValueError(f"unit {unknown[0]!r} has no definition in fmu_build.model_description.UNITS")
+        raise ValueError(f"unit {unknown[0]!r} has no definition in gyrowheel.fmu_build.model_description.UNITS")
     units = ET.SubElement(root, "UnitDefinitions")
     for name in used:
         base, displays = UNITS[name]

@@ -2,7 +2,7 @@
 
     [model]       name, description, formulation ("reduced" | "multipliers")
     [wheel]       M, R, k_diam, k_axial, beta_min
-    [effects.X]   one table per effect X, its parameters (see model.effects)
+    [effects.X]   one table per effect X, its parameters (see gyrowheel.model.effects)
     [initial]     x, y, alpha, beta, gamma, alpha_dot, beta_dot, gamma_dot
                   (angles also as <name>_deg); never x_dot/y_dot: rolling fixes them
     [experiment]  start_time, stop_time, output_interval, solver, rel_tol, abs_tol, max_step,
@@ -18,8 +18,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from model.build import BETA_MIN_DEFAULT, FORMULATIONS, start_values, touchdown_lean, wheel_parameters
-from model.effects import CATALOGUE, lift_off_conflict
+from gyrowheel.model.build import BETA_MIN_DEFAULT, FORMULATIONS, start_values, touchdown_lean, wheel_parameters
+from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 
 SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
@@ -118,7 +118,7 @@ def _wheel(r: _Reader, data: dict) -> dict[str, float]:
         if "beta_min_deg" in data:
             raise r.fail("wheel", "beta_min_deg", "beta_min given twice (as a preset and in deg)")
         defaults = {q.name: q.start for q in wheel_parameters()}
-        try:  # where the body touches the ground (model.build.touchdown_lean), not below the default
+        try:  # where the body touches the ground (gyrowheel.model.build.touchdown_lean), not below the default
             lean = touchdown_lean(wheel.get("k_diam", defaults["k_diam"]), wheel.get("k_axial", defaults["k_axial"]))
         except ValueError as exc:
             raise r.fail("wheel", "beta_min", str(exc)) from None

@@ -9,8 +9,8 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from fmu_build.scene import SOLVERS, Experiment
-from model.spec import ModelSpec, Quantity
+from gyrowheel.fmu_build.scene import SOLVERS, Experiment
+from gyrowheel.model.spec import ModelSpec, Quantity
 
 # The variables every FMU keeps (INTERFACE.md); [outputs] keep cannot remove them.
 REQUIRED_OUTPUTS = ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot",

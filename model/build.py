@@ -14,12 +14,12 @@ import math
 
 import casadi as ca
 
-from model.context import Body, WheelContext
-from model.effects import CATALOGUE, lift_off_conflict
-from model.kinematics import WheelKinematics, norm
-from model.lagrangian import ConstrainedSystem
-from model.spec import Event, ModelSpec, Quantity
-from model.stiction import law_update, stuck_rate_rows
+from gyrowheel.model.context import Body, WheelContext
+from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
+from gyrowheel.model.kinematics import WheelKinematics, norm
+from gyrowheel.model.lagrangian import ConstrainedSystem
+from gyrowheel.model.spec import Event, ModelSpec, Quantity
+from gyrowheel.model.stiction import law_update, stuck_rate_rows
 
 FORMULATIONS = ("reduced", "multipliers")
 SPEED_CHOICES = ("body", "angle_rates")

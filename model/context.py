@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
-from model.spec import Check, Quantity
+from gyrowheel.model.spec import Check, Quantity
 
 
 @dataclass
@@ -141,7 +141,7 @@ class WheelContext:
     stick_slip: list[StickSlip] = field(default_factory=list)
     Fn: ca.SX = field(default_factory=lambda: ca.SX.sym("Fn"))
     uses_Fn: bool = False
-    kin: object = None  # model.kinematics.WheelKinematics of the wheel coordinates
+    kin: object = None  # gyrowheel.model.kinematics.WheelKinematics of the wheel coordinates
     Fc: ca.SX = field(default_factory=lambda: ca.SX.sym("Fc", 3))  # contact force, bound late
     late: dict = field(default_factory=lambda: {n: ca.SX.sym(n + "_late") for n in ("T", "V", "P_diss", "P_act")})
     late_values: dict = field(default_factory=dict)

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from model.polynomial import simplify, solve_linear
+from gyrowheel.model.polynomial import simplify, solve_linear
 
 
 def prune_identically_zero(A: ca.SX, trials: int = 6, seed: int = 20261122) -> ca.SX:

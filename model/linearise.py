@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from model.spec import ModelSpec
+from gyrowheel.model.spec import ModelSpec
 
 
 class LinearisationError(ValueError):

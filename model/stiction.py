@@ -25,7 +25,7 @@ from typing import Callable
 
 import casadi as ca
 
-from model.context import BREAKAWAY, StickSlip
+from gyrowheel.model.context import BREAKAWAY, StickSlip
 
 
 def stuck_rate_rows(laws: list[StickSlip], x: ca.SX, bind: Callable) -> dict[int, ca.SX]:

@@ -5,7 +5,7 @@
 System collects these as named scalars and produces the same ModelSpec the wheel's
 assembler produces (model/build.py), so that fmu_build turns it into an FMI 2.0 FMU
 with the same code generation, variable table, modelDescription writer and C runtime
-(fmu_build.builder.build_spec_fmu). A controller is one such system
+(gyrowheel.fmu_build.builder.build_spec_fmu). A controller is one such system
 (controller/compensator.py); the wheel is built by model/build.py into the same ModelSpec.
 
 Every state is a settable start value; with output=True (default) it is also an output
@@ -17,7 +17,7 @@ import re
 
 import casadi as ca
 
-from model.spec import Check, Event, ModelSpec, Quantity
+from gyrowheel.model.spec import Check, Event, ModelSpec, Quantity
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _ACTIONS = ("terminate", "warn")

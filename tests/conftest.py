@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import model
-from fmu_build import build_fmu, load_scene
+from gyrowheel import model
+from gyrowheel.fmu_build import build_fmu, load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "examples" / "scenes"
@@ -131,8 +131,8 @@ class _Built:
         self.scene_text, self.scene_name = scene_text, scene_name
 
     def result(self):
-        from fmu_build.builder import BuildResult, model_spec
-        from fmu_build.scene import parse_scene
+        from gyrowheel.fmu_build.builder import BuildResult, model_spec
+        from gyrowheel.fmu_build.scene import parse_scene
         spec = model_spec(parse_scene(self.scene_text, self.scene_name))
         return BuildResult(fmu=self.fmu, spec=spec, sources=self.sources, identifier=self.identifier)
 
@@ -171,8 +171,8 @@ def earth_fmu(earth_build) -> Path:
 @pytest.fixture(scope="session")
 def earth_loop(tmp_path_factory):
     """The Gyrover closed loop on earth (wheel + controller FMUs, .ssp) on the earth's course, built once."""
-    from controller.closed_loop import build_closed_loop
-    from controller.mission import course
+    from gyrowheel.controller.closed_loop import build_closed_loop
+    from gyrowheel.controller.mission import course
     return shared_build(tmp_path_factory, "closed_loop_earth", lambda out: build_closed_loop(
         load_scene(SCENES / "gyrover_mission_earth.toml"), out, course("earth")))
 

@@ -11,8 +11,8 @@ STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror"]
 
 
 def gyrowheel(*args, cwd=None) -> subprocess.CompletedProcess:
-    """`gyrowheel ARGS` (python -m fmu_build), output captured."""
-    return subprocess.run([sys.executable, "-m", "fmu_build", *map(str, args)], capture_output=True, text=True,
+    """`gyrowheel ARGS` (python -m gyrowheel), output captured."""
+    return subprocess.run([sys.executable, "-m", "gyrowheel", *map(str, args)], capture_output=True, text=True,
                           cwd=cwd or ROOT)
 
 

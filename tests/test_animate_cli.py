@@ -9,12 +9,12 @@ from PIL import Image
 
 from animate_data import rolling_csv
 from conftest import ROOT
-from fmu_build.cli import main
+from gyrowheel.cli import main
 
 
 def test_animate_command_writes_a_gif(tmp_path):
     csv = rolling_csv(tmp_path / "run.csv", stop=1.0, gyrover=True)
-    r = subprocess.run([sys.executable, "-m", "fmu_build", "animate", str(csv), "-o", str(tmp_path / "run.gif"),
+    r = subprocess.run([sys.executable, "-m", "gyrowheel", "animate", str(csv), "-o", str(tmp_path / "run.gif"),
                         "--fps", "10", "--size", "128x96", "--trail", "0.5"], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == ("wrote " + str(tmp_path / "run.gif") + ": 11 frames at 10 fps, 128x96, "

@@ -14,9 +14,9 @@ import pytest
 from fmpy.util import write_csv
 
 from animate_data import R, rolling_csv
-from fmu_build.animate import AnimationError, Options, build_timeline, read_result, resolve_parameters
-from fmu_build.animate.geometry import circle_points, wheel_poses
-from fmu_build.simulate import run
+from gyrowheel.animation import AnimationError, Options, build_timeline, read_result, resolve_parameters
+from gyrowheel.animation.geometry import circle_points, wheel_poses
+from gyrowheel.simulation import run
 
 PHI = np.linspace(0.0, 2 * np.pi, 20001)
 RNG = np.random.default_rng(7)

@@ -15,10 +15,10 @@ from PIL import Image
 
 from animate_data import rolling_csv
 from browser import Chromium, chromium_path
-from fmu_build.animate import animate
-from fmu_build.animate.render import RIM_COLOURS
+from gyrowheel.animation import animate
+from gyrowheel.animation.render import RIM_COLOURS
 
-VENDOR = Path(__file__).resolve().parent.parent / "fmu_build" / "animate" / "vendor" / "three"
+VENDOR = Path(__file__).resolve().parent.parent / "animation" / "vendor" / "three"
 FRAMES = 5  # three.js frames the page must have rendered
 
 

@@ -7,8 +7,8 @@ import pytest
 from PIL import Image
 
 from animate_data import rolling_csv
-from fmu_build.animate import AnimationError, animate
-from fmu_build.animate.render import RIM_COLOURS
+from gyrowheel.animation import AnimationError, animate
+from gyrowheel.animation.render import RIM_COLOURS
 
 
 def _colour_pixels(frame: np.ndarray, colour: str, tol: int = 40) -> int:

@@ -12,7 +12,7 @@ from conftest import ROOT
 
 
 def test_bench_quick_writes_figure_and_table(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "fmu_build", "bench", "--quick", "--scenarios", "paper",
+    r = subprocess.run([sys.executable, "-m", "gyrowheel", "bench", "--quick", "--scenarios", "paper",
                         "--out", str(tmp_path)], capture_output=True, text=True, cwd=ROOT, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     table = (tmp_path / "work_precision.md").read_text()

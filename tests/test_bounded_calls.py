@@ -19,8 +19,8 @@ from fmpy.fmi2 import fmi2LastSuccessfulTime
 
 from conftest import ROOT, STATES
 from fmi_helpers import Slave
-from fmu_build import build_fmu, parse_scene
-from fmu_build.scene import SceneError
+from gyrowheel.fmu_build import build_fmu, parse_scene
+from gyrowheel.fmu_build.scene import SceneError
 
 SCENE = "[model]\nname = 'bounded'\n[effects.gravity]\ng = 9.81\n[experiment]\nmax_step = 0.05\n"
 

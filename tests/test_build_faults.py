@@ -18,12 +18,12 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from scipy.integrate import solve_ivp
 
-from fmu_build import build_fmu, parse_scene
-from fmu_build.cli import main
-from fmu_build.scene import SceneError
-from model import build_model
-from model.build import FORMULATIONS
-from model.effects import CATALOGUE
+from gyrowheel.fmu_build import build_fmu, parse_scene
+from gyrowheel.cli import main
+from gyrowheel.fmu_build.scene import SceneError
+from gyrowheel.model import build_model
+from gyrowheel.model.build import FORMULATIONS
+from gyrowheel.model.effects import CATALOGUE
 
 OPTIONAL = [name for name in CATALOGUE if name != "gravity"]
 COMBINATIONS = [()] + [(e,) for e in OPTIONAL] + list(itertools.combinations(OPTIONAL, 2)) + [tuple(OPTIONAL)]
@@ -112,12 +112,12 @@ def test_reader_answers_every_odd_value_with_a_scene_error():
 
 def test_unexpected_build_failure_is_one_line(tmp_path, capsys, monkeypatch):
     """Whatever escapes model building (a CasADi RuntimeError here) becomes one line and exit 1."""
-    import fmu_build.builder
+    import gyrowheel.fmu_build.builder
 
     def broken(*args, **kwargs):
         raise RuntimeError("Error in Function::Function for 'gw_out' [SXFunction]\n...\n"
                            "gw_out::init: Initialization failed since variables [tilt] are free.")
-    monkeypatch.setattr(fmu_build.builder, "build_fmu", broken)
+    monkeypatch.setattr(gyrowheel.fmu_build.builder, "build_fmu", broken)
     scene = tmp_path / "s.toml"
     scene.write_text("[effects.gravity]\n")
     assert main(["build", str(scene), "-o", str(tmp_path / "s.fmu")]) == 1

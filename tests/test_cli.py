@@ -11,7 +11,7 @@ from conftest import ROOT, SCENES
 
 
 def gyrowheel(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "fmu_build", *map(str, args)], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "gyrowheel", *map(str, args)], capture_output=True, text=True,
                           cwd=cwd or ROOT)
 
 
@@ -115,9 +115,9 @@ def test_non_finite_numbers_are_refused(tmp_path, args):
     (dict(stop_time="x"), "stop_time must be a number, got str 'x'"),
 ])
 def test_python_run_checks_values_by_name_and_type(built, kwargs, message):
-    """fmu_build.simulate.run (the Python side of gyrowheel simulate) checks Python start values
+    """gyrowheel.simulation.run (the Python side of gyrowheel simulate) checks Python start values
     like --set does: nothing truncated, every error a SimulationError naming the value."""
-    from fmu_build.simulate import SimulationError, run
+    from gyrowheel.simulation import SimulationError, run
     with pytest.raises(SimulationError) as exc:
         run(built, **{"stop_time": 0.1, **kwargs})
     assert message in str(exc.value)

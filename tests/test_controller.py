@@ -10,11 +10,11 @@ import pytest
 from scipy.linalg import expm
 
 from conftest import SCENES
-from controller.design import closed_loop_matrix, controllable_basis, plant_model, sampled_spectral_radius
-from controller.operating_point import steady_turn
-from cosim.master import run
-from fmu_build import load_scene
-from fmu_build.builder import model_spec
+from gyrowheel.controller.design import closed_loop_matrix, controllable_basis, plant_model, sampled_spectral_radius
+from gyrowheel.controller.operating_point import steady_turn
+from gyrowheel.cosim.master import run
+from gyrowheel.fmu_build import load_scene
+from gyrowheel.fmu_build.builder import model_spec
 
 M, R, KD, KA = 2.0, 0.17, 0.25, 0.4
 I_FA, I_FD, RATE = 5e-4, 2.5e-4, 400.0  # the gyrover effect's defaults (the mission scenes' flywheel)

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, SCENES, steady_precession
-from fmu_build import load_scene, parse_scene
-from fmu_build.scene import SOLVERS, SceneError
-from model import build_model
-from model.kinematics import WheelKinematics, frame_lmn
+from gyrowheel.fmu_build import load_scene, parse_scene
+from gyrowheel.fmu_build.scene import SOLVERS, SceneError
+from gyrowheel.model import build_model
+from gyrowheel.model.kinematics import WheelKinematics, frame_lmn
 
 DOCS = ROOT / "docs"
 

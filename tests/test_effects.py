@@ -9,8 +9,8 @@ from fmpy import read_model_description, simulate_fmu
 
 from conftest import PAPER, SCENES, steady_precession
 from fmi_helpers import Slave
-from fmu_build import build_fmu, parse_scene
-from fmu_build.analysis import fit_circle
+from gyrowheel.fmu_build import build_fmu, parse_scene
+from gyrowheel.studies.analysis import fit_circle
 from paper_wheel import G, KA, KD, M, R
 from paper_wheel import PAPER_WHEEL_TOML as BASE
 
@@ -242,7 +242,7 @@ def test_gyrover_matches_an_independent_newton_euler_derivation():
     """The effect's right-hand side (CasADi, one Lagrangian) against tests/reference/gyrover_newton_euler.py
     (sympy rotation matrices, momentum balances) at random states, inputs and parameters: the
     accelerations of all coordinates, the tilt and flywheel motor torques, the centre velocity."""
-    from model.build import build_model
+    from gyrowheel.model.build import build_model
     from reference import gyrover_newton_euler as ne
 
     spec = build_model(wheel={"M": M, "R": R, "k_diam": KD, "k_axial": KA}, effects={"gravity": {}, "gyrover": {}})

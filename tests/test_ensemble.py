@@ -1,5 +1,5 @@
 """The ensemble path's memory kept between runs (gw_ensemble_new / gw_ensemble_run_in, a context
-per run in flight, fmu_build/ensemble.py): runs of one Ensemble reuse the lanes' instances and
+per run in flight, taylor/ensemble.py): runs of one Ensemble reuse the lanes' instances and
 the batch memory, so nothing of one run may reach the next, and runs from several threads at
 once must each have their own context.  Also the step size passes on made-up series
 (tests/c/test_ens_passes.c)."""
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from c_programs import C_SRC, STRICT, TESTS_C
-from fmu_build.ensemble import STATUS_ERROR, STATUS_OK, Ensemble
+from gyrowheel.taylor.ensemble import STATUS_ERROR, STATUS_OK, Ensemble
 
 
 @pytest.fixture(scope="module")
@@ -148,7 +148,7 @@ def test_ensemble_library_clean_under_sanitizers(paper, tmp_path):
     under AddressSanitizer, LeakSanitizer and UndefinedBehaviorSanitizer; each run gives the
     same numbers."""
     from c_programs import MODE_FLAGS, SANITIZER_ENV
-    from fmu_build.ensemble import _UNITY
+    from gyrowheel.taylor.ensemble import _UNITY
     src = paper.sources
     prog = tmp_path / "ens.c"
     prog.write_text(_UNITY.format(id=paper.identifier, lanes=4)
@@ -254,7 +254,7 @@ def test_ensembles_made_at_once_by_threads_on_a_cold_cache(paper, tmp_path, monk
     either renames, the interleaving that failed."""
     import threading
 
-    import fmu_build.ensemble as ensemble_mod
+    import gyrowheel.taylor.ensemble as ensemble_mod
 
     barrier = threading.Barrier(2, timeout=300)
     compile_shared = ensemble_mod.compile_shared
@@ -346,7 +346,7 @@ def test_increments_pass_equals_the_one_lane_increment(paper, tmp_path, cc):
     pass fused two sums fewer: dx differed in 1.2% of the components, P'(h) in 20%, and the
     inline lane-steps left those of the GW_ENSEMBLE_LANE_STEPS=1 build (paper, gamma_dot 1e5 at
     rel_tol 1e-4, slope_hold at 1e-3: 1-2 ulp, found by review18)."""
-    from fmu_build.ensemble import _UNITY, FLAGS
+    from gyrowheel.taylor.ensemble import _UNITY, FLAGS
     prog = tmp_path / "incr.c"
     prog.write_text(_UNITY.format(id=paper.identifier, lanes=4) + '#include "test_ens_increments.c"\n')
     exe = tmp_path / "incr"

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fmu_build.ensemble import STATUS_ERROR, STATUS_OK, STATUS_TERMINATED, Ensemble
+from gyrowheel.taylor.ensemble import STATUS_ERROR, STATUS_OK, STATUS_TERMINATED, Ensemble
 from test_ensemble import _same  # every result field equal, messages too
 
 
@@ -27,7 +27,7 @@ def slope(example_build):
 
 def _both(fmu, tmp_path, monkeypatch):
     """The library as built (inline lane-steps) and with GW_ENSEMBLE_LANE_STEPS=1."""
-    import fmu_build.ensemble as ensemble_mod
+    import gyrowheel.taylor.ensemble as ensemble_mod
     inline = Ensemble(fmu, lanes=4, cache=tmp_path)
     monkeypatch.setattr(ensemble_mod, "_UNITY", "#define GW_ENSEMBLE_LANE_STEPS 1\n" + ensemble_mod._UNITY)
     return inline, Ensemble(fmu, lanes=4, cache=tmp_path)

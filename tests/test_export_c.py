@@ -39,9 +39,9 @@ from fmpy import simulate_fmu
 
 from c_programs import MODE_FLAGS, MODES, TESTS_C, run_built, writable_symbols
 from conftest import ROOT, SCENES
-from fmu_build import build_fmu, load_scene
+from gyrowheel.fmu_build import build_fmu, load_scene
 from export_c_helpers import STRICT, cc, gyrowheel
-from fmu_build.export_c import MARKER, export_c
+from gyrowheel.fmu_build.export_c import MARKER, export_c
 
 @pytest.fixture(scope="module")
 def earth_reference(earth_fmu):

@@ -40,8 +40,8 @@ import pytest
 from c_programs import TESTS_C
 from conftest import ROOT, SCENES
 from export_c_helpers import STRICT, cc, gyrowheel
-from fmu_build import load_scene
-from fmu_build.export_c import MARKER, ExportError, export_c
+from gyrowheel.fmu_build import load_scene
+from gyrowheel.fmu_build.export_c import MARKER, ExportError, export_c
 
 
 def _scene_named(tmp_path: Path, name: str, scene: str = "paper_earth") -> Path:

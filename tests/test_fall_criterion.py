@@ -18,8 +18,8 @@ from fmpy import simulate_fmu
 
 from conftest import SCENES, CasadiWheel
 from fmi_helpers import Slave
-from fmu_build import parse_scene
-from model.build import BETA_MIN_DEFAULT, touchdown_lean
+from gyrowheel.fmu_build import parse_scene
+from gyrowheel.model.build import BETA_MIN_DEFAULT, touchdown_lean
 
 HOOP = dict(M=1.0, R=1.0, g=100.0, k_diam=0.5, k_axial=1.0)
 HOOP_START = dict(beta=math.pi / 2, beta_dot=0.01, gamma_dot=0.1)

@@ -28,7 +28,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime
 
 from fmi_helpers import Slave
-from fmu_build import build_fmu, parse_scene
+from gyrowheel.fmu_build import build_fmu, parse_scene
 
 SCENE = """
 [model]

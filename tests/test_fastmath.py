@@ -8,7 +8,7 @@
       -DGW_FASTMATH_NO_SIMD (the portable path of gw_sincos2)
   test_generated_code_merges_sincos    the paper wheel's gw_ode computes sin and cos of alpha
       and beta with one gw_sincos2, no libm sin or cos
-  test_merge_respects_reassignment     fmu_build.casadi_c pairs sin(a) with cos(a) only while
+  test_merge_respects_reassignment     gyrowheel.fmu_build.casadi_c pairs sin(a) with cos(a) only while
       a keeps its value
   test_pair_respects_uses              two gw_sincos become one gw_sincos2 only if the first's
       output is not used or its argument changed before the second
@@ -34,7 +34,7 @@ import subprocess
 import pytest
 
 from c_programs import C_SRC, STRICT, TESTS_C
-from fmu_build.casadi_c import _merge_sincos, _pair_sincos
+from gyrowheel.fmu_build.casadi_c import _merge_sincos, _pair_sincos
 
 COMPILERS = [c for c in ("gcc", "clang") if shutil.which(c)]
 
@@ -56,7 +56,7 @@ def test_ulp_error_against_long_double(cc, extra, tmp_path):
 
 
 def test_generated_code_merges_sincos(tmp_path):
-    from fmu_build import build_fmu, load_scene
+    from gyrowheel.fmu_build import build_fmu, load_scene
     from pathlib import Path
     scene = load_scene(Path(__file__).resolve().parent.parent / "examples" / "scenes" / "paper_earth.toml")
     built = build_fmu(scene, tmp_path / "earth.fmu", build_dir=tmp_path / "b")
@@ -101,7 +101,7 @@ def test_pair_respects_uses():
 
 
 def test_include_with_sincos_only():
-    from fmu_build.casadi_c import make_internal
+    from gyrowheel.fmu_build.casadi_c import make_internal
     text = ("#include <math.h>\n\nstatic int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, "
             "casadi_real* w, int mem) {\n  casadi_real a0, a1, a2;\n  a0=arg[0][0];\n  a1=cos(a0);\n  a2=sin(a0);\n"
             "  if (res[0]!=0) res[0][0]=(a1*a2);\n  return 0;\n}\n")
@@ -143,7 +143,7 @@ def test_rewritten_bodies_evaluate_as_casadi(cc, tmp_path):
     agrees with CasADi's own evaluation to a few ulps."""
     import casadi as ca
     import numpy as np
-    from fmu_build.casadi_c import make_internal
+    from gyrowheel.fmu_build.casadi_c import make_internal
     points = [(0.7, 1.3), (-2.1, -0.4), (3.0, 1e-3), (1e3, -7.5)]
     x, functions = _trig_functions()
     for name, expr in functions.items():

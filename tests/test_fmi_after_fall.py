@@ -165,11 +165,11 @@ def test_terminate_before_initialisation_is_refused_reset_works(earth_fmu):
 def test_fall_after_a_logged_run_in_the_same_process(earth_fmu):
     """fmpy's logger proxy is process-global: after simulate_fmu(logger=...) (gyrowheel simulate)
     returned, an FMU on fmpy's default callbacks that logs (the fall's fmi2Discard reason, logged
-    always) called a freed callback and crashed the process. fmu_build.simulate restores a living
+    always) called a freed callback and crashed the process. gyrowheel.simulation restores a living
     logger after every run."""
     from fmpy import simulate_fmu
 
-    from fmu_build.simulate import Messages, run
+    from gyrowheel.simulation import Messages, run
     messages = Messages()
     r = run(earth_fmu, stop_time=1.0, start_values=NO_SPIN, messages=messages)
     assert r["time"][-1] == pytest.approx(T_FALL, abs=1e-3)

@@ -24,10 +24,10 @@ import pytest
 
 from conftest import SCENES
 from fmi_helpers import Model, Slave
-from fmu_build import build_fmu, load_scene
-from fmu_build.builder import model_spec
-from fmu_build.model_description import write_model_description
-from fmu_build.variables import build_table
+from gyrowheel.fmu_build import build_fmu, load_scene
+from gyrowheel.fmu_build.builder import model_spec
+from gyrowheel.fmu_build.model_description import write_model_description
+from gyrowheel.fmu_build.variables import build_table
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +39,7 @@ def disk_fmu(example_build):
 def rest_fmu(tmp_path_factory):
     """A wheel at rest (no spin) with air drag and contact forces: drag_force and the tangential
     contact force are magnitudes of vectors that are 0 at the start."""
-    from fmu_build.scene import parse_scene
+    from gyrowheel.fmu_build.scene import parse_scene
     text = ('[model]\nname = "drag_at_rest"\n[effects.gravity]\n[effects.air_drag]\nc_lin = 0.1\n'
             '[effects.contact_forces]\n[initial]\nbeta_deg = 80.0\ngamma_dot = 0.0\n')
     return build_fmu(parse_scene(text, "drag_at_rest.toml"),
@@ -48,7 +48,7 @@ def rest_fmu(tmp_path_factory):
 @pytest.fixture(scope="module")
 def mult_fmu(tmp_path_factory):
     """paper_earth in the multipliers formulation (outputs constraint_violation, lambda_x, lambda_y)."""
-    from fmu_build.scene import parse_scene
+    from gyrowheel.fmu_build.scene import parse_scene
     text = (SCENES / "paper_earth.toml").read_text().replace('[model]\n', '[model]\nformulation = "multipliers"\n', 1)
     text = text.replace('name = "paper_earth"', 'name = "earth_multipliers"')
     scene = parse_scene(text, "earth_multipliers.toml")
@@ -166,7 +166,7 @@ def test_unadvertised_initial_partials_are_zero(earth_fmu):
 def test_initial_partials_equal_casadis_jacobian(scene, fixture, request):
     """Exact: the FMU's answers in Initialization Mode equal CasADi's Jacobian of the
     InitialUnknowns at x = init(s, p), evaluated in Python (rel 1e-12)."""
-    from fmu_build.codegen import init_jacobian, initial_unknowns
+    from gyrowheel.fmu_build.codegen import init_jacobian, initial_unknowns
     fmu = request.getfixturevalue(fixture)
     sc = load_scene(SCENES / f"{scene}.toml")
     spec = model_spec(sc)

@@ -25,7 +25,7 @@ from fmpy import read_model_description
 
 from conftest import SCENES, STATES
 from fmi_helpers import Slave
-from fmu_build import load_scene
+from gyrowheel.fmu_build import load_scene
 
 H = 0.01
 
@@ -144,8 +144,8 @@ def test_setup_experiment_refuses_a_tolerance_outside_rel_tols_range(earth_fmu, 
 
 @pytest.mark.parametrize("key,value", [("rel_tol", 2.0), ("rel_tol", 1e-16), ("abs_tol", 5.0)])
 def test_scene_tolerances_outside_the_fmus_ranges_are_refused(key, value):
-    from fmu_build import parse_scene
-    from fmu_build.scene import SceneError
+    from gyrowheel.fmu_build import parse_scene
+    from gyrowheel.fmu_build.scene import SceneError
     text = f'[model]\nname = "t"\n[effects.gravity]\ng = 9.81\n[experiment]\n{key} = {value!r}\n'
     with pytest.raises(SceneError, match=f"{key}: must lie in"):
         parse_scene(text, "t.toml")

@@ -14,7 +14,7 @@ from fmpy.validation import validate_fmu
 
 from conftest import CasadiWheel, PAPER, STATES
 from fmi_helpers import Slave
-from model.build import BETA_MIN_DEFAULT
+from gyrowheel.model.build import BETA_MIN_DEFAULT
 
 
 

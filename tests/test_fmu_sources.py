@@ -12,7 +12,7 @@
                                             reproduce their own FMU's results
   test_fmpy_build_platform_binary_strict    fmpy's CMake build (only the listed <SourceFiles>)
                                             with all warnings as errors, then simulated
-  test_make_internal_*                      fmu_build.casadi_c on CasADi-shaped input
+  test_make_internal_*                      gyrowheel.fmu_build.casadi_c on CasADi-shaped input
 """
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 
 from c_programs import FMI_HEADERS, writable_symbols
-from fmu_build.casadi_c import CodegenFormatError, make_internal
+from gyrowheel.fmu_build.casadi_c import CodegenFormatError, make_internal
 
 STRICT_C99 = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror"]
 STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
@@ -145,7 +145,7 @@ def test_fmpy_build_platform_binary_strict(earth_fmu, tmp_path):
         np.testing.assert_allclose(got[name], ref[name], rtol=1e-9, atol=1e-12)
 
 
-# ---- fmu_build.casadi_c -------------------------------------------------------------------------
+# ---- gyrowheel.fmu_build.casadi_c -------------------------------------------------------------------------
 
 GENERATED = """\
 #define casadi_f0 CASADI_PREFIX(f0)
@@ -210,7 +210,7 @@ def test_make_internal_refuses_what_it_does_not_know():
 def test_large_generated_sources_are_compiled_at_O1(tmp_path):
     """-O2 on CasADi's multi-megabyte straight-line functions costs minutes (docs/runtime.md);
     the level follows the largest file the unity build includes."""
-    from fmu_build.compiler import LARGE_SOURCE_BYTES, OPTIMISE, OPTIMISE_LARGE, optimisation_for
+    from gyrowheel.fmu_build.compiler import LARGE_SOURCE_BYTES, OPTIMISE, OPTIMISE_LARGE, optimisation_for
     (tmp_path / "gw_fmu.c").write_text("/* unity */\n")
     (tmp_path / "gw_funcs.c").write_text("x" * 1000)
     assert optimisation_for(tmp_path) == OPTIMISE and "-O2" in OPTIMISE

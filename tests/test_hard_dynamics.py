@@ -14,9 +14,9 @@ from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 
 from conftest import CasadiWheel, PAPER, SCENES, STATES
 from fmi_helpers import Slave
-from fmu_build import build_fmu, parse_scene
-from fmu_build.scipy_reference import solve_hybrid
-from model.build import BETA_MIN_DEFAULT
+from gyrowheel.fmu_build import build_fmu, parse_scene
+from gyrowheel.studies.scipy_reference import solve_hybrid
+from gyrowheel.model.build import BETA_MIN_DEFAULT
 
 TIGHT = dict(rel_tol=1e-12, abs_tol=1e-14)
 

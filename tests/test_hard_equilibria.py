@@ -12,9 +12,9 @@ from scipy.integrate import quad
 
 from conftest import STATES, critical_spin, steady_precession
 from fmi_helpers import Slave
-from fmu_build import build_fmu, parse_scene
-from fmu_build.analysis import fit_circle
-from model.build import BETA_MIN_DEFAULT
+from gyrowheel.fmu_build import build_fmu, parse_scene
+from gyrowheel.studies.analysis import fit_circle
+from gyrowheel.model.build import BETA_MIN_DEFAULT
 
 M, R, KD, KA, G = 2.0, 0.17, 0.25, 0.4, 9.81
 SCENE = """

@@ -15,8 +15,8 @@ from fmpy.fmi2 import fmi2LastSuccessfulTime
 
 from conftest import STATES
 from fmi_helpers import Slave
-from fmu_build import build_fmu, parse_scene
-from model.build import BETA_MIN_DEFAULT
+from gyrowheel.fmu_build import build_fmu, parse_scene
+from gyrowheel.model.build import BETA_MIN_DEFAULT
 
 SCENE = """
 [model]

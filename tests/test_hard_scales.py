@@ -13,7 +13,7 @@ from fmpy import simulate_fmu
 
 from conftest import STATES
 from fmi_helpers import Slave
-from fmu_build import build_fmu, parse_scene
+from gyrowheel.fmu_build import build_fmu, parse_scene
 
 SCENE = """
 [model]

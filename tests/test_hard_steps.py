@@ -10,7 +10,7 @@ from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 
 from conftest import CasadiWheel, PAPER, STATES
 from fmi_helpers import Slave
-from fmu_build import build_fmu, parse_scene
+from gyrowheel.fmu_build import build_fmu, parse_scene
 
 SCENE = """
 [model]

@@ -9,8 +9,8 @@ from scipy.integrate import solve_ivp
 
 import casadi as ca
 from conftest import PAPER, critical_spin
-from model.build import build_model
-from model.linearise import (LinearisationError, initial_state, linearise, output_expr, parameter_values,
+from gyrowheel.model.build import build_model
+from gyrowheel.model.linearise import (LinearisationError, initial_state, linearise, output_expr, parameter_values,
                              upright_rolling, wheel_mode_eigenvalues)
 
 
@@ -59,6 +59,6 @@ def test_not_an_equilibrium_is_refused():
     spec = build_model(effects={"gravity": {}})
     p = parameter_values(spec)
     x0 = initial_state(spec, p, {"beta": 1.2, "gamma_dot": 5.0})
-    from model.linearise import check_equilibrium
+    from gyrowheel.model.linearise import check_equilibrium
     with pytest.raises(LinearisationError, match="not an equilibrium"):
         check_equilibrium(spec, x0, np.zeros(0), p, moving=("x", "y", "gamma"))

@@ -22,9 +22,9 @@ from fmpy.fmi2 import FMU2Model, FMU2Slave, fmi2LastSuccessfulTime
 from fmpy.validation import validate_fmu
 
 from conftest import STATES
-from fmu_build import load_scene
-from fmu_build.builder import model_spec
-from model.build import BETA_MIN_DEFAULT
+from gyrowheel.fmu_build import load_scene
+from gyrowheel.fmu_build.builder import model_spec
+from gyrowheel.model.build import BETA_MIN_DEFAULT
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "examples" / "scenes" / "paper_earth.toml"

@@ -18,12 +18,12 @@ from conftest import ROOT
 from fmi_helpers import Slave
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime
-from fmu_build import load_scene
-from fmu_build.builder import build_spec_fmu
-from fmu_build.codegen import hoisted
-from model.build import build_model
-from model.hoist import split_parameters
-from model.system import System
+from gyrowheel.fmu_build import load_scene
+from gyrowheel.fmu_build.builder import build_spec_fmu
+from gyrowheel.fmu_build.codegen import hoisted
+from gyrowheel.model.build import build_model
+from gyrowheel.model.hoist import split_parameters
+from gyrowheel.model.system import System
 
 SCENES = sorted(p.stem for p in (ROOT / "examples" / "scenes").glob("*.toml"))
 

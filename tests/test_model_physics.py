@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import PAPER, CasadiWheel, critical_spin, steady_precession
-from model.kinematics import WheelKinematics, angular_velocity
+from gyrowheel.model.kinematics import WheelKinematics, angular_velocity
 
 RNG = np.random.default_rng(20261122)
 

@@ -10,9 +10,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from fmu_build.codegen import hoisted
-from model.build import build_model
-from model.polynomial import Normaliser, TooLarge, simplify, solve_linear
+from gyrowheel.fmu_build.codegen import hoisted
+from gyrowheel.model.build import build_model
+from gyrowheel.model.polynomial import Normaliser, TooLarge, simplify, solve_linear
 from reference import newton_euler as ne
 
 a, b, c, d = (ca.SX.sym(n) for n in "abcd")
@@ -87,7 +87,7 @@ def test_structured_solve_matches_numpy():
 
 
 def test_wheel_rhs_is_smaller_and_agrees_with_newton_euler():
-    """The FMU's ode (parameter-only part hoisted into ode_pre, fmu_build.codegen.hoisted) has one
+    """The FMU's ode (parameter-only part hoisted into ode_pre, gyrowheel.fmu_build.codegen.hoisted) has one
     division and the sines and cosines of alpha and beta only, and both forms equal the
     Newton-Euler right-hand side at random states, near flat and upright included."""
     spec = build_model()

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from fmu_build import build_fmu, parse_scene
+from gyrowheel.fmu_build import build_fmu, parse_scene
 
 STATES = ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")
 BASE_VARIABLES = {

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from fmu_build.analysis import fit_circle, relative_energy_drift
+from gyrowheel.studies.analysis import fit_circle, relative_energy_drift
 
 GRAVITY = {"earth": 9.81, "mars": 3.721, "moon": 1.625}
 

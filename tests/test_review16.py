@@ -6,7 +6,7 @@
   Event Mode is seen by the next fmi2GetEventIndicators without a step, a restored FMU state
   brings its own parameters' c back, fmi2Reset and a new start value give the new c, and two
   instances with different parameters keep their own c;
-- the rewrite (fmu_build/taylor_rewrite.py) on random graphs of every supported kind of op, with
+- the rewrite (taylor/rewrite.py) on random graphs of every supported kind of op, with
   parameters 0, negative and infinite, against the un-rewritten kernel.
 """
 from __future__ import annotations
@@ -21,10 +21,10 @@ import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi2 import FMU2Model
 
-from fmu_build.builder import build_spec_fmu
-from fmu_build.codegen import optimised
-from fmu_build.taylor_graph import decompose
-from model.system import System
+from gyrowheel.fmu_build.builder import build_spec_fmu
+from gyrowheel.fmu_build.codegen import optimised
+from gyrowheel.taylor.graph import decompose
+from gyrowheel.model.system import System
 from test_taylor_rewrite import Jet
 
 

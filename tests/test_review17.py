@@ -1,5 +1,5 @@
 """Fresh-eyes review of the event indicators read from the Taylor kernel's order-0 row
-(fmu_build/taylor_events.py, GW_TL(evt); c_src/gw_solver_taylor.c and gw_ensemble.c)."""
+(taylor/events.py, GW_TL(evt); c_src/gw_solver_taylor.c and gw_ensemble.c)."""
 from __future__ import annotations
 
 import ctypes
@@ -7,7 +7,7 @@ import ctypes
 import casadi as ca
 import numpy as np
 
-from fmu_build.codegen import optimised
+from gyrowheel.fmu_build.codegen import optimised
 from test_taylor_events import _library, _ptr
 
 
@@ -83,8 +83,8 @@ def test_single_run_update_warning_and_terminal_events_as_with_gw_evt(tmp_path):
     import zipfile
 
     from conftest import SCENES
-    from fmu_build import build_fmu, load_scene
-    from fmu_build.compiler import compiler
+    from gyrowheel.fmu_build import build_fmu, load_scene
+    from gyrowheel.fmu_build.compiler import compiler
     built = build_fmu(load_scene(SCENES / "slope_hold.toml"), tmp_path / "s.fmu", build_dir=tmp_path / "b",
                       taylor=True)
     assert "#define GW_TL_HAS_EVT 1" in (built.sources / "gw_taylor_model.h").read_text()

@@ -6,7 +6,7 @@ import math
 import pytest
 
 from conftest import SCENES
-from fmu_build.scene import SceneError, load_scene, parse_scene
+from gyrowheel.fmu_build.scene import SceneError, load_scene, parse_scene
 
 
 @pytest.mark.parametrize("name,g", [("paper_earth", 9.81), ("paper_mars", 3.721), ("paper_moon", 1.625)])

@@ -17,10 +17,10 @@ from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi2 import FMU2Model
 
 from fmi_helpers import Slave
-from fmu_build import build_fmu, parse_scene
-from fmu_build.scene import SceneError
-from fmu_build.scipy_reference import solve_hybrid
-from model.build import build_model
+from gyrowheel.fmu_build import build_fmu, parse_scene
+from gyrowheel.fmu_build.scene import SceneError
+from gyrowheel.studies.scipy_reference import solve_hybrid
+from gyrowheel.model.build import build_model
 from reference.planar_gyrover import Planar
 from paper_wheel import G, KA, KD, M, R
 from paper_wheel import PAPER_WHEEL_TOML as WHEEL
@@ -349,7 +349,7 @@ def test_gyrover_drive_sticks_and_slips_like_the_planar_reference():
     above c_rr R F_n (break away), the wheel rolls, stops where the torque is within the limit
     (stick), again and again: the model's 11 switches in 3 s against an independent planar sympy
     derivation (tests/reference/planar_gyrover.py), both integrated by scipy with its own event
-    location (fmu_build/scipy_reference.py); the FMU's runtime agrees with them to 3e-10 s (measured,
+    location (studies/scipy_reference.py); the FMU's runtime agrees with them to 3e-10 s (measured,
     docs/effects.md; its location is tested below on a cheaper scene, a Gyrover FMU takes 20 s to
     compile)."""
     tau = 0.03

@@ -16,7 +16,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from fmu_build.sweep import read_table, sweep
+from gyrowheel.studies import read_table, sweep
 from terminal import AS_FROM_A_TERMINAL
 
 # dask's own command line (`dask scheduler`, `dask worker`), from this interpreter's environment
@@ -110,7 +110,7 @@ def test_cli_through_scheduler_with_user_metric(earth_fmu, scheduler, tmp_path):
     metric = tmp_path / "lean.py"
     metric.write_text("def lowest(traj):\n    return float(traj['beta'].min())\n")
     out = tmp_path / "cli.csv"
-    done = subprocess.run([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu), "--grid", "beta_deg=70,80",
+    done = subprocess.run([sys.executable, "-m", "gyrowheel", "sweep", str(earth_fmu), "--grid", "beta_deg=70,80",
                            "--grid", "gamma_dot=3,6", "--stop-time", "1", "--scheduler", scheduler,
                            "--metric-function", f"{metric}:lowest", "--no-progress", "-o", str(out)],
                           capture_output=True, text=True, timeout=120)
@@ -128,7 +128,7 @@ def test_ctrl_c_leaves_a_readable_partial_table(earth_fmu, scheduler, tmp_path, 
     out = tmp_path / "partial.parquet"
     total = 40 * 50
     execution = ["--scheduler", scheduler] if where == "scheduler" else ["--workers", "2"]
-    proc = subprocess.Popen([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu),
+    proc = subprocess.Popen([sys.executable, "-m", "gyrowheel", "sweep", str(earth_fmu),
                              "--grid", "beta_deg=60:89:40", "--grid", "gamma_dot=0:15:50", "--stop-time", "20",
                              *execution, "--batch-size", "10", "--no-progress", "-o", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **AS_FROM_A_TERMINAL)
@@ -158,7 +158,7 @@ def test_ctrl_c_while_the_sweep_starts(earth_fmu, scheduler, tmp_path, where):
     traceback, and no point run to its end first (the stop does not wait for the sweep)."""
     out = tmp_path / "early.parquet"
     execution = ["--scheduler", scheduler] if where == "scheduler" else ["--workers", "2"]
-    proc = subprocess.Popen([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu),
+    proc = subprocess.Popen([sys.executable, "-m", "gyrowheel", "sweep", str(earth_fmu),
                              "--grid", "beta_deg=60:89:40", "--grid", "gamma_dot=0:15:50", "--stop-time", "20",
                              *execution, "--batch-size", "10", "--no-progress", "-o", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **AS_FROM_A_TERMINAL)
@@ -179,7 +179,7 @@ def test_both_workers_run_batches(earth_fmu, scheduler, tmp_path):
     metric = tmp_path / "pid.py"
     metric.write_text("import os\ndef pid(traj):\n    return float(os.getpid())\n")
     out = tmp_path / "pids.csv"
-    done = subprocess.run([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu), "--grid", "beta_deg=60:89:40",
+    done = subprocess.run([sys.executable, "-m", "gyrowheel", "sweep", str(earth_fmu), "--grid", "beta_deg=60:89:40",
                            "--stop-time", "2", "--scheduler", scheduler, "--batch-size", "2",
                            "--metric-function", f"{metric}:pid", "--no-progress", "-o", str(out)],
                           capture_output=True, text=True, timeout=120)
@@ -195,7 +195,7 @@ def test_no_unpacked_fmu_is_left_in_the_temporary_directory(earth_fmu, tmp_path,
     the LocalCluster's workers alike), so thousands of sweeps do not fill /tmp."""
     scratch = tmp_path / "tmp"
     scratch.mkdir()
-    done = subprocess.run([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu), "--grid", "beta_deg=70,80",
+    done = subprocess.run([sys.executable, "-m", "gyrowheel", "sweep", str(earth_fmu), "--grid", "beta_deg=70,80",
                            "--stop-time", "0.5", "--workers", workers, "--no-progress", "-o", str(tmp_path / "t.csv")],
                           capture_output=True, text=True, timeout=120, env={**os.environ, "TMPDIR": str(scratch)})
     assert done.returncode == 0, done.stderr
@@ -242,9 +242,9 @@ def test_ctrl_c_anywhere_in_a_dask_sweep_ends_cleanly(earth_fmu, scheduler, tmp_
     the sweep's left on the scheduler."""
     from distributed import Client
 
-    from fmu_build.sweep import plan_sweep, run_plan
-    from fmu_build.sweep.output import TableWriter
-    from fmu_build.sweep.target import FmuTarget
+    from gyrowheel.studies import plan_sweep, run_plan
+    from gyrowheel.studies.output import TableWriter
+    from gyrowheel.studies.target import FmuTarget
 
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal (see terminal.py)
     out = tmp_path / "partial.parquet"

@@ -1,4 +1,4 @@
-"""The sweep engine's ensemble path (fmu_build/sweep/ensemble_path.py): with solver taylor, a
+"""The sweep engine's ensemble path (studies/ensemble_path.py): with solver taylor, a
 batch of points runs through the ensemble library (c_src/gw_ensemble.c) and gives the table the
 plain loop (one FMU run per point) gives, falls, failures and batch splits included."""
 from __future__ import annotations
@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from fmu_build.ensemble import Ensemble
-from fmu_build.sweep import SweepSpecError, sweep
+from gyrowheel.taylor.ensemble import Ensemble
+from gyrowheel.studies import SweepSpecError, sweep
 
 METRICS = ["survived", "fall_time", "end_time", "event", "min_beta", "max:beta", "final:x", "final:alpha",
            "energy_drift"]
@@ -82,7 +82,7 @@ def test_ensemble_path_leaves_no_file_in_the_temp_directory(taylor_fmu, ensemble
     the library is loaded."""
     import tempfile
 
-    from fmu_build.sweep import ensemble_path
+    from gyrowheel.studies import ensemble_path
     shared = tmp_path / "tmp"
     shared.mkdir()
     monkeypatch.setattr(tempfile, "tempdir", str(shared))

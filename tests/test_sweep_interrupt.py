@@ -1,4 +1,4 @@
-"""fmu_build.sweep.interrupt: Ctrl-C as a stop request while Dask is at work (no Dask needed here)."""
+"""gyrowheel.studies.interrupt: Ctrl-C as a stop request while Dask is at work (no Dask needed here)."""
 from __future__ import annotations
 
 import os
@@ -7,8 +7,8 @@ import time
 
 import pytest
 
-from fmu_build.sweep import read_table
-from fmu_build.sweep.interrupt import deferred_sigint
+from gyrowheel.studies import read_table
+from gyrowheel.studies.interrupt import deferred_sigint
 
 
 @pytest.fixture
@@ -66,7 +66,7 @@ def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, mo
     """workers=0 (`--workers 0`): a KeyboardInterrupt in the second batch leaves the first one's
     rows in the table on disk. The loop ran every point as one batch: 0 rows kept, however long
     the sweep had run (gyrowheel sweep ... --workers 0, Ctrl-C after 8 s of 1200 points)."""
-    from fmu_build.sweep import execute as ex
+    from gyrowheel.studies import execute as ex
 
     calls = []
     real = ex.run_batch
@@ -78,7 +78,7 @@ def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, mo
         return real(*args)
 
     monkeypatch.setattr(ex, "run_batch", run_batch)
-    from fmu_build.sweep import sweep
+    from gyrowheel.studies import sweep
     out = tmp_path / "t.csv"
     with pytest.raises(KeyboardInterrupt):
         sweep(earth_fmu, grid={"beta_deg": "70:80:20", "gamma_dot": "5:6:10"}, stop_time=0.1, workers=0,
@@ -91,8 +91,8 @@ def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, mo
 def test_ctrl_c_while_the_command_starts_is_exit_130(monkeypatch, capsys):
     """Ctrl-C in the first ~0.5 s of `gyrowheel sweep`, while make_parser imports the subcommands
     (pandas, dask): exit 130 without a traceback. It came before main's handler: Python's own
-    traceback through fmu_build/sweep/api.py's `import pandas` and death by SIGINT (status -2)."""
-    from fmu_build import cli
+    traceback through studies/api.py's `import pandas` and death by SIGINT (status -2)."""
+    from gyrowheel import cli
 
     def make_parser():
         raise KeyboardInterrupt  # where the Ctrl-C lands: inside an import
@@ -107,7 +107,7 @@ def test_after_a_ctrl_c_the_command_exits_130_whatever_ctrl_c_follows(monkeypatc
     written', then status -2 (killed by the second SIGINT while Python exited, joining Dask's
     threads) instead of 130, 3 times in 4. Once the command returns 130 as the program (argv from
     sys.argv), further SIGINTs are ignored; called with argv (a library caller) nothing changes."""
-    from fmu_build import cli
+    from gyrowheel import cli
 
     def make_parser():
         raise KeyboardInterrupt

@@ -15,9 +15,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from fmu_build.cli import main
-from fmu_build.sweep import SweepSpecError, read_table, sweep
-from fmu_build.sweep.spec import parse_grid, point_table
+from gyrowheel.cli import main
+from gyrowheel.studies import SweepSpecError, read_table, sweep
+from gyrowheel.studies.spec import parse_grid, point_table
 from terminal import AS_FROM_A_TERMINAL
 
 KEEP = ["point", "beta_deg", "survived", "fall_time", "max_lean", "final_x", "status", "reason"]
@@ -160,7 +160,7 @@ class _Server:
 @pytest.mark.parametrize("reply", [None, b"HTTP/1.0 426 Upgrade Required\r\ncontent-length: 0\r\n\r\n"],
                          ids=["silent", "web-server"])
 def test_an_address_that_is_no_scheduler_fails_cleanly(earth_fmu, tmp_path, capsys, monkeypatch, reply):
-    import fmu_build.sweep.execute as execute
+    import gyrowheel.studies.execute as execute
     monkeypatch.setattr(execute, "CONNECT_TIMEOUT", 2.0)
     server = _Server(reply)
     try:
@@ -216,7 +216,7 @@ RESTART = """
 import os, signal, time
 import dask
 from distributed import Client, LocalCluster
-from fmu_build.sweep.execute import LOCAL_CONFIG, _children_ignore_sigint
+from gyrowheel.studies.execute import LOCAL_CONFIG, _children_ignore_sigint
 
 def sigint():
     return signal.getsignal(signal.SIGINT) is signal.SIG_IGN
@@ -261,7 +261,7 @@ def test_ctrl_c_while_the_local_cluster_starts(earth_fmu, tmp_path):
     """Ctrl-C right after the command starts its LocalCluster is not lost: exit 130 at once, not
     after the whole sweep."""
     out = tmp_path / "t.parquet"
-    proc = subprocess.Popen([sys.executable, "-m", "fmu_build", "sweep", str(earth_fmu), "--grid", "beta_deg=60:89:40",
+    proc = subprocess.Popen([sys.executable, "-m", "gyrowheel", "sweep", str(earth_fmu), "--grid", "beta_deg=60:89:40",
                              "--grid", "gamma_dot=0:15:50", "--stop-time", "20", "--workers", "2", "--batch-size", "10",
                              "--no-progress", "-o", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **AS_FROM_A_TERMINAL)
@@ -280,7 +280,7 @@ def test_ctrl_c_while_the_local_cluster_starts(earth_fmu, tmp_path):
 
 GUARD = """
 import signal, subprocess, sys, time
-from fmu_build.sweep.execute import _children_ignore_sigint
+from gyrowheel.studies.execute import _children_ignore_sigint
 with _children_ignore_sigint() as quiet:
     pass
 print(quiet.interrupted, flush=True)
@@ -318,7 +318,7 @@ def test_startup_guard_keeps_a_ctrl_c_for_later(tmp_path, ctrl_c):
 def test_ctrl_c_before_the_run_replaces_a_previous_table(earth_fmu, tmp_path, capsys, monkeypatch):
     """Ctrl-C after the command has printed its plan but before the first row: the file at -o is
     this sweep's (empty) table, as the message says, not a previous sweep's rows left there."""
-    import fmu_build.sweep.api as api
+    import gyrowheel.studies.api as api
     out = tmp_path / "t.csv"
     argv = ["sweep", str(earth_fmu), "--grid", "M=1.5,2", "--stop-time", "0.1", "--workers", "0", "--no-progress",
             "-o", str(out)]

@@ -11,10 +11,10 @@ import pandas as pd
 import pytest
 from fmpy import simulate_fmu
 
-from fmu_build.cli import main
-from fmu_build.sweep import SweepSpecError, read_table, sweep
-from fmu_build.sweep.steady import precession_rates
-from model.build import BETA_MIN_DEFAULT
+from gyrowheel.cli import main
+from gyrowheel.studies import SweepSpecError, read_table, sweep
+from gyrowheel.studies.steady import precession_rates
+from gyrowheel.model.build import BETA_MIN_DEFAULT
 
 PAPER = dict(M=2.0, R=0.17, k_diam=0.25, k_axial=0.4, g=9.81)
 
@@ -96,7 +96,7 @@ def test_derive_and_metric_function_from_files(earth_fmu, tmp_path):
     """Inputs the FMU does not have (rho) become FMU values through a derive function."""
     helper = tmp_path / "helper.py"
     helper.write_text(textwrap.dedent("""
-        from fmu_build.sweep.steady import precession_rates
+        from gyrowheel.studies.steady import precession_rates
         def start(point, values):
             keys = ("M", "R", "k_diam", "k_axial", "g")
             a, c = precession_rates(values["beta"], point["rho"], **{k: values[k] for k in keys})

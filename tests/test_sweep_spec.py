@@ -6,11 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from fmu_build.sweep.batch import Settings
-from fmu_build.sweep.execute import MAX_BATCH, auto_batch_size
-from fmu_build.sweep.plan import Resolver
-from fmu_build.sweep.spec import SweepSpecError, as_axis, parse_grid, parse_random, point_table
-from fmu_build.sweep.target import Variable
+from gyrowheel.studies.batch import Settings
+from gyrowheel.studies.execute import MAX_BATCH, auto_batch_size
+from gyrowheel.studies.plan import Resolver
+from gyrowheel.studies.spec import SweepSpecError, as_axis, parse_grid, parse_random, point_table
+from gyrowheel.studies.target import Variable
 
 
 def test_grid_forms():

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from fmu_build.sweep.steady import (critical_spin, growth_rate, precession_growth_rate, precession_rates,
+from gyrowheel.studies.steady import (critical_spin, growth_rate, precession_growth_rate, precession_rates,
                                     precession_speed, upright_boundary)
 from tests.conftest import CasadiWheel
 

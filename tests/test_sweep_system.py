@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from cosim.master import run
-from fmu_build.sweep import SweepSpecError, sweep
+from gyrowheel.cosim.master import run
+from gyrowheel.studies import SweepSpecError, sweep
 
 DISTURBED = -2.3983435979786334  # alpha_dot [rad/s] of a disturbed start (any start does: sweep and master must agree)
 

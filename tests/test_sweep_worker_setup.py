@@ -10,8 +10,8 @@ import signal
 import pytest
 from distributed import Scheduler, Worker
 
-from fmu_build.sweep import worker_setup
-from fmu_build.sweep.worker_setup import HEARTBEAT_FAILURE, CancelledWhileClosing, HeartbeatWhileClosing
+from gyrowheel.studies import worker_setup
+from gyrowheel.studies.worker_setup import HEARTBEAT_FAILURE, CancelledWhileClosing, HeartbeatWhileClosing
 
 
 def _tracebacks_of_a_heartbeat_cut_by_close(preload: bool) -> list[str]:

@@ -16,10 +16,10 @@ import pytest
 import xmlschema
 
 from conftest import ROOT
-from cosim.master import MasterError, run
-from cosim.system import SystemFileError, read_ssp, write_ssp
+from gyrowheel.cosim.master import MasterError, run
+from gyrowheel.cosim.system import SystemFileError, read_ssp, write_ssp
 
-SCHEMAS = Path(__file__).resolve().parent / "schemas" / "ssp1"
+SCHEMAS = Path(__file__).resolve().parent.parent / "cosim" / "schemas" / "ssp1"
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 BINDING = ('<ssd:ParameterBindings><ssd:ParameterBinding{attrs}>{values}</ssd:ParameterBinding>'
            '</ssd:ParameterBindings>')
@@ -159,7 +159,7 @@ def test_every_binding_type_is_applied(unpacked, earth_loop, tmp_path):
 
 
 def gyrowheel(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "fmu_build", *map(str, args)], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "gyrowheel", *map(str, args)], capture_output=True, text=True,
                           cwd=cwd)
 
 
@@ -169,7 +169,7 @@ def gyrowheel(*args, cwd):
     ("M", "heavy", r"wheel\.M: 'heavy' is not a valid Real"),
 ])
 def test_master_start_values_are_checked_like_bindings(unpacked, tmp_path, name, value, message):
-    """cosim.master.run(start_values=...) (the Python side of `gyrowheel system run --set`) types
+    """gyrowheel.cosim.master.run(start_values=...) (the Python side of `gyrowheel system run --set`) types
     its values with the bindings' checks: nothing truncated (1.5 was run as max_internal_steps =
     1), nothing wrapped (3e9 reached the FMU as -1294967296), the variable named."""
     ssd, fmus = unpacked
@@ -230,7 +230,7 @@ def test_the_master_removes_the_fmus_it_unpacked(earth_loop, tmp_path, monkeypat
 def test_animate_a_system_run_with_the_ssp_as_geometry(earth_loop, tmp_path):
     """`gyrowheel system run` then `gyrowheel animate` on its CSV, the .ssp giving the wheel's R and
     flywheel (a bound L_pend is the one drawn): the pair a user reaches for first."""
-    from fmu_build.animate import read_result, resolve_parameters
+    from gyrowheel.animation import read_result, resolve_parameters
     out = tmp_path / "run.csv"
     assert gyrowheel("system", "run", earth_loop.ssp, "--stop-time", "0.5", "-o", out, cwd=tmp_path).returncode == 0
     r = gyrowheel("animate", out, "--fmu", earth_loop.ssp, "-o", tmp_path / "run.gif", "--fps", "10",

@@ -11,8 +11,8 @@ import pytest
 from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
-from fmu_build.builder import build_spec_fmu
-from model.system import System, SystemDescriptionError
+from gyrowheel.fmu_build.builder import build_spec_fmu
+from gyrowheel.model.system import System, SystemDescriptionError
 
 
 def lag_system() -> System:

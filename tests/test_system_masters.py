@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 import xmlschema
 
-from cosim import ecos_run, libcosim_run
-from cosim.master import run
-from cosim.system import PARAMETER_SET, SystemFileError, read_ssp, write_osp, write_ssp
+from gyrowheel.cosim import ecos_run, libcosim_run
+from gyrowheel.cosim.master import run
+from gyrowheel.cosim.system import PARAMETER_SET, SystemFileError, read_ssp, write_osp, write_ssp
 
-SCHEMAS = Path(__file__).resolve().parent / "schemas" / "ssp1"
+SCHEMAS = Path(__file__).resolve().parent.parent / "cosim" / "schemas" / "ssp1"
 COMPARED = {"wheel": ["beta", "alpha", "x", "y", "tilt"], "controller": ["tilt_cmd", "drive_torque"]}
 
 
@@ -123,7 +123,7 @@ def test_a_state_start_value_is_not_an_ssp_parameter_binding(earth_loop, tmp_pat
 
 
 def test_cli_system_run(earth_loop, tmp_path):
-    from fmu_build.cli import main
+    from gyrowheel.cli import main
     out = tmp_path / "run.csv"
     assert main(["system", "run", str(earth_loop.ssp), "--step", "0.01", "--stop-time", "1", "-o", str(out)]) == 0
     header = out.read_text().splitlines()[0]

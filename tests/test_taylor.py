@@ -1,5 +1,5 @@
-"""Solver taylor (c_src/gw_solver_taylor.c, fmu_build/taylor_graph.py, taylor_c.py) and the
-ensemble path (c_src/gw_ensemble.c, fmu_build/ensemble.py).
+"""Solver taylor (c_src/gw_solver_taylor.c, taylor/graph.py, taylor_c.py) and the
+ensemble path (c_src/gw_ensemble.c, taylor/ensemble.py).
 
 - the recurrence of every elementary operation against CasADi's own derivatives (Taylor
   coefficient = derivative / k!) at random points;
@@ -28,13 +28,13 @@ import numpy as np
 import pytest
 
 from conftest import SCENES, STATES, CasadiWheel
-from fmu_build import build_fmu, load_scene, parse_scene
-from fmu_build.builder import model_spec
-from fmu_build.codegen import optimised
-from fmu_build.compiler import compiler
-from fmu_build.ensemble import LANES, STATUS_OK, STATUS_TERMINATED, Ensemble, EnsembleError
-from fmu_build.taylor_c import taylor_source, work_series
-from fmu_build.taylor_graph import TaylorUnsupportedError, decompose
+from gyrowheel.fmu_build import build_fmu, load_scene, parse_scene
+from gyrowheel.fmu_build.builder import model_spec
+from gyrowheel.fmu_build.codegen import optimised
+from gyrowheel.fmu_build.compiler import compiler
+from gyrowheel.taylor.ensemble import LANES, STATUS_OK, STATUS_TERMINATED, Ensemble, EnsembleError
+from gyrowheel.taylor.kernel_c import taylor_source, work_series
+from gyrowheel.taylor.graph import TaylorUnsupportedError, decompose
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))  # fmi_slave.FmuRunner: one fmi2DoStep per run
@@ -280,7 +280,7 @@ def test_deferred_defect_check_rejects_where_the_rhs_check_does(lunar, tmp_path)
     same times with the same step sizes on the near-pole case."""
     from fmpy import extract
 
-    from fmu_build.compiler import UNITY_SOURCE, compile_shared
+    from gyrowheel.fmu_build.compiler import UNITY_SOURCE, compile_shared
     rhs_dir = Path(extract(str(lunar.fmu), unzipdir=str(tmp_path / "rhs")))
     so = next((rhs_dir / "binaries").rglob("*.so"))
     compile_shared(rhs_dir / "sources" / UNITY_SOURCE, [rhs_dir / "sources"], so,
@@ -409,7 +409,7 @@ def test_kernel_and_ensemble_sources_warning_clean(cc, paper, tmp_path):
     """An FMU with the kernel and its ensemble library build under -std=c99 -Wall -Wextra
     -Wpedantic -Werror with gcc and clang (the target_clones kernel included)."""
     import shutil
-    from fmu_build.ensemble import _UNITY
+    from gyrowheel.taylor.ensemble import _UNITY
     if shutil.which(cc) is None:
         pytest.skip(f"{cc} is not installed (make test installs it: Debian package {cc})")
     src = paper[0].sources
@@ -476,7 +476,7 @@ def test_generic_clone_equals_the_x86_64_v3_one_to_rounding(paper, tmp_path):
     built with GW_NO_CLONES (what the default clone compiles to: SSE2, no contraction) the run
     takes the same steps and ends within rounding of the FMU's own binary (on this machine its
     x86-64-v3 clone, fused multiply-adds), and within rel_tol of scipy's DOP853 at 1e-13."""
-    from fmu_build.compiler import OPTIMISE, STANDARD
+    from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD
     unz = _rebuilt(paper[0], tmp_path, [compiler(), *STANDARD, *OPTIMISE, "-DGW_NO_CLONES"])
     x_generic, n_generic = _final_states(paper[0].fmu, unz, **_SETTINGS)
     x_own, n_own = _final_states(paper[0].fmu, **_SETTINGS)
@@ -636,7 +636,7 @@ def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path,
     multiple of the lanes, falls at different times, refills and a communication grid.  Both
     step size forms: the library's gw_fastmath.h ln and exp (4 lanes per vector call against
     the scalar calls), and libm's (GW_TAYLOR_STEP_FM 0, the FMU's: a loop over the lanes)."""
-    import fmu_build.ensemble as ensemble_mod
+    import gyrowheel.taylor.ensemble as ensemble_mod
     assert "#define GW_TAYLOR_STEP_FM 1" in ensemble_mod._UNITY  # the library's default
     if not step_fm:
         monkeypatch.setattr(ensemble_mod, "_UNITY", "#define GW_TAYLOR_STEP_FM 0\n" + ensemble_mod._UNITY)
@@ -665,7 +665,7 @@ def test_ensemble_rejected_steps_retry_on_the_lane_series(lunar, tmp_path, monke
     the defect check, in every lane of a full batch) the lazily fetched series give the numbers
     of the build that copies every lane's series every step (GW_ENSEMBLE_LANE_STEPS=1) bit for
     bit, and the error stays at the tolerance against DOP853 at rel_tol 1e-13."""
-    import fmu_build.ensemble as ensemble_mod
+    import gyrowheel.taylor.ensemble as ensemble_mod
     from fmi_slave import FmuRunner
     T, tol = 0.004, 1e-9
     assert _rejections(lunar.fmu, None, T, tol)  # the single run rejects steps here

@@ -1,4 +1,4 @@
-"""The event indicators read from the Taylor kernel's order-0 row (fmu_build/taylor_events.py).
+"""The event indicators read from the Taylor kernel's order-0 row (taylor/events.py).
 
 Solver taylor and the ensemble evaluate the indicators at each accepted step's end from the
 series the kernel has just computed there (GW_TL(evt)) instead of calling gw_evt: the values
@@ -16,14 +16,14 @@ import numpy as np
 import pytest
 
 from conftest import SCENES
-from fmu_build import build_fmu, load_scene, parse_scene
-from fmu_build.builder import model_spec
-from fmu_build.codegen import hoisted, optimised, taylor_ode
-from fmu_build.compiler import compiler
-from fmu_build.ensemble import Ensemble
-from fmu_build.taylor_c import taylor_source
-from fmu_build.taylor_events import event_source, kernel_nodes
-from fmu_build.taylor_graph import decompose
+from gyrowheel.fmu_build import build_fmu, load_scene, parse_scene
+from gyrowheel.fmu_build.builder import model_spec
+from gyrowheel.fmu_build.codegen import hoisted, optimised, taylor_ode
+from gyrowheel.fmu_build.compiler import compiler
+from gyrowheel.taylor.ensemble import Ensemble
+from gyrowheel.taylor.kernel_c import taylor_source
+from gyrowheel.taylor.events import event_source, kernel_nodes
+from gyrowheel.taylor.graph import decompose
 
 ROOT = Path(__file__).resolve().parent.parent
 _HARNESS = """#include <math.h>
@@ -143,7 +143,7 @@ def test_fall_times_as_with_the_event_function(tmp_path, monkeypatch):
     one-lane tail): the same steps and fall times as the same library evaluating gw_evt at every
     step (GW_TAYLOR_KERNEL_EVT 0), to the event location's tolerance (1e-12 s relative; the
     kernel's sin(beta) may differ from gw_sin's by a rounding), and the same states to 1e-9."""
-    import fmu_build.ensemble as ensemble_mod
+    import gyrowheel.taylor.ensemble as ensemble_mod
     built = build_fmu(parse_scene(FALLS, "scene.toml"), tmp_path / "f.fmu", build_dir=tmp_path / "b",
                       taylor=True)
     assert "GW_TL_HAS_EVT 1" in (tmp_path / "b" / "fmu" / "sources" / "gw_taylor_model.h").read_text()

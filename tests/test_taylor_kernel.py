@@ -1,4 +1,4 @@
-"""The generated Taylor kernel (fmu_build/taylor_c.py, c_src/gw_taylor_ops.h) on its own.
+"""The generated Taylor kernel (taylor/kernel_c.py, c_src/gw_taylor_ops.h) on its own.
 
 - every recurrence to order 20 against an independent reference: each operation applied to
   operands with closed-form solutions (y = y0 e^{0.3 t}, z = 0.4 + (z0 - 0.4) e^{-0.25 t}),
@@ -22,9 +22,9 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from fmu_build.codegen import optimised
-from fmu_build.taylor_c import taylor_source, work_series
-from fmu_build.taylor_graph import decompose
+from gyrowheel.fmu_build.codegen import optimised
+from gyrowheel.taylor.kernel_c import taylor_source, work_series
+from gyrowheel.taylor.graph import decompose
 
 ROOT = Path(__file__).resolve().parent.parent
 ORDER = 20

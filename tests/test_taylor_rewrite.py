@@ -1,4 +1,4 @@
-"""The exact rewrites of the Taylor decomposition (fmu_build/taylor_rewrite.py).
+"""The exact rewrites of the Taylor decomposition (taylor/rewrite.py).
 
 - a system built to hit every rule (constant factors through products, sums, negations,
   divisions and reciprocals, squares x (c x), reciprocals used as factors, scaled operands of
@@ -22,12 +22,12 @@ import numpy as np
 import pytest
 
 from conftest import SCENES
-from fmu_build import load_scene
-from fmu_build.builder import model_spec
-from fmu_build.codegen import hoisted, optimised, taylor_ode
-from fmu_build.compiler import compiler
-from fmu_build.taylor_c import _Plan, taylor_source, work_series
-from fmu_build.taylor_graph import Decomposition, decompose
+from gyrowheel.fmu_build import load_scene
+from gyrowheel.fmu_build.builder import model_spec
+from gyrowheel.fmu_build.codegen import hoisted, optimised, taylor_ode
+from gyrowheel.fmu_build.compiler import compiler
+from gyrowheel.taylor.kernel_c import _Plan, taylor_source, work_series
+from gyrowheel.taylor.graph import Decomposition, decompose
 
 ROOT = Path(__file__).resolve().parent.parent
 ORDER = 9

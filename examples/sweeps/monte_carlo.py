@@ -12,7 +12,7 @@ rates are over the admissible samples (uniform over the admissible part of the b
 and the worst lean; draws docs/img/sweep_monte_carlo.png.
 
 --closed-loop: the same study of the Gyrover's closed loop (issue 9: wheel + gain-scheduled LQG
-controller FMUs as an .ssp, built here with controller.closed_loop.build_closed_loop for the earth
+controller FMUs as an .ssp, built here with gyrowheel.controller.closed_loop.build_closed_loop for the earth
 mission scene and course): wheel mass and inertia +/-20% around the design's nominal values (the
 controller keeps its nominal gains), the mission's 5 deg lean with zero heading rate, 60 s. That wheel has no friction effects, so friction is not varied there.
 """
@@ -29,8 +29,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
-from fmu_build.cli import main as gyrowheel  # noqa: E402
-from fmu_build.sweep import read_table  # noqa: E402
+from gyrowheel.cli import main as gyrowheel  # noqa: E402
+from gyrowheel.studies import read_table  # noqa: E402
 
 NOMINAL = dict(M=2.0, k_diam=0.25, k_axial=0.4, c_rr=0.003, c_pivot=0.001)
 CLOSED_LOOP_NOMINAL = dict(M=2.0, k_diam=0.25, k_axial=0.4)
@@ -49,9 +49,9 @@ def command(out: Path, samples: int, seed: int, execution: list[str], source: st
 
 def closed_loop_source(out: Path) -> tuple[str, list[str]]:
     """Build the earth mission's closed loop (.ssp); two starts: upright, and the mission's 5 deg lean."""
-    from controller.closed_loop import build_closed_loop
-    from controller.mission import course
-    from fmu_build import load_scene
+    from gyrowheel.controller.closed_loop import build_closed_loop
+    from gyrowheel.controller.mission import course
+    from gyrowheel.fmu_build import load_scene
 
     loop = build_closed_loop(load_scene(ROOT / "examples/scenes/gyrover_mission_earth.toml"), out / "closed_loop",
                              course("earth"))

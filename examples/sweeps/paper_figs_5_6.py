@@ -9,7 +9,7 @@ docs/model.md found an unstable steady precession at 85 deg, rho = 0.2 m). Every
 the steady precession of eqs. (52)/(49) with a 1e-6 rad/s nudge of the lean rate and checks, over
 10 s, that the lean stays within 1e-3 rad and the centre's circle has radius rho to 1e-3
 (examples/sweeps/steady_precession.py). The curves are eq. (53); the shading is where the
-linearisation of the model's own equations (fmu_build.sweep.steady) has a growing mode.
+linearisation of the model's own equations (gyrowheel.studies.steady) has a growing mode.
 """
 from __future__ import annotations
 
@@ -24,9 +24,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
-from fmu_build.cli import main as gyrowheel  # noqa: E402
-from fmu_build.sweep import read_table  # noqa: E402
-from fmu_build.sweep.steady import precession_growth_rate, precession_speed  # noqa: E402
+from gyrowheel.cli import main as gyrowheel  # noqa: E402
+from gyrowheel.studies import read_table  # noqa: E402
+from gyrowheel.studies.steady import precession_growth_rate, precession_speed  # noqa: E402
 
 HELPER = "examples/sweeps/steady_precession.py"
 PAPER = dict(M=2.0, R=0.17, k_diam=0.25, k_axial=0.4)

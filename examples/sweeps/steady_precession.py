@@ -9,8 +9,8 @@
 """
 import numpy as np
 
-from fmu_build.analysis import fit_circle
-from fmu_build.sweep.steady import precession_rates
+from gyrowheel.studies.analysis import fit_circle
+from gyrowheel.studies.steady import precession_rates
 
 NUDGE = 1e-6  # rad/s of lean rate added to the equilibrium
 STEADY_BETA = 1e-3  # rad: the lean may move this much and the motion still counts as steady

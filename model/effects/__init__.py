@@ -8,15 +8,15 @@ sum their power), whatever the order in the scene.
 """
 from __future__ import annotations
 
-from model.effects.air_drag import AirDrag
-from model.effects.base import Effect
-from model.effects.contact_forces import ContactForces
-from model.effects.energy import Energy
-from model.effects.gravity import Gravity
-from model.effects.gyrover import Gyrover
-from model.effects.rolling_resistance import RollingResistance
-from model.effects.slope import Slope
-from model.effects.spin_friction import SpinFriction
+from gyrowheel.model.effects.air_drag import AirDrag
+from gyrowheel.model.effects.base import Effect
+from gyrowheel.model.effects.contact_forces import ContactForces
+from gyrowheel.model.effects.energy import Energy
+from gyrowheel.model.effects.gravity import Gravity
+from gyrowheel.model.effects.gyrover import Gyrover
+from gyrowheel.model.effects.rolling_resistance import RollingResistance
+from gyrowheel.model.effects.slope import Slope
+from gyrowheel.model.effects.spin_friction import SpinFriction
 
 CATALOGUE: dict[str, type[Effect]] = {e.name: e for e in (
     Gravity, Slope, Gyrover, RollingResistance, SpinFriction, AirDrag, ContactForces, Energy)}

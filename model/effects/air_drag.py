@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model.context import WheelContext
-from model.effects.base import Effect
-from model.kinematics import norm
-from model.spec import Quantity
+from gyrowheel.model.context import WheelContext
+from gyrowheel.model.effects.base import Effect
+from gyrowheel.model.kinematics import norm
+from gyrowheel.model.spec import Quantity
 
 
 class AirDrag(Effect):

@@ -1,8 +1,8 @@
 """The interface every effect implements."""
 from __future__ import annotations
 
-from model.context import WheelContext
-from model.spec import Quantity
+from gyrowheel.model.context import WheelContext
+from gyrowheel.model.spec import Quantity
 
 
 class Effect:

@@ -8,16 +8,16 @@ lateral F_lat (in the ground plane, to the left of the heading), and the frictio
 Events: lift-off (F_n reaches 0) and slip (|F_t| reaches mu F_n), each "terminate",
 "warn" or "ignore" (no event, no flag); rolling without slip and point contact stop being
 valid there. A load-proportional law cannot go on past lift-off: with one, on_lift_off must be
-"terminate" (model.effects.lift_off_conflict; the scene reader refuses the others).
+"terminate" (gyrowheel.model.effects.lift_off_conflict; the scene reader refuses the others).
 """
 from __future__ import annotations
 
 import casadi as ca
 
-from model.context import WheelContext
-from model.effects.base import Effect
-from model.kinematics import norm
-from model.spec import Quantity
+from gyrowheel.model.context import WheelContext
+from gyrowheel.model.effects.base import Effect
+from gyrowheel.model.kinematics import norm
+from gyrowheel.model.spec import Quantity
 
 ACTIONS = ("terminate", "warn", "ignore")
 

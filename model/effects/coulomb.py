@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model.context import WheelContext
-from model.effects.base import Effect
+from gyrowheel.model.context import WheelContext
+from gyrowheel.model.effects.base import Effect
 
 LAWS = ("stiction", "smoothed")
 

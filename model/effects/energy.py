@@ -6,9 +6,9 @@ energy(t) + dissipated_energy(t) - actuator_work(t) = energy(0).
 """
 from __future__ import annotations
 
-from model.context import WheelContext
-from model.effects.base import Effect
-from model.spec import Quantity
+from gyrowheel.model.context import WheelContext
+from gyrowheel.model.effects.base import Effect
+from gyrowheel.model.spec import Quantity
 
 
 class Energy(Effect):

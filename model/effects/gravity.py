@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model.context import WheelContext
-from model.effects.base import Effect
-from model.spec import Quantity
+from gyrowheel.model.context import WheelContext
+from gyrowheel.model.effects.base import Effect
+from gyrowheel.model.spec import Quantity
 
 PRESETS = {"earth": 9.81, "mars": 3.721, "moon": 1.625}
 

@@ -27,9 +27,9 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model.context import Body, WheelContext
-from model.effects.base import Effect
-from model.spec import Quantity
+from gyrowheel.model.context import Body, WheelContext
+from gyrowheel.model.effects.base import Effect
+from gyrowheel.model.spec import Quantity
 
 
 class Gyrover(Effect):

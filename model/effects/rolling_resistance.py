@@ -19,9 +19,9 @@ F_n is solved together with the accelerations (it depends on them). Two laws (sc
 """
 from __future__ import annotations
 
-from model.context import WheelContext
-from model.effects.coulomb import CoulombLaw
-from model.spec import Quantity
+from gyrowheel.model.context import WheelContext
+from gyrowheel.model.effects.coulomb import CoulombLaw
+from gyrowheel.model.spec import Quantity
 
 
 class RollingResistance(CoulombLaw):

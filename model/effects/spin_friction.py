@@ -10,9 +10,9 @@ optional viscous part. The Coulomb part follows the scene key `law`:
 """
 from __future__ import annotations
 
-from model.context import WheelContext
-from model.effects.coulomb import CoulombLaw
-from model.spec import Quantity
+from gyrowheel.model.context import WheelContext
+from gyrowheel.model.effects.coulomb import CoulombLaw
+from gyrowheel.model.spec import Quantity
 
 
 class SpinFriction(CoulombLaw):

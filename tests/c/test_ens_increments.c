@@ -2,7 +2,7 @@
  * test_ens_increments.c -- the ensemble's increments pass (gw_ens_increments, c_src/
  * gw_ensemble_passes.h: dx = sum_k X_k h^k and P'(h) of every lane, lanes innermost) against
  * solver taylor's one-lane gw_taylor_increment, bit for bit, lane by lane, as compiled in the
- * ensemble library: appended to its unity file (fmu_build/ensemble.py _UNITY), with its flags
+ * ensemble library: appended to its unity file (taylor/ensemble.py _UNITY), with its flags
  * (-O3 -ffp-contract=fast; the x86-64-v3 clones fuse multiply-adds), so that the compiler's
  * contraction of each is what the library runs.  Random series of 13 components (blocks of 8
  * and the rest; the pass's chains of 4 and single ones), orders 7 .. 24, coefficients over 60

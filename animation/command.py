@@ -1,0 +1,59 @@
+"""`gyrowheel animate RESULT.csv -o run.gif|run.mp4|run.html`: arguments and the run."""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """'640x480' -> (640, 480); raises AnimationError."""
+    from gyrowheel.animation import AnimationError
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise AnimationError(f"--size: expected WIDTHxHEIGHT in pixels, e.g. 640x480, got {text!r}") from None
+    return w, h
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from gyrowheel.cli import finite_float
+
+    parser.add_argument("result", help="result CSV (gyrowheel simulate, or any table with its column names)")
+    parser.add_argument("-o", "--output", help="animation to write: .gif, .mp4 or .html (default: RESULT.gif)")
+    parser.add_argument("--fmu", help="read R and the flywheel's geometry from this FMU's start values "
+                        "(or from a system's .ssp: its wheel component's FMU and bindings)")
+    parser.add_argument("--component", help="for a system's result (<component>.<variable> columns, "
+                        "gyrowheel system run): the component to draw (default: the one with the wheel's columns)")
+    parser.add_argument("--R", type=finite_float, help="wheel radius in m (default: the FMU's, or z / sin(beta))")
+    parser.add_argument("--fps", type=finite_float, default=25.0, help="frames per second of playback (default 25)")
+    parser.add_argument("--speed", type=finite_float, default=1.0,
+                        help="simulated seconds per second of playback (default 1)")
+    parser.add_argument("--size", default="640x480", help="WIDTHxHEIGHT in pixels (default 640x480)")
+    parser.add_argument("--trail", type=finite_float, help="seconds of contact track behind the wheel (default: all)")
+    parser.add_argument("--start", type=finite_float, help="first simulated time shown, s (default: the run's start)")
+    parser.add_argument("--stop", type=finite_float, help="last simulated time shown, s (default: the run's end)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Write the animation and say what was written. Raises AnimationError for bad input."""
+    from gyrowheel.animation import animate
+
+    output = Path(args.output or Path(args.result).with_suffix(".gif").name)
+    size = parse_size(args.size)
+    tl = animate(args.result, output, R=args.R, fmu=args.fmu, component=args.component, fps=args.fps, speed=args.speed, size=size,
+                 trail=args.trail, start=args.start, stop=args.stop)
+    t0, t1 = tl.time[0], tl.time[-1]
+    what = f"{len(tl.time)} frame{'s' * (len(tl.time) != 1)} at {args.fps:g} fps" + ("" if output.suffix.lower() == ".html"
+                                                           else f", {size[0]}x{size[1]}")
+    print(f"wrote {output}: {what}, t = {t0:g} .. {t1:g} s at ×{args.speed:g} (R = {tl.parameters.R:g} m "
+          f"from {tl.parameters.source['R']})")
+    defaults = [n for n, s in tl.parameters.source.items() if s == "model default"]
+    if defaults:
+        print(f"note: flywheel geometry {', '.join(defaults)} from the model's defaults; pass --fmu for the run's",
+              file=sys.stderr)
+    if tl.spin_per_frame > math.pi / 2:
+        print(f"note: the wheel turns up to {tl.spin_per_frame:.1f} rad between frames, so its marks may seem to "
+              "turn backwards; lower --speed or raise --fps", file=sys.stderr)
+    return 0

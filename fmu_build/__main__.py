@@ -1,5 +1,0 @@
-import sys
-
-from fmu_build.cli import main
-
-sys.exit(main())

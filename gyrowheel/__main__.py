@@ -1,0 +1,6 @@
+"""`python -m gyrowheel`: the gyrowheel command."""
+import sys
+
+from gyrowheel.cli import main
+
+sys.exit(main())

@@ -1,0 +1,99 @@
+"""`gyrowheel sweep`: the command-line face of gyrowheel.studies (docs/sweeps.md).
+
+Bad input (a malformed spec, an unknown variable, a bad value) is one line and exit 2 before
+anything runs; Ctrl-C stops the sweep with the rows done so far on disk (exit 130).
+"""
+from __future__ import annotations
+
+import sys
+
+
+def add_parser(sub) -> None:
+    from gyrowheel.cli import finite_float
+
+    s = sub.add_parser("sweep", help="parameter sweep / Monte Carlo of a scene or FMU (on Dask)",
+                       description="Run many points of a scene or FMU; one row per point in a Parquet or CSV table.")
+    s.add_argument("source", help="scene (.toml, built first), FMU (.fmu) or system of FMUs (.ssp)")
+    g = s.add_argument_group("points")
+    g.add_argument("--grid", action="append", metavar="NAME=SPEC",
+                   help="START:STOP:N, START:STOP:N:log or V1,V2,... (repeatable; grids multiply); "
+                        "angles also as NAME_deg")
+    g.add_argument("--random", action="append", metavar="NAME=DIST", help="normal:MU:SIGMA or uniform:A:B (repeatable)")
+    g.add_argument("--samples", type=int, help="number of random samples (crossed with the grid)")
+    g.add_argument("--seed", type=int, default=0, help="seed of numpy's default_rng (default 0)")
+    g.add_argument("--set", action="append", metavar="NAME=VALUE", help="a value for every point (repeatable)")
+    g.add_argument("--derive", metavar="FUNC", help="module:function or file.py:function turning a point's "
+                   "inputs into unit values: f(point, values) -> dict")
+    e = s.add_argument_group("experiment")
+    e.add_argument("--stop-time", type=finite_float, help="s (default: the unit's DefaultExperiment)")
+    e.add_argument("--output-interval", type=finite_float, help="communication step, s (default: the unit's step size)")
+    e.add_argument("--solver", help="euler, rk4, dopri5, dop853, rosenbrock, taylor (FMUs with the Taylor kernel)")
+    e.add_argument("--rel-tol", type=finite_float)
+    e.add_argument("--abs-tol", type=finite_float)
+    e.add_argument("--max-step", type=finite_float)
+    m = s.add_argument_group("metrics and output")
+    m.add_argument("--metrics", help="comma-separated: survived, fall_time, end_time, event, min_beta, max_beta, "
+                   "max_lean, final_position, energy_drift, final:NAME, max:NAME, min:NAME, mean:NAME")
+    m.add_argument("--metric-function", action="append", metavar="FUNC",
+                   help="module:function or file.py:function of the trajectory (repeatable)")
+    m.add_argument("-o", "--output", default="sweep.parquet", help=".parquet or .csv (default sweep.parquet)")
+    m.add_argument("--plot", metavar="PNG", help="also plot the table")
+    m.add_argument("--plot-metric", help="the column to plot (default: fall_time, else the first metric)")
+    x = s.add_argument_group("execution")
+    x.add_argument("--workers", type=int, help="LocalCluster processes (default: one per core; 0: in-process loop)")
+    x.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    x.add_argument("--batch-size", type=int, help="points per task (default: about 4 tasks per worker)")
+    x.add_argument("--no-progress", action="store_true", help="no progress bar")
+    x.add_argument("--no-ensemble", action="store_true",
+                   help="with solver taylor, run every point through the FMU instead of the ensemble path")
+    s.set_defaults(func=cmd_sweep)
+
+
+def cmd_sweep(args) -> int:
+    from gyrowheel.cli import CliError
+    from gyrowheel.studies.api import check_execution, open_target, plan_sweep, run_plan
+    from gyrowheel.studies.output import TableWriter, check_output_path
+    from gyrowheel.studies.plot import check_plot_path
+    from gyrowheel.studies.spec import SweepSpecError, parse_assignments
+
+    if args.workers is not None and args.scheduler:
+        raise CliError("--workers and --scheduler exclude each other")
+    try:
+        output = check_output_path(args.output)
+        check_plot_path(args.plot)
+        check_execution(args.workers, args.batch_size)
+        with open_target(args.source) as target:
+            plan = plan_sweep(target, grid=args.grid, random=args.random, samples=args.samples, seed=args.seed,
+                              fixed=parse_assignments(args.set), derive=args.derive, stop_time=args.stop_time,
+                              output_interval=args.output_interval, solver=args.solver, rel_tol=args.rel_tol,
+                              abs_tol=args.abs_tol, max_step=args.max_step, metrics=args.metrics,
+                              metric_functions=args.metric_function or (), ensemble=not args.no_ensemble)
+            writer = TableWriter(output, plan.inputs)
+            where = args.scheduler or ("in-process loop" if args.workers == 0 else
+                                       f"LocalCluster of {args.workers or 'all cores'} worker(s)")
+            try:  # from here on, Ctrl-C leaves a complete table of the points done (none, if it comes now)
+                print(f"sweep: {len(plan.values)} points, t = {plan.settings.start_time:g} .. "
+                      f"{plan.settings.stop_time:g} s every {plan.settings.output_interval:g} s, on {where}",
+                      file=sys.stderr)
+                table = run_plan(plan, workers=args.workers, scheduler=args.scheduler, batch_size=args.batch_size,
+                                 progress=not args.no_progress, writer=writer)
+            except KeyboardInterrupt:
+                if not writer.flushed:  # stopped before run_plan: no table yet, or a previous sweep's
+                    writer.flush()
+                print(f"gyrowheel: interrupted: {writer.written} of {len(plan.values)} points written to {output}",
+                      file=sys.stderr)
+                return 130
+    except SweepSpecError as exc:
+        raise CliError(str(exc)) from None
+    except (OSError, TimeoutError) as exc:  # e.g. no scheduler at the address
+        raise CliError(f"{type(exc).__name__}: {exc}", 1) from None
+    failed = int((table["status"] != "ok").sum())
+    print(f"wrote {output}: {len(table)} rows ({failed} failed)")
+    if args.plot:
+        from gyrowheel.studies.plot import plot_table
+        try:
+            plot_table(table, args.plot, inputs=list(plan.inputs.columns), metric=args.plot_metric)
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
+        print(f"wrote {args.plot}")
+    return 0

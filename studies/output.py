@@ -1,0 +1,107 @@
+"""The result table: one row per point (inputs, metrics, status, reason, wall time), on disk as it grows.
+
+The file is rewritten whole, atomically (write a sibling, then os.replace), at most every
+`interval` seconds (and never more often than ten times the last write took) and once at the
+end: whatever stops the sweep, Ctrl-C included, the file on disk is a complete, readable table
+of the points finished by its last write. Parquet (pyarrow) or CSV, chosen by the suffix.
+"""
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import pandas as pd
+
+from gyrowheel.studies.spec import SweepSpecError
+
+FORMATS = (".parquet", ".csv")
+TAIL = ("status", "reason", "wall_time")
+
+
+def check_output_path(path: str | Path | None) -> Path | None:
+    if path is None:
+        return None
+    path = Path(path)
+    if path.suffix.lower() not in FORMATS:
+        raise SweepSpecError(f"-o {path}: unknown format {path.suffix or '(no suffix)'!r}; use .parquet or .csv")
+    if not path.parent.exists():
+        raise SweepSpecError(f"-o {path}: directory {path.parent} does not exist")
+    return path
+
+
+def _dtypes(frame: pd.DataFrame) -> pd.DataFrame:
+    """Columns of True/False with gaps (failed points) as nullable booleans, not objects."""
+    for col in frame.columns:
+        if frame[col].dtype == object:
+            present = frame[col].dropna()
+            if len(present) and all(isinstance(v, (bool,)) or type(v).__name__ == "bool_" for v in present):
+                frame[col] = frame[col].astype("boolean")
+    return frame
+
+
+def result_table(inputs: pd.DataFrame, rows: list[dict]) -> pd.DataFrame:
+    """Join the inputs of the points done with their results, in point order.
+
+    Columns: point, the inputs as given, the metric columns, status, reason, wall_time [s].
+    """
+    if not rows:
+        cols = ["point", *inputs.columns, *TAIL]
+        return pd.DataFrame(columns=cols)
+    results = pd.DataFrame(rows).set_index("point").sort_index()
+    metric_cols = [c for c in results.columns if c not in TAIL]
+    frame = inputs.loc[results.index].join(results[metric_cols + list(TAIL)])
+    for text in ("reason", "event"):  # failed points have no event: '' rather than a missing value
+        if text in frame:
+            frame[text] = frame[text].fillna("")
+    frame = _dtypes(frame.reset_index())
+    return frame
+
+
+class TableWriter:
+    """Collects rows; keeps `path` a complete table of the rows so far (see module docstring)."""
+
+    def __init__(self, path: Path | None, inputs: pd.DataFrame, interval: float = 1.0):
+        self.path, self.inputs, self.interval = path, inputs, interval
+        self.rows: list[dict] = []
+        self._last = time.monotonic()
+        self._cost = 0.0
+        self.written = 0
+        self.flushed = False  # the file holds this sweep's table (not a previous one's, or none)
+
+    def add(self, rows: list[dict]) -> None:
+        self.rows.extend(rows)
+        now = time.monotonic()
+        if self.path is not None and now - self._last >= max(self.interval, 10 * self._cost):
+            self.flush()
+
+    def table(self) -> pd.DataFrame:
+        return result_table(self.inputs, self.rows)
+
+    def flush(self) -> pd.DataFrame:
+        frame = self.table()
+        if self.path is not None:
+            t0 = time.monotonic()
+            write_table(frame, self.path)
+            self._cost = time.monotonic() - t0
+            self._last = time.monotonic()
+            self.written = len(frame)
+            self.flushed = True
+        return frame
+
+
+def write_table(frame: pd.DataFrame, path: Path) -> None:
+    tmp = path.with_name(f".{path.name}.part")
+    if path.suffix.lower() == ".parquet":
+        frame.to_parquet(tmp, index=False, engine="pyarrow")
+    else:
+        frame.to_csv(tmp, index=False)
+    os.replace(tmp, path)
+
+
+def read_table(path: str | Path) -> pd.DataFrame:
+    """Read a sweep table written by gyrowheel sweep (Parquet or CSV)."""
+    path = Path(path)
+    if path.suffix.lower() == ".parquet":
+        return pd.read_parquet(path)
+    return _dtypes(pd.read_csv(path))  # True/False with gaps: nullable booleans, as the Parquet file has

@@ -1,0 +1,132 @@
+"""A system of FMUs (an SSP 1.0 .ssp, e.g. the Gyrover's wheel + controller) as a sweep target.
+
+The same stepping as gyrowheel's own master (cosim/master.py, libcosim's fixed-step algorithm):
+in Initialization Mode every connection is copied once, then every communication step each
+component steps from t to t + h with its inputs held and the connections are copied (Jacobi).
+The sweep's --output-interval is the master's communication step. A component that terminates
+(the wheel falling: fmi2Discard + fmi2Terminated) ends the run there, as a fall, not a failure.
+
+Names: the first component (the plant, 'wheel') keeps its variables' own names (M, beta_deg,
+beta, x ...), so the built-in metrics read its outputs; every component's variables are also
+'<component>.<variable>' (controller.gain_scale, controller.tilt_cmd).
+"""
+from __future__ import annotations
+
+import tempfile
+from dataclasses import replace
+from pathlib import Path
+
+from gyrowheel.studies.target import FmuTarget
+
+
+class SspTarget:
+    """Components and connections of an .ssp; each worker opens one instance of every component."""
+
+    def __init__(self, path: str | Path):
+        from gyrowheel.cosim.system import read_ssp
+
+        self.path = Path(path)
+        with tempfile.TemporaryDirectory(prefix="gyrowheel-sweep-ssp-") as tmp:
+            system = read_ssp(self.path, tmp)
+            self.components = {c.name: FmuTarget(c.fmu) for c in system.components}
+            self._bytes = {name: t.payload() for name, t in self.components.items()}
+        self.plant = system.components[0].name
+        self.starts = {c.name: dict(c.start_values) for c in system.components}
+        self.connections = [(k.start_element, k.start_connector, k.end_element, k.end_connector)
+                            for k in system.connections]
+        self.default_stop_time = system.stop_time
+        steps = [t.default_step for t in self.components.values() if t.default_step]
+        self.default_step = min(steps) if steps else None
+        self._variables = {}
+        self.outputs, self.where = [], {}  # where: sweep name -> (component, variable)
+        for name, t in self.components.items():
+            for var, v in t.variables().items():
+                for alias in ([var] if name == self.plant else []) + [f"{name}.{var}"]:
+                    self._variables[alias] = replace(v, name=alias)
+                    self.where[alias] = (name, var)
+            self.outputs += [o if name == self.plant else f"{name}.{o}" for o in t.outputs]
+        self.flag_names = list(self.components[self.plant].flag_names)
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_bytes"] = None  # shipped once per worker as the payload
+        return state
+
+    def variables(self) -> dict:
+        return self._variables
+
+    def canonical(self, name: str) -> str:
+        """One name per variable: the plant's 'M' and 'wheel.M' are both 'wheel.M'."""
+        component, var = self.where.get(name, (None, name))
+        return f"{component}.{var}" if component else name
+
+    def payload(self):
+        return self._bytes
+
+    def open(self, payload) -> "SystemInstance":
+        return SystemInstance(self, payload)
+
+
+class SystemInstance:
+    """One instance per component, reused point after point (each reset, set, initialised)."""
+
+    def __init__(self, target: SspTarget, payload):
+        self.target = target
+        self.units = {}
+        try:
+            for name, t in target.components.items():
+                self.units[name] = t.open(payload[name] if payload is not None else None)
+        except Exception:
+            self.close()
+            raise
+        self.output_names = list(target.outputs)
+        self._links = [(self.units[a], target.components[a].variables()[av].vr,
+                        target.components[a].variables()[av].type,
+                        self.units[b], target.components[b].variables()[bv].vr)
+                       for a, av, b, bv in target.connections]
+        self._slices, i = [], 0
+        for name, unit in self.units.items():
+            self._slices.append((unit, slice(i, i + len(unit.output_names))))
+            i += len(unit.output_names)
+
+    def _exchange(self) -> None:
+        for src, svr, kind, dst, dvr in self._links:
+            src.copy(svr, kind, dst, dvr)
+
+    def start(self, values: dict, start_time: float) -> None:
+        split = {name: dict(self.target.starts[name]) for name in self.units}
+        for alias, value in values.items():
+            component, var = self.target.where[alias]
+            split[component][var] = value
+        for name, unit in self.units.items():
+            unit.enter_initialisation(split[name], start_time)
+        self._exchange()
+        for unit in self.units.values():
+            unit.exit_initialisation()
+
+    def step(self, t: float, h: float) -> float | None:
+        ended = None
+        for unit in self.units.values():
+            when = unit.step(t, h)
+            if when is not None and ended is None:
+                ended = when
+        if ended is None:
+            self._exchange()
+        return ended
+
+    def read(self, row) -> None:
+        for unit, where in self._slices:
+            unit.read(row[where])
+
+    def flags(self) -> list[str]:
+        """The plant's true Boolean flags, then the other components' as '<component>.<flag>'
+        (e.g. the controller's 'controller.lost')."""
+        out = list(self.units[self.target.plant].flags())
+        for name, unit in self.units.items():
+            if name != self.target.plant:
+                out += [f"{name}.{f}" for f in unit.flags()]
+        return out
+
+    def close(self) -> None:
+        for unit in self.units.values():
+            unit.close()

@@ -1,0 +1,269 @@
+"""What a sweep runs: a target that opens one reusable instance per task on a worker.
+
+A target is small and picklable (it travels with every task); its payload (here the FMU's
+bytes) is sent to each worker once (Dask scatter) and unpacked once per worker process. Any
+object with the same three members can be swept, e.g. a system of the wheel and a controller
+run by gyrowheel's co-simulation master (issue 9):
+
+    target.variables() -> {name: Variable}     settable inputs, parameters, outputs (on the client)
+    target.payload()   -> bytes or None         shipped to the workers once
+    target.open(payload) -> instance            on the worker, once per task; the instance has
+        output_names                            Real outputs recorded at every communication point
+        start(values, start_time)               reset (after the first point), set, initialise
+        step(t, h) -> None | float              one communication step; the event time if the
+                                                unit terminated (fmi2Discard + fmi2Terminated)
+        read(row)                               the outputs into a float64 array
+        flags() -> list[str]                    Boolean outputs that are true (e.g. 'fallen')
+        close()
+    A point that the instance refuses raises PointFailure(reason); the sweep records it and goes on.
+
+FmuTarget drives a Co-Simulation FMU through fmpy's FMU2Slave and the raw fmi2 functions
+(FMI 2.0.4, sections 2.1.5-2.1.7 and 4.2): one instance, fmi2Reset between points.
+"""
+from __future__ import annotations
+
+import atexit
+import hashlib
+import shutil
+import tempfile
+import threading
+import zipfile
+from ctypes import byref, c_double, c_int, c_uint
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from gyrowheel.cosim.fmi_log import forget_messages, logging_callbacks
+
+_UNPACKED: dict[str, str] = {}  # FMU digest -> extraction directory, per worker process (removed at its exit)
+_LOCK = threading.Lock()  # fmpy's FMU2Slave() changes the working directory while loading
+
+
+class PointFailure(Exception):
+    """A point the unit refused or could not finish; str() is the reason recorded in the table."""
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One model variable as the sweep sees it (from modelDescription.xml)."""
+
+    name: str
+    type: str  # Real, Integer, Enumeration, Boolean, String
+    causality: str
+    variability: str
+    initial: str | None
+    unit: str | None
+    start: object
+    vr: int
+    items: dict = field(default_factory=dict)  # enumeration item name -> value
+
+    @property
+    def settable(self) -> bool:
+        return self.causality in ("parameter", "input") or self.initial in ("exact", "approx")
+
+
+def _read_variables(md) -> dict[str, Variable]:
+    enums = {t.name: {i.name: int(i.value) for i in t.items} for t in md.typeDefinitions}
+    out = {}
+    for v in md.modelVariables:
+        start = v.start
+        if start is not None and v.type in ("Real",):
+            start = float(start)
+        items = enums.get(v.declaredType.name, {}) if v.type == "Enumeration" and v.declaredType else {}
+        if v.type == "Enumeration" and isinstance(start, str) and start.lstrip("-").isdigit():
+            start = int(start)
+        out[v.name] = Variable(v.name, v.type, v.causality, v.variability, v.initial,
+                               v.unit or (v.declaredType.unit if v.declaredType else None), start,
+                               v.valueReference, items)
+    return out
+
+
+class FmuTarget:
+    """A built Co-Simulation FMU as a sweep target (picklable without its bytes)."""
+
+    def __init__(self, path: str | Path):
+        from fmpy import read_model_description
+
+        self.path = Path(path)
+        try:
+            self._data: bytes | None = self.path.read_bytes()
+            md = read_model_description(str(self.path))
+        except FileNotFoundError:
+            raise FileNotFoundError(f"{self.path}: no such FMU file") from None
+        except Exception as exc:  # fmpy raises plain Exceptions for broken archives
+            raise ValueError(f"{self.path}: not a readable FMU: {exc}") from None
+        if md.coSimulation is None:
+            raise ValueError(f"{self.path}: the FMU does not support Co-Simulation")
+        self.digest = hashlib.sha256(self._data).hexdigest()
+        self.identifier = md.coSimulation.modelIdentifier
+        self.guid = md.guid
+        self._variables = _read_variables(md)
+        exp = md.defaultExperiment
+        self.default_stop_time = float(exp.stopTime) if exp is not None and exp.stopTime else None
+        self.default_step = float(exp.stepSize) if exp is not None and exp.stepSize else None
+        self.outputs = [v.name for v in self._variables.values() if v.causality == "output" and v.type == "Real"]
+        self.flag_names = [v.name for v in self._variables.values()
+                           if v.causality == "output" and v.type == "Boolean"]
+        # a gyrowheel FMU built with the Taylor kernel: batches may take the ensemble path
+        self.taylor_kernel = _has_taylor_kernel(self._data)
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_data"] = None  # the bytes go to each worker once, as the payload
+        return state
+
+    def variables(self) -> dict[str, Variable]:
+        return self._variables
+
+    def payload(self) -> bytes | None:
+        return self._data
+
+    def open(self, payload: bytes | None) -> "FmuInstance":
+        return FmuInstance(self, _unpack(self, payload))
+
+
+def _has_taylor_kernel(data: bytes) -> bool:
+    import io
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as zf:
+            return b"GW_TL_NVAR" in zf.read("sources/gw_taylor_model.h")
+    except (KeyError, zipfile.BadZipFile):
+        return False
+
+
+def _unpack(target: FmuTarget, payload: bytes | None) -> str:
+    with _LOCK:
+        where = _UNPACKED.get(target.digest)
+        if where is None:
+            where = tempfile.mkdtemp(prefix=f"gyrowheel-sweep-{target.digest[:12]}-")
+            atexit.register(shutil.rmtree, where, True)
+            if payload is not None:
+                import io
+                zipfile.ZipFile(io.BytesIO(payload)).extractall(where)
+            else:
+                zipfile.ZipFile(target.path).extractall(where)
+            _UNPACKED[target.digest] = where
+        return where
+
+
+class FmuInstance:
+    """One FMU2Slave, reused: fmi2Reset, set, initialise, fmi2DoStep ... for every point."""
+
+    def __init__(self, target: FmuTarget, unzipdir: str):
+        from fmpy.fmi2 import FMU2Slave
+
+        self.target = target
+        self.messages: list[str] = []
+        self._callbacks, self._id = logging_callbacks(self.messages)
+        with _LOCK:
+            self.slave = FMU2Slave(guid=target.guid, unzipDirectory=unzipdir,
+                                   modelIdentifier=target.identifier, instanceName="sweep")
+        self.slave.instantiate(callbacks=self._callbacks, loggingOn=False)
+        f = self.slave._functions  # the raw ctypes functions: status codes instead of exceptions
+        self._c = self.slave.component
+        self._do_step, self._get_real = f["fmi2DoStep"], f["fmi2GetReal"]
+        self._f = f
+        variables = target.variables()
+        self.output_names = list(target.outputs)
+        n = len(self.output_names)
+        self._out_vr = (c_uint * n)(*[variables[name].vr for name in self.output_names])
+        self._out_buf = (c_double * n)()
+        self._out_view = np.frombuffer(self._out_buf, dtype=np.float64)
+        self._flags = [(name, variables[name].vr) for name in target.flag_names]
+        self._vars = variables
+        self._fresh = True
+
+    def _check(self, status: int, what: str) -> None:
+        if status > 1:  # fmi2Discard and worse
+            reason = "; ".join(self.messages) or f"{what} returned status {status}"
+            raise PointFailure(reason)
+
+    def start(self, values: dict[str, object], start_time: float) -> None:
+        """fmi2Reset (after the first point), fmi2SetupExperiment, set `values`, initialise."""
+        self.enter_initialisation(values, start_time)
+        self.exit_initialisation()
+
+    def enter_initialisation(self, values: dict[str, object], start_time: float) -> None:
+        """fmi2Reset (after the first point), fmi2SetupExperiment, set `values`, fmi2EnterInitializationMode."""
+        f, c = self._f, self._c
+        self.messages.clear()
+        if not self._fresh:
+            if f["fmi2Reset"](c) > 1:
+                self._reinstantiate()
+        self._fresh = False
+        self._check(f["fmi2SetupExperiment"](c, 0, 0.0, start_time, 0, 0.0), "fmi2SetupExperiment")
+        reals, ints, bools = [], [], []
+        for name, value in values.items():
+            v = self._vars[name]
+            (reals if v.type == "Real" else bools if v.type == "Boolean" else ints).append((v.vr, value))
+        for group, ctype, setter in ((reals, c_double, "fmi2SetReal"), (ints, c_int, "fmi2SetInteger"),
+                                     (bools, c_int, "fmi2SetBoolean")):
+            if group:
+                vr = (c_uint * len(group))(*[g[0] for g in group])
+                val = (ctype * len(group))(*[g[1] for g in group])
+                self._check(f[setter](c, vr, len(group), val), setter)
+        self._check(f["fmi2EnterInitializationMode"](c), "fmi2EnterInitializationMode")
+
+    def exit_initialisation(self) -> None:
+        self._check(self._f["fmi2ExitInitializationMode"](self._c), "fmi2ExitInitializationMode")
+
+    def copy_real(self, vr: int, to: "FmuInstance", to_vr: int) -> None:
+        """One connection: this instance's Real output vr -> `to`'s input to_vr (fmi2GetReal, fmi2SetReal)."""
+        value, ref = c_double(0.0), c_uint(vr)
+        self._check(self._get_real(self._c, byref(ref), 1, byref(value)), "fmi2GetReal")
+        to._check(to._f["fmi2SetReal"](to._c, byref(c_uint(to_vr)), 1, byref(value)), "fmi2SetReal")
+
+    def copy(self, vr: int, fmi_type: str, to: "FmuInstance", to_vr: int) -> None:
+        """One connection of any FMI 2.0 type but String (both ends of one type: SystemDescription.check;
+        an Enumeration travels as an Integer)."""
+        if fmi_type == "Real":
+            return self.copy_real(vr, to, to_vr)
+        if fmi_type == "String":
+            raise PointFailure("String connections are not supported by the sweep's master")
+        kind = "Boolean" if fmi_type == "Boolean" else "Integer"
+        value = c_int(0)
+        self._check(self._f[f"fmi2Get{kind}"](self._c, byref(c_uint(vr)), 1, byref(value)), f"fmi2Get{kind}")
+        to._check(to._f[f"fmi2Set{kind}"](to._c, byref(c_uint(to_vr)), 1, byref(value)), f"fmi2Set{kind}")
+
+    def _reinstantiate(self) -> None:
+        """After fmi2Fatal (or a refused fmi2Reset) the instance is gone: make a new one."""
+        try:
+            self.slave.fmi2FreeInstance(self._c)
+        except Exception:
+            pass
+        self.slave.instantiate(callbacks=self._callbacks, loggingOn=False)
+        self._c = self.slave.component
+
+    def step(self, t: float, h: float) -> float | None:
+        status = self._do_step(self._c, t, h, 1)
+        if status <= 1:
+            return None
+        if status == 2:  # fmi2Discard: a terminating event (the fall) is a result, not a failure
+            from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
+            flag, when = c_int(0), c_double(0.0)
+            self._f["fmi2GetBooleanStatus"](self._c, fmi2Terminated, byref(flag))
+            if flag.value:
+                self._f["fmi2GetRealStatus"](self._c, fmi2LastSuccessfulTime, byref(when))
+                return when.value
+        self._check(status, f"fmi2DoStep(t={t!r}, h={h!r})")
+        return None
+
+    def read(self, row: np.ndarray) -> None:
+        self._check(self._get_real(self._c, self._out_vr, len(self._out_vr), self._out_buf), "fmi2GetReal")
+        row[:] = self._out_view
+
+    def flags(self) -> list[str]:
+        out = []
+        for name, vr in self._flags:
+            value = c_int(0)
+            if self._f["fmi2GetBoolean"](self._c, byref(c_uint(vr)), 1, byref(value)) <= 1 and value.value:
+                out.append(name)
+        return out
+
+    def close(self) -> None:
+        try:
+            self.slave.freeInstance()
+        except Exception:
+            pass
+        forget_messages(self._id)

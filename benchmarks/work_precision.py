@@ -33,7 +33,6 @@ Writes <out>/work_precision_<scenario>.png, <out>/work_precision.md and prints t
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 from dataclasses import dataclass
@@ -80,13 +79,6 @@ class Point:
     seconds: float
     error: float
     energy_drift: float
-
-
-def near_flat_start(beta_deg: float = 10.0, k_diam: float = 0.25, R: float = 0.17, g: float = 9.81):
-    """Steady precession about a fixed centre (rho = 0 in eq. 52): the rates used above."""
-    b = math.radians(beta_deg)
-    ad = math.sqrt(g / (k_diam * R * math.sin(b)))
-    return ad, -math.cos(b) * ad
 
 
 def best_time(fn, repeat: int) -> tuple[float, object]:

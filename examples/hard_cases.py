@@ -22,8 +22,9 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2LastSuccessfulTime
 
 from gyrowheel.fmu_build import build_fmu, load_scene, parse_scene
-from gyrowheel.studies.scipy_reference import solve_hybrid
 from gyrowheel.model.build import BETA_MIN_DEFAULT
+from gyrowheel.model.steady import critical_spin, precession_rates
+from gyrowheel.studies.scipy_reference import solve_hybrid
 
 HERE = Path(__file__).resolve().parent
 STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
@@ -208,8 +209,7 @@ def main() -> int:
     t, fell, sec = paper.run(60.0, 1.0, solver="dop853", beta=math.pi / 2, gamma_dot=0.0, **tight)
     row("6 exactly upright, no spin", "dop853", ("fell at t = %.2f s" % t) if fell else "stays upright for 60 s",
         "round-off grows e^(t/0.15 s)" if fell else "-", sec)
-    I_d, I_a = 0.25 * 2 * 0.17**2, 0.4 * 2 * 0.17**2
-    wc = math.sqrt(2 * 9.81 * 0.17 * I_d / (I_a * (I_a + 2 * 0.17**2)))
+    wc = critical_spin(**PAPER)
     for factor in (0.8, 1.0, 1.25):
         paper.start(solver="dop853", beta=math.pi / 2 - 1e-3, gamma_dot=factor * wc, **tight)
         lean, t = 0.0, 0.0
@@ -259,10 +259,9 @@ def main() -> int:
 
     # 9. steady precession held for 1000 s (eq. 52, beta 80 deg, rho 1 m)
     b, rho = math.radians(80.0), 1.0
-    I_d, I_a, M, R = 0.25 * 2 * 0.17**2, 0.4 * 2 * 0.17**2, 2.0, 0.17
-    ad = -math.sqrt(M * 9.81 * R**2 / math.tan(b) / ((I_a + M * R**2) * rho + I_d * R * math.cos(b)))
+    ad, gd = precession_rates(b, rho, **PAPER)
     for solver in ("dopri5", "dop853"):
-        paper.start(solver=solver, beta=b, alpha_dot=ad, gamma_dot=-(rho / R + math.cos(b)) * ad,
+        paper.start(solver=solver, beta=b, alpha_dot=ad, gamma_dot=gd,
                     rel_tol=1e-11, abs_tol=1e-13, max_step=100.0)
         t0 = time.perf_counter()
         paper.slave.doStep(0.0, 1000.0)

@@ -21,7 +21,8 @@ sys.path.insert(0, str(ROOT))
 
 from gyrowheel.cli import main as gyrowheel  # noqa: E402
 from gyrowheel.studies import read_table  # noqa: E402
-from gyrowheel.studies.steady import critical_spin, upright_boundary  # noqa: E402
+from gyrowheel.model.steady import critical_spin  # noqa: E402
+from gyrowheel.studies.steady import upright_boundary  # noqa: E402
 
 WHEEL = dict(M=2.0, R=0.17, k_diam=0.25, k_axial=0.4)
 GRAVITY = {"earth": 9.81, "mars": 3.721, "moon": 1.625}

@@ -205,9 +205,7 @@ def boundary(plan: Plan, isum: dict[int, str] | None = None) -> list[tuple[bool,
             sign = "" if op == "tan" else "-"
             expr = f"{sign}({interior(q)} + 2.0 * {v0(n)} * {vk(n)})"
             target = vk(q)
-        elif op == "log":
-            expr = f"({ok[0]} - {I} * rk) * {rec}"
-        elif op == "dq":
+        elif op in ("log", "dq"):
             expr = f"({ok[0]} - {I} * rk) * {rec}"
         elif op == "atan2":
             expr = f"({I} * rk + {ok[0]} * {o0[1]} - {ok[1]} * {o0[0]}) * {rec}"

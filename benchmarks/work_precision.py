@@ -282,7 +282,7 @@ def error_floor(points: list[Point], prefix: str = "gyrowheel") -> float:
 
 
 def table(name: str, points: list[Point]) -> str:
-    """Cheapest time to reach each error, as a multiple of gyrowheel's best (issue 11's table)."""
+    """Cheapest time to reach each error, as a multiple of gyrowheel's best (docs/performance.md's table)."""
     cols = " | ".join(f"{t:.0e}" for t in TARGETS)
     lines = [f"### {name}", "", f"| method | {cols} |", "|---|" + "---|" * len(TARGETS)]
     best = {t: min((s for m, s in cheapest(points, t).items() if m.startswith("gyrowheel")), default=None)

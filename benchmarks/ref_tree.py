@@ -56,6 +56,7 @@ class RefTree:
 
     def __init__(self, ref: str, tmp: Path):
         self.ref = ref
+        Path(tmp).mkdir(parents=True, exist_ok=True)
         if (Path(ref) / "pyproject.toml").is_file():
             self.root = Path(ref).resolve()
         else:

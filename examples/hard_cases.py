@@ -1,7 +1,7 @@
 """Hard cases: where the wheel's equations get hard, and what the FMU does there.
 
-Prints one table (case, solver, result, error, time) for the ten families of the
-hard-cases issue, including the long runs the test suite leaves out (10^4 s of rolling,
+Prints one table (case, solver, result, error, time) for ten families of hard cases,
+including the long runs the test suite leaves out (10^4 s of rolling,
 1000 s of steady precession). docs/hard_cases.md shows a run and says which solver to use where.
 
     python examples/hard_cases.py
@@ -133,7 +133,7 @@ def main() -> int:
                                 beta_min=BETA_MIN_DEFAULT)
         row("2 Euler's disk to 1e-3 rad", solver, f"fell at t = {t:.9f} s (rel_tol 1e-10)",
             f"event {t - ref:+.1e} s", sec)
-    # the thin hoop of issue 8: 52 dips to 0.0135 rad in 100 s, all defaults but the wheel
+    # the thin hoop (tests/test_fall_criterion.py): 52 dips to 0.0135 rad in 100 s, all defaults but the wheel
     hoop = dict(M=1.0, R=1.0, g=100.0, k_diam=0.5, k_axial=1.0, beta=math.pi / 2, beta_dot=0.01, gamma_dot=0.1)
     for solver, tol in (("dopri5", 1e-8), ("dop853", 1e-12)):
         paper.start(solver=solver, rel_tol=tol, abs_tol=tol * 1e-2, **hoop)

@@ -22,7 +22,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
 
 from gyrowheel.cli import main as gyrowheel  # noqa: E402
 from gyrowheel.studies import read_table  # noqa: E402

@@ -34,18 +34,19 @@ def test_dop853_ab_reference_is_a_git_ref_or_a_directory(tmp_path):
     bench = Path(__file__).resolve().parent.parent / "benchmarks"
     sys.path.insert(0, str(bench))
     try:
-        import dop853_ab
+        from ref_tree import RefTree
     finally:
         sys.path.remove(str(bench))
     root = bench.parent
     if shutil.which("git") is None or subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"],
                                                       capture_output=True).returncode != 0:
         pytest.skip("not a git checkout")
-    tree = dop853_ab.reference_tree("HEAD", tmp_path)
-    assert (tree / "fmu_build" / "builder.py").is_file() and (tree / "c_src" / "gw_fastmath.h").is_file()
-    assert dop853_ab.reference_tree(str(root), tmp_path / "x") == root
+    tree = RefTree("HEAD", tmp_path)
+    assert (tree.root / "fmu_build" / "builder.py").is_file() and (tree.root / "c_src" / "gw_fastmath.h").is_file()
+    assert tree.layout == "package"
+    assert RefTree(str(root), tmp_path / "x").root == root
     with pytest.raises(SystemExit, match="neither a directory nor a git ref"):
-        dop853_ab.reference_tree("no-such-ref-xyz", tmp_path / "y")
+        RefTree("no-such-ref-xyz", tmp_path / "y")
     assert "/work/main" not in (bench / "dop853_ab.py").read_text()
 
 

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from gyrowheel.studies.steady import (critical_spin, growth_rate, precession_growth_rate, precession_rates,
-                                    precession_speed, upright_boundary)
+from gyrowheel.model.steady import critical_spin, precession_rates, precession_speed
+from gyrowheel.studies.steady import growth_rate, precession_growth_rate, upright_boundary
 from tests.conftest import CasadiWheel
 
 PAPER = dict(M=2.0, R=0.17, k_diam=0.25, k_axial=0.4, g=9.81)

@@ -187,7 +187,7 @@ def controller_fmu(earth_loop):
     return earth_loop.controller_fmu
 
 
-# ---- `gyrowheel export-c` (test_export_c.py, test_export_c_review.py) ----------------------------
+# ---- `gyrowheel export-c` (test_export_c.py, test_export_c_realtime.py) -------------------------
 
 @pytest.fixture(scope="session")
 def earth(tmp_path_factory) -> Path:

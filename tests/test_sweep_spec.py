@@ -119,3 +119,9 @@ def test_auto_batch_size():
     assert auto_batch_size(10_000, 2) == MAX_BATCH
     assert auto_batch_size(100, 2) == 13
     assert auto_batch_size(3, 8) == 1
+
+
+def test_huge_grids_refused_before_building_them():
+    grid = [parse_grid("M=1:2:100000"), parse_grid("R=0.1:0.2:100000")]
+    with pytest.raises(SweepSpecError, match="10000000000 points"):
+        point_table(grid)

@@ -90,6 +90,12 @@ def paper_model() -> CasadiWheel:
     return CasadiWheel(**PAPER)
 
 
+@pytest.fixture(scope="session")
+def casadi_wheel() -> type[CasadiWheel]:
+    """The CasADi model at parameters of a test's own: casadi_wheel(M=..., k_diam=..., g=...)."""
+    return CasadiWheel
+
+
 def _run_dir(tmp_path_factory) -> Path:
     """The directory of this test run that all of its pytest-xdist workers share: a worker's
     basetemp is <run>/popen-gwN, a run without xdist has its basetemp alone."""

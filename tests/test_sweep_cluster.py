@@ -195,8 +195,8 @@ def test_ctrl_c_while_the_local_cluster_starts(earth_fmu, tmp_path):
 
 def test_both_workers_run_batches(earth_fmu, scheduler, tmp_path):
     """The FMU's bytes are one task's result that every batch depends on; a batch prefers a worker
-    holding its inputs, so before they were replicated every batch ran on the worker that had
-    them and the second sat idle (1 -> 2 workers gave 1.0-1.6x). Each worker's process id, as a
+    holding its inputs, so unless they are replicated every batch runs on the worker that has
+    them and the second sits idle (1 -> 2 workers give 1.0-1.6x). Each worker's process id, as a
     user metric, must appear in the table."""
     metric = tmp_path / "pid.py"
     metric.write_text("import os\ndef pid(traj):\n    return float(os.getpid())\n")
@@ -292,10 +292,11 @@ def _sigint_soon(delay: float) -> None:
 def test_ctrl_c_anywhere_in_a_dask_sweep_ends_cleanly(earth_fmu, scheduler, tmp_path, monkeypatch, landing):
     """SIGINT at a chosen point of a sweep through a scheduler address, the race window held open.
 
-    gather: the reported flake. Ctrl-C while the main thread waits in Future.result (Dask's
-    utils.sync) and the client's IO loop is busy (a loaded machine: here a callback holds it for
-    0.5 s): distributed's cancel callback then read a future its coroutine had not made yet and
-    tornado logged 'Traceback ... ioloop.py, in _run_callback ... NameError' on our stderr.
+    gather: Ctrl-C while the main thread waits in Future.result (Dask's utils.sync) and the
+    client's IO loop is busy (a loaded machine: here a callback holds it for 0.5 s): distributed's
+    cancel callback can then read a future its coroutine has not made yet, and tornado logs
+    'Traceback ... ioloop.py, in _run_callback ... NameError' on our stderr unless the sweep
+    guards against it (an intermittent failure on a loaded machine otherwise).
     submit, write: Ctrl-C while batches go out, while the table is written. Each must end
     with KeyboardInterrupt, a readable table of the points done, no error logged, and nothing of
     the sweep's left on the scheduler."""

@@ -71,7 +71,7 @@ def test_a_programs_own_handler_is_left_alone():
 
 def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, monkeypatch):
     """workers=0 (`--workers 0`): a KeyboardInterrupt in the second batch leaves the first one's
-    rows in the table on disk. The loop ran every point as one batch: 0 rows kept, however long
+    rows in the table on disk. Were every point one batch, a Ctrl-C would keep 0 rows however long
     the sweep had run (gyrowheel sweep ... --workers 0, Ctrl-C after 8 s of 1200 points)."""
     from gyrowheel.studies import execute as ex
 
@@ -97,8 +97,8 @@ def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, mo
 
 def test_ctrl_c_while_the_command_starts_is_exit_130(monkeypatch, capsys):
     """Ctrl-C in the first ~0.5 s of `gyrowheel sweep`, while make_parser imports the subcommands
-    (pandas, dask): exit 130 without a traceback. It came before main's handler: Python's own
-    traceback through studies/api.py's `import pandas` and death by SIGINT (status -2)."""
+    (pandas, dask): exit 130 without a traceback, not Python's own traceback through
+    studies/api.py's `import pandas` and death by SIGINT (status -2) before main's handler."""
     from gyrowheel import cli
 
     def make_parser():
@@ -111,9 +111,10 @@ def test_ctrl_c_while_the_command_starts_is_exit_130(monkeypatch, capsys):
 
 def test_after_a_ctrl_c_the_command_exits_130_whatever_ctrl_c_follows(monkeypatch, default_sigint):
     """`gyrowheel sweep --scheduler ...`, Ctrl-C twice 50 ms apart: 'interrupted: 280 of 1200 points
-    written', then status -2 (killed by the second SIGINT while Python exited, joining Dask's
-    threads) instead of 130, 3 times in 4. Once the command returns 130 as the program (argv from
-    sys.argv), further SIGINTs are ignored; called with argv (a library caller) nothing changes."""
+    written' and exit 130, not status -2 (killed by the second SIGINT while Python exits, joining
+    Dask's threads; 3 times in 4 without this). Once the command returns 130 as the program (argv
+    from sys.argv), further SIGINTs are ignored; called with argv (a library caller) nothing
+    changes."""
     from gyrowheel import cli
 
     def make_parser():

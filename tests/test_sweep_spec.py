@@ -100,8 +100,8 @@ def test_resolver_degrees_presets_enumerations():
     ("solver", "rk5", "valid: euler, rk4"),
     ("solver", 7.0, "not an item"),
     ("solver", 1.5, "not an integer"),
-    # an fmi2Integer is 32 bits (before: ctypes wrapped 3e9 to -1294967296, every point failed
-    # with the FMU's "max_internal_steps = -1294967296 must be ...")
+    # an fmi2Integer is 32 bits: refused here, not wrapped by ctypes to -1294967296 so that every
+    # point fails with the FMU's "max_internal_steps = -1294967296 must be ..."
     ("solver", 3e9, r"is an Enumeration \(32 bits\) and 3000000000.0 is out of its range"),
 ])
 def test_resolver_errors(name, value, message):

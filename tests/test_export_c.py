@@ -165,27 +165,29 @@ def test_capi(mode, earth, earth_gcc, tmp_path):
     assert re.search(r"test_capi: (\d{4,}) checks, 0 failures", r.stderr), r.stderr
 
 
-def test_capi_errors(earth, earth_gcc, tmp_path):
-    """tests/c/test_capi_errors.c built strictly against the export and run: every error reaches
-    the logger once, advances the solver cannot take are refused (see the program's header)."""
-    exe = tmp_path / "test_capi_errors"
-    diagnostics = cc("gcc", *STRICT, "-O2", f"-I{earth}", f"-I{TESTS_C}", TESTS_C / "test_capi_errors.c",
+def _run_against_the_export(program: str, earth: Path, earth_gcc: dict, tmp_path: Path) -> str:
+    """tests/c/<program>.c built strictly (no diagnostic at all) against the export's library
+    object and run: exit 0 and "<program>: N checks, 0 failures" on stderr; returns its stdout."""
+    exe = tmp_path / program
+    diagnostics = cc("gcc", *STRICT, "-O2", f"-I{earth}", f"-I{TESTS_C}", TESTS_C / f"{program}.c",
                      earth_gcc["obj"], "-lm", "-o", exe).stderr
     assert diagnostics == ""
     r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
-    assert r.returncode == 0 and re.search(r"test_capi_errors: \d+ checks, 0 failures", r.stderr), r.stderr
+    assert r.returncode == 0 and re.search(rf"{program}: \d+ checks, 0 failures", r.stderr), r.stderr
+    return r.stdout
+
+
+def test_capi_errors(earth, earth_gcc, tmp_path):
+    """tests/c/test_capi_errors.c: every error reaches the logger once, advances the solver cannot
+    take are refused (see the program's header)."""
+    _run_against_the_export("test_capi_errors", earth, earth_gcc, tmp_path)
 
 
 def test_docs_quote_the_exports_figures(earth, earth_gcc, tmp_path):
     """The state size and the allocations of create that docs/c_api.md quotes are the export's,
     as tests/c/capi_figures.c measures them (a user allocator counts the blocks)."""
-    exe = tmp_path / "capi_figures"
-    diagnostics = cc("gcc", *STRICT, "-O2", f"-I{earth}", f"-I{TESTS_C}", TESTS_C / "capi_figures.c",
-                     earth_gcc["obj"], "-lm", "-o", exe).stderr
-    assert diagnostics == ""
-    r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
-    assert r.returncode == 0 and re.search(r"capi_figures: \d+ checks, 0 failures", r.stderr), r.stderr
-    figures = {k: int(v) for k, v in (line.split() for line in r.stdout.splitlines())}
+    stdout = _run_against_the_export("capi_figures", earth, earth_gcc, tmp_path)
+    figures = {k: int(v) for k, v in (line.split() for line in stdout.splitlines())}
     assert set(figures) == {"state_size", "blocks"}
     text = (ROOT / "docs" / "c_api.md").read_text()
     size, blocks = figures["state_size"], figures["blocks"]

@@ -1,7 +1,8 @@
 /*
  * oscillator_importer.h -- toy_oscillator.c (harmonic oscillator, TERMINATE event "hit" at
  * acos(pos_lim)) as a Co-Simulation importer sees it: its token and value references, and the
- * steps every test of test_oscillator.c and test_oscillator_simulation.c starts from.
+ * steps the tests of test_oscillator.c, test_oscillator_simulation.c and test_solvers_osc.c
+ * start from.
  * Test code only (include after harness.h).
  */
 #ifndef GW_TEST_OSCILLATOR_IMPORTER_H

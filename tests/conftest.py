@@ -83,6 +83,12 @@ def paper_model() -> CasadiWheel:
     return CasadiWheel(**PAPER)
 
 
+@pytest.fixture(scope="session")
+def casadi_wheel() -> type[CasadiWheel]:
+    """The CasADi model at parameters of a test's own: casadi_wheel(M=..., k_diam=..., g=...)."""
+    return CasadiWheel
+
+
 def _run_dir(tmp_path_factory) -> Path:
     """The directory of this test run that all of its pytest-xdist workers share: a worker's
     basetemp is <run>/popen-gwN, a run without xdist has its basetemp alone."""
@@ -180,7 +186,7 @@ def controller_fmu(earth_loop):
     return earth_loop.controller_fmu
 
 
-# ---- `gyrowheel export-c` (test_export_c.py, test_export_c_review.py) ----------------------------
+# ---- `gyrowheel export-c` (test_export_c.py, test_export_c_realtime.py) -------------------------
 
 @pytest.fixture(scope="session")
 def earth(tmp_path_factory) -> Path:

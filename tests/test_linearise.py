@@ -1,4 +1,4 @@
-"""Section 2: linearisation about upright rolling against the analytic modes and simulation."""
+"""Linearisation about upright rolling against the analytic modes and simulation."""
 from __future__ import annotations
 
 import math

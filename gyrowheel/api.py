@@ -261,10 +261,11 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     Raises SweepSpecError naming the argument (`grid['beta_deg'] = '60:89': ...`,
     `fixed['R']: ...`, `stop_time ...`) before anything runs; SweepInterrupted (a
     KeyboardInterrupt) when Ctrl-C stops it, with the table of the points done;
-    MissingExtraError without gyrowheel[sweep]; OSError / TimeoutError for a scheduler that
-    cannot be reached.
+    SceneError for a scene that cannot be read or built; MissingExtraError without
+    gyrowheel[sweep]; OSError / TimeoutError for a scheduler that cannot be reached; TypeError
+    for a source of another kind.
     """
-    arguments = dict(locals())  # every argument, forwarded as given (fixed and source adapted below)
+    arguments = dict(locals())  # every argument, forwarded as given (fixed as strings: parsed below)
     require("sweep", "gyrowheel.sweep()")
     from gyrowheel.studies.api import sweep as run_sweep
     from gyrowheel.studies.spec import parse_assignments
@@ -378,8 +379,9 @@ def system_run(system, *, step: float = 0.01, stop_time: float | None = None, st
             result = run(description, step, stop_time, start_values=starts)
         except GyrowheelError:
             raise
-        except ValueError as exc:  # the master's checks of the step, the stop time, the memory
-            raise ArgumentError(str(exc), argument="stop_time" if str(exc).startswith("stop time") else None) from None
+        except ValueError as exc:  # the master's checks: a stop time off the step grid, a result too large
+            text = str(exc)
+            raise ArgumentError(text, argument="stop_time" if text.startswith("stop time") else None) from None
     if csv is not None:
         write_csv(result.data, csv)
     return result
@@ -400,12 +402,12 @@ def _system_start_values(system, values) -> dict[str, dict[str, object]]:
                                     argument="start_values")
             by_component[component] = dict(own)
     else:
-        given = values if isinstance(values, Mapping) else None
+        keyed = isinstance(values, Mapping)  # else 'COMPONENT.VARIABLE=VALUE' strings
         for key, value in _assignments(values, "start_values").items():
             component, _, variable = key.partition(".")
             if component not in names or not variable:
-                where = f"start_values[{key!r}]" if given is not None else f"start_values {key + '=' + str(value)!r}"
-                form = "COMPONENT.VARIABLE" if given is not None else "COMPONENT.VARIABLE=VALUE"
+                where = f"start_values[{key!r}]" if keyed else f"start_values {key + '=' + str(value)!r}"
+                form = "COMPONENT.VARIABLE" if keyed else "COMPONENT.VARIABLE=VALUE"
                 raise ArgumentError(f"{where}: expected {form} with {listed}", argument="start_values")
             by_component.setdefault(component, {})[variable] = value
     out = {}

@@ -82,12 +82,11 @@ import gyrowheel
 print(sorted(m for m in heavy if m in sys.modules))
 gyrowheel.build, gyrowheel.sweep, gyrowheel.animate, gyrowheel.GyrowheelError, gyrowheel.SweepSpecError
 print(sorted(m for m in {HEAVY!r} if m in sys.modules))
-from gyrowheel.cli import make_parser
-parser = make_parser()
-parser.format_help()
-for action in parser._subparsers._group_actions:
-    for sub in action.choices.values():
-        sub.format_help()
+import contextlib, io
+from gyrowheel.cli import main
+for argv in ([], ["build"], ["simulate"], ["system", "run"], ["export-c"], ["animate"], ["info"], ["sweep"]):
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.suppress(SystemExit):
+        main([*argv, "--help"])
 print(sorted(m for m in {HEAVY!r} if m in sys.modules))
 """
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

@@ -15,12 +15,14 @@ from pathlib import Path
 
 import numpy as np
 
+from gyrowheel.errors import GyrowheelError
+
 REQUIRED = ("time", "x", "y", "alpha", "beta", "gamma")
 GYROVER = ("theta_p", "tilt")
 FLYWHEEL_PARAMETERS = ("L_pend", "m_fly", "I_fly_axial")
 
 
-class AnimationError(ValueError):
+class AnimationError(GyrowheelError, ValueError):
     """Bad input to the animation (file, columns, parameters, options): a one-line message."""
 
 

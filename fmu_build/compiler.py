@@ -15,6 +15,8 @@ from pathlib import Path
 
 import fmpy
 
+from gyrowheel.errors import GyrowheelError
+
 STANDARD = ["-std=c99"]
 WARNINGS = ["-Wall", "-Wextra", "-Wpedantic", "-Werror"]
 OPTIMISE = ["-O2", "-fno-math-errno"]
@@ -28,7 +30,7 @@ OPTIMISE_LARGE = ["-O1", "-fno-math-errno"]
 UNITY_SOURCE = "gw_fmu.c"  # the FMU's only <SourceFiles> entry
 
 
-class CompileError(RuntimeError):
+class CompileError(GyrowheelError, RuntimeError):
     """The C compiler failed; the message carries its output."""
 
 

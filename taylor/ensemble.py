@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build.compiler import compile_shared
 
 __all__ = ["Ensemble", "EnsembleResult", "EnsembleError", "STATUS_OK", "STATUS_TERMINATED",
@@ -178,7 +179,7 @@ GW_EXPORT int {id}_ensemble_run_packed(void *ctx, long n, int n_grid, double *f,
 """
 
 
-class EnsembleError(RuntimeError):
+class EnsembleError(GyrowheelError, RuntimeError):
     """The ensemble library could not be built or a job was refused (the reason is given)."""
 
 

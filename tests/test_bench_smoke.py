@@ -1,4 +1,5 @@
-"""`gyrowheel bench --quick` runs end to end and writes its figure and table (no timing asserted);
+"""The work-precision benchmark (`python benchmarks/work_precision.py --quick`, a study of the
+checkout, run in full by `make bench`) runs end to end and writes its figure and table (no timing asserted);
 the benchmark scripts' helpers (dop853_ab reference tree, taylor_vs_heyoka.to_heyoka) refuse what they
 cannot do."""
 from __future__ import annotations
@@ -12,8 +13,8 @@ from conftest import ROOT
 
 
 def test_bench_quick_writes_figure_and_table(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "gyrowheel", "bench", "--quick", "--scenarios", "paper",
-                        "--out", str(tmp_path)], capture_output=True, text=True, cwd=ROOT, timeout=600)
+    r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "work_precision.py"), "--quick", "--scenarios",
+                        "paper", "--out", str(tmp_path)], capture_output=True, text=True, cwd=tmp_path, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     table = (tmp_path / "work_precision.md").read_text()
     for method in ("gyrowheel/dop853", "gyrowheel/rosenbrock", "gyrowheel/dopri5 (multipliers)", "casadi/cvodes",

@@ -35,7 +35,7 @@ class CompileError(GyrowheelError, RuntimeError):
 
 
 def fmi_headers_dir() -> Path:
-    """FMI 2.0 headers shipped with fmpy (DESIGN.md: not a copy in the repo)."""
+    """FMI 2.0 headers shipped with fmpy, not a copy in the repository (docs/architecture.md)."""
     return Path(fmpy.__file__).parent / "c-code"
 
 

@@ -182,7 +182,7 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
             raise r.fail(table, conflict[0], conflict[1])
     if "gravity" not in effects:
         raise r.fail("effects", None, "[effects.gravity] is required: every FMU exposes g "
-                     "(INTERFACE.md); use g = 0 for a weightless wheel")
+                     "(docs/interface.md); use g = 0 for a weightless wheel")
     conflict = lift_off_conflict(effects)
     if conflict:
         raise r.fail("effects.contact_forces", "on_lift_off", conflict)

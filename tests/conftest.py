@@ -18,7 +18,7 @@ from gyrowheel.model.steady import critical_spin, precession_rates  # noqa: F401
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "examples" / "scenes"
 PAPER = dict(M=2.0, R=0.17, k_diam=0.25, k_axial=0.4, g=9.81)
-STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]  # INTERFACE.md order
+STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]  # docs/interface.md order
 
 
 class CasadiWheel:

@@ -15,7 +15,7 @@
 #include <stddef.h>
 #include <string.h>
 
-#include "gw_fastmath.h" /* gw_fm_step4: the lanes' step sizes */
+#include "gw_solver_taylor_step.h" /* gw_fm_step4: the lanes' step sizes */
 
 /* The passes work on vectors of GW_ENS_V lanes (GCC / clang vector extension: GCC vectorised
  * none of the plain loops): 4 lanes (one AVX2 register) where the lanes are a multiple of 4,

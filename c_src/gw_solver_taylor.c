@@ -57,16 +57,17 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include <math.h>
 #include <string.h>
 
-#include "gw_fastmath.h" /* gw_fm_step: the step size; gw_fm_log, gw_fm_exp (GW_TAYLOR_STEP_FM) */
 #include "gw_solver.h"
+#include "gw_solver_taylor_step.h" /* gw_fm_step: the step size */
 
 /* The rejection rule's ln and exp (a rejected step's shorter retry; the step size itself is
- * gw_fm_step's, gw_taylor_step_size): libm's in the FMU, gw_fastmath.h's in the ensemble library
- * (taylor/ensemble.py: GW_TAYLOR_STEP_FM 1) */
+ * gw_fm_step's, gw_taylor_step_size): libm's in the FMU, gw_fm_logexp.h's in the ensemble library
+ * (GW_TAYLOR_STEP_FM 1) */
 #ifndef GW_TAYLOR_STEP_FM
 #define GW_TAYLOR_STEP_FM 0
 #endif
 #if GW_TAYLOR_STEP_FM
+#include "gw_fm_logexp.h"
 #define GW_TL_LN gw_fm_log
 #define GW_TL_EXP gw_fm_exp
 #else
@@ -116,7 +117,7 @@ GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, doub
     *bad_order = gw_taylor_bad_order(order, n1, n2);
     if (*bad_order) return 0.0;
     /* log2 rho = min_j log2(N_j^(-1/j)), h = 2^(log2 rho + log2 c): gw_fm_step's short log2 and
-     * exp2 (gw_fastmath.h, 6e-6 of the exact rule), the same body as the ensemble's norms pass
+     * exp2 (gw_solver_taylor_step.h, 6e-6 of the exact rule), the same body as the ensemble's norms pass
      * over its lanes (gw_ens_norms, gw_fm_step4) */
     return gw_fm_step(n1, n2, 1.0 / (order - 1), 1.0 / order, run->log2_c);
 }

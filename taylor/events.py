@@ -29,7 +29,7 @@ from gyrowheel.taylor.graph import C_EXPR, OP_NAMES, UNARY, Decomposition
 
 __all__ = ["event_source", "kernel_nodes"]
 
-# ops whose C is not taylor_graph.C_EXPR's: CasADi's generated C takes sin / cos from gw_fastmath.h
+# ops whose C is not taylor_graph.C_EXPR's: CasADi's generated C takes sin / cos from gw_sincos.h
 # (fmu_build/casadi_c.py), and its casadi_sign returns the argument itself where it is neither
 # < 0 nor > 0 (NaN stays NaN, -0.0 stays -0.0; C_EXPR's order-0 sign gives 0.0 there)
 _C = {**C_EXPR, "sin": "gw_sin({0})", "cos": "gw_cos({0})",

@@ -634,7 +634,7 @@ def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path,
     GW_ENSEMBLE_LANE_STEPS=1 (every lane through gw_taylor_step / _defect / _increment on its own
     copy of the series) returns equal steps, times, states and grid outputs, with N not a
     multiple of the lanes, falls at different times, refills and a communication grid.  Both
-    step size forms: the library's gw_fastmath.h ln and exp (4 lanes per vector call against
+    step size forms: the library's gw_fm_logexp.h ln and exp (4 lanes per vector call against
     the scalar calls), and libm's (GW_TAYLOR_STEP_FM 0, the FMU's: a loop over the lanes)."""
     import gyrowheel.taylor.ensemble as ensemble_mod
     assert "#define GW_TAYLOR_STEP_FM 1" in ensemble_mod._UNITY  # the library's default

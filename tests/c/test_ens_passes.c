@@ -20,7 +20,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "gw_fastmath.h"
+#include "gw_solver_taylor_step.h"
 
 #define GW_ENSEMBLE_LANES 4
 #include "gw_ensemble_passes.h"

@@ -62,7 +62,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 /* The rejection rule's ln and exp (a rejected step's shorter retry; the step size itself is
  * gw_fm_step's, gw_taylor_step_size): libm's in the FMU, gw_fm_logexp.h's in the ensemble library
- * (GW_TAYLOR_STEP_FM 1) */
+ * (gw_ensemble_lib.c: GW_TAYLOR_STEP_FM 1) */
 #ifndef GW_TAYLOR_STEP_FM
 #define GW_TAYLOR_STEP_FM 0
 #endif

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from c_programs import C_SRC, STRICT, TESTS_C
-from gyrowheel.taylor.ensemble import STATUS_ERROR, STATUS_OK, Ensemble
+from gyrowheel.taylor.ensemble import STATUS_ERROR, STATUS_OK, Ensemble, library_source
 
 
 @pytest.fixture(scope="module")
@@ -111,23 +111,34 @@ int main(void) {
         if (ID(run)(c, N, P, S, span, tol, status, tf, xf, yf, steps, logger, G, grid, yg, rows, flags))
             return 1;
         printf("%d %d %d %lu %.17g\n", status[0], status[2], status[6], steps[0], xf[0]);
-        if (rep == 0) { /* the same job through run_packed, in a buffer of exactly its layout */
-            const size_t ne = sz[7] > 0 ? (size_t)sz[7] : 1, nf = 5 + G + (size_t)N * (sz[3] + sz[1] + 1
-                             + sz[0] + sz[4]) + (size_t)N * (G + 1) * sz[4];
-            const size_t bytes = 8 * nf + sizeof(long) * 3 * N + sizeof(int) * N * (1 + ne) + N * ne;
-            double *f = malloc(bytes);
-            long *lg = (long *)(f + nf);
-            unsigned char *fl = (unsigned char *)((int *)(lg + 3 * N) + N * (1 + ne));
+        if (rep == 0) { /* the same job through run_packed, in a buffer of exactly the size and
+                         * at the places the library exports (ID(layout), gw_ensemble_lib.c) */
+            const size_t ne = sz[7] > 0 ? (size_t)sz[7] : 1;
+            long at[GW_LIB_N_SECTIONS];
+            double *f;
+            char *b;
+            const long *lg_steps, *lg_rows, *lg_status;
+            const unsigned char *fl;
+            const double *f_tf, *f_xf;
+            if (ID(layout)(N, G, at) != GW_LIB_N_SECTIONS) return 4;
+            if (!(f = malloc((size_t)at[GW_LIB_AT_end]))) return 1;
+            b = (char *)f;
             memcpy(f, span, sizeof span);
             memcpy(f + 2, tol, sizeof tol);
-            memcpy(f + 5, grid, sizeof grid);
-            memcpy(f + 5 + G, P, sizeof(double) * N * sz[3]);
-            memcpy(f + 5 + G + N * sz[3], S, sizeof(double) * N * sz[1]);
-            if (!f || ID(run_packed)(ctx, N, G, f, logger)) return 1;
+            memcpy(b + at[GW_LIB_AT_grid], grid, sizeof grid);
+            memcpy(b + at[GW_LIB_AT_p], P, sizeof(double) * N * sz[3]);
+            memcpy(b + at[GW_LIB_AT_s], S, sizeof(double) * N * sz[1]);
+            if (ID(run_packed)(ctx, N, G, f, logger)) return 1;
+            lg_steps = (const long *)(void *)(b + at[GW_LIB_AT_steps]);
+            lg_rows = (const long *)(void *)(b + at[GW_LIB_AT_n_rows]);
+            lg_status = (const long *)(void *)(b + at[GW_LIB_AT_status]);
+            fl = (const unsigned char *)(b + at[GW_LIB_AT_flags]);
+            f_tf = (const double *)(void *)(b + at[GW_LIB_AT_t_final]);
+            f_xf = (const double *)(void *)(b + at[GW_LIB_AT_x_final]);
             for (k = 0; k < N; k++)
-                if (lg[2 * N + k] != status[k] || (unsigned long)lg[k] != steps[k] || lg[N + k] != rows[k]
-                    || fl[k * ne] != (flags[k * sz[7]] != 0) || f[5 + G + N * (sz[3] + sz[1] + 1) + k * sz[0]]
-                    != xf[k * sz[0]] || f[5 + G + N * (sz[3] + sz[1]) + k] != tf[k])
+                if (lg_status[k] != status[k] || (unsigned long)lg_steps[k] != steps[k] || lg_rows[k] != rows[k]
+                    || fl[k * ne] != (flags[k * sz[7]] != 0) || f_xf[k * sz[0]] != xf[k * sz[0]]
+                    || f_tf[k] != tf[k])
                     return 3;
             free(f);
         }
@@ -148,10 +159,9 @@ def test_ensemble_library_clean_under_sanitizers(paper, tmp_path):
     under AddressSanitizer, LeakSanitizer and UndefinedBehaviorSanitizer; each run gives the
     same numbers."""
     from c_programs import MODE_FLAGS, SANITIZER_ENV
-    from gyrowheel.taylor.ensemble import _UNITY
     src = paper.sources
     prog = tmp_path / "ens.c"
-    prog.write_text(_UNITY.format(id=paper.identifier, lanes=4)
+    prog.write_text(library_source(paper.identifier, 4)
                     + f"#define ID(name) {paper.identifier}_ensemble_##name\n" + DRIVER)
     exe = tmp_path / "ens"
     cmd = ["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", *MODE_FLAGS["sanitizers"], f"-I{src}",
@@ -346,9 +356,9 @@ def test_increments_pass_equals_the_one_lane_increment(paper, tmp_path, cc):
     pass fused two sums fewer: dx differed in 1.2% of the components, P'(h) in 20%, and the
     inline lane-steps left those of the GW_ENSEMBLE_LANE_STEPS=1 build (paper, gamma_dot 1e5 at
     rel_tol 1e-4, slope_hold at 1e-3: 1-2 ulp, found by review18)."""
-    from gyrowheel.taylor.ensemble import _UNITY, FLAGS
+    from gyrowheel.taylor.ensemble import FLAGS
     prog = tmp_path / "incr.c"
-    prog.write_text(_UNITY.format(id=paper.identifier, lanes=4) + '#include "test_ens_increments.c"\n')
+    prog.write_text(library_source(paper.identifier, 4) + '#include "test_ens_increments.c"\n')
     exe = tmp_path / "incr"
     subprocess.run([cc, *STRICT, *FLAGS, f"-I{paper.sources}", f"-I{TESTS_C}", str(prog), "-lm", "-o", str(exe)],
                    check=True)

@@ -409,13 +409,13 @@ def test_kernel_and_ensemble_sources_warning_clean(cc, paper, tmp_path):
     """An FMU with the kernel and its ensemble library build under -std=c99 -Wall -Wextra
     -Wpedantic -Werror with gcc and clang (the target_clones kernel included)."""
     import shutil
-    from gyrowheel.taylor.ensemble import _UNITY
+    from gyrowheel.taylor.ensemble import library_source
     if shutil.which(cc) is None:
         pytest.skip(f"{cc} is not installed (make test installs it: Debian package {cc})")
     src = paper[0].sources
     strict = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-shared", "-fPIC", f"-I{src}"]
     unity = tmp_path / "ens.c"
-    unity.write_text(_UNITY.format(id=paper[0].identifier, lanes=8))
+    unity.write_text(library_source(paper[0].identifier, 8))
     for source in (src / "gw_fmu.c", unity):
         r = subprocess.run([cc, *strict, str(source), "-o", str(tmp_path / "x.so"), "-lm"],
                            capture_output=True, text=True)
@@ -599,6 +599,13 @@ def test_ensemble_bad_job_names_the_field(paper, tmp_path):
     for lanes in (0, -1, 2.5, "4", True):
         with pytest.raises(ValueError, match="lanes must be an integer >= 1"):
             Ensemble(built.fmu, lanes=lanes, cache=tmp_path)
+    # defines: C macros of the build, each a #define line of the library's unity file
+    for defines, message in (({"1X": 1}, "defines: '1X' is not a C identifier"),
+                             ({"GW_X": "1\n#include <x>"}, "defines: GW_X must be an integer or a one-line string"),
+                             ({"GW_X": 1.5}, "defines: GW_X must be an integer or a one-line string"),
+                             ([("GW_X", 1)], "defines must be a {name: value} dict")):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            Ensemble(built.fmu, cache=tmp_path, defines=defines)
 
 
 def test_ensemble_bad_values_name_the_field(paper, tmp_path):
@@ -627,7 +634,7 @@ def test_ensemble_bad_values_name_the_field(paper, tmp_path):
 
 
 @pytest.mark.parametrize("step_fm", [1, 0], ids=["fastmath-step", "libm-step"])
-def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path, monkeypatch, step_fm):
+def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path, step_fm):
     """The batch's lane-innermost passes (gw_ensemble.c: the step size norms, the step sizes, the
     defects, the increments' Horner sums of all lanes at once) give each lane the numbers of
     solver taylor's one-lane code bit for bit: the same library built with
@@ -636,18 +643,15 @@ def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path,
     multiple of the lanes, falls at different times, refills and a communication grid.  Both
     step size forms: the library's gw_fm_logexp.h ln and exp (4 lanes per vector call against
     the scalar calls), and libm's (GW_TAYLOR_STEP_FM 0, the FMU's: a loop over the lanes)."""
-    import gyrowheel.taylor.ensemble as ensemble_mod
-    assert "#define GW_TAYLOR_STEP_FM 1" in ensemble_mod._UNITY  # the library's default
-    if not step_fm:
-        monkeypatch.setattr(ensemble_mod, "_UNITY", "#define GW_TAYLOR_STEP_FM 0\n" + ensemble_mod._UNITY)
+    assert "#define GW_TAYLOR_STEP_FM 1" in (ROOT / "c_src" / "gw_ensemble_lib.c").read_text()  # the library's default
+    defines = {} if step_fm else {"GW_TAYLOR_STEP_FM": 0}
     built, _ = paper
     g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81])
     spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 4.0, 6.1])
     kw = dict(parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-7)
     grid = np.linspace(0.5, 6.0, 12)
-    passes = Ensemble(built.fmu, lanes=4, cache=tmp_path)
-    monkeypatch.setattr(ensemble_mod, "_UNITY", "#define GW_ENSEMBLE_LANE_STEPS 1\n" + ensemble_mod._UNITY)
-    per_lane = Ensemble(built.fmu, lanes=4, cache=tmp_path)
+    passes = Ensemble(built.fmu, lanes=4, cache=tmp_path, defines=defines)
+    per_lane = Ensemble(built.fmu, lanes=4, cache=tmp_path, defines={**defines, "GW_ENSEMBLE_LANE_STEPS": 1})
     for extra in ({}, {"grid": grid}):
         a, b = passes.run(6.0, **kw, **extra), per_lane.run(6.0, **kw, **extra)
         assert 0 < a.terminated.sum() < len(g)
@@ -658,14 +662,13 @@ def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path,
             np.testing.assert_array_equal(a.y_grid, b.y_grid)
 
 
-def test_ensemble_rejected_steps_retry_on_the_lane_series(lunar, tmp_path, monkeypatch):
+def test_ensemble_rejected_steps_retry_on_the_lane_series(lunar, tmp_path):
     """The batch leaves each lane's series in its block and copies it into the lane's instance
     only where solver code reads it (gw_ensemble.c, gw_ens_fetch): a rejected step's retries, a
     landing step, event location (through I->tl_fetch).  On the near-pole case (steps rejected by
     the defect check, in every lane of a full batch) the lazily fetched series give the numbers
     of the build that copies every lane's series every step (GW_ENSEMBLE_LANE_STEPS=1) bit for
     bit, and the error stays at the tolerance against DOP853 at rel_tol 1e-13."""
-    import gyrowheel.taylor.ensemble as ensemble_mod
     from fmi_slave import FmuRunner
     T, tol = 0.004, 1e-9
     assert _rejections(lunar.fmu, None, T, tol)  # the single run rejects steps here
@@ -674,8 +677,8 @@ def test_ensemble_rejected_steps_retry_on_the_lane_series(lunar, tmp_path, monke
     starts = {k: [v] * 4 for k, v in NEAR_FALL.items()}
     starts["gamma_dot"] = [NEAR_FALL["gamma_dot"] * f for f in (1.0, 1.0001, 0.9999, 1.0002)]
     lazy = Ensemble(lunar.fmu, lanes=4, cache=tmp_path).run(T, starts=starts, rel_tol=tol)
-    monkeypatch.setattr(ensemble_mod, "_UNITY", "#define GW_ENSEMBLE_LANE_STEPS 1\n" + ensemble_mod._UNITY)
-    eager = Ensemble(lunar.fmu, lanes=4, cache=tmp_path).run(T, starts=starts, rel_tol=tol)
+    eager = Ensemble(lunar.fmu, lanes=4, cache=tmp_path, defines={"GW_ENSEMBLE_LANE_STEPS": 1}).run(
+        T, starts=starts, rel_tol=tol)
     assert list(lazy.status) == [STATUS_OK] * 4 and list(lazy.steps) == list(eager.steps)
     np.testing.assert_array_equal(lazy.x_final, eager.x_final)
     assert np.max(np.abs(lazy.x_final[0, :8] - ref)) < 100 * tol

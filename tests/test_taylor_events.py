@@ -138,20 +138,18 @@ gamma_dot = 1.0
 """
 
 
-def test_fall_times_as_with_the_event_function(tmp_path, monkeypatch):
+def test_fall_times_as_with_the_event_function(tmp_path):
     """Trajectories that fall at different times (the ensemble, 9 on 4 lanes, refills and the
     one-lane tail): the same steps and fall times as the same library evaluating gw_evt at every
     step (GW_TAYLOR_KERNEL_EVT 0), to the event location's tolerance (1e-12 s relative; the
     kernel's sin(beta) may differ from gw_sin's by a rounding), and the same states to 1e-9."""
-    import gyrowheel.taylor.ensemble as ensemble_mod
     built = build_fmu(parse_scene(FALLS, "scene.toml"), tmp_path / "f.fmu", build_dir=tmp_path / "b",
                       taylor=True)
     assert "GW_TL_HAS_EVT 1" in (tmp_path / "b" / "fmu" / "sources" / "gw_taylor_model.h").read_text()
     kw = dict(parameters={"g": [9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81], "beta_min": 0.1},
               starts={"gamma_dot": [6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 4.0, 6.1]}, rel_tol=1e-8)
     kernel = Ensemble(built.fmu, lanes=4, cache=tmp_path).run(20.0, **kw)
-    monkeypatch.setattr(ensemble_mod, "_UNITY", "#define GW_TAYLOR_KERNEL_EVT 0\n" + ensemble_mod._UNITY)
-    evt = Ensemble(built.fmu, lanes=4, cache=tmp_path).run(20.0, **kw)
+    evt = Ensemble(built.fmu, lanes=4, cache=tmp_path, defines={"GW_TAYLOR_KERNEL_EVT": 0}).run(20.0, **kw)
     assert kernel.terminated.sum() >= 3 and list(kernel.status) == list(evt.status)
     assert list(kernel.steps) == list(evt.steps)
     np.testing.assert_allclose(kernel.t_final, evt.t_final, rtol=0, atol=2e-12 * 20.0)

@@ -115,8 +115,7 @@ static double gw_dd_sum(const gw_instance *I, int init_mode, const gw_dd_unknown
 
 /* the matrix of the current mode at the current point; 0 or reason logged.  Its entries are
  * checked where they are used (gw_dd_check): a non-finite partial of one pair (norm_2's
- * derivative at 0 once made every partial of a multipliers model NaN) must not refuse the
- * others. */
+ * derivative at 0, in a multipliers model) must not refuse the others. */
 static int gw_dd_matrix(gw_instance *I, const char *fn, int init_mode) {
     if (init_mode) {
         if (gw_eval_dini(I, I->t, I->dini_D) != 0) {

@@ -48,7 +48,7 @@
  * these macros at its end.
  *
  * Before including: GW_TL_W (lanes) and GW_TL(name) (the name prefix of this instance).
- * Checked against CasADi's own derivatives: tests/test_taylor.py, tests/test_taylor_kernel.py.
+ * Checked against CasADi's own derivatives and mpmath: tests/test_taylor_kernel.py.
  */
 #include <stdint.h>
 

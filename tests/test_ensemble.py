@@ -15,6 +15,7 @@ import pytest
 
 from c_programs import C_SRC, STRICT, TESTS_C
 from gyrowheel.taylor.ensemble import STATUS_ERROR, STATUS_OK, Ensemble, library_source
+from taylor_helpers import same_results as _same
 
 
 @pytest.fixture(scope="module")
@@ -31,16 +32,6 @@ JOB = dict(parameters={"g": [9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0], "beta_min
 OTHERS = [dict(parameters={"M": [2.0, -1.0]}, rel_tol=1e-6),
           dict(starts={"gamma_dot": [6.0, 1e9, 6.0]}, rel_tol=1e-12),
           dict(starts={"gamma_dot": [4.0]}, rel_tol=1e-4)]
-
-
-def _same(a, b):
-    assert list(a.status) == list(b.status) and list(a.steps) == list(b.steps)
-    np.testing.assert_array_equal(a.t_final, b.t_final)
-    np.testing.assert_array_equal(a.x_final, b.x_final)
-    np.testing.assert_array_equal(a.y_grid, b.y_grid)
-    np.testing.assert_array_equal(a.n_rows, b.n_rows)
-    np.testing.assert_array_equal(a.flags, b.flags)
-    assert a.messages == b.messages
 
 
 def test_runs_reusing_a_context_equal_fresh_runs(paper, tmp_path):
@@ -184,10 +175,9 @@ def test_step_size_passes_equal_the_one_lane_formulas(cc, tmp_path):
     gw_taylor_step_size: gw_fm_step4 in 4-lane vectors against scalar gw_fm_step calls, and within
     its bound of the exact rule), and the order-1 flag that spares gw_taylor_attempt_size its copy
     zero exactly where the lane's derivatives are finite; gw_ens_defects bit for bit
-    gw_taylor_defect's loop, a NaN defect component before finite ones included (the pass let
-    the later finite one replace it: a step accepted that solver taylor rejects).  (Once also
-    compiled with GW_TAYLOR_STEP_FM 0 and 1: since gw_fm_step that macro reaches only the
-    rejection rule, which this program does not include, so both builds were the same program.)"""
+    gw_taylor_defect's loop, a NaN defect component before finite ones included (were the later
+    finite one to replace it, solver taylor would reject a step the pass accepts).  Compiled once:
+    GW_TAYLOR_STEP_FM reaches only the rejection rule, which this program does not include."""
     exe = tmp_path / "passes"
     subprocess.run([cc, *STRICT, "-O2", f"-I{C_SRC}",
                     str(TESTS_C / "test_ens_passes.c"), "-lm", "-o", str(exe)], check=True)
@@ -201,9 +191,8 @@ class _Interrupt(Exception):
 
 def test_context_back_in_the_pool_after_an_interrupted_run(paper, tmp_path):
     """Ctrl-C during a run: the signal's exception is raised as the C call returns, inside
-    Ensemble.run; the context it took must go back to the pool (it was lost at each interrupt:
-    never freed, a new one made by the next run), and the next run reuses it and equals a fresh
-    run."""
+    Ensemble.run; the context it took must go back to the pool (not be lost, never freed, a new
+    one made by the next run), and the next run reuses it and equals a fresh run."""
     import signal
     import threading
 
@@ -330,9 +319,9 @@ def test_a_trajectory_has_the_same_bits_in_any_batch(paper, tmp_path, lanes):
     the batch size and the order): 11 trajectories (falls at different times, so the job ends
     with few lanes active) each equal, bit for bit, to its run alone and in the reversed job,
     with and without a grid.  The one-lane kernel for a job's tail (GW_ENSEMBLE_SINGLE_MAX > 0)
-    broke this: the library's FMA contraction rounds it unlike the lane kernel (found by review18:
-    a lone trajectory differed at 1e-13 from itself in a batch; a sweep's fall_time, min_beta,
-    final_x ... differed between batch_size 14 and 1)."""
+    breaks this: the library's FMA contraction rounds it unlike the lane kernel (a lone
+    trajectory 1e-13 from itself in a batch; a sweep's fall_time, min_beta, final_x ... apart
+    between batch_size 14 and 1)."""
     ens = Ensemble(paper.fmu, lanes=lanes, cache=tmp_path)
     g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81, 2.0, 9.81])
     spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 11.0, 0.8, 6.0, 2.5])
@@ -352,10 +341,10 @@ def test_a_trajectory_has_the_same_bits_in_any_batch(paper, tmp_path, lanes):
 def test_increments_pass_equals_the_one_lane_increment(paper, tmp_path, cc):
     """gw_ens_increments (dx and P'(h) of all lanes) bit for bit gw_taylor_increment lane by lane,
     compiled as the ensemble library is (its unity file and flags: FMA contraction in the
-    x86-64-v3 clones), on random series (tests/c/test_ens_increments.c).  Before the fix the
-    pass fused two sums fewer: dx differed in 1.2% of the components, P'(h) in 20%, and the
-    inline lane-steps left those of the GW_ENSEMBLE_LANE_STEPS=1 build (paper, gamma_dot 1e5 at
-    rel_tol 1e-4, slope_hold at 1e-3: 1-2 ulp, found by review18)."""
+    x86-64-v3 clones), on random series (tests/c/test_ens_increments.c).  A pass fusing two sums
+    fewer gives dx apart in 1.2% of the components, P'(h) in 20%, and inline lane-steps 1-2 ulp
+    apart from those of the GW_ENSEMBLE_LANE_STEPS=1 build (paper, gamma_dot 1e5 at rel_tol
+    1e-4, slope_hold at 1e-3)."""
     from gyrowheel.taylor.ensemble import FLAGS
     prog = tmp_path / "incr.c"
     prog.write_text(library_source(paper.identifier, 4) + '#include "test_ens_increments.c"\n')
@@ -371,10 +360,10 @@ def test_lane_counts_two_and_more_give_the_same_bits(paper, tmp_path):
     """Ensemble(fmu, lanes=3 / 16) and the default 4: the same steps and values bit for bit (each
     lane's kernel slice and passes do the same operations, and a job's tail stays in the lane
     kernel: with the one-lane tail kernel, GW_ENSEMBLE_SINGLE_MAX 1 of 3 and 6 of 16, the widths
-    were 1e-13 apart in some trajectories).  lanes = 1 runs the scalar kernel, contracted
+    are 1e-13 apart in some trajectories).  lanes = 1 runs the scalar kernel, contracted
     otherwise: equal to rounding
-    (tests/test_taylor.py::test_ensemble_lanes_tail_and_refill_equal_the_single_runs)."""
-    rng = np.random.default_rng(5)  # 13 trajectories, 5 of which were apart at 8 or 16 lanes
+    (tests/test_ensemble_runs.py::test_ensemble_lanes_tail_and_refill_equal_the_single_runs)."""
+    rng = np.random.default_rng(5)  # 13 trajectories, 5 of which the one-lane tail kernel sets apart
     starts = {"gamma_dot": rng.uniform(0.5, 12.0, 13), "beta": rng.uniform(0.9, 1.55, 13)}
     for extra in ({}, {"grid": np.linspace(0.3, 6.0, 20)}):
         kw = dict(parameters={"beta_min": np.full(13, 0.3)}, starts=starts, rel_tol=1e-9, **extra)

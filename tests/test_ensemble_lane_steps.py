@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from gyrowheel.taylor.ensemble import STATUS_ERROR, STATUS_OK, STATUS_TERMINATED, Ensemble
-from test_ensemble import _same  # every result field equal, messages too
+from taylor_helpers import same_results as _same  # every result field equal, messages too
 
 
 @pytest.fixture(scope="module")
@@ -37,8 +37,7 @@ def test_paper_lanes_falling_refused_and_on_a_grid_equal_the_solver_code(paper, 
     refilled at once), a fast one (gamma_dot 1e4: 60,000 steps beside the others' hundred), at
     1e-7 one refused by the budget's projection (gamma_dot 1e9: 'max_internal_steps'), the rest
     run to the end beside them; without and with a communication grid (every lane lands on each
-    point, its budget and guard starting anew).  (Fast spins, which differed between the two
-    builds until the increments pass fused its sums as gw_taylor_increment does:
+    point, its budget and guard starting anew).  (Fast spins:
     test_fast_spin_and_early_stick_equal_the_solver_code.)"""
     inline, per_lane = _both(paper.fmu, tmp_path)
     g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81, 9.81, 2.0])
@@ -85,10 +84,10 @@ def test_stick_slip_updates_beside_ordinary_steps_equal_the_solver_code(slope, t
 
 
 def test_fast_spin_and_early_stick_equal_the_solver_code(paper, slope, tmp_path):
-    """Found by review18: gamma_dot 1e5 at rel_tol 1e-4 (70,000 steps, first apart at step
-    3100) and slope_hold at rel_tol 1e-3 (order 7: a stick event, then one landing step) differed
-    between the builds by 1-2 ulp: the increments pass (gw_ens_increments) fused two sums fewer
-    than gw_taylor_increment under the library's FMA contraction (tests/c/test_ens_increments.c)."""
+    """gamma_dot 1e5 at rel_tol 1e-4 (70,000 steps) and slope_hold at rel_tol 1e-3 (order 7: a
+    stick event, then one landing step): the builds 1-2 ulp apart (from step 3100 on) if the
+    increments pass (gw_ens_increments) fuses fewer sums than gw_taylor_increment under the
+    library's FMA contraction (tests/c/test_ens_increments.c)."""
     inline, per_lane = _both(paper.fmu, tmp_path)
     kw = dict(parameters={"beta_min": [0.1] * 4}, starts={"gamma_dot": [1e5, 6.0, 3e4, 0.5]}, rel_tol=1e-4)
     for grid in (None, [0.25, 0.5, 1.0]):

@@ -111,7 +111,7 @@ def test_include_with_sincos_only():
 
 def test_pair_keeps_the_second_argument_written_first():
     """sin(cos x) and cos(cos x) beside sin x: the second gw_sincos reads the first's output,
-    which a gw_sincos2 at the second line would read before assigning it (found in review)."""
+    which a gw_sincos2 at the second line would read before assigning it."""
     one = "  casadi_real gw_s0, gw_c0; gw_sincos(a0, &gw_s0, &gw_c0); a1=gw_c0;"
     two = "  casadi_real gw_s1, gw_c1; gw_sincos(a1, &gw_s1, &gw_c1); a2=gw_s1;"
     lines = [one, two]
@@ -185,9 +185,8 @@ FLAG_SETS = {
 def test_error_under_a_parent_projects_flags(cc, flags, tmp_path):
     """gw_sincos / gw_sincos2 compiled with a parent project's -ffast-math (the C export allows
     it with -fno-finite-math-only) keep the reduction's extra bits: at most 4 ulp (IEEE flags: 1)
-    over [-1e5, 1e5], [-3.5, 3.5] and next to multiples of pi/2.  Before GW_FM_KEEP the
-    reassociated reduction gave 1e6 ulp near pi and 1e12 ulp near multiples of pi around 5e4
-    (found in review)."""
+    over [-1e5, 1e5], [-3.5, 3.5] and next to multiples of pi/2.  Without GW_FM_KEEP the
+    reassociated reduction is 1e6 ulp off near pi and 1e12 ulp near multiples of pi around 5e4."""
     if "x86-64-v3" in " ".join(FLAG_SETS[flags]):
         import platform
         if platform.machine() not in ("x86_64", "AMD64"):

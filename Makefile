@@ -3,7 +3,8 @@
 #               run's animation (GIF and interactive HTML) to results/; the Gyrover closed
 #               loop (earth, moon: turn and figure eight) with its plots and animations to
 #               results/system/
-#   make test   installs what the tests need (Debian's chromium too, as root) and runs them all
+#   make test   installs what the tests need (Debian's chromium too, as root) and runs them all;
+#               one builds the wheel and installs it into a fresh environment (pip, from PyPI)
 #   make bench  the work-precision benchmark (results/bench/*.png, work_precision.md)
 #   make realtime  the exported C in a 1 kHz fixed-step loop (results/c/realtime.md, docs/c_api.md)
 PYTHON ?= python3
@@ -90,4 +91,4 @@ realtime: $(STAMP)
 	$(PY) examples/c_realtime.py --out results/c
 
 clean:
-	rm -rf results build .pytest_cache
+	rm -rf results build dist .pytest_cache

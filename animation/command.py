@@ -37,18 +37,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Write the animation and say what was written. Raises AnimationError for bad input."""
-    from gyrowheel.animation import animate
+    """Write the animation (gyrowheel.animate) and say what was written. Raises AnimationError
+    for bad input (its engine_text in the command's flags: gyrowheel.wording)."""
+    from gyrowheel.api import animate
 
     output = Path(args.output or Path(args.result).with_suffix(".gif").name)
-    size = parse_size(args.size)
-    tl = animate(args.result, output, R=args.R, fmu=args.fmu, component=args.component, fps=args.fps, speed=args.speed, size=size,
-                 trail=args.trail, start=args.start, stop=args.stop)
+    tl = animate(args.result, output, R=args.R, fmu=args.fmu, component=args.component, fps=args.fps,
+                 speed=args.speed, size=args.size, trail=args.trail, start=args.start, stop=args.stop)
+    size = tl.options.size
     t0, t1 = tl.time[0], tl.time[-1]
     what = f"{len(tl.time)} frame{'s' * (len(tl.time) != 1)} at {args.fps:g} fps" + ("" if output.suffix.lower() == ".html"
                                                            else f", {size[0]}x{size[1]}")
+    source = {"R": "--R"}.get(tl.parameters.source["R"], tl.parameters.source["R"])  # a radius given: by --R
     print(f"wrote {output}: {what}, t = {t0:g} .. {t1:g} s at ×{args.speed:g} (R = {tl.parameters.R:g} m "
-          f"from {tl.parameters.source['R']})")
+          f"from {source})")
     defaults = [n for n, s in tl.parameters.source.items() if s == "model default"]
     if defaults:
         print(f"note: flywheel geometry {', '.join(defaults)} from the model's defaults; pass --fmu for the run's",

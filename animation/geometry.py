@@ -1,7 +1,7 @@
 """Where every drawn part of the wheel is: poses from the coordinates, by the model's own kinematics.
 
 The picture must use exactly the FMU's conventions, so the poses are not re-derived here: CasADi
-evaluates model/kinematics.py's WheelKinematics (paper section 2, INTERFACE.md):
+evaluates model/kinematics.py's WheelKinematics (paper section 2, docs/interface.md):
 - centre C = (x, y, R sin beta) (holonomic constraint, eq. 21), beta = pi/2 upright;
 - the frame {l, m, n} of eqs. (9)-(11): l from the centre towards the contact point, m = -(cos alpha,
   sin alpha, 0) horizontal, n the axle;

@@ -1,6 +1,6 @@
 """A result table (CSV as `gyrowheel simulate` writes it) and the parameters its picture needs.
 
-Columns are read by name (INTERFACE.md): time, x, y, alpha, beta, gamma are required; the Gyrover's
+Columns are read by name (docs/interface.md): time, x, y, alpha, beta, gamma are required; the Gyrover's
 theta_p and tilt (model/effects/gyrover.py) add the flywheel; z, contact_x, contact_y, vx, vy are
 used when present. A system's result (`gyrowheel system run`: "<component>.<variable>" columns)
 is read through the component whose columns carry the wheel (chosen by name when several do).
@@ -15,12 +15,14 @@ from pathlib import Path
 
 import numpy as np
 
+from gyrowheel.errors import GyrowheelError
+
 REQUIRED = ("time", "x", "y", "alpha", "beta", "gamma")
 GYROVER = ("theta_p", "tilt")
 FLYWHEEL_PARAMETERS = ("L_pend", "m_fly", "I_fly_axial")
 
 
-class AnimationError(ValueError):
+class AnimationError(GyrowheelError, ValueError):
     """Bad input to the animation (file, columns, parameters, options): a one-line message."""
 
 

@@ -13,13 +13,12 @@ machine: re-measure on a quiet one.
     python benchmarks/dop853_ab.py [--ref main | --ref DIR] [--scenarios paper long near_flat] [--solver dopri5]
 
 --ref: a directory holding another checkout, or a git ref of this repository (exported with
-`git archive` into a temporary directory).
+`git archive` into a temporary directory), in either layout of the project
+(benchmarks/ref_tree.py): the reference's FMU is built by its own code.
 """
 from __future__ import annotations
 
 import argparse
-import os
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -28,9 +27,9 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent))
 
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
+from ref_tree import RefTree  # noqa: E402
 from taylor_vs_heyoka import TARGETS, SameGraph, rows_against_heyoka  # noqa: E402
 from work_precision import SCENARIOS, SOLVER_CODES  # noqa: E402
 
@@ -39,41 +38,23 @@ from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
 TOLS = [10.0 ** -k for k in range(3, 15)]
 
 
-def reference_tree(ref: str, tmp: Path) -> Path:
-    """The checkout to compare against: ref itself if it is a directory, else the git ref of this
-    repository exported into tmp/ref.  Raises SystemExit naming ref when it is neither."""
-    if Path(ref).is_dir():
-        return Path(ref).resolve()
-    root = HERE.parent
-    archive = subprocess.run(["git", "-C", str(root), "archive", "--format=tar", ref], capture_output=True)
-    if archive.returncode != 0:
-        raise SystemExit(f"dop853_ab: --ref {ref!r} is neither a directory nor a git ref of {root}: "
-                         f"{archive.stderr.decode(errors='replace').strip()}")
-    out = tmp / "ref"
-    out.mkdir(parents=True)
-    subprocess.run(["tar", "-x", "-C", str(out)], input=archive.stdout, check=True)
-    return out
-
-
-def build_ref(ref: Path, name: str, work: Path) -> Path:
-    """The scenario's FMU built by the reference checkout's own fmu_build (a subprocess)."""
+def build_ref(ref: RefTree, name: str, work: Path) -> Path:
+    """The scenario's FMU built by the reference's own fmu_build (a subprocess in its tree)."""
     text, _ = SCENARIOS[name]
     scene = f'[model]\nname = "ab_{name}"\n' + text
-    fmu, bdir = str(work / "ref.fmu"), str(work / "refb")
-    code = ("from pathlib import Path; from fmu_build import build_fmu, parse_scene; "
-            f"build_fmu(parse_scene({scene!r}, {name + '.toml'!r}), Path({fmu!r}), build_dir=Path({bdir!r}))")
-    subprocess.run([sys.executable, "-c", code], check=True, cwd=ref,
-                   env=dict(os.environ, PYTHONPATH=str(ref)))
+    ref.python(f"import sys; from pathlib import Path; from {ref.module('gyrowheel.fmu_build')} import build_fmu, "
+               "parse_scene; build_fmu(parse_scene(sys.argv[1], sys.argv[2]), Path(sys.argv[3]), "
+               "build_dir=Path(sys.argv[4]))", scene, f"{name}.toml", str(work / "ref.fmu"), str(work / "refb"))
     return work / "ref.fmu"
 
 
-def run(name: str, ref: Path, work: Path, repeat: int, solver: str = "dop853", label: str | None = None) -> list[str]:
+def run(name: str, ref: RefTree, work: Path, repeat: int, solver: str = "dop853") -> list[str]:
     text, stop = SCENARIOS[name]
     work = work / name
     work.mkdir()
     built = build_fmu(parse_scene(f'[model]\nname = "ab_{name}"\n' + text, f"{name}.toml"),
                       work / "new.fmu", build_dir=work / "newb")
-    fmus = {"this tree": built.fmu, f"ref ({label or ref})": build_ref(ref, name, work)}
+    fmus = {"this tree": built.fmu, f"ref ({ref.ref})": build_ref(ref, name, work)}
     g = SameGraph(built, stop)
     names, ref_x = g.names, g.ref
     runners = {k: FmuRunner(v) for k, v in fmus.items()}
@@ -112,9 +93,9 @@ def main() -> int:
     parser.add_argument("--solver", default="dop853", choices=["dop853", "dopri5", "rosenbrock"])
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="gw-dop853-ab-") as tmp:
-        ref = reference_tree(args.ref, Path(tmp))
+        ref = RefTree(args.ref, Path(tmp))
         for name in args.scenarios:
-            print("\n".join(run(name, ref, Path(tmp), args.repeat, args.solver, label=args.ref)), flush=True)
+            print("\n".join(run(name, ref, Path(tmp), args.repeat, args.solver)), flush=True)
     return 0
 
 

@@ -1,4 +1,4 @@
-"""The ensemble path's time per trajectory against heyoka's batch mode, measured in one run (issue 11).
+"""The ensemble path's time per trajectory against heyoka's batch mode, measured in one run.
 
 Scenario paper (earth, 20 s; --scenario long, near_flat: benchmarks/work_precision.py).  For each target error (max abs error of the 8 states at 20 s
 against heyoka in long double at tol 1e-19) the cheapest tolerance reaching it is found first,
@@ -15,9 +15,10 @@ Every time is thread CPU time, best of --repeat, the methods interleaved; ratios
 per-trajectory times in this one run (absolute times on a loaded machine are not to be quoted).
 Also the fixed cost of one run: N = 1 to t_end = 1 ms (a handful of steps), and N = 4 to
 1e-9 s at rel_tol 1e-4 (what a run of the 1e-4 rows pays besides its steps).
---against REF (a git revision, e.g. main) also times REF's ensemble (the same scene built by
-REF's whole tree: its generator, c_src/ and taylor/ensemble.py; 4 lanes, at gyrowheel's
-tolerances), interleaved: before and after a change in the same run.
+--against REF (a git revision, e.g. main, or a checkout directory; either layout of the project:
+benchmarks/ref_tree.py) also times REF's ensemble (the same scene built by REF's whole tree: its
+generator, c_src/ and its Ensemble; 4 lanes, at gyrowheel's tolerances), interleaved: before and
+after a change in the same run.
 
     python benchmarks/ensemble_scaling.py [--scenario paper] [--n 1 4 16 64] [--lanes 1 4 8]
         [--targets 1e-4 1e-10] [--against main]
@@ -25,12 +26,7 @@ tolerances), interleaved: before and after a change in the same run.
 from __future__ import annotations
 
 import argparse
-import importlib.util
-import io
-import os
-import subprocess
 import sys
-import tarfile
 import tempfile
 from pathlib import Path
 
@@ -38,8 +34,8 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent))
 
+from ref_tree import RefTree  # noqa: E402
 from taylor_vs_heyoka import SameGraph, to_heyoka  # noqa: E402
 from work_precision import SCENARIOS, best_time  # noqa: E402
 
@@ -68,27 +64,16 @@ def best_of_many(fn, k: int) -> float:
 
 
 def ensemble_at(ref: str, scene: str, work: Path, lanes: int = 4):
-    """The Ensemble of git revision ref on the same scene: its whole tree (git archive), its
-    generator building the FMU (in a subprocess: the generated C and the runtime change
-    together, e.g. the event indicators' hoisted part), its taylor/ensemble.py compiling and
-    running it."""
-    root = HERE.parent
-    tar = subprocess.run(["git", "-C", str(root), "archive", ref], capture_output=True, check=True).stdout
-    src = work / f"ref-{ref}"
-    with tarfile.open(fileobj=io.BytesIO(tar)) as t:
-        t.extractall(src)
-    out = work / f"ref-{ref}.fmu"
-    build = ("import sys; from pathlib import Path; from fmu_build import build_fmu, parse_scene; "
-             "build_fmu(parse_scene(sys.argv[1], 'scene.toml'), Path(sys.argv[2]), "
-             "build_dir=Path(sys.argv[3]), taylor=True)")
-    subprocess.run([sys.executable, "-c", build, scene, str(out), str(work / f"ref-{ref}-build")],
-                   cwd=src, env={**os.environ, "PYTHONPATH": str(src), "PYTHONDONTWRITEBYTECODE": "1"},
-                   check=True)
-    spec = importlib.util.spec_from_file_location(f"ensemble_{ref}", src / "fmu_build" / "ensemble.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod.Ensemble(out, lanes=lanes, cache=work / "ens")
+    """The Ensemble of version ref (a git revision or a checkout directory) on the same scene: its
+    whole tree, its generator building the FMU (in a subprocess: the generated C and the runtime
+    change together, e.g. the event indicators' hoisted part), its Ensemble (loaded into this
+    process) compiling and running it."""
+    tree = RefTree(ref, work)
+    out = Path(tempfile.mkdtemp(prefix="ref-fmu-", dir=work)) / "ref.fmu"
+    tree.python(f"import sys; from pathlib import Path; from {tree.module('gyrowheel.fmu_build')} import build_fmu, "
+                "parse_scene; build_fmu(parse_scene(sys.argv[1], 'scene.toml'), Path(sys.argv[2]), "
+                "build_dir=Path(sys.argv[3]), taylor=True)", scene, str(out), str(out.parent / "build"))
+    return tree.load("gyrowheel.taylor.ensemble").Ensemble(out, lanes=lanes, cache=work / "ens")
 
 
 def main() -> int:

@@ -2,8 +2,8 @@
 
 Every number is printed next to a peer measured in the same run:
 - RHS: the generated C (compiled with the FMU's own portable flags) versus the minimal
-  hand-written closed form of the wheel (benchmarks/minimal_wheel.h, issue 11's target: within
-  1.2x) and versus the same CasADi Function evaluated by CasADi's virtual machine from Python.
+  hand-written closed form of the wheel (benchmarks/minimal_wheel.h; docs/performance.md's
+  target: within 1.2x) and versus the same CasADi Function evaluated by CasADi's virtual machine from Python.
 - 20 s scenario at rel_tol 1e-8: one fmi2DoStep(0, 20) of the FMU's DOPRI5, fmpy's
   simulate_fmu with 2001 output points, and CasADi's cvodes integrator on the same model.
 

@@ -16,13 +16,11 @@ Cluster start-up is measured separately and excluded from the per-point figures.
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from gyrowheel.studies import plan_sweep  # noqa: E402
 from gyrowheel.studies.execute import run_dask, run_loop  # noqa: E402

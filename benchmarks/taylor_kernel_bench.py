@@ -8,9 +8,11 @@ calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8, 16 at 
 15 (rel_tol 1e-4, 1e-7, 1e-10, 1e-12) and the ratio of a W-lane call to a one-lane call (the
 cost of W trajectories against one: 1 would be perfect vectorisation, W none at all).
 
-With --baseline REF the kernel generator of that git ref (taylor/kernel_c.py, taylor_graph.py
-and, where REF has it, taylor_rewrite.py; c_src/gw_taylor_ops.h, gw_taylor.c) is timed in the same rounds, and its states' series are compared with
-this tree's (they differ by rounding only: the summation order).  Timings on a loaded machine
+With --baseline REF (a git ref or a checkout directory, either layout: benchmarks/ref_tree.py)
+the kernel that REF's generator writes for the same ode (its taylor/kernel_c.py, or
+fmu_build/taylor_c.py in the top-level layout), compiled with REF's c_src/gw_taylor_ops.h,
+gw_taylor.c and runtime headers, is timed in the same rounds, and its states' series are
+compared with this tree's (they differ by rounding only: the summation order).  Timings on a loaded machine
 are noisy: compare ratios from one run; re-measure absolute times on a quiet machine.
 
     python benchmarks/taylor_kernel_bench.py [--scene examples/scenes/paper_earth.toml]
@@ -20,7 +22,7 @@ from __future__ import annotations
 
 import argparse
 import ctypes
-import importlib
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -29,12 +31,14 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(HERE))
+
+from ref_tree import RefTree  # noqa: E402
 
 from gyrowheel.fmu_build import build_fmu, load_scene  # noqa: E402
 from gyrowheel.fmu_build.codegen import taylor_ode  # noqa: E402
 from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, compiler  # noqa: E402
+from gyrowheel.fmu_build.runtime import RUNTIME_DIR  # noqa: E402
 from gyrowheel.taylor.ensemble import FLAGS as ENSEMBLE_FLAGS  # noqa: E402
 
 DRIVER = r"""#define _POSIX_C_SOURCE 199309L
@@ -83,44 +87,31 @@ def _ptr(a: np.ndarray):
     return a.ctypes.data_as(_D)
 
 
-def baseline_source(ref: str, ode, model: str, out: Path) -> None:
-    """gw_taylor_model.h and gw_taylor_ops.h of git ref `ref`'s generator, into out."""
-    def show(path: str) -> str:
-        return subprocess.run(["git", "-C", str(ROOT), "show", f"{ref}:{path}"], check=True,
-                              capture_output=True, text=True).stdout
-    pkg = out / "py"
-    pkg.mkdir(parents=True)
-    tag = "gwbase_" + "".join(ch for ch in ref if ch.isalnum())
-    have = subprocess.run(["git", "-C", str(ROOT), "ls-tree", "--name-only", ref, "fmu_build/"],
-                          check=True, capture_output=True, text=True).stdout.split()
-    parts = [m for m in ("graph", "c", "rewrite") if f"fmu_build/taylor_{m}.py" in have]
-    for m in parts:  # the generator's modules of ref, importing each other, not this tree's
-        text = show(f"fmu_build/taylor_{m}.py")
-        for other in parts:
-            text = text.replace(f"gyrowheel.fmu_build.taylor_{other} ", f"{tag}_{other} ").replace(
-                f"gyrowheel.fmu_build.taylor_{other}\n", f"{tag}_{other}\n")
-        (pkg / f"{tag}_{m}.py").write_text(text)
+def baseline_source(ref: RefTree, ode, model: str, out: Path) -> None:
+    """gw_taylor_model.h of `ref`'s generator for `ode` (run in ref's tree, a subprocess: the ode
+    passes as a file of casadi.Function.save), and ref's gw_taylor_ops.h and gw_taylor.c, into
+    out."""
+    out.mkdir(parents=True, exist_ok=True)
+    ode_file = out / "ode.casadi"
+    ode.save(str(ode_file))
+    ref.python(f"import sys; import casadi as ca; from {ref.module('gyrowheel.taylor.graph')} import decompose; "
+               f"from {ref.module('gyrowheel.taylor.kernel_c')} import taylor_source; "
+               "text = taylor_source(decompose(ca.Function.load(sys.argv[1])), sys.argv[2]); "
+               "open(sys.argv[3], 'w').write(text)", str(ode_file), model, str(out / "gw_taylor_model.h"))
     for name in ("gw_taylor_ops.h", "gw_taylor.c"):
-        (out / name).write_text(show(f"c_src/{name}"))
-    sys.path.insert(0, str(pkg))
-    try:
-        mod = importlib.import_module(f"{tag}_c")
-        graph = importlib.import_module(f"{tag}_graph")
-        (out / "gw_taylor_model.h").write_text(mod.taylor_source(graph.decompose(ode), model))
-    finally:
-        sys.path.remove(str(pkg))
+        shutil.copy(ref.file(f"c_src/{name}"), out / name)
 
 
 class Kernel:
     """One compiled instance: a kernel directory at a lane count."""
 
-    def __init__(self, src: Path, lanes: int, work: Path, name: str):
+    def __init__(self, src: Path, lanes: int, work: Path, name: str, runtime: Path = RUNTIME_DIR):
         self.lanes = lanes
         c = work / f"{name}_w{lanes}.c"
         c.write_text(DRIVER.format(lanes=lanes))
         lib = work / f"{name}_w{lanes}.so"
         flags = [*STANDARD, *OPTIMISE] if lanes == 1 else ["-std=c99", *ENSEMBLE_FLAGS]
-        subprocess.run([compiler(), *flags, "-shared", "-fPIC", f"-I{src}", f"-I{ROOT / 'c_src'}",
+        subprocess.run([compiler(), *flags, "-shared", "-fPIC", f"-I{src}", f"-I{runtime}",
                         str(c), "-o", str(lib), "-lm"], check=True)
         self.lib = ctypes.CDLL(str(lib))
         self.lib.bench_time.restype = ctypes.c_double
@@ -150,8 +141,8 @@ class Kernel:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scene", default=str(ROOT / "examples/scenes/paper_earth.toml"))
-    parser.add_argument("--baseline", help="git ref whose kernel generator to time alongside")
+    parser.add_argument("--scene", default=str(HERE.parent / "examples/scenes/paper_earth.toml"))
+    parser.add_argument("--baseline", help="git ref or checkout directory whose kernel generator to time alongside")
     parser.add_argument("--lanes", type=int, nargs="*", default=[1, 4, 8, 16])
     parser.add_argument("--orders", type=int, nargs="*", default=[6, 10, 13, 15])
     parser.add_argument("--rounds", type=int, default=15)
@@ -167,12 +158,13 @@ def main() -> int:
         x0 = np.array(fns["init"](s0, p)).ravel()
         u = np.array([q.start for q in built.spec.inputs], dtype=float)
         nx = x0.size
-        variants = {"this tree": built.sources}
+        variants = {"this tree": (built.sources, RUNTIME_DIR)}
         if args.baseline:
+            ref = RefTree(args.baseline, work)
             base = work / "base"
-            baseline_source(args.baseline, taylor_ode(fns), scene.name, base)
-            variants[args.baseline] = base
-        kernels = {(v, W): Kernel(src, W, work, f"k{i}") for i, (v, src) in enumerate(variants.items())
+            baseline_source(ref, taylor_ode(fns), scene.name, base)
+            variants[args.baseline] = (base, ref.file("c_src"))
+        kernels = {(v, W): Kernel(src, W, work, f"k{i}", runtime) for i, (v, (src, runtime)) in enumerate(variants.items())
                    for W in args.lanes}
         print(f"{args.scene}: {nx} states; work series: "
               + ", ".join(f"{v} {kernels[(v, args.lanes[0])].nvar}" for v in variants))

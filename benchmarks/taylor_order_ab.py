@@ -1,10 +1,12 @@
-"""The order rule of solver taylor, measured: time to reach each error for several rules (issue 11).
+"""The order rule of solver taylor, measured: time to reach each error for several rules.
 
 Builds each scenario's FMU once (taylor=True), then recompiles its own sources into variants:
-  base      the sources as they are (or, with --base REV, gw_solver_taylor.c and gw_solver.h of
-            git revision REV put in their place, and the Taylor kernel of REV's generator:
-            gw_taylor_model.h from its taylor/kernel_c.py, its gw_taylor_ops.h and
-            gw_taylor.c; the step rule and the kernel before a change, in the same run)
+  now       the sources as they are
+  REV       with --base REV (a git revision or a checkout directory, either layout:
+            benchmarks/ref_tree.py): REV's gw_solver_taylor.c and gw_solver.h in their place,
+            and the Taylor kernel of REV's generator (gw_taylor_model.h as REV writes it, REV's
+            gw_taylor_ops.h and gw_taylor.c): the step rule and the kernel before a change, in
+            the same run
   +k        the same sources with -DGW_TAYLOR_EXTRA_ORDER=k (a fixed k orders above p0)
 and times every variant at every (rel_tol, abs_tol) interleaved (one fmi2DoStep through fmpy,
 thread CPU time, best of --repeat), with heyoka on the same graph as the peer (the references and
@@ -20,7 +22,6 @@ from __future__ import annotations
 import argparse
 import re
 import shutil
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -29,9 +30,9 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent))
 
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
+from ref_tree import RefTree  # noqa: E402
 from taylor_vs_heyoka import SameGraph, rows_against_heyoka  # noqa: E402
 from work_precision import SCENARIOS  # noqa: E402
 
@@ -44,18 +45,16 @@ TOLS = [10.0 ** -k for k in range(3, 15)]
 TAYLOR = 6
 
 
-def variant(fmu: Path, work: Path, name: str, flags: list[str], base: str | None, built=None) -> Path:
+def variant(fmu: Path, work: Path, name: str, flags: list[str], base: RefTree | None, built=None) -> Path:
     """The FMU with its binary recompiled from its own sources (plus `flags`, or the solver files
-    and the kernel of git revision `base`), zipped as work/<name>.fmu."""
+    and the kernel of the version `base`), zipped as work/<name>.fmu."""
     from fmpy import extract
     from taylor_kernel_bench import baseline_source
     d = Path(extract(str(fmu), unzipdir=str(work / name)))
     src = d / "sources"
     if base:
         for f in ("gw_solver_taylor.c", "gw_solver.h"):
-            text = subprocess.run(["git", "show", f"{base}:c_src/{f}"], cwd=HERE.parent, check=True,
-                                  capture_output=True, text=True).stdout
-            (src / f).write_text(text)
+            shutil.copy(base.file(f"c_src/{f}"), src / f)
         kernel = work / f"{name}_kernel"
         baseline_source(base, taylor_ode(built.spec.functions()), built.spec.name, kernel)
         for f in ("gw_taylor_model.h", "gw_taylor_ops.h", "gw_taylor.c"):
@@ -78,14 +77,14 @@ def variant(fmu: Path, work: Path, name: str, flags: list[str], base: str | None
     return out
 
 
-def run(name: str, work: Path, variants: dict[str, tuple[list[str], str | None]], repeat: int) -> list[str]:
+def run(name: str, work: Path, variants: dict[str, tuple[list[str], RefTree | None]], repeat: int) -> list[str]:
     text, stop = SCENARIOS[name]
     built = build_fmu(parse_scene(f'[model]\nname = "ab_{name}"\n' + text, f"{name}.toml"),
                       work / f"{name}.fmu", build_dir=work / name, taylor=True)
     g = SameGraph(built, stop)
     names, ref = g.names, g.ref
 
-    fmus = {v: variant(built.fmu, work / name, f"{name}_{v.replace('+', 'x')}", fl, b, built)
+    fmus = {v: variant(built.fmu, work / name, f"{name}_{re.sub(r'[^0-9A-Za-z_.-]', 'x', v)}", fl, b, built)
             for v, (fl, b) in variants.items()}
     runners = {v: FmuRunner(path) for v, path in fmus.items()}
     pts: dict[str, list] = {v: [] for v in fmus}
@@ -128,16 +127,16 @@ def main() -> int:
     parser.add_argument("--scenarios", nargs="*", default=["paper", "near_flat"],
                         choices=["paper", "long", "near_flat"])
     parser.add_argument("--extra", nargs="*", type=int, default=[], help="fixed extra orders to time")
-    parser.add_argument("--base", help="git revision whose gw_solver_taylor.c / gw_solver.h and "
-                        "Taylor kernel are the REV row")
+    parser.add_argument("--base", help="git revision or checkout directory whose gw_solver_taylor.c / "
+                        "gw_solver.h and Taylor kernel are the REV row")
     parser.add_argument("--repeat", type=int, default=7)
     args = parser.parse_args()
-    variants: dict[str, tuple[list[str], str | None]] = {"now": ([], None)}
-    if args.base:
-        variants[args.base] = ([], args.base)
-    for k in args.extra:
-        variants[f"+{k}"] = ([f"-DGW_TAYLOR_EXTRA_ORDER={k}"], None)
     with tempfile.TemporaryDirectory(prefix="gw-taylor-ab-") as tmp:
+        variants: dict[str, tuple[list[str], RefTree | None]] = {"now": ([], None)}
+        if args.base:
+            variants[args.base] = ([], RefTree(args.base, Path(tmp)))
+        for k in args.extra:
+            variants[f"+{k}"] = ([f"-DGW_TAYLOR_EXTRA_ORDER={k}"], None)
         for name in args.scenarios:
             print("\n".join(run(name, Path(tmp), variants, args.repeat)), flush=True)
     return 0

@@ -1,4 +1,4 @@
-"""Solver taylor and the ensemble path against heyoka, measured in one run (issue 11).
+"""Solver taylor and the ensemble path against heyoka, measured in one run.
 
 For each scenario (paper 20 s, long 1000 s, near_flat 5 s; the scenes of work_precision.py)
 both integrate the SAME equations: heyoka gets the model's CasADi expression graph translated
@@ -27,7 +27,6 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(HERE.parent))
 
 from fmi_slave import FmuRunner  # noqa: E402
 from work_precision import SCENARIOS  # noqa: E402

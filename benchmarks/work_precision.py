@@ -33,7 +33,6 @@ Writes <out>/work_precision_<scenario>.png, <out>/work_precision.md and prints t
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 from dataclasses import dataclass
@@ -80,13 +79,6 @@ class Point:
     seconds: float
     error: float
     energy_drift: float
-
-
-def near_flat_start(beta_deg: float = 10.0, k_diam: float = 0.25, R: float = 0.17, g: float = 9.81):
-    """Steady precession about a fixed centre (rho = 0 in eq. 52): the rates used above."""
-    b = math.radians(beta_deg)
-    ad = math.sqrt(g / (k_diam * R * math.sin(b)))
-    return ad, -math.cos(b) * ad
 
 
 def best_time(fn, repeat: int) -> tuple[float, object]:
@@ -290,7 +282,7 @@ def error_floor(points: list[Point], prefix: str = "gyrowheel") -> float:
 
 
 def table(name: str, points: list[Point]) -> str:
-    """Cheapest time to reach each error, as a multiple of gyrowheel's best (issue 11's table)."""
+    """Cheapest time to reach each error, as a multiple of gyrowheel's best (docs/performance.md's table)."""
     cols = " | ".join(f"{t:.0e}" for t in TARGETS)
     lines = [f"### {name}", "", f"| method | {cols} |", "|---|" + "---|" * len(TARGETS)]
     best = {t: min((s for m, s in cheapest(points, t).items() if m.startswith("gyrowheel")), default=None)

@@ -50,7 +50,11 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
-from scipy.linalg import expm, orth, solve_continuous_are
+
+from gyrowheel.extras import require
+
+require("system", "gyrowheel.controller")  # scipy comes with the optional part [system]
+from scipy.linalg import expm, orth, solve_continuous_are  # noqa: E402
 
 from gyrowheel.controller.operating_point import MEASUREMENTS, measurement_exprs, steady_turn
 from gyrowheel.controller.operating_point import plant_model as _plant_model

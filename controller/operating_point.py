@@ -21,7 +21,11 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import least_squares
+
+from gyrowheel.extras import require
+
+require("system", "gyrowheel.controller")  # scipy comes with the optional part [system]
+from scipy.optimize import least_squares  # noqa: E402
 
 from gyrowheel.model.linearise import (LinearisationError, LinearModel, initial_state, linearise, output_expr,
                              parameter_values, upright_rolling)

@@ -21,11 +21,12 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Discard
 
+from gyrowheel.errors import GyrowheelError
 from gyrowheel.cosim.system import SystemDescription, SystemFileError, coerce_value
 from gyrowheel.cosim.fmi_log import forget_messages, logging_callbacks
 
 
-class MasterError(RuntimeError):
+class MasterError(GyrowheelError, RuntimeError):
     """A component refused a call; the message names the component and carries its log."""
 
 

@@ -17,6 +17,9 @@ from xml.etree import ElementTree as ET
 
 from fmpy import read_model_description
 
+from gyrowheel.errors import GyrowheelError
+from gyrowheel.extras import require
+
 SSD_NS = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC_NS = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV_NS = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
@@ -24,7 +27,7 @@ OSP_NS = "http://opensimulationplatform.com/MSMI/OSPSystemStructure"
 FMU_TYPE = "application/x-fmu-sharedlibrary"
 
 
-class SystemFileError(ValueError):
+class SystemFileError(GyrowheelError, ValueError):
     """A system file that cannot be read or does not fit its FMUs; the message says where."""
 
 
@@ -131,7 +134,8 @@ def write_ssp(system: SystemDescription, path: str | Path) -> Path:
     """Write <path>.ssp: SystemStructure.ssd (SSP 1.0) and resources/<component>.fmu.
 
     Raises SystemFileError if a connection does not fit or a start value is not a parameter or
-    an input (check_bindings)."""
+    an input (check_bindings); MissingExtraError without gyrowheel[system] (pyssp-standard)."""
+    require("system", "gyrowheel.cosim.system.write_ssp()")  # pyssp-standard: the optional part [system]
     from pyssp_standard.common_content_ssc import TypeReal
     from pyssp_standard.ssd import SSD, Component as SspComponent, Connection as SspConnection
     from pyssp_standard.ssd import Connector, DefaultExperiment, System

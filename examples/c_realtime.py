@@ -18,8 +18,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
 from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, compiler  # noqa: E402
 from gyrowheel.fmu_build.export_c import export_c  # noqa: E402
 from gyrowheel.fmu_build.scene import load_scene, parse_scene  # noqa: E402

@@ -3,7 +3,7 @@
     python examples/gyrover_control.py --out results/system            # earth and moon
     python examples/gyrover_control.py --out results/system --study    # + communication-step study
 
-For each world (examples/scenes/gyrover_mission_<world>.toml; the scene's start is the issue's
+For each world (examples/scenes/gyrover_mission_<world>.toml; the scene's start is the mission's
 disturbance: rolling upright at 1.5 m/s with a 5 deg lean and zero heading rate):
 1. linearise the wheel about upright rolling at speeds 0.1-3 m/s: open-loop eigenvalues and
    controllability (eigenvalues_<world>.csv); design the gain schedule (45 LQG designs on steady
@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from pathlib import Path
 
 import matplotlib
@@ -36,7 +35,6 @@ from fmpy.util import write_csv  # noqa: E402
 from scipy.linalg import expm  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
 from gyrowheel.controller.closed_loop import build_closed_loop, schedule_for  # noqa: E402
 from gyrowheel.controller.design import closed_loop_matrix, controllable_basis, plant_model, sampled_spectral_radius  # noqa: E402
 from gyrowheel.controller.mission import COURSES, standard  # noqa: E402

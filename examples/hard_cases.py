@@ -1,7 +1,7 @@
 """Hard cases: where the wheel's equations get hard, and what the FMU does there.
 
-Prints one table (case, solver, result, error, time) for the ten families of the
-hard-cases issue, including the long runs the test suite leaves out (10^4 s of rolling,
+Prints one table (case, solver, result, error, time) for ten families of hard cases,
+including the long runs the test suite leaves out (10^4 s of rolling,
 1000 s of steady precession). docs/hard_cases.md shows a run and says which solver to use where.
 
     python examples/hard_cases.py
@@ -22,8 +22,9 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2LastSuccessfulTime
 
 from gyrowheel.fmu_build import build_fmu, load_scene, parse_scene
-from gyrowheel.studies.scipy_reference import solve_hybrid
 from gyrowheel.model.build import BETA_MIN_DEFAULT
+from gyrowheel.model.steady import critical_spin, precession_rates
+from gyrowheel.studies.scipy_reference import solve_hybrid
 
 HERE = Path(__file__).resolve().parent
 STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
@@ -132,7 +133,7 @@ def main() -> int:
                                 beta_min=BETA_MIN_DEFAULT)
         row("2 Euler's disk to 1e-3 rad", solver, f"fell at t = {t:.9f} s (rel_tol 1e-10)",
             f"event {t - ref:+.1e} s", sec)
-    # the thin hoop of issue 8: 52 dips to 0.0135 rad in 100 s, all defaults but the wheel
+    # the thin hoop (tests/test_fall_criterion.py): 52 dips to 0.0135 rad in 100 s, all defaults but the wheel
     hoop = dict(M=1.0, R=1.0, g=100.0, k_diam=0.5, k_axial=1.0, beta=math.pi / 2, beta_dot=0.01, gamma_dot=0.1)
     for solver, tol in (("dopri5", 1e-8), ("dop853", 1e-12)):
         paper.start(solver=solver, rel_tol=tol, abs_tol=tol * 1e-2, **hoop)
@@ -208,8 +209,7 @@ def main() -> int:
     t, fell, sec = paper.run(60.0, 1.0, solver="dop853", beta=math.pi / 2, gamma_dot=0.0, **tight)
     row("6 exactly upright, no spin", "dop853", ("fell at t = %.2f s" % t) if fell else "stays upright for 60 s",
         "round-off grows e^(t/0.15 s)" if fell else "-", sec)
-    I_d, I_a = 0.25 * 2 * 0.17**2, 0.4 * 2 * 0.17**2
-    wc = math.sqrt(2 * 9.81 * 0.17 * I_d / (I_a * (I_a + 2 * 0.17**2)))
+    wc = critical_spin(**PAPER)
     for factor in (0.8, 1.0, 1.25):
         paper.start(solver="dop853", beta=math.pi / 2 - 1e-3, gamma_dot=factor * wc, **tight)
         lean, t = 0.0, 0.0
@@ -259,10 +259,9 @@ def main() -> int:
 
     # 9. steady precession held for 1000 s (eq. 52, beta 80 deg, rho 1 m)
     b, rho = math.radians(80.0), 1.0
-    I_d, I_a, M, R = 0.25 * 2 * 0.17**2, 0.4 * 2 * 0.17**2, 2.0, 0.17
-    ad = -math.sqrt(M * 9.81 * R**2 / math.tan(b) / ((I_a + M * R**2) * rho + I_d * R * math.cos(b)))
+    ad, gd = precession_rates(b, rho, **PAPER)
     for solver in ("dopri5", "dop853"):
-        paper.start(solver=solver, beta=b, alpha_dot=ad, gamma_dot=-(rho / R + math.cos(b)) * ad,
+        paper.start(solver=solver, beta=b, alpha_dot=ad, gamma_dot=gd,
                     rel_tol=1e-11, abs_tol=1e-13, max_step=100.0)
         t0 = time.perf_counter()
         paper.slave.doStep(0.0, 1000.0)

@@ -34,6 +34,10 @@ class BuildResult:
     sources: Path  # directory holding every C file of the FMU
     identifier: str
 
+    def __fspath__(self) -> str:
+        """The FMU's path: a BuildResult serves wherever a path of its FMU does (os.PathLike)."""
+        return str(self.fmu)
+
 
 # runtime files only an FMU with the Taylor kernel carries: the recurrences the kernel includes,
 # and the ensemble path's sources (gyrowheel.taylor.ensemble builds them from the FMU's sources/; not part

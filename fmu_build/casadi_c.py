@@ -5,7 +5,7 @@ helpers (checkout, release, incref, n_in, name_in, sparsity_out, work_bytes, ...
 file-level helpers (casadi_sq, ..._casadi_version), all with external linkage whatever the
 options (CasADi 3.6-3.8: with_export only adds CASADI_SYMBOL_EXPORT to the API, not to
 casadi_sq & co.).  Compiled as it comes, every FMU would export ~120 symbols with the same
-names (issue 8, section 9), and the body functions ignore some of the standard arguments
+names (two FMUs in one process would clash), and the body functions ignore some of the standard arguments
 (32 -Wunused-parameter warnings).
 
 `make_internal` rewrites the file so that it can only be part of the unity build:

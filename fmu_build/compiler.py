@@ -15,6 +15,8 @@ from pathlib import Path
 
 import fmpy
 
+from gyrowheel.errors import GyrowheelError
+
 STANDARD = ["-std=c99"]
 WARNINGS = ["-Wall", "-Wextra", "-Wpedantic", "-Werror"]
 OPTIMISE = ["-O2", "-fno-math-errno"]
@@ -28,12 +30,12 @@ OPTIMISE_LARGE = ["-O1", "-fno-math-errno"]
 UNITY_SOURCE = "gw_fmu.c"  # the FMU's only <SourceFiles> entry
 
 
-class CompileError(RuntimeError):
+class CompileError(GyrowheelError, RuntimeError):
     """The C compiler failed; the message carries its output."""
 
 
 def fmi_headers_dir() -> Path:
-    """FMI 2.0 headers shipped with fmpy (DESIGN.md: not a copy in the repo)."""
+    """FMI 2.0 headers shipped with fmpy, not a copy in the repository (docs/architecture.md)."""
     return Path(fmpy.__file__).parent / "c-code"
 
 

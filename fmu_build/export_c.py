@@ -22,6 +22,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build import c_names
 from gyrowheel.fmu_build.builder import _guid, model_spec
 from gyrowheel.fmu_build.runtime import EXPORT_DIR, runtime_sources
@@ -37,7 +38,7 @@ KINDS = ("PARAMETER", "INITIAL", "INPUT", "STATE", "OUTPUT", "EVENT")  # gyrowhe
 MACRO_LETTER = {"PARAMETER": "P", "INITIAL": "I", "INPUT": "U", "STATE": "X", "OUTPUT": "Y", "EVENT": "E"}
 
 
-class ExportError(ValueError):
+class ExportError(GyrowheelError, ValueError):
     """The scene or the output directory cannot be exported to; the message says why."""
 
 

@@ -18,6 +18,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from gyrowheel.errors import GyrowheelError
 from gyrowheel.model.build import BETA_MIN_DEFAULT, FORMULATIONS, start_values, touchdown_lean, wheel_parameters
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 
@@ -26,7 +27,7 @@ ANGLES = {"alpha", "beta", "gamma", "beta_min"}
 TOUCHDOWN = "touchdown"  # [wheel] beta_min preset: the lean at which the body must touch the ground
 
 
-class SceneError(ValueError):
+class SceneError(GyrowheelError, ValueError):
     """A scene file that cannot be used; the message says where and why."""
 
 
@@ -181,7 +182,7 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
             raise r.fail(table, conflict[0], conflict[1])
     if "gravity" not in effects:
         raise r.fail("effects", None, "[effects.gravity] is required: every FMU exposes g "
-                     "(INTERFACE.md); use g = 0 for a weightless wheel")
+                     "(docs/interface.md); use g = 0 for a weightless wheel")
     conflict = lift_off_conflict(effects)
     if conflict:
         raise r.fail("effects.contact_forces", "on_lift_off", conflict)

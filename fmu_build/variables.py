@@ -12,7 +12,7 @@ import casadi as ca
 from gyrowheel.fmu_build.scene import SOLVERS, Experiment
 from gyrowheel.model.spec import ModelSpec, Quantity
 
-# The variables every FMU keeps (INTERFACE.md); [outputs] keep cannot remove them.
+# The variables every FMU keeps (docs/interface.md); [outputs] keep cannot remove them.
 REQUIRED_OUTPUTS = ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot",
                     "z", "vx", "vy", "energy")
 
@@ -53,7 +53,7 @@ class Variable:
 
 
 def solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
-    """The runtime's own parameters (INTERFACE.md, solver settings)."""
+    """The runtime's own parameters (docs/interface.md, "Solver settings")."""
     return [
         (Quantity("solver", "", "internal Co-Simulation integrator", SOLVERS[exp.solver]), "Enumeration", "Solver"),
         (Quantity("rel_tol", "1", "relative error tolerance of adaptive solvers, in [2.2e-15, 1]; "

@@ -11,6 +11,8 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
 
+from gyrowheel.errors import GyrowheelError
+
 # fmpy 0.3.32 forwards every FMU message through ONE process-global logger (the last one given
 # to fmpy.logging.addLoggerProxy). simulate_fmu(logger=...) proxies a callback that dies when it
 # returns; the next FMU instantiated with fmpy's default callbacks would then call freed memory
@@ -28,7 +30,7 @@ def restore_fmpy_logger() -> None:
     addLoggerProxy(byref(callbacks))
 
 
-class SimulationError(RuntimeError):
+class SimulationError(GyrowheelError, RuntimeError):
     """The FMU refused a value or failed; the message carries the FMU's logged reason."""
 
 
@@ -85,6 +87,22 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
     return out
 
 
+def check_start_values(fmu: str | Path, values: dict[str, object]) -> dict[str, object]:
+    """Start values given as strings (NAME=VALUE text) or Python values -> typed values, checked
+    as coerce_start_values checks them; a Python value is read as its exact text (1.5 for an
+    Integer is refused, not truncated). Raises SimulationError naming the variable."""
+    return coerce_start_values(fmu, {k: v if isinstance(v, str) else _as_text(v) for k, v in values.items()})
+
+
+def write_csv(result: np.ndarray, path: str | Path) -> Path:
+    """Write a structured result (fmpy's, or a system run's) as CSV with a header row; Booleans
+    as 0/1, so that the file reads back as numbers (fmpy.util.read_csv, numpy). Returns the path."""
+    from fmpy.util import write_csv as fmpy_write_csv
+    dtype = [(n, "i1" if result.dtype[n] == np.bool_ else result.dtype[n]) for n in result.dtype.names]
+    fmpy_write_csv(str(path), result.astype(dtype))
+    return Path(path)
+
+
 def _as_text(value: object) -> str:
     """A Python start value as the text coerce_start_values reads: floats by repr (exact round
     trip), so 1.5 given for an Integer is refused instead of truncated by int()."""
@@ -114,8 +132,7 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
         if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float, np.number))):
             raise SimulationError(f"{what} must be a number, got {type(value).__name__} {value!r}")
     if start_values:
-        start_values = coerce_start_values(fmu, {k: v if isinstance(v, str) else _as_text(v)
-                                                 for k, v in start_values.items()})
+        start_values = check_start_values(fmu, start_values)
     if output_interval is None:  # fmpy would pick its own; the scene's interval is what users expect
         exp = read_model_description(str(fmu)).defaultExperiment
         output_interval = float(exp.stepSize) if exp is not None and exp.stepSize else None

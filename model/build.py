@@ -75,7 +75,7 @@ def touchdown_lean(k_diam: float, k_axial: float) -> float:
 
 
 def wheel_parameters() -> list[Quantity]:
-    """Parameters of the base wheel (INTERFACE.md), with their defaults."""
+    """Parameters of the base wheel (docs/interface.md), with their defaults."""
     return [
         Quantity("M", "kg", "wheel mass", 2.0),
         Quantity("R", "m", "wheel (rolling) radius", 0.17),

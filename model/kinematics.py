@@ -22,7 +22,7 @@ def norm(v) -> ca.SX:
     at 0; the derivative is v / |v| away from 0 and 0 at 0 (CasADi's convention for fabs there,
     sign(0) = 0), where norm_2's v / |v| is 0/0. Magnitudes that are 0 at a start (a violation of
     the rolling constraint, the drag on a wheel at rest, the tangential force of a wheel standing
-    still) otherwise made the FMU's directional derivatives NaN (review of issue 8, section 3)."""
+    still) would otherwise make the FMU's directional derivatives NaN (docs/fmi.md)."""
     vv = ca.dot(v, v)
     return vv / ca.sqrt(vv + 1e-200)
 

@@ -2,8 +2,8 @@
 
 Given kinetic energy T(q, q_dot), potential V(q), Pfaffian constraints
 A(q) q_dot = 0 and non-conservative generalised forces Q_nc, this module builds
-the two formulations compared in Kelly's NASA report
-(seeds/kelly-nasa-constrained-motion.txt):
+the two formulations compared in Kelly's NASA report ("Dynamics Formulations for
+the Real-Time Simulation of Constrained Motion", NASA/ASEE 1987):
 
 * reduced (null-space / Kane-Maggi): q_dot = S(q) v with A S = 0 and
   S^T (M q_ddot + c - Q) = 0, q_ddot = S v_dot + S_dot v: a system in the
@@ -189,7 +189,7 @@ class ConstrainedSystem:
     def _solve_affine(self, residual: ca.SX, w: ca.SX) -> ca.SX:
         """w from the residual, which is affine in w: A w + b = 0.
 
-        Simplified before code generation, every step exact (issue 11, docs/performance.md):
+        Simplified before code generation, every step exact (docs/performance.md):
         identically-zero entries of A pruned; coordinates on which neither A nor b depends
         (cyclic: x, y, the heading alpha and the spin gamma of the wheel on flat ground) set to 0,
         which removes their sines and cosines from the accelerations; then A w = -b solved block

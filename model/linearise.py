@@ -10,9 +10,9 @@ expressions of the spec's symbols (e.g. the lean beta - pi/2).
 upright_rolling() gives the operating point of a wheel rolling straight and upright at speed v
 (beta = pi/2, gamma_dot = v / R, every other rate zero; actuators at rest), an equilibrium of the
 wheel alone and of the wheel with the gyrover effect (no dissipation). The unactuated wheel's
-lean-heading modes there solve lambda^2 I_diam (I_diam + M R^2) = M g R I_diam
-- w^2 I_axial (I_axial + M R^2) (w = gamma_dot), so they are neutral above the critical spin
-w_c^2 = M g R I_diam / (I_axial (I_axial + M R^2)) and one grows below it (tests/test_linearise.py).
+lean-heading modes there have a closed form (gyrowheel.model.steady.wheel_mode_eigenvalues):
+neutral above the critical spin, one growing below it; the linear model's eigenvalues match it
+(tests/test_linearise.py).
 """
 from __future__ import annotations
 
@@ -164,14 +164,3 @@ def linearise(spec: ModelSpec, x0, u0, p, measurements: dict[str, ca.SX] | list[
                        list(spec.x_names), [q.name for q in spec.inputs], list(measurements),
                        np.asarray(x0, float), np.asarray(u0, float), y0.ravel())
 
-
-def wheel_mode_eigenvalues(M: float, R: float, k_diam: float, k_axial: float, g: float,
-                           spin: float) -> complex:
-    """Analytic lean-heading eigenvalue of the unactuated upright rolling wheel (the +root).
-
-    lambda^2 = (M g R I_d - w^2 I_a (I_a + M R^2)) / (I_d (I_d + M R^2)), w = gamma_dot.
-    Real (one growing mode) below the critical spin, imaginary (neutral weave) above.
-    """
-    I_d, I_a = k_diam * M * R**2, k_axial * M * R**2
-    lam2 = (M * g * R * I_d - spin**2 * I_a * (I_a + M * R**2)) / (I_d * (I_d + M * R**2))
-    return complex(math.sqrt(lam2)) if lam2 >= 0 else complex(0.0, math.sqrt(-lam2))

@@ -11,20 +11,22 @@
     output   the tidy table, kept complete on disk while it grows (Parquet or CSV)
     plot     a first look at a table
     steady   steady motions of the wheel (eqs. 49, 52, 53) and their linearised stability
-    api      sweep(): all of the above in one call
+    api      sweep(): all of the above in one call (gyrowheel.sweep is its public face)
     analysis, scipy_reference  measurements on results; scipy's integrator on a ModelSpec
 
 The names below are loaded on first use: importing a module of this package does not import
-Dask or pandas (the core install has neither; the sweep extra does).
+Dask or pandas (the core install has neither; the sweep extra does). The errors live with
+gyrowheel's others (gyrowheel.errors), so `except SweepSpecError` needs no pandas.
 """
 from importlib import import_module
 
-_EXPORTS = {"open_target": "api", "plan_sweep": "api", "run_plan": "api", "sweep": "api",
-            "read_table": "output", "SweepSpecError": "spec", "FmuTarget": "target", "PointFailure": "target"}
+_EXPORTS = {"open_target": "studies.api", "plan_sweep": "studies.api", "run_plan": "studies.api",
+            "sweep": "studies.api", "read_table": "studies.output", "SweepSpecError": "errors",
+            "SweepInterrupted": "errors", "FmuTarget": "studies.target", "PointFailure": "studies.target"}
 __all__ = sorted(_EXPORTS)
 
 
 def __getattr__(name: str):
     if name in _EXPORTS:
-        return getattr(import_module(f"gyrowheel.studies.{_EXPORTS[name]}"), name)
+        return getattr(import_module(f"gyrowheel.{_EXPORTS[name]}"), name)
     raise AttributeError(f"module 'gyrowheel.studies' has no attribute {name!r}")

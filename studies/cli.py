@@ -50,50 +50,42 @@ def add_parser(sub) -> None:
 
 
 def cmd_sweep(args) -> int:
+    """gyrowheel.sweep with the command's arguments; prints what it runs and what it wrote."""
     from gyrowheel.cli import CliError
-    from gyrowheel.studies.api import check_execution, open_target, plan_sweep, run_plan
-    from gyrowheel.studies.output import TableWriter, check_output_path
-    from gyrowheel.studies.plot import check_plot_path
-    from gyrowheel.studies.spec import SweepSpecError, parse_assignments
+    from gyrowheel.errors import SweepInterrupted, SweepSpecError
+    from gyrowheel.extras import require
+    from gyrowheel.wording import command_line_text
+
+    require("sweep", "gyrowheel sweep")  # before anything imports Dask or pandas
+    from gyrowheel.api import sweep
 
     if args.workers is not None and args.scheduler:
         raise CliError("--workers and --scheduler exclude each other")
+    where = args.scheduler or ("in-process loop" if args.workers == 0 else
+                               f"LocalCluster of {args.workers or 'all cores'} worker(s)")
+
+    def announce(plan) -> None:
+        print(f"sweep: {len(plan.values)} points, t = {plan.settings.start_time:g} .. "
+              f"{plan.settings.stop_time:g} s every {plan.settings.output_interval:g} s, on {where}", file=sys.stderr)
+
     try:
-        output = check_output_path(args.output)
-        check_plot_path(args.plot)
-        check_execution(args.workers, args.batch_size)
-        with open_target(args.source) as target:
-            plan = plan_sweep(target, grid=args.grid, random=args.random, samples=args.samples, seed=args.seed,
-                              fixed=parse_assignments(args.set), derive=args.derive, stop_time=args.stop_time,
-                              output_interval=args.output_interval, solver=args.solver, rel_tol=args.rel_tol,
-                              abs_tol=args.abs_tol, max_step=args.max_step, metrics=args.metrics,
-                              metric_functions=args.metric_function or (), ensemble=not args.no_ensemble)
-            writer = TableWriter(output, plan.inputs)
-            where = args.scheduler or ("in-process loop" if args.workers == 0 else
-                                       f"LocalCluster of {args.workers or 'all cores'} worker(s)")
-            try:  # from here on, Ctrl-C leaves a complete table of the points done (none, if it comes now)
-                print(f"sweep: {len(plan.values)} points, t = {plan.settings.start_time:g} .. "
-                      f"{plan.settings.stop_time:g} s every {plan.settings.output_interval:g} s, on {where}",
-                      file=sys.stderr)
-                table = run_plan(plan, workers=args.workers, scheduler=args.scheduler, batch_size=args.batch_size,
-                                 progress=not args.no_progress, writer=writer)
-            except KeyboardInterrupt:
-                if not writer.flushed:  # stopped before run_plan: no table yet, or a previous sweep's
-                    writer.flush()
-                print(f"gyrowheel: interrupted: {writer.written} of {len(plan.values)} points written to {output}",
-                      file=sys.stderr)
-                return 130
+        table = sweep(args.source, grid=args.grid, random=args.random, samples=args.samples, seed=args.seed,
+                      fixed=args.set or {}, derive=args.derive, stop_time=args.stop_time,
+                      output_interval=args.output_interval, solver=args.solver, rel_tol=args.rel_tol,
+                      abs_tol=args.abs_tol, max_step=args.max_step, metrics=args.metrics,
+                      metric_functions=args.metric_function or (), workers=args.workers, scheduler=args.scheduler,
+                      batch_size=args.batch_size, output=args.output, plot=args.plot, plot_metric=args.plot_metric,
+                      progress=not args.no_progress, ensemble=not args.no_ensemble, on_start=announce)
+    except SweepInterrupted as stop:  # the points done are on disk
+        print(f"gyrowheel: interrupted: {stop.written} of {stop.total} points written to {stop.output}",
+              file=sys.stderr)
+        return 130
     except SweepSpecError as exc:
-        raise CliError(str(exc)) from None
+        raise CliError(command_line_text(exc)) from None
     except (OSError, TimeoutError) as exc:  # e.g. no scheduler at the address
         raise CliError(f"{type(exc).__name__}: {exc}", 1) from None
     failed = int((table["status"] != "ok").sum())
-    print(f"wrote {output}: {len(table)} rows ({failed} failed)")
+    print(f"wrote {args.output}: {len(table)} rows ({failed} failed)")
     if args.plot:
-        from gyrowheel.studies.plot import plot_table
-        try:
-            plot_table(table, args.plot, inputs=list(plan.inputs.columns), metric=args.plot_metric)
-        except ValueError as exc:
-            raise CliError(str(exc)) from None
         print(f"wrote {args.plot}")
     return 0

@@ -22,12 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from gyrowheel.errors import SweepSpecError  # with gyrowheel's other errors: importable without pandas
+
 DISTRIBUTIONS = {"normal": ("mu", "sigma"), "uniform": ("a", "b")}
 MAX_POINTS = 10**7  # a typo such as 1:2:100000 x 1:2:100000 is refused, not allowed to fill the memory
-
-
-class SweepSpecError(ValueError):
-    """A sweep that cannot be run as specified; the message names the flag and the value."""
 
 
 @dataclass(frozen=True)

@@ -1,21 +1,14 @@
-"""Steady motions of the unactuated wheel and their linearised stability (for the maps of docs/sweeps.md).
+"""Linearised stability of the unactuated wheel's steady motions (for the maps of docs/sweeps.md).
 
-Steady precession (Nandy & Xu section 3, with the corrections of docs/errata.md): the centre
-runs on a circle of radius rho at constant lean beta,
-    gamma_dot = -(rho/R + cos beta) alpha_dot                                   (49, corrected)
-    alpha_dot^2 = M g R^2 cot beta / ((I_axial + M R^2) rho + I_diam R cos beta)  (52, any inertia)
-    v = rho |alpha_dot|                                                         (53)
-(the paper's 20 g cot beta / (5 R cos beta + 28 rho) for I_diam = M R^2/4, I_axial = 2 M R^2/5).
-Straight upright rolling at spin w is the limit beta = pi/2; it is stable iff
-    w^2 > w_c^2 = M g R I_diam / (I_axial (I_axial + M R^2)).
-
-Stability from the model itself: x, y, alpha, gamma are cyclic, so the reduced equations of
-motion (null-space form) close on z = (beta, alpha_dot, beta_dot, gamma_dot). A steady motion is
-an equilibrium z* of z_dot = f(z); CasADi differentiates the model's own ode (the function that
-becomes the FMU's C) to J = df/dz at z*, and the motion is linearly unstable when an eigenvalue
-of J has a positive real part. Steady motions come in a two-parameter family, so two eigenvalues
-are zero; the other two are +-i w (stable) or +-l (unstable).
-This is deliberately small: the general linearisation of systems belongs to issue 9.
+The steady motions themselves (steady precession, eqs. 49 corrected, 52, 53; the critical spin of
+upright rolling) are closed forms in gyrowheel.model.steady. Here their stability comes from the
+model itself: x, y, alpha, gamma are cyclic, so the reduced equations of motion (null-space form)
+close on z = (beta, alpha_dot, beta_dot, gamma_dot). A steady motion is an equilibrium z* of
+z_dot = f(z); CasADi differentiates the model's own ode (the function that becomes the FMU's C)
+to J = df/dz at z*, and the motion is linearly unstable when an eigenvalue of J has a positive
+real part. Steady motions come in a two-parameter family, so two eigenvalues are zero; the other
+two are +-i w (stable) or +-l (unstable). The linearisation of any ModelSpec with inputs and
+outputs is gyrowheel.model.linearise.
 """
 from __future__ import annotations
 
@@ -24,41 +17,9 @@ from functools import lru_cache
 
 import numpy as np
 
+from gyrowheel.model.steady import precession_rates
+
 REDUCED = ("beta", "alpha_dot", "beta_dot", "gamma_dot")
-
-
-def inertias(M: float, R: float, k_diam: float, k_axial: float) -> tuple[float, float]:
-    """(I_diam, I_axial) in kg m^2."""
-    return k_diam * M * R**2, k_axial * M * R**2
-
-
-def precession_rates(beta: float, rho: float, M: float, R: float, k_diam: float, k_axial: float, g: float,
-                     sign: float = -1.0) -> tuple[float, float]:
-    """(alpha_dot, gamma_dot) [rad/s] of steady precession at lean beta [rad] on a circle rho [m].
-
-    Eqs. (52) (general inertia) and (49) (corrected sign); sign picks the direction of travel
-    (-1: the wheel rolls forward, gamma_dot > 0, for 0 < beta < pi/2). ValueError if no real rate.
-    """
-    I_d, I_a = inertias(M, R, k_diam, k_axial)
-    den = (I_a + M * R**2) * rho + I_d * R * math.cos(beta)
-    num = M * g * R**2 / math.tan(beta)
-    if not num / den > 0:
-        raise ValueError(f"no steady precession at beta = {beta!r} rad, rho = {rho!r} m")
-    alpha_dot = sign * math.sqrt(num / den)
-    return alpha_dot, -(rho / R + math.cos(beta)) * alpha_dot
-
-
-def precession_speed(beta, rho, M: float, R: float, k_diam: float, k_axial: float, g: float):
-    """Centre speed v [m/s] of steady precession, eq. (53) for any inertia; numpy-broadcasting."""
-    I_d, I_a = inertias(M, R, k_diam, k_axial)
-    beta, rho = np.asarray(beta, float), np.asarray(rho, float)
-    return np.sqrt(M * g * R**2 / np.tan(beta) * rho**2 / ((I_a + M * R**2) * rho + I_d * R * np.cos(beta)))
-
-
-def critical_spin(M: float, R: float, k_diam: float, k_axial: float, g: float) -> float:
-    """w_c [rad/s]: straight upright rolling is stable iff gamma_dot^2 > w_c^2."""
-    I_d, I_a = inertias(M, R, k_diam, k_axial)
-    return math.sqrt(M * g * R * I_d / (I_a * (I_a + M * R**2)))
 
 
 @lru_cache(maxsize=1)
@@ -94,7 +55,7 @@ def growth_rate(beta: float, alpha_dot: float, gamma_dot: float, **params) -> fl
 def upright_boundary(M: float, R: float, k_diam: float, k_axial: float, g: float) -> float:
     """The spin [rad/s] where upright rolling turns stable, found from the eigenvalues alone (bisection).
 
-    Compare critical_spin(): the two must agree (tests/test_sweep_steady.py).
+    Compare gyrowheel.model.steady.critical_spin(): the two must agree (tests/test_sweep_steady.py).
     """
     params = dict(M=M, R=R, k_diam=k_diam, k_axial=k_axial, g=g)
     scale = math.sqrt(g / R)

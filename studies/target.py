@@ -3,7 +3,7 @@
 A target is small and picklable (it travels with every task); its payload (here the FMU's
 bytes) is sent to each worker once (Dask scatter) and unpacked once per worker process. Any
 object with the same three members can be swept, e.g. a system of the wheel and a controller
-run by gyrowheel's co-simulation master (issue 9):
+run by gyrowheel's co-simulation master (studies/system_target.py):
 
     target.variables() -> {name: Variable}     settable inputs, parameters, outputs (on the client)
     target.payload()   -> bytes or None         shipped to the workers once

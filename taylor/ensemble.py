@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build.compiler import compile_shared
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR
 
@@ -47,7 +48,7 @@ STATUS_OK, STATUS_TERMINATED, STATUS_ERROR = 0, 2, 3  # gw_status values
 # the slices unrolled, 1.15x before; 16 lanes 1.1x, their series outgrow L1), and the per-lane
 # control does not shrink with the width; a job of N < 8 leaves lanes idle (paper, 1e-4, loaded
 # machine, one run: N = 16 0.041 ms per trajectory on 4 and 8 lanes, N = 64 0.041 / 0.040, N = 4
-# 0.044 / 0.073).  docs/taylor_performance.md "Wider batches"
+# 0.044 / 0.073).  docs/taylor.md, docs/performance.md
 LANES = 4
 KIND_PARAM, KIND_START, KIND_OUTPUT, KIND_EVENT = 0, 1, 3, 5  # gw_kind
 FLAGS = ["-O3", "-ffp-contract=fast"]  # portable: the x86-64-v3 kernel is a target clone
@@ -108,7 +109,7 @@ def _checked_defines(defines) -> dict:
     return out
 
 
-class EnsembleError(RuntimeError):
+class EnsembleError(GyrowheelError, RuntimeError):
     """The ensemble library could not be built or a job was refused (the reason is given)."""
 
 

@@ -29,11 +29,10 @@ from gyrowheel.taylor.graph import C_EXPR, OP_NAMES, UNARY, Decomposition
 
 __all__ = ["event_source", "kernel_nodes"]
 
-# ops whose C is not taylor_graph.C_EXPR's: CasADi's generated C takes sin / cos from gw_sincos.h
-# (fmu_build/casadi_c.py), and its casadi_sign returns the argument itself where it is neither
-# < 0 nor > 0 (NaN stays NaN, -0.0 stays -0.0; C_EXPR's order-0 sign gives 0.0 there)
-_C = {**C_EXPR, "sin": "gw_sin({0})", "cos": "gw_cos({0})",
-      "sign": "({0} < 0.0 ? -1.0 : ({0} > 0.0 ? 1.0 : {0}))"}
+# the C of each op as CasADi's generated code writes it: taylor/graph.py's C_EXPR (sign there is
+# casadi_sign's), except sin and cos, which the generated C takes from gw_sincos.h
+# (fmu_build/casadi_c.py)
+_C = {**C_EXPR, "sin": "gw_sin({0})", "cos": "gw_cos({0})"}
 _PAIRS = {"sincos": ("sin", "cos"), "sinhcosh": ("sinh", "cosh")}
 
 

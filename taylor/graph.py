@@ -39,6 +39,13 @@ OP_NAMES = {getattr(ca, n): n[3:].lower() for n in dir(ca) if n.startswith("OP_"
 
 # ops whose result is piecewise constant: order 0 only, zero derivatives
 PIECEWISE = {"lt", "le", "eq", "ne", "not", "and", "or", "sign", "floor", "ceil"}
+# sign(x) in C as CasADi defines it (its casadi_sign in the generated gw_ode and gw_evt, and its
+# SX virtual machine): -1 where x < 0, 1 where x > 0, x itself otherwise, so NaN stays NaN and
+# -0.0 stays -0.0.  Both uses need exactly that: the kernel's order 0 is the right-hand side
+# gw_ode computes (a NaN there must reach the solver's finiteness checks, not become 0), and the
+# event indicators read from the kernel's order-0 row must equal gw_evt's bit for bit
+# (taylor/events.py).  Its derivatives are 0 wherever x != 0 (PIECEWISE).
+SIGN_C = "({0} < 0.0 ? -1.0 : ({0} > 0.0 ? 1.0 : {0}))"
 # C expressions of every op at order 0 (cst nodes, and the order-0 value of var nodes)
 C_EXPR = {
     "add": "{0} + {1}", "sub": "{0} - {1}", "mul": "{0} * {1}", "div": "{0} / {1}",
@@ -53,7 +60,7 @@ C_EXPR = {
     "eq": "({0} == {1} ? 1.0 : 0.0)", "ne": "({0} != {1} ? 1.0 : 0.0)",
     "not": "({0} == 0.0 ? 1.0 : 0.0)", "and": "({0} != 0.0 && {1} != 0.0 ? 1.0 : 0.0)",
     "or": "({0} != 0.0 || {1} != 0.0 ? 1.0 : 0.0)",
-    "sign": "({0} > 0.0 ? 1.0 : ({0} < 0.0 ? -1.0 : 0.0))", "floor": "floor({0})",
+    "sign": SIGN_C, "floor": "floor({0})",
     "ceil": "ceil({0})",
 }
 UNARY = {"neg", "twice", "sq", "inv", "sqrt", "sin", "cos", "tan", "sinh", "cosh", "tanh", "exp",
@@ -147,7 +154,7 @@ class _Builder:
         if op in ("add", "sub", "neg", "twice"):
             return self.var(op, args)
         if op == "mul":
-            return self.var("mul", args)  # scaled when one factor is constant (taylor_c)
+            return self.var("mul", args)  # scaled when one factor is constant (taylor/kernel_recurrences.py)
         if op == "div":
             a, b = args
             if b[0] == "c":

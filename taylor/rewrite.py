@@ -30,7 +30,7 @@ graph divides.  Identical nodes are made once (products commutatively), nodes no
 are dropped, then products and quotients are shared modulo associativity (_Products).  Rounding
 differs from the original graph's (products reassociated), values are equal in real arithmetic:
 tests/test_taylor_rewrite.py checks them against CasADi's derivatives and the un-rewritten
-kernel; docs/taylor_performance.md has the counts and timings.
+kernel; docs/taylor.md has the counts, docs/performance.md the timings.
 """
 from __future__ import annotations
 

@@ -13,11 +13,12 @@ import pytest
 
 from gyrowheel import model
 from gyrowheel.fmu_build import build_fmu, load_scene
+from gyrowheel.model.steady import critical_spin, precession_rates  # noqa: F401 (critical_spin: for the tests)
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "examples" / "scenes"
 PAPER = dict(M=2.0, R=0.17, k_diam=0.25, k_axial=0.4, g=9.81)
-STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]  # INTERFACE.md order
+STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]  # docs/interface.md order
 
 
 class CasadiWheel:
@@ -63,17 +64,9 @@ class CasadiWheel:
 
 def steady_precession(beta: float, rho: float, M: float, R: float, k_diam: float, k_axial: float,
                       g: float, sign: float = -1.0) -> dict[str, float]:
-    """Initial rates of steady precession (eq. 52 generalised, eq. 49 corrected)."""
-    I_d, I_a = k_diam * M * R**2, k_axial * M * R**2
-    alpha_dot = sign * math.sqrt(M * g * R**2 / math.tan(beta) / ((I_a + M * R**2) * rho + I_d * R * math.cos(beta)))
-    gamma_dot = -(rho / R + math.cos(beta)) * alpha_dot
+    """Start values of steady precession by state name (gyrowheel.model.steady.precession_rates)."""
+    alpha_dot, gamma_dot = precession_rates(beta, rho, M, R, k_diam, k_axial, g, sign)
     return dict(beta=beta, alpha_dot=alpha_dot, gamma_dot=gamma_dot, beta_dot=0.0)
-
-
-def critical_spin(M, R, k_diam, k_axial, g) -> float:
-    """Spin rate above which straight upright rolling is stable."""
-    I_d, I_a = k_diam * M * R**2, k_axial * M * R**2
-    return math.sqrt(M * g * R * I_d / (I_a * (I_a + M * R**2)))
 
 
 @pytest.fixture(autouse=True)
@@ -88,6 +81,12 @@ def _fmpy_logger_alive():
 @pytest.fixture(scope="session")
 def paper_model() -> CasadiWheel:
     return CasadiWheel(**PAPER)
+
+
+@pytest.fixture(scope="session")
+def casadi_wheel() -> type[CasadiWheel]:
+    """The CasADi model at parameters of a test's own: casadi_wheel(M=..., k_diam=..., g=...)."""
+    return CasadiWheel
 
 
 def _run_dir(tmp_path_factory) -> Path:
@@ -187,7 +186,7 @@ def controller_fmu(earth_loop):
     return earth_loop.controller_fmu
 
 
-# ---- `gyrowheel export-c` (test_export_c.py, test_export_c_review.py) ----------------------------
+# ---- `gyrowheel export-c` (test_export_c.py, test_export_c_realtime.py) -------------------------
 
 @pytest.fixture(scope="session")
 def earth(tmp_path_factory) -> Path:

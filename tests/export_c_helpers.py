@@ -1,4 +1,4 @@
-"""Helpers of the `gyrowheel export-c` tests (test_export_c.py, test_export_c_review.py) and of
+"""Helpers of the `gyrowheel export-c` tests (test_export_c.py, test_export_c_realtime.py) and of
 their shared fixtures in conftest.py: the command line, the C compiler with strict flags."""
 from __future__ import annotations
 

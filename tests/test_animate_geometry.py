@@ -62,7 +62,7 @@ def test_leaned_rim_touches_the_ground_at_the_contact_point():
 
 
 def test_marks_turn_forward_over_the_top_as_the_wheel_rolls_forward():
-    """Positive spin rolls the wheel along (cos alpha, sin alpha) (INTERFACE.md: vx = R gamma_dot at
+    """Positive spin rolls the wheel along (cos alpha, sin alpha) (docs/interface.md: vx = R gamma_dot at
     alpha = 0, upright); a mark at the top then moves forward and one at the contact stays put."""
     alpha, d_gamma = 0.7, 1e-6
     q0 = np.array([[0, 0, alpha, np.pi / 2, 0.0]])

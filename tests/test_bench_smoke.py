@@ -1,4 +1,5 @@
-"""`gyrowheel bench --quick` runs end to end and writes its figure and table (no timing asserted);
+"""The work-precision benchmark (`python benchmarks/work_precision.py --quick`, a study of the
+checkout, run in full by `make bench`) runs end to end and writes its figure and table (no timing asserted);
 the benchmark scripts' helpers (dop853_ab reference tree, taylor_vs_heyoka.to_heyoka) refuse what they
 cannot do."""
 from __future__ import annotations
@@ -12,8 +13,8 @@ from conftest import ROOT
 
 
 def test_bench_quick_writes_figure_and_table(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "gyrowheel", "bench", "--quick", "--scenarios", "paper",
-                        "--out", str(tmp_path)], capture_output=True, text=True, cwd=ROOT, timeout=600)
+    r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "work_precision.py"), "--quick", "--scenarios",
+                        "paper", "--out", str(tmp_path)], capture_output=True, text=True, cwd=tmp_path, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     table = (tmp_path / "work_precision.md").read_text()
     for method in ("gyrowheel/dop853", "gyrowheel/rosenbrock", "gyrowheel/dopri5 (multipliers)", "casadi/cvodes",
@@ -34,18 +35,19 @@ def test_dop853_ab_reference_is_a_git_ref_or_a_directory(tmp_path):
     bench = Path(__file__).resolve().parent.parent / "benchmarks"
     sys.path.insert(0, str(bench))
     try:
-        import dop853_ab
+        from ref_tree import RefTree
     finally:
         sys.path.remove(str(bench))
     root = bench.parent
     if shutil.which("git") is None or subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"],
                                                       capture_output=True).returncode != 0:
         pytest.skip("not a git checkout")
-    tree = dop853_ab.reference_tree("HEAD", tmp_path)
-    assert (tree / "fmu_build" / "builder.py").is_file() and (tree / "c_src" / "gw_sincos.h").is_file()
-    assert dop853_ab.reference_tree(str(root), tmp_path / "x") == root
+    tree = RefTree("HEAD", tmp_path)
+    assert (tree.root / "fmu_build" / "builder.py").is_file() and (tree.root / "c_src" / "gw_sincos.h").is_file()
+    assert tree.layout == "package"
+    assert RefTree(str(root), tmp_path / "x").root == root
     with pytest.raises(SystemExit, match="neither a directory nor a git ref"):
-        dop853_ab.reference_tree("no-such-ref-xyz", tmp_path / "y")
+        RefTree("no-such-ref-xyz", tmp_path / "y")
     assert "/work/main" not in (bench / "dop853_ab.py").read_text()
 
 

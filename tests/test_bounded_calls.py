@@ -1,11 +1,12 @@
-"""Every fmi2DoStep returns in bounded time: the budget of internal steps (issue 8, section 9).
+"""Every fmi2DoStep returns in bounded time: the budget of internal steps (docs/fmi.md).
 
 `max_internal_steps` (an FMI parameter and a scene setting) bounds the internal steps, accepted and
 rejected together, of one call. A step that needs more is refused up front when the count is known
 (ceil(H / max_step) is a lower bound for every solver, exact for euler and rk4) or stopped when the
 budget runs out, with the estimate in the message; the instance stays at the start of the step.
-Each case the fuzzer reported is here with a small budget so that it runs in milliseconds; the
-docstring gives its time before (from the issue) and the test asserts the time after.
+Each case is a call a fuzzer made, here with a small budget so that it runs in milliseconds; the
+docstring gives the time the call takes without a budget and the test asserts that it returns at
+once.
 """
 from __future__ import annotations
 
@@ -64,8 +65,9 @@ def steps_taken(log: str) -> int:
 
 
 def test_huge_communication_step_is_refused_up_front(slave):
-    """fmi2DoStep(0, 1e9): before, hours (1e4 s took 1.6 s with 720k DOPRI5 steps); now refused before
-    any work: at max_step 0.05 s it needs at least 2e10 steps, more than the default budget 1e6."""
+    """fmi2DoStep(0, 1e9), hours without a budget (1e4 s take 1.6 s with 720k DOPRI5 steps): refused
+    before any work, since at max_step 0.05 s it needs at least 2e10 steps, more than the default
+    budget 1e6."""
     slave.init(solver=3)
     before = slave.get(*STATES)
     seconds, log = refused(slave, 0.0, 1e9)
@@ -91,13 +93,13 @@ def test_huge_step_with_a_huge_max_step_stops_when_the_budget_is_spent(slave):
     assert "the budget of internal steps is spent" in log or "the step size has settled" in log
     assert steps_taken(log) <= 2000
     estimate = float(re.search(r"would need about ([0-9.e+]+) internal steps", log)[1])
-    assert 1e5 < estimate < 1e7  # 720k steps for 1e4 s (the issue's measurement)
+    assert 1e5 < estimate < 1e7  # 720k steps for 1e4 s, measured without a budget
     assert_state_kept(slave, before, 0.0)
 
 
 def test_rosenbrock_long_step_is_bounded(slave):
-    """rosenbrock fmi2DoStep(0, 1e5): before, more than 30 s; now refused up front at the default max_step
-    (2e6 steps), and with max_step relaxed stopped by a budget of 300 steps in milliseconds."""
+    """rosenbrock fmi2DoStep(0, 1e5), more than 30 s without a budget: refused up front at the default
+    max_step (2e6 steps), and with max_step relaxed stopped by a budget of 300 steps in milliseconds."""
     slave.init(solver=4)
     seconds, log = refused(slave, 0.0, 1e5)
     assert seconds < 0.5 and "would need at least 2e+06 internal steps" in log
@@ -122,7 +124,7 @@ def test_budget_stops_a_step_the_projection_lets_through(slave):
 
 
 def test_tiny_max_step_is_refused_up_front(slave):
-    """max_step = 1e-10, then a 0.01 s step: before, 4 minutes; now refused at once (1e8 steps needed)."""
+    """max_step = 1e-10, then a 0.01 s step (4 minutes without a budget): refused at once, 1e8 steps needed."""
     slave.init(solver=3, max_step=1e-10)
     before = slave.get(*STATES)
     seconds, log = refused(slave, 0.0, 0.01)
@@ -131,7 +133,8 @@ def test_tiny_max_step_is_refused_up_front(slave):
 
 
 def test_rk4_exact_step_count_is_refused_up_front(slave):
-    """rk4 with max_step = 1e-9 over 1 s: before, 25 minutes; the fixed step's count is exact (1e9)."""
+    """rk4 with max_step = 1e-9 over 1 s (25 minutes without a budget): refused at once; the fixed step's
+    count is exact (1e9)."""
     slave.init(solver=2, max_step=1e-9)
     before = slave.get(*STATES)
     seconds, log = refused(slave, 0.0, 1.0)
@@ -149,8 +152,8 @@ def test_rk4_within_the_budget_runs(slave):
 
 
 def test_stiff_rolling_resistance_is_stopped_by_the_budget(euler_disk_smoothed):
-    """euler_disk with c_rr = 1.001e6 (accepted), smoothed law: before, 12.7 s for a 1e-4 s step; now
-    the step is stopped by a budget of 5000 steps (or refused earlier by the projection), in
+    """euler_disk with c_rr = 1.001e6 (accepted), smoothed law, 12.7 s for a 1e-4 s step without a
+    budget: the step is stopped by a budget of 5000 steps (or refused earlier by the projection), in
     milliseconds, and the instance is back at the step start. (With the default law, stiction, the
     same c_rr is not stiff: the rim sticks at once, test_stiction.py::test_huge_rolling_resistance_brakes_at_once.)"""
     s = Slave(euler_disk_smoothed)
@@ -177,8 +180,8 @@ def test_rejected_steps_count_against_the_budget(slave):
 
 @pytest.mark.parametrize("value", [0, -5])
 def test_budget_must_be_positive(slave, value):
-    """Refused at the call, fmi2SetInteger itself, like every setting (fmi-robust's rule; before the
-    merge: only at fmi2ExitInitializationMode)."""
+    """Refused at the call, fmi2SetInteger itself, like every setting (docs/fmi.md, "Settings and
+    their valid ranges"), not only later at fmi2ExitInitializationMode."""
     slave.slave.setupExperiment(startTime=0.0)
     with pytest.raises(FMICallException) as exc:
         slave.set(max_internal_steps=value)

@@ -1,12 +1,11 @@
-"""Issue 8, section 5: every scene either builds or is refused in one line; lift-off policies hold.
+"""Every scene either builds or is refused in one line; the lift-off policies hold.
 
-- formulation "multipliers" with the Gyrover failed with a CasADi traceback ("variables [tilt] are
-  free": the multipliers of a system with driven coordinates were left in placeholder symbols).
-  Now every formulation x effect combination builds, and the multiplier form of the Gyrover follows
-  the reduced form with the tilt input driven.
-- on_lift_off = "ignore" was overridden by the lift-off stop that load-proportional laws add; now
-  "ignore" means no event and no flag, and a law that cannot go on past lift-off makes the scene
-  reader refuse the policy, naming the key.
+- every formulation x effect combination builds, and the multiplier form of the Gyrover (a system
+  with a driven coordinate, whose multipliers must not be left in placeholder symbols: CasADi's
+  "variables [tilt] are free") follows the reduced form with the tilt input driven.
+- on_lift_off = "ignore" means no event and no flag, also with the load-proportional laws that add
+  a lift-off stop of their own; a law that cannot go on past lift-off makes the scene reader
+  refuse the policy, naming the key.
 """
 from __future__ import annotations
 
@@ -87,7 +86,7 @@ ODD_VALUES = ["[]", "{}", '"x"', "true", "1", "1.5", "-1", "0", "1e308", "inf", 
 
 def test_reader_answers_every_odd_value_with_a_scene_error():
     """Every key of every table with values of every TOML type: a SceneError or a scene, nothing else
-    (a list as solver used to escape as TypeError: unhashable type)."""
+    (a list as solver, for one, must not escape as TypeError: unhashable type)."""
     keys = {"model": ["name", "description", "formulation"],
             "wheel": ["M", "R", "k_diam", "k_axial", "beta_min", "beta_min_deg"],
             "initial": ["beta", "beta_deg", "gamma_dot", "x_dot"],

@@ -20,8 +20,8 @@ import pytest
 from c_programs import (C_SRC, FMI_HEADERS, MODES, STRICT, TESTS_C, UNITY, run_program, unity_flags,
                         writable_symbols)
 
-PROGRAMS = {"oscillator": "oscillator", "warn": "warn", "decay": "decay",  # driver -> toy model
-            "stickslip": "stickslip"}
+PROGRAMS = {"oscillator": "oscillator", "oscillator_simulation": "oscillator",  # driver -> toy model
+            "warn": "warn", "decay": "decay", "stickslip": "stickslip"}
 
 
 @pytest.mark.parametrize("mode", MODES)

@@ -1,7 +1,7 @@
 """The CI entry point is a shell script nothing else runs: check it parses and calls `make test`.
 
-A broken .ci/run fails CI in two seconds before any test runs (it happened: a text replacement
-spliced a Makefile recipe into its comments), so the suite guards it.
+A broken .ci/run fails CI in two seconds before any test runs (a text replacement that splices a
+Makefile recipe into its comments is enough), so the suite guards it.
 """
 import pathlib
 import subprocess

@@ -66,6 +66,10 @@ def _bad_scene(tmp_path, text):
     (("simulate", "{fmu}", "--plot", "{bad}/p.png"), "bad.toml is not a directory"),
     (("simulate", "{fmu}", "-o", "."), "-o .: is a directory; give a file name"),
     (("export-c", str(SCENES / "paper_earth.toml"), "-o", "{bad}", "--no-compile"), "exists and is not a directory"),
+    (("simulate", "{bad}"), "bad.toml: a scene, not an FMU; build its FMU first"),
+    (("info", "{bad}"), "bad.toml: a scene, not an FMU"),
+    (("simulate", "{fmu}", "--output-interval", "0"), "--output-interval must be > 0, got 0.0"),
+    (("simulate", "{fmu}", "--plot", "."), "--plot .: is a directory; give a file name"),
 ])
 def test_bad_input_is_one_line(built, tmp_path, args, fragment):
     bad = _bad_scene(tmp_path, "[wheel]\nmass = 2\n")
@@ -123,3 +127,28 @@ def test_python_run_checks_values_by_name_and_type(built, kwargs, message):
     assert message in str(exc.value)
     r = run(built, stop_time=0.1, start_values={"gamma_dot": 0, "solver": "rk4", "max_internal_steps": 2000})
     assert r["time"][-1] == pytest.approx(0.1)
+
+
+def test_version():
+    from gyrowheel import __version__
+    r = gyrowheel("--version")
+    assert r.returncode == 0 and r.stdout == f"gyrowheel {__version__}\n"
+
+
+def test_bench_is_no_verb():
+    """The work-precision benchmark is a study of a checkout (make bench, benchmarks/work_precision.py),
+    not a verb of the installed command."""
+    r = gyrowheel("bench", "--quick")
+    assert r.returncode == 2 and "invalid choice: 'bench'" in r.stderr
+    assert "bench" not in gyrowheel("--help").stdout
+
+
+def test_info_json(built):
+    import json
+    r = gyrowheel("info", "--json", built)
+    assert r.returncode == 0, r.stderr
+    data = json.loads(r.stdout)
+    assert data["model_name"] == "paper_earth" and data["fmi_version"] == "2.0" and data["platforms"] == ["linux64"]
+    g = next(v for v in data["variables"] if v["name"] == "g")
+    assert (g["causality"], g["start"], g["unit"]) == ("parameter", 9.81, "m/s2")
+    assert "solvers      euler, rk4, dopri5, rosenbrock, dop853" in gyrowheel("info", built).stdout

@@ -1,4 +1,4 @@
-"""Section 2: the Gyrover controller: what the actuators reach, the design across the schedule,
+"""The Gyrover controller: what the actuators reach, the design across the schedule,
 closed-loop eigenvalues against the co-simulated loop, the sampled loop's step limit, the mission."""
 from __future__ import annotations
 
@@ -120,9 +120,10 @@ def test_the_sampled_linear_loop_predicts_the_step_that_fails(earth_loop):
 
 
 def test_mission_on_earth_turn_and_figure_eight(earth_loop):
-    """The issue's mission: rolling upright at 1.5 m/s with a 5 deg lean and zero heading rate (the
-    scene's start), a 90 deg turn and a figure eight on 3 m circles, 60 s at 10 ms: up, tracking
-    within 5 deg after the first 5 s, actuators within their limits, and the course flown."""
+    """The earth mission (gyrowheel.controller.mission): rolling upright at 1.5 m/s with a 5 deg lean
+    and zero heading rate (the scene's start), a 90 deg turn and a figure eight on 3 m circles, 60 s
+    at 10 ms: up, tracking within 5 deg after the first 5 s, actuators within their limits, and the
+    course flown."""
     d = earth_loop.design
     r = run(earth_loop.system, 0.01)
     data = r.data

@@ -1,4 +1,4 @@
-"""Issue 8, section 8: statements of the docs that readers got wrong, now stated and tested.
+"""Statements of the docs that are easy to read wrongly, stated precisely and tested.
 
 Each test names the document and the claim it keeps true.
 """

@@ -13,17 +13,39 @@
   test_capi[strict|sanitizers|valgrind]   tests/c/test_capi.c: table, create, bad input through
                                           the API with code and message, save/restore and corrupt
                                           buffers, the fall and its time, allocator, threads
+  test_capi_errors                        tests/c/test_capi_errors.c: every error reaches the
+                                          logger once; euler/rk4 refuse steps the time grid cannot
+                                          resolve (t = 1e15), not one silent 0.5 s step, and still
+                                          take one step per 1 ms period at t = 1e9 s; an advance
+                                          beyond max_internal_steps refused at once by DOPRI5,
+                                          DOP853 and RODAS4
+  test_docs_quote_the_exports_figures     the state size and allocation count docs/c_api.md
+                                          quotes are the export's (tests/c/capi_figures.c)
   test_two_models_side_by_side            paper_earth and lunar_rover objects linked into one
                                           program (tests/c/test_capi_two.c), run interleaved: both
                                           equal their FMUs bit for bit; the slip event's time; a
                                           state of one refused by the other
-  test_realtime_example                   examples/realtime.c, short: rk4 takes 4 evaluations a
-                                          1 ms step, conserves energy to 1e-10, is accurate to 1e-7;
-                                          euler is not (the claims of docs/c_api.md, shortened)
+  test_fast_math_parent_project_keeps_nan_checks
+                                          a parent CMake project with -ffast-math: the library
+                                          keeps its NaN checks (advance(NaN) is refused, not an
+                                          endless loop); plain cc with -ffast-math stops at a
+                                          clear #error; the export's examples are not built
+                                          inside the parent project
   test_cli_bad_input[...]                 one line `gyrowheel: error: ...`, exit 2
+  test_model_names_refused[...]           names that would break the user's program refused
+                                          before anything is written: C23 / C++ keywords,
+                                          reserved identifiers, standard header names (time.h on
+                                          -I. hides <time.h>), names the C library declares
   test_reexport_replaces_previous         a previous export's files go, the user's stay
+  test_reexport_never_adopts_users_files  the user's files (a build/ tree, notes, own sources)
+                                          are never recorded as the export's, so no later
+                                          re-export deletes them
   test_docs_worked_example                docs/c_api.md's worked example compiles strictly and
                                           prints what the page shows
+  test_taylor_scene_exports_its_kernel    a taylor scene exports the Taylor kernel; its example
+                                          equals the FMU
+
+The real-time example (examples/realtime.c): tests/test_export_c_realtime.py.
 """
 from __future__ import annotations
 
@@ -39,14 +61,22 @@ from fmpy import simulate_fmu
 
 from c_programs import MODE_FLAGS, MODES, TESTS_C, run_built, writable_symbols
 from conftest import ROOT, SCENES
-from gyrowheel.fmu_build import build_fmu, load_scene
 from export_c_helpers import STRICT, cc, gyrowheel
-from gyrowheel.fmu_build.export_c import MARKER, export_c
+from gyrowheel.fmu_build import build_fmu, load_scene
+from gyrowheel.fmu_build.export_c import MARKER, ExportError, export_c
+
 
 @pytest.fixture(scope="module")
 def earth_reference(earth_fmu):
     """fmpy's run of the FMU of the same scene at the scene's output interval."""
     return simulate_fmu(str(earth_fmu), output_interval=0.01)
+
+
+def _scene_named(tmp_path: Path, name: str, scene: str = "paper_earth") -> Path:
+    text = (SCENES / f"{scene}.toml").read_text()
+    path = tmp_path / f"{name}.toml"
+    path.write_text(re.sub(r'(?m)^name = ".*"$', f'name = "{name}"', text, count=1))
+    return path
 
 
 def read_csv(path_or_text) -> np.ndarray:
@@ -135,6 +165,37 @@ def test_capi(mode, earth, earth_gcc, tmp_path):
     assert re.search(r"test_capi: (\d{4,}) checks, 0 failures", r.stderr), r.stderr
 
 
+def _run_against_the_export(program: str, earth: Path, earth_gcc: dict, tmp_path: Path) -> str:
+    """tests/c/<program>.c built strictly (no diagnostic at all) against the export's library
+    object and run: exit 0 and "<program>: N checks, 0 failures" on stderr; returns its stdout."""
+    exe = tmp_path / program
+    diagnostics = cc("gcc", *STRICT, "-O2", f"-I{earth}", f"-I{TESTS_C}", TESTS_C / f"{program}.c",
+                     earth_gcc["obj"], "-lm", "-o", exe).stderr
+    assert diagnostics == ""
+    r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and re.search(rf"{program}: \d+ checks, 0 failures", r.stderr), r.stderr
+    return r.stdout
+
+
+def test_capi_errors(earth, earth_gcc, tmp_path):
+    """tests/c/test_capi_errors.c: every error reaches the logger once, advances the solver cannot
+    take are refused (see the program's header)."""
+    _run_against_the_export("test_capi_errors", earth, earth_gcc, tmp_path)
+
+
+def test_docs_quote_the_exports_figures(earth, earth_gcc, tmp_path):
+    """The state size and the allocations of create that docs/c_api.md quotes are the export's,
+    as tests/c/capi_figures.c measures them (a user allocator counts the blocks)."""
+    stdout = _run_against_the_export("capi_figures", earth, earth_gcc, tmp_path)
+    figures = {k: int(v) for k, v in (line.split() for line in stdout.splitlines())}
+    assert set(figures) == {"state_size", "blocks"}
+    text = (ROOT / "docs" / "c_api.md").read_text()
+    size, blocks = figures["state_size"], figures["blocks"]
+    assert f"(`state_size` bytes: {size} for paper_earth)" in text
+    assert f"buffer of {size - 1} bytes, a state needs {size} (paper_earth_state_size)" in text
+    assert f"({blocks} blocks for paper_earth)" in text
+
+
 @pytest.fixture(scope="module")
 def lunar(tmp_path_factory, example_build) -> tuple[Path, Path]:
     """lunar_rover (slip: a warning event; lift-off and fall: terminating) as export and FMU."""
@@ -165,38 +226,51 @@ def test_two_models_side_by_side(earth, earth_gcc, earth_reference, lunar, tmp_p
     assert "do not match this model" in info["cross_restore"]
 
 
-def results(stdout: str) -> dict[str, dict[str, float]]:
-    out = {}
-    for line in stdout.splitlines():
-        if line.startswith("RESULT solver="):
-            fields = dict(kv.split("=") for kv in line.split()[1:])
-            solver = fields.pop("solver")
-            out[solver] = {k: float(v) for k, v in fields.items()}
-    return out
+FAST_MATH_PROGRAM = r"""
+#include <math.h>
+#include <stdio.h>
+#include "paper_earth.h"
+int main(void) {
+    paper_earth *w = NULL;
+    int st;
+    if (paper_earth_create(NULL, NULL, NULL, NULL, &w) < 0) return 1;
+    st = paper_earth_advance(w, NAN);
+    printf("%d\n", st);
+    paper_earth_free(w);
+    return st == GYROWHEEL_ERR_TIME ? 0 : 1;
+}
+"""
 
 
-def test_realtime_example(earth_gcc):
-    r = subprocess.run([str(earth_gcc["realtime"]), "--steps", "21000", "--compare"], capture_output=True,
-                       text=True, timeout=300)
-    assert r.returncode == 0, r.stderr
-    res = results(r.stdout)
-    assert set(res) == {"euler", "rk4", "dopri5", "dop853"}
-    rk4 = res["rk4"]
-    assert rk4["steps"] == 21000 and rk4["terminated"] == 0
-    assert 3.999 < rk4["rhs_per_step"] <= 4.0  # one RK4 step per 1 ms period, always
-    assert rk4["energy_drift"] < 1e-10 and rk4["err_20"] < 1e-7
-    assert res["euler"]["terminated"] == 1 or res["euler"]["err_20"] > 1e-2  # not accurate enough
-    assert res["dopri5"]["rhs_per_step"] >= 6.0 and res["dop853"]["rhs_per_step"] >= 12.0
-    for solver in res.values():
-        assert 0 < solver["wall_p50_us"] <= solver["wall_p999_us"] <= solver["wall_max_us"]
-        assert 0 < solver["cpu_p50_us"] <= solver["cpu_p999_us"] <= solver["cpu_max_us"]
-
-
-def _scene(tmp_path: Path, name: str) -> Path:
-    text = (SCENES / "paper_earth.toml").read_text().replace('name = "paper_earth"', f'name = "{name}"')
-    path = tmp_path / f"{name}.toml"
-    path.write_text(text)
-    return path
+def test_fast_math_parent_project_keeps_nan_checks(earth, tmp_path):
+    """-ffast-math would let the compiler drop the library's NaN checks (advance(NaN) then loops
+    for ever): plain cc stops at a clear #error; a parent CMake project built with -ffast-math
+    gets a library that keeps them, and the export's examples are not built inside it."""
+    if shutil.which("cmake") is None:
+        pytest.skip("cmake is not installed (make test installs it: Debian package cmake)")
+    # plain cc: a clear stop, not a library without its checks
+    r = subprocess.run(["gcc", *STRICT, "-O2", "-ffast-math", "-fsyntax-only", str(earth / "paper_earth.c")],
+                       capture_output=True, text=True)
+    assert r.returncode != 0 and "compile it with -fno-finite-math-only" in r.stderr, r.stderr
+    # a parent CMake project built with -ffast-math
+    project = tmp_path / "rig"
+    project.mkdir()
+    (project / "main.c").write_text(FAST_MATH_PROGRAM)
+    (project / "CMakeLists.txt").write_text(
+        "cmake_minimum_required(VERSION 3.13)\nproject(rig C)\n"
+        f'add_subdirectory("{earth}" paper_earth)\n'
+        "add_executable(rig main.c)\ntarget_link_libraries(rig PRIVATE paper_earth)\n")
+    build = tmp_path / "build"
+    r = subprocess.run(["cmake", "-S", str(project), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release",
+                        "-DCMAKE_C_FLAGS=-ffast-math", "-DPAPER_EARTH_STRICT=ON"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    r = subprocess.run(["cmake", "--build", str(build), "--target", "rig"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    r = subprocess.run([str(build / "rig")], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 0 and r.stdout.strip() == str(-5), r.stdout + r.stderr
+    targets = subprocess.run(["cmake", "--build", str(build), "--target", "help"], capture_output=True,
+                             text=True).stdout
+    assert "paper_earth_example" not in targets and "paper_earth_realtime" not in targets
 
 
 @pytest.mark.parametrize("case,fragment", [
@@ -216,7 +290,7 @@ def test_cli_bad_input(case, fragment, tmp_path):
         out.mkdir()
         (out / "CMakeLists.txt").write_text("# the user's own\n")
     else:
-        scene = _scene(tmp_path, "double" if case == "keyword" else "gw_wheel")
+        scene = _scene_named(tmp_path, "double" if case == "keyword" else "gw_wheel")
     r = gyrowheel("export-c", scene, "-o", out)
     assert r.returncode == 2
     assert r.stderr.count("\n") == 1 and r.stderr.startswith("gyrowheel: error: ") and fragment in r.stderr, r.stderr
@@ -224,15 +298,60 @@ def test_cli_bad_input(case, fragment, tmp_path):
         assert (out / "CMakeLists.txt").read_text() == "# the user's own\n"
 
 
+@pytest.mark.parametrize("name,fragment", [
+    ("new", "'new' is a C++ keyword"),
+    ("bool", "'bool' is a C keyword"),
+    ("_wheel", "reserved identifier"),
+    ("my__wheel", "reserved identifier"),
+    ("time", "would make time.h hide the system header <time.h>"),
+    ("Math", "would make Math.h hide the system header <math.h> (on a case-insensitive"),
+    ("system", "declared by the C library's header <stdlib.h>"),
+    ("log", "declared by the C library's header <math.h>"),
+])
+def test_model_names_refused(name, fragment, tmp_path):
+    """Names that would break the user's program: C23 / C++ keywords, reserved identifiers,
+    standard header names (time.h on -I. hides <time.h>), names the C library declares."""
+    out = tmp_path / "out"
+    with pytest.raises(ExportError, match=re.escape(fragment)):
+        export_c(load_scene(_scene_named(tmp_path, name)), out)
+    assert not out.exists()  # nothing written
+
+
+def test_model_name_refused_on_the_command_line(tmp_path):
+    r = gyrowheel("export-c", _scene_named(tmp_path, "clock"), "-o", tmp_path / "out")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert r.stderr.startswith("gyrowheel: error: ") and "<time.h>" in r.stderr
+
+
 def test_reexport_replaces_previous(earth, tmp_path):
     out = tmp_path / "export"
     shutil.copytree(earth, out)
     (out / "notes.txt").write_text("mine")
-    result = export_c(load_scene(_scene(tmp_path, "other_wheel")), out, check=False)
+    result = export_c(load_scene(_scene_named(tmp_path, "other_wheel")), out, check=False)
     assert result.identifier == "other_wheel"
     assert not (out / "paper_earth.h").exists() and not (out / "paper_earth.c").exists()
     assert (out / "other_wheel.h").is_file() and (out / "notes.txt").read_text() == "mine"
     assert "other_wheel_create" in (out / "other_wheel.h").read_text()
+
+
+def test_reexport_never_adopts_users_files(tmp_path):
+    """The user's files in the export's directory (a build/ tree, notes, own sources) are never
+    recorded as the export's, so no later re-export deletes them."""
+    out = tmp_path / "export"
+    first = export_c(load_scene(SCENES / "paper_earth.toml"), out, check=False)
+    mine = {"notes.txt": "mine", "build/CMakeCache.txt": "# cmake", "mycode/app.c": "int app;\n",
+            "src/my_extra.c": "int extra;\n"}
+    for rel, text in mine.items():
+        (out / rel).parent.mkdir(parents=True, exist_ok=True)
+        (out / rel).write_text(text)
+    second = export_c(load_scene(SCENES / "paper_earth.toml"), out, check=False)
+    third = export_c(load_scene(_scene_named(tmp_path, "other_wheel")), out, check=False)
+    for rel, text in mine.items():
+        assert (out / rel).read_text() == text, rel
+    recorded = json.loads((out / MARKER).read_text())["files"]
+    assert recorded == third.files and not set(mine) & set(recorded)
+    assert len(first.files) == len(second.files) == len(third.files)  # the first is a fresh export's
+    assert not (out / "paper_earth.h").exists() and (out / "other_wheel.h").is_file()
 
 
 def test_docs_worked_example(earth, earth_gcc, tmp_path):

@@ -1,9 +1,9 @@
-"""Issue 8, section 7: when has the wheel fallen? (docs/model.md, "When the wheel has fallen")
+"""When has the wheel fallen? (docs/model.md, "When the wheel has fallen")
 
 A thin hoop (M = 1, R = 1, g = 100, k_diam = 0.5, k_axial = 1, upright, beta_dot = 0.01,
 gamma_dot = 0.1, no dissipation) dips to a lean of 0.0135 rad at t = 0.968 s and comes back up,
-52 times in 100 s. The old default beta_min = 0.02 declared it fallen at the first dip. The
-default is now as near flat as the model's Euler angles keep their accuracy (1e-3 rad); the
+52 times in 100 s: a default beta_min of 0.02 would declare it fallen at the first dip. The
+default is as near flat as the model's Euler angles keep their accuracy (1e-3 rad); the
 physical fall lean of a wheel with width is the scene preset beta_min = "touchdown".
 """
 from __future__ import annotations

@@ -1,8 +1,8 @@
-"""The fall time from (nearly) upright no longer depends on max_step (issue 8, section 7, known limit).
+"""The fall time from (nearly) upright does not depend on max_step (docs/accuracy.md, docs/hard_cases.md).
 
 Near beta = pi/2 the ulp of beta is 2.2e-16: a lean rate of 1e-17 rad/s times a step of 1 ms is an
-increment far below half an ulp, and plain x + h k rounded it away, so the fall from fl(pi/2) came at
-5.83 s with max_step 0.1 s, 9.06 s with 0.01 s and never (40 s) with 1e-3 s. Every solver now adds
+increment far below half an ulp, which plain x + h k rounds away: the fall from fl(pi/2) would come
+at 5.83 s with max_step 0.1 s, 9.06 s with 0.01 s and never (40 s) with 1e-3 s. Every solver adds
 its increments with compensated summation (TwoSum: x + xc carries what rounding drops,
 c_src/gw_solver.c gw_sum_update), so the increments accumulate whatever the step size.
 
@@ -87,8 +87,8 @@ def test_quadrature_reference_matches_the_linear_growth():
 
 
 @pytest.mark.parametrize("beta0, spread, off", [
-    (math.pi / 2 - 1e-10, 1e-6, 1e-6),  # before: the fall was off by 7.4e-6 s
-    (math.pi / 2, 0.06, 0.08),          # before: 5.83 s / 9.06 s / never, reference 5.669 s
+    (math.pi / 2 - 1e-10, 1e-6, 1e-6),  # plain summation: the fall off by 7.4e-6 s
+    (math.pi / 2, 0.06, 0.08),          # plain summation: 5.83 s / 9.06 s / never, reference 5.669 s
 ])
 def test_fall_time_does_not_depend_on_max_step(fmu, beta0, spread, off):
     ref = fall_time_quadrature(beta0)

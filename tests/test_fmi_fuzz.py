@@ -1,9 +1,10 @@
 """The seeded fmi2 call-sequence fuzzer (tests/fuzz/fmi2_fuzz.py), a short run: 300 sequences of
 60 calls on paper_earth, Co-Simulation and Model Exchange, with every invariant checked (no
 non-finite value written, every non-OK status logged, fmi2Discard only where allowed, terminate /
-reset / re-initialise / free always work). Against the runtime before issue 8 the same run reports
-971 violations (array written despite fmi2Error, unlogged fmi2Discard of the status functions,
-fmi2Terminate refused after an error, ...). The long run and its ASan+UBSan build: docs/fmi.md."""
+reset / re-initialise / free always work). The run is short but not blind: against a runtime that
+writes arrays despite fmi2Error, leaves fmi2Discard of the status functions unlogged and refuses
+fmi2Terminate after an error it reports 971 violations. The long run and its ASan+UBSan build:
+docs/fmi.md, "Fuzzing"."""
 from __future__ import annotations
 
 from fuzz.fmi2_fuzz import fuzz

@@ -1,14 +1,14 @@
-"""Issue 8, section 3: every partial derivative the model description advertises is answered,
-exactly, in every state where FMI 2.0.4 allows fmi2GetDirectionalDerivative (sections 2.1.9, 2.2.8).
+"""Every partial derivative the model description advertises is answered, exactly, in every state
+where FMI 2.0.4 allows fmi2GetDirectionalDerivative (sections 2.1.9, 2.2.8; docs/fmi.md).
 
   Initialization Mode  InitialUnknowns x their `dependencies` (start values, parameters, inputs):
                        the generated `dini` (CasADi Jacobian at x = init(s, p)).
-      before: 23 of the 67 advertised partials of paper_earth (M, R, k_diam, k_axial, g as the
-      known) failed with fmi2Error ("known R is not a continuous state or a Real input");
-      after: all 67 answered, d z / d R = sin(beta) exactly (58 since the simplified RHS of the
-      solvers branch: the 9 dropped are exactly 0, test_unadvertised_initial_partials_are_zero).
+      all 58 advertised partials of paper_earth answered, the 18 with a parameter (M, R, k_diam,
+      k_axial, g) as the known included (not refused as "known R is not a continuous state or a
+      Real input"), d z / d R = sin(beta) exactly; partials the model description leaves out
+      are exactly 0 (test_unadvertised_initial_partials_are_zero).
   after initialisation Outputs and Derivatives x their `dependencies` (states, inputs): `dir`.
-  every example scene  dependency lists sorted and unique (before: "2 14 14", "16 16").
+  every example scene  dependency lists sorted and unique (not "2 14 14", "16 16").
 Each answer is checked against central differences of the FMU itself (Initialization Mode:
 fmi2SetReal on the known, fmi2GetReal of the unknown; Continuous-Time Mode:
 fmi2SetContinuousStates).
@@ -115,9 +115,9 @@ def test_every_initial_unknown_partial_is_answered_and_right(fixture, request):
         assert worst < 1e-5  # central differences resolve ~1e-5 where large terms cancel
         assert s.messages == [] or all(st < 2 for st, _, _ in s.messages)
         if Path(fmu).stem == "paper_earth":
-            # 67 (23 with a parameter as the known) before the solvers branch simplified the RHS
-            # (cyclic alpha dropped, M cancelled, R only with g, beta_ddot free of beta_dot):
-            # those 9 partials are exactly 0 (test_unadvertised_initial_partials_are_zero)
+            # the simplified right-hand side (cyclic alpha dropped, M cancelled, R only with g,
+            # beta_ddot free of beta_dot) has no other dependencies: the 9 partials a fuller
+            # form would list are exactly 0 (test_unadvertised_initial_partials_are_zero)
             assert len(pairs) == 58
             assert sum(k in ("M", "R", "k_diam", "k_axial", "g") for _, k in pairs) == 18
         s.slave.exitInitializationMode()
@@ -251,13 +251,13 @@ def test_every_output_and_derivative_partial_in_continuous_time_mode(fixture, re
 
 
 def test_constraint_violation_partials_at_the_start_are_zero(mult_fmu):
-    """Review of issue 8, section 3, multipliers formulation: the initial state lies on the
-    constraint manifold for every start value and parameter (x = init(s, p) builds the speeds
-    from the null space), so constraint_violation = |A(q) q_dot| is identically 0 there and its
-    partials in Initialization Mode are exactly 0. Before: norm_2's derivative v / |v| is 0/0 at
-    v = 0, one NaN entry refused every partial of the model (134 advertised, all fmi2Error:
-    "partial derivative (4, 2) is not finite"); after a step the violation is > 0 and its
-    partials are the smooth ones."""
+    """Multipliers formulation: the initial state lies on the constraint manifold for every start
+    value and parameter (x = init(s, p) builds the speeds from the null space), so
+    constraint_violation = |A(q) q_dot| is identically 0 there and its partials in
+    Initialization Mode are exactly 0. They must not come from norm_2's derivative v / |v|, 0/0
+    at v = 0: one NaN entry would refuse every partial of the model (134 advertised, all
+    fmi2Error: "partial derivative (4, 2) is not finite"). After a step the violation is > 0
+    and its partials are the smooth ones."""
     s = Slave(mult_fmu)
     try:
         s.slave.setupExperiment(startTime=0.0)
@@ -276,11 +276,10 @@ def test_constraint_violation_partials_at_the_start_are_zero(mult_fmu):
 
 
 def test_magnitudes_of_zero_vectors_have_partials_at_rest(rest_fmu):
-    """Review of issue 8, section 3: at rest the drag force F = -(c_lin + ...) v is 0 for every
-    drag parameter, so d drag_force / d (c_lin, rho_air, cd_area) = 0 exactly; with respect to a
-    rate the magnitude has a symmetric kink, answered 0 like fabs (sign(0) = 0) and like central
-    differences. Before: norm_2's 0/0 made these entries NaN and one NaN refused every partial
-    of the model in Initialization Mode."""
+    """At rest the drag force F = -(c_lin + ...) v is 0 for every drag parameter, so
+    d drag_force / d (c_lin, rho_air, cd_area) = 0 exactly; with respect to a rate the magnitude
+    has a symmetric kink, answered 0 like fabs (sign(0) = 0) and like central differences, not
+    norm_2's 0/0: one NaN entry would refuse every partial of the model in Initialization Mode."""
     s = Slave(rest_fmu)
     try:
         s.slave.setupExperiment(startTime=0.0)

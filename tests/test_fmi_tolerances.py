@@ -1,21 +1,21 @@
-"""Issue 8, section 2: one tolerance precedence for every importer (docs/fmi.md, "Tolerances").
+"""One tolerance precedence for every importer (docs/fmi.md, "Tolerances").
 
 DefaultExperiment declares the scene's rel_tol. At initialisation, whatever the order of the calls:
   rel_tol set explicitly                      -> that rel_tol (and abs_tol as set or the scene's)
   else fmi2SetupExperiment(tolerance = T)     -> rel_tol = T, abs_tol = scene abs_tol * T / scene rel_tol
                                                  (so the declared default T keeps the scene's accuracy)
   else                                        -> the scene's rel_tol and abs_tol.
-abs_tol = 0 (the scenes' default since the solvers branch; lunar_rover has it) follows the rel_tol in
-force as rel_tol / 100, and scales to 0: it follows a forwarded T too.
+abs_tol = 0 (the scenes' default; lunar_rover has it) follows the rel_tol in force as rel_tol / 100,
+and scales to 0: it follows a forwarded T too.
 
 Importers, reproduced as call sequences (communication step 0.01 s, the scenes' stop times):
   PyFMI 2.21, OMSimulator 3.0   forward DefaultExperiment's tolerance, 1e-4 when none is declared.
-      before (none declared): final states off by 3.8e-7 (paper_earth, alpha) and 3.6e-3
-      (lunar_rover, alpha_dot) from the scene's accuracy; after: identical to the scene's run.
+      the run is identical to the scene's (were no tolerance declared, 1e-4 would put the final
+      states off by 3.8e-7 (paper_earth, alpha) and 3.6e-3 (lunar_rover, alpha_dot)).
   a tool passing its own 1e-4 gets 1e-4 (errors of that size, by design).
   fmpy                          setupExperiment(tolerance) first, then the user's start values:
-      a user's rel_tol wins (before: the forwarded tolerance replaced it); OMSimulator sets start
-      values before setupExperiment: the same result.
+      a user's rel_tol wins over the forwarded tolerance; OMSimulator sets start values before
+      setupExperiment: the same result.
 """
 from __future__ import annotations
 
@@ -57,11 +57,11 @@ def _final(fmu, tolerance=None, before_setup=None, after_setup=None, read=("rel_
         s.free()
 
 
-# the issue's configuration: beta_min was 0.02 then (lunar_rover fell at 17.46 s; with today's
+# lunar_rover with beta_min = 0.02: it falls at 17.46 s, where a loose tolerance shows most (with the
 # default 1e-3 it rolls on and 1e-4 costs only 3.4e-6 at the end)
-@pytest.mark.parametrize("scene,fixture,before,values", [("paper_earth", "earth_fmu", 3.8e-7, {}),
-                                                         ("lunar_rover", "lunar_fmu", 3.6e-3, {"beta_min": 0.02})])
-def test_forwarded_default_gets_the_scenes_accuracy(scene, fixture, before, values, request):
+@pytest.mark.parametrize("scene,fixture,undeclared,values", [("paper_earth", "earth_fmu", 3.8e-7, {}),
+                                                             ("lunar_rover", "lunar_fmu", 3.6e-3, {"beta_min": 0.02})])
+def test_forwarded_default_gets_the_scenes_accuracy(scene, fixture, undeclared, values, request):
     """PyFMI / OMSimulator: fmi2SetupExperiment(toleranceDefined, DefaultExperiment's tolerance)."""
     fmu = request.getfixturevalue(fixture)
     exp = load_scene(SCENES / f"{scene}.toml").experiment
@@ -70,16 +70,16 @@ def test_forwarded_default_gets_the_scenes_accuracy(scene, fixture, before, valu
     assert exp.abs_tol == {"paper_earth": 1e-10, "lunar_rover": 0.0}[scene]  # explicit; follows rel_tol
     scene_run, _ = _final(fmu, before_setup=values)
     forwarded, settings = _final(fmu, tolerance=declared, before_setup=values)
-    assert np.array_equal(forwarded, scene_run)  # after: 0 (before: `before`, see below)
+    assert np.array_equal(forwarded, scene_run)  # 0 (not `undeclared`, see below)
     assert settings == {"rel_tol": exp.rel_tol, "abs_tol": exp.abs_tol}  # exactly the scene's
-    # what the importers forwarded before DefaultExperiment declared a tolerance (FMIL's 1e-4):
+    # what the importers forward when DefaultExperiment declares no tolerance (FMIL's 1e-4):
     own, settings = _final(fmu, tolerance=1e-4, before_setup=values)
     err = float(np.max(np.abs(own - scene_run)))
-    print(f"{scene}: forwarded default 0, own tolerance 1e-4 {err:.3g} (issue: {before:.2g})")
+    print(f"{scene}: forwarded default 0, own tolerance 1e-4 {err:.3g} (expected about {undeclared:.2g})")
     # abs_tol scaled alike: 1e-10 -> 1e-6; 0 stays 0 (absolute 1e-4 / 100 = 1e-6 in force alike)
     assert settings == {"rel_tol": 1e-4, "abs_tol": pytest.approx(exp.abs_tol * 1e4, rel=1e-12, abs=0.0)}
     # a tool's own tolerance applies: an error of that tolerance's size
-    assert before / 30 < err < before * 30
+    assert undeclared / 30 < err < undeclared * 30
 
 
 def test_user_rel_tol_wins_over_a_forwarded_tolerance(earth_fmu):
@@ -111,7 +111,7 @@ def test_abs_tol_zero_follows_a_forwarded_tolerance(lunar_fmu, tolerance):
 
 
 def test_abs_tol_zero_is_a_valid_setting(earth_fmu):
-    """fmi2SetReal(abs_tol, 0) is accepted at the call (fmi-robust refused it: below 1e-30) and means
+    """fmi2SetReal(abs_tol, 0) is accepted at the call (not refused as below 1e-30) and means
     rel_tol / 100: the same run as abs_tol = rel_tol / 100 set explicitly."""
     zero, settings = _final(earth_fmu, after_setup={"rel_tol": 1e-6, "abs_tol": 0.0})
     assert settings == {"rel_tol": 1e-6, "abs_tol": 0.0}

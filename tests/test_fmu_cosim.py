@@ -36,7 +36,7 @@ def test_fmpy_validate_is_clean(earth_fmu):
 
 
 def test_interface_variables(md):
-    """INTERFACE.md: names, causality, variability, initial, units and defaults."""
+    """docs/interface.md: names, causality, variability, initial, units and defaults."""
     v = {x.name: x for x in md.modelVariables}
     for name, unit, start in [("M", "kg", 2.0), ("R", "m", 0.17), ("k_diam", None, 0.25),
                               ("k_axial", None, 0.4), ("g", "m/s2", 9.81), ("beta_min", "rad", BETA_MIN_DEFAULT)]:

@@ -1,4 +1,4 @@
-"""A built FMU's sources/ as an importer builds them (issue 8, sections 4 and 9).
+"""A built FMU's sources/ as an importer builds them (docs/runtime.md).
 
   test_every_source_file_is_warning_clean   each .c of sources/ alone and the unity file, with
                                             -std=c99 -Wall -Wextra -Wpedantic -Werror, gcc and

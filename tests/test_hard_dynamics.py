@@ -1,4 +1,5 @@
-"""Hard cases, families 1-4: near flat, Euler's disk, fast spin, long horizon.
+"""Hard cases (examples/hard_cases.py, docs/hard_cases.md), families 1-4: near flat, Euler's disk,
+fast spin, long horizon.
 
 Each asserts physics (energy, lean, located event time, agreement with a tight independent
 reference), not just "no exception". Longer runs (10^4 s) live in examples/hard_cases.py.

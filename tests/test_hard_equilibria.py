@@ -1,5 +1,5 @@
-"""Hard cases 6 and 9: the upright equilibrium (no spin: unstable; at the critical spin: marginal)
-and steady precession (eq. 52) held for 100 s."""
+"""Hard-case families 6 and 9 (examples/hard_cases.py): the upright equilibrium (no spin: unstable;
+at the critical spin: marginal) and steady precession (eq. 52) held for 100 s."""
 from __future__ import annotations
 
 import math
@@ -107,9 +107,9 @@ def test_small_lean_from_upright_falls_at_the_exact_time(fmu, phi0):
     instability exponent lambda = sqrt(g / ((1 + k_diam) R)) = 6.79 1/s) to 1e-7 s plus what the
     round-off of the lean can change, ulps of pi/2 / (lambda phi0): 4 ulps in the initial lean, and
     the rounding of every step's increment added to beta ~ pi/2 (up to half an ulp per step; the run
-    takes some 60 steps, so 32 ulps in all): 1.1e-5 s at phi0 = 1e-10 (measured 7.4e-6 s before the
-    solvers summed the state with compensation; since then 2e-7 s, tests/test_fall_from_upright.py),
-    1e-12 s at 1e-3. The bound is kept as it was."""
+    takes some 60 steps, so 32 ulps in all): 1.1e-5 s at phi0 = 1e-10, 1e-12 s at 1e-3. The bound
+    holds for plain summation of the state (measured 7.4e-6 s); the solvers sum with compensation
+    and reach 2e-7 s (tests/test_fall_from_upright.py)."""
     status, t_fall, trace, final, _ = _run(fmu, 20.0, 1.0, solver=5, beta=math.pi / 2 - phi0, gamma_dot=0.0,
                                            rel_tol=1e-12, abs_tol=1e-14)
     assert status == 2 and final["fallen"]

@@ -1,4 +1,5 @@
-"""Hard cases 10: inconsistent input gives a clear fmi2Error with a logged reason, never a hang or a NaN.
+"""Hard-case family 10 (examples/hard_cases.py): inconsistent input gives a clear fmi2Error with a
+logged reason, never a hang or a NaN.
 
 Initial states on the wrong side of beta_min, NaN / Inf parameters and start values, absurd rates
 (gamma_dot = 1e9 rad/s: the rim would move at 1.7e8 m/s) and, for contrast, large but sane rates

@@ -1,8 +1,8 @@
-"""Hard cases 5: extreme scales. R from 1 mm to 5 m, M from 1 g to 1 t, g from 1e-3 to 100 m/s^2,
-inertia at the limits of physical bodies (ring, thin disc). Physics, not just "no exception":
-M drops out, dynamic similarity in tau = t sqrt(g / R), energy conserved, and errors relative to the
-wheel's own scales (R, sqrt(g/R), M g R) stay the same at every scale (the nominals of the
-absolute tolerances)."""
+"""Hard-case family 5 (examples/hard_cases.py): extreme scales. R from 1 mm to 5 m, M from 1 g to
+1 t, g from 1e-3 to 100 m/s^2, inertia at the limits of physical bodies (ring, thin disc). Physics,
+not just "no exception": M drops out, dynamic similarity in tau = t sqrt(g / R), energy conserved,
+and errors relative to the wheel's own scales (R, sqrt(g/R), M g R) stay the same at every scale
+(the nominals of the absolute tolerances)."""
 from __future__ import annotations
 
 import math

@@ -1,4 +1,5 @@
-"""Hard cases 7-8: communication steps from 1e-7 s to 100 s, a fall inside one step, reversibility."""
+"""Hard-case families 7-8 (examples/hard_cases.py): communication steps from 1e-7 s to 100 s, a fall
+inside one step, reversibility."""
 from __future__ import annotations
 
 import math

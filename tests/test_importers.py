@@ -50,7 +50,7 @@ def test_runs_under_ecospy_to_the_fall_and_ends_cleanly(earth_fmu, capfd):
     """ecospy 0.7.2 (a second real master): the spinless wheel falls at t = 0.4335 s; ecospy ignores
     fmi2Discard and steps on to 2 s. The FMU answers every further step with fmi2Discard, keeps the
     state at the fall, logs the refusal once (counted, "repeated 154 more times") and terminates
-    cleanly. Before: fmi2Error at the first further step, then one "illegal call in state Error"
+    cleanly, not fmi2Error at the first further step and then one "illegal call in state Error"
     line per step."""
     from ecospy import EcosLib, EcosSimulation, EcosSimulationStructure
 

@@ -1,4 +1,4 @@
-"""Section 2: linearisation about upright rolling against the analytic modes and simulation."""
+"""Linearisation about upright rolling against the analytic modes and simulation."""
 from __future__ import annotations
 
 import math
@@ -11,7 +11,8 @@ import casadi as ca
 from conftest import PAPER, critical_spin
 from gyrowheel.model.build import build_model
 from gyrowheel.model.linearise import (LinearisationError, initial_state, linearise, output_expr, parameter_values,
-                             upright_rolling, wheel_mode_eigenvalues)
+                                       upright_rolling)
+from gyrowheel.model.steady import wheel_mode_eigenvalues
 
 
 @pytest.fixture(scope="module")

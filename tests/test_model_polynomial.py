@@ -95,9 +95,9 @@ def test_wheel_rhs_is_smaller_and_agrees_with_newton_euler():
     ode, pre = fns["ode"], fns["ode_pre"]
     ode = ca.Function("ode", ode.sx_in(), ca.cse(ode.call(ode.sx_in())))
     ops = [ode.instruction_id(k) for k in range(ode.n_instructions())]
-    assert ops.count(ca.OP_DIV) == 1  # was 5 (a symbolic 3x3 solve)
+    assert ops.count(ca.OP_DIV) == 1  # a symbolic 3x3 solve would take 5
     assert ops.count(ca.OP_SIN) + ops.count(ca.OP_COS) == 4  # sin/cos of alpha and beta only
-    assert ops.count(ca.OP_MUL) + ops.count(ca.OP_ADD) + ops.count(ca.OP_SUB) < 50  # 170 before
+    assert ops.count(ca.OP_MUL) + ops.count(ca.OP_ADD) + ops.count(ca.OP_SUB) < 50  # 170 with a symbolic 3x3 solve
     full = spec.functions()["ode"]
     p = [2.0, 0.17, 0.25, 0.4, 0.02, 9.81]
     c = pre(p)

@@ -16,7 +16,7 @@ from gyrowheel.fmu_build import build_fmu, parse_scene
 STATES = ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")
 BASE_VARIABLES = {
     "M", "R", "k_diam", "k_axial", "beta_min", "g", "solver", "rel_tol", "abs_tol", "max_step",
-    "max_internal_steps",  # the budget of internal steps of one fmi2DoStep (issue 8 section 9)
+    "max_internal_steps",  # the budget of internal steps of one fmi2DoStep (docs/fmi.md)
     *STATES, "z", "vx", "vy", "energy", "fallen",
 } | {f"der({s})" for s in STATES}  # state derivatives, for Model Exchange
 EFFECT_VARIABLES = {  # what each effect adds, by name (docs/effects.md)

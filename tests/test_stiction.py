@@ -1,4 +1,4 @@
-"""True stiction of the Coulomb laws (issue 8, section 6; docs/effects.md, "Stiction").
+"""True stiction of the Coulomb laws (docs/effects.md, "Stiction").
 
 Against references the code did not produce: Newton-Euler of an upright disk on an incline
 (solved here), the analytic stop time of a wheel rolling uphill or of a pivoting wheel, and an
@@ -230,7 +230,7 @@ def test_wheel_on_a_gentle_slope_stands_still(slope_fmu, theta):
 
 
 def test_smoothed_law_creeps_as_documented(build):
-    """law = "smoothed" keeps the old behaviour: creep at R eps atanh(tan(theta) / c_rr)."""
+    """law = "smoothed" creeps, as docs/effects.md says: at R eps atanh(tan(theta) / c_rr)."""
     fmu = build("slope_smoothed", '[effects.slope]\n[effects.rolling_resistance]\nlaw = "smoothed"\n')
     theta, eps = math.radians(0.5), 0.01
     r = simulate_fmu(fmu, stop_time=2.0, output_interval=0.5,

@@ -76,10 +76,9 @@ def test_default_fmu_refuses_solver_taylor_before_running(earth_fmu, ensemble_ca
 
 
 def test_ensemble_path_leaves_no_file_in_the_temp_directory(taylor_fmu, ensemble_calls, monkeypatch, tmp_path):
-    """The ensemble path used to leave /tmp/gyrowheel-sweep-ens-<digest>.fmu behind for good (one
-    per FMU ever swept) and to trust such a file if it was already there (a file of that name put
-    by anyone was compiled and loaded); now the FMU's bytes go to a private directory removed once
-    the library is loaded."""
+    """The FMU's bytes go to a private directory removed once the library is loaded: nothing such
+    as /tmp/gyrowheel-sweep-ens-<digest>.fmu is left behind for good (one per FMU ever swept), and
+    no file of a predictable name that anyone could put there is compiled and loaded."""
     import tempfile
 
     from gyrowheel.studies import ensemble_path
@@ -96,8 +95,8 @@ def test_ensemble_path_leaves_no_file_in_the_temp_directory(taylor_fmu, ensemble
 def test_ensemble_path_points_do_not_depend_on_the_batch(taylor_fmu, ensemble_calls):
     """docs/sweeps.md 'Determinism' on the ensemble path: a point's metrics are the same bits
     whatever the batch size and the order of the points (a point alone in its batch, or left
-    alone at a batch's end, ran on the one-lane kernel, which the library's FMA contraction
-    rounds otherwise: fall_time, min_beta, final_x ... differed at 1e-14, found by review18)."""
+    alone at a batch's end, must not run on a one-lane kernel that the library's FMA contraction
+    rounds otherwise: fall_time, min_beta, final_x ... would differ at 1e-14)."""
     kw = dict(metrics=METRICS, workers=0, stop_time=3.0, output_interval=0.5, solver="taylor", rel_tol=1e-9)
     whole = sweep(taylor_fmu, points=POINTS[:10], batch_size=10, **kw)
     single = sweep(taylor_fmu, points=POINTS[:10], batch_size=1, **kw)

@@ -1,14 +1,21 @@
-"""gyrowheel.studies.interrupt: Ctrl-C as a stop request while Dask is at work (no Dask needed here)."""
+"""Ctrl-C in a sweep without Dask at work: gyrowheel.studies.interrupt's stop request, the guard that
+keeps a Ctrl-C during the cluster's start-up for later, the plain loop's batches, and the command's
+exit status 130 with the table at -o always this sweep's."""
 from __future__ import annotations
 
 import os
 import signal
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import pytest
 
+from gyrowheel.cli import main
 from gyrowheel.studies import read_table
 from gyrowheel.studies.interrupt import deferred_sigint
+from terminal import AS_FROM_A_TERMINAL
 
 
 @pytest.fixture
@@ -64,7 +71,7 @@ def test_a_programs_own_handler_is_left_alone():
 
 def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, monkeypatch):
     """workers=0 (`--workers 0`): a KeyboardInterrupt in the second batch leaves the first one's
-    rows in the table on disk. The loop ran every point as one batch: 0 rows kept, however long
+    rows in the table on disk. Were every point one batch, a Ctrl-C would keep 0 rows however long
     the sweep had run (gyrowheel sweep ... --workers 0, Ctrl-C after 8 s of 1200 points)."""
     from gyrowheel.studies import execute as ex
 
@@ -90,8 +97,8 @@ def test_ctrl_c_in_the_plain_loop_keeps_the_batches_done(earth_fmu, tmp_path, mo
 
 def test_ctrl_c_while_the_command_starts_is_exit_130(monkeypatch, capsys):
     """Ctrl-C in the first ~0.5 s of `gyrowheel sweep`, while make_parser imports the subcommands
-    (pandas, dask): exit 130 without a traceback. It came before main's handler: Python's own
-    traceback through studies/api.py's `import pandas` and death by SIGINT (status -2)."""
+    (pandas, dask): exit 130 without a traceback, not Python's own traceback through
+    studies/api.py's `import pandas` and death by SIGINT (status -2) before main's handler."""
     from gyrowheel import cli
 
     def make_parser():
@@ -104,9 +111,10 @@ def test_ctrl_c_while_the_command_starts_is_exit_130(monkeypatch, capsys):
 
 def test_after_a_ctrl_c_the_command_exits_130_whatever_ctrl_c_follows(monkeypatch, default_sigint):
     """`gyrowheel sweep --scheduler ...`, Ctrl-C twice 50 ms apart: 'interrupted: 280 of 1200 points
-    written', then status -2 (killed by the second SIGINT while Python exited, joining Dask's
-    threads) instead of 130, 3 times in 4. Once the command returns 130 as the program (argv from
-    sys.argv), further SIGINTs are ignored; called with argv (a library caller) nothing changes."""
+    written' and exit 130, not status -2 (killed by the second SIGINT while Python exits, joining
+    Dask's threads; 3 times in 4 without this). Once the command returns 130 as the program (argv
+    from sys.argv), further SIGINTs are ignored; called with argv (a library caller) nothing
+    changes."""
     from gyrowheel import cli
 
     def make_parser():
@@ -118,3 +126,58 @@ def test_after_a_ctrl_c_the_command_exits_130_whatever_ctrl_c_follows(monkeypatc
     monkeypatch.setattr("sys.argv", ["gyrowheel", "sweep", "x.fmu"])
     assert cli.main() == 130
     assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN  # default_sigint restores it
+
+
+GUARD = """
+import signal, subprocess, sys, time
+from gyrowheel.studies.execute import _children_ignore_sigint
+with _children_ignore_sigint() as quiet:
+    pass
+print(quiet.interrupted, flush=True)
+with _children_ignore_sigint() as startup:
+    child = subprocess.run([sys.executable, "-c", "import signal; print(signal.getsignal(signal.SIGINT) is signal.SIG_IGN)"],
+                           capture_output=True, text=True)
+    print("ready", flush=True)
+    time.sleep(float(sys.argv[1]))
+print(startup.interrupted, child.stdout.strip(), signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+"""
+
+
+@pytest.mark.parametrize("ctrl_c", [True, False])
+def test_startup_guard_keeps_a_ctrl_c_for_later(tmp_path, ctrl_c):
+    """The guard around the cluster's start-up: children started inside ignore SIGINT from their
+    start; a Ctrl-C (SIGINT to the whole process group, as a terminal sends it) that arrives
+    inside is not lost but reported when the guard ends, and the handler is restored."""
+    script = tmp_path / "guard.py"
+    script.write_text(GUARD)
+    proc = subprocess.Popen([sys.executable, str(script), "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, **AS_FROM_A_TERMINAL, cwd=Path(__file__).resolve().parent.parent)
+    try:
+        assert proc.stdout.readline().strip() == "False"
+        assert proc.stdout.readline().strip() == "ready"
+        if ctrl_c:
+            os.killpg(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 0, err
+    assert out.split() == [str(ctrl_c), "True", "True"], out + err
+
+
+def test_ctrl_c_before_the_run_replaces_a_previous_table(earth_fmu, tmp_path, capsys, monkeypatch):
+    """Ctrl-C after the command has printed its plan but before the first row: the file at -o is
+    this sweep's (empty) table, as the message says, not a previous sweep's rows left there."""
+    import gyrowheel.studies.api as api
+    out = tmp_path / "t.csv"
+    argv = ["sweep", str(earth_fmu), "--grid", "M=1.5,2", "--stop-time", "0.1", "--workers", "0", "--no-progress",
+            "-o", str(out)]
+    assert main(argv) == 0 and len(read_table(out)) == 2
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(api, "run_plan", interrupted)
+    assert main(argv) == 130
+    assert "interrupted: 0 of 2 points written to" in capsys.readouterr().err
+    assert len(read_table(out)) == 0

@@ -100,8 +100,8 @@ def test_resolver_degrees_presets_enumerations():
     ("solver", "rk5", "valid: euler, rk4"),
     ("solver", 7.0, "not an item"),
     ("solver", 1.5, "not an integer"),
-    # an fmi2Integer is 32 bits (before: ctypes wrapped 3e9 to -1294967296, every point failed
-    # with the FMU's "max_internal_steps = -1294967296 must be ...")
+    # an fmi2Integer is 32 bits: refused here, not wrapped by ctypes to -1294967296 so that every
+    # point fails with the FMU's "max_internal_steps = -1294967296 must be ..."
     ("solver", 3e9, r"is an Enumeration \(32 bits\) and 3000000000.0 is out of its range"),
 ])
 def test_resolver_errors(name, value, message):
@@ -119,3 +119,9 @@ def test_auto_batch_size():
     assert auto_batch_size(10_000, 2) == MAX_BATCH
     assert auto_batch_size(100, 2) == 13
     assert auto_batch_size(3, 8) == 1
+
+
+def test_huge_grids_refused_before_building_them():
+    grid = [parse_grid("M=1:2:100000"), parse_grid("R=0.1:0.2:100000")]
+    with pytest.raises(SweepSpecError, match="10000000000 points"):
+        point_table(grid)

@@ -49,3 +49,15 @@ def test_system_names_are_checked(earth_loop):
         sweep(earth_loop.ssp, grid={"controller.nope": [1.0]}, stop_time=1.0, workers=0)
     with pytest.raises(SweepSpecError, match="no Real output 'tilt_cmd'"):  # the controller's, not the plant's
         sweep(earth_loop.ssp, grid={"M": [2.0]}, metrics="final:tilt_cmd", stop_time=1.0, workers=0)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(grid={"M": [1.8, 2.2]}, fixed={"wheel.M": 3.0}), "both swept and fixed"),
+    (dict(grid={"M": [1.8], "wheel.M": [2.2]}), "swept twice"),
+    (dict(grid={"beta_deg": [80.0], "wheel.beta": [1.0]}), "swept twice"),
+    (dict(grid={"M": [1.8]}, fixed={"beta": 1.0, "wheel.beta_deg": 80.0}), "given twice"),
+])
+def test_system_aliases_are_one_variable(earth_loop, kwargs, message):
+    """In an .ssp the wheel's M is also wheel.M: setting it under both names must not let one win silently."""
+    with pytest.raises(SweepSpecError, match=message):
+        sweep(earth_loop.ssp, stop_time=0.1, workers=0, **kwargs)

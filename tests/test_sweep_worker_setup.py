@@ -1,11 +1,15 @@
-"""The preload of the sweep's own workers: SIGINT ignored, and no traceback from a heartbeat that a
-closing worker cuts off (the race behind a CI failure of test_ctrl_c_leaves_a_readable_partial_table:
-"Failed to communicate with scheduler during heartbeat", CommClosedError "Stream is closed")."""
+"""The preload of the sweep's own workers: SIGINT ignored, also by the workers the nanny restarts,
+and no traceback from a heartbeat that a closing worker cuts off (a race a Ctrl-C of a sweep can
+hit, as test_sweep_cluster.py's test_ctrl_c_leaves_a_readable_partial_table does: "Failed to
+communicate with scheduler during heartbeat", CommClosedError "Stream is closed")."""
 from __future__ import annotations
 
 import asyncio
 import logging
 import signal
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 from distributed import Scheduler, Worker
@@ -100,8 +104,9 @@ def test_dask_setup_ignores_sigint_and_installs_the_filter():
 @pytest.mark.parametrize("status, kept", [("running", True), ("closing", False), ("closed", False)])
 def test_a_batch_cancelled_by_the_close_is_not_logged(status, kept):
     """After a Ctrl-C of `gyrowheel sweep --workers 2` mid-run, each worker closed under a running
-    batch logged 'Async instruction for <Task cancelled ...> ended with CancelledError' (WARNING)
-    on the user's terminal (3 of 3 tries). Dropped while the worker closes; kept while it runs."""
+    batch logs 'Async instruction for <Task cancelled ...> ended with CancelledError' (WARNING)
+    on the user's terminal (3 of 3 tries without the filter). Dropped while the worker closes;
+    kept while it runs."""
     f = CancelledWhileClosing(_Worker(status))
     msg = ("Async instruction for <Task cancelled name=\"execute('gyrowheel-sweep-95670ec4-0')\" coro=<Worker.execute() "
            "done, defined at worker_state_machine.py:3606>> ended with CancelledError")
@@ -110,3 +115,46 @@ def test_a_batch_cancelled_by_the_close_is_not_logged(status, kept):
                               None, None)
     assert f.filter(record) is kept
     assert f.filter(other) is True
+
+
+RESTART = """
+import os, signal, time
+import dask
+from distributed import Client, LocalCluster
+from gyrowheel.studies.execute import LOCAL_CONFIG, _children_ignore_sigint
+
+def sigint():
+    return signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+
+def die():
+    os.kill(os.getpid(), signal.SIGKILL)
+
+if __name__ == "__main__":
+    with dask.config.set(LOCAL_CONFIG), _children_ignore_sigint():
+        cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               dashboard_address=":0")
+    with cluster, Client(cluster) as c:
+        first = c.run(os.getpid)
+        c.submit(die, pure=False)
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            time.sleep(0.2)
+            try:
+                now = c.run(os.getpid)
+            except Exception:
+                continue
+            if now and set(now.values()) != set(first.values()):
+                break
+        print(set(now.values()) != set(first.values()), list(c.run(sigint).values()))
+"""
+
+
+def test_restarted_workers_ignore_ctrl_c(tmp_path):
+    """The workers the nanny starts after one died ignore SIGINT too (the preload): else a
+    terminal's Ctrl-C would kill them with tracebacks of their own."""
+    script = tmp_path / "restart.py"
+    script.write_text(RESTART)
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120,
+                       cwd=Path(__file__).resolve().parent.parent)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["True", "[True]"], r.stdout + r.stderr[-2000:]

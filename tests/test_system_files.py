@@ -108,8 +108,9 @@ BAD = {
 
 @pytest.mark.parametrize("case", sorted(BAD))
 def test_a_bad_system_file_names_its_fault(unpacked, tmp_path, case):
-    """Each used to crash (traceback), be misread (a Boolean read as a Real by the master, an
-    unnamed 'could not convert string to float'), or run without complaint (no components)."""
+    """Each is refused with its fault named: not a crash (traceback), not misread (a Boolean read as
+    a Real by the master, an unnamed 'could not convert string to float'), not run without
+    complaint (no components)."""
     ssd, fmus = unpacked
     edit, message = BAD[case]
     path = archive(tmp_path / f"{case}.ssp", edit(ssd), fmus)
@@ -126,7 +127,7 @@ def test_a_component_that_is_not_an_fmu(unpacked, tmp_path):
 
 def test_every_binding_type_is_applied(unpacked, earth_loop, tmp_path):
     """ssv:Integer, an external .ssv file and a system-level binding ('controller.gain_scale') are
-    applied; they used to be dropped without a word (only inline ssv:Real was read). A binding on
+    applied, not dropped without a word (as a reader of inline ssv:Real alone would). A binding on
     the system overrides the component's (SSP 1.0 section 5.3.5)."""
     ssd, fmus = unpacked
     text = bind(ssd, "wheel", param("max_internal_steps", "Integer", "7"))
@@ -164,14 +165,15 @@ def gyrowheel(*args, cwd):
 
 
 @pytest.mark.parametrize("name, value, message", [
-    ("max_internal_steps", 1.5, r"wheel\.max_internal_steps: 1\.5 is not a valid Integer"),  # before: int() -> 1
+    ("max_internal_steps", 1.5, r"wheel\.max_internal_steps: 1\.5 is not a valid Integer"),  # not int() -> 1
     ("max_internal_steps", 3e9, r"wheel\.max_internal_steps: 3000000000\.0 is not a valid Integer"),  # wrapped
     ("M", "heavy", r"wheel\.M: 'heavy' is not a valid Real"),
 ])
 def test_master_start_values_are_checked_like_bindings(unpacked, tmp_path, name, value, message):
     """gyrowheel.cosim.master.run(start_values=...) (the Python side of `gyrowheel system run --set`) types
-    its values with the bindings' checks: nothing truncated (1.5 was run as max_internal_steps =
-    1), nothing wrapped (3e9 reached the FMU as -1294967296), the variable named."""
+    its values with the bindings' checks: nothing truncated (1.5 must not run as
+    max_internal_steps = 1), nothing wrapped (3e9 must not reach the FMU as -1294967296), the
+    variable named."""
     ssd, fmus = unpacked
     system = read_ssp(archive(tmp_path / "plain.ssp", ssd, fmus), tmp_path / "u")
     with pytest.raises(MasterError, match=message):
@@ -180,9 +182,9 @@ def test_master_start_values_are_checked_like_bindings(unpacked, tmp_path, name,
 
 def test_a_failing_component_says_why(unpacked, tmp_path):
     """A component that refuses a bound value: MasterError names it and carries the FMU's logged
-    reason; the CLI prints that one line and exits 1. It used to say 'fmi2ExitInitializationMode
-    failed with status 3 (run again with the FMU's logging categories on ...)', which the command
-    cannot do, while fmpy printed the reason to stdout."""
+    reason; the CLI prints that one line and exits 1. Not 'fmi2ExitInitializationMode failed with
+    status 3 (run again with the FMU's logging categories on ...)', which the command cannot do,
+    with the reason printed by fmpy to stdout."""
     ssd, fmus = unpacked
     path = archive(tmp_path / "neg.ssp", bind(ssd, "wheel", param("M", "Real", "-1")), fmus)
     with pytest.raises(MasterError, match=r"^wheel: fmi2ExitInitializationMode: M \(mass\) must be > 0"):
@@ -197,15 +199,15 @@ def test_a_failing_component_says_why(unpacked, tmp_path):
     (("--stop-time", "0.333"), 2, "stop at 0.33 or 0.34, or choose a step that divides 0.333 s"),
     (("--stop-time", "-1"), 2, "--stop-time must be > 0, got -1.0"),
     (("--step", "0"), 2, "--step must be > 0"),
-    # 6e10 points used to be attempted (a list per point: the machine's memory, then a kill)
+    # 6e10 points refused before the run, not attempted (a list per point: the machine's memory, then a kill)
     (("--step", "1e-9"), 2, "60000000001 communication points of 39 columns would take"),
     (("--stop-time", "1", "-o", "{file}/x.csv"), 2, "is not a directory"),
     (("--stop-time", "1", "-o", "{dir}"), 2, "is a directory; give a file name"),
 ])
 def test_cli_system_run_bad_options(earth_loop, tmp_path, args, code, fragment):
-    """One line, the right exit, before the run. `--stop-time 1e-9` used to run zero steps and write
-    one row; an unwritable -o raised a traceback after the whole run; a result larger than half the
-    machine's memory is refused with its size."""
+    """One line, the right exit, before the run: `--stop-time 1e-9` must not run zero steps and
+    write one row, an unwritable -o must not raise a traceback after the whole run; a result
+    larger than half the machine's memory is refused with its size."""
     (tmp_path / "file").write_text("")
     args = [a.format(file=tmp_path / "file", dir=tmp_path) for a in args]
     r = gyrowheel("system", "run", earth_loop.ssp, *args, cwd=tmp_path)
@@ -215,7 +217,7 @@ def test_cli_system_run_bad_options(earth_loop, tmp_path, args, code, fragment):
 
 def test_the_master_removes_the_fmus_it_unpacked(earth_loop, tmp_path, monkeypatch):
     """fmpy.extract unpacks every component into a new temporary directory; the master removes
-    them after the run (it used to leave two per run, so the step study left a dozen)."""
+    them after the run (two per run left behind would fill /tmp: a step study makes a dozen)."""
     import tempfile
     system = read_ssp(earth_loop.ssp, tmp_path / "u")
     scratch = tmp_path / "scratch"
@@ -248,8 +250,8 @@ def test_animate_a_system_run_with_the_ssp_as_geometry(earth_loop, tmp_path):
 
 
 def test_controller_tilt_stop_is_at_most_a_right_angle(controller_fmu, tmp_path):
-    """tilt_max (the gimbal stop) used to take any value >= 0, e.g. 10 rad; past pi/2 the spin axis
-    would turn through the link (docs/system.md): refused at initialisation, with the reason."""
+    """tilt_max (the gimbal stop) past pi/2, e.g. 10 rad, would turn the spin axis through the link
+    (docs/system.md): refused at initialisation, with the reason."""
     r = gyrowheel("simulate", controller_fmu, "--stop-time", "0.05", "--set", "tilt_max=2", "-o", tmp_path / "c.csv",
                   cwd=tmp_path)
     assert r.returncode == 1 and "tilt_max must be <= 1.5708" in r.stderr, r.stderr

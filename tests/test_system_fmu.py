@@ -1,4 +1,4 @@
-"""Section 1: any small CasADi system becomes an FMU through the wheel's path (model/system.py)."""
+"""Any small CasADi system becomes an FMU through the wheel's path (model/system.py)."""
 from __future__ import annotations
 
 import math

@@ -1,4 +1,4 @@
-"""Section 3: the closed loop as SSP 1.0 / OSP files, run by gyrowheel's master and libcosim."""
+"""The closed loop as SSP 1.0 / OSP files, run by gyrowheel's master and libcosim."""
 from __future__ import annotations
 
 import math

@@ -29,7 +29,8 @@ from gyrowheel.fmu_build import load_scene
 from gyrowheel.fmu_build.builder import model_spec
 from gyrowheel.fmu_build.codegen import hoisted, optimised, taylor_ode
 from gyrowheel.fmu_build.compiler import compiler
-from gyrowheel.taylor.kernel_c import _Plan, taylor_source, work_series
+from gyrowheel.taylor.kernel_c import taylor_source, work_series
+from gyrowheel.taylor.kernel_plan import Plan
 from gyrowheel.taylor.graph import Decomposition, decompose
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -152,7 +153,7 @@ def test_paper_wheel_rewrite_removes_the_waste():
     assert new.op_counts["div"] == 1 and new.op_counts["sincos"] == old.op_counts["sincos"]
     assert not [nd for nd in new.nodes.values() if nd.op == "mul" and "c" in (a[0] for a in nd.args)]
     assert len(new.nodes) <= len(old.nodes) - 15
-    assert (len(_Plan(old).terms), len(_Plan(new).terms)) == (24, 18)
+    assert (len(Plan(old).terms), len(Plan(new).terms)) == (24, 18)
     assert sum(nd.op == "mul" for nd in new.nodes.values()) == 13  # heyoka's minimal form: 15
 
 
@@ -168,7 +169,7 @@ def test_products_shared_modulo_associativity(tmp_path):
     ode = optimised(ca.Function("gw_ode", [t, x, ca.SX.sym("u", 0), p], [ca.vertcat(*f)],
                                 ["t", "x", "u", "p"], ["xdot"]))
     dec = decompose(ode)
-    kinds = [(nd.op, len(_Plan(dec).terms)) for nd in dec.nodes.values()]
+    kinds = [(nd.op, len(Plan(dec).terms)) for nd in dec.nodes.values()]
     assert dec.op_counts["div"] == 1, kinds  # e / den, shared
     assert dec.op_counts["mul"] <= 6, kinds  # a b; (a b) c, (a b) d; a (e/den), c (e/den); e d (a b)
     lins = [nd for nd in dec.nodes.values() if nd.op == "lin"]

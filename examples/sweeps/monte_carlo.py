@@ -11,7 +11,7 @@ rigid body) are refused by the FMU and stay in the table as failed rows with tha
 rates are over the admissible samples (uniform over the admissible part of the box). Prints the success rate (95% Wilson interval)
 and the worst lean; draws docs/img/sweep_monte_carlo.png.
 
---closed-loop: the same study of the Gyrover's closed loop (issue 9: wheel + gain-scheduled LQG
+--closed-loop: the same study of the Gyrover's closed loop (wheel + gain-scheduled LQG
 controller FMUs as an .ssp, built here with gyrowheel.controller.closed_loop.build_closed_loop for the earth
 mission scene and course): wheel mass and inertia +/-20% around the design's nominal values (the
 controller keeps its nominal gains), the mission's 5 deg lean with zero heading rate, 60 s. That wheel has no friction effects, so friction is not varied there.
@@ -27,7 +27,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
 
 from gyrowheel.cli import main as gyrowheel  # noqa: E402
 from gyrowheel.studies import read_table  # noqa: E402

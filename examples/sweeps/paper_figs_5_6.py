@@ -22,11 +22,11 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
 
 from gyrowheel.cli import main as gyrowheel  # noqa: E402
 from gyrowheel.studies import read_table  # noqa: E402
-from gyrowheel.studies.steady import precession_growth_rate, precession_speed  # noqa: E402
+from gyrowheel.model.steady import precession_speed  # noqa: E402
+from gyrowheel.studies.steady import precession_growth_rate  # noqa: E402
 
 HELPER = "examples/sweeps/steady_precession.py"
 PAPER = dict(M=2.0, R=0.17, k_diam=0.25, k_axial=0.4)

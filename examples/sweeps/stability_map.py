@@ -9,7 +9,6 @@ gamma_dot0 (alpha_dot0 = beta_dot0 = 0), then draws docs/img/sweep_stability.png
 from __future__ import annotations
 
 import argparse
-import math
 import shlex
 import sys
 from pathlib import Path
@@ -17,11 +16,11 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
 
 from gyrowheel.cli import main as gyrowheel  # noqa: E402
 from gyrowheel.studies import read_table  # noqa: E402
-from gyrowheel.studies.steady import critical_spin, upright_boundary  # noqa: E402
+from gyrowheel.model.steady import critical_spin  # noqa: E402
+from gyrowheel.studies.steady import upright_boundary  # noqa: E402
 
 WHEEL = dict(M=2.0, R=0.17, k_diam=0.25, k_axial=0.4)
 GRAVITY = {"earth": 9.81, "mars": 3.721, "moon": 1.625}
@@ -38,7 +37,6 @@ def plot(table, png: Path, fall_deg: float) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.colors import ListedColormap
 
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), sharey=True, constrained_layout=True)
     for ax, (name, g) in zip(axes, GRAVITY.items()):

@@ -10,7 +10,7 @@
 import numpy as np
 
 from gyrowheel.studies.analysis import fit_circle
-from gyrowheel.studies.steady import precession_rates
+from gyrowheel.model.steady import precession_rates
 
 NUDGE = 1e-6  # rad/s of lean rate added to the equilibrium
 STEADY_BETA = 1e-3  # rad: the lean may move this much and the motion still counts as steady

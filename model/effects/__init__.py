@@ -1,4 +1,4 @@
-"""Effects: independent physics a scene can switch on (DESIGN.md, "The model").
+"""Effects: independent physics a scene can switch on (docs/effects.md, docs/architecture.md).
 
 Each effect module defines an Effect with its parameters and an apply() that adds
 terms to the shared WheelContext. The scene names the effects it wants; nothing

@@ -32,9 +32,9 @@ static void run(int solver, double max_step, double h, double tol) {
     CHECK_NEAR(getr(c, 0), 2.0 * exp(-5.0), tol);
     CHECK_STATUS(fmi2GetFMUstate(c, &st), fmi2OK);
     CHECK_STATUS(fmi2SerializedFMUstateSize(c, st, &size), fmi2OK);
-    /* layout 3: fmi-robust's version 2 (t_events, y_valid, the tolerance flags, CRC-32) and
-     * the solvers' budget max_internal_steps, controller memory err_old, compensation xc
-     * (nx = 1: x, s, y, nominal, xc) */
+    /* layout 3 (c_src/gw_state.c): the header, t_events, y_valid, the tolerance flags and a
+     * CRC-32, the budget max_internal_steps, the controller memory err_old and the
+     * compensation xc (nx = 1: x, s, y, nominal, xc) */
     CHECK(size == 44 + 35 + 9 * 4 + 11 * 8 + 5 * 8 + 8 * 5 + 4);
     CHECK_STATUS(fmi2SetFMUstate(c, st), fmi2OK);
     CHECK_STATUS(fmi2FreeFMUstate(c, &st), fmi2OK);

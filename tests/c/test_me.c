@@ -1,65 +1,12 @@
 /*
  * test_me.c -- drives the runtime as a Model Exchange importer, linked statically with
- * toy_me.c (forced Duffing oscillator with a local state, TERMINATE event "hit",
- * WARN event "slow", exact `dir`).  Covers the ME state machine, an RK4 outer loop
- * with importer-side event location, state/derivative variables, lazy outputs,
- * fmi2GetDirectionalDerivative (both interfaces) against the analytic Jacobian and
- * finite differences, FMU states in ME, and the error paths with their reasons.
+ * toy_me.c (forced Duffing oscillator with a local state, TERMINATE event "hit", WARN event
+ * "slow", exact `dir`).  Covers the ME state machine, an RK4 outer loop with importer-side
+ * event location, state/derivative variables, lazy outputs, FMU states in ME, and the error
+ * paths with their reasons.  Directional derivatives: test_me_dirder.c.
  */
 #include "harness.h"
-
-#define TOKEN "{70y0-me00-0000-0000-000000000004}"
-#define NX 3
-#define NE 2
-
-enum { VR_K = 0, VR_C = 1, VR_POS_LIM = 2, VR_VEL_LIM = 3, VR_USE_FORCE = 4, VR_POS = 10,
-       VR_VEL = 11, VR_W = 12, VR_ENERGY = 20, VR_FORCE = 21, VR_WPOS = 22, VR_F = 30,
-       VR_SOLVER = 40, VR_HIT = 50, VR_SLOW = 51, VR_DPOS = 60, VR_DVEL = 61, VR_DW = 62 };
-
-
-/* the error is returned, its reason logged; the instance is then in Error state */
-#define EXPECT_ERROR(call, msg)                                                              \
-    do {                                                                                     \
-        log_clear();                                                                         \
-        CHECK_STATUS(call, fmi2Error);                                                       \
-        CHECK_LOG(msg);                                                                      \
-    } while (0)
-
-/* the parameters of one run; everything else default */
-typedef struct {
-    double c, f, pos_lim, vel_lim;
-} setup;
-
-static void configure(fmi2Component c, const setup *s) {
-    CHECK_STATUS(setr(c, VR_C, s->c), fmi2OK);
-    CHECK_STATUS(setr(c, VR_F, s->f), fmi2OK);
-    CHECK_STATUS(setr(c, VR_POS_LIM, s->pos_lim), fmi2OK);
-    CHECK_STATUS(setr(c, VR_VEL_LIM, s->vel_lim), fmi2OK);
-}
-
-/* Instantiated -> InitializationMode -> EventMode -> ContinuousTimeMode */
-static void to_ct_mode(fmi2Component c, const setup *s) {
-    fmi2EventInfo ei;
-    configure(c, s);
-    CHECK_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
-    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
-    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
-    memset(&ei, 0xff, sizeof(ei));
-    CHECK_STATUS(fmi2NewDiscreteStates(c, &ei), fmi2OK);
-    CHECK(ei.newDiscreteStatesNeeded == fmi2False);
-    CHECK(ei.terminateSimulation == fmi2False);
-    CHECK(ei.nominalsOfContinuousStatesChanged == fmi2False);
-    CHECK(ei.valuesOfContinuousStatesChanged == fmi2False);
-    CHECK(ei.nextEventTimeDefined == fmi2False);
-    CHECK_STATUS(fmi2EnterContinuousTimeMode(c), fmi2OK);
-}
-
-static fmi2Component me(const char *name) {
-    fmi2Component c =
-        fmi2Instantiate(name, fmi2ModelExchange, TOKEN, "", &h_callbacks, fmi2False, fmi2True);
-    CHECK(c != NULL);
-    return c;
-}
+#include "me_importer.h"
 
 /* ---- an explicit RK4 importer ------------------------------------------------------ */
 
@@ -326,149 +273,6 @@ static void test_variables(void) {
     fmi2FreeInstance(c);
 }
 
-/* ---- directional derivatives --------------------------------------------------------- */
-
-/* analytic D of toy_me at x, f (k = 1, use_force = 1, parameter c) */
-static void analytic(double c, const double *x, double f, double D[8][4]) {
-    memset(D, 0, 8 * 4 * sizeof(double));
-    D[0][1] = 1.0;
-    D[1][0] = -1.0 - 3.0 * c * x[0] * x[0];
-    D[1][3] = 1.0;
-    D[2][1] = f;
-    D[2][3] = x[1];
-    D[3][0] = 1.0;
-    D[4][1] = 1.0;
-    D[5][0] = x[0] + c * x[0] * x[0] * x[0];
-    D[5][1] = x[1];
-    D[6][3] = 1.0;
-    D[7][0] = x[2];
-    D[7][2] = x[0];
-}
-
-/* unknowns: der(pos), der(vel), der(w), pos, vel, energy, force, wpos (rows of D), w */
-static const fmi2ValueReference UNK[9] = {VR_DPOS, VR_DVEL, VR_DW, VR_POS, VR_VEL,
-                                          VR_ENERGY, VR_FORCE, VR_WPOS, VR_W};
-static const fmi2ValueReference KNOWN[4] = {VR_POS, VR_VEL, VR_W, VR_F};
-
-/* all 9 unknowns at (x, f) in CT mode */
-static void eval_unknowns(fmi2Component c, const double *x, double f, double *out) {
-    CHECK_STATUS(fmi2SetContinuousStates(c, x, NX), fmi2OK);
-    CHECK_STATUS(setr(c, VR_F, f), fmi2OK);
-    CHECK_STATUS(fmi2GetReal(c, UNK, 9, out), fmi2OK);
-}
-
-static double rel_err(double a, double b) {
-    double s = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
-    return fabs(a - b) / (s > 1.0 ? s : 1.0);
-}
-
-static void test_directional_derivatives(void) {
-    const double cpar = 0.5, f = 0.3;
-    setup s = {cpar, f, -5.0, -10.0};
-    fmi2Component c = me("dir");
-    double x[NX] = {0.7, -0.45, 0.35}, D[8][4], dv[9], seed[4], worst_fd = 0.0;
-    int i, j;
-    to_ct_mode(c, &s);
-    CHECK_STATUS(fmi2SetTime(c, 1.5), fmi2OK);
-    CHECK_STATUS(fmi2SetContinuousStates(c, x, NX), fmi2OK);
-    analytic(cpar, x, f, D);
-    for (j = 0; j < 4; j++) {
-        double xp[NX], xm[NX], fp = f, fm = f, yp[9], ym[9], hstep;
-        memset(seed, 0, sizeof(seed));
-        seed[j] = 1.0;
-        CHECK_STATUS(fmi2GetDirectionalDerivative(c, UNK, 9, KNOWN, 4, seed, dv), fmi2OK);
-        for (i = 0; i < 8; i++) CHECK_NEAR(dv[i], D[i][j], 1e-14);
-        CHECK_NEAR(dv[8], j == 2 ? 1.0 : 0.0, 0.0); /* w as unknown: identity row */
-        /* central finite differences of GetDerivatives / GetReal */
-        memcpy(xp, x, sizeof(xp));
-        memcpy(xm, x, sizeof(xm));
-        hstep = 1e-5;
-        if (j < 3) {
-            xp[j] += hstep;
-            xm[j] -= hstep;
-        } else {
-            fp += hstep;
-            fm -= hstep;
-        }
-        eval_unknowns(c, xp, fp, yp);
-        eval_unknowns(c, xm, fm, ym);
-        if (j < 3) { /* GetDerivatives agrees with der(...) */
-            double dxp[NX];
-            CHECK_STATUS(fmi2GetDerivatives(c, dxp, NX), fmi2OK);
-            CHECK(dxp[0] == ym[0] && dxp[1] == ym[1] && dxp[2] == ym[2]);
-        }
-        for (i = 0; i < 9; i++) {
-            double fd = (yp[i] - ym[i]) / (2.0 * hstep), e = rel_err(dv[i], fd);
-            if (e > worst_fd) worst_fd = e;
-            CHECK(e < 1e-6);
-        }
-        eval_unknowns(c, x, f, yp); /* back to the point */
-    }
-    fprintf(stderr, "directional derivatives vs central differences: worst relative %.3g\n",
-            worst_fd);
-    /* a combined seed, knowns in another order and repeated */
-    {
-        fmi2ValueReference kn[5] = {VR_F, VR_W, VR_POS, VR_VEL, VR_POS};
-        double sd[5] = {0.5, -2.0, 1.5, 0.25, -0.5};
-        CHECK_STATUS(fmi2GetDirectionalDerivative(c, UNK, 9, kn, 5, sd, dv), fmi2OK);
-        for (i = 0; i < 8; i++)
-            CHECK_NEAR(dv[i], 0.5 * D[i][3] - 2.0 * D[i][2] + 1.0 * D[i][0] + 0.25 * D[i][1],
-                       1e-14);
-        CHECK_NEAR(dv[8], -2.0, 0.0);
-        CHECK_STATUS(fmi2GetDirectionalDerivative(c, UNK, 0, kn, 0, sd, dv), fmi2OK);
-    }
-    /* in Event Mode, Initialization Mode, and in Co-Simulation */
-    CHECK_STATUS(fmi2EnterEventMode(c), fmi2OK);
-    seed[0] = 1.0;
-    CHECK_STATUS(fmi2GetDirectionalDerivative(c, UNK + 5, 1, KNOWN, 1, seed, dv), fmi2OK);
-    CHECK_NEAR(dv[0], D[5][0], 1e-14);
-    CHECK_STATUS(fmi2Reset(c), fmi2OK);
-    log_clear();
-    EXPECT_ERROR(fmi2GetDirectionalDerivative(c, UNK, 1, KNOWN, 1, seed, dv),
-                 "fmi2GetDirectionalDerivative: illegal call in state Instantiated");
-    CHECK_STATUS(fmi2Reset(c), fmi2OK);
-    configure(c, &s);
-    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
-    {
-        double x0[NX] = {1.0, 0.0, 0.0}, D0[8][4];
-        analytic(cpar, x0, f, D0);
-        CHECK_STATUS(fmi2GetDirectionalDerivative(c, UNK, 8, KNOWN, 1, seed, dv), fmi2OK);
-        for (i = 0; i < 8; i++) CHECK_NEAR(dv[i], D0[i][0], 1e-14);
-    }
-    fmi2FreeInstance(c);
-
-    c = fmi2Instantiate("dir_cs", fmi2CoSimulation, TOKEN, "", &h_callbacks, fmi2False,
-                        fmi2False);
-    CHECK(c != NULL);
-    configure(c, &s);
-    CHECK_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
-    CHECK_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
-    CHECK_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
-    CHECK_STATUS(fmi2DoStep(c, 0.0, 0.5, fmi2True), fmi2OK);
-    {
-        double xc[NX];
-        fmi2ValueReference svr[3] = {VR_POS, VR_VEL, VR_W};
-        CHECK_STATUS(fmi2GetReal(c, svr, 3, xc), fmi2OK);
-        analytic(cpar, xc, f, D);
-        for (j = 0; j < 4; j++) {
-            memset(seed, 0, sizeof(seed));
-            seed[j] = 1.0;
-            CHECK_STATUS(fmi2GetDirectionalDerivative(c, UNK, 9, KNOWN, 4, seed, dv), fmi2OK);
-            for (i = 0; i < 8; i++) CHECK_NEAR(dv[i], D[i][j], 1e-14);
-        }
-        /* the state derivative variables in CS: ode at the current point */
-        CHECK_NEAR(getr(c, VR_DPOS), xc[1], 0.0);
-        CHECK_NEAR(getr(c, VR_DW), f * xc[1], 1e-15);
-    }
-    /* CS behaviour unchanged: ME functions refused */
-    {
-        double r[NX];
-        EXPECT_ERROR(fmi2GetDerivatives(c, r, NX),
-                     "fmi2GetDerivatives: Model Exchange is not supported by this instance");
-    }
-    fmi2FreeInstance(c);
-}
-
 /* ---- error paths ------------------------------------------------------------------- */
 
 static void test_errors(void) {
@@ -662,7 +466,6 @@ static void test_errors(void) {
 int main(void) {
     test_rk4_importer_with_events();
     test_variables();
-    test_directional_derivatives();
     test_errors();
     return h_finish("test_me");
 }

@@ -35,30 +35,32 @@ static const gw_variable vars[] = {
 static const char *const x_names[] = {"x"};
 
 static const gw_model GW_MODEL = {
-    "decay",
-    "{decay-0000-0000-0000-000000000003}",
-    1, 1, 0, 0, 1, 0, 0,
-    s_start, NULL, NULL,
-    (int)(sizeof(vars) / sizeof(vars[0])),
-    vars,
-    {init_f, NULL},
-    {ode_f, NULL},
-    {out_f, NULL},
-    {NULL, NULL},
-    {NULL, NULL},
-    {NULL, NULL},
-    {NULL, NULL},
-    {NULL, NULL}, /* dir */
-    x_names,
-    NULL,
-    NULL,
-    NULL,
-    GW_SOLVER_DOPRI5,
-    1e-8, 1e-10, 0.1,
-    {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
-    {NULL, NULL}, /* upd: no update events */
-    0.0, /* default_max_internal_steps: the runtime's default */
-    {NULL, NULL}, /* ode_pre: none */
-    0,
-    {NULL, NULL, 0, 0, "a toy model without a Taylor kernel"}, /* taylor */
+    .identifier = "decay",
+    .token = "{decay-0000-0000-0000-000000000003}",
+    .nx = 1, .ns = 1, .nu = 0, .np = 0, .ny = 1, .ne = 0, .nc = 0,
+    .s_start = s_start, .u_start = NULL, .p_start = NULL,
+    .n_vars = (int)(sizeof(vars) / sizeof(vars[0])),
+    .vars = vars,
+    .init = {init_f, NULL},
+    .ode = {ode_f, NULL},
+    .out = {out_f, NULL},
+    .evt = {NULL, NULL},
+    .chk = {NULL, NULL},
+    .nom = {NULL, NULL},
+    .jac = {NULL, NULL},
+    .dir = {NULL, NULL},
+    .x_names = x_names,
+    .event_names = NULL,
+    .event_actions = NULL,
+    .check_messages = NULL,
+    .default_solver = GW_SOLVER_DOPRI5,
+    .default_rel_tol = 1e-8, .default_abs_tol = 1e-10, .default_max_step = 0.1,
+    /* no dini: Initialization Mode knows the states */
+    .dini = {NULL, NULL}, .n_init_rows = 0, .init_rows = NULL,
+    .upd = {NULL, NULL}, /* no update events */
+    .default_max_internal_steps = 0.0, /* the runtime's default */
+    .ode_pre = {NULL, NULL}, /* no parameter-only subexpressions */
+    .n_pre = 0,
+    .taylor = {.jet = NULL, .cst = NULL, .n_var = 0, .n_cst = 0,
+               .why_absent = "a toy model without a Taylor kernel"},
 };

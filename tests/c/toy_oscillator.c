@@ -110,30 +110,32 @@ static const int event_actions[] = {GW_EVENT_TERMINATE};
 static const char *const check_messages[] = {"k must be > 0"};
 
 static const gw_model GW_MODEL = {
-    "oscillator",
-    "{0sc1-11a7-0r00-0000-000000000001}",
-    2, 2, 1, 4, 4, 1, 1,
-    s_start, u_start, p_start,
-    (int)(sizeof(vars) / sizeof(vars[0])),
-    vars,
-    {init_f, init_w},
-    {ode_f, ode_w},
-    {out_f, out_w},
-    {evt_f, out_w},
-    {chk_f, chk_w},
-    {nom_f, nom_w},
-    {NULL, NULL},
-    {NULL, NULL}, /* dir */
-    x_names,
-    event_names,
-    event_actions,
-    check_messages,
-    GW_SOLVER_DOPRI5,
-    1e-6, 1e-8, 0.01,
-    {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
-    {NULL, NULL}, /* upd: no update events */
-    0.0, /* default_max_internal_steps: the runtime's default */
-    {NULL, NULL}, /* ode_pre: none */
-    0,
-    {NULL, NULL, 0, 0, "a toy model without a Taylor kernel"}, /* taylor */
+    .identifier = "oscillator",
+    .token = "{0sc1-11a7-0r00-0000-000000000001}",
+    .nx = 2, .ns = 2, .nu = 1, .np = 4, .ny = 4, .ne = 1, .nc = 1,
+    .s_start = s_start, .u_start = u_start, .p_start = p_start,
+    .n_vars = (int)(sizeof(vars) / sizeof(vars[0])),
+    .vars = vars,
+    .init = {init_f, init_w},
+    .ode = {ode_f, ode_w},
+    .out = {out_f, out_w},
+    .evt = {evt_f, out_w},
+    .chk = {chk_f, chk_w},
+    .nom = {nom_f, nom_w},
+    .jac = {NULL, NULL},
+    .dir = {NULL, NULL},
+    .x_names = x_names,
+    .event_names = event_names,
+    .event_actions = event_actions,
+    .check_messages = check_messages,
+    .default_solver = GW_SOLVER_DOPRI5,
+    .default_rel_tol = 1e-6, .default_abs_tol = 1e-8, .default_max_step = 0.01,
+    /* no dini: Initialization Mode knows the states */
+    .dini = {NULL, NULL}, .n_init_rows = 0, .init_rows = NULL,
+    .upd = {NULL, NULL}, /* no update events */
+    .default_max_internal_steps = 0.0, /* the runtime's default */
+    .ode_pre = {NULL, NULL}, /* no parameter-only subexpressions */
+    .n_pre = 0,
+    .taylor = {.jet = NULL, .cst = NULL, .n_var = 0, .n_cst = 0,
+               .why_absent = "a toy model without a Taylor kernel"},
 };

@@ -108,30 +108,32 @@ static const int event_actions[] = {GW_EVENT_UPDATE, GW_EVENT_WARN};
 static const char *const check_messages[] = {"L must be > 0"};
 
 static const gw_model GW_MODEL = {
-    "stickslip",
-    "{5t1c-k5l1-0000-0000-000000000006}",
-    3, 2, 0, 2, 4, 2, 1,
-    s_start, u_start, p_start,
-    (int)(sizeof(vars) / sizeof(vars[0])),
-    vars,
-    {init_f, w_2_1},
-    {ode_f, w_4_1},
-    {out_f, w_4_1},
-    {evt_f, w_4_1},
-    {chk_f, w_2_1},
-    {NULL, NULL},
-    {NULL, NULL},
-    {NULL, NULL}, /* dir */
-    x_names,
-    event_names,
-    event_actions,
-    check_messages,
-    GW_SOLVER_DOPRI5,
-    1e-10, 1e-12, 0.05,
-    {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
-    {upd_f, w_5_1},
-    0.0, /* default_max_internal_steps: the runtime's default */
-    {NULL, NULL}, /* ode_pre: none */
-    0,
-    {NULL, NULL, 0, 0, "a toy model without a Taylor kernel"}, /* taylor */
+    .identifier = "stickslip",
+    .token = "{5t1c-k5l1-0000-0000-000000000006}",
+    .nx = 3, .ns = 2, .nu = 0, .np = 2, .ny = 4, .ne = 2, .nc = 1,
+    .s_start = s_start, .u_start = u_start, .p_start = p_start,
+    .n_vars = (int)(sizeof(vars) / sizeof(vars[0])),
+    .vars = vars,
+    .init = {init_f, w_2_1},
+    .ode = {ode_f, w_4_1},
+    .out = {out_f, w_4_1},
+    .evt = {evt_f, w_4_1},
+    .chk = {chk_f, w_2_1},
+    .nom = {NULL, NULL},
+    .jac = {NULL, NULL},
+    .dir = {NULL, NULL},
+    .x_names = x_names,
+    .event_names = event_names,
+    .event_actions = event_actions,
+    .check_messages = check_messages,
+    .default_solver = GW_SOLVER_DOPRI5,
+    .default_rel_tol = 1e-10, .default_abs_tol = 1e-12, .default_max_step = 0.05,
+    /* no dini: Initialization Mode knows the states */
+    .dini = {NULL, NULL}, .n_init_rows = 0, .init_rows = NULL,
+    .upd = {upd_f, w_5_1},
+    .default_max_internal_steps = 0.0, /* the runtime's default */
+    .ode_pre = {NULL, NULL}, /* no parameter-only subexpressions */
+    .n_pre = 0,
+    .taylor = {.jet = NULL, .cst = NULL, .n_var = 0, .n_cst = 0,
+               .why_absent = "a toy model without a Taylor kernel"},
 };

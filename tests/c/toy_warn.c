@@ -75,30 +75,32 @@ static const int event_actions[] = {GW_EVENT_WARN, GW_EVENT_WARN};
 static const char *const check_messages[] = {"x_thresh must be > 0"};
 
 static const gw_model GW_MODEL = {
-    "warner",
-    "{3a7b-warn-0000-0000-000000000002}",
-    1, 1, 1, 3, 2, 2, 1,
-    s_start, u_start, p_start,
-    (int)(sizeof(vars) / sizeof(vars[0])),
-    vars,
-    {init_f, w_2_1},
-    {ode_f, w_4_1},
-    {out_f, w_4_1},
-    {evt_f, w_4_1},
-    {chk_f, w_2_1},
-    {NULL, NULL},
-    {NULL, NULL},
-    {NULL, NULL}, /* dir */
-    x_names,
-    event_names,
-    event_actions,
-    check_messages,
-    GW_SOLVER_RK4,
-    1e-6, 1e-9, 0.01,
-    {NULL, NULL}, 0, NULL, /* no dini: Initialization Mode knows the states */
-    {NULL, NULL}, /* upd: no update events */
-    0.0, /* default_max_internal_steps: the runtime's default */
-    {NULL, NULL}, /* ode_pre: none */
-    0,
-    {NULL, NULL, 0, 0, "a toy model without a Taylor kernel"}, /* taylor */
+    .identifier = "warner",
+    .token = "{3a7b-warn-0000-0000-000000000002}",
+    .nx = 1, .ns = 1, .nu = 1, .np = 3, .ny = 2, .ne = 2, .nc = 1,
+    .s_start = s_start, .u_start = u_start, .p_start = p_start,
+    .n_vars = (int)(sizeof(vars) / sizeof(vars[0])),
+    .vars = vars,
+    .init = {init_f, w_2_1},
+    .ode = {ode_f, w_4_1},
+    .out = {out_f, w_4_1},
+    .evt = {evt_f, w_4_1},
+    .chk = {chk_f, w_2_1},
+    .nom = {NULL, NULL},
+    .jac = {NULL, NULL},
+    .dir = {NULL, NULL},
+    .x_names = x_names,
+    .event_names = event_names,
+    .event_actions = event_actions,
+    .check_messages = check_messages,
+    .default_solver = GW_SOLVER_RK4,
+    .default_rel_tol = 1e-6, .default_abs_tol = 1e-9, .default_max_step = 0.01,
+    /* no dini: Initialization Mode knows the states */
+    .dini = {NULL, NULL}, .n_init_rows = 0, .init_rows = NULL,
+    .upd = {NULL, NULL}, /* no update events */
+    .default_max_internal_steps = 0.0, /* the runtime's default */
+    .ode_pre = {NULL, NULL}, /* no parameter-only subexpressions */
+    .n_pre = 0,
+    .taylor = {.jet = NULL, .cst = NULL, .n_var = 0, .n_cst = 0,
+               .why_absent = "a toy model without a Taylor kernel"},
 };

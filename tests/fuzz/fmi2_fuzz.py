@@ -1,4 +1,4 @@
-"""Seeded fuzzer of fmi2 call sequences against one FMU's shared library (issue 8, section 9).
+"""Seeded fuzzer of fmi2 call sequences against one FMU's shared library (docs/fmi.md, "Fuzzing").
 
 Each sequence instantiates the FMU (Co-Simulation or Model Exchange, by the seed), makes random
 calls in random states with hostile arguments (unknown value references, NaN, inf, 1e308,

@@ -1,22 +1,21 @@
-"""Issue 8, section 9: what a fuzzer found (except the step budget, issue 8's other part).
-
-Each finding is a test with the value before (the issue's) and after:
-  (a) non-finite values handed to the caller
+"""Invalid input through the FMI functions is refused with a reason; nothing non-finite reaches
+the caller (docs/fmi.md). The cases are calls a seeded fmi2 fuzzer made (tests/fuzz/fmi2_fuzz.py;
+the budget of internal steps, its other finding: test_bounded_calls.py):
+  (a) no non-finite value handed to the caller
       R = 0, M = 0, M = 1e308, R = 5e-324 set in Initialization Mode, fmi2GetReal(der(...)):
-        before NaN with fmi2Warning and no log; after fmi2Error naming the variable and the
-        failed validity check, the caller's array untouched
-      fmi2GetDirectionalDerivative with seed 1e308: before Inf with fmi2OK; after fmi2Error
-  (b) Model Exchange fmi2ExitInitializationMode with M = 1e308: before fmi2Discard (not allowed
-      for that call), nothing logged, instance half-initialised in Event Mode; after fmi2Error
-      with the reason, exactly as Co-Simulation, and no Event Mode
-  (c) corrupt FMU states: before only the header was checked (3,848 of 4,536 single bit flips of
-      a paper_earth state accepted; solver = 42, NaN states, rel_tol = -1 accepted); after a
-      CRC-32 and the same range checks as fmi2Set*: every flip and every bad field refused
-  (d) smaller: an out-of-range solver via fmi2SetInteger (before OK, failed only at
-      initialisation), rel_tol = 1e308 / 1e6 (before accepted: no error control / "step size
-      underflow"), fmi2DoStep with h below the resolution of t (before fmi2OK without advancing,
-      nothing said), fmi2SetInteger / fmi2SetString in Continuous-Time Mode (before fmi2OK):
-      all refused at the call with a reason.
+        fmi2Error naming the variable and the failed validity check, the caller's array untouched
+        (not NaN with fmi2Warning and no log)
+      fmi2GetDirectionalDerivative with seed 1e308: fmi2Error, not Inf with fmi2OK
+  (b) Model Exchange fmi2ExitInitializationMode with M = 1e308: fmi2Error with the reason, exactly
+      as Co-Simulation, and no Event Mode (fmi2Discard is not allowed for that call, and an
+      instance half-initialised in Event Mode would be unusable)
+  (c) corrupt FMU states: a CRC-32 and the same range checks as fmi2Set* refuse every single bit
+      flip of a paper_earth state (checking the header alone accepts 3,848 of 4,536) and every
+      bad field (solver = 42, NaN states, rel_tol = -1)
+  (d) refused at the call with a reason, not accepted to fail later or never: an out-of-range
+      solver via fmi2SetInteger, rel_tol = 1e308 / 1e6 (no error control / "step size
+      underflow"), fmi2DoStep with h below the resolution of t (no advance, nothing said),
+      fmi2SetInteger / fmi2SetString in Continuous-Time Mode.
 """
 from __future__ import annotations
 
@@ -26,7 +25,6 @@ import random
 import struct
 import zlib
 
-import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
@@ -58,7 +56,7 @@ def test_initial_derivatives_never_non_finite(earth_fmu, kind, values, check):
         status, out = _raw_get_real(inst, names)
         if status == 0:  # computable after all: then every value is finite
             assert all(math.isfinite(v) for v in out)
-        else:  # before: fmi2Warning with NaN in the array and no message
+        else:  # fmi2Error with the reason, not fmi2Warning with NaN in the array and no message
             assert status == 3 and out == [SENTINEL] * len(names)
             assert "is not finite" in inst.log_text() and check in inst.log_text()
     finally:
@@ -76,7 +74,7 @@ def test_huge_seed_is_refused_not_inf(earth_fmu, kind):
         seed = (ctypes.c_double * 1)(1e308)
         out = (ctypes.c_double * n)(SENTINEL, SENTINEL)
         status = inst.raw("fmi2GetDirectionalDerivative", uvr, ctypes.c_size_t(n), kvr, ctypes.c_size_t(1), seed, out)
-        assert status == 3 and list(out) == [SENTINEL, SENTINEL]  # before: fmi2OK with inf
+        assert status == 3 and list(out) == [SENTINEL, SENTINEL]  # fmi2Error, not fmi2OK with inf
         assert "the seed is too large" in inst.log_text()
     finally:
         inst.free()
@@ -90,7 +88,7 @@ def test_exit_initialization_refusal_is_the_same_in_both_interfaces(earth_fmu, k
         inst.set(M=1e308)
         inst.fmu2.enterInitializationMode()
         status = inst.raw("fmi2ExitInitializationMode")
-        assert status == 3  # before (ME): fmi2Discard, nothing logged
+        assert status == 3  # fmi2Error in ME too, not fmi2Discard with nothing logged
         assert "fmi2ExitInitializationMode: initial value of output energy is not finite (inf)" \
             in inst.log_text()
         if kind is Model:  # not half-initialised in Event Mode: Event Mode calls are refused
@@ -132,7 +130,7 @@ def test_every_single_bit_flip_is_refused(saved):
     assert _accepts(s, blob)
     accepted = sum(_accepts(s, bytes(blob[:i // 8]) + bytes([blob[i // 8] ^ (1 << i % 8)]) + blob[i // 8 + 1:])
                    for i in range(8 * len(blob)))
-    print(f"{8 * len(blob)} single bit flips, {accepted} accepted (before: 3,848 of 4,536)")
+    print(f"{8 * len(blob)} single bit flips, {accepted} accepted (checking the header alone: 3,848 of 4,536)")
     assert accepted == 0
     assert "CRC-32 checksum does not match" in s.log_text()
 
@@ -193,12 +191,12 @@ def test_fields_out_of_range_are_refused_even_with_a_valid_checksum(saved, field
     s, blob = saved
     b = bytearray(blob)
     struct.pack_into(fmt, b, _field(blob, where), value)
-    assert not _accepts(s, _with_crc(b))  # before: accepted (only the header was checked)
+    assert not _accepts(s, _with_crc(b))  # the checksum is not enough: the range checks refuse it
     assert reason in s.log_text(), s.log_text()[-300:]
 
 
 @pytest.mark.parametrize("field,where,value", [
-    ("abs_tol", _DBL["abs_tol"], 0.0),  # follow rel_tol: valid (solvers), like the scenes' default
+    ("abs_tol", _DBL["abs_tol"], 0.0),  # follow rel_tol: valid, the scenes' default
     ("max_internal_steps", _DBL["max_internal_steps"], 1.0),
     ("max_internal_steps", _DBL["max_internal_steps"], 2147483647.0),
     ("err_old", _DBL["err_old"], 0.0),
@@ -251,7 +249,7 @@ def test_random_payload_with_a_valid_header_is_refused(saved):
 def test_settings_are_refused_at_the_call(earth_fmu, name, value, reason):
     s = Slave(earth_fmu, logging_on=False)
     try:
-        with pytest.raises(FMICallException) as exc:  # before: fmi2OK, failing later or never
+        with pytest.raises(FMICallException) as exc:  # at the call, not failing later or never
             s.set(**{name: value})
         assert exc.value.status == 3 and reason in s.log_text()
     finally:
@@ -262,7 +260,7 @@ def test_step_below_the_resolution_of_t_is_refused(earth_fmu):
     s = Slave(earth_fmu, logging_on=False)
     try:
         s.init(start_time=1e6)
-        with pytest.raises(FMICallException) as exc:  # before: fmi2OK, t unchanged, silent
+        with pytest.raises(FMICallException) as exc:  # not fmi2OK with t unchanged, silently
             s.slave.doStep(1e6, 1e-12)
         assert exc.value.status == 3
         assert "is below the resolution of currentCommunicationPoint" in s.log_text()
@@ -272,8 +270,8 @@ def test_step_below_the_resolution_of_t_is_refused(earth_fmu):
 
 @pytest.mark.parametrize("function", ["fmi2SetInteger", "fmi2SetBoolean", "fmi2SetString"])
 def test_discrete_setters_are_refused_in_continuous_time_mode(earth_fmu, function):
-    """FMI 2.0.4 section 3.2.3: not in Continuous-Time Mode. Before: fmi2OK (nvr = 0: the call
-    itself was never checked against the state machine)."""
+    """FMI 2.0.4 section 3.2.3: not in Continuous-Time Mode, also with nvr = 0 (the call itself is
+    checked against the state machine, not only its variables)."""
     m = Model(earth_fmu, logging_on=False)
     try:
         m.init()

@@ -1,0 +1,419 @@
+"""gyrowheel's Python API: the verbs of the `gyrowheel` command as functions.
+
+    import gyrowheel
+    fmu = gyrowheel.build("examples/scenes/paper_moon.toml", "moon.fmu")     # -> BuildResult
+    run = gyrowheel.simulate(fmu, stop_time=5.0, start_values={"gamma_dot": 8.0})
+    run["beta"][-1]                                 # a structured numpy array, as fmpy returns
+    gyrowheel.info(fmu).variable("g").start          # 1.625 (m/s2)
+
+Every function takes a path or the parsed object alike (a scene: a path or a gyrowheel.Scene;
+an FMU: a path or the BuildResult that built it; a system: a path to an .ssp or its
+SystemDescription; a result: a CSV path or the array simulate returned), returns data, and
+names its own arguments in its errors (`grid['beta_deg'] = '60:89': ...`, `stop_time must be
+> 0`). The `gyrowheel` command calls exactly these functions (gyrowheel/cli.py).
+
+Importing this module imports no third-party package: each function imports what it uses,
+and a function whose optional part is not installed raises MissingExtraError
+(gyrowheel.extras) before it imports anything of it.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+import os
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+
+from gyrowheel.errors import ArgumentError, FmuError, GyrowheelError, SweepSpecError
+from gyrowheel.extras import require
+from gyrowheel.wording import ANIMATE, SWEEP, reworded
+
+
+# -- arguments ---------------------------------------------------------------------------------
+
+def one_line(exc: BaseException) -> str:
+    """The last non-empty line of an exception's message (CasADi puts the reason there)."""
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    return lines[-1] if lines else type(exc).__name__
+
+
+def _path(value, argument: str, what: str) -> Path:
+    """A str or os.PathLike argument as a Path; TypeError naming the argument otherwise."""
+    if isinstance(value, (str, os.PathLike)):
+        return Path(value)
+    raise TypeError(f"{argument} must be {what}, got {type(value).__name__}")
+
+
+def _scene(scene):
+    """(Scene, how errors name it, the scene file's name or '') from a path or a Scene."""
+    from gyrowheel.fmu_build.scene import Scene, load_scene
+
+    if isinstance(scene, Scene):
+        return scene, f"scene {scene.name!r}", ""
+    if isinstance(scene, str) and "\n" in scene:
+        raise ArgumentError("scene: got TOML text, not a path; read text with gyrowheel.parse_scene(text) "
+                            "and pass the Scene", argument="scene")
+    path = _path(scene, "scene", "a path to a scene file (.toml) or a gyrowheel.Scene")
+    return load_scene(path), str(path), path.name
+
+
+def _fmu_file(fmu, argument: str = "fmu") -> Path:
+    """An FMU argument (a path, or the BuildResult of gyrowheel.build) as the path of a file."""
+    path = _path(fmu, argument, "a path to an FMU (.fmu) or the gyrowheel.BuildResult of one")
+    if path.suffix.lower() == ".toml":
+        raise FmuError(f"{path}: a scene, not an FMU; build its FMU first", argument=argument)
+    if not path.is_file():
+        raise FmuError(f"{path}: no such FMU file", argument=argument)
+    return path
+
+
+def _model_description(path: Path):
+    """fmpy's ModelDescription of an FMU with Co-Simulation; FmuError otherwise."""
+    from fmpy import read_model_description
+    try:
+        md = read_model_description(str(path))
+    except Exception as exc:  # fmpy raises plain Exceptions for broken archives and XML
+        raise FmuError(f"{path}: not a readable FMU: {exc}", argument="fmu") from None
+    if md.coSimulation is None:
+        raise FmuError(f"{path}: the FMU does not support Co-Simulation", argument="fmu")
+    return md
+
+
+def _seconds(value, argument: str) -> float | None:
+    """None, or a finite number of seconds > 0 (ArgumentError naming the argument)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ArgumentError(f"{argument} must be a number of seconds, got {type(value).__name__} {value!r}",
+                            argument=argument)
+    value = float(value)
+    if not math.isfinite(value):
+        raise ArgumentError(f"{argument} must be finite, got {value!r}", argument=argument)
+    if not value > 0:
+        raise ArgumentError(f"{argument} must be > 0, got {value!r}", argument=argument)
+    return value
+
+
+def _flag(value, argument: str) -> bool:
+    if not isinstance(value, bool):
+        raise TypeError(f"{argument} must be True or False, got {type(value).__name__} {value!r}")
+    return value
+
+
+def _output_file(path, argument: str = "output") -> Path:
+    """A file a function will write: not a directory; its directory is created. Checked before
+    the work, not after it. Raises ArgumentError naming the argument (also for a directory that
+    cannot be made because a file is in the way), OSError for other failures (permissions)."""
+    path = _path(path, argument, "a file path")
+    if path.is_dir():
+        raise ArgumentError(f"{argument} {path}: is a directory; give a file name", argument=argument)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        blocker = next((p for p in reversed(path.parents) if p.exists() and not p.is_dir()), path.parent)
+        raise ArgumentError(f"{argument} {path}: cannot write: {blocker} is not a directory",
+                            argument=argument) from None
+    return path
+
+
+def _assignments(values, argument: str) -> dict[str, object]:
+    """Start values as {name: value}: a mapping, or NAME=VALUE strings as the command line gives
+    them (values stay text, checked later against the FMU). ArgumentError names a bad item."""
+    if values is None:
+        return {}
+    if isinstance(values, Mapping):
+        for key in values:
+            if not isinstance(key, str) or not key:
+                raise ArgumentError(f"{argument}: names must be non-empty strings, got {key!r}", argument=argument)
+        return dict(values)
+    if isinstance(values, str) or not isinstance(values, Sequence):
+        raise ArgumentError(f"{argument}: expected a mapping {{name: value}} or a list of 'NAME=VALUE' "
+                            f"strings, got {values!r}", argument=argument)
+    out = {}
+    for item in values:
+        if not isinstance(item, str) or "=" not in item or not item.split("=", 1)[0].strip():
+            raise ArgumentError(f"{argument} {item!r}: expected NAME=VALUE", argument=argument)
+        name, text = item.split("=", 1)
+        out[name.strip()] = text.strip()
+    return out
+
+
+# -- the verbs ---------------------------------------------------------------------------------
+
+def build(scene, output=None, *, build_dir=None, taylor: bool = False):
+    """Build the FMI 2.0 FMU of a scene (Co-Simulation and Model Exchange, sources included).
+
+    scene: a scene file (str or os.PathLike, TOML: docs/scenes.md) or a gyrowheel.Scene.
+    output: the .fmu to write (default: '<scene name>.fmu' in the working directory); its
+    directory is created. build_dir: keep the generated C and objects there (default: a
+    temporary directory, removed). taylor: also generate the Taylor kernel (solver taylor at
+    run time, gyrowheel.Ensemble); implied by solver = "taylor" in the scene.
+    Returns a gyrowheel.BuildResult: fmu (the path), spec (the ModelSpec: variables, effects),
+    sources (the C sources' directory, kept only with build_dir), identifier (the model
+    identifier); it is os.PathLike, so it stands for its FMU in every other function.
+    Raises SceneError (the file, table and key at fault; a combination the model refuses),
+    ArgumentError (output), CompileError (the C compiler failed, with its output), TypeError
+    (an argument of the wrong type), OSError (a file that cannot be written).
+    """
+    from gyrowheel.fmu_build import builder
+    from gyrowheel.fmu_build.scene import SceneError
+
+    parsed, where, _ = _scene(scene)
+    out = _output_file(output if output is not None else f"{parsed.name}.fmu", "output")
+    build_dir = None if build_dir is None else _path(build_dir, "build_dir", "a directory path")
+    try:
+        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=_flag(taylor, "taylor"))
+    except GyrowheelError:
+        raise
+    except ValueError as exc:  # a combination the model refuses (the message names the key)
+        raise SceneError(f"{where}: {one_line(exc)}") from exc
+
+
+def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, output=None, plot=None):
+    """Simulate an FMU in Co-Simulation with fmpy (FMI 2.0.4, section 4), from its start to stop_time.
+
+    fmu: the .fmu (a path, or the BuildResult of gyrowheel.build). stop_time [s] (default: the
+    FMU's DefaultExperiment); output_interval [s]: the communication step, one row each
+    (default: the DefaultExperiment's step size). start_values: {name: value} (parameters,
+    solver settings, initial states: 'gamma_dot', 'solver': 'rk4', 'beta': 1.4 rad) or
+    'NAME=VALUE' strings; each checked against the FMU by name and type before the run
+    (1.5 for an Integer is refused, not truncated). output: also write the result as CSV
+    (Booleans as 0/1); plot: also write a PNG of the trajectory (needs gyrowheel[plot]).
+    Returns fmpy's structured array, shape (n,): one row per communication point, fields 'time'
+    [s] and every output by name (units: gyrowheel.info). A terminating event (the wheel falling
+    flat) ends the run early; its last row is at the event and the Boolean output 'fallen' is
+    True there.
+    Raises FmuError (no such file, not an FMU), ArgumentError (a bad time, start value or
+    output path, named), SimulationError (the FMU refused the run: its logged reason),
+    MissingExtraError (plot without matplotlib), TypeError.
+    """
+    from gyrowheel.simulation import SimulationError, check_start_values, run, write_csv
+
+    path = _fmu_file(fmu)
+    stop_time, output_interval = _seconds(stop_time, "stop_time"), _seconds(output_interval, "output_interval")
+    if plot is not None:
+        require("plot", "gyrowheel.simulate(plot=...)")
+    csv = _output_file(output, "output") if output is not None else None
+    png = _output_file(plot, "plot") if plot is not None else None
+    _model_description(path)
+    try:
+        starts = check_start_values(path, _assignments(start_values, "start_values"))
+    except SimulationError as exc:
+        raise ArgumentError(f"start_values: {exc}", argument="start_values") from None
+    result = run(path, stop_time=stop_time, output_interval=output_interval, start_values=starts)
+    if csv is not None:
+        write_csv(result, csv)
+    if png is not None:
+        from gyrowheel.plotting import plot_trajectories
+        plot_trajectories({path.stem: result}, png, title=path.stem)
+    return result
+
+
+def info(fmu):
+    """Describe an FMU, from its modelDescription.xml (FMI 2.0.4, section 2.2) and its archive.
+
+    fmu: the .fmu (a path, or the BuildResult of gyrowheel.build).
+    Returns gyrowheel.FmuInfo: model name, FMI version, generation tool and date, guid,
+    interfaces, default experiment [s], every variable with causality, variability, start
+    (typed), unit and description, the effects, the solver choices, the platforms in
+    binaries/, whether it carries sources and the Taylor kernel. str(info) is the text
+    `gyrowheel info` prints, info.as_dict() the JSON of `gyrowheel info --json`.
+    Raises FmuError (no such file, not a readable FMU), TypeError.
+    """
+    from gyrowheel.description import read_info
+    return read_info(_fmu_file(fmu))
+
+
+def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: int = 0, points=None,
+          fixed=None, derive=None, stop_time: float | None = None, output_interval: float | None = None,
+          start_time: float = 0.0, solver: str | None = None, rel_tol: float | None = None,
+          abs_tol: float | None = None, max_step: float | None = None, metrics=None, metric_functions=(),
+          workers: int | None = None, scheduler: str | None = None, client=None, batch_size: int | None = None,
+          output=None, plot=None, plot_metric: str | None = None, progress: bool = False,
+          ensemble: bool = True, on_start: Callable | None = None):
+    """Run a parameter sweep or Monte Carlo study on Dask; returns the table (docs/sweeps.md).
+
+    source: a scene (a .toml path or a gyrowheel.Scene: built first, in a temporary
+    directory), an FMU (.fmu path or BuildResult), a system of FMUs (.ssp path) or a sweep target
+    (gyrowheel.studies.target).
+    grid: {name: 'START:STOP:N' | 'START:STOP:N:log' | [values] | value}, or 'NAME=SPEC'
+    strings; grids multiply. random: {name: 'normal:MU:SIGMA' | 'uniform:A:B' | (dist, a, b)}
+    or 'NAME=DIST' strings, with samples (count, crossed with the grid) and seed (numpy's
+    default_rng). points: an explicit table (DataFrame or list of dicts) instead of grid/random.
+    Names: the unit's settable variables, angles also as NAME_deg (degrees), presets by name
+    (g='moon'), enumeration items by name (solver='rk4'); other names need derive
+    ('module:function', 'file.py:function' or a callable f(point, values) -> {name: value}).
+    fixed: {name: value} (or 'NAME=VALUE' strings) for every point; solver, rel_tol, abs_tol,
+    max_step: solver settings for every point. stop_time, output_interval, start_time [s]: the
+    communication grid (default: the unit's DefaultExperiment). metrics: names or a
+    comma-separated string (survived, fall_time, end_time, event, min_beta, max_beta, max_lean,
+    final_position, energy_drift, final:NAME, max:NAME, min:NAME, mean:NAME); metric_functions:
+    'module:function' references or callables of the trajectory.
+    workers (0: an in-process loop; default: a LocalCluster, one process per core), scheduler
+    (a Dask scheduler's address) or client (a distributed.Client); batch_size: points per task.
+    output: a .parquet or .csv kept complete on disk while the sweep runs; plot: a PNG of the
+    table (plot_metric: its column); progress: a progress bar on a terminal. ensemble: with
+    solver taylor, run batches on the ensemble path (False: one FMU run per point).
+    on_start: called with the gyrowheel.studies.plan.Plan (its inputs, values and settings)
+    once everything is checked, just before the first point runs.
+    Returns a pandas DataFrame, one row per point: point, the inputs, the metrics, status
+    ('ok', 'error'), reason, wall_time [s].
+    Raises SweepSpecError naming the argument (`grid['beta_deg'] = '60:89': ...`,
+    `fixed['R']: ...`, `stop_time ...`) before anything runs; SweepInterrupted (a
+    KeyboardInterrupt) when Ctrl-C stops it, with the table of the points done;
+    SceneError for a scene that cannot be read or built; MissingExtraError without
+    gyrowheel[sweep]; OSError / TimeoutError for a scheduler that cannot be reached; TypeError
+    for a source of another kind.
+    """
+    arguments = dict(locals())  # every argument, forwarded as given (fixed as strings: parsed below)
+    require("sweep", "gyrowheel.sweep()")
+    from gyrowheel.studies.api import sweep as run_sweep
+    from gyrowheel.studies.spec import parse_assignments
+
+    by_name = tuple(name for name in ("grid", "random") if isinstance(arguments[name], Mapping))
+    with reworded(SWEEP, (SweepSpecError,), by_name):
+        if fixed is not None and not isinstance(fixed, Mapping):
+            arguments["fixed"] = parse_assignments(fixed)
+        return run_sweep(**arguments)
+
+
+def export_c(scene, output=None, *, check: bool = True):
+    """Write a scene's model as plain C with a C API (no FMI): docs/c_api.md.
+
+    scene: a scene file (str or os.PathLike) or a gyrowheel.Scene. output: the directory to
+    write (default: '<scene name>_c'): new, empty, or a previous export (its files are replaced,
+    the user's kept). check: first probe the model name against the C library's declarations,
+    and afterwards compile '<model>.c' strictly (C99, all warnings as errors).
+    Returns gyrowheel.ExportResult: directory, identifier, files (relative), spec.
+    Raises SceneError, ExportError (a model name C cannot take, a directory that cannot be
+    used), CompileError, TypeError, OSError.
+    """
+    from gyrowheel.fmu_build.export_c import export_c as write_export
+    from gyrowheel.fmu_build.scene import SceneError
+
+    parsed, where, scene_file = _scene(scene)
+    out = _path(output if output is not None else f"{parsed.name}_c", "output", "a directory path")
+    try:
+        return write_export(parsed, out, check=_flag(check, "check"), scene_file=scene_file)
+    except GyrowheelError:
+        raise
+    except ValueError as exc:  # a combination the model refuses, or an output table it cannot hold
+        raise SceneError(f"{where}: {one_line(exc)}") from exc
+
+
+def animate(result, output, *, R: float | None = None, fmu=None, component: str | None = None,
+            fps: float = 25.0, speed: float = 1.0, size=(640, 480), trail: float | None = None,
+            start: float | None = None, stop: float | None = None):
+    """Write an animation of a run: a GIF or MP4 (matplotlib), or a standalone interactive HTML
+    page (three.js), chosen by output's extension (.gif, .mp4, .html): docs/animation.md.
+
+    result: a result CSV (gyrowheel simulate's, or any table with its column names) or the
+    result as data: the structured array gyrowheel.simulate returns, or gyrowheel.system_run's
+    RunResult (component: which component of a system's result to draw; default: the one with
+    the wheel's columns). output: the file to write; its directory is created.
+    R [m]: the wheel radius, or fmu: an FMU (path or BuildResult) or an .ssp whose start values
+    give R and the flywheel's geometry (default: z / sin(beta) from the result).
+    fps: frames per second of playback (0, 120]; speed: simulated seconds per second of
+    playback; size: (width, height) in pixels or 'WIDTHxHEIGHT', 64 to 4096; trail: seconds of
+    contact track behind the wheel (default: all); start, stop [s]: the part of the run shown.
+    Returns the animation's Timeline (frame times, poses, parameters with their sources).
+    Raises AnimationError naming the argument or the file, column and row at fault;
+    MissingExtraError without gyrowheel[animate].
+    """
+    require("animate", "gyrowheel.animate()")
+    from gyrowheel.animation import AnimationError
+    from gyrowheel.animation import animate as draw
+    from gyrowheel.animation.command import parse_size
+
+    with reworded(ANIMATE, (AnimationError,)):
+        if isinstance(size, str):
+            size = parse_size(size)
+        elif not (isinstance(size, Sequence) and len(size) == 2
+                  and all(isinstance(v, numbers.Integral) and not isinstance(v, bool) for v in size)):
+            raise AnimationError(f"size: expected (WIDTH, HEIGHT) in pixels or 'WIDTHxHEIGHT', got {size!r}",
+                                 argument="size")
+        if fmu is not None:
+            fmu = _path(fmu, "fmu", "a path to an FMU or .ssp, or a gyrowheel.BuildResult")
+        timeline = draw(result, output, R=R, fmu=fmu, component=component, fps=fps, speed=speed,
+                        size=tuple(int(v) for v in size), trail=trail, start=start, stop=stop)
+    if timeline.parameters.source.get("R") == "--R":  # the engine's label for a radius given
+        timeline.parameters.source["R"] = "R"
+    return timeline
+
+
+def system_run(system, *, step: float = 0.01, stop_time: float | None = None, start_values=None, output=None):
+    """Run a system of FMUs (SSP 1.0) with gyrowheel's own master on fmpy: fixed communication
+    step, Jacobi exchange, like libcosim's fixed-step algorithm (docs/system.md).
+
+    system: an .ssp file (a path; its FMUs are unpacked into a temporary directory, removed
+    after the run) or a gyrowheel.cosim.system.SystemDescription. step [s]: the communication
+    step; stop_time [s]: default the system's DefaultExperiment; it must be a whole number of
+    steps from the start. start_values: {'COMPONENT.VARIABLE': value}, {COMPONENT: {VARIABLE:
+    value}} or 'COMPONENT.VARIABLE=VALUE' strings, on top of the system's own bindings; each
+    checked against the component's FMU by name and type. output: also write the result as CSV.
+    Returns gyrowheel.cosim.master.RunResult: data (structured array: time [s] and every
+    output as '<component>.<variable>'), stopped_by (the component that ended the run early,
+    e.g. the wheel falling flat, or None), wall_time [s].
+    Raises SystemFileError (the .ssp, naming the element at fault), ArgumentError (step,
+    stop_time, start_values, output), MasterError (a component failed: its logged reason),
+    TypeError.
+    """
+    import tempfile
+
+    from gyrowheel.cosim.master import run
+    from gyrowheel.cosim.system import SystemDescription, read_ssp
+    from gyrowheel.simulation import write_csv
+
+    step = _seconds(step, "step")
+    if step is None:
+        raise ArgumentError("step must be a number of seconds > 0, got None", argument="step")
+    stop_time = _seconds(stop_time, "stop_time")
+    csv = _output_file(output, "output") if output is not None else None
+    with tempfile.TemporaryDirectory(prefix="gyrowheel-system-") as tmp:
+        if isinstance(system, SystemDescription):
+            description = system
+        else:
+            description = read_ssp(_path(system, "system", "a path to an .ssp or a SystemDescription"), tmp)
+        starts = _system_start_values(description, start_values)
+        try:
+            result = run(description, step, stop_time, start_values=starts)
+        except GyrowheelError:
+            raise
+        except ValueError as exc:  # the master's checks: a stop time off the step grid, a result too large
+            text = str(exc)
+            raise ArgumentError(text, argument="stop_time" if text.startswith("stop time") else None) from None
+    if csv is not None:
+        write_csv(result.data, csv)
+    return result
+
+
+def _system_start_values(system, values) -> dict[str, dict[str, object]]:
+    """start_values (see system_run) -> {component: {variable: typed value}}, checked against
+    each component's FMU as simulate checks them. Raises ArgumentError naming the entry."""
+    from gyrowheel.simulation import SimulationError, check_start_values
+
+    names = [c.name for c in system.components]
+    listed = f"a component of {', '.join(names)}"
+    by_component: dict[str, dict[str, object]] = {}
+    if isinstance(values, Mapping) and values and all(isinstance(v, Mapping) for v in values.values()):
+        for component, own in values.items():
+            if component not in names:
+                raise ArgumentError(f"start_values[{component!r}]: no such component; expected {listed}",
+                                    argument="start_values")
+            by_component[component] = dict(own)
+    else:
+        keyed = isinstance(values, Mapping)  # else 'COMPONENT.VARIABLE=VALUE' strings
+        for key, value in _assignments(values, "start_values").items():
+            component, _, variable = key.partition(".")
+            if component not in names or not variable:
+                where = f"start_values[{key!r}]" if keyed else f"start_values {key + '=' + str(value)!r}"
+                form = "COMPONENT.VARIABLE" if keyed else "COMPONENT.VARIABLE=VALUE"
+                raise ArgumentError(f"{where}: expected {form} with {listed}", argument="start_values")
+            by_component.setdefault(component, {})[variable] = value
+    out = {}
+    for component, own in by_component.items():
+        try:
+            out[component] = check_start_values(system.component(component).fmu, own)
+        except SimulationError as exc:
+            raise ArgumentError(f"start_values, component {component}: {exc}", argument="start_values") from None
+    return out

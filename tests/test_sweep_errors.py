@@ -1,0 +1,139 @@
+"""Sweeps refused before anything runs, and a scheduler that is not one.
+
+Through the API a bad sweep raises SweepSpecError naming the option or variable; the command line
+prints one line `gyrowheel: error: ...`, exits 2 and writes nothing: unknown names, options that
+exclude each other, values that are not finite or out of range, a variable given twice. An address
+that answers but is no Dask scheduler ends the command with one line and exit 1, not a hang or a
+traceback."""
+from __future__ import annotations
+
+import socket
+import threading
+import time
+
+import pytest
+
+from gyrowheel.cli import main
+from gyrowheel.studies import SweepSpecError, sweep
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(grid={"foo": [1.0]}), "unknown variable 'foo'"),
+    (dict(grid={"z": [1.0]}), "calculated output"),
+    (dict(grid={"beta": [1.0], "beta_deg": [60.0]}), "swept twice"),
+    (dict(grid={"M": [1.0]}, fixed={"M": 2.0}), "both swept and fixed"),
+    (dict(grid={"M": [1.0]}, metrics="lean"), "unknown metric"),
+    (dict(grid={"M": [1.0]}, metrics="final:nope"), "no Real output 'nope'"),
+    (dict(grid={"M": [1.0]}, solver="rk5"), "valid: euler, rk4"),
+    (dict(grid={"M": [1.0]}, metric_functions=["no_such_module_xyz:f"]), "cannot load"),
+    (dict(grid={"M": [1.0]}, output="table.xlsx"), "use .parquet or .csv"),
+])
+def test_bad_names_and_options_refused_before_running(earth_fmu, kwargs, message):
+    with pytest.raises(SweepSpecError, match=message):
+        sweep(earth_fmu, stop_time=0.1, workers=0, **kwargs)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--grid", "beta_deg=60:89"], "--grid 'beta_deg=60:89': expected NAME=START:STOP:N"),
+    (["--grid", "speed=1,2"], "unknown variable 'speed'; settable: M, R"),
+    (["--random", "M=normal:2:0.1"], "--random needs --samples"),
+    (["--grid", "M=1,2", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "exclude each other"),
+])
+def test_cli_errors_are_one_line_exit_2(earth_fmu, tmp_path, capsys, argv, message):
+    code = main(["sweep", str(earth_fmu), "-o", str(tmp_path / "t.parquet"), "--workers", "0", *argv]
+                if "--scheduler" not in argv else ["sweep", str(earth_fmu), *argv])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err.startswith("gyrowheel: error: ") and message in err and "\n" not in err
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(grid=["M=1,nan"]), "not finite"),
+    (dict(grid=["M=1,inf"]), "not finite"),
+    (dict(grid={"M": [1.0, float("nan")]}), "not finite"),
+    (dict(grid={"M": float("inf")}), "not finite"),
+    (dict(grid={"M": [1.0]}, fixed={"R": float("nan")}), "--set R: value nan"),
+    (dict(grid={"M": [1.0]}, rel_tol=float("nan")), "not finite"),
+    (dict(points=[{"M": float("inf")}]), "not finite"),
+    (dict(grid={"M": [1.0]}, stop_time=float("inf")), "--stop-time"),
+    (dict(grid={"M": [1.0]}, output_interval=0.0), "--output-interval must be > 0"),
+    (dict(grid={"M": [1.0]}, output_interval=float("nan")), "--output-interval"),
+    (dict(grid={"M": [1.0]}, fixed={"beta": 1.0, "beta_deg": 80.0}), "'beta' given twice"),
+    (dict(grid={"M": [1.0]}, fixed={"solver": "rk4"}, solver="dopri5"), "'solver' given twice"),
+    (dict(random={"M": "normal:2:0.1"}, samples=2, seed=-1), "--seed must be a whole number >= 0"),
+    (dict(random={"M": "normal:2:0.1"}, samples=2, seed=1.5), "--seed must be a whole number >= 0"),
+    (dict(random={"M": "normal:2:0.1"}, samples=2.5), "--samples must be a whole number"),
+])
+def test_bad_values_refused_before_running(earth_fmu, kwargs, message):
+    kwargs.setdefault("stop_time", 0.1)
+    with pytest.raises(SweepSpecError, match=message):
+        sweep(earth_fmu, workers=0, **kwargs)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--grid", "M=1", "--stop-time", "inf"], "--stop-time"),
+    (["--grid", "M=1", "--output-interval", "0"], "--output-interval must be > 0"),
+    (["--grid", "beta_deg=60,nan"], "not finite"),
+    (["--grid", "M=1", "--plot", "NODIR/x.png"], "does not exist"),
+    (["--grid", "M=1", "--plot", "x.xyz"], "format"),
+    (["--grid", "M=1", "--workers", "-1"], "--workers"),
+    (["--random", "M=normal:2:0.1", "--samples", "2", "--seed", "-1"], "--seed must be a whole number >= 0"),
+])
+def test_cli_bad_values_one_line_exit_2_nothing_run(earth_fmu, tmp_path, capsys, argv, message):
+    out = tmp_path / "t.csv"
+    argv = [a.replace("NODIR", str(tmp_path / "no_such_dir")) for a in argv]
+    try:
+        code = main(["sweep", str(earth_fmu), "--stop-time", "0.1", "--no-progress", "-o", str(out), *argv]
+                    + ([] if "--workers" in argv else ["--workers", "0"]))
+    except SystemExit as exc:  # refused by argparse itself (finite_float options)
+        code = exc.code
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and err[-1].startswith(("gyrowheel: error: ", "gyrowheel sweep: error: ")), err
+    assert message in err[-1], err
+    assert not any(line.startswith("sweep:") for line in err)  # refused before it started
+    assert not out.exists()
+
+
+class _Server:
+    """A TCP server on localhost that accepts and then says nothing, or answers like a web server."""
+
+    def __init__(self, reply: bytes | None):
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(8)
+        self.address = f"tcp://127.0.0.1:{self.sock.getsockname()[1]}"
+        self.reply, self.conns = reply, []
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self):
+        while True:
+            try:
+                conn, _ = self.sock.accept()
+            except OSError:
+                return
+            self.conns.append(conn)
+            if self.reply is not None:
+                conn.sendall(self.reply)
+                conn.close()
+
+    def close(self):
+        self.sock.close()
+        for c in self.conns:
+            c.close()
+
+
+@pytest.mark.parametrize("reply", [None, b"HTTP/1.0 426 Upgrade Required\r\ncontent-length: 0\r\n\r\n"],
+                         ids=["silent", "web-server"])
+def test_an_address_that_is_no_scheduler_fails_cleanly(earth_fmu, tmp_path, capsys, monkeypatch, reply):
+    import gyrowheel.studies.execute as execute
+    monkeypatch.setattr(execute, "CONNECT_TIMEOUT", 2.0)
+    server = _Server(reply)
+    try:
+        t0 = time.monotonic()
+        code = main(["sweep", str(earth_fmu), "--grid", "M=1,2", "--stop-time", "0.1", "--scheduler", server.address,
+                     "--no-progress", "-o", str(tmp_path / "t.csv")])
+        took = time.monotonic() - t0
+    finally:
+        server.close()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and err[-1].startswith("gyrowheel: error: ") and server.address in err[-1], err
+    assert "Traceback" not in "\n".join(err) and took < 30

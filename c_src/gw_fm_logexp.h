@@ -107,8 +107,8 @@ GW_FASTMATH_INLINE double gw_fm_exp(double x)
     GW_FM_EXP_BODY(double, uint64_t, gw_fm_bits, gw_fm_dbl, GW_FM_SEL1, GW_FM_RET1, GW_FM_KEEP1)
 
 #if GW_FASTMATH_V4
-/* *gw_fm_out = ln *xp and e^*xp in 4 lanes, each bit-equal to gw_fm_log / gw_fm_exp of that lane (through
- * pointers: a 32-byte vector passed by value changes the ABI without AVX) */
+/* *gw_fm_out = ln *xp and e^*xp in 4 lanes, each bit-equal to gw_fm_log / gw_fm_exp of that
+ * lane (through pointers: a 32-byte vector passed by value changes the ABI without AVX) */
 GW_FASTMATH_INLINE void gw_fm_log4(gw_fm_v4 *gw_fm_out, const gw_fm_v4 *xp) {
     const gw_fm_v4 x = *xp;
     GW_FM_LOG_BODY(gw_fm_v4, gw_fm_u4, GW_FM_BITS4, GW_FM_DBL4, GW_FM_SEL4, GW_FM_RET4, GW_FM_KEEP4)

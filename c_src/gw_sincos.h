@@ -30,10 +30,11 @@
  * Error measured against glibc's long double sinl/cosl (tests/c/test_fastmath.c, run by
  * tests/test_fastmath.py): at most 1 ulp over 10^7 points in [-1e5, 1e5], near every multiple
  * of pi/2 below 2^20, and on [-pi, pi] (0.78 ulp at most in that sample, 0.785 found at
- * x = 0.7956032296848280; 97% correctly rounded; glibc: 0.52); docs/performance.md.  Deterministic: +, -, *, a bit read and one int-to-double
- * conversion, no tables, no state.  Under a parent project's -ffast-math (-fno-finite-math-only:
- * NaN checks kept) the exact differences and TwoSums are held by GW_FM_KEEP: at most 4 ulp
- * (gw_sincos2 then not bit-equal to gw_sincos; tests/test_fastmath.py, gcc and clang).
+ * x = 0.7956032296848280; 97% correctly rounded; glibc: 0.52); docs/performance.md.
+ * Deterministic: +, -, *, a bit read and one int-to-double conversion, no tables, no state.
+ * Under a parent project's -ffast-math (-fno-finite-math-only: NaN checks kept) the exact
+ * differences and TwoSums are held by GW_FM_KEEP: at most 4 ulp (gw_sincos2 then not
+ * bit-equal to gw_sincos; tests/test_fastmath.py, gcc and clang).
  */
 #ifndef GW_SINCOS_H
 #define GW_SINCOS_H

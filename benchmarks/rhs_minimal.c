@@ -1,8 +1,8 @@
 /* The minimal hand-written right-hand side (minimal_wheel.h) behind the same opaque boundary as
  * the generated model (rhs_model.c): its own translation unit, called through a pointer; with
  * libm's sin and cos (rhs_minimal) and with the runtime's gw_sincos (rhs_minimal_fast, the
- * generated code's: c_src/gw_fastmath.h). */
-#include "gw_fastmath.h"
+ * generated code's: c_src/gw_sincos.h). */
+#include "gw_sincos.h"
 #include "minimal_wheel.h"
 
 void rhs_minimal(const void *w, const double *x, double *xdot);

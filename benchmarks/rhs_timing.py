@@ -1,6 +1,6 @@
 """Build and run benchmarks/rhs_bench.c: ns per RHS evaluation of a scene's generated model and, in
 the same run, of the minimal hand-written closed form of the base wheel (rhs_minimal.c), with libm's
-sin/cos and with the runtime's gw_sincos2 (c_src/gw_fastmath.h, what the generated code uses)."""
+sin/cos and with the runtime's gw_sincos2 (c_src/gw_sincos.h, what the generated code uses)."""
 from __future__ import annotations
 
 import math

@@ -155,7 +155,7 @@ GW_API gw_status gw_value_check(gw_instance *I, const char *fn, const gw_variabl
  * decides what may be set when (the FMI layer: gw_fmi2_variables.c) and checks it with
  * gw_value_check.  A tunable parameter or an input invalidates the caches; a parameter
  * after initialisation recomputes the state nominals.  Setting rel_tol or abs_tol marks it
- * explicit: a tolerance from gw_setup_experiment no longer replaces it. */
+ * explicit: a tolerance from gw_setup_experiment then does not replace it. */
 GW_API void gw_value_set(gw_instance *I, const gw_variable *v, double value);
 /* t, x, u or p changed behind the core's back (Model Exchange): cached values are stale. */
 GW_API void gw_point_changed(gw_instance *I);

@@ -17,7 +17,7 @@
  * The order p is common (from rel_tol); the constants are recomputed only when a lane's
  * parameters change.
  *
- * Not part of an FMU: included by the ensemble library's unity file (taylor/ensemble.py),
+ * Not part of an FMU's binary: included by the ensemble library's front end (gw_ensemble_lib.c),
  * after gw_core.c and the model (gw_taylor_model.h).  All memory through the callbacks.
  */
 #ifndef GW_UNITY_BUILD
@@ -34,7 +34,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include "gw_solver.h"
 
 #ifndef GW_ENSEMBLE_LANES
-#define GW_ENSEMBLE_LANES 4 /* taylor/ensemble.py LANES */
+#define GW_ENSEMBLE_LANES 4 /* gyrowheel.taylor.ensemble.LANES */
 #endif
 
 #if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && !defined(GW_NO_CLONES) &&   \

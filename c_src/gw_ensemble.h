@@ -1,8 +1,8 @@
 /*
  * gw_ensemble.h -- the ensemble path's API (gw_ensemble.c): N trajectories of one model with
  * solver taylor, GW_ENSEMBLE_LANES at a time, each stopping at its own terminating event.
- * Called by the ensemble library (taylor/ensemble.py builds it next to an FMU, Python
- * wrapper gyrowheel.taylor.ensemble.Ensemble) and, later, by the plain C API of `gyrowheel export-c`.
+ * Called by the ensemble library's front end (gw_ensemble_lib.c, built next to an FMU by
+ * gyrowheel.taylor.ensemble.Ensemble).
  */
 #ifndef GW_ENSEMBLE_H
 #define GW_ENSEMBLE_H

@@ -24,7 +24,7 @@
 #define GW_ENSEMBLE_BATCH_H
 
 /* 1: each lane's numbers from the one-lane code instead of the passes (through I->tl_w), every
- * lane-step through the solver code, for tests/test_taylor.py::
+ * lane-step through the solver code, for tests/test_ensemble_runs.py::
  * test_ensemble_lane_innermost_passes_equal_the_per_lane_code */
 #ifndef GW_ENSEMBLE_LANE_STEPS
 #define GW_ENSEMBLE_LANE_STEPS 0

@@ -15,7 +15,7 @@
 #include <stddef.h>
 #include <string.h>
 
-#include "gw_fastmath.h" /* gw_fm_step4: the lanes' step sizes */
+#include "gw_solver_taylor_step.h" /* gw_fm_step4: the lanes' step sizes */
 
 /* The passes work on vectors of GW_ENS_V lanes (GCC / clang vector extension: GCC vectorised
  * none of the plain loops): 4 lanes (one AVX2 register) where the lanes are a multiple of 4,
@@ -158,11 +158,11 @@ GW_ENS_INLINE void gw_ens_horner(const double *w, size_t si, size_t so, int orde
     gw_ens_v q[C][NV], dq[C][NV];
     const double *wk = w + (size_t)i0 * si + (size_t)order * so;
     int k, j, c;
-    /* dq from 0, as gw_taylor_increment: starting it at q (its first sum, 0 h + q) let GCC share
-     * the product q h of the first two sums, so that neither the first sum of q nor the last of
-     * P'(h) was fused into a multiply-add, while the one-lane code fuses both: dx differed from
+    /* dq from 0, as gw_taylor_increment: started at q (its first sum, 0 h + q), GCC shares the
+     * product q h of the first two sums and fuses neither the first sum of q nor the last of
+     * P'(h) into a multiply-add, where the one-lane code fuses both: dx would differ from
      * gw_taylor_increment's in 1.2% of the components, P'(h) in 20% (random series, orders 7-12:
-     * tests/c/test_ens_passes.c; the inline lane-steps against GW_ENSEMBLE_LANE_STEPS=1) */
+     * tests/c/test_ens_increments.c; the inline lane-steps against GW_ENSEMBLE_LANE_STEPS=1) */
     for (c = 0; c < nc; c++)
         for (j = 0; j < NV; j++) {
             q[c][j] = gw_ens_ld(wk + (size_t)c * si + j * V);

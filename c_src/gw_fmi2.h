@@ -84,7 +84,7 @@ GW_INTERNAL const char *gw_fmi2_state_name(int state);
 GW_INTERNAL void gw_fmi2_set_state(gw_fmu *F, int state);
 /* 1 if F is usable and its state is in mask; else logs, enters Error, returns 0 */
 GW_INTERNAL int gw_fmi2_begin(gw_fmu *F, const char *fn, int mask);
-/* 1 if F was instantiated for `type`; else logs, enters Error, returns 0 */
+/* 1 if F was instantiated for `type` (GW_IFACE_BOTH: any); else logs, enters Error, returns 0 */
 GW_INTERNAL int gw_fmi2_interface(gw_fmu *F, const char *fn, int type);
 /* the function's final status; fmi2Error / fmi2Fatal enter the Error / Fatal state; the
  * answer to non-finite values returns to fmi2Error (gw_fmi2_allow_discard) */
@@ -106,39 +106,52 @@ GW_INTERNAL gw_status gw_fmi2_copy_finite(gw_fmu *F, const char *fn, double *dst
 
 static inline int gw_fmi2_is_me(const gw_fmu *F) { return F->fmu_type == fmi2ModelExchange; }
 
-/* BEGIN/END frame of every fmi2 function: check the state, keep the worst status. */
-#define GW_BEGIN(fn, mask)                                                                      \
+/* ---- the frame of every fmi2 function ------------------------------------------------------
+ * GW_FRAME(Name) opens the body of fmi2Name, Name being the function's name without its "fmi2"
+ * prefix (as modelica/Reference-FMUs' BEGIN_FUNCTION(F) with MASK_fmi2##F and #F):
+ *   fn       "fmi2Name" (GW_FN), the name every message of the function starts with;
+ *   F, I     the component and its core instance; status: the worst status so far, fmi2OK;
+ *   checks   the interface, GW_IFACE_Name (fmi2CoSimulation or fmi2ModelExchange: functions
+ *            of that interface only; GW_IFACE_BOTH), then the state, GW_MASK_Name (the states
+ *            in which FMI 2.0.4 allows the call, tables of sections 3.2.3 and 4.2.4): a call
+ *            that fails either is logged, enters the Error state and returns fmi2Error.
+ * The GW_IFACE_ and GW_MASK_ macros of a function stand next to it, in its file.  A function
+ * that answers some calls before the state check (fmi2DoStep after a terminating event,
+ * fmi2GetDirectionalDerivative of a model without partial derivatives) opens with
+ * GW_FRAME_OPEN(Name) and checks with GW_FRAME_CHECK_STATE() after that answer.  GW_FRAME_END()
+ * closes every frame: the final status through gw_fmi2_end. */
+#define GW_IFACE_BOTH (-1)
+#define GW_FN(name) static const char fn[] = "fmi2" #name
+#define GW_FRAME_OPEN(name)                                                                     \
+    GW_FN(name);                                                                                \
+    const int gw_frame_mask = GW_MASK_##name;                                                   \
     gw_fmu *F = (gw_fmu *)c;                                                                    \
     gw_instance *I;                                                                             \
     fmi2Status status = fmi2OK;                                                                 \
-    if (!gw_fmi2_begin(F, fn, mask)) return fmi2Error;                                          \
+    if (!gw_fmi2_interface(F, fn, GW_IFACE_##name)) return fmi2Error;                           \
     I = F->I;                                                                                   \
     (void)I;                                                                                    \
     if (0) goto END
-#define GW_BEGIN_FOR(type, fn, mask)                                                            \
-    gw_fmu *F = (gw_fmu *)c;                                                                    \
-    gw_instance *I;                                                                             \
-    fmi2Status status = fmi2OK;                                                                 \
-    if (!gw_fmi2_interface(F, fn, type)) return fmi2Error;                                      \
-    if (!gw_fmi2_begin(F, fn, mask)) return fmi2Error;                                          \
-    I = F->I;                                                                                   \
-    (void)I;                                                                                    \
-    if (0) goto END
-#define GW_BEGIN_ME(fn, mask) GW_BEGIN_FOR(fmi2ModelExchange, fn, mask)
-#define GW_BEGIN_CS(fn, mask) GW_BEGIN_FOR(fmi2CoSimulation, fn, mask)
+#define GW_FRAME_CHECK_STATE()                                                                  \
+    if (!gw_fmi2_begin(F, fn, gw_frame_mask)) return fmi2Error
+#define GW_FRAME(name)                                                                          \
+    GW_FRAME_OPEN(name);                                                                        \
+    GW_FRAME_CHECK_STATE()
+
 /* a core call's status, mapped; leave on anything worse than a warning */
 #define GW_TRY(expr)                                                                            \
     do {                                                                                        \
         status = gw_fmi2_worst(status, gw_fmi2_status(expr));                                   \
         if (status > fmi2Warning) goto END;                                                     \
     } while (0)
+/* log an error (in a frame, its text starts with "%s: " and fn) and leave with fmi2Error */
 #define GW_FAIL(...)                                                                            \
     do {                                                                                        \
         GW_LOG_ERR(I, __VA_ARGS__);                                                             \
         status = fmi2Error;                                                                     \
         goto END;                                                                               \
     } while (0)
-#define GW_END_FUNCTION()                                                                       \
+#define GW_FRAME_END()                                                                          \
     END:                                                                                        \
     return gw_fmi2_end(F, status)
 

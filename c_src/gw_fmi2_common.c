@@ -14,6 +14,13 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include "gw_fmi2.h"
 
+/* the frames of this file's functions (GW_FRAME, gw_fmi2.h): interface, legal states */
+#define GW_IFACE_SetDebugLogging GW_IFACE_BOTH
+#define GW_IFACE_SetupExperiment GW_IFACE_BOTH
+#define GW_IFACE_EnterInitializationMode GW_IFACE_BOTH
+#define GW_IFACE_ExitInitializationMode GW_IFACE_BOTH
+#define GW_IFACE_Terminate GW_IFACE_BOTH
+#define GW_IFACE_Reset GW_IFACE_BOTH
 #define GW_MASK_SetDebugLogging GW_ST_ANY
 #define GW_MASK_Reset GW_ST_ANY
 #define GW_MASK_SetupExperiment GW_ST_INSTANTIATED
@@ -74,7 +81,7 @@ GW_INTERNAL int gw_fmi2_begin(gw_fmu *F, const char *fn, int mask) {
 
 GW_INTERNAL int gw_fmi2_interface(gw_fmu *F, const char *fn, int type) {
     if (!F) return 0;
-    if (F->fmu_type == type) return 1;
+    if (type == GW_IFACE_BOTH || F->fmu_type == type) return 1;
     if (type == fmi2ModelExchange)
         GW_LOG_ERR(F->I, "%s: Model Exchange is not supported by this instance (instantiated "
                    "for Co-Simulation)", fn);
@@ -204,9 +211,9 @@ const char *fmi2GetVersion(void) { return fmi2Version; }
 
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[]) {
-    GW_BEGIN("fmi2SetDebugLogging", GW_MASK_SetDebugLogging);
-    GW_TRY(gw_set_logging(I, "fmi2SetDebugLogging", loggingOn, nCategories, categories));
-    GW_END_FUNCTION();
+    GW_FRAME(SetDebugLogging);
+    GW_TRY(gw_set_logging(I, fn, loggingOn, nCategories, categories));
+    GW_FRAME_END();
 }
 
 /* ---- creation and destruction ------------------------------------------------------------- */
@@ -215,6 +222,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn) {
+    GW_FN(Instantiate); /* no frame: there is no instance yet */
     const gw_model *m = &GW_MODEL;
     gw_fmu *F;
     gw_callbacks cb;
@@ -223,33 +231,32 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     (void)visible;
     if (!functions) return NULL;
     if (!functions->allocateMemory || !functions->freeMemory) {
-        gw_fmi2_instantiate_error(functions, name, "fmi2Instantiate: allocateMemory and "
-                                  "freeMemory callbacks are required");
+        gw_fmi2_instantiate_error(functions, name,
+                                  "%s: allocateMemory and freeMemory callbacks are required", fn);
         return NULL;
     }
     if (!instanceName || instanceName[0] == '\0') {
-        gw_fmi2_instantiate_error(functions, name, "fmi2Instantiate: missing instance name");
+        gw_fmi2_instantiate_error(functions, name, "%s: missing instance name", fn);
         return NULL;
     }
     if (fmuType != fmi2CoSimulation && fmuType != fmi2ModelExchange) {
         gw_fmi2_instantiate_error(functions, name,
-                                  "fmi2Instantiate: %s: unknown fmuType %d (expected "
+                                  "%s: %s: unknown fmuType %d (expected "
                                   "fmi2ModelExchange=%d or fmi2CoSimulation=%d)",
-                                  m->identifier, (int)fmuType, (int)fmi2ModelExchange,
+                                  fn, m->identifier, (int)fmuType, (int)fmi2ModelExchange,
                                   (int)fmi2CoSimulation);
         return NULL;
     }
     if (!fmuGUID || strcmp(fmuGUID, m->token) != 0) {
         gw_fmi2_instantiate_error(functions, name,
-                                  "fmi2Instantiate: GUID \"%s\" does not match the model's \"%s\"",
-                                  fmuGUID ? fmuGUID : "(null)", m->token);
+                                  "%s: GUID \"%s\" does not match the model's \"%s\"",
+                                  fn, fmuGUID ? fmuGUID : "(null)", m->token);
         return NULL;
     }
     if (!m->ode.eval || !m->init.eval || (m->ny > 0 && !m->out.eval) ||
         (m->ne > 0 && !m->evt.eval) || (m->nc > 0 && !m->chk.eval)) {
         gw_fmi2_instantiate_error(functions, name,
-                                  "fmi2Instantiate: model %s lacks a required function",
-                                  m->identifier);
+                                  "%s: model %s lacks a required function", fn, m->identifier);
         return NULL;
     }
     F = (gw_fmu *)functions->allocateMemory(1, sizeof(gw_fmu));
@@ -269,7 +276,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         }
     }
     if (!F) {
-        gw_fmi2_instantiate_error(functions, name, "fmi2Instantiate: out of memory");
+        gw_fmi2_instantiate_error(functions, name, "%s: out of memory", fn);
         return NULL;
     }
     F->fmu_type = (int)fmuType;
@@ -296,24 +303,24 @@ void fmi2FreeInstance(fmi2Component c) {
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
                                fmi2Real tolerance, fmi2Real startTime,
                                fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
-    GW_BEGIN("fmi2SetupExperiment", GW_MASK_SetupExperiment);
-    GW_TRY(gw_setup_experiment(I, "fmi2SetupExperiment", toleranceDefined, tolerance,
+    GW_FRAME(SetupExperiment);
+    GW_TRY(gw_setup_experiment(I, fn, toleranceDefined, tolerance,
                                startTime, stopTimeDefined, stopTime));
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    GW_BEGIN("fmi2EnterInitializationMode", GW_MASK_EnterInitializationMode);
+    GW_FRAME(EnterInitializationMode);
     gw_fmi2_set_state(F, GW_ST_INIT_MODE);
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     gw_status st;
-    GW_BEGIN("fmi2ExitInitializationMode", GW_MASK_ExitInitializationMode);
+    GW_FRAME(ExitInitializationMode);
     /* CS and ME alike: every check first; a refusal is fmi2Error with its reasons and the
      * instance not half-initialised (fmi2Discard is not an answer of this function) */
-    st = gw_initialize(I, "fmi2ExitInitializationMode");
+    st = gw_initialize(I, fn);
     if (st > GW_WARNING) {
         status = fmi2Error;
         goto END;
@@ -323,15 +330,14 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     F->initialized = 1;
     F->last_dostep_status = fmi2OK;
     status = gw_fmi2_status(st);
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 /* Terminated, also as the answer to two habits of importers (FMI 2.0.4 section 2.1.6 lists
  * neither): a second fmi2Terminate is ignored, and one after an fmi2Error keeps the last
  * consistent state (every failed call restores it) readable.  Both say so (fmi2Warning). */
 fmi2Status fmi2Terminate(fmi2Component c) {
-    static const char fn[] = "fmi2Terminate";
-    GW_BEGIN(fn, GW_MASK_Terminate);
+    GW_FRAME(Terminate);
     gw_fmi2_flush_log(F);
     if (F->state == GW_ST_TERMINATED) {
         gw_log(I, GW_WARNING, GW_LOG_WARNING, "%s: already terminated; the call is ignored", fn);
@@ -349,17 +355,17 @@ fmi2Status fmi2Terminate(fmi2Component c) {
         status = fmi2Warning;
     }
     gw_fmi2_set_state(F, GW_ST_TERMINATED);
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
-    GW_BEGIN("fmi2Reset", GW_MASK_Reset);
+    GW_FRAME(Reset);
     gw_fmi2_forget_log(F);
     gw_instance_reset(I);
     gw_fmi2_set_state(F, GW_ST_INSTANTIATED);
     F->last_dostep_status = fmi2OK;
     F->initialized = 0;
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 #endif /* GW_UNITY_BUILD */

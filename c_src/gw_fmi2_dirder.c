@@ -24,6 +24,8 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include "gw_fmi2.h"
 
+/* the frame of fmi2GetDirectionalDerivative (GW_FRAME_OPEN, gw_fmi2.h): interface, legal states */
+#define GW_IFACE_GetDirectionalDerivative GW_IFACE_BOTH
 #define GW_MASK_GetDirectionalDerivative                                                        \
     (GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED | GW_ST_TERMINATED |             \
      GW_ST_ERROR | GW_ST_ME)
@@ -113,8 +115,7 @@ static double gw_dd_sum(const gw_instance *I, int init_mode, const gw_dd_unknown
 
 /* the matrix of the current mode at the current point; 0 or reason logged.  Its entries are
  * checked where they are used (gw_dd_check): a non-finite partial of one pair (norm_2's
- * derivative at 0 once made every partial of a multipliers model NaN) must not refuse the
- * others. */
+ * derivative at 0, in a multipliers model) must not refuse the others. */
 static int gw_dd_matrix(gw_instance *I, const char *fn, int init_mode) {
     if (init_mode) {
         if (gw_eval_dini(I, I->t, I->dini_D) != 0) {
@@ -164,21 +165,17 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         size_t nUnknown, const fmi2ValueReference vKnown_ref[],
                                         size_t nKnown, const fmi2Real dvKnown[],
                                         fmi2Real dvUnknown[]) {
-    static const char fn[] = "fmi2GetDirectionalDerivative";
     const gw_model *m;
     size_t i, j;
     int init_mode;
-    gw_fmu *F = (gw_fmu *)c;
-    gw_instance *I;
-    fmi2Status status = fmi2OK;
+    GW_FRAME_OPEN(GetDirectionalDerivative);
     /* a function the model does not provide fails alike in every state */
-    if (F && !F->I->f_dir.eval && F->state != GW_ST_FATAL) {
-        GW_LOG_ERR(F->I, "%s: not provided by this FMU (providesDirectionalDerivative=false)", fn);
+    if (!I->f_dir.eval && F->state != GW_ST_FATAL) {
+        GW_LOG_ERR(I, "%s: not provided by this FMU (providesDirectionalDerivative=false)", fn);
         gw_fmi2_set_state(F, GW_ST_ERROR);
         return fmi2Error;
     }
-    if (!gw_fmi2_begin(F, fn, GW_MASK_GetDirectionalDerivative)) return fmi2Error;
-    I = F->I;
+    GW_FRAME_CHECK_STATE();
     m = I->m;
     /* Initialization Mode has its own knowns (FMI 2.0.4 section 2.2.8) when the model
      * generated their derivatives; a model without `dini` keeps the states as knowns there */
@@ -240,7 +237,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         else gw_dd_unknown_sim(m, v, &at);
         dvUnknown[i] = gw_dd_sum(I, init_mode, &at, vKnown_ref, nKnown, dvKnown);
     }
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 #endif /* GW_UNITY_BUILD */

@@ -12,6 +12,17 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include "gw_fmi2.h"
 
+/* the frames of this file's functions (GW_FRAME, gw_fmi2.h): interface, legal states */
+#define GW_IFACE_EnterEventMode fmi2ModelExchange
+#define GW_IFACE_NewDiscreteStates fmi2ModelExchange
+#define GW_IFACE_EnterContinuousTimeMode fmi2ModelExchange
+#define GW_IFACE_CompletedIntegratorStep fmi2ModelExchange
+#define GW_IFACE_SetTime fmi2ModelExchange
+#define GW_IFACE_SetContinuousStates fmi2ModelExchange
+#define GW_IFACE_GetDerivatives fmi2ModelExchange
+#define GW_IFACE_GetEventIndicators fmi2ModelExchange
+#define GW_IFACE_GetContinuousStates fmi2ModelExchange
+#define GW_IFACE_GetNominalsOfContinuousStates fmi2ModelExchange
 #define GW_MASK_EnterEventMode GW_ST_ME
 #define GW_MASK_NewDiscreteStates GW_ST_EVENT_MODE
 #define GW_MASK_EnterContinuousTimeMode GW_ST_EVENT_MODE
@@ -21,25 +32,25 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #define GW_MASK_GetDerivatives (GW_ST_INIT_MODE | GW_ST_ME | GW_ST_TERMINATED | GW_ST_ERROR)
 #define GW_MASK_GetEventIndicators GW_MASK_GetDerivatives
 #define GW_MASK_GetContinuousStates GW_MASK_GetDerivatives
-#define GW_MASK_GetNominals (GW_ST_INSTANTIATED | GW_ST_ME | GW_ST_TERMINATED | GW_ST_ERROR)
+#define GW_MASK_GetNominalsOfContinuousStates                                                  \
+    (GW_ST_INSTANTIATED | GW_ST_ME | GW_ST_TERMINATED | GW_ST_ERROR)
 
 fmi2Status fmi2EnterEventMode(fmi2Component c) {
-    GW_BEGIN_ME("fmi2EnterEventMode", GW_MASK_EnterEventMode);
+    GW_FRAME(EnterEventMode);
     gw_fmi2_set_state(F, GW_ST_EVENT_MODE);
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
     const gw_model *m;
     int i;
     gw_ev_result r = GW_EV_NONE;
-    GW_BEGIN_ME("fmi2NewDiscreteStates", GW_MASK_NewDiscreteStates);
+    GW_FRAME(NewDiscreteStates);
     m = I->m;
-    if (!eventInfo) GW_FAIL("fmi2NewDiscreteStates: eventInfo is NULL");
+    if (!eventInfo) GW_FAIL("%s: eventInfo is NULL", fn);
     if (m->ne > 0) {
         if (gw_eval_evt(I, I->t, I->x, I->e_me) != 0)
-            GW_FAIL("fmi2NewDiscreteStates: evaluation of the event indicators failed at "
-                    "t=%.17g", I->t);
+            GW_FAIL("%s: evaluation of the event indicators failed at t=%.17g", fn, I->t);
         r = gw_event_update(I, I->e_me);
     }
     if (r == GW_EV_TERMINATE && !I->terminated) {
@@ -48,7 +59,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
         for (i = 0; i < m->ne; i++)
             if (gw_event_ended(I, i) && !(I->e[i] > 0.0) && gw_log_enabled(I, GW_LOG_EVENTS))
                 gw_log(I, GW_OK, GW_LOG_EVENTS,
-                       "fmi2NewDiscreteStates: event %s: terminateSimulation = true at t=%.17g",
+                       "%s: event %s: terminateSimulation = true at t=%.17g", fn,
                        m->event_names ? m->event_names[i] : "?", I->t);
     }
     eventInfo->newDiscreteStatesNeeded = fmi2False;
@@ -59,7 +70,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
     I->x_jumped = 0;
     eventInfo->nextEventTimeDefined = fmi2False;
     eventInfo->nextEventTime = 0.0;
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 /* Also after terminateSimulation: OMSimulator and the FMU Compliance Checker call it once more
@@ -67,41 +78,41 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
  * so it is made; the instance stays terminated (fmi2CompletedIntegratorStep and
  * fmi2NewDiscreteStates keep saying terminateSimulation) and fmi2Terminate works. */
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
-    GW_BEGIN_ME("fmi2EnterContinuousTimeMode", GW_MASK_EnterContinuousTimeMode);
+    GW_FRAME(EnterContinuousTimeMode);
     if (I->terminated && gw_log_enabled(I, GW_LOG_EVENTS))
         gw_log(I, GW_OK, GW_LOG_EVENTS,
-               "fmi2EnterContinuousTimeMode: the simulation terminated at t=%.17g (%s); "
-               "terminateSimulation stays true: call fmi2Terminate",
-               I->last_successful_time, gw_fmi2_stop_reason(I));
+               "%s: the simulation terminated at t=%.17g (%s); terminateSimulation stays "
+               "true: call fmi2Terminate",
+               fn, I->last_successful_time, gw_fmi2_stop_reason(I));
     gw_fmi2_set_state(F, GW_ST_CONT_TIME_MODE);
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
-    GW_BEGIN_ME("fmi2CompletedIntegratorStep", GW_MASK_CompletedIntegratorStep);
+    GW_FRAME(CompletedIntegratorStep);
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!enterEventMode || !terminateSimulation)
-        GW_FAIL("fmi2CompletedIntegratorStep: enterEventMode or terminateSimulation is NULL");
+        GW_FAIL("%s: enterEventMode or terminateSimulation is NULL", fn);
     /* no step events: state events are located by the importer; a terminated simulation
      * keeps asking to terminate */
     *enterEventMode = fmi2False;
     *terminateSimulation = I->terminated ? fmi2True : fmi2False;
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
-    GW_BEGIN_ME("fmi2SetTime", GW_MASK_SetTime);
-    if (!isfinite(time)) GW_FAIL("fmi2SetTime: time %g is not finite", time);
+    GW_FRAME(SetTime);
+    if (!isfinite(time)) GW_FAIL("%s: time %g is not finite", fn, time);
     if (time != I->t) {
         I->t = time;
         gw_point_changed(I);
     }
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
-/* nx of a state-vector call must be the model's */
-#define GW_CHECK_NX(fn, arr, n)                                                                 \
+/* nx of a state-vector call must be the model's (in a frame: fn, I) */
+#define GW_CHECK_NX(arr, n)                                                                     \
     do {                                                                                        \
         if ((n) != (size_t)I->m->nx)                                                            \
             GW_FAIL("%s: nx = %lu, the model has %d continuous states", fn, (unsigned long)(n), \
@@ -111,84 +122,81 @@ fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
     size_t i;
-    GW_BEGIN_ME("fmi2SetContinuousStates", GW_MASK_SetContinuousStates);
-    GW_CHECK_NX("fmi2SetContinuousStates", x, nx);
+    GW_FRAME(SetContinuousStates);
+    GW_CHECK_NX(x, nx);
     for (i = 0; i < nx; i++)
         if (!isfinite(x[i]))
-            GW_FAIL("fmi2SetContinuousStates: state %s = %g is not finite",
+            GW_FAIL("%s: state %s = %g is not finite", fn,
                     I->m->x_names ? I->m->x_names[i] : "?", x[i]);
     if (nx > 0 && memcmp(I->x, x, nx * sizeof(double)) != 0) {
         memcpy(I->x, x, nx * sizeof(double));
         gw_point_changed(I);
     }
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx) {
-    GW_BEGIN_ME("fmi2GetDerivatives", GW_MASK_GetDerivatives);
+    GW_FRAME(GetDerivatives);
     gw_fmi2_allow_discard(F);
-    GW_CHECK_NX("fmi2GetDerivatives", derivatives, nx);
-    GW_TRY(gw_update_derivatives(I, "fmi2GetDerivatives"));
-    GW_TRY(gw_fmi2_copy_finite(F, "fmi2GetDerivatives", derivatives, I->xdot, nx,
-                               "derivative of state", I->m->x_names));
-    GW_END_FUNCTION();
+    GW_CHECK_NX(derivatives, nx);
+    GW_TRY(gw_update_derivatives(I, fn));
+    GW_TRY(gw_fmi2_copy_finite(F, fn, derivatives, I->xdot, nx, "derivative of state",
+                               I->m->x_names));
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
     const gw_model *m;
     int i;
-    GW_BEGIN_ME("fmi2GetEventIndicators", GW_MASK_GetEventIndicators);
+    GW_FRAME(GetEventIndicators);
     gw_fmi2_allow_discard(F);
     m = I->m;
     if (ni != (size_t)m->ne)
-        GW_FAIL("fmi2GetEventIndicators: ni = %lu, the model has %d event indicators",
-                (unsigned long)ni, m->ne);
+        GW_FAIL("%s: ni = %lu, the model has %d event indicators", fn, (unsigned long)ni,
+                m->ne);
     if (ni == 0) goto END;
-    if (!eventIndicators) GW_FAIL("fmi2GetEventIndicators: array is NULL");
+    if (!eventIndicators) GW_FAIL("%s: array is NULL", fn);
     if (I->in_setup && gw_eval_init(I, I->x) != 0)
-        GW_FAIL("fmi2GetEventIndicators: evaluation of the initial state failed");
+        GW_FAIL("%s: evaluation of the initial state failed", fn);
     if (gw_eval_evt(I, I->t, I->x, I->e_me) != 0)
-        GW_FAIL("fmi2GetEventIndicators: evaluation of the event indicators failed at t=%.17g",
-                I->t);
+        GW_FAIL("%s: evaluation of the event indicators failed at t=%.17g", fn, I->t);
     for (i = 0; i < m->ne; i++)
         if (!isfinite(I->e_me[i])) {
-            GW_LOG_NONFINITE(I, "fmi2GetEventIndicators: event indicator %s is not finite (%g) "
-                             "at t=%.17g", m->event_names ? m->event_names[i] : "?", I->e_me[i],
-                             I->t);
+            GW_LOG_NONFINITE(I, "%s: event indicator %s is not finite (%g) at t=%.17g", fn,
+                             m->event_names ? m->event_names[i] : "?", I->e_me[i], I->t);
             status = gw_fmi2_status(I->nonfinite_status);
             goto END;
         }
     memcpy(eventIndicators, I->e_me, ni * sizeof(double));
     if (!I->in_setup) gw_event_observe(I, I->e_me); /* positive values arm their events */
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
-    GW_BEGIN_ME("fmi2GetContinuousStates", GW_MASK_GetContinuousStates);
-    GW_CHECK_NX("fmi2GetContinuousStates", x, nx);
+    GW_FRAME(GetContinuousStates);
+    GW_CHECK_NX(x, nx);
     if (I->in_setup && gw_eval_init(I, I->x) != 0)
-        GW_FAIL("fmi2GetContinuousStates: evaluation of the initial state failed");
+        GW_FAIL("%s: evaluation of the initial state failed", fn);
     /* the states are finite after initialisation (checked wherever they are set); the
      * initial state from init(s, p) may not be: bad start values, fmi2Error */
-    GW_TRY(gw_fmi2_copy_finite(F, "fmi2GetContinuousStates", x, I->x, nx, "state",
-                               I->m->x_names));
-    GW_END_FUNCTION();
+    GW_TRY(gw_fmi2_copy_finite(F, fn, x, I->x, nx, "state", I->m->x_names));
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
     size_t i;
-    GW_BEGIN_ME("fmi2GetNominalsOfContinuousStates", GW_MASK_GetNominals);
-    GW_CHECK_NX("fmi2GetNominalsOfContinuousStates", x_nominal, nx);
+    GW_FRAME(GetNominalsOfContinuousStates);
+    GW_CHECK_NX(x_nominal, nx);
     if (nx == 0) goto END;
     if (I->in_setup) { /* from the current parameters; 1 where not usable */
         if (gw_eval_nom(I, x_nominal) != 0)
-            GW_FAIL("fmi2GetNominalsOfContinuousStates: evaluation of the nominals failed");
+            GW_FAIL("%s: evaluation of the nominals failed", fn);
         for (i = 0; i < nx; i++)
             if (!(x_nominal[i] > 0.0) || !isfinite(x_nominal[i])) x_nominal[i] = 1.0;
     } else {
         memcpy(x_nominal, I->nominal, nx * sizeof(double));
     }
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 #endif /* GW_UNITY_BUILD */

@@ -22,9 +22,22 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include "gw_fmi2.h"
 
+/* the frames of this file's functions (GW_FRAME, gw_fmi2.h): interface, legal states */
 #define GW_MASK_FMUstate                                                                        \
     (GW_ST_INSTANTIATED | GW_ST_INIT_MODE | GW_ST_STEP_COMPLETE | GW_ST_STEP_FAILED |           \
      GW_ST_TERMINATED | GW_ST_ERROR | GW_ST_EVENT_MODE | GW_ST_CONT_TIME_MODE)
+#define GW_IFACE_GetFMUstate GW_IFACE_BOTH
+#define GW_IFACE_SetFMUstate GW_IFACE_BOTH
+#define GW_IFACE_FreeFMUstate GW_IFACE_BOTH
+#define GW_IFACE_SerializedFMUstateSize GW_IFACE_BOTH
+#define GW_IFACE_SerializeFMUstate GW_IFACE_BOTH
+#define GW_IFACE_DeSerializeFMUstate GW_IFACE_BOTH
+#define GW_MASK_GetFMUstate GW_MASK_FMUstate
+#define GW_MASK_SetFMUstate GW_MASK_FMUstate
+#define GW_MASK_FreeFMUstate GW_MASK_FMUstate
+#define GW_MASK_SerializedFMUstateSize GW_MASK_FMUstate
+#define GW_MASK_SerializeFMUstate GW_MASK_FMUstate
+#define GW_MASK_DeSerializeFMUstate GW_MASK_FMUstate
 
 typedef struct {
     size_t size;
@@ -97,9 +110,9 @@ static gw_blob *gw_fmi2_blob(gw_instance *I, const char *fn, fmi2FMUstate *FMUst
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     gw_blob *b;
     int front[2];
-    GW_BEGIN("fmi2GetFMUstate", GW_MASK_FMUstate);
-    if (!FMUstate) GW_FAIL("fmi2GetFMUstate: FMUstate is NULL");
-    b = gw_fmi2_blob(I, "fmi2GetFMUstate", FMUstate, gw_state_size(I));
+    GW_FRAME(GetFMUstate);
+    if (!FMUstate) GW_FAIL("%s: FMUstate is NULL", fn);
+    b = gw_fmi2_blob(I, fn, FMUstate, gw_state_size(I));
     if (!b) {
         status = fmi2Error;
         goto END;
@@ -108,68 +121,67 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     front[1] = (int)F->last_dostep_status | (F->initialized ? GW_FRONT_INITIALIZED : 0);
     gw_state_write(I, front, b->data);
     *FMUstate = (fmi2FMUstate)b;
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     const gw_blob *b = (const gw_blob *)FMUstate;
-    GW_BEGIN("fmi2SetFMUstate", GW_MASK_FMUstate);
-    if (!b) GW_FAIL("fmi2SetFMUstate: FMUstate is NULL");
-    if (gw_fmi2_check_state(F, "fmi2SetFMUstate", b->data, b->size))
+    GW_FRAME(SetFMUstate);
+    if (!b) GW_FAIL("%s: FMUstate is NULL", fn);
+    if (gw_fmi2_check_state(F, fn, b->data, b->size))
         gw_fmi2_apply_state(F, b->data);
     else
         status = fmi2Error;
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    GW_BEGIN("fmi2FreeFMUstate", GW_MASK_FMUstate);
+    GW_FRAME(FreeFMUstate);
     if (FMUstate && *FMUstate) {
         gw_free(I, *FMUstate);
         *FMUstate = NULL;
     }
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
     const gw_blob *b = (const gw_blob *)FMUstate;
-    GW_BEGIN("fmi2SerializedFMUstateSize", GW_MASK_FMUstate);
-    if (!b || !size) GW_FAIL("fmi2SerializedFMUstateSize: FMUstate or size is NULL");
+    GW_FRAME(SerializedFMUstateSize);
+    if (!b || !size) GW_FAIL("%s: FMUstate or size is NULL", fn);
     *size = b->size;
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[],
                                  size_t size) {
     const gw_blob *b = (const gw_blob *)FMUstate;
-    GW_BEGIN("fmi2SerializeFMUstate", GW_MASK_FMUstate);
+    GW_FRAME(SerializeFMUstate);
     if (!b || !serializedState)
-        GW_FAIL("fmi2SerializeFMUstate: FMUstate or serializedState is NULL");
+        GW_FAIL("%s: FMUstate or serializedState is NULL", fn);
     if (size < b->size)
-        GW_FAIL("fmi2SerializeFMUstate: buffer of %lu bytes, %lu needed", (unsigned long)size,
+        GW_FAIL("%s: buffer of %lu bytes, %lu needed", fn, (unsigned long)size,
                 (unsigned long)b->size);
     memcpy(serializedState, b->data, b->size);
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate) {
     gw_blob *b;
-    GW_BEGIN("fmi2DeSerializeFMUstate", GW_MASK_FMUstate);
-    if (!FMUstate) GW_FAIL("fmi2DeSerializeFMUstate: FMUstate is NULL");
-    if (!gw_fmi2_check_state(F, "fmi2DeSerializeFMUstate",
-                             (const unsigned char *)serializedState, size)) {
+    GW_FRAME(DeSerializeFMUstate);
+    if (!FMUstate) GW_FAIL("%s: FMUstate is NULL", fn);
+    if (!gw_fmi2_check_state(F, fn, (const unsigned char *)serializedState, size)) {
         status = fmi2Error;
         goto END;
     }
-    b = gw_fmi2_blob(I, "fmi2DeSerializeFMUstate", FMUstate, size);
+    b = gw_fmi2_blob(I, fn, FMUstate, size);
     if (!b) {
         status = fmi2Error;
         goto END;
     }
     memcpy(b->data, serializedState, size);
     *FMUstate = (fmi2FMUstate)b;
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 #endif /* GW_UNITY_BUILD */

@@ -11,7 +11,25 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include "gw_fmi2.h"
 
+/* the frames of this file's functions (GW_FRAME, gw_fmi2.h): interface, legal states
+ * (GW_MASK_Set, GW_MASK_SetDiscrete: gw_fmi2.h) */
+#define GW_IFACE_GetReal GW_IFACE_BOTH
+#define GW_IFACE_GetInteger GW_IFACE_BOTH
+#define GW_IFACE_GetBoolean GW_IFACE_BOTH
+#define GW_IFACE_GetString GW_IFACE_BOTH
+#define GW_IFACE_SetReal GW_IFACE_BOTH
+#define GW_IFACE_SetInteger GW_IFACE_BOTH
+#define GW_IFACE_SetBoolean GW_IFACE_BOTH
+#define GW_IFACE_SetString GW_IFACE_BOTH
 #define GW_MASK_Get GW_ST_ANY
+#define GW_MASK_GetReal GW_MASK_Get
+#define GW_MASK_GetInteger GW_MASK_Get
+#define GW_MASK_GetBoolean GW_MASK_Get
+#define GW_MASK_GetString GW_MASK_Get
+#define GW_MASK_SetReal GW_MASK_Set
+#define GW_MASK_SetInteger GW_MASK_SetDiscrete
+#define GW_MASK_SetBoolean GW_MASK_SetDiscrete
+#define GW_MASK_SetString GW_MASK_SetDiscrete
 
 static const char *gw_fmi2_type_name(int type) {
     switch (type) {
@@ -94,7 +112,8 @@ static int gw_fmi2_settable(gw_fmu *F, const char *fn, const gw_variable *v) {
     return ok;
 }
 
-#define GW_CHECK_ARRAYS(fn, vr, nvr, value)                                                     \
+/* (in a frame: fn, I) */
+#define GW_CHECK_ARRAYS(vr, nvr, value)                                                         \
     if ((nvr) > 0 && (!(vr) || !(value)))                                                       \
     GW_FAIL("%s: NULL array for %lu values", fn, (unsigned long)(nvr))
 
@@ -103,15 +122,15 @@ static int gw_fmi2_settable(gw_fmu *F, const char *fn, const gw_variable *v) {
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[]) {
     size_t k;
-    GW_BEGIN("fmi2GetReal", GW_MASK_Get);
+    GW_FRAME(GetReal);
     gw_fmi2_allow_discard(F);
-    GW_CHECK_ARRAYS("fmi2GetReal", vr, nvr, value);
-    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, "fmi2GetReal"));
-    if (gw_fmi2_needs_derivatives(I, vr, nvr)) GW_TRY(gw_update_derivatives(I, "fmi2GetReal"));
+    GW_CHECK_ARRAYS(vr, nvr, value);
+    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, fn));
+    if (gw_fmi2_needs_derivatives(I, vr, nvr)) GW_TRY(gw_update_derivatives(I, fn));
     /* every reference and value checked before anything is written: the caller's array
      * never receives a non-finite value, nor a partial answer */
     for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_fmi2_lookup(I, "fmi2GetReal", vr[k], GW_REAL);
+        const gw_variable *v = gw_fmi2_lookup(I, fn, vr[k], GW_REAL);
         double d;
         if (!v) {
             status = fmi2Error;
@@ -119,24 +138,24 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         }
         d = gw_value_get(I, v);
         if (!isfinite(d)) {
-            GW_LOG_NONFINITE(I, "fmi2GetReal: variable %s (vr=%u) is not finite (%g) at t=%.17g; "
-                             "nothing returned", v->name, v->vr, d, I->t);
+            GW_LOG_NONFINITE(I, "%s: variable %s (vr=%u) is not finite (%g) at t=%.17g; "
+                             "nothing returned", fn, v->name, v->vr, d, I->t);
             status = gw_fmi2_status(I->nonfinite_status);
             goto END;
         }
     }
     for (k = 0; k < nvr; k++) value[k] = gw_value_get(I, gw_variable_find(I->m, vr[k]));
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Integer value[]) {
     size_t k;
-    GW_BEGIN("fmi2GetInteger", GW_MASK_Get);
-    GW_CHECK_ARRAYS("fmi2GetInteger", vr, nvr, value);
-    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, "fmi2GetInteger"));
+    GW_FRAME(GetInteger);
+    GW_CHECK_ARRAYS(vr, nvr, value);
+    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, fn));
     for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_fmi2_lookup(I, "fmi2GetInteger", vr[k], GW_INTEGER);
+        const gw_variable *v = gw_fmi2_lookup(I, fn, vr[k], GW_INTEGER);
         double d;
         if (!v) {
             status = fmi2Error;
@@ -145,34 +164,34 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
         d = gw_value_get(I, v);
         value[k] = isfinite(d) ? (fmi2Integer)floor(d + 0.5) : 0;
     }
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[]) {
     size_t k;
-    GW_BEGIN("fmi2GetBoolean", GW_MASK_Get);
-    GW_CHECK_ARRAYS("fmi2GetBoolean", vr, nvr, value);
-    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, "fmi2GetBoolean"));
+    GW_FRAME(GetBoolean);
+    GW_CHECK_ARRAYS(vr, nvr, value);
+    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, fn));
     for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_fmi2_lookup(I, "fmi2GetBoolean", vr[k], GW_BOOLEAN);
+        const gw_variable *v = gw_fmi2_lookup(I, fn, vr[k], GW_BOOLEAN);
         if (!v) {
             status = fmi2Error;
             goto END;
         }
         value[k] = gw_value_get(I, v) != 0.0 ? fmi2True : fmi2False;
     }
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          fmi2String value[]) {
-    GW_BEGIN("fmi2GetString", GW_MASK_Get);
+    GW_FRAME(GetString);
     (void)value;
     if (nvr > 0)
-        GW_FAIL("fmi2GetString: unknown value reference %u (the model has no String variables)",
+        GW_FAIL("%s: unknown value reference %u (the model has no String variables)", fn,
                 vr ? vr[0] : 0u);
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 /* ---- setting values ------------------------------------------------------------------------ */
@@ -180,61 +199,61 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        const fmi2Real value[]) {
     size_t k;
-    GW_BEGIN("fmi2SetReal", GW_MASK_Set);
-    GW_CHECK_ARRAYS("fmi2SetReal", vr, nvr, value);
+    GW_FRAME(SetReal);
+    GW_CHECK_ARRAYS(vr, nvr, value);
     for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_fmi2_lookup(I, "fmi2SetReal", vr[k], GW_REAL);
-        if (!v || !gw_fmi2_settable(F, "fmi2SetReal", v)) {
+        const gw_variable *v = gw_fmi2_lookup(I, fn, vr[k], GW_REAL);
+        if (!v || !gw_fmi2_settable(F, fn, v)) {
             status = fmi2Error;
             goto END;
         }
-        GW_TRY(gw_value_check(I, "fmi2SetReal", v, value[k]));
+        GW_TRY(gw_value_check(I, fn, v, value[k]));
         gw_value_set(I, v, value[k]);
     }
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[]) {
     size_t k;
-    GW_BEGIN("fmi2SetInteger", GW_MASK_SetDiscrete);
-    GW_CHECK_ARRAYS("fmi2SetInteger", vr, nvr, value);
+    GW_FRAME(SetInteger);
+    GW_CHECK_ARRAYS(vr, nvr, value);
     for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_fmi2_lookup(I, "fmi2SetInteger", vr[k], GW_INTEGER);
-        if (!v || !gw_fmi2_settable(F, "fmi2SetInteger", v)) {
+        const gw_variable *v = gw_fmi2_lookup(I, fn, vr[k], GW_INTEGER);
+        if (!v || !gw_fmi2_settable(F, fn, v)) {
             status = fmi2Error;
             goto END;
         }
-        GW_TRY(gw_value_check(I, "fmi2SetInteger", v, (double)value[k]));
+        GW_TRY(gw_value_check(I, fn, v, (double)value[k]));
         gw_value_set(I, v, (double)value[k]);
     }
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Boolean value[]) {
     size_t k;
-    GW_BEGIN("fmi2SetBoolean", GW_MASK_SetDiscrete);
-    GW_CHECK_ARRAYS("fmi2SetBoolean", vr, nvr, value);
+    GW_FRAME(SetBoolean);
+    GW_CHECK_ARRAYS(vr, nvr, value);
     for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_fmi2_lookup(I, "fmi2SetBoolean", vr[k], GW_BOOLEAN);
-        if (!v || !gw_fmi2_settable(F, "fmi2SetBoolean", v)) {
+        const gw_variable *v = gw_fmi2_lookup(I, fn, vr[k], GW_BOOLEAN);
+        if (!v || !gw_fmi2_settable(F, fn, v)) {
             status = fmi2Error;
             goto END;
         }
         gw_value_set(I, v, value[k] ? 1.0 : 0.0);
     }
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          const fmi2String value[]) {
-    GW_BEGIN("fmi2SetString", GW_MASK_SetDiscrete);
+    GW_FRAME(SetString);
     (void)value;
     if (nvr > 0)
-        GW_FAIL("fmi2SetString: unknown value reference %u (the model has no String variables)",
+        GW_FAIL("%s: unknown value reference %u (the model has no String variables)", fn,
                 vr ? vr[0] : 0u);
-    GW_END_FUNCTION();
+    GW_FRAME_END();
 }
 
 #endif /* GW_UNITY_BUILD */

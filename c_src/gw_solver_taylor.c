@@ -57,16 +57,17 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include <math.h>
 #include <string.h>
 
-#include "gw_fastmath.h" /* gw_fm_step: the step size; gw_fm_log, gw_fm_exp (GW_TAYLOR_STEP_FM) */
 #include "gw_solver.h"
+#include "gw_solver_taylor_step.h" /* gw_fm_step: the step size */
 
 /* The rejection rule's ln and exp (a rejected step's shorter retry; the step size itself is
- * gw_fm_step's, gw_taylor_step_size): libm's in the FMU, gw_fastmath.h's in the ensemble library
- * (taylor/ensemble.py: GW_TAYLOR_STEP_FM 1) */
+ * gw_fm_step's, gw_taylor_step_size): libm's in the FMU, gw_fm_logexp.h's in the ensemble library
+ * (gw_ensemble_lib.c: GW_TAYLOR_STEP_FM 1) */
 #ifndef GW_TAYLOR_STEP_FM
 #define GW_TAYLOR_STEP_FM 0
 #endif
 #if GW_TAYLOR_STEP_FM
+#include "gw_fm_logexp.h"
 #define GW_TL_LN gw_fm_log
 #define GW_TL_EXP gw_fm_exp
 #else
@@ -116,7 +117,7 @@ GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, doub
     *bad_order = gw_taylor_bad_order(order, n1, n2);
     if (*bad_order) return 0.0;
     /* log2 rho = min_j log2(N_j^(-1/j)), h = 2^(log2 rho + log2 c): gw_fm_step's short log2 and
-     * exp2 (gw_fastmath.h, 6e-6 of the exact rule), the same body as the ensemble's norms pass
+     * exp2 (gw_solver_taylor_step.h, 6e-6 of the exact rule), the same body as the ensemble's norms pass
      * over its lanes (gw_ens_norms, gw_fm_step4) */
     return gw_fm_step(n1, n2, 1.0 / (order - 1), 1.0 / order, run->log2_c);
 }
@@ -133,7 +134,7 @@ GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, doub
 #if defined(__GNUC__) || defined(__clang__)
 typedef double gw_tl_v2 __attribute__((vector_size(16))); /* one SSE2 register */
 /* a full block of 8 components as 4 pairs: the same multiplies and adds in the same order as
- * the scalar loop below, half the instructions (the scalar loop was bound by the issue of its 4
+ * the scalar loop below, half the instructions (the scalar loop is bound by the issue of its 4
  * operations per component and order, not by the chains' latency); the ensemble's layout, cloned
  * as its increments pass (gw_ens_increments, fused multiply-adds on x86-64-v3), which equals
  * this lane by lane bit for bit */
@@ -212,8 +213,8 @@ static GW_TL_CLONED void gw_taylor_increment8_om(const double *x0, size_t so, in
 
 /* gw_taylor_increment on the series X with state i's coefficient k at X[i si + k so]; cloned
  * like the blocks of 8 and the ensemble's increments pass (gw_ens_increments fuses the last
- * nx mod 8 components' multiply-adds too: unfused here, those components of a single run were
- * 1 ulp off the ensemble's lane, tests/test_taylor.py::
+ * nx mod 8 components' multiply-adds too: unfused here, those components of a single run would
+ * be 1 ulp off the ensemble's lane, tests/test_taylor_near_pole.py::
  * test_ensemble_rejected_steps_retry_on_the_lane_series, lunar_rover's 9th state) */
 static GW_TL_CLONED void gw_taylor_increment_strided(const double *X, size_t si, size_t so, int order, int nx,
                                         double h, double *dx, double *dp) {
@@ -286,8 +287,8 @@ GW_INTERNAL int gw_taylor_begin(gw_instance *I, gw_taylor_run *run) {
     /* (h / rho)^(p+1), the size of the first neglected term, as with Jorba & Zou's rule at the
      * order q, h0 = rho / e^2 exp(-0.7 / (q - 1)): ln(h / rho) = ln(h0 / rho) (q + 1) / (p + 1).
      * q = -ln(eps) / 2 + 3/2 follows rel_tol continuously, where the integer p0 = ceil(q - 1/2)
-     * jumps (the neglected term then fell e^2 at once at each p0 and stayed put in between:
-     * rel_tol 3e-4 and 1e-4 gave the same steps); ln of the term is that of p0's rule averaged
+     * jumps (with p0 the neglected term would fall e^2 at once at each p0 and stay put in
+     * between: rel_tol 3e-4 and 1e-4 would take the same steps); ln of the term is that of p0's rule averaged
      * over rel_tol's range of p0 (q - 1/2 runs through (p0 - 1, p0]), equal to it mid-range */
     q = -0.5 * log(I->rel_tol > DBL_EPSILON ? I->rel_tol : DBL_EPSILON) + 1.5;
     if (q < 3.0) q = 3.0; /* rel_tol > e^-3: order 3's rule (p0 = 3 up to e^-4) */
@@ -425,8 +426,8 @@ static void gw_swap_series(double **a, double **b) {
     *b = tmp;
 }
 
-/* 1: every step checks with a right-hand side evaluation, as before the deferred check (for
- * tests/test_taylor.py::test_deferred_defect_check_rejects_where_the_rhs_check_does) */
+/* 1: every step checks with a right-hand side evaluation instead of the next step's series (for
+ * tests/test_taylor_near_pole.py::test_deferred_defect_check_rejects_where_the_rhs_check_does) */
 #ifndef GW_TAYLOR_DEFECT_RHS
 #define GW_TAYLOR_DEFECT_RHS 0
 #endif

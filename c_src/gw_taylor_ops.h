@@ -48,7 +48,7 @@
  * these macros at its end.
  *
  * Before including: GW_TL_W (lanes) and GW_TL(name) (the name prefix of this instance).
- * Checked against CasADi's own derivatives: tests/test_taylor.py, tests/test_taylor_kernel.py.
+ * Checked against CasADi's own derivatives and mpmath: tests/test_taylor_kernel.py.
  */
 #include <stdint.h>
 
@@ -140,7 +140,7 @@ typedef struct {
  * and cosine a scalar gw_sincos (measured: 32% of a 4-lane jet of order 10 on the paper
  * scenario, the same per lane at 4, 8 and 16 lanes).  Not under -ffast-math (the reduction's
  * 1.5 2^52 trick needs its roundings; the lanes' gw_sincos keeps them with GW_FM_KEEP). */
-#include "gw_fastmath.h"
+#include "gw_sincos.h"
 #if GW_TL_VW > 1 && !defined(__FAST_MATH__)
 #define GW_TL_V0 1
 typedef long long GW_TL(vi) __attribute__((vector_size(GW_TL_VW * sizeof(double))));

@@ -19,13 +19,13 @@ names (two FMUs in one process would clash), and the body functions ignore some 
     and those are never indexed), and the NULL tests split the body into branches that keep
     gcc from merging sin(x) and cos(x) into one sincos call (measured: one libm call, 5-7 ns,
     of a 28 ns right-hand side; docs/performance.md);
-  * each body's sin and cos come from c_src/gw_fastmath.h (static inline, at most 1 ulp;
+  * each body's sin and cos come from c_src/gw_sincos.h (static inline, at most 1 ulp;
     docs/performance.md): a cos(aY) and a sin(aY) of the same variable, aY unchanged in
     between, become one gw_sincos(aY, &gw_sN, &gw_cN) at the first of the two and reads of
     gw_sN / gw_cN (compilers do not merge two inlined reductions by themselves: measured); two
     such gw_sincos in a body (alpha and beta in gw_ode) become one gw_sincos2 at the second
     when nothing in between uses the first's output or changes its argument, and the
-    second's argument is not the first's output (SSE2 lanes, the same bits); any other sin / cos a gw_sin / gw_cos; the file includes gw_fastmath.h after
+    second's argument is not the first's output (SSE2 lanes, the same bits); any other sin / cos a gw_sin / gw_cos; the file includes gw_sincos.h after
     <math.h>;
   * the whole file is guarded by GW_UNITY_BUILD, so that compiled on its own it is empty.
 Anything it does not recognise (a function definition of another shape, a global left over)
@@ -54,7 +54,7 @@ _INPUT_LOAD = re.compile(r"\barg\[(\d+)\]\? arg\[\1\]\[(\d+)\] : 0;")
 _TRIG = re.compile(r"(?<![\w.])(sin|cos)\(")
 _TRIG_LINE = re.compile(r"^(?P<indent>\s*)(?P<out>\w+)=(?P<fn>sin|cos)\((?P<arg>\w+)\);$")
 _MATH_INCLUDE = "#include <math.h>\n"
-FASTMATH_INCLUDE = '#include "gw_fastmath.h" /* gw_sin, gw_cos: see fmu_build/casadi_c.py */\n'
+FASTMATH_INCLUDE = '#include "gw_sincos.h" /* gw_sin, gw_cos: see fmu_build/casadi_c.py */\n'
 
 
 class CodegenFormatError(RuntimeError):

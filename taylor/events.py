@@ -30,7 +30,7 @@ from gyrowheel.taylor.graph import C_EXPR, OP_NAMES, UNARY, Decomposition
 __all__ = ["event_source", "kernel_nodes"]
 
 # the C of each op as CasADi's generated code writes it: taylor/graph.py's C_EXPR (sign there is
-# casadi_sign's), except sin and cos, which the generated C takes from gw_fastmath.h
+# casadi_sign's), except sin and cos, which the generated C takes from gw_sincos.h
 # (fmu_build/casadi_c.py)
 _C = {**C_EXPR, "sin": "gw_sin({0})", "cos": "gw_cos({0})"}
 _PAIRS = {"sincos": ("sin", "cos"), "sinhcosh": ("sinh", "cosh")}

@@ -97,7 +97,7 @@ def taylor_source(dec: Decomposition, model: str, evt: ca.Function | None = None
  * interior sums: {len(plan.terms)} terms in {n_groups} loops of up to {GROUP} accumulators (one lane:
  * {packs.slots} packed slots, {len(packs.groups)} vectors of 4, loops of up to {PACK_GROUP}) */
 #include "gw_taylor_ops.h" /* the lane vectors GW_TL(v), GW_TLZ, GW_TLFMA, ... for GW_TL_W lanes */
-#include "gw_fastmath.h" /* gw_sincos at order 0 (sin and cos of one argument, <= 1 ulp) */
+#include "gw_sincos.h" /* gw_sincos at order 0 (sin and cos of one argument, <= 1 ulp) */
 #define GW_TL_NX {dec.nx}
 /* GW_TL_ROW: the numbers of a row (one order's coefficients): the internal series (var
  * nodes, weighted series, reciprocals); with GW_TL_PACK (one lane) then the terms' packed

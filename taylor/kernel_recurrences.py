@@ -77,7 +77,7 @@ def zero_items(plan: Plan, slices: bool = False) -> list[tuple[bool, str]]:
         if op == "sincos" and vec:
             items.append((False, f"GW_TL(sincos)({ptr(node.args[0])}, {ptr(('v', n))}, "
                                  f"{ptr(('v', node.extra[0]))});"))
-        elif op == "sincos":  # gw_fastmath.h: inline, <= 1 ulp, one reduction for the pair
+        elif op == "sincos":  # gw_sincos.h: inline, <= 1 ulp, one reduction for the pair
             items.append((True, f"gw_sincos({args[0]}, &{v0(n, True)}, &{v0(node.extra[0], True)});"))
         elif op == "sinhcosh":
             items.append((True, f"{v0(n, True)} = sinh({args[0]});"))

@@ -43,7 +43,7 @@ def test_dop853_ab_reference_is_a_git_ref_or_a_directory(tmp_path):
                                                       capture_output=True).returncode != 0:
         pytest.skip("not a git checkout")
     tree = RefTree("HEAD", tmp_path)
-    assert (tree.root / "fmu_build" / "builder.py").is_file() and (tree.root / "c_src" / "gw_fastmath.h").is_file()
+    assert (tree.root / "fmu_build" / "builder.py").is_file() and (tree.root / "c_src" / "gw_sincos.h").is_file()
     assert tree.layout == "package"
     assert RefTree(str(root), tmp_path / "x").root == root
     with pytest.raises(SystemExit, match="neither a directory nor a git ref"):

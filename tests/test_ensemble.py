@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from c_programs import C_SRC, STRICT, TESTS_C
-from gyrowheel.taylor.ensemble import STATUS_ERROR, STATUS_OK, Ensemble
+from gyrowheel.taylor.ensemble import STATUS_ERROR, STATUS_OK, Ensemble, library_source
+from taylor_helpers import same_results as _same
 
 
 @pytest.fixture(scope="module")
@@ -31,16 +32,6 @@ JOB = dict(parameters={"g": [9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0], "beta_min
 OTHERS = [dict(parameters={"M": [2.0, -1.0]}, rel_tol=1e-6),
           dict(starts={"gamma_dot": [6.0, 1e9, 6.0]}, rel_tol=1e-12),
           dict(starts={"gamma_dot": [4.0]}, rel_tol=1e-4)]
-
-
-def _same(a, b):
-    assert list(a.status) == list(b.status) and list(a.steps) == list(b.steps)
-    np.testing.assert_array_equal(a.t_final, b.t_final)
-    np.testing.assert_array_equal(a.x_final, b.x_final)
-    np.testing.assert_array_equal(a.y_grid, b.y_grid)
-    np.testing.assert_array_equal(a.n_rows, b.n_rows)
-    np.testing.assert_array_equal(a.flags, b.flags)
-    assert a.messages == b.messages
 
 
 def test_runs_reusing_a_context_equal_fresh_runs(paper, tmp_path):
@@ -111,23 +102,34 @@ int main(void) {
         if (ID(run)(c, N, P, S, span, tol, status, tf, xf, yf, steps, logger, G, grid, yg, rows, flags))
             return 1;
         printf("%d %d %d %lu %.17g\n", status[0], status[2], status[6], steps[0], xf[0]);
-        if (rep == 0) { /* the same job through run_packed, in a buffer of exactly its layout */
-            const size_t ne = sz[7] > 0 ? (size_t)sz[7] : 1, nf = 5 + G + (size_t)N * (sz[3] + sz[1] + 1
-                             + sz[0] + sz[4]) + (size_t)N * (G + 1) * sz[4];
-            const size_t bytes = 8 * nf + sizeof(long) * 3 * N + sizeof(int) * N * (1 + ne) + N * ne;
-            double *f = malloc(bytes);
-            long *lg = (long *)(f + nf);
-            unsigned char *fl = (unsigned char *)((int *)(lg + 3 * N) + N * (1 + ne));
+        if (rep == 0) { /* the same job through run_packed, in a buffer of exactly the size and
+                         * at the places the library exports (ID(layout), gw_ensemble_lib.c) */
+            const size_t ne = sz[7] > 0 ? (size_t)sz[7] : 1;
+            long at[GW_LIB_N_SECTIONS];
+            double *f;
+            char *b;
+            const long *lg_steps, *lg_rows, *lg_status;
+            const unsigned char *fl;
+            const double *f_tf, *f_xf;
+            if (ID(layout)(N, G, at) != GW_LIB_N_SECTIONS) return 4;
+            if (!(f = malloc((size_t)at[GW_LIB_AT_end]))) return 1;
+            b = (char *)f;
             memcpy(f, span, sizeof span);
             memcpy(f + 2, tol, sizeof tol);
-            memcpy(f + 5, grid, sizeof grid);
-            memcpy(f + 5 + G, P, sizeof(double) * N * sz[3]);
-            memcpy(f + 5 + G + N * sz[3], S, sizeof(double) * N * sz[1]);
-            if (!f || ID(run_packed)(ctx, N, G, f, logger)) return 1;
+            memcpy(b + at[GW_LIB_AT_grid], grid, sizeof grid);
+            memcpy(b + at[GW_LIB_AT_p], P, sizeof(double) * N * sz[3]);
+            memcpy(b + at[GW_LIB_AT_s], S, sizeof(double) * N * sz[1]);
+            if (ID(run_packed)(ctx, N, G, f, logger)) return 1;
+            lg_steps = (const long *)(void *)(b + at[GW_LIB_AT_steps]);
+            lg_rows = (const long *)(void *)(b + at[GW_LIB_AT_n_rows]);
+            lg_status = (const long *)(void *)(b + at[GW_LIB_AT_status]);
+            fl = (const unsigned char *)(b + at[GW_LIB_AT_flags]);
+            f_tf = (const double *)(void *)(b + at[GW_LIB_AT_t_final]);
+            f_xf = (const double *)(void *)(b + at[GW_LIB_AT_x_final]);
             for (k = 0; k < N; k++)
-                if (lg[2 * N + k] != status[k] || (unsigned long)lg[k] != steps[k] || lg[N + k] != rows[k]
-                    || fl[k * ne] != (flags[k * sz[7]] != 0) || f[5 + G + N * (sz[3] + sz[1] + 1) + k * sz[0]]
-                    != xf[k * sz[0]] || f[5 + G + N * (sz[3] + sz[1]) + k] != tf[k])
+                if (lg_status[k] != status[k] || (unsigned long)lg_steps[k] != steps[k] || lg_rows[k] != rows[k]
+                    || fl[k * ne] != (flags[k * sz[7]] != 0) || f_xf[k * sz[0]] != xf[k * sz[0]]
+                    || f_tf[k] != tf[k])
                     return 3;
             free(f);
         }
@@ -148,10 +150,9 @@ def test_ensemble_library_clean_under_sanitizers(paper, tmp_path):
     under AddressSanitizer, LeakSanitizer and UndefinedBehaviorSanitizer; each run gives the
     same numbers."""
     from c_programs import MODE_FLAGS, SANITIZER_ENV
-    from gyrowheel.taylor.ensemble import _UNITY
     src = paper.sources
     prog = tmp_path / "ens.c"
-    prog.write_text(_UNITY.format(id=paper.identifier, lanes=4)
+    prog.write_text(library_source(paper.identifier, 4)
                     + f"#define ID(name) {paper.identifier}_ensemble_##name\n" + DRIVER)
     exe = tmp_path / "ens"
     cmd = ["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", *MODE_FLAGS["sanitizers"], f"-I{src}",
@@ -174,10 +175,9 @@ def test_step_size_passes_equal_the_one_lane_formulas(cc, tmp_path):
     gw_taylor_step_size: gw_fm_step4 in 4-lane vectors against scalar gw_fm_step calls, and within
     its bound of the exact rule), and the order-1 flag that spares gw_taylor_attempt_size its copy
     zero exactly where the lane's derivatives are finite; gw_ens_defects bit for bit
-    gw_taylor_defect's loop, a NaN defect component before finite ones included (the pass let
-    the later finite one replace it: a step accepted that solver taylor rejects).  (Once also
-    compiled with GW_TAYLOR_STEP_FM 0 and 1: since gw_fm_step that macro reaches only the
-    rejection rule, which this program does not include, so both builds were the same program.)"""
+    gw_taylor_defect's loop, a NaN defect component before finite ones included (were the later
+    finite one to replace it, solver taylor would reject a step the pass accepts).  Compiled once:
+    GW_TAYLOR_STEP_FM reaches only the rejection rule, which this program does not include."""
     exe = tmp_path / "passes"
     subprocess.run([cc, *STRICT, "-O2", f"-I{C_SRC}",
                     str(TESTS_C / "test_ens_passes.c"), "-lm", "-o", str(exe)], check=True)
@@ -191,9 +191,8 @@ class _Interrupt(Exception):
 
 def test_context_back_in_the_pool_after_an_interrupted_run(paper, tmp_path):
     """Ctrl-C during a run: the signal's exception is raised as the C call returns, inside
-    Ensemble.run; the context it took must go back to the pool (it was lost at each interrupt:
-    never freed, a new one made by the next run), and the next run reuses it and equals a fresh
-    run."""
+    Ensemble.run; the context it took must go back to the pool (not be lost, never freed, a new
+    one made by the next run), and the next run reuses it and equals a fresh run."""
     import signal
     import threading
 
@@ -320,9 +319,9 @@ def test_a_trajectory_has_the_same_bits_in_any_batch(paper, tmp_path, lanes):
     the batch size and the order): 11 trajectories (falls at different times, so the job ends
     with few lanes active) each equal, bit for bit, to its run alone and in the reversed job,
     with and without a grid.  The one-lane kernel for a job's tail (GW_ENSEMBLE_SINGLE_MAX > 0)
-    broke this: the library's FMA contraction rounds it unlike the lane kernel (found by review18:
-    a lone trajectory differed at 1e-13 from itself in a batch; a sweep's fall_time, min_beta,
-    final_x ... differed between batch_size 14 and 1)."""
+    breaks this: the library's FMA contraction rounds it unlike the lane kernel (a lone
+    trajectory 1e-13 from itself in a batch; a sweep's fall_time, min_beta, final_x ... apart
+    between batch_size 14 and 1)."""
     ens = Ensemble(paper.fmu, lanes=lanes, cache=tmp_path)
     g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81, 2.0, 9.81])
     spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 11.0, 0.8, 6.0, 2.5])
@@ -342,13 +341,13 @@ def test_a_trajectory_has_the_same_bits_in_any_batch(paper, tmp_path, lanes):
 def test_increments_pass_equals_the_one_lane_increment(paper, tmp_path, cc):
     """gw_ens_increments (dx and P'(h) of all lanes) bit for bit gw_taylor_increment lane by lane,
     compiled as the ensemble library is (its unity file and flags: FMA contraction in the
-    x86-64-v3 clones), on random series (tests/c/test_ens_increments.c).  Before the fix the
-    pass fused two sums fewer: dx differed in 1.2% of the components, P'(h) in 20%, and the
-    inline lane-steps left those of the GW_ENSEMBLE_LANE_STEPS=1 build (paper, gamma_dot 1e5 at
-    rel_tol 1e-4, slope_hold at 1e-3: 1-2 ulp, found by review18)."""
-    from gyrowheel.taylor.ensemble import _UNITY, FLAGS
+    x86-64-v3 clones), on random series (tests/c/test_ens_increments.c).  A pass fusing two sums
+    fewer gives dx apart in 1.2% of the components, P'(h) in 20%, and inline lane-steps 1-2 ulp
+    apart from those of the GW_ENSEMBLE_LANE_STEPS=1 build (paper, gamma_dot 1e5 at rel_tol
+    1e-4, slope_hold at 1e-3)."""
+    from gyrowheel.taylor.ensemble import FLAGS
     prog = tmp_path / "incr.c"
-    prog.write_text(_UNITY.format(id=paper.identifier, lanes=4) + '#include "test_ens_increments.c"\n')
+    prog.write_text(library_source(paper.identifier, 4) + '#include "test_ens_increments.c"\n')
     exe = tmp_path / "incr"
     subprocess.run([cc, *STRICT, *FLAGS, f"-I{paper.sources}", f"-I{TESTS_C}", str(prog), "-lm", "-o", str(exe)],
                    check=True)
@@ -361,10 +360,10 @@ def test_lane_counts_two_and_more_give_the_same_bits(paper, tmp_path):
     """Ensemble(fmu, lanes=3 / 16) and the default 4: the same steps and values bit for bit (each
     lane's kernel slice and passes do the same operations, and a job's tail stays in the lane
     kernel: with the one-lane tail kernel, GW_ENSEMBLE_SINGLE_MAX 1 of 3 and 6 of 16, the widths
-    were 1e-13 apart in some trajectories).  lanes = 1 runs the scalar kernel, contracted
+    are 1e-13 apart in some trajectories).  lanes = 1 runs the scalar kernel, contracted
     otherwise: equal to rounding
-    (tests/test_taylor.py::test_ensemble_lanes_tail_and_refill_equal_the_single_runs)."""
-    rng = np.random.default_rng(5)  # 13 trajectories, 5 of which were apart at 8 or 16 lanes
+    (tests/test_ensemble_runs.py::test_ensemble_lanes_tail_and_refill_equal_the_single_runs)."""
+    rng = np.random.default_rng(5)  # 13 trajectories, 5 of which the one-lane tail kernel sets apart
     starts = {"gamma_dot": rng.uniform(0.5, 12.0, 13), "beta": rng.uniform(0.9, 1.55, 13)}
     for extra in ({}, {"grid": np.linspace(0.3, 6.0, 20)}):
         kw = dict(parameters={"beta_min": np.full(13, 0.3)}, starts=starts, rel_tol=1e-9, **extra)

@@ -1,4 +1,4 @@
-"""gw_sin / gw_cos / gw_sincos (c_src/gw_fastmath.h), the sin and cos of the generated code.
+"""gw_sin / gw_cos / gw_sincos (c_src/gw_sincos.h), the sin and cos of the generated code.
 
   test_ulp_error_against_long_double   tests/c/test_fastmath.c under gcc and clang with the
       strict flags and the FMU's optimisation: at most 1 ulp from glibc's long double sinl/cosl
@@ -61,12 +61,12 @@ def test_generated_code_merges_sincos(tmp_path):
     scene = load_scene(Path(__file__).resolve().parent.parent / "examples" / "scenes" / "paper_earth.toml")
     built = build_fmu(scene, tmp_path / "earth.fmu", build_dir=tmp_path / "b")
     text = (built.sources / "gw_funcs.c").read_text()
-    assert '#include "gw_fastmath.h"' in text
+    assert '#include "gw_sincos.h"' in text
     # the vendored msun / fdlibm code travels with Sun's notice, which its terms require kept
     notice = ("Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.",
               "Permission to use, copy, modify, and distribute this software is freely granted,",
               "provided that this notice is preserved.")
-    header = (built.sources / "gw_fastmath.h").read_text()
+    header = (built.sources / "gw_sincos.h").read_text()
     assert all(line in header for line in notice)
     ode = text[text.index("/* gw_ode:"):]
     ode = ode[:ode.index("\n}\n")]
@@ -106,12 +106,12 @@ def test_include_with_sincos_only():
             "casadi_real* w, int mem) {\n  casadi_real a0, a1, a2;\n  a0=arg[0][0];\n  a1=cos(a0);\n  a2=sin(a0);\n"
             "  if (res[0]!=0) res[0][0]=(a1*a2);\n  return 0;\n}\n")
     out = make_internal(text, set())
-    assert "gw_sincos(a0, &gw_s0, &gw_c0)" in out and '#include "gw_fastmath.h"' in out, out
+    assert "gw_sincos(a0, &gw_s0, &gw_c0)" in out and '#include "gw_sincos.h"' in out, out
 
 
 def test_pair_keeps_the_second_argument_written_first():
     """sin(cos x) and cos(cos x) beside sin x: the second gw_sincos reads the first's output,
-    which a gw_sincos2 at the second line would read before assigning it (found in review)."""
+    which a gw_sincos2 at the second line would read before assigning it."""
     one = "  casadi_real gw_s0, gw_c0; gw_sincos(a0, &gw_s0, &gw_c0); a1=gw_c0;"
     two = "  casadi_real gw_s1, gw_c1; gw_sincos(a1, &gw_s1, &gw_c1); a2=gw_s1;"
     lines = [one, two]
@@ -185,9 +185,8 @@ FLAG_SETS = {
 def test_error_under_a_parent_projects_flags(cc, flags, tmp_path):
     """gw_sincos / gw_sincos2 compiled with a parent project's -ffast-math (the C export allows
     it with -fno-finite-math-only) keep the reduction's extra bits: at most 4 ulp (IEEE flags: 1)
-    over [-1e5, 1e5], [-3.5, 3.5] and next to multiples of pi/2.  Before GW_FM_KEEP the
-    reassociated reduction gave 1e6 ulp near pi and 1e12 ulp near multiples of pi around 5e4
-    (found in review)."""
+    over [-1e5, 1e5], [-3.5, 3.5] and next to multiples of pi/2.  Without GW_FM_KEEP the
+    reassociated reduction is 1e6 ulp off near pi and 1e12 ulp near multiples of pi around 5e4."""
     if "x86-64-v3" in " ".join(FLAG_SETS[flags]):
         import platform
         if platform.machine() not in ("x86_64", "AMD64"):
@@ -221,7 +220,7 @@ LOG_EXP_FLAGS = {
 @pytest.mark.parametrize("cc", COMPILERS)
 @pytest.mark.parametrize("flags", list(LOG_EXP_FLAGS), ids=list(LOG_EXP_FLAGS))
 def test_log_exp_error_and_lanes(cc, flags, tmp_path):
-    """gw_fm_log / gw_fm_exp (c_src/gw_fastmath.h), the ensemble's step size ln and exp (its
+    """gw_fm_log / gw_fm_exp (c_src/gw_fm_logexp.h), the ensemble's step size ln and exp (its
     one-lane code and its 4-lane pass), in ulps against long double over 1e7 points: the norms' range
     [1e-300, 1e300], [0.5, 2], subnormals, ln h in [-60, 10], every finite exp; the 4-lane forms
     bit-equal lane by lane with the FMU's flags (the ensemble's bit-identity with its one-lane

@@ -6,7 +6,10 @@
 - the lane layouts (W = 1, 2 and 4 and 8 with GCC's vector extension, 3 as plain lanes) give
   the same numbers, bit for bit, lane by lane, at misaligned work arrays, and write nothing
   outside the work size GW_TL_NVAR (order + 1) W they announce;
-- every lane count compiles under -std=c99 -Wall -Wextra -Wpedantic -Werror with gcc and clang.
+- every lane count compiles under -std=c99 -Wall -Wextra -Wpedantic -Werror with gcc and clang;
+- the recurrence of every elementary operation against CasADi's own derivatives (coefficient k =
+  derivative / k!) at random points; an unsupported operation is refused by name; every example
+  scene's operations are supported.
 """
 from __future__ import annotations
 
@@ -22,9 +25,13 @@ import mpmath as mp
 import numpy as np
 import pytest
 
+from conftest import SCENES
+from gyrowheel.fmu_build import load_scene
+from gyrowheel.fmu_build.builder import model_spec
 from gyrowheel.fmu_build.codegen import optimised
+from gyrowheel.fmu_build.compiler import compiler
 from gyrowheel.taylor.kernel_c import taylor_source, work_series
-from gyrowheel.taylor.graph import decompose
+from gyrowheel.taylor.graph import TaylorUnsupportedError, decompose
 
 ROOT = Path(__file__).resolve().parent.parent
 ORDER = 20
@@ -176,3 +183,89 @@ def test_every_lane_count_warning_clean(system, tmp_path, cc):
     f, _ = system
     for lanes in (1, 2, 3, 4, 8, 16):
         _library(f, lanes, tmp_path, cc)
+
+
+# ---- against CasADi's derivatives; what the decomposition supports -------------------------
+
+def _op_system():
+    """x' = (drivers y, z; then one state per operation of y and z)."""
+    y, z, t = ca.SX.sym("y"), ca.SX.sym("z"), ca.SX.sym("t")
+    p = ca.SX.sym("p", 1)
+    ops = {
+        "mul": y * z, "div": y / z, "div_const_num": 2.0 / z, "sq": y ** 2, "sqrt": ca.sqrt(z),
+        "sin": ca.sin(y), "cos": ca.cos(z), "tan": ca.tan(y), "exp": ca.exp(y), "log": ca.log(z),
+        "pow_const": y ** 2.5, "pow_var": z ** y, "tanh": ca.tanh(y), "atan2": ca.atan2(y, z),
+        "atan": ca.atan(y), "asin": ca.asin(y), "acos": ca.acos(z), "fabs": ca.fabs(y - 0.5),
+        "fmin": ca.fmin(y, z), "fmax": ca.fmax(y, p[0] * z), "if_else": ca.if_else(y > z, y * y, z),
+        "sinh": ca.sinh(y), "cosh": ca.cosh(z), "neg_twice": -(2 * y) + z - 1.0, "inv": 1.0 / y,
+        "time": ca.sin(t) * y, "sub_const": 1.0 - y * p[0],
+    }
+    w = ca.SX.sym("w", len(ops))
+    x = ca.vertcat(y, z, w)
+    xdot = ca.vertcat(0.3 + 0.2 * z * p[0], -0.25 * y + 0.1, *ops.values())
+    f = ca.Function("gw_ode", [t, x, ca.SX.sym("u", 0), p], [xdot], ["t", "x", "u", "p"], ["xdot"])
+    return f, list(ops)
+
+
+def _jet_library(f: ca.Function, tmp: Path) -> ctypes.CDLL:
+    (tmp / "gw_taylor_model.h").write_text(taylor_source(decompose(optimised(f)), "ops"))
+    (tmp / "jet.c").write_text(
+        '#include <math.h>\n#include <stddef.h>\n#define GW_MAYBE_UNUSED __attribute__((unused))\n#define GW_TL_W 1\n'
+        '#define GW_TL(name) gw_tl1_##name\n#include "gw_taylor_model.h"\n'
+        "void jet(int order, const double *t, const double *x, const double *p, double *w);\n"
+        "void jet(int order, const double *t, const double *x, const double *p, double *w) {\n"
+        "    double c[GW_TL_NCST + 1];\n    gw_tl1_cst(NULL, p, c);\n    gw_tl1_jet(order, t, x, c, w);\n}\n")
+    lib = tmp / "jet.so"
+    subprocess.run([compiler(), "-std=c99", "-O1", "-shared", "-fPIC", "-Wall", "-Wextra", "-Werror",
+                    f"-I{ROOT / 'c_src'}", f"-I{tmp}", str(tmp / "jet.c"), "-o", str(lib), "-lm"],
+                   check=True, capture_output=True)
+    return ctypes.CDLL(str(lib))
+
+
+def _lie_derivatives(f: ca.Function, order: int) -> ca.Function:
+    """x^(k)(t), k = 0..order, of the solution through (t, x): d/dt g = dg/dx f + dg/dt."""
+    t, x, p = ca.SX.sym("t"), ca.SX.sym("x", f.nnz_in(1)), ca.SX.sym("p", 1)
+    rhs = f(t, x, ca.SX(0, 1), p)
+    ders, g = [x], x
+    for _ in range(order):
+        g = ca.jtimes(g, x, rhs) + ca.jacobian(g, t)
+        ders.append(g)
+    return ca.Function("lie", [t, x, p], [ca.horzcat(*ders)])
+
+
+def test_recurrences_match_casadi_derivatives(tmp_path):
+    """Coefficient k of every operation's series equals CasADi's k-th derivative / k!."""
+    f, names = _op_system()
+    order = 7
+    lib = _jet_library(f, tmp_path)
+    lie = _lie_derivatives(f, order)
+    dec = decompose(optimised(f))
+    nx = f.nnz_in(1)
+    rng = np.random.default_rng(11)
+    D = ctypes.POINTER(ctypes.c_double)
+    for _ in range(5):
+        y, z = rng.uniform(0.2, 0.8, 2)
+        x = np.concatenate([[y, z], rng.uniform(-1, 1, nx - 2)])
+        t, p = np.array([rng.uniform(0, 2)]), np.array([rng.uniform(0.5, 1.5)])
+        w = np.zeros(work_series(dec) * (order + 1))
+        lib.jet(order, t.ctypes.data_as(D), x.ctypes.data_as(D), p.ctypes.data_as(D), w.ctypes.data_as(D))
+        jet = w[: nx * (order + 1)].reshape(nx, order + 1)
+        ref = np.array(lie(t[0], x, p)) / np.array([math.factorial(k) for k in range(order + 1)])
+        for i in range(nx):
+            name = "driver" if i < 2 else names[i - 2]
+            np.testing.assert_allclose(jet[i], ref[i], rtol=1e-9, atol=1e-11, err_msg=name)
+
+
+def test_unsupported_operation_is_refused_by_name(tmp_path):
+    x = ca.SX.sym("x", 1)
+    f = ca.Function("gw_ode", [ca.SX.sym("t"), x, ca.SX.sym("u", 0), ca.SX.sym("p", 0)], [ca.erf(x)])
+    with pytest.raises(TaylorUnsupportedError, match="'erf'"):
+        decompose(f)
+
+
+@pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.stem)
+def test_every_example_scene_supported(path):
+    """Every effect's operations have recurrences (the decomposition of each example scene)."""
+    spec = model_spec(load_scene(path))
+    dec = decompose(optimised(spec.functions()["ode"]))
+    assert dec.nx == spec.x.numel() and dec.n_var > dec.nx

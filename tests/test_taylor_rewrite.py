@@ -8,12 +8,15 @@
   with its sqrt and divisions, the Euler disk, the lunar rover): the rewritten kernel's series equal
   the un-rewritten kernel's to rounding at random points;
 - what the rewrite removes on the paper wheel: no mul by a constant, no twice, no reciprocal node,
-  x (c x) as sq, fewer nodes and interior sums.
+  x (c x) as sq, fewer nodes and interior sums;
+- random graphs of every supported kind of op, with parameters 0, negative and infinite: the
+  rewritten kernel's series equal the un-rewritten one's, no finite coefficient made NaN or inf.
 """
 from __future__ import annotations
 
 import ctypes
 import math
+import random
 import subprocess
 from pathlib import Path
 
@@ -139,7 +142,7 @@ def test_scene_series_equal_the_unrewritten_kernel(scene, tmp_path):
 
 
 def test_paper_wheel_rewrite_removes_the_waste():
-    """The paper wheel's graph (issue 11): c / (2 c' sin b) used as a factor of two products -> one
+    """The paper wheel's graph: c / (2 c' sin b) used as a factor of two products -> one
     shared quotient, no linear node carrying only a constant factor, x (c y + d) distributed and
     its products shared: 18 interior terms instead of 24."""
     ode, *_ = _scene_ode("paper_earth.toml")
@@ -177,3 +180,41 @@ def test_products_shared_modulo_associativity(tmp_path):
         x0, p0 = rng.uniform(-0.8, 0.8, 6), rng.uniform(0.5, 1.5, 1)
         got, ref = jet.series(0.2, x0, [], p0), np.array(lie(0.2, x0, p0))
         np.testing.assert_allclose(got, ref, rtol=1e-9, atol=1e-10 * np.max(np.abs(ref)))
+
+
+def _random_expr(rng: random.Random, x: ca.SX, p: ca.SX, t: ca.SX, depth: int) -> ca.SX:
+    """a random expression of the states, parameters and time: every rewrite rule's pattern
+    (factors, reciprocals, x (c x), a (c b + d), shared products) among nonlinear ops"""
+    if depth == 0 or rng.random() < 0.2:
+        return rng.choice([x[0], x[1], x[2], p[0], p[1], p[2], t, ca.SX(rng.choice([0.0, -1.5, 2.0]))])
+    a, b = _random_expr(rng, x, p, t, depth - 1), _random_expr(rng, x, p, t, depth - 1)
+    c = rng.choice([p[0], p[1], p[2], 2.0, -0.5])
+    return rng.choice([
+        a + b, a - b, a * b, c * a, a / (b * b + 1.5), a / c, c / (2.0 * (a * a + 1.0)), -a, 2 * a,
+        ca.sin(a), ca.cos(0.5 * a), ca.exp(0.3 * ca.sin(a)), ca.sqrt(a * a + 1.0), ca.atan2(a, b + 3.0),
+        (a * a + 1.0) ** 1.5, (a * a + 1.0) ** (0.3 * ca.sin(b)), ca.tanh(a), ca.fabs(a),
+        ca.fmin(a, b), ca.fmax(a, b), ca.if_else(a > 0.1, b, 2.0 * a), ca.atan(a), ca.log(a * a + 2.0),
+        (a * b) * (c * a) + (b * a) / (a * a + 1.0), a * (c * a), a * (c * b - p[1]) + a])
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_random_graphs_rewritten_equal_unrewritten(seed, tmp_path):
+    """The rewritten kernel's series equal the un-rewritten one's on random graphs, also with
+    parameters 0, negative and infinite: no finite coefficient becomes NaN or inf (a factor
+    divided by, a product reassociated through 0 inf)."""
+    rng = random.Random(seed)
+    x, t, p = ca.SX.sym("x", 3), ca.SX.sym("t"), ca.SX.sym("p", 3)
+    f = [_random_expr(rng, x, p, t, 4) + 0.1 * x[i] for i in range(3)]
+    ode = optimised(ca.Function("gw_ode", [t, x, ca.SX.sym("u", 0), p], [ca.vertcat(*f)],
+                                ["t", "x", "u", "p"], ["xdot"]))
+    new, old = Jet(decompose(ode), tmp_path, "new"), Jet(decompose(ode, rewrite=False), tmp_path, "old")
+    points = np.random.default_rng(seed)
+    for pv in ([0.7, 1.1, -0.4], [0.0, 0.0, 0.0], [-1.3, 0.0, 2.0], [math.inf, 1.0, 0.5], [1.0, -math.inf, 0.0]):
+        xv = points.uniform(-0.9, 0.9, 3)
+        got, ref = new.series(0.37, xv, [], pv), old.series(0.37, xv, [], pv)
+        finite = np.isfinite(ref)
+        assert np.all(np.isfinite(got[finite])), f"p = {pv}: finite coefficients became {got[finite & ~np.isfinite(got)]}"
+        got, ref = np.where(finite, got, 0.0), np.where(finite, ref, 0.0)
+        scale = np.max(np.abs(ref), axis=1, keepdims=True)
+        err = np.max(np.abs(got - ref) / np.where(scale > 0, scale, 1.0))
+        assert err < 1e-10, f"p = {pv}: series differ by {err:.1e} of their largest coefficient"

@@ -2,7 +2,7 @@
  * translation unit of its own so that tests/test_fastmath.py can compile it with a parent
  * project's flags (-ffast-math -fno-finite-math-only) and measure it from tests/c/test_fastexp.c
  * compiled with IEEE semantics (-DGW_FASTEXP_UNIT). */
-#include "gw_fastmath.h"
+#include "gw_fm_logexp.h"
 
 double unit_log(double x);
 double unit_exp(double x);

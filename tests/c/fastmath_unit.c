@@ -2,7 +2,7 @@
  * its own so that tests/test_fastmath.py can compile it with a parent project's flags
  * (-ffast-math -fno-finite-math-only) and measure it from a harness compiled with IEEE
  * semantics (tests/c/test_fastmath_flags.c). */
-#include "gw_fastmath.h"
+#include "gw_sincos.h"
 
 void unit_sincos(double x, double *s, double *c);
 void unit_sincos2(double x0, double x1, double *s0, double *c0, double *s1, double *c1);

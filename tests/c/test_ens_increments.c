@@ -2,14 +2,15 @@
  * test_ens_increments.c -- the ensemble's increments pass (gw_ens_increments, c_src/
  * gw_ensemble_passes.h: dx = sum_k X_k h^k and P'(h) of every lane, lanes innermost) against
  * solver taylor's one-lane gw_taylor_increment, bit for bit, lane by lane, as compiled in the
- * ensemble library: appended to its unity file (taylor/ensemble.py _UNITY), with its flags
- * (-O3 -ffp-contract=fast; the x86-64-v3 clones fuse multiply-adds), so that the compiler's
+ * ensemble library: appended to its unity file (gyrowheel.taylor.ensemble.library_source), with
+ * its flags (-O3 -ffp-contract=fast; the x86-64-v3 clones fuse multiply-adds), so that the compiler's
  * contraction of each is what the library runs.  Random series of 13 components (blocks of 8
  * and the rest; the pass's chains of 4 and single ones), orders 7 .. 24, coefficients over 60
  * binades, step sizes 2^-6 .. 2^2, zero and negative-zero coefficients.  Run by
  * tests/test_ensemble.py::test_increments_pass_equals_the_one_lane_increment.
- * (Starting the pass's dq at q let GCC share one product between two sums: dx differed in 1.2%
- * of the components, P'(h) in 20%; the inline lane-steps then left GW_ENSEMBLE_LANE_STEPS=1's.)
+ * (Were the pass's dq started at q, GCC would share one product between two sums: dx apart in
+ * 1.2% of the components, P'(h) in 20%, the inline lane-steps apart from
+ * GW_ENSEMBLE_LANE_STEPS=1's.)
  */
 #include <stdio.h>
 

@@ -20,7 +20,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "gw_fastmath.h"
+#include "gw_solver_taylor_step.h"
 
 #define GW_ENSEMBLE_LANES 4
 #include "gw_ensemble_passes.h"
@@ -38,7 +38,7 @@ static void expect(int ok, const char *what, int lane) {
 
 static int same(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
 
-/* the increments and updates are tested through the library (tests/test_taylor.py) */
+/* the increments and updates are tested through the library (tests/test_ensemble_runs.py) */
 void (*const unused_passes[])(void) = {(void (*)(void))gw_ens_increments,
                                        (void (*)(void))gw_ens_sum_updates};
 
@@ -146,7 +146,7 @@ int main(void) {
     expect(worst > 0.0 && worst < 6e-6 && n_zero > 0 && n_sub > 0, "step size off the exact rule", -1);
     fprintf(stderr, "step size within %.3g of the exact rule\n", worst);
     { /* every order solver taylor uses, p = p0 + 4 in [7, 30] (gw_taylor_order, GW_TAYLOR_MAX_ORDER):
-       * norms over the whole double range, subnormals and zeros among them (review19: 5.4e-6 at
+       * norms over the whole double range, subnormals and zeros among them (measured: 5.4e-6 at
        * order 7, 4.1e-6 at 30; orders 3..6, never used, reach 8.8e-6) */
         int p, k;
         double worst_p = 0.0;

@@ -1,5 +1,5 @@
 /*
- * test_fastexp.c -- the error of gw_fm_log / gw_fm_exp (c_src/gw_fastmath.h) in ulps against glibc's
+ * test_fastexp.c -- the error of gw_fm_log / gw_fm_exp (c_src/gw_fm_logexp.h) in ulps against glibc's
  * long double logl / expl (64-bit significand), and the bit-equality of the 4-lane forms
  * gw_fm_log4 / gw_fm_exp4 with them, lane by lane:
  *   log  norms   3e6 log-uniform points in [1e-300, 1e300] (the step size's norms N_j)
@@ -20,7 +20,7 @@
 #include <string.h>
 
 #include "fm_check.h"
-#include "gw_fastmath.h"
+#include "gw_fm_logexp.h"
 
 /* the functions measured: tests/c/fastexp_unit.c's, in this translation unit (inlined), or
  * (-DGW_FASTEXP_UNIT) compiled on its own with other flags; the lanes' bit-equality is then

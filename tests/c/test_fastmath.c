@@ -1,5 +1,5 @@
 /*
- * test_fastmath.c -- the error of gw_sin / gw_cos (c_src/gw_fastmath.h) in ulps against glibc's
+ * test_fastmath.c -- the error of gw_sin / gw_cos (c_src/gw_sincos.h) in ulps against glibc's
  * long double sinl / cosl (64-bit significand: its own error is about 2^-11 ulp of a double),
  * over more than 10^7 arguments:
  *   uniform  6e6 points in [-1e5, 1e5] (the angles of long runs)
@@ -19,7 +19,7 @@
 #include <string.h>
 
 #include "fm_check.h"
-#include "gw_fastmath.h"
+#include "gw_sincos.h"
 
 static long n_pair_differ; /* gw_sincos2 results not bit-equal to gw_sincos's */
 static double prev_x = 0.5;

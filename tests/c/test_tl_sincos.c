@@ -1,6 +1,6 @@
 /*
  * test_tl_sincos.c -- GW_TL(sincos) (c_src/gw_taylor_ops.h), the sine and cosine of a slice of
- * lanes at the W-lane Taylor kernel's order 0, against gw_sincos (c_src/gw_fastmath.h) lane by
+ * lanes at the W-lane Taylor kernel's order 0, against gw_sincos (c_src/gw_sincos.h) lane by
  * lane.  Slices of GW_TL_W lanes (compiled for W = 4 and 8, VW 4 doubles, and W = 2) made of:
  *   uniform  random arguments in [-1e5, 1e5] and [-pi, pi] (the common case, all lanes fast)
  *   mixed    one lane per slice from a hard set and the others uniform: the doubles nearest to

@@ -1,0 +1,200 @@
+"""The ensemble path's results (c_src/gw_ensemble.c, taylor/ensemble.py) against solver
+taylor's single runs, and its refusals.
+
+- an ensemble equals N fmi2DoStep runs with taylor, falls included; a job's tail and the lanes'
+  refills (N not a multiple of the lanes, trajectories ending at different times) on 1, 4 and 8
+  lanes give the same steps;
+- the batch's lane-innermost passes give each lane solver taylor's one-lane numbers bit for bit
+  (the build with GW_ENSEMBLE_LANE_STEPS=1), with either step size form;
+- a bad trajectory is reported with its index, a bad job, value or lane count is a ValueError
+  naming the field.
+"""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from c_programs import C_SRC
+from conftest import STATES
+from gyrowheel.taylor.ensemble import LANES, STATUS_OK, STATUS_TERMINATED, Ensemble
+from taylor_helpers import TAYLOR, fmu_runner
+
+
+@pytest.fixture(scope="module")
+def paper(example_build):
+    built = example_build("paper_earth", taylor=True)
+    return built, fmu_runner(built.fmu)
+
+
+def _one_step_run(runner, stop: float, **values) -> float:
+    """Start `runner` with values and run one fmi2DoStep(0, stop): the time reached (stop, or
+    fmi2LastSuccessfulTime when the run ended early, a fall)."""
+    from fmpy.fmi2 import fmi2LastSuccessfulTime
+    runner.start(**values)
+    try:
+        runner.slave.doStep(0.0, stop)
+        return stop
+    except Exception:
+        return runner.slave.getRealStatus(fmi2LastSuccessfulTime)
+
+
+def test_ensemble_equals_single_runs(paper, tmp_path):
+    """N trajectories (g, gamma_dot varied; some fall) equal N fmi2DoStep runs with taylor, on the
+    default lanes (4, one AVX2 vector: the library reports the GW_ENSEMBLE_LANES it was built with,
+    so the default reaches the C; the sweep engine uses it)."""
+    built, runner = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    assert ens.lanes == LANES == 4
+    g = np.array([9.81, 3.721, 1.625, 9.81, 9.81, 0.0, 9.81, 5.0, 9.81, 2.0])
+    spin = np.array([6.0, 6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 4.0, 0.2, 6.0])
+    res = ens.run(20.0, parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-10)
+    assert set(res.status) <= {STATUS_OK, STATUS_TERMINATED} and res.terminated.any()
+    for j in range(len(g)):
+        t = _one_step_run(runner, 20.0, solver=TAYLOR, rel_tol=1e-10, abs_tol=1e-12, max_step=20.0, g=g[j],
+                          gamma_dot=spin[j], beta_min=0.1)
+        x = np.array(runner.slave.getReal([runner.vr[n] for n in STATES + ["energy"]]))
+        # the library is built with FMA contraction (rounding differs from the FMU's build)
+        assert abs(res.t_final[j] - t) < 1e-9, j
+        np.testing.assert_allclose(res.x_final[j], x[:8], rtol=1e-9, atol=1e-8, err_msg=str(j))
+        assert res.output("energy")[j] == pytest.approx(x[8], abs=1e-9)
+
+
+def test_ensemble_lanes_tail_and_refill_equal_the_single_runs(paper, tmp_path):
+    """N not a multiple of the lanes and trajectories ending at different times (falls): the
+    lanes take the next trajectory as soon as theirs ends, and the job's tail runs with idle
+    lanes (gw_ensemble.c, GW_ENSEMBLE_SINGLE_MAX 0).  7 trajectories on 1, 4 and 8 lanes (the
+    4-lane run ends with 3 lanes idle, the 8-lane one starts with 7 of 8 lanes; on a grid, each
+    lane's calls end at every point) equal
+    the 8-lane run of test_ensemble_equals_single_runs's kind: the same steps, the same values
+    to rounding (each lane count's kernel rounds its own way under FMA contraction)."""
+    built, runner = paper
+    g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0])
+    spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2])
+    kw = dict(parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-9)
+    runs = {w: Ensemble(built.fmu, lanes=w, cache=tmp_path).run(6.0, **kw) for w in (1, 4, 8)}
+    gridded = {w: Ensemble(built.fmu, lanes=w, cache=tmp_path).run(6.0, grid=np.linspace(0.5, 6.0, 12), **kw)
+               for w in (1, 4)}
+    ref = runs[8]
+    assert 0 < ref.terminated.sum() < len(g) and set(ref.status) <= {STATUS_OK, STATUS_TERMINATED}
+    for res in [runs[1], runs[4], *gridded.values()]:
+        assert list(res.status) == list(ref.status)
+        np.testing.assert_allclose(res.t_final, ref.t_final, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(res.x_final, ref.x_final, rtol=1e-9, atol=1e-8)
+    for w in (1, 4):
+        assert list(runs[w].steps) == list(ref.steps)
+    np.testing.assert_allclose(gridded[1].y_grid, gridded[4].y_grid, rtol=1e-9, atol=1e-8)
+    for j in (0, 2):  # one that runs to the end, one that falls: as one fmi2DoStep run
+        t = _one_step_run(runner, 6.0, solver=TAYLOR, rel_tol=1e-9, abs_tol=1e-11, max_step=6.0, g=g[j],
+                          gamma_dot=spin[j], beta_min=0.1)
+        assert abs(ref.t_final[j] - t) < 1e-9
+        np.testing.assert_allclose(ref.x_final[j], runner.slave.getReal([runner.vr[n] for n in STATES]),
+                                   rtol=1e-9, atol=1e-8)
+
+
+def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
+    built, _ = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    res = ens.run(1.0, parameters={"M": [2.0, -1.0]}, rel_tol=1e-8)
+    assert list(res.status) == [STATUS_OK, 3]
+    assert any("ensemble trajectory 1" in m for m in res.messages)
+    # an error while integrating names its trajectory too (which of N?)
+    res = ens.run(2.0, starts={"gamma_dot": [6.0, 6.0, 1e9, 6.0]}, rel_tol=1e-8)
+    assert list(res.status) == [STATUS_OK, STATUS_OK, 3, STATUS_OK]
+    assert res.messages and all(m.startswith("ensemble trajectory 2: ") for m in res.messages), res.messages
+    assert "max_internal_steps" in res.messages[0]
+    with pytest.raises(KeyError, match="unknown parameter 'mass'"):
+        ens.run(1.0, parameters={"mass": [1.0]})
+    with pytest.raises(ValueError, match=r"shape \(N, 6\)"):
+        ens.run(1.0, parameters=np.ones((2, 3)))
+
+
+def test_ensemble_bad_job_names_the_field(paper, tmp_path):
+    """A bad t_end, tolerance, max_step or grid is a ValueError naming the field, not the C
+    library's catch-all 'ensemble: bad job (n >= 0, status, t_end > t_start, ...)'; so is a
+    bad lane count or define."""
+    built, _ = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    nan = float("nan")
+    cases = [({"t_end": -1.0}, "t_end = -1.0 must be greater than t_start"),
+             ({"t_end": nan}, "t_start and t_end must be finite"),
+             ({"t_end": float("inf")}, "t_start and t_end must be finite"),
+             ({"t_end": 1.0, "rel_tol": 0.0}, "rel_tol must be a finite number > 0"),
+             ({"t_end": 1.0, "rel_tol": nan}, "rel_tol must be a finite number > 0"),
+             ({"t_end": 1.0, "abs_tol": -1.0}, "abs_tol must be a finite number >= 0"),
+             ({"t_end": 1.0, "max_step": 0.0}, "max_step must be a finite number > 0"),
+             ({"t_end": 1.0, "grid": [0.5, 0.9]}, "last communication point 0.9 must equal t_end"),
+             ({"t_end": 1.0, "grid": [0.5, 0.4, 1.0]}, "must increase strictly"),
+             ({"t_end": 1.0, "grid": [0.0, 0.5, 1.0]}, "must increase strictly after t_start"),
+             ({"t_end": 1.0, "grid": [0.5, nan, 1.0]}, "must be finite")]
+    for kwargs, message in cases:
+        t_end = kwargs.pop("t_end")
+        with pytest.raises(ValueError, match=re.escape(message)):
+            ens.run(t_end, **kwargs)
+    res = ens.run(1.0, rel_tol=1e-8, grid=[0.5, 1.0])  # a good job still runs
+    assert list(res.status) == [STATUS_OK]
+    # lanes: 0 or -1 would fail in the compiler, 2.5 would be truncated to 2 silently
+    for lanes in (0, -1, 2.5, "4", True):
+        with pytest.raises(ValueError, match="lanes must be an integer >= 1"):
+            Ensemble(built.fmu, lanes=lanes, cache=tmp_path)
+    # defines: C macros of the build, each a #define line of the library's unity file
+    for defines, message in (({"1X": 1}, "defines: '1X' is not a C identifier"),
+                             ({"GW_X": "1\n#include <x>"}, "defines: GW_X must be an integer or a one-line string"),
+                             ({"GW_X": 1.5}, "defines: GW_X must be an integer or a one-line string"),
+                             ([("GW_X", 1)], "defines must be a {name: value} dict")):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            Ensemble(built.fmu, cache=tmp_path, defines=defines)
+
+
+def test_ensemble_bad_values_name_the_field(paper, tmp_path):
+    """A value that is not a number names its field (not numpy's "could not convert string to
+    float: 'heavy'" for {'M': 'heavy'}, a broadcast error for a 2-D column, a silent NaN start
+    for {'gamma_dot': None}); numbers given as text ("1.0") are numbers."""
+    built, _ = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    cases = [({"parameters": {"M": "heavy"}}, "parameter 'M' must be a number"),
+             ({"parameters": {"M": [[1.0, 2.0], [3.0, 4.0]]}}, "parameter 'M' must be a number"),
+             ({"starts": {"gamma_dot": None}}, "start value 'gamma_dot' must be a number"),
+             ({"starts": {"gamma_dot": [5.0, None]}}, "start value 'gamma_dot' must be a number"),
+             ({"parameters": [["a"] * len(ens.parameter_names)]}, "parameters must be an (N, 6) array of numbers"),
+             ({"grid": "abc"}, "grid must be a sequence of communication points")]
+    for kwargs, message in cases:
+        with pytest.raises(ValueError, match=re.escape(message)):
+            ens.run(1.0, **kwargs)
+    as_text = ens.run("1.0", t_start="0", rel_tol="1e-8", max_step="0.5", grid=[0.5, 1.0])
+    as_numbers = ens.run(1.0, rel_tol=1e-8, max_step=0.5, grid=[0.5, 1.0])
+    assert list(as_text.status) == [STATUS_OK]
+    assert np.array_equal(as_text.x_final, as_numbers.x_final)
+    objects = np.array([ens.default_parameters], dtype=object)  # numbers held as objects still run
+    assert np.array_equal(ens.run(1.0, parameters=objects, rel_tol=1e-8).x_final,
+                          ens.run(1.0, rel_tol=1e-8).x_final)
+
+
+@pytest.mark.parametrize("step_fm", [1, 0], ids=["fastmath-step", "libm-step"])
+def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path, step_fm):
+    """The batch's lane-innermost passes (gw_ensemble.c: the step size norms, the step sizes, the
+    defects, the increments' Horner sums of all lanes at once) give each lane the numbers of
+    solver taylor's one-lane code bit for bit: the same library built with
+    GW_ENSEMBLE_LANE_STEPS=1 (every lane through gw_taylor_step / _defect / _increment on its own
+    copy of the series) returns equal steps, times, states and grid outputs, with N not a
+    multiple of the lanes, falls at different times, refills and a communication grid.  Both
+    step size forms: the library's gw_fm_logexp.h ln and exp (4 lanes per vector call against
+    the scalar calls), and libm's (GW_TAYLOR_STEP_FM 0, the FMU's: a loop over the lanes)."""
+    assert "#define GW_TAYLOR_STEP_FM 1" in (C_SRC / "gw_ensemble_lib.c").read_text()  # the library's default
+    defines = {} if step_fm else {"GW_TAYLOR_STEP_FM": 0}
+    built, _ = paper
+    g = np.array([9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81])
+    spin = np.array([6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 4.0, 6.1])
+    kw = dict(parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-7)
+    grid = np.linspace(0.5, 6.0, 12)
+    passes = Ensemble(built.fmu, lanes=4, cache=tmp_path, defines=defines)
+    per_lane = Ensemble(built.fmu, lanes=4, cache=tmp_path, defines={**defines, "GW_ENSEMBLE_LANE_STEPS": 1})
+    for extra in ({}, {"grid": grid}):
+        a, b = passes.run(6.0, **kw, **extra), per_lane.run(6.0, **kw, **extra)
+        assert 0 < a.terminated.sum() < len(g)
+        assert list(a.status) == list(b.status) and list(a.steps) == list(b.steps)
+        np.testing.assert_array_equal(a.t_final, b.t_final)
+        np.testing.assert_array_equal(a.x_final, b.x_final)
+        if extra:
+            np.testing.assert_array_equal(a.y_grid, b.y_grid)

@@ -1,6 +1,9 @@
-/* A minimal hand-written right-hand side of the base wheel (gravity only), the peer of
- * issue 11's RHS target and of the plain C DOP853 (benchmarks/plain_dop853.c).  Written by
- * hand for the benchmark ONLY: the FMU's model stays derived by CasADi from the Lagrangian.
+/* A minimal hand-written right-hand side of the base wheel (gravity only): the peer the
+ * generated right-hand side's cost is measured against (docs/performance.md: within 1.2x of this
+ * closed form; benchmarks/rhs_minimal.c, rhs_bench.c), the RHS of the plain C DOP853
+ * (benchmarks/plain_dop853.c) and, written as heyoka expressions, of heyoka's runs
+ * (benchmarks/peers.py).  Written by hand for the benchmark ONLY: the FMU's model stays derived by
+ * CasADi from the Lagrangian.
  *
  * Closed form in the spin rate about the axle w_n = gamma_dot + alpha_dot cos(beta) (from
  * the Newton-Euler derivation of tests/reference/newton_euler.py, simplified by hand):
@@ -51,7 +54,7 @@ static inline void minimal_wheel_rhs_trig(const minimal_wheel *w, const double *
     xd[7] = w->c_n * ad * bd * sb - add * cb;
 }
 
-/* with libm's sin and cos (the peer of issue 11's RHS target, and of plain_dop853.c) */
+/* with libm's sin and cos (the peer of the generated right-hand side, and plain_dop853.c's RHS) */
 static inline void minimal_wheel_rhs(const minimal_wheel *w, const double *x, double *xd) {
     minimal_wheel_rhs_trig(w, x, xd, sin(x[2]), cos(x[2]), sin(x[3]), cos(x[3]));
 }

@@ -1,9 +1,12 @@
 /* A plain C DOP853 around the minimal hand-written right-hand side (benchmarks/minimal_wheel.h):
- * the peer "what a user could write by hand" of issue 11.  Hairer's dop853.f step and
- * controller (SAFE = 0.9, FAC1 = 0.333, FAC2 = 6: h_new / h in [1/3, 6], BETA = 0; Hairer's
- * initial step), the same tableau as the runtime (c_src/gw_dop853_tableau.h), no
- * events, no dense output.  Built as a shared library by benchmarks/work_precision.py:
- *   cc -O2 -fno-math-errno -shared -fPIC -I c_src plain_dop853.c -o plain_dop853.so -lm
+ * the work-precision benchmark's peer "what a user could write by hand" (docs/performance.md,
+ * docs/accuracy.md).  Hairer's dop853.f step and controller (SAFE = 0.9, FAC1 = 0.333,
+ * FAC2 = 6: h_new / h in [1/3, 6], BETA = 0; Hairer's initial step), the same tableau as the
+ * runtime (c_src/gw_dop853_tableau.h), no events, no dense output.  Built as a shared library
+ * for benchmarks/work_precision.py by benchmarks/peers.py (PlainDop853), as, from the top of the
+ * repository,
+ *   cc -std=c99 -O2 -fno-math-errno -shared -fPIC -I c_src benchmarks/plain_dop853.c
+ *      -o plain_dop853.so -lm
  * Error norm: RMS of err_i / (atol + rtol max(|x_i|, |xnew_i|)) (Hairer's ITOL = 0). */
 #include <math.h>
 

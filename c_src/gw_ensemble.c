@@ -11,9 +11,11 @@
  * (gw_taylor_attempt / _conclude of solver taylor: its own step size, defect check, dense
  * output, event location, compensated update); the batch runs each lane at its pending
  * attempt's end point, so that the series of the next step is also the defect check's
- * f(t1, P(h)) (one kernel call per lane and step, as in gw_integrate_taylor).  A lane whose trajectory reaches t_end or stops at a terminating
- * event (a fall) takes the next trajectory of the job at once, while the others go on; with
- * few lanes left active (the tail of the job) the batch runs them with the one-lane kernel.
+ * f(t1, P(h)) (one kernel call per lane and step, as in gw_integrate_taylor).  A lane whose
+ * trajectory reaches t_end or stops at a terminating event (a fall) takes the next trajectory of
+ * the job at once, while the others go on; the tail of the job (fewer active lanes than
+ * GW_ENSEMBLE_LANES) stays on the lane kernel, the idle lanes repeating an active one, unless
+ * GW_ENSEMBLE_SINGLE_MAX (default 0) lets the one-lane kernel take it (below).
  * The order p is common (from rel_tol); the constants are recomputed only when a lane's
  * parameters change.
  *

@@ -24,6 +24,14 @@
  * Cost: without FMA a scalar gw_fm_exp takes about 22 ns of latency where glibc's table-driven
  * exp (FMA where the CPU has it) takes 11, so the FMU's solver taylor keeps libm's
  * (GW_TAYLOR_STEP_FM, gw_solver_taylor.c).
+ *
+ * What is borrowed, gw_fm_log's reduction and its coefficients Lg1..Lg7 and the split of ln 2 into
+ * ln2_hi + ln2_lo, is fdlibm's (e_log.c, e_exp.c), under:
+ *
+ *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
+ *   Developed at SunPro, a Sun Microsystems, Inc. business.
+ *   Permission to use, copy, modify, and distribute this software is freely granted,
+ *   provided that this notice is preserved.
  */
 #ifndef GW_FM_LOGEXP_H
 #define GW_FM_LOGEXP_H

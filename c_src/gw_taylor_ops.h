@@ -104,7 +104,7 @@ typedef double GW_TL(vu)
 #endif
 
 /* GW_TL_PACK: the one-lane kernel under GCC and clang sums 4 terms' products per vector
- * operation from packed copies of their operands (taylor/kernel_c.py, _Packs):
+ * operation from packed copies of their operands (taylor/kernel_packs.py, Packs):
  *   GW_TL(p)               4 doubles, two 2-double vectors (SSE2 and NEON registers; a 4-double
  *                          vector lives in memory where no register holds it: the portable
  *                          default clone beside x86-64-v3 ran 0.79-0.85x the former scalar

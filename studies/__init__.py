@@ -10,7 +10,8 @@
     interrupt  Ctrl-C as a stop request while Dask is at work, acted on between steps
     output   the tidy table, kept complete on disk while it grows (Parquet or CSV)
     plot     a first look at a table
-    steady   steady motions of the wheel (eqs. 49, 52, 53) and their linearised stability
+    steady   the linearised stability of the wheel's steady motions (their closed forms,
+             eqs. 49, 52, 53 and the critical spin: gyrowheel.model.steady)
     api      sweep(): all of the above in one call (gyrowheel.sweep is its public face)
     analysis, scipy_reference  measurements on results; scipy's integrator on a ModelSpec
 

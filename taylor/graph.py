@@ -19,7 +19,8 @@ decompose() then rewrites the graph (taylor/rewrite.py, exact in real arithmetic
 constant factors carried to the consumers, `lin` nodes for scaled sums, squares, reciprocal
 factors as divisions, products shared modulo associativity): what every kernel is built from.
 
-Operations (CasADi OP_* code -> recurrence; taylor/kernel_c.py has the formulas):
+Operations (CasADi OP_* code -> recurrence; c_src/gw_taylor_ops.h has the formulas,
+taylor/kernel_recurrences.py writes their C):
   add sub neg twice mul (linear when one factor is constant) div inv sq sqrt sin/cos (one
   pair per argument) sinh/cosh (pair) tan tanh exp log pow/constpow (constant exponent; a
   variable exponent is exp(b log a)) atan atan2 asin acos fabs fmin fmax if_else_zero, the

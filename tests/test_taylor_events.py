@@ -171,10 +171,10 @@ def _sign_model():
 
 def test_kernel_indicators_take_casadis_sign_of_nan_and_negative_zero(tmp_path):
     """GW_TL(evt) writes sign(v) as CasADi's casadi_sign, v < 0 ? -1 : v > 0 ? 1 : v, which gw_evt
-    calls, not as taylor_graph's order-0 C, (v > 0 ? 1 : (v < 0 ? -1 : 0)): that gives 0 for a
-    NaN (a finite indicator that does not fire where gw_evt's NaN counts as a crossing) and +0.0
-    for -0.0 (1 / sign: +inf against -inf).  The kernel's indicators are gw_evt's bit for bit
-    where no sine is read from the kernel."""
+    calls (taylor/graph.py's SIGN_C), not as (v > 0 ? 1 : (v < 0 ? -1 : 0)): that would give 0
+    for a NaN (a finite indicator that does not fire where gw_evt's NaN counts as a crossing) and
+    +0.0 for -0.0 (1 / sign: +inf against -inf).  The kernel's indicators are gw_evt's bit for
+    bit where no sine is read from the kernel."""
     fns = _sign_model()
     lib = _library(fns, tmp_path)
     p, u, pc = np.array([0.25]), np.zeros(1), np.zeros(1)

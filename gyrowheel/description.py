@@ -14,7 +14,7 @@ import zipfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from gyrowheel.errors import FmuError
+from gyrowheel.errors import FmuError, UnknownNameError
 
 TAYLOR_HEADER = "sources/gw_taylor_model.h"  # holds GW_TL_NVAR when the model has the Taylor kernel
 
@@ -85,11 +85,11 @@ class FmuInfo:
     taylor: bool
 
     def variable(self, name: str) -> VariableInfo:
-        """The variable called `name`; KeyError lists the names."""
+        """The variable called `name`; UnknownNameError (a KeyError) lists the names."""
         for v in self.variables:
             if v.name == name:
                 return v
-        raise KeyError(f"no variable {name!r}; variables: {', '.join(v.name for v in self.variables)}")
+        raise UnknownNameError(f"no variable {name!r}; variables: {', '.join(v.name for v in self.variables)}")
 
     def as_dict(self) -> dict:
         """Everything as plain JSON types (path as text, tuples as lists)."""
@@ -115,11 +115,25 @@ class FmuInfo:
                   f"platforms    {', '.join(self.platforms) or 'none (no binaries)'}",
                   f"sources      {'yes' if self.sources else 'no'}"
                   + (", with the Taylor kernel (solver taylor, the ensemble path)" if self.taylor else "")]
-        lines.append(f"{'name':<16}{'causality':<11}{'variability':<12}{'start':>14}  unit  description")
-        for v in self.variables:
-            lines.append(f"{v.name:<16}{v.causality:<11}{v.variability:<12}{_text(v.start):>14}  "
-                         f"{v.unit or '':<5} {v.description or ''}")
+        # the variable table: every column as wide as its longest entry, two spaces apart
+        rows = [("name", "causality", "variability", "start", "unit", "description")]
+        rows += [(v.name, v.causality, v.variability, _start_text(v), v.unit or "", v.description or "")
+                 for v in self.variables]
+        width = [max(len(r[i]) for r in rows) for i in range(5)]
+        for r in rows:
+            cells = [r[0].ljust(width[0]), r[1].ljust(width[1]), r[2].ljust(width[2]), r[3].rjust(width[3]),
+                     r[4].ljust(width[4]), r[5]]
+            lines.append("  ".join(cells).rstrip())
         return "\n".join(lines)
+
+
+def _start_text(v: VariableInfo) -> str:
+    """A start value for the table: an Enumeration's by its item name ('dopri5 (3)')."""
+    if v.items and v.start is not None:
+        name = next((k for k, value in v.items.items() if value == v.start), None)
+        if name is not None:
+            return f"{name} ({v.start})"
+    return _text(v.start)
 
 
 def _text(value) -> str:

@@ -8,6 +8,7 @@ GyrowheelError, so `except gyrowheel.GyrowheelError` catches whatever gyrowheel 
       ArgumentError (ValueError)        an argument of a gyrowheel function that cannot be used
       FmuError (ValueError)             an `fmu` argument that is not a usable FMI 2.0 FMU
       SweepSpecError (ValueError)       a sweep that cannot be run as specified
+      UnknownNameError (KeyError)       a name (variable, parameter, output, extra) that is not there
       MissingExtraError (ImportError)   an optional part of gyrowheel is not installed
     and, defined beside the code that raises them: SceneError, ExportError, AnimationError,
     SystemFileError (ValueErrors), SimulationError, MasterError, EnsembleError, CompileError
@@ -43,6 +44,15 @@ class ArgumentError(GyrowheelError, ValueError):
 class FmuError(GyrowheelError, ValueError):
     """An `fmu` argument that is not a usable FMU: no such file, not an FMU archive, not FMI 2.0
     Co-Simulation, or a scene where an FMU is expected."""
+
+
+class UnknownNameError(GyrowheelError, KeyError):
+    """A name looked up that is not there (a variable of an FMU, a parameter, start value or
+    output of an Ensemble, an optional part); a KeyError, as a failed lookup by name is. The
+    message lists the names there are."""
+
+    def __str__(self) -> str:  # KeyError's str() would quote the whole message
+        return str(self.args[0]) if self.args else ""
 
 
 class SweepSpecError(GyrowheelError, ValueError):

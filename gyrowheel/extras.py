@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import importlib.util
 
-from gyrowheel.errors import MissingExtraError
+from gyrowheel.errors import MissingExtraError, UnknownNameError
 
 # extra -> the top-level import names of the distributions it installs (pyproject.toml's
 # [project.optional-dependencies]; tests/test_extras.py checks the two agree)
@@ -44,7 +44,7 @@ def missing(extra: str) -> list[str]:
     try:
         names = EXTRAS[extra]
     except KeyError:
-        raise KeyError(f"no optional part {extra!r}; known: {', '.join(EXTRAS)}") from None
+        raise UnknownNameError(f"no optional part {extra!r}; known: {', '.join(EXTRAS)}") from None
     return [name for name in names if not _found(name)]
 
 

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gyrowheel.errors import GyrowheelError
+from gyrowheel.errors import ArgumentError, FmuError, GyrowheelError, UnknownNameError
 from gyrowheel.fmu_build.compiler import compile_shared
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR
 
@@ -71,11 +71,11 @@ def library_source(identifier: str, lanes: int, defines: dict | None = None) -> 
     ({name: value}, each a #define, in the given order), GW_ENSEMBLE_ID and GW_ENSEMBLE_LANES,
     then c_src/gw_ensemble_lib.c, which includes the model (the FMU's gw_funcs.c, gw_taylor.c,
     model_desc.c) and the runtime.  Compiled with the FMU's sources/ and gw_ensemble_lib.c on
-    the include path.  Raises ValueError naming the field for an identifier or a define name
+    the include path.  Raises ArgumentError (a ValueError) naming the field for an identifier or a define name
     that is not a C identifier, lanes not an integer >= 1, or a value that is not an integer or
     a one-line string."""
     if not isinstance(identifier, str) or not _C_NAME.fullmatch(identifier):
-        raise ValueError(f"identifier must be a C identifier (the FMU's modelIdentifier), got {identifier!r}")
+        raise ArgumentError(f"identifier must be a C identifier (the FMU's modelIdentifier), got {identifier!r}")
     _check_lanes(lanes)
     lines = [f"/* The ensemble library of model {identifier}: written by gyrowheel.taylor.ensemble. */"]
     for name, value in _checked_defines(defines).items():
@@ -89,22 +89,22 @@ def _check_lanes(lanes) -> None:
     """lanes becomes GW_ENSEMBLE_LANES, so it is checked here: 0 or less would fail in the
     compiler with the compiler's message, 2.5 would be truncated to 2 without a word."""
     if isinstance(lanes, bool) or not isinstance(lanes, (int, np.integer)) or lanes < 1:
-        raise ValueError(f"lanes must be an integer >= 1 (trajectories advanced together), got {lanes!r}")
+        raise ArgumentError(f"lanes must be an integer >= 1 (trajectories advanced together), got {lanes!r}")
 
 
 def _checked_defines(defines) -> dict:
-    """defines as {name: value text}; ValueError naming the field for anything else."""
+    """defines as {name: value text}; ArgumentError naming the field for anything else."""
     if defines is None:
         return {}
     if not isinstance(defines, dict):
-        raise ValueError(f"defines must be a {{name: value}} dict of C macros, got {defines!r}")
+        raise ArgumentError(f"defines must be a {{name: value}} dict of C macros, got {defines!r}")
     out = {}
     for name, value in defines.items():
         if not isinstance(name, str) or not _C_NAME.fullmatch(name):
-            raise ValueError(f"defines: {name!r} is not a C identifier")
+            raise ArgumentError(f"defines: {name!r} is not a C identifier")
         if isinstance(value, bool) or not isinstance(value, (int, np.integer, str)) or \
                 (isinstance(value, str) and ("\n" in value or "\\" in value)):
-            raise ValueError(f"defines: {name} must be an integer or a one-line string, got {value!r}")
+            raise ArgumentError(f"defines: {name} must be an integer or a one-line string, got {value!r}")
         out[name] = str(int(value)) if not isinstance(value, str) else value
     return out
 
@@ -134,9 +134,9 @@ class EnsembleResult:
     event_names: list[str] = field(default_factory=list)
 
     def output(self, name: str) -> np.ndarray:
-        """(N,) values of one output at t_final; KeyError lists the names."""
+        """(N,) values of one output at t_final; UnknownNameError (a KeyError) lists the names."""
         if name not in self.output_names:
-            raise KeyError(f"no output {name!r}; outputs: {', '.join(self.output_names)}")
+            raise UnknownNameError(f"no output {name!r}; outputs: {', '.join(self.output_names)}")
         return self.y_final[:, self.output_names.index(name)]
 
     @property
@@ -161,56 +161,69 @@ def _numbers(v):
     if a.dtype.kind == "O" and not any(x is None for x in a.flat):  # numbers as objects
         return a.astype(float)  # (ValueError from a string among them)
     if a.dtype.kind not in "biuf":
-        raise ValueError(v)
+        raise ValueError(v)  # the callers name the field
     return a
 
 
 def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
     """The job's numbers checked before the C library sees them (it can only say "bad job"):
-    a ValueError naming the field.  Returns the grid as a contiguous float array (empty: none).
+    an ArgumentError naming the field.  Returns the grid as a contiguous float array (empty: none).
     The ranges the instances check themselves (rel_tol within [10 eps, 1]) are reported per
     trajectory by them.  (math.isfinite on the scalars: numpy's took 2 us of a small run.)"""
     def number(name, v):
         try:
             return float(v)
         except (TypeError, ValueError):
-            raise ValueError(f"{name} must be a number, got {v!r}") from None
+            raise ArgumentError(f"{name} must be a number, got {v!r}") from None
     t0, t1, rtol = number("t_start", t_start), number("t_end", t_end), number("rel_tol", rel_tol)
     if not math.isfinite(t0) or not math.isfinite(t1):
-        raise ValueError(f"t_start and t_end must be finite, got {t0!r} and {t1!r}")
+        raise ArgumentError(f"t_start and t_end must be finite, got {t0!r} and {t1!r}")
     if not t1 > t0:
-        raise ValueError(f"t_end = {t1!r} must be greater than t_start = {t0!r}")
+        raise ArgumentError(f"t_end = {t1!r} must be greater than t_start = {t0!r}")
     if not (math.isfinite(rtol) and rtol > 0):
-        raise ValueError(f"rel_tol must be a finite number > 0, got {rtol!r}")
+        raise ArgumentError(f"rel_tol must be a finite number > 0, got {rtol!r}")
     if abs_tol is not None:
         atol = number("abs_tol", abs_tol)
         if not (math.isfinite(atol) and atol >= 0):
-            raise ValueError(f"abs_tol must be a finite number >= 0, got {atol!r}")
+            raise ArgumentError(f"abs_tol must be a finite number >= 0, got {atol!r}")
     if max_step is not None:
         hmax = number("max_step", max_step)
         if not (math.isfinite(hmax) and hmax > 0):
-            raise ValueError(f"max_step must be a finite number > 0, got {hmax!r}")
+            raise ArgumentError(f"max_step must be a finite number > 0, got {hmax!r}")
     if grid is None:
         return _NO_GRID
     try:
         g = np.ascontiguousarray(np.asarray(_numbers(grid), dtype=float).ravel())
     except ValueError:
-        raise ValueError(f"grid must be a sequence of communication points (numbers, s), got {grid!r}") from None
+        raise ArgumentError(f"grid must be a sequence of communication points (numbers, s), got {grid!r}") from None
     if g.size:
         if not np.all(np.isfinite(g)):
-            raise ValueError("grid: communication points must be finite")
+            raise ArgumentError("grid: communication points must be finite")
         if not (g[0] > t0 and np.all(np.diff(g) > 0)):
-            raise ValueError(f"grid: communication points must increase strictly after t_start = {t0!r}")
+            raise ArgumentError(f"grid: communication points must increase strictly after t_start = {t0!r}")
         if g[-1] != t1:
-            raise ValueError(f"grid: the last communication point {float(g[-1])!r} must equal t_end = {t1!r}")
+            raise ArgumentError(f"grid: the last communication point {float(g[-1])!r} must equal t_end = {t1!r}")
     return g
 
 
 def _sources(fmu: Path, work: Path) -> tuple[Path, str, str]:
     """Extract sources/ and read (identifier, guid) from modelDescription.xml."""
     import xml.etree.ElementTree as ET
-    with zipfile.ZipFile(fmu) as zf:
-        md = ET.fromstring(zf.read("modelDescription.xml"))
+    try:
+        zf = zipfile.ZipFile(fmu)
+    except FileNotFoundError:
+        raise FmuError(f"{fmu}: no such FMU file", argument="fmu") from None
+    except IsADirectoryError:
+        raise FmuError(f"{fmu}: is a directory, not an FMU file", argument="fmu") from None
+    except zipfile.BadZipFile:
+        raise FmuError(f"{fmu}: not an FMU (not a zip archive)", argument="fmu") from None
+    with zf:
+        try:
+            md = ET.fromstring(zf.read("modelDescription.xml"))
+        except KeyError:
+            raise FmuError(f"{fmu}: not an FMU (no modelDescription.xml)", argument="fmu") from None
+        except ET.ParseError as exc:
+            raise FmuError(f"{fmu}: modelDescription.xml is not readable XML ({exc})", argument="fmu") from None
         names = [n for n in zf.namelist() if n.startswith("sources/")]
         if not names:
             raise EnsembleError(f"{fmu}: the FMU carries no sources/ (not built by gyrowheel?)")
@@ -262,9 +275,9 @@ class Ensemble:
     kept (default ~/.cache/gyrowheel/ensemble); defines: extra C macros of this build,
     {name: integer or one-line string} (switches of the ensemble path and the solver, e.g.
     {"GW_ENSEMBLE_LANE_STEPS": 1}: every lane-step through the solver code), part of the
-    library's cache key.  Raises ValueError for lanes not an integer >= 1 or a bad define (naming
-    it), EnsembleError if the FMU has no sources or its model no Taylor kernel, CompileError if
-    the compiler fails.
+    library's cache key.  Raises ArgumentError (a ValueError) for lanes not an integer >= 1 or a
+    bad define (naming it), FmuError for a file that is not an FMU, EnsembleError if the FMU has
+    no sources or its model no Taylor kernel, CompileError if the compiler fails.
     """
 
     def __init__(self, fmu: str | Path, lanes: int = LANES, cache: str | Path | None = None,
@@ -357,17 +370,17 @@ class Ensemble:
             cols = {}
             for k, v in values.items():
                 if k not in names:
-                    raise KeyError(f"unknown {what} {k!r}; {what}s: {', '.join(names)}")
+                    raise UnknownNameError(f"unknown {what} {k!r}; {what}s: {', '.join(names)}")
                 try:  # (a string, None, a 2-D array: numpy's message named no field, or none came)
                     cols[k] = np.atleast_1d(_numbers(v).astype(float))
                     if cols[k].ndim != 1:
-                        raise ValueError(v)
+                        raise ValueError(v)  # named below
                 except ValueError:
-                    raise ValueError(f"{what} {k!r} must be a number or a 1-D sequence of numbers "
-                                     f"(one per trajectory), got {v!r}") from None
+                    raise ArgumentError(f"{what} {k!r} must be a number or a 1-D sequence of numbers "
+                                        f"(one per trajectory), got {v!r}") from None
             sizes = {len(c) for c in cols.values() if len(c) != 1}
             if len(sizes) > 1 or (n is not None and sizes and sizes != {n}):
-                raise ValueError(f"{what}s: columns of different lengths {sorted(sizes | {n or 0})}")
+                raise ArgumentError(f"{what}s: columns of different lengths {sorted(sizes | {n or 0})}")
             rows = n if n is not None else (sizes.pop() if sizes else 1)
             table = np.tile(default, (rows, 1))
             for k, c in cols.items():
@@ -376,11 +389,11 @@ class Ensemble:
         try:
             table = _numbers(values).astype(float)
         except ValueError:
-            raise ValueError(f"{what}s must be an (N, {len(names)}) array of numbers ({', '.join(names)}) "
-                             f"or a {{name: values}} dict, got {values!r}") from None
+            raise ArgumentError(f"{what}s must be an (N, {len(names)}) array of numbers ({', '.join(names)}) "
+                                f"or a {{name: values}} dict, got {values!r}") from None
         if table.ndim != 2 or table.shape[1] != len(names) or (n is not None and table.shape[0] != n):
-            raise ValueError(f"{what}s must have shape (N, {len(names)}) ({', '.join(names)}), "
-                             f"got {table.shape}")
+            raise ArgumentError(f"{what}s must have shape (N, {len(names)}) ({', '.join(names)}), "
+                                f"got {table.shape}")
         return table
 
     def run(self, t_end: float, parameters=None, starts=None, *, t_start: float = 0.0,
@@ -394,7 +407,8 @@ class Ensemble:
         grid: communication points (s) after t_start, increasing, the last == t_end: each
         trajectory then advances as through fmi2DoStep from point to point and the result holds
         the outputs at t_start and at every point reached (y_grid, n_rows) and the fired events.
-        Raises ValueError / KeyError naming a bad shape or name, EnsembleError for a refused job.
+        Raises ArgumentError (a ValueError) naming a bad value or shape, UnknownNameError (a
+        KeyError) for an unknown name, EnsembleError for a refused job.
         """
         g = _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid)
         t_start, t_end, rel_tol = float(t_start), float(t_end), float(rel_tol)  # "1.0" passed the check

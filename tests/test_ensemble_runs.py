@@ -18,6 +18,7 @@ import pytest
 
 from c_programs import C_SRC
 from conftest import STATES
+from gyrowheel.errors import ArgumentError, FmuError, UnknownNameError
 from gyrowheel.taylor.ensemble import LANES, STATUS_OK, STATUS_TERMINATED, Ensemble
 from taylor_helpers import TAYLOR, fmu_runner
 
@@ -104,9 +105,12 @@ def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
     assert list(res.status) == [STATUS_OK, STATUS_OK, 3, STATUS_OK]
     assert res.messages and all(m.startswith("ensemble trajectory 2: ") for m in res.messages), res.messages
     assert "max_internal_steps" in res.messages[0]
-    with pytest.raises(KeyError, match="unknown parameter 'mass'"):
+    with pytest.raises(UnknownNameError, match="unknown parameter 'mass'") as info:  # a KeyError
         ens.run(1.0, parameters={"mass": [1.0]})
-    with pytest.raises(ValueError, match=r"shape \(N, 6\)"):
+    assert isinstance(info.value, KeyError) and str(info.value).startswith("unknown parameter 'mass'")
+    with pytest.raises(UnknownNameError, match="no output 'nope'; outputs: x, y"):
+        res.output("nope")
+    with pytest.raises(ArgumentError, match=r"shape \(N, 6\)"):
         ens.run(1.0, parameters=np.ones((2, 3)))
 
 
@@ -130,21 +134,37 @@ def test_ensemble_bad_job_names_the_field(paper, tmp_path):
              ({"t_end": 1.0, "grid": [0.5, nan, 1.0]}, "must be finite")]
     for kwargs, message in cases:
         t_end = kwargs.pop("t_end")
-        with pytest.raises(ValueError, match=re.escape(message)):
+        with pytest.raises(ArgumentError, match=re.escape(message)):  # a ValueError
             ens.run(t_end, **kwargs)
     res = ens.run(1.0, rel_tol=1e-8, grid=[0.5, 1.0])  # a good job still runs
     assert list(res.status) == [STATUS_OK]
     # lanes: 0 or -1 would fail in the compiler, 2.5 would be truncated to 2 silently
     for lanes in (0, -1, 2.5, "4", True):
-        with pytest.raises(ValueError, match="lanes must be an integer >= 1"):
+        with pytest.raises(ArgumentError, match="lanes must be an integer >= 1"):
             Ensemble(built.fmu, lanes=lanes, cache=tmp_path)
     # defines: C macros of the build, each a #define line of the library's unity file
     for defines, message in (({"1X": 1}, "defines: '1X' is not a C identifier"),
                              ({"GW_X": "1\n#include <x>"}, "defines: GW_X must be an integer or a one-line string"),
                              ({"GW_X": 1.5}, "defines: GW_X must be an integer or a one-line string"),
                              ([("GW_X", 1)], "defines must be a {name: value} dict")):
-        with pytest.raises(ValueError, match=re.escape(message)):
+        with pytest.raises(ArgumentError, match=re.escape(message)):
             Ensemble(built.fmu, cache=tmp_path, defines=defines)
+
+
+def test_ensemble_of_a_file_that_is_no_fmu_names_it(tmp_path):
+    """The fmu argument: a missing file, a directory, a file that is no zip archive, a zip without
+    modelDescription.xml: an FmuError (a gyrowheel.GyrowheelError and a ValueError) naming the
+    file, never Python's FileNotFoundError / BadZipFile / KeyError from the archive."""
+    import zipfile
+    (tmp_path / "text.fmu").write_text("not a zip")
+    with zipfile.ZipFile(tmp_path / "empty.fmu", "w") as zf:
+        zf.writestr("readme.txt", "no model description")
+    cases = [(tmp_path / "missing.fmu", "no such FMU file"), (tmp_path, "is a directory"),
+             (tmp_path / "text.fmu", "not a zip archive"), (tmp_path / "empty.fmu", "no modelDescription.xml")]
+    for path, message in cases:
+        with pytest.raises(FmuError, match=re.escape(f"{path}: ") + ".*" + re.escape(message)) as info:
+            Ensemble(path, cache=tmp_path / "cache")
+        assert info.value.argument == "fmu" and isinstance(info.value, ValueError)
 
 
 def test_ensemble_bad_values_name_the_field(paper, tmp_path):

@@ -1,6 +1,6 @@
 """What a sweep costs on Dask, measured against a plain in-process loop in the same run.
 
-    python benchmarks/sweep_scaling.py [--points 2000] [--repeats 3] [--png docs/img/sweep_cost.png]
+    python benchmarks/sweep_scaling.py [--points 2000] [--repeats 3] [--png results/bench/sweep_cost.png]
 
 Prints, for points of about 1 ms (the paper's earth wheel, 20 s, dopri5, output every 1 s):
   1. Dask overhead per point: a LocalCluster of 1 worker process against the same points in a
@@ -87,7 +87,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=2000)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--png", default=str(ROOT / "docs" / "img" / "sweep_cost.png"))
+    ap.add_argument("--png", default="results/bench/sweep_cost.png",
+                    help="the figure (docs/img/sweep_cost.png is this figure)")
     ap.add_argument("--fmu", help="a built paper_earth FMU (default: build it)")
     args = ap.parse_args()
     import tempfile
@@ -156,6 +157,7 @@ def main() -> int:
         print("4. cost growth (plain loop, ms per point; for 'points' s per map):")
         for kind, x, y in rows:
             print(f"   {kind:<12} {x:>10g}  {y:10.3f}")
+        Path(args.png).parent.mkdir(parents=True, exist_ok=True)
         draw(rows, Path(args.png), n / t_d1)
         print(f"wrote {args.png}")
     return 0

@@ -17,8 +17,17 @@ gyrowheel/errors.py). [extra]: needs that optional part (pip install "gyrowheel[
 Everything is loaded on first use: `import gyrowheel` imports no third-party package.
 """
 from importlib import import_module
+from pathlib import Path as _Path
 
 __version__ = "0.1.0"
+
+# In a source checkout the other rooms (model/, fmu_build/, taylor/, ...) are siblings of this
+# folder; installed, pyproject.toml's package-dir puts them inside it. Python started in the
+# checkout's root imports this folder rather than an installed gyrowheel, so the rooms are then
+# looked up beside it too (site-packages holds no pyproject.toml: an install is unaffected).
+_ROOT = _Path(__file__).resolve().parent.parent
+if (_ROOT / "pyproject.toml").is_file() and (_ROOT / "c_src" / "__init__.py").is_file():
+    __path__.append(str(_ROOT))
 
 _EXPORTS = {
     # the verbs
@@ -35,7 +44,7 @@ _EXPORTS = {
     # errors
     "GyrowheelError": "gyrowheel.errors", "ArgumentError": "gyrowheel.errors", "FmuError": "gyrowheel.errors",
     "SweepSpecError": "gyrowheel.errors", "SweepInterrupted": "gyrowheel.errors",
-    "MissingExtraError": "gyrowheel.errors", "SceneError": "gyrowheel.fmu_build.scene",
+    "MissingExtraError": "gyrowheel.errors", "UnknownNameError": "gyrowheel.errors", "SceneError": "gyrowheel.fmu_build.scene",
     "SimulationError": "gyrowheel.simulation", "ExportError": "gyrowheel.fmu_build.export_c",
     "CompileError": "gyrowheel.fmu_build.compiler", "AnimationError": "gyrowheel.animation.table",
     "SystemFileError": "gyrowheel.cosim.system", "MasterError": "gyrowheel.cosim.master",

@@ -65,16 +65,21 @@ def _check(r: subprocess.CompletedProcess, cwd: Path, hint: str = "") -> subproc
     return r
 
 
+# files of the package folders that are for the maintainers, not the users: not in the wheel
+MAINTAINER_FILES = {"gyrowheel/animation/vendor/three/update.sh"}
+
+
 def _repository_files() -> set[str]:
-    """Every file of the package folders (bytecode aside) as its path in the wheel: each folder of
-    [tool.setuptools.package-dir] ships whole, its Python and its data."""
+    """Every file of the package folders (bytecode and MAINTAINER_FILES aside) as its path in the
+    wheel: each folder of [tool.setuptools.package-dir] ships whole, its Python and its data."""
     files = set()
     for package, folder in PACKAGE_DIR.items():
         base = ROOT / folder
         for path in base.rglob("*"):
             if path.is_file() and "__pycache__" not in path.parts and path.suffix != ".pyc":
                 files.add(f"{package.replace('.', '/')}/{path.relative_to(base).as_posix()}")
-    return files
+    assert MAINTAINER_FILES <= files, "a maintainer file moved: update MAINTAINER_FILES"
+    return files - MAINTAINER_FILES
 
 
 @pytest.fixture(scope="module")
@@ -179,6 +184,7 @@ def test_wheel_holds_the_package_folders_under_one_name(wheel):
         entry_points = zf.read(f"{DIST_INFO}/entry_points.txt").decode()
         metadata = Parser().parsestr(zf.read(f"{DIST_INFO}/METADATA").decode())
     assert {n.split("/")[0] for n in names} == {"gyrowheel", DIST_INFO}
+    assert f"{DIST_INFO}/licenses/LICENSE" in names  # the project's licence travels with it
     shipped = {n for n in names if not n.startswith(f"{DIST_INFO}/")}
     expected = _repository_files()
     assert shipped == expected, (
@@ -330,3 +336,18 @@ def test_installed_files_lie_under_gyrowheel_only(venv):
     assert venv.importable(folders) == [], "a repository folder is importable as a top-level module"
     installed = [p.name for p in venv.site.iterdir() if p.name.lower().startswith("gyrowheel")]
     assert sorted(installed) == sorted(["gyrowheel", DIST_INFO])
+
+
+def test_python_started_in_the_checkout_imports_the_checkouts_rooms(venv):
+    """Python started in the checkout's root imports the checkout's gyrowheel/ folder, not the
+    installed package (the current directory comes first on sys.path); its subpackages are the
+    checkout's sibling folders then (gyrowheel/__init__.py), so `python -m gyrowheel` and the
+    README's Python example work there too, with the checkout's code."""
+    code = ("import json, gyrowheel, gyrowheel.fmu_build.builder as b, gyrowheel.animation as a; "
+            "print(json.dumps([gyrowheel.__file__, b.__file__, a.__file__]))")
+    r = _check(_run([venv.python, "-c", code], ROOT, venv.tool_env), ROOT)
+    init, builder, animation = (Path(p) for p in json.loads(r.stdout))
+    assert init == ROOT / "gyrowheel" / "__init__.py"
+    assert builder == ROOT / "fmu_build" / "builder.py" and animation == ROOT / "animation" / "__init__.py"
+    r = _check(_run([venv.python, "-m", "gyrowheel", "--version"], ROOT, venv.tool_env), ROOT)
+    assert r.stdout.strip() == f"gyrowheel {VERSION}"

@@ -9,7 +9,7 @@ the paper's 20 s the wheel never leans lower than 30 deg above the ground (beta_
 fall threshold of the stability map). Samples that break I_axial <= 2 I_diam (possible for any
 rigid body) are refused by the FMU and stay in the table as failed rows with that reason; the
 rates are over the admissible samples (uniform over the admissible part of the box). Prints the success rate (95% Wilson interval)
-and the worst lean; draws docs/img/sweep_monte_carlo.png.
+and the worst lean; draws the figure (docs/img/sweep_monte_carlo.png).
 
 --closed-loop: the same study of the Gyrover's closed loop (wheel + gain-scheduled LQG
 controller FMUs as an .ssp, built here with gyrowheel.controller.closed_loop.build_closed_loop for the earth
@@ -144,14 +144,15 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--workers", type=int)
     ap.add_argument("--scheduler")
-    ap.add_argument("--source", default="examples/scenes/paper_earth_friction.toml",
+    ap.add_argument("--source", default=str(ROOT / "examples" / "scenes" / "paper_earth_friction.toml"),
                     help="scene, FMU or system (.ssp) of the unactuated study")
     ap.add_argument("--closed-loop", action="store_true", help="the Gyrover's closed loop instead (see above)")
     ap.add_argument("--out", default="results/sweeps", help="directory for the table")
-    ap.add_argument("--png", help="default: docs/img/sweep_monte_carlo[_closed_loop].png")
+    ap.add_argument("--png", help="the figure (default: OUT/sweep_monte_carlo[_closed_loop].png; "
+                    "docs/img/ holds these figures)")
     args = ap.parse_args()
-    png = Path(args.png or ROOT / "docs" / "img" / f"sweep_monte_carlo{'_closed_loop' if args.closed_loop else ''}.png")
     out = Path(args.out)
+    png = Path(args.png or out / f"sweep_monte_carlo{'_closed_loop' if args.closed_loop else ''}.png")
     out.mkdir(parents=True, exist_ok=True)
     execution = (["--scheduler", args.scheduler] if args.scheduler else
                  ["--workers", str(args.workers)] if args.workers is not None else [])

@@ -130,10 +130,12 @@ def main() -> int:
     ap.add_argument("--workers", type=int)
     ap.add_argument("--scheduler")
     ap.add_argument("--out", default="results/sweeps", help="directory for the tables")
-    ap.add_argument("--png", default=str(ROOT / "docs" / "img" / "sweep_paper_figs_5_6.png"))
+    ap.add_argument("--png", help="the figure (default: OUT/sweep_paper_figs_5_6.png; "
+                    "docs/img/sweep_paper_figs_5_6.png is this figure)")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    args.png = args.png or str(out / "sweep_paper_figs_5_6.png")
     execution = (["--scheduler", args.scheduler] if args.scheduler else
                  ["--workers", str(args.workers)] if args.workers is not None else [])
     tables = {}

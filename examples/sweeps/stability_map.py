@@ -4,7 +4,7 @@ on earth, Mars and the moon, with the critical spin w_c and the linearised eigen
     python examples/sweeps/stability_map.py [--workers N | --scheduler ADDRESS] [--out DIR]
 
 Runs one `gyrowheel sweep` (printed) over the paper's wheel started at lean beta0 with spin
-gamma_dot0 (alpha_dot0 = beta_dot0 = 0), then draws docs/img/sweep_stability.png from its table.
+gamma_dot0 (alpha_dot0 = beta_dot0 = 0), then draws the map (docs/img/sweep_stability.png) from its table.
 """
 from __future__ import annotations
 
@@ -72,10 +72,12 @@ def main() -> int:
     ap.add_argument("--scheduler")
     ap.add_argument("--fall-deg", type=float, default=30.0, help="lean counted as a fall (beta_min), deg")
     ap.add_argument("--out", default="results/sweeps", help="directory for the table")
-    ap.add_argument("--png", default=str(ROOT / "docs" / "img" / "sweep_stability.png"))
+    ap.add_argument("--png", help="the figure (default: OUT/sweep_stability.png; docs/img/sweep_stability.png "
+                    "is this figure)")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    args.png = args.png or str(out / "sweep_stability.png")
     execution = (["--scheduler", args.scheduler] if args.scheduler else
                  ["--workers", str(args.workers)] if args.workers is not None else [])
     argv = command(out / "stability.parquet", execution, args.fall_deg)

@@ -3,6 +3,7 @@ are checked by the same rules (check_scene) and build as their files would."""
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 import zipfile
 
@@ -176,3 +177,19 @@ def test_numpy_numbers_in_a_scene_object_are_numbers():
     assert checked.experiment.max_internal_steps == 5 and type(checked.experiment.max_internal_steps) is int
     with pytest.raises(SceneError, match=r"\[wheel\] M: must be a number, got bool"):
         check_scene(Scene(wheel={"M": np.bool_(True)}))
+
+
+def test_public_dataclasses_document_every_field():
+    """help() of a result or scene type says what each field is, not only the signature."""
+    from gyrowheel.cosim.system import SystemDescription
+    from gyrowheel.fmu_build.builder import BuildResult
+    from gyrowheel.fmu_build.export_c import ExportResult
+    from gyrowheel.taylor.ensemble import EnsembleResult
+    for cls in (Scene, Experiment, BuildResult, ExportResult, EnsembleResult, SystemDescription):
+        doc = inspect.getdoc(cls)
+        assert doc and not doc.startswith(cls.__name__ + "("), cls  # its own, not the dataclass signature
+        for f in dataclasses.fields(cls):
+            assert f.name in doc, f"{cls.__name__}.{f.name}"
+    for fn in (load_scene, parse_scene, check_scene):
+        doc = inspect.getdoc(fn)
+        assert "Returns" in doc and "Raises" in doc and "docs/scenes.md" in doc, fn.__name__

@@ -55,6 +55,10 @@ def run(args: argparse.Namespace) -> int:
     if defaults:
         print(f"note: flywheel geometry {', '.join(defaults)} from the model's defaults; pass --fmu for the run's",
               file=sys.stderr)
+    if len(tl.time) == 2 and tl.time[1] - tl.time[0] < args.speed / args.fps:
+        print(f"note: at ×{args.speed:g} and {args.fps:g} fps one frame is {args.speed / args.fps:g} s of the run, "
+              f"more than the {t1 - t0:g} s shown: the animation shows only its first and last instant; "
+              "lower --speed", file=sys.stderr)
     if tl.spin_per_frame > math.pi / 2:
         print(f"note: the wheel turns up to {tl.spin_per_frame:.1f} rad between frames, so its marks may seem to "
               "turn backwards; lower --speed or raise --fps", file=sys.stderr)

@@ -1,6 +1,7 @@
 """From a result table to what each frame shows: frame times, poses, the contact track, readouts.
 
-Frame k shows simulated time start + k * speed / fps (the last frame is the stop time itself), the
+Frame k shows simulated time start + k * speed / fps (the last frame is the stop time itself, also
+when one step of speed / fps is longer than the whole window: then start and stop are all), the
 coordinates linearly interpolated between output rows (angles as the FMU writes them: continuous,
 not wrapped). The contact track is drawn from the rows themselves, not from the frames, so a fast
 playback does not cut corners off the path.
@@ -72,11 +73,16 @@ def frame_times(t_first: float, t_last: float, options: Options) -> np.ndarray:
     if stop < start:
         raise AnimationError(f"--stop {stop:g} is before --start {start:g}")
     dt = options.speed / options.fps
-    count = int(math.ceil((stop - start) / dt - 1e-9)) + 1
+    # frame steps to the stop (a last step that is a whole one up to rounding is not split off);
+    # a window longer than 0 has at least one, however fast the playback: its stop is shown
+    steps = int(math.ceil((stop - start) / dt - 1e-9))
+    count = max(steps, 1 if stop > start else 0) + 1
     if count > MAX_FRAMES:
         raise AnimationError(f"{count} frames is more than {MAX_FRAMES}: raise --speed, lower --fps "
                              "or narrow --start/--stop")
-    return np.minimum(start + dt * np.arange(count), stop)
+    times = np.minimum(start + dt * np.arange(count), stop)
+    times[0] = start  # (dt may overflow to inf: 0 * inf is no time)
+    return times
 
 
 def _rows(table: ResultTable) -> tuple[np.ndarray, np.ndarray]:

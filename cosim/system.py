@@ -33,6 +33,10 @@ class SystemFileError(GyrowheelError, ValueError):
 
 @dataclass
 class Component:
+    """One FMU of a system: name (unique in the system: the prefix of its result columns,
+    '<name>.<variable>'), fmu (its file), start_values ({variable: value} set before
+    initialisation: SSP parameter bindings)."""
+
     name: str
     fmu: Path  # on disk (while writing) or inside the unpacked .ssp (after reading)
     start_values: dict[str, object] = field(default_factory=dict)  # parameter / input values by name
@@ -40,6 +44,9 @@ class Component:
 
 @dataclass
 class Connection:
+    """An output of one component feeding an input of another, by names (SSP 1.0 section
+    5.3.6): start_element.start_connector -> end_element.end_connector."""
+
     start_element: str
     start_connector: str  # an output
     end_element: str
@@ -48,6 +55,16 @@ class Connection:
 
 @dataclass
 class SystemDescription:
+    """A system of FMUs, as an .ssp holds it (write_ssp writes one, read_ssp reads one back)
+    and gyrowheel.system_run runs it.
+
+    name         the system's name (the .ssd's System name)
+    components   its FMUs, a list of Component (name, fmu path, start values)
+    connections  output -> input links, a list of Connection (SSP 1.0 section 5.3.6)
+    start_time   s, DefaultExperiment startTime
+    stop_time    s, DefaultExperiment stopTime (> start_time): where system_run stops by default
+    """
+
     name: str
     components: list[Component]
     connections: list[Connection]

@@ -6,11 +6,12 @@ build_fmu is the wheel's path: scene -> ModelSpec -> build_spec_fmu.
 from __future__ import annotations
 
 import hashlib
+import os
 import shutil
 import tempfile
 import uuid
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
@@ -18,20 +19,36 @@ from gyrowheel.fmu_build.compiler import UNITY_SOURCE, compile_shared, fmi_heade
 from gyrowheel.fmu_build.documentation import write_index_html
 from gyrowheel.fmu_build.model_description import write_model_description
 from gyrowheel.fmu_build.runtime import runtime_sources
-from gyrowheel.fmu_build.scene import Experiment, Scene
+from gyrowheel.errors import ArgumentError
+from gyrowheel.fmu_build.scene import Experiment, Scene, check_scene
 from gyrowheel.fmu_build.variables import build_table
 from gyrowheel.model.build import build_model
 from gyrowheel.model.spec import ModelSpec
 
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 PLATFORM = "linux64"
+FMU_SUFFIX = ".fmu"  # an FMU's file name extension (FMI 2.0.4, section 2.1: "*.fmu")
 
 
 @dataclass
 class BuildResult:
+    """What build_fmu / build_spec_fmu (and gyrowheel.build) built.
+
+    fmu         path of the FMU written (the `output` given)
+    spec        the model built: its ModelSpec (variables with units, effects, events, the
+                CasADi Functions); left out of repr()
+    sources     directory of the FMU's C sources (generated and runtime) in the kept build
+                directory (build_dir/fmu/sources), or None when no build_dir was given (the
+                temporary build directory is removed)
+    identifier  the FMU's modelIdentifier (the scene's name): its binary and C prefix
+
+    A BuildResult is os.PathLike: it stands for its FMU wherever a path of one does
+    (gyrowheel.simulate, info, sweep, Ensemble). repr() shows the FMU and its identifier.
+    """
+
     fmu: Path
-    spec: ModelSpec
-    sources: Path  # directory holding every C file of the FMU
+    spec: ModelSpec = field(repr=False)
+    sources: Path | None = field(repr=False)  # directory holding every C file of the FMU, if kept
     identifier: str
 
     def __fspath__(self) -> str:
@@ -47,8 +64,35 @@ TAYLOR_ONLY = {"gw_taylor_ops.h", "gw_ensemble.c", "gw_ensemble.h", "gw_ensemble
 
 
 def model_spec(scene: Scene) -> ModelSpec:
+    """The wheel's ModelSpec of `scene`, checked first (check_scene: SceneError naming the
+    field); ValueError for a combination only the model can refuse."""
+    return _spec(check_scene(scene))
+
+
+def _spec(scene: Scene) -> ModelSpec:
+    """The ModelSpec of a checked scene."""
     return build_model(wheel=scene.wheel, initial=scene.initial, effects=scene.effects,
                        formulation=scene.formulation, name=scene.name, description=scene.description)
+
+
+def check_output(output: str | Path, scene_file: str | Path | None = None) -> Path:
+    """The FMU's output path, refused before anything is built when it cannot be an FMU: a name
+    not ending in .fmu (FMI 2.0.4, section 2.1: an FMU is a zip file "*.fmu"; out.toml, noext),
+    or the scene file itself (the FMU would overwrite the scene it is built from).
+    Raises ArgumentError naming `output`."""
+    if not isinstance(output, (str, os.PathLike)):
+        raise ArgumentError(f"output must be a file path ending in {FMU_SUFFIX}, got {type(output).__name__}",
+                            argument="output")
+    output = Path(output)
+    if scene_file is not None and output.exists() and Path(scene_file).exists() \
+            and os.path.samefile(output, scene_file):
+        raise ArgumentError(f"output {output}: is the scene file the FMU is built from; writing the FMU "
+                            f"there would overwrite it: give a path ending in {FMU_SUFFIX}", argument="output")
+    if output.suffix != FMU_SUFFIX:
+        got = f"ends in {output.suffix!r}" if output.suffix else "has no extension"
+        raise ArgumentError(f"output {output}: {got}; an FMU's file name ends in {FMU_SUFFIX} "
+                            "(FMI 2.0.4, section 2.1)", argument="output")
+    return output
 
 
 def _guid(*parts: str) -> str:
@@ -60,9 +104,17 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
               taylor: bool = False) -> BuildResult:
     """Build the FMU of `scene` at `output`: the wheel's ModelSpec through build_spec_fmu.
 
+    scene: a Scene, checked first by the scene file's rules (check_scene); output: the .fmu to
+    write (check_output: a name ending in .fmu, not the scene's own file); build_dir: keep the
+    generated C there (BuildResult.sources), else a temporary directory is used and removed;
     taylor: also generate the Taylor kernel (solver taylor, the ensemble path) when the scene's
-    solver is not taylor already."""
-    return build_spec_fmu(model_spec(scene), output, scene.experiment, build_dir=build_dir,
+    solver is not taylor already.
+    Returns the BuildResult. Raises SceneError (the scene, naming the field), ArgumentError
+    (output), and what build_spec_fmu raises.
+    """
+    scene = check_scene(scene)
+    output = check_output(output, scene.file)
+    return build_spec_fmu(_spec(scene), output, scene.experiment, build_dir=build_dir,
                           keep=scene.outputs, source=scene.source, taylor=taylor)
 
 
@@ -75,12 +127,13 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     keep: the outputs to expose (None: all); source: text shipped in documentation/index.html
     (the scene file, the gains); taylor: generate the Taylor kernel of solver taylor and the
     ensemble path even if experiment.solver is not "taylor" (only those FMUs carry it).
-    Sources stay in build_dir if given. Raises ValueError for a bad table,
-    gyrowheel.taylor.graph.TaylorUnsupportedError (a ValueError) for a kernel the ode's
+    Sources stay in build_dir if given (BuildResult.sources; None without build_dir).
+    Raises ArgumentError for an output that is no .fmu name (check_output), ValueError for a bad
+    table, gyrowheel.taylor.graph.TaylorUnsupportedError (a ValueError) for a kernel the ode's
     operations do not allow, CompileError if the C compiler fails.
     """
     experiment = experiment or Experiment()
-    output = Path(output)
+    output = check_output(output)
     tmp = None
     if build_dir is None:
         tmp = tempfile.TemporaryDirectory(prefix="gyrowheel-")
@@ -116,7 +169,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
                                                                                    source))
         output.parent.mkdir(parents=True, exist_ok=True)
         _zip(root, output)
-        return BuildResult(fmu=output, spec=spec, sources=src, identifier=identifier)
+        return BuildResult(fmu=output, spec=spec, sources=src if tmp is None else None, identifier=identifier)
     finally:
         if tmp is not None:
             tmp.cleanup()

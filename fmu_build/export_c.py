@@ -19,16 +19,16 @@ import re
 import shutil
 import subprocess
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build import c_names
-from gyrowheel.fmu_build.builder import _guid, model_spec
+from gyrowheel.fmu_build.builder import _guid, _spec
 from gyrowheel.fmu_build.runtime import EXPORT_DIR, runtime_sources
 from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
 from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
-from gyrowheel.fmu_build.scene import Scene
+from gyrowheel.fmu_build.scene import Scene, check_scene
 from gyrowheel.fmu_build.variables import Variable, build_table
 from gyrowheel.model.spec import ModelSpec
 
@@ -39,15 +39,27 @@ MACRO_LETTER = {"PARAMETER": "P", "INITIAL": "I", "INPUT": "U", "STATE": "X", "O
 
 
 class ExportError(GyrowheelError, ValueError):
-    """The scene or the output directory cannot be exported to; the message says why."""
+    """The scene or the output directory cannot be exported to; the message says why (an error
+    about the directory begins with `output` and has argument 'output')."""
 
 
 @dataclass
 class ExportResult:
+    """What export_c (gyrowheel.export_c) wrote.
+
+    directory   the export's directory (the `out_dir` given)
+    identifier  the model's name: the prefix of the C API (<identifier>_create, ...) and of
+                <identifier>.h / <identifier>.c
+    files       every file the export wrote, relative to directory (POSIX paths, sorted): the
+                list kept in its .gyrowheel-export marker, removed by the next export into it
+    spec        the model exported: its ModelSpec (variables with units, effects); left out of
+                repr()
+    """
+
     directory: Path
     identifier: str
     files: list[str]  # relative to directory
-    spec: ModelSpec
+    spec: ModelSpec = field(repr=False)
 
 
 @dataclass
@@ -212,17 +224,21 @@ def render(template: str, values: dict[str, str]) -> str:
 
 
 def _prepare(out_dir: Path) -> None:
-    """An empty or new directory, or a previous export (its files are removed first)."""
+    """An empty or new directory, or a previous export (its files are removed first). Raises
+    ExportError naming `output` (export_c's out_dir) for any other."""
     if out_dir.exists() and not out_dir.is_dir():
-        raise ExportError(f"{out_dir}: exists and is not a directory")
+        raise ExportError(f"output {out_dir}: exists and is not a directory; the export is a directory "
+                          "(choose a new or empty one)", argument="output")
     if out_dir.is_dir() and any(out_dir.iterdir()):
         marker = out_dir / MARKER
         if not marker.is_file():
-            raise ExportError(f"{out_dir}: not empty and not a gyrowheel export; choose a new or empty directory")
+            raise ExportError(f"output {out_dir}: not empty and not a gyrowheel export; choose a new or empty "
+                              "directory", argument="output")
         try:
             previous = json.loads(marker.read_text())["files"]
         except (ValueError, KeyError, TypeError):
-            raise ExportError(f"{out_dir}/{MARKER}: unreadable; remove the directory to export into it") from None
+            raise ExportError(f"output {out_dir}: its {MARKER} is unreadable; remove the directory to export "
+                              "into it", argument="output") from None
         for rel in previous:
             path = (out_dir / rel).resolve()
             if out_dir.resolve() in path.parents and path.is_file():
@@ -250,11 +266,16 @@ def compile_check(unity: Path) -> None:
 def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: str = "") -> ExportResult:
     """Write the C export of `scene` into out_dir (see the module docstring).
 
-    check: probe the model name against the C library's declarations first, and compile
-    <model>.c strictly afterwards (CompileError if it fails).
-    Raises ExportError (bad model name, unusable directory), ValueError (bad output table),
-    CompileError.
+    scene: a Scene, checked first by the scene file's rules (check_scene); out_dir: the
+    directory (gyrowheel.export_c's `output`): new, empty, or a previous export (its files are
+    replaced, the user's kept); check: probe the model name against the C library's
+    declarations first, and compile <model>.c strictly afterwards (CompileError if it fails);
+    scene_file: the scene file's name, quoted in the header and README.
+    Returns the ExportResult. Raises SceneError (the scene, naming the field), ExportError (a
+    model name C cannot take; a directory that cannot be used, naming `output`), ValueError
+    (bad output table), CompileError.
     """
+    scene = check_scene(scene)
     model = check_identifier(scene.name)
     if check:  # a name the C library declares (system, clock, FILE, ...): before anything is written
         try:
@@ -264,7 +285,7 @@ def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: 
     out_dir = Path(out_dir)
     _prepare(out_dir)
     users = _files(out_dir)  # what is left is the user's: never recorded, so never removed
-    spec = model_spec(scene)
+    spec = _spec(scene)
     exp = scene.experiment
     table = build_table(spec, exp, scene.outputs)
     src = out_dir / "src"

@@ -1,4 +1,5 @@
-"""Scene files: TOML that names a wheel, its effects, initial state and experiment.
+"""Scenes: TOML files that name a wheel, its effects, initial state and experiment, and the
+Scene objects they are read into (docs/scenes.md).
 
     [model]       name, description, formulation ("reduced" | "multipliers")
     [wheel]       M, R, k_diam, k_axial, beta_min
@@ -9,11 +10,18 @@
                   max_internal_steps
     [outputs]     keep = [...] to expose only some outputs (optional)
 
-Every error names the file, the table and the key, and lists the valid choices.
+One set of rules serves both ways in: parse_scene reads a file's tables through it, and
+check_scene puts a Scene made or changed in Python (dataclasses.replace, attribute assignment)
+through the same rules, so an object is refused exactly where its file would be, and builds
+exactly as its file would. Every error names the file (or the scene), the table and the key,
+and lists the valid choices.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
+import numbers
+import os
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,14 +33,37 @@ from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
 TOUCHDOWN = "touchdown"  # [wheel] beta_min preset: the lean at which the body must touch the ground
+TABLES = ("model", "wheel", "effects", "initial", "experiment", "outputs")
+ZIP_MAGIC = b"PK\x03\x04"  # the start of a zip archive (an FMU, an .ssp)
 
 
 class SceneError(GyrowheelError, ValueError):
-    """A scene file that cannot be used; the message says where and why."""
+    """A scene that cannot be used; the message says where and why: the file (or, for a Scene
+    object, `scene 'NAME'`), the table and the key, e.g.
+    `paper.toml: [wheel] M: must be > 0, got -1.0`."""
 
 
 @dataclass
 class Experiment:
+    """A scene's [experiment]: the FMU's DefaultExperiment and the defaults of its solver
+    parameters (docs/scenes.md, docs/fmi.md); all can still be set when the FMU is used.
+
+    start_time        s, DefaultExperiment startTime (any finite number)
+    stop_time         s, DefaultExperiment stopTime, > start_time
+    output_interval   s, > 0: DefaultExperiment stepSize, the communication step of
+                      gyrowheel simulate
+    solver            the FMU's Enumeration parameter `solver`: one of SOLVERS (euler, rk4,
+                      dopri5, rosenbrock, dop853, taylor; taylor also puts the Taylor kernel
+                      into the FMU, docs/taylor.md)
+    rel_tol           1, relative tolerance of the adaptive solvers in [2.22e-15, 1]; also
+                      DefaultExperiment tolerance
+    abs_tol           1, absolute tolerance (scaled by each state's nominal value) in [1e-30, 1],
+                      or 0 (the default): rel_tol / 100, following the tolerance in force
+    max_step          s, > 0: bound of the internal step (the fixed step of euler and rk4)
+    max_internal_steps  whole number in [1, 2**31 - 1]: budget of internal steps of one
+                      fmi2DoStep (docs/fmi.md, "Bounded calls")
+    """
+
     start_time: float = 0.0
     stop_time: float = 20.0
     output_interval: float = 0.01
@@ -45,6 +76,38 @@ class Experiment:
 
 @dataclass
 class Scene:
+    """A scene: what gyrowheel.build (build_fmu) and export_c turn into an FMU or C code.
+
+    Read from a file by load_scene / parse_scene, or made in Python; build_fmu and export_c
+    check it with check_scene (the file's rules), so a Scene changed with dataclasses.replace
+    is refused where its file would be. Values are in SI units, angles in rad (the file's
+    <angle>_deg keys and presets are converted when it is read).
+
+    name         the FMU's modelIdentifier and modelName: a C identifier (letters, digits, _);
+                 a file's [model] name, default its file name without .toml
+    description  free text: modelDescription.xml's description
+    formulation  "reduced" (Kane/Maggi null space) or "multipliers" (Lagrange multipliers with
+                 stabilisation), docs/model.md
+    wheel        {name: value} of the base wheel's parameters: M kg, R m, k_diam 1, k_axial 1
+                 (I_diam = k_diam M R^2, I_axial = k_axial M R^2), beta_min rad (the lean at
+                 which the wheel counts as fallen; < pi/2); each > 0; missing ones keep the
+                 paper's defaults (docs/interface.md)
+    initial      {name: value} of start values: x, y m; alpha, beta, gamma rad (beta in
+                 (0, pi), pi/2 upright); alpha_dot, beta_dot, gamma_dot rad/s; and the start
+                 values the effects add (docs/effects.md); missing ones keep their defaults
+    effects      {effect: {parameter or choice: value}}: the effects built in, by their
+                 catalogue name (gyrowheel.model.effects.CATALOGUE), each with its parameters
+                 (SI numbers) and string choices; "gravity" is required (every FMU exposes g)
+    experiment   an Experiment: DefaultExperiment and the solver parameters' defaults
+    outputs      the optional outputs to expose ([outputs] keep), or None: all of them; the
+                 names are checked when the FMU is built
+    source       the scene's TOML text, shipped in the FMU's documentation/index.html
+                 ("Built from"); check_scene writes it anew when it no longer describes the
+                 scene (a Scene changed in Python, or made there)
+    file         the scene file it was loaded from (load_scene), or None; build_fmu refuses to
+                 write the FMU over it
+    """
+
     name: str = "wheel"
     description: str = "Gyrover wheel rolling without slip"
     formulation: str = "reduced"
@@ -54,11 +117,15 @@ class Scene:
     experiment: Experiment = field(default_factory=Experiment)
     outputs: list[str] | None = None
     source: str = ""  # the TOML text, shipped in the FMU's documentation
+    file: Path | None = field(default=None, compare=False)  # where load_scene read it from
 
 
 class _Reader:
-    def __init__(self, where: str):
-        self.where = where
+    """The rules' error messages: `where` names the file or the scene; `mapping` is what a table
+    is in its words ("table" in a file, "dict" in a Scene object)."""
+
+    def __init__(self, where: str, mapping: str = "table"):
+        self.where, self.mapping = where, mapping
 
     def fail(self, table: str, key: str | None, problem: str) -> SceneError:
         loc = f"[{table}]" + (f" {key}" if key else "")
@@ -67,11 +134,11 @@ class _Reader:
     def table(self, data: dict, name: str) -> dict:
         value = data.get(name, {})
         if not isinstance(value, dict):
-            raise self.fail(name, None, "must be a table")
+            raise self.fail(name, None, f"must be a {self.mapping}")
         return value
 
     def number(self, table: str, key: str, value) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):  # (a Scene object's numpy numbers too)
             raise self.fail(table, key, f"must be a number, got {type(value).__name__} {value!r}")
         if not math.isfinite(value):
             raise self.fail(table, key, f"must be finite, got {value!r}")
@@ -173,7 +240,7 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
         if name not in CATALOGUE:
             raise r.fail(table, None, f"unknown effect; valid: {', '.join(CATALOGUE)}")
         if not isinstance(options, dict):
-            raise r.fail(table, None, "must be a table")
+            raise r.fail(table, None, f"must be a {r.mapping}")
         cls = CATALOGUE[name]
         r.unknown(table, options, {q.name for q in cls.parameters()} | set(cls.choices()))
         effects[name] = {key: _effect_value(r, table, key, value, cls) for key, value in options.items()}
@@ -207,9 +274,9 @@ def _experiment(r: _Reader, data: dict) -> Experiment:
             exp.start_time = r.number("experiment", key, value)
         elif key == "max_internal_steps":
             low, high = MAX_INTERNAL_STEPS_RANGE
-            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= value <= high:
                 raise r.fail("experiment", key, f"must be a whole number from {low} to {high}, got {value!r}")
-            exp.max_internal_steps = value
+            exp.max_internal_steps = int(value)
         elif key == "abs_tol":  # 0 allowed (follow rel_tol); the range below
             exp.abs_tol = r.number("experiment", key, value)
         else:
@@ -224,21 +291,17 @@ def _experiment(r: _Reader, data: dict) -> Experiment:
     return exp
 
 
-def parse_scene(text: str, where: str = "<scene>") -> Scene:
-    """Scene from TOML text; `where` names the file in error messages."""
-    r = _Reader(where)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{where}: not valid TOML: {exc}") from None
-    r.unknown("<top level>", data, {"model", "wheel", "effects", "initial", "experiment", "outputs"})
-    scene = Scene(source=text)
+def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
+    """The scene of `data`, a file's tables ({table: {key: value}}), every rule applied: the one
+    validator of parse_scene and check_scene. Raises SceneError naming table and key."""
+    r.unknown("<top level>", data, set(TABLES))
+    scene = Scene()
     meta = r.table(data, "model")
     r.unknown("model", meta, {"name", "description", "formulation"})
     for key in ("name", "description", "formulation"):
         if key in meta and not isinstance(meta[key], str):
             raise r.fail("model", key, "must be a string")
-    scene.name = meta.get("name", Path(where).stem if where != "<scene>" else scene.name)
+    scene.name = meta.get("name", default_name)
     if not scene.name.isidentifier():
         raise r.fail("model", "name", f"must be a C identifier (letters, digits, _), got {scene.name!r}")
     scene.description = meta.get("description", scene.description)
@@ -256,19 +319,161 @@ def parse_scene(text: str, where: str = "<scene>") -> Scene:
         keep = outputs["keep"]
         if not isinstance(keep, list) or not all(isinstance(k, str) for k in keep):
             raise r.fail("outputs", "keep", "must be a list of output names")
-        scene.outputs = keep
+        scene.outputs = list(keep)
     return scene
 
 
+def parse_scene(text: str, where: str = "<scene>") -> Scene:
+    """The Scene of a scene file's TOML text, every rule of docs/scenes.md applied.
+
+    text: the TOML (str); where: how errors name the file (e.g. its path); its stem is the
+    model name when [model] name is not given (the default "<scene>": name "wheel").
+    Returns the Scene: angles in rad (<angle>_deg converted), presets resolved (g = "moon" ->
+    1.625, beta_min = "touchdown" -> the lean), defaults filled in, source = text, file None
+    (load_scene sets it).
+    Raises SceneError, one line naming `where`, the table and the key, and the valid choices
+    where there is a list (docs/scenes.md, "Rules: what is refused"), e.g.
+        s.toml: not valid TOML: Expected ']' at the end of a table declaration (at line 1, column 7)
+        s.toml: [wheel] M: must be > 0, got 0.0
+        s.toml: [effects.gravity] g: unknown preset 'jupiter'; valid: earth, mars, moon or a number
+        s.toml: [effects]: [effects.gravity] is required: every FMU exposes g (docs/interface.md); ...
+        s.toml: [experiment] solver: unknown solver 'rk45'; valid: euler, rk4, dopri5, rosenbrock, dop853, taylor
+    Combinations only the model can judge (an [outputs] keep name, k_axial > 2 k_diam) are
+    refused when the FMU is built or initialised, not here.
+    """
+    if not isinstance(text, str):
+        raise SceneError(f"{where}: the scene text must be a str, got {type(text).__name__}")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{where}: not valid TOML: {exc}") from None
+    scene = _validate(_Reader(where), data, Path(where).stem if where != "<scene>" else Scene.name)
+    scene.source = text
+    return scene
+
+
+def _tables(r: _Reader, scene: Scene) -> dict:
+    """A Scene object's fields as a file's tables (what _validate reads)."""
+    if not isinstance(scene.experiment, Experiment):
+        raise r.fail("experiment", None, f"must be an Experiment (gyrowheel.fmu_build.scene.Experiment), "
+                                         f"got {type(scene.experiment).__name__}")
+    return {"model": {"name": scene.name, "description": scene.description, "formulation": scene.formulation},
+            "wheel": scene.wheel, "effects": scene.effects, "initial": scene.initial,
+            "experiment": {f.name: getattr(scene.experiment, f.name) for f in dataclasses.fields(Experiment)},
+            "outputs": {} if scene.outputs is None else {"keep": scene.outputs}}
+
+
+def _content(scene: Scene) -> tuple:
+    """What a scene builds (every field but its source text and file)."""
+    return tuple(getattr(scene, f.name) for f in dataclasses.fields(Scene) if f.name not in ("source", "file"))
+
+
+def check_scene(scene: Scene) -> Scene:
+    """A Scene object checked by the rules a scene file is read by (parse_scene), whether it was
+    loaded, made in Python or changed since (dataclasses.replace, assignment).
+
+    scene: a Scene. Returns a new Scene (the argument is not changed) that builds exactly as the
+    scene file saying the same would: numbers as floats, angles in rad, presets resolved
+    (wheel beta_min = "touchdown", an effect's preset such as g = "moon", <angle>_deg keys
+    converted), its own dicts and lists; source the given TOML text if that still describes it,
+    else a TOML text written from it (so the FMU's documentation shows what was built); file
+    kept. Checking a checked scene returns an equal one.
+    Raises SceneError with parse_scene's messages, the scene named by its name, e.g.
+        scene 'paper_moon': [wheel] M: must be > 0, got -1.0
+        scene 'paper_moon': [effects]: [effects.gravity] is required: every FMU exposes g ...
+        scene 'a b': [model] name: must be a C identifier (letters, digits, _), got 'a b'
+        scene 'paper_moon': [experiment] solver: unknown solver 'bogus'; valid: euler, rk4, ...
+        scene 'paper_moon': [wheel] M: must be a number, got str 'a'
+    and for a scene that is not a Scene (its type named). Source: docs/scenes.md.
+    """
+    if not isinstance(scene, Scene):
+        raise SceneError(f"scene must be a gyrowheel.Scene, got {type(scene).__name__}", argument="scene")
+    r = _Reader(f"scene {scene.name!r}", mapping="dict")
+    checked = _validate(r, _tables(r, scene), Scene.name)
+    if not isinstance(scene.source, str):
+        raise SceneError(f"{r.where}: source must be the scene's TOML text (a str), got {type(scene.source).__name__}")
+    if scene.file is not None and not isinstance(scene.file, (str, os.PathLike)):
+        raise SceneError(f"{r.where}: file must be a path or None, got {type(scene.file).__name__}")
+    checked.file = None if scene.file is None else Path(scene.file)
+    checked.source = scene.source if _describes(scene.source, checked) else scene_toml(checked)
+    return checked
+
+
+def _describes(text: str, scene: Scene) -> bool:
+    """Whether the TOML `text` reads as `scene` (its name from [model] name or, as a file named
+    after the scene would give it, from the file name)."""
+    if not text:
+        return False
+    try:
+        return _content(parse_scene(text, f"{scene.name}.toml")) == _content(scene)
+    except SceneError:
+        return False
+
+
+def _toml_string(text: str) -> str:
+    """A TOML basic string: the quote, the backslash and control characters (but tab) escaped."""
+    def char(c: str) -> str:
+        if c in '"\\':
+            return "\\" + c
+        if (ord(c) < 32 and c != "\t") or ord(c) == 127:
+            return f"\\u{ord(c):04x}"
+        return c
+    return '"' + "".join(map(char, text)) + '"'
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, str):
+        return _toml_string(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    return repr(value)  # an int, or a finite float: Python's repr is a TOML float read back exactly
+
+
+def scene_toml(scene: Scene) -> str:
+    """The scene file of a checked Scene (check_scene): TOML whose parse_scene gives the same
+    scene (angles in rad, presets as their numbers). Source: docs/scenes.md."""
+    lines = ["# written by gyrowheel from a Scene object", "[model]"]
+    lines += [f"{key} = {_toml_value(getattr(scene, key))}" for key in ("name", "description", "formulation")]
+
+    def table(name: str, values: dict) -> None:
+        lines.extend(["", f"[{name}]"] + [f"{key} = {_toml_value(value)}" for key, value in values.items()])
+
+    table("wheel", scene.wheel)
+    for effect, options in scene.effects.items():
+        table(f"effects.{effect}", options)
+    table("initial", scene.initial)
+    table("experiment", dataclasses.asdict(scene.experiment))
+    if scene.outputs is not None:
+        table("outputs", {"keep": scene.outputs})
+    return "\n".join(lines) + "\n"
+
+
 def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file."""
+    """Read and check a scene file (UTF-8 TOML, docs/scenes.md): parse_scene of its text.
+
+    path: the file (str or os.PathLike). Returns its Scene, with file = the path and source =
+    the file's text.
+    Raises SceneError, one line beginning with the path: `PATH: no such scene file`,
+    `PATH: cannot read: Is a directory`, `PATH: an FMU (a zip archive), not a scene file: ...`,
+    `PATH: not a text file (TOML is UTF-8): invalid start byte at byte 0`, and every error of
+    parse_scene (`PATH: [wheel] M: must be > 0, got 0.0`).
+    """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        raw = path.read_bytes()
     except FileNotFoundError:
         raise SceneError(f"{path}: no such scene file") from None
     except OSError as exc:
         raise SceneError(f"{path}: cannot read: {exc.strerror}") from None
+    if raw.startswith(ZIP_MAGIC):
+        what = "an FMU" if path.suffix.lower() == ".fmu" else "an SSP system" if path.suffix.lower() == ".ssp" \
+            else "a zip archive"
+        raise SceneError(f"{path}: {what} (a zip archive), not a scene file: a scene is TOML text "
+                         "(docs/scenes.md)")
+    try:
+        text = raw.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")  # as text mode reads it
     except UnicodeDecodeError as exc:
         raise SceneError(f"{path}: not a text file (TOML is UTF-8): {exc.reason} at byte {exc.start}") from None
-    return parse_scene(text, str(path))
+    scene = parse_scene(text, str(path))
+    scene.file = path
+    return scene

@@ -63,6 +63,10 @@ _LONG_DTYPE = np.int64 if _LONG == 8 else np.int32
 # the library's front end (its exported functions and the packed run's layout): one C file of the
 # runtime, compiled for a model through the unity file library_source writes
 LIBRARY_SOURCE = "gw_ensemble_lib.c"
+# what an FMU without the Taylor kernel is told, in the Python API's words and the command's
+NO_KERNEL = ("which the ensemble path needs: build its scene with the kernel, gyrowheel.build(scene, output, "
+             "taylor=True) or `gyrowheel build --taylor SCENE -o FMU` (or solver = \"taylor\" in the scene's "
+             "[experiment])")
 _C_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
@@ -115,7 +119,28 @@ class EnsembleError(GyrowheelError, RuntimeError):
 
 @dataclass
 class EnsembleResult:
-    """Final values of N trajectories (row j: trajectory j of the inputs)."""
+    """What Ensemble.run returns: N trajectories' final values (row j: trajectory j of the
+    inputs) and, with a communication grid, their outputs at its points.
+
+    status        (N,) int: STATUS_OK (reached t_end), STATUS_TERMINATED (stopped by a
+                  terminating event: the wheel fell, a lift-off ...), STATUS_ERROR (refused or
+                  failed: the reason is in messages)
+    t_final       (N,) s: t_end, the time of the terminating event, or where it failed
+    x_final       (N, nx): the continuous states at t_final, in state_names order
+    y_final       (N, ny): the outputs at t_final, in output_names order (NaN after an error)
+    steps         (N,) int: Taylor steps taken
+    output_names  the outputs' names (the FMU's, y's order); state_names: the states'
+    messages      the errors logged, one "ensemble trajectory <j>: ..." each
+    grid          with run(..., grid=...): (G + 1,) s, t_start and the G communication points;
+                  None without a grid
+    y_grid        with a grid: (N, G + 1, ny) the outputs at t_start and at each point; rows
+                  from n_rows[j] on are NaN (trajectory j ended before them); else None
+    n_rows        with a grid: (N,) int, the rows of y_grid written for each trajectory (t_start's
+                  and the points reached); else None
+    flags         (N, ne) bool: which events (event_names: their Boolean outputs, such as
+                  fallen) have fired by t_final
+    event_names   the events' flags' names, flags' column order
+    """
 
     status: np.ndarray  # (N,) int: STATUS_OK, STATUS_TERMINATED, STATUS_ERROR
     t_final: np.ndarray  # (N,) s
@@ -268,12 +293,14 @@ def _free_contexts(free, contexts: list) -> None:
 class Ensemble:
     """The ensemble library of one FMU built by gyrowheel (compiled once, cached by content).
 
-    fmu: path of the .fmu; lanes: trajectories advanced together (default LANES, 4: as cheap
-    per trajectory as 8 or 16 at N >= 16 and much cheaper below, measured; any integer >= 1 is
-    built, each width its own cached library; a trajectory's result is the same bit for bit in
-    any job and on 2 to 16 lanes; on 1 lane equal to rounding); cache: where the library is
-    kept (default ~/.cache/gyrowheel/ensemble); defines: extra C macros of this build,
-    {name: integer or one-line string} (switches of the ensemble path and the solver, e.g.
+    fmu: the .fmu, built by gyrowheel with the Taylor kernel (gyrowheel.build(..., taylor=True)):
+    a path (str or os.PathLike) or the BuildResult of gyrowheel.build; lanes: trajectories
+    advanced together (default LANES, 4: as cheap per trajectory as 8 or 16 at N >= 16 and much
+    cheaper below, measured; any integer >= 1 is built, each width its own cached library; a
+    trajectory's result is the same bit for bit in any job and on 2 to 16 lanes; on 1 lane equal
+    to rounding); cache: where the library is kept (default ~/.cache/gyrowheel/ensemble);
+    defines: extra C macros of this build, {name: integer or one-line string} (switches of the
+    ensemble path and the solver, e.g.
     {"GW_ENSEMBLE_LANE_STEPS": 1}: every lane-step through the solver code), part of the
     library's cache key.  Raises ArgumentError (a ValueError) for lanes not an integer >= 1 or a
     bad define (naming it), FmuError for a file that is not an FMU, EnsembleError if the FMU has
@@ -295,10 +322,7 @@ class Ensemble:
             lib = (Path(cache) if cache else _cache_dir()) / digest / "libensemble.so"
             kernel = src / "gw_taylor_model.h"
             if not kernel.is_file() or "GW_TL_NVAR" not in kernel.read_text():
-                raise EnsembleError(f"{fmu}: the FMU has no Taylor kernel (solver taylor), which the "
-                                    "ensemble path needs: build it from a scene with solver = "
-                                    "\"taylor\", or with gyrowheel build --taylor "
-                                    "(build_fmu(..., taylor=True))")
+                raise EnsembleError(f"{fmu}: the FMU has no Taylor kernel (solver taylor), {NO_KERNEL}")
             if not lib.exists():
                 shutil.copyfile(front, src / LIBRARY_SOURCE)
                 unity = src / f"{self.identifier}_ensemble.c"
@@ -316,8 +340,7 @@ class Ensemble:
         fn("sizes")(sizes)
         self.nx, self.ns, self.nu, self.np, self.ny, self.lanes, has_taylor, self.ne = list(sizes)
         if not has_taylor:
-            raise EnsembleError(f"{fmu}: the model has no Taylor kernel (solver taylor), which "
-                                "the ensemble path needs")
+            raise EnsembleError(f"{fmu}: the model has no Taylor kernel (solver taylor), {NO_KERNEL}")
         name = fn("name")
         name.restype = ctypes.c_char_p
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import zipfile
 
 import pytest
 from PIL import Image
@@ -37,6 +38,36 @@ def _write(path, text):
     return path
 
 
+def _write_bytes(path, data):
+    path.write_bytes(data)
+    return path
+
+
+def _mkdir(path):
+    path.mkdir()
+    return path
+
+
+FOREIGN_XML = """<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="2.0" modelName="spring" guid="{00000000-0000-0000-0000-000000000000}">
+  <CoSimulation modelIdentifier="spring"/>
+  <ModelVariables>
+    <ScalarVariable name="k" valueReference="0" causality="parameter" variability="fixed">
+      <Real start="1"/>
+    </ScalarVariable>
+  </ModelVariables>
+  <ModelStructure/>
+</fmiModelDescription>
+"""
+
+
+def _zip(path, xml=FOREIGN_XML):
+    """A zip archive holding a modelDescription.xml: an FMU (of a model with no R) or an .ssp's stand-in."""
+    with zipfile.ZipFile(path, "w") as zf:
+        zf.writestr("modelDescription.xml", xml)
+    return path
+
+
 @pytest.mark.parametrize("make,extra,fragment", [
     (lambda d: d / "missing.csv", (), "missing.csv: no such result file"),
     (lambda d: _write(d / "empty.csv", ""), (), "empty.csv: empty file"),
@@ -67,6 +98,24 @@ def _write(path, text):
     (lambda d: rolling_csv(d / "ok.csv"), ("--start", "1.5", "--stop", "1"), "--stop 1 is before --start 1.5"),
     (lambda d: rolling_csv(d / "ok.csv"), ("--speed", "1e-5"), "frames is more than 20000: raise --speed"),
     (lambda d: rolling_csv(d / "ok.csv"), ("-o", "{d}/odd.mp4", "--size", "99x64"), "even width and height"),
+    (lambda d: _zip(d / "moon.fmu"), (), "moon.fmu: an FMU, not a result CSV: animate draws a run; simulate the FMU "
+                                         "first (gyrowheel simulate, gyrowheel.simulate) and give its result"),
+    (lambda d: _zip(d / "loop.ssp"), (), "loop.ssp: an SSP system, not a result CSV: animate draws a run; run the "
+                                         "system first"),
+    (lambda d: _zip(d / "data.zip"), (), "data.zip: a zip archive, not a result CSV"),
+    (lambda d: _write_bytes(d / "bin.csv", b"\xff\xfe\x00t"), (),
+     "bin.csv: not a text file (a result CSV is UTF-8 text): invalid start byte at byte 0"),
+    (lambda d: _write_bytes(d / "nul.csv", b"time\x00x"), (),
+     "nul.csv: not a text file (a result CSV is UTF-8 text): a NUL byte at byte 4"),
+    (lambda d: _mkdir(d / "dir.csv"), (), "dir.csv: is a directory, not a result CSV"),
+    (lambda d: rolling_csv(d / "ok.csv"), ("--R", "-1"), "--R must be a finite number > 0 (the wheel radius in m), "
+                                                         "got -1"),
+    (lambda d: rolling_csv(d / "ok.csv"), ("--R", "0"), "--R must be a finite number > 0"),
+    (lambda d: rolling_csv(d / "ok.csv") and _zip(d / "spring.fmu") and d / "ok.csv", ("--fmu", "{d}/spring.fmu"),
+     "--fmu {d}/spring.fmu: no start value of R (the wheel radius): not a wheel FMU built by gyrowheel; give --R, "
+     "or leave out --fmu (R from z / sin(beta))"),
+    (lambda d: rolling_csv(d / "ok.csv") and _mkdir(d / "fmu_dir") and d / "ok.csv", ("--fmu", "{d}/fmu_dir"),
+     "fmu_dir: is a directory, not an FMU"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, make, extra, fragment):
     path = make(tmp_path)
@@ -76,8 +125,46 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, make, extra, fragmen
     assert main(["animate", str(path), *args]) == 2
     err = capsys.readouterr().err
     assert err.startswith("gyrowheel: error: ") and err.count("\n") == 1, err
-    assert fragment in err, err
+    assert fragment.format(d=tmp_path) in err, err
     assert not (tmp_path / "out.gif").exists()
+
+
+def test_api_names_its_arguments_and_says_what_a_file_is(tmp_path):
+    """gyrowheel.animate: a radius out of range is named as R (not a contradiction of the
+    result), a foreign FMU as fmu, an FMU (its BuildResult) given as the result is said to be one."""
+    import gyrowheel
+    from gyrowheel.fmu_build.builder import BuildResult
+    csv = rolling_csv(tmp_path / "ok.csv")
+    for R, got in ((-1.0, "-1"), (0.0, "0"), (float("nan"), "nan"), ("0.17", "str '0.17'")):
+        with pytest.raises(gyrowheel.AnimationError) as err:
+            gyrowheel.animate(csv, tmp_path / "x.html", R=R)
+        assert str(err.value) == f"R must be a finite number > 0 (the wheel radius in m), got {got}"
+        assert err.value.argument == "R"
+    with pytest.raises(gyrowheel.AnimationError) as err:
+        gyrowheel.animate(csv, tmp_path / "x.html", fmu=_zip(tmp_path / "spring.fmu"))
+    assert str(err.value).startswith(f"fmu {tmp_path / 'spring.fmu'}: no start value of R (the wheel radius): "
+                                     "not a wheel FMU built by gyrowheel; give R, or leave out fmu")
+    assert err.value.argument == "fmu"
+    built = BuildResult(fmu=_zip(tmp_path / "moon.fmu"), spec=None, sources=None, identifier="moon")
+    with pytest.raises(gyrowheel.AnimationError, match=r"^.*moon.fmu: an FMU, not a result CSV"):
+        gyrowheel.animate(built, tmp_path / "a.html")
+    assert not (tmp_path / "x.html").exists() and not (tmp_path / "a.html").exists()
+
+
+def test_a_speed_beyond_the_run_shows_its_start_and_stop(tmp_path, capsys):
+    """speed = 1e300 on a 2 s run: one frame step is longer than the run, so the animation is its
+    first and last instant (2 frames, not the start alone), and the command says so."""
+    import gyrowheel
+    csv = rolling_csv(tmp_path / "ok.csv")
+    tl = gyrowheel.animate(csv, tmp_path / "a.html", speed=1e300)
+    assert list(tl.time) == [0.0, 2.0]
+    tl = gyrowheel.animate(csv, tmp_path / "b.html", fps=1e-300)  # a step of inf s
+    assert list(tl.time) == [0.0, 2.0]
+    assert main(["animate", str(csv), "-o", str(tmp_path / "c.gif"), "--speed", "1e300", "--size", "96x64"]) == 0
+    out, err = capsys.readouterr()
+    assert "wrote " + str(tmp_path / "c.gif") + ": 2 frames at 25 fps" in out
+    assert ("note: at ×1e+300 and 25 fps one frame is 4e+298 s of the run, more than the 2 s shown: the animation "
+            "shows only its first and last instant; lower --speed") in err
 
 
 def _as_system_result(csv, path, components=("wheel",)):

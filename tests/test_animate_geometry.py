@@ -161,3 +161,16 @@ def test_frames_interpolate_the_rows(tmp_path):
     np.testing.assert_allclose(tl.poses.centre, wheel_poses(q, R).centre, atol=2e-5)
     assert tl.track_time[0] == 0.25 and tl.track_time[-1] == 1.0 and len(tl.track) == 2 + 74  # ends + rows 0.26 .. 0.99
     assert tl.readout[0].startswith("t =    0.25 s   beta =  80.0°   alpha =   11.5°   v = 1.02 m/s")
+
+
+def test_an_fmu_given_must_give_what_the_drawing_needs(earth_fmu, tmp_path):
+    """The paper wheel's FMU gives R to a plain run's drawing; for a Gyrover run (theta_p, tilt)
+    it has no flywheel, so it is refused rather than passed over for the model's defaults."""
+    plain = read_result(rolling_csv(tmp_path / "plain.csv"))
+    params = resolve_parameters(plain, fmu=earth_fmu)
+    assert params.R == 0.17 and params.source == {"R": earth_fmu.name}
+    gyrover = read_result(rolling_csv(tmp_path / "gyrover.csv", gyrover=True))
+    with pytest.raises(AnimationError, match=r"^--fmu .*paper_earth.fmu: no start value of L_pend, m_fly, "
+                       r"I_fly_axial \(the Gyrover's flywheel\), which this result's theta_p and tilt columns need"):
+        resolve_parameters(gyrover, fmu=earth_fmu)
+    assert resolve_parameters(gyrover).source["L_pend"] == "model default"  # without an FMU: said by the command

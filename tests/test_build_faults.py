@@ -6,20 +6,29 @@
 - on_lift_off = "ignore" means no event and no flag, also with the load-proportional laws that add
   a lift-off stop of their own; a law that cannot go on past lift-off makes the scene reader
   refuse the policy, naming the key.
+- a Scene object goes through the scene file's rules wherever it is built (build_fmu, export_c,
+  gyrowheel.build), answers every odd value as its file does, and builds the FMU its file would;
+  an output that is no .fmu name or is the scene file itself is refused before anything is built.
 """
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
+import re
+import zipfile
 
 import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 from scipy.integrate import solve_ivp
 
+import gyrowheel
+from conftest import SCENES
 from gyrowheel.fmu_build import build_fmu, parse_scene
 from gyrowheel.cli import main
-from gyrowheel.fmu_build.scene import SceneError
+from gyrowheel.errors import ArgumentError
+from gyrowheel.fmu_build.scene import Experiment, Scene, SceneError, check_scene, load_scene
 from gyrowheel.model import build_model
 from gyrowheel.model.build import FORMULATIONS
 from gyrowheel.model.effects import CATALOGUE
@@ -84,29 +93,150 @@ ODD_VALUES = ["[]", "{}", '"x"', "true", "1", "1.5", "-1", "0", "1e308", "inf", 
               '"touchdown"', '"ignore"', '"earth"']
 
 
-def test_reader_answers_every_odd_value_with_a_scene_error():
-    """Every key of every table with values of every TOML type: a SceneError or a scene, nothing else
-    (a list as solver, for one, must not escape as TypeError: unhashable type)."""
+NEIGHBOURS = ("effects.gravity", "effects.rolling_resistance")  # the effect tables beside an effect's own
+
+
+def _odd_scenes():
+    """(table, key, value's TOML text, the scene file's text): every key of every table with
+    every odd value (an effect's table beside NEIGHBOURS)."""
     keys = {"model": ["name", "description", "formulation"],
             "wheel": ["M", "R", "k_diam", "k_axial", "beta_min", "beta_min_deg"],
             "initial": ["beta", "beta_deg", "gamma_dot", "x_dot"],
-            "experiment": ["start_time", "stop_time", "output_interval", "solver", "rel_tol", "abs_tol", "max_step"],
+            "experiment": ["start_time", "stop_time", "output_interval", "solver", "rel_tol", "abs_tol", "max_step",
+                           "max_internal_steps"],
             "outputs": ["keep"]}
     keys.update({f"effects.{name}": [q.name for q in cls.parameters()] + list(cls.choices())
                  for name, cls in CATALOGUE.items()})
-    escaped = []
     for table, names in keys.items():
-        others = [t for t in ("effects.gravity", "effects.rolling_resistance") if t != table]
-        prefix = "".join(f"[{t}]\n" for t in others) if table.startswith("effects.") else ""
+        prefix = "".join(f"[{t}]\n" for t in NEIGHBOURS if t != table) if table.startswith("effects.") else ""
         for key, value in itertools.product(names, ODD_VALUES):
-            text = f"{prefix}[{table}]\n{key} = {value}\n"
-            try:
-                parse_scene(text, "s.toml")
-            except SceneError:
-                pass
-            except Exception as exc:  # noqa: BLE001
-                escaped.append(f"[{table}] {key} = {value}: {type(exc).__name__}: {exc}")
+            yield table, key, value, f"{prefix}[{table}]\n{key} = {value}\n"
+
+
+def test_reader_answers_every_odd_value_with_a_scene_error():
+    """Every key of every table with values of every TOML type: a SceneError or a scene, nothing else
+    (a list as solver, for one, must not escape as TypeError: unhashable type)."""
+    escaped = []
+    for table, key, value, text in _odd_scenes():
+        try:
+            parse_scene(text, "s.toml")
+        except SceneError:
+            pass
+        except Exception as exc:  # noqa: BLE001
+            escaped.append(f"[{table}] {key} = {value}: {type(exc).__name__}: {exc}")
     assert not escaped, "\n".join(escaped)
+
+
+def _object(table: str, key: str, value) -> Scene:
+    """The Scene object saying what `[table] key = value` says in the file (with the same
+    neighbouring effect tables as the file)."""
+    if table == "model":
+        return dataclasses.replace(Scene(), **{key: value})
+    if table == "experiment":
+        experiment = Experiment()
+        setattr(experiment, key, value)
+        return Scene(experiment=experiment)
+    if table == "outputs":
+        return Scene(outputs=value)
+    if table.startswith("effects."):
+        effects = {t.split(".", 1)[1]: {} for t in NEIGHBOURS if t != table}
+        effects[table.split(".", 1)[1]] = {key: value}
+        return Scene(effects=effects)
+    return dataclasses.replace(Scene(), **{table: {key: value}})
+
+
+def test_objects_answer_every_odd_value_as_their_files():
+    """One rule set: a Scene object holding each odd value where its file has it is refused with
+    the file's message (after the name of the file or scene), or read as the same scene."""
+    import tomllib
+    differ = []
+    for table, key, text, scene_text in _odd_scenes():
+        value = tomllib.loads(f"v = {text}")["v"]
+        try:
+            expected = parse_scene(scene_text, "wheel.toml")
+        except SceneError as exc:
+            expected = str(exc).split(": ", 1)[1]
+        try:
+            got = check_scene(_object(table, key, value))
+        except SceneError as exc:
+            got = re.sub(r"^scene .*?: \[", "[", str(exc))
+        if isinstance(expected, Scene) and isinstance(got, Scene):
+            same = dataclasses.replace(got, source="") == dataclasses.replace(expected, source="")
+        else:
+            same = got == expected
+        if not same:
+            differ.append(f"[{table}] {key} = {text}: file {expected!r}, object {got!r}")
+    assert not differ, "\n".join(differ)
+
+
+# -- what is built where ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("name,fragment", [
+    ("out.toml", "ends in '.toml'; an FMU's file name ends in .fmu (FMI 2.0.4, section 2.1)"),
+    ("noext", "has no extension; an FMU's file name ends in .fmu (FMI 2.0.4, section 2.1)"),
+])
+def test_an_fmu_is_written_only_to_an_fmu_name(tmp_path, name, fragment):
+    scene = load_scene(SCENES / "paper_moon.toml")
+    for build in (build_fmu, gyrowheel.build):
+        with pytest.raises(ArgumentError) as err:
+            build(scene, tmp_path / name)
+        assert str(err.value) == f"output {tmp_path / name}: {fragment}" and err.value.argument == "output"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_scene_file_is_never_overwritten(tmp_path, capsys):
+    """`gyrowheel build my2.toml -o my2.toml`: refused in one line naming -o, the scene unchanged;
+    a scene file named like an FMU is not overwritten by its own FMU either."""
+    scene = tmp_path / "my2.toml"
+    scene.write_text("[effects.gravity]\n")
+    assert main(["build", str(scene), "-o", str(scene)]) != 0
+    assert _one_error_line(capsys).startswith(f"gyrowheel: error: -o {scene}: is the scene file the FMU is built "
+                                              "from; writing the FMU there would overwrite it")
+    assert scene.read_text() == "[effects.gravity]\n"
+    odd = tmp_path / "odd.fmu"
+    odd.write_text("[effects.gravity]\n")
+    with pytest.raises(ArgumentError, match="is the scene file the FMU is built from"):
+        build_fmu(load_scene(odd), odd)
+    assert odd.read_text() == "[effects.gravity]\n"
+
+
+@pytest.mark.parametrize("change,message", [
+    (dict(effects={}), "scene 'paper_moon': [effects]: [effects.gravity] is required"),
+    (dict(name="a b"), "scene 'a b': [model] name: must be a C identifier (letters, digits, _), got 'a b'"),
+    (dict(wheel={"M": -1.0}), "scene 'paper_moon': [wheel] M: must be > 0, got -1.0"),
+])
+def test_every_build_path_checks_the_scene_object(tmp_path, change, message):
+    """build_fmu, export_c and gyrowheel.build / export_c refuse a Scene its file would be
+    refused for, before anything is written."""
+    from gyrowheel.fmu_build.export_c import export_c
+    scene = dataclasses.replace(load_scene(SCENES / "paper_moon.toml"), **change)
+    for build, out in ((build_fmu, "x.fmu"), (gyrowheel.build, "x.fmu"), (export_c, "x_c"),
+                       (gyrowheel.export_c, "x_c")):
+        with pytest.raises(SceneError) as err:
+            build(scene, tmp_path / out)
+        assert str(err.value).startswith(message), (build, str(err.value))
+    assert list(tmp_path.iterdir()) == []
+
+
+def _members(fmu) -> dict[str, bytes]:
+    with zipfile.ZipFile(fmu) as zf:
+        return {n: re.sub(rb'generationDateAndTime="[^"]*"', b"", zf.read(n)) for n in zf.namelist()}
+
+
+def test_a_scene_object_builds_the_fmu_of_its_file(tmp_path):
+    """A changed Scene builds exactly the FMU of the scene file saying the same (its documentation
+    shows that file); without build_dir no sources directory is pointed to; repr is short."""
+    moon = load_scene(SCENES / "paper_moon.toml")
+    changed = dataclasses.replace(moon, wheel={**moon.wheel, "M": 3}, initial={**moon.initial, "gamma_dot": 7})
+    built = build_fmu(changed, tmp_path / "object.fmu")
+    text = check_scene(changed).source
+    assert "M = 3.0" in text and "gamma_dot = 7.0" in text
+    (tmp_path / "paper_moon.toml").write_text(text)
+    from_file = build_fmu(load_scene(tmp_path / "paper_moon.toml"), tmp_path / "file.fmu", build_dir=tmp_path / "b")
+    assert _members(built.fmu) == _members(from_file.fmu)
+    assert built.sources is None and from_file.sources == tmp_path / "b" / "fmu" / "sources"
+    assert (from_file.sources / "gw_funcs.c").is_file()
+    assert repr(built) == f"BuildResult(fmu={tmp_path / 'object.fmu'!r}, identifier='paper_moon')"
 
 
 def test_unexpected_build_failure_is_one_line(tmp_path, capsys, monkeypatch):

@@ -32,6 +32,8 @@
                                           clear #error; the export's examples are not built
                                           inside the parent project
   test_cli_bad_input[...]                 one line `gyrowheel: error: ...`, exit 2
+  test_output_errors_name_output[...]     a directory that cannot take the export is named as the
+                                          `output` argument (export_c and gyrowheel.export_c)
   test_model_names_refused[...]           names that would break the user's program refused
                                           before anything is written: C23 / C++ keywords,
                                           reserved identifiers, standard header names (time.h on
@@ -296,6 +298,26 @@ def test_cli_bad_input(case, fragment, tmp_path):
     assert r.stderr.count("\n") == 1 and r.stderr.startswith("gyrowheel: error: ") and fragment in r.stderr, r.stderr
     if case == "not_empty":
         assert (out / "CMakeLists.txt").read_text() == "# the user's own\n"
+
+
+@pytest.mark.parametrize("case,fragment", [
+    ("file", "exists and is not a directory; the export is a directory (choose a new or empty one)"),
+    ("not_empty", "not empty and not a gyrowheel export; choose a new or empty directory"),
+    ("marker", f"its {MARKER} is unreadable; remove the directory to export into it"),
+])
+def test_output_errors_name_output(case, fragment, tmp_path):
+    import gyrowheel as api
+    scene = load_scene(SCENES / "paper_moon.toml")
+    out = tmp_path / "m.fmu"  # export_c(S, "m.fmu") with m.fmu an FMU beside it
+    if case == "file":
+        out.write_bytes(b"PK\x03\x04 an FMU")
+    else:
+        out.mkdir()
+        (out / ("notes.txt" if case == "not_empty" else MARKER)).write_text("mine")
+    for export in (export_c, api.export_c):
+        with pytest.raises(ExportError) as err:
+            export(scene, out, check=False)
+        assert str(err.value) == f"output {out}: {fragment}" and err.value.argument == "output"
 
 
 @pytest.mark.parametrize("name,fragment", [

@@ -68,7 +68,7 @@ class Resolver:
             if v.type == "Boolean" and value.lower() in ("true", "false"):
                 return base, value.lower() == "true"
             if v.type == "Enumeration":
-                raise SweepSpecError(f"{where}: {value!r} is not an item of {name!r}; valid: "
+                raise SweepSpecError(f"{where}: value {value!r} for {name!r} is not one of its items; valid: "
                                      f"{', '.join(v.items)} (or their numbers){missing_item_hint(base, value)}")
             choices = list(self.presets.get(base, {}))
             extra = f"; valid: {', '.join(choices)} or a number" if choices else ""

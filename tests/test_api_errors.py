@@ -221,9 +221,10 @@ def test_an_argument_of_the_wrong_type_is_named(moon, tmp_path):
 
 @pytest.mark.parametrize("kwargs, error, argument, message", [
     (dict(solver="taylor"), gyrowheel.SweepSpecError, "solver",
-     "solver: 'taylor' is not an item of 'solver'; valid: euler, rk4, dopri5, rosenbrock, dop853 (or their numbers); "
-     "taylor needs an FMU built with the Taylor kernel: gyrowheel.build(..., taylor=True)"),
-    (dict(solver="nope"), gyrowheel.SweepSpecError, "solver", "solver: 'nope' is not an item of 'solver'; valid: "),
+     "solver: value 'taylor' for 'solver' is not one of its items; valid: euler, rk4, dopri5, rosenbrock, dop853 (or "
+     "their numbers); taylor needs an FMU built with the Taylor kernel: gyrowheel.build(..., taylor=True)"),
+    (dict(solver="nope"), gyrowheel.SweepSpecError, "solver",
+     "solver: value 'nope' for 'solver' is not one of its items; valid: "),
     (dict(max_step=math.nan), gyrowheel.SweepSpecError, "max_step", "max_step: value nan for 'max_step' is not finite"),
     (dict(grid="beta_deg=60:80:3"), ArgumentTypeError, "grid",
      "grid: expected a mapping or a list of 'NAME=SPEC' strings, got str 'beta_deg=60:80:3'"),

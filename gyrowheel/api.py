@@ -10,7 +10,9 @@ Every function takes a path or the parsed object alike (a scene: a path or a gyr
 an FMU: a path or the BuildResult that built it; a system: a path to an .ssp or its
 SystemDescription; a result: a CSV path or the array simulate returned), returns data, and
 names its own arguments in its errors (`grid['beta_deg'] = '60:89': ...`, `stop_time must be
-> 0`). The `gyrowheel` command calls exactly these functions (gyrowheel/cli.py).
+> 0`), every one a GyrowheelError (gyrowheel/errors.py; the checks every function shares:
+gyrowheel/arguments.py, the FMU a run needs: gyrowheel.description.open_fmu). The `gyrowheel`
+command calls exactly these functions (gyrowheel/cli.py).
 
 Importing this module imports no third-party package: each function imports what it uses,
 and a function whose optional part is not installed raises MissingExtraError
@@ -26,7 +28,7 @@ from pathlib import Path
 
 from gyrowheel import arguments
 from gyrowheel.arguments import check_memory, count, existing_file, flag, number, path
-from gyrowheel.errors import ArgumentError, ArgumentTypeError, FmuError, GyrowheelError, SweepSpecError
+from gyrowheel.errors import ArgumentError, ArgumentTypeError, GyrowheelError, SweepSpecError
 from gyrowheel.extras import require
 from gyrowheel.wording import ANIMATE, SWEEP, reworded
 

@@ -5,6 +5,7 @@ DefaultExperiment, the ModelVariables with their types) and from the archive: th
 under binaries/ (section 2.3), whether it carries sources/, and for an FMU built by gyrowheel its
 effects (documentation/index.html) and whether it has the Taylor kernel (the ensemble path).
 str(info) is the text `gyrowheel info` prints; info.as_dict() what `gyrowheel info --json` prints.
+open_fmu is where simulate, info and sweep open an FMU and say what is wrong with one.
 """
 from __future__ import annotations
 

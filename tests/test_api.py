@@ -114,6 +114,9 @@ def test_public_names():
     for name in ("SimulationError", "MasterError", "EnsembleError", "CompileError"):
         assert issubclass(getattr(gyrowheel, name), RuntimeError), name
     assert issubclass(gyrowheel.MissingExtraError, ImportError)
+    # a wrong type: an ArgumentError (so a ValueError) and a TypeError, as Python's own
+    assert issubclass(gyrowheel.ArgumentTypeError, gyrowheel.ArgumentError)
+    assert issubclass(gyrowheel.ArgumentTypeError, TypeError)
     assert issubclass(gyrowheel.SweepInterrupted, KeyboardInterrupt)
     assert not issubclass(gyrowheel.SweepInterrupted, Exception)
 

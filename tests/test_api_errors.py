@@ -69,8 +69,8 @@ def _names(exc: pytest.ExceptionInfo, argument: str | None, *fragments: str) -> 
 # -- one memory rule for every run that collects rows -----------------------------------------------
 
 def test_a_run_too_large_for_the_memory_is_refused_before_it_starts(moon, solo, tmp_path):
-    """simulate(stop_time=1e300) filled the machine's memory (23.5 GB) instead of refusing; the
-    system run's refusal printed the number of points as a 303-digit integer."""
+    """A result that cannot fit is refused at once, not collected until the machine runs out of
+    memory; a count too large to read in digits is given as 1e+302."""
     outputs = sum(v.causality == "output" for v in gyrowheel.info(moon).variables)
     t0 = time.monotonic()
     with pytest.raises(gyrowheel.ArgumentError) as exc:
@@ -119,9 +119,9 @@ def test_one_memory_rule_for_simulate_system_run_and_sweep(moon, solo, monkeypat
     ("schema", "bad3.fmu: not a readable FMU: modelDescription.xml breaks the FMI 2.0 schema: "),
 ])
 def test_an_fmu_that_cannot_run_here_says_why(foreign, capsys, kind, message):
-    """`gyrowheel simulate fmi3.fmu` / `win.fmu` ended in fmpy's traceback ("Cannot find shared
-    library", "cannot be simulated on the current platform"), exit 1, a plain Exception in the
-    API; `gyrowheel info bad3.fmu` printed six lines of fmpy's validation."""
+    """FMI 3.0, a binary for another platform only, a modelDescription.xml breaking the schema:
+    an FmuError saying which, in one line (fmpy's own words are a plain Exception or several
+    lines of validation); the command exits 2 with that line."""
     from gyrowheel.cli import main
     fmu = foreign[kind]
     for verb in ("simulate", "info")[:1 if kind == "win" else 2]:
@@ -149,8 +149,9 @@ def test_info_of_an_fmu_without_a_description(foreign):
 # -- a file of another kind, a directory -----------------------------------------------------------
 
 def test_a_directory_or_a_file_of_another_kind_is_named_as_such(moon, tmp_path):
-    """A directory was 'no such FMU file' (simulate, info), 'no such result file' (animate), 'no
-    such SSP file' (system_run); an FMU given as a scene was 'not a text file (TOML is UTF-8)'."""
+    """A directory is named a directory (not 'no such FMU / result / SSP file'), an FMU given as
+    a scene an FMU (not a text file that is no UTF-8), a Scene given as an FMU a Scene: what the
+    user gave, so they see what to give instead."""
     run = tmp_path / "run"
     run.mkdir()
     cases = [(lambda: gyrowheel.simulate(run), gyrowheel.FmuError, "fmu", "is a directory, not an FMU file"),
@@ -178,8 +179,9 @@ def test_a_directory_or_a_file_of_another_kind_is_named_as_such(moon, tmp_path):
 # -- wrong types: GyrowheelErrors (and TypeErrors) naming the argument ------------------------------
 
 def test_an_argument_of_the_wrong_type_is_named(moon, tmp_path):
-    """Each was a TypeError, AttributeError or FileNotFoundError of Python, numpy, pandas or
-    distributed ('DataFrame constructor not properly called!', "'<' not supported ...")."""
+    """A GyrowheelError naming the argument, a TypeError too for a wrong type: never Python's,
+    numpy's, pandas' or distributed's own error ('DataFrame constructor not properly called!',
+    "'<' not supported ..."), which names no argument."""
     scene = gyrowheel.load_scene(SCENES / "paper_moon.toml")
     run = gyrowheel.simulate(moon, stop_time=0.2)
     sweep = dict(grid={"M": [2.0]}, stop_time=0.1)
@@ -217,7 +219,7 @@ def test_an_argument_of_the_wrong_type_is_named(moon, tmp_path):
     assert not (tmp_path / "x.fmu").exists() and not (tmp_path / "x.gif").exists()
 
 
-# -- sweep: the argument the user gave, not where the engine put it ---------------------------------
+# -- sweep: the argument the user gave, as given ---------------------------------------------------
 
 @pytest.mark.parametrize("kwargs, error, argument, message", [
     (dict(solver="taylor"), gyrowheel.SweepSpecError, "solver",
@@ -232,7 +234,7 @@ def test_an_argument_of_the_wrong_type_is_named(moon, tmp_path):
      "fixed: expected a mapping or a list of 'NAME=VALUE' strings, got str 'gamma_dot=8'"),
     (dict(metric_functions="mod:f"), ArgumentTypeError, "metric_functions",
      "metric_functions: expected a list of 'module:function' references or functions, got str 'mod:f'"),
-    # silently accepted before: samples without random repeated every grid point 5 times
+    # samples without random would run every grid point 5 times alike
     (dict(samples=5), gyrowheel.SweepSpecError, "samples",
      "samples 5 without random: there is nothing to draw; give random NAME=DIST, or leave samples out"),
     (dict(workers=2, scheduler="tcp://127.0.0.1:1"), gyrowheel.SweepSpecError, "workers",
@@ -240,7 +242,7 @@ def test_an_argument_of_the_wrong_type_is_named(moon, tmp_path):
     (dict(ensemble="x"), ArgumentTypeError, "ensemble", "ensemble must be True or False, got str 'x'"),
     (dict(fixed=["gamma_dot=8", "gamma_dot=9"]), gyrowheel.SweepSpecError, "fixed",
      "fixed['gamma_dot']: given twice, as gamma_dot=8 and gamma_dot=9"),
-    # the reported grid: numpy made its 10^9 values (8 GB) before the check of the point count
+    # an axis of 10^9 values (8 GB as numpy's array) is refused before it is made
     (dict(grid={"beta_deg": "60:89:1000000000"}), gyrowheel.SweepSpecError, "grid",
      "grid['beta_deg'] = '60:89:1000000000': 1000000000 values, more than the 10000000 points of one sweep"),
 ])
@@ -262,8 +264,8 @@ def test_sweep_names_the_argument_given(moon, kwargs, error, argument, message):
 ])
 def test_sweep_values_every_point_would_fail_with_are_refused_before_it_runs(moon, tmp_path, kwargs, argument,
                                                                                engine):
-    """`--rel-tol -1` gave "wrote rt.csv: 3 rows (3 failed)", exit 0, each row failing with
-    fmi2SetReal's range message."""
+    """A value the unit refuses for every point (`--rel-tol -1`) is refused before the sweep,
+    naming the argument, rather than written as a table whose every row failed."""
     started = []
     with pytest.raises(gyrowheel.SweepSpecError) as exc:
         gyrowheel.sweep(moon, grid={"beta_deg": "60:80:3"}, stop_time=2.0, workers=0, output=tmp_path / "rt.csv",
@@ -274,7 +276,8 @@ def test_sweep_values_every_point_would_fail_with_are_refused_before_it_runs(moo
 
 
 def test_sweep_table_columns_do_not_depend_on_failed_points(moon):
-    """Every point failing (a mass the model refuses) left a table with no metric column at all."""
+    """Every point failing (a mass the model refuses) still gives the metric columns, empty: a
+    table's columns do not depend on its outcomes."""
     kw = dict(grid={"gamma_dot": [5.0, 6.0]}, stop_time=0.1, workers=0)
     ok, failed = gyrowheel.sweep(moon, fixed={"M": 2.0}, **kw), gyrowheel.sweep(moon, fixed={"M": -1.0}, **kw)
     assert (ok["status"] == "ok").all() and (failed["status"] == "error").all()
@@ -284,8 +287,8 @@ def test_sweep_table_columns_do_not_depend_on_failed_points(moon):
 
 
 def test_a_metric_function_must_return_numbers(moon):
-    """A metric function's number is a column; anything else fails the point with the reason,
-    instead of a column of whatever it returned."""
+    """A metric function's number is a column; anything else fails the point, the reason naming
+    the function and what it returned (a column of text would break the table's numbers)."""
     table = gyrowheel.sweep(moon, grid={"gamma_dot": [5.0, 6.0]}, stop_time=0.1, workers=0, metrics=["survived"],
                             metric_functions=[lambda traj: 5, lambda traj: {"lean": float(traj["beta"][-1])}])
     assert list(table["<lambda>"]) == [5, 5] and table["lean"].notna().all() and (table["status"] == "ok").all()
@@ -302,8 +305,8 @@ def test_a_metric_function_must_return_numbers(moon):
 # -- simulate -------------------------------------------------------------------------------------
 
 def test_simulate_names_what_it_cannot_use(moon, tmp_path):
-    """`--set gamma_dot=8 --set gamma_dot=9`: the last won silently; solver taylor on an FMU
-    without the kernel listed the solvers but not how to get taylor (docs/interface.md)."""
+    """A start value given twice is refused (which one was meant?); solver taylor on an FMU
+    without the kernel lists the solvers and says how to get taylor (docs/interface.md)."""
     with pytest.raises(gyrowheel.ArgumentError) as exc:
         gyrowheel.simulate(moon, start_values=["gamma_dot=8", "gamma_dot=9"])
     _names(exc, "start_values", "start_values: 'gamma_dot' given twice (gamma_dot=8, gamma_dot=9)")
@@ -314,7 +317,7 @@ def test_simulate_names_what_it_cannot_use(moon, tmp_path):
 
 
 def test_a_figure_names_its_run_once(moon, tmp_path, monkeypatch):
-    """`simulate --plot` drew the FMU's name twice, as the figure's and the column's title."""
+    """`simulate --plot` names the FMU once: the column's title, no figure title repeating it."""
     import matplotlib.figure
     titles = []
     monkeypatch.setattr(matplotlib.figure.Figure, "suptitle", lambda self, text, **kw: titles.append(text))

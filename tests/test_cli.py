@@ -155,18 +155,17 @@ def test_info_json(built):
 
 
 @pytest.mark.parametrize("args, line", [
-    # an output that cannot be written is bad input (exit 2), as the same directory given to
-    # simulate is (build exited 1)
+    # an output that cannot be written is bad input (exit 2), for build as for simulate
     (("build", "{scene}", "-o", "{dir}"), "-o {dir}: is a directory; give a file name"),
     (("simulate", "{fmu}", "-o", "{dir}"), "-o {dir}: is a directory; give a file name"),
     (("build", "{scene}", "-o", "{csv}/x.fmu"), "-o {csv}/x.fmu: cannot write: {csv} is not a directory"),
     (("build", "{scene}", "-o", "{dir}/x.fmu", "--keep-build", "{csv}"), "--keep-build {csv}: exists and is not a "
                                                                           "directory"),
-    # argparse's own errors are one line too (it printed its usage first)
+    # argparse's own errors are one line too, without the usage
     (("simulate", "{fmu}", "--stop-time", "nan"), "argument --stop-time: 'nan' is not a finite number (see "
                                                   "gyrowheel simulate --help)"),
     (("simulate",), "the following arguments are required: fmu (see gyrowheel simulate --help)"),
-    # a run whose rows would not fit in the memory is refused before it starts (it filled it)
+    # a run whose rows would not fit in the memory is refused before it starts
     (("simulate", "{fmu}", "--stop-time", "1e300"), "--stop-time 1e+300 s with --output-interval 0.01 s: 1e+302 "
                                                     "communication points of 14 columns would take "),
     # a directory, or a file of another kind, named as such
@@ -179,7 +178,7 @@ def test_info_json(built):
     # a value given twice: refused, not the last one taken
     (("simulate", "{fmu}", "--set", "gamma_dot=8", "--set", "gamma_dot=9"),
      "--set: 'gamma_dot' given twice (gamma_dot=8, gamma_dot=9)"),
-    # a value every point of a sweep would fail with (3 failed rows and exit 0)
+    # a value every point of a sweep would fail with: refused, no table of failed rows
     (("sweep", "{fmu}", "--grid", "beta_deg=60:80:3", "--rel-tol", "-1", "--stop-time", "2", "--workers", "0",
       "-o", "{dir}/rt.csv"), "--rel-tol: the unit refuses -1.0 for every point: fmi2SetReal: rel_tol = -1 is outside "
                              "its valid range"),
@@ -194,7 +193,8 @@ def test_bad_input_exits_2_with_one_line(built, tmp_path, args, line):
 
 
 def test_a_reader_that_goes_away_is_no_error(built):
-    """`gyrowheel info moon.fmu --json | head -2` said "gyrowheel: error: Broken pipe", exit 1."""
+    """`gyrowheel info moon.fmu --json | head -2`: a reader that has what it wants and goes away
+    is no error (exit 0, nothing on stderr)."""
     for reader in ("head -2", "true"):  # true reads nothing: the pipe is closed before the first write
         r = subprocess.run(f"{sys.executable} -m gyrowheel info --json {built} | {reader}; exit ${{PIPESTATUS[0]}}",
                            shell=True, executable="/bin/bash", capture_output=True, text=True, cwd=ROOT)
@@ -203,7 +203,7 @@ def test_a_reader_that_goes_away_is_no_error(built):
 
 
 def test_the_sweep_says_where_it_runs(monkeypatch, capsys):
-    """The sweep's first line said "on LocalCluster of all cores worker(s)"."""
+    """The sweep's first line says where it runs in words, with the number of workers."""
     import os
     from types import SimpleNamespace
 

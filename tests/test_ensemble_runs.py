@@ -165,8 +165,7 @@ def test_ensemble_of_a_file_that_is_no_fmu_names_it(tmp_path):
         with pytest.raises(FmuError, match=re.escape(f"{path}: ") + ".*" + re.escape(message)) as info:
             Ensemble(path, cache=tmp_path / "cache")
         assert info.value.argument == "fmu" and isinstance(info.value, ValueError)
-    # a scene, as a file or a Scene: say so, and how to build the FMU the ensemble needs (they
-    # gave "not an FMU (not a zip archive)" and a TypeError of pathlib)
+    # a scene, as a file or a Scene: say so, and how to build the FMU the ensemble needs
     from gyrowheel.fmu_build.scene import load_scene
     build = ("build its FMU first; taylor needs an FMU built with the Taylor kernel: gyrowheel.build(..., "
              "taylor=True), `gyrowheel build --taylor`, or solver = \"taylor\" in the scene")
@@ -238,9 +237,9 @@ def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path,
 
 
 def test_ensemble_advice_is_what_run_can_do(paper, tmp_path):
-    """A trajectory the budget of internal steps stops advised "raise max_internal_steps or
-    shorten the communication step", neither of which Ensemble.run has: its message advises a
-    grid (the budget is per communication step), and a grid carries the same run through."""
+    """A trajectory the budget of internal steps stops is told what Ensemble.run can change (it
+    has no max_internal_steps): a grid, since the budget is per communication step; and a grid
+    carries the same run through."""
     built, _ = paper
     ens = Ensemble(built.fmu, cache=tmp_path)
     kw = dict(parameters={"g": [1.625]}, starts={"gamma_dot": [8.0]})

@@ -68,7 +68,7 @@ def test_cli_errors_are_one_line_exit_2(earth_fmu, tmp_path, capsys, argv, messa
     (dict(random={"M": "normal:2:0.1"}, samples=2, seed=-1), "--seed must be a whole number >= 0"),
     (dict(random={"M": "normal:2:0.1"}, samples=2, seed=1.5), "--seed must be a whole number >= 0"),
     (dict(random={"M": "normal:2:0.1"}, samples=2.5), "--samples must be a whole number"),
-    # accepted before, to every grid point run 3 times alike / every row failing with the FMU's range
+    # refused before running: every grid point would run 3 times alike / every row would fail
     (dict(grid={"M": [1.0]}, samples=3), "--samples 3 without --random: there is nothing to draw"),
     (dict(grid={"M": [1.0]}, rel_tol=-1.0), r"--rel-tol: the unit refuses -1.0 for every point: fmi2SetReal: "
                                             r"rel_tol = -1 is outside its valid range \[2.22e-15, 1\]"),

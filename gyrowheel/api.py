@@ -50,9 +50,12 @@ def _scene(scene):
     if isinstance(scene, str) and "\n" in scene:
         raise ArgumentError("scene: got TOML text, not a path; read text with gyrowheel.parse_scene(text) "
                             "and pass the Scene", argument="scene")
-    file = existing_file(scene, "scene", "scene", what="a path to a scene file (.toml) or a gyrowheel.Scene",
-                         error=SceneError)
-    return load_scene(file), str(file), file.name
+    file = path(scene, "scene", "a path to a scene file (.toml) or a gyrowheel.Scene")
+    try:  # load_scene says what is wrong with the file (also what it is, when it is no scene)
+        return load_scene(file), str(file), file.name
+    except SceneError as exc:
+        exc.argument = exc.argument or "scene"
+        raise
 
 
 def _seconds(value, argument: str) -> float | None:
@@ -163,7 +166,10 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False):
     from gyrowheel.fmu_build.scene import SceneError
 
     parsed, where, _ = _scene(scene)
-    out = _output_file(output if output is not None else f"{parsed.name}.fmu", "output")
+    out = path(output if output is not None else f"{parsed.name}.fmu", "output", "a file path ending in .fmu")
+    if out.is_dir():  # said first: a directory has no .fmu to check
+        raise ArgumentError(f"output {out}: is a directory; give a file name", argument="output")
+    out = _output_file(builder.check_output(out, parsed.file), "output")  # (.fmu, not the scene: made after)
     build_dir = None if build_dir is None else _output_directory(build_dir, "build_dir")
     taylor = flag(taylor, "taylor")
     try:
@@ -379,16 +385,13 @@ def animate(result, output, *, R: float | None = None, fmu=None, component: str 
     from gyrowheel.animation import animate as draw
     from gyrowheel.animation.command import parse_size
 
-    if isinstance(result, (str, os.PathLike)):
-        result = existing_file(result, "result", "result", what="a result CSV", error=AnimationError, kinds=())
-    elif not (hasattr(result, "dtype") or hasattr(result, "data")):
+    if not (isinstance(result, (str, os.PathLike)) or hasattr(result, "dtype") or hasattr(result, "data")):
         raise ArgumentTypeError(f"result must be a result CSV (a path), the structured array of gyrowheel.simulate "
                                 f"or a gyrowheel.RunResult, got {type(result).__name__}", argument="result")
     output = path(output, "output", "a file path (.gif, .mp4 or .html)")
-    for name, value in (("R", R), ("fps", fps), ("speed", speed), ("trail", trail), ("start", start),
-                        ("stop", stop)):
-        if value is not None or name in ("fps", "speed"):
-            number(value, name, error=AnimationError)
+    for name, value in (("fps", fps), ("speed", speed), ("trail", trail), ("start", start), ("stop", stop)):
+        if value is not None or name in ("fps", "speed"):  # their types; the ranges (and R): the engine
+            number(value, name, finite=False)
     if component is not None and not isinstance(component, str):
         raise ArgumentTypeError(f"component must be a component's name, got {arguments.shown(component)}",
                                 argument="component")

@@ -1,7 +1,7 @@
 """The checks every verb of gyrowheel makes of its arguments, in one place.
 
 Types and ranges (number, whole, flag, path), the file an argument names (existing_file: no such
-file, a directory, a file of another kind: a scene where an FMU goes, an FMU where a scene goes),
+file, a directory, a file of another kind: a scene where an FMU goes, an FMU where a system goes),
 and the one rule on the size of a run's result (check_memory), which simulate, system_run, the
 sweep and the Ensemble apply before they collect a single row.
 
@@ -97,10 +97,8 @@ KINDS = {"scene": ("scene", "a scene", "a scene file"), "fmu": ("FMU", "an FMU",
 # (the file's kind, the kind expected) -> what to do instead
 ADVICE = {("scene", "fmu"): "build its FMU first",
           ("scene", "ssp"): "build its FMU first",
-          ("fmu", "scene"): "a scene is a TOML file (docs/scenes.md)",
           ("fmu", "ssp"): "simulate it with gyrowheel.simulate (`gyrowheel simulate`)",
-          ("ssp", "fmu"): "run it with gyrowheel.system_run (`gyrowheel system run`)",
-          ("ssp", "scene"): "run it with gyrowheel.system_run (`gyrowheel system run`)"}
+          ("ssp", "fmu"): "run it with gyrowheel.system_run (`gyrowheel system run`)"}
 
 
 def file_kind(path: Path) -> str | None:
@@ -120,14 +118,14 @@ def file_kind(path: Path) -> str | None:
     return {".toml": "scene", ".csv": "result", ".fmu": "fmu", ".ssp": "ssp"}.get(path.suffix.lower())
 
 
-def existing_file(value, name: str, expected: str, *, what: str, error: type, argument: str | None = None,
-                  kinds: tuple[str, ...] = tuple(KINDS)) -> Path:
-    """The path of an existing file of kind `expected` ('scene', 'fmu', 'ssp', 'result').
+def existing_file(value, name: str, expected: str, *, what: str, error: type, argument: str | None = None) -> Path:
+    """The path of an existing file of kind `expected` ('fmu', 'ssp'; a scene and a result CSV
+    are checked by their readers: gyrowheel.fmu_build.scene.load_scene, the animation's).
 
     value: a str or os.PathLike (else ArgumentTypeError: `{name} must be {what}`). Raises
     `error` with the message beginning with the file: `x.fmu: no such FMU file`, `out: is a
     directory, not an FMU file`, `moon.toml: a scene, not an FMU; build its FMU first` (a file
-    of another of `kinds`; a file of no known kind is left to the reader, which says what is
+    of another known kind; one of no known kind is left to the reader, which says what is
     wrong with it)."""
     path_ = path(value, name, what, argument=argument)
     noun, _, a_file = KINDS[expected]
@@ -137,7 +135,7 @@ def existing_file(value, name: str, expected: str, *, what: str, error: type, ar
     kind = file_kind(path_)
     if kind == "directory":
         raise error(f"{path_}: is a directory, not {a_file}", argument=argument)
-    if kind in KINDS and kind != expected and kind in kinds:
+    if kind in KINDS and kind != expected:
         advice = ADVICE.get((kind, expected))
         raise error(f"{path_}: {KINDS[kind][1]}, not {KINDS[expected][1]}" + (f"; {advice}" if advice else ""),
                     argument=argument)
@@ -184,8 +182,10 @@ def check_memory(values: float, bytes_per_value: float, what: str, advice: str, 
 
 # -- the solver an FMU does not have ----------------------------------------------------------------
 
-TAYLOR_HINT = ("taylor needs an FMU built with the Taylor kernel: gyrowheel.build(..., taylor=True), "
-               "`gyrowheel build --taylor`, or solver = \"taylor\" in the scene")
+# how to get an FMU with the Taylor kernel (solver taylor, the Ensemble), in the API's words and the command's
+TAYLOR_BUILD = ("gyrowheel.build(scene, output, taylor=True) or `gyrowheel build --taylor SCENE -o FMU` (or "
+                "solver = \"taylor\" in the scene's [experiment])")
+TAYLOR_HINT = f"taylor needs an FMU built with the Taylor kernel: {TAYLOR_BUILD}"
 
 
 def missing_item_hint(variable: str, value) -> str:

@@ -65,9 +65,7 @@ _LONG_DTYPE = np.int64 if _LONG == 8 else np.int32
 # runtime, compiled for a model through the unity file library_source writes
 LIBRARY_SOURCE = "gw_ensemble_lib.c"
 # what an FMU without the Taylor kernel is told, in the Python API's words and the command's
-NO_KERNEL = ("which the ensemble path needs: build its scene with the kernel, gyrowheel.build(scene, output, "
-             "taylor=True) or `gyrowheel build --taylor SCENE -o FMU` (or solver = \"taylor\" in the scene's "
-             "[experiment])")
+NO_KERNEL = f"which the ensemble path needs: build its scene with the kernel, {arguments.TAYLOR_BUILD}"
 _C_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
@@ -235,7 +233,7 @@ def _fmu_path(fmu) -> Path:
     """The fmu argument (a path; a gyrowheel.BuildResult is one) as a Path: a scene (a .toml, a
     gyrowheel.Scene) is refused naming how to build the FMU the ensemble needs, anything else
     that is no path with an ArgumentTypeError."""
-    build = f"build its FMU first; {arguments.TAYLOR_HINT}"
+    build = f"build its FMU with the Taylor kernel first: {arguments.TAYLOR_BUILD}"
     if not isinstance(fmu, (str, os.PathLike)):
         from gyrowheel.fmu_build.scene import Scene
         if isinstance(fmu, Scene):

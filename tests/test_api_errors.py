@@ -151,21 +151,22 @@ def test_info_of_an_fmu_without_a_description(foreign):
 def test_a_directory_or_a_file_of_another_kind_is_named_as_such(moon, tmp_path):
     """A directory is named a directory (not 'no such FMU / result / SSP file'), an FMU given as
     a scene an FMU (not a text file that is no UTF-8), a Scene given as an FMU a Scene: what the
-    user gave, so they see what to give instead."""
+    user gave, so they see what to give instead. (Scene and result files: their readers say it,
+    tests/test_scene.py, tests/test_animate_cli.py; here, that every verb gets there.)"""
     run = tmp_path / "run"
     run.mkdir()
     cases = [(lambda: gyrowheel.simulate(run), gyrowheel.FmuError, "fmu", "is a directory, not an FMU file"),
              (lambda: gyrowheel.info(run), gyrowheel.FmuError, "fmu", "is a directory, not an FMU file"),
              (lambda: gyrowheel.system_run(run), gyrowheel.SystemFileError, "system",
               "is a directory, not an SSP file"),
-             (lambda: gyrowheel.animate(run, tmp_path / "x.gif"), gyrowheel.AnimationError, "result",
-              "is a directory, not a result file"),
+             (lambda: gyrowheel.animate(run, tmp_path / "x.gif"), gyrowheel.AnimationError, None,
+              "is a directory, not a result CSV"),
              (lambda: gyrowheel.sweep(run, grid={"M": [2.0]}, workers=0), gyrowheel.SweepSpecError, "source",
               "is a directory, not a scene, FMU or system file"),
              (lambda: gyrowheel.build(moon.fmu, tmp_path / "x.fmu"), gyrowheel.SceneError, "scene",
-              "paper_moon.fmu: an FMU, not a scene; a scene is a TOML file (docs/scenes.md)"),
+              "paper_moon.fmu: an FMU (a zip archive), not a scene file: a scene is TOML text (docs/scenes.md)"),
              (lambda: gyrowheel.export_c(moon, tmp_path / "x_c", check=False), gyrowheel.SceneError, "scene",
-              "paper_moon.fmu: an FMU, not a scene"),
+              "paper_moon.fmu: an FMU (a zip archive), not a scene file"),
              (lambda: gyrowheel.simulate(gyrowheel.load_scene(SCENES / "paper_moon.toml")), gyrowheel.FmuError, "fmu",
               "fmu: a gyrowheel.Scene, not an FMU; build its FMU first: gyrowheel.build(scene)")]
     for call, error, argument, message in cases:
@@ -224,7 +225,7 @@ def test_an_argument_of_the_wrong_type_is_named(moon, tmp_path):
 @pytest.mark.parametrize("kwargs, error, argument, message", [
     (dict(solver="taylor"), gyrowheel.SweepSpecError, "solver",
      "solver: value 'taylor' for 'solver' is not one of its items; valid: euler, rk4, dopri5, rosenbrock, dop853 (or "
-     "their numbers); taylor needs an FMU built with the Taylor kernel: gyrowheel.build(..., taylor=True)"),
+     "their numbers); taylor needs an FMU built with the Taylor kernel: gyrowheel.build(scene, output, taylor=True)"),
     (dict(solver="nope"), gyrowheel.SweepSpecError, "solver",
      "solver: value 'nope' for 'solver' is not one of its items; valid: "),
     (dict(max_step=math.nan), gyrowheel.SweepSpecError, "max_step", "max_step: value nan for 'max_step' is not finite"),
@@ -313,7 +314,8 @@ def test_simulate_names_what_it_cannot_use(moon, tmp_path):
     with pytest.raises(gyrowheel.ArgumentError) as exc:
         gyrowheel.simulate(moon, start_values={"solver": "taylor"})
     _names(exc, "start_values", "valid: euler, rk4, dopri5, rosenbrock, dop853; taylor needs an FMU built with the "
-                                "Taylor kernel: gyrowheel.build(..., taylor=True), `gyrowheel build --taylor`")
+                                "Taylor kernel: gyrowheel.build(scene, output, taylor=True) or `gyrowheel build "
+                                "--taylor SCENE -o FMU`")
 
 
 def test_a_figure_names_its_run_once(moon, tmp_path, monkeypatch):

@@ -171,10 +171,12 @@ def test_info_json(built):
     # a directory, or a file of another kind, named as such
     (("simulate", "{dir}"), "{dir}: is a directory, not an FMU file"),
     (("info", "{dir}"), "{dir}: is a directory, not an FMU file"),
-    (("animate", "{dir}", "-o", "{dir}/x.gif"), "{dir}: is a directory, not a result file"),
+    (("animate", "{dir}", "-o", "{dir}/x.gif"), "{dir}: is a directory, not a result CSV"),
     (("system", "run", "{dir}"), "{dir}: is a directory, not an SSP file"),
-    (("build", "{fmu}"), "{fmu}: an FMU, not a scene; a scene is a TOML file (docs/scenes.md)"),
-    (("export-c", "{fmu}", "-o", "{dir}/c"), "{fmu}: an FMU, not a scene; a scene is a TOML file (docs/scenes.md)"),
+    (("system", "run", "{fmu}"), "{fmu}: an FMU, not an SSP system; simulate it with gyrowheel.simulate "
+                                 "(`gyrowheel simulate`)"),
+    (("build", "{fmu}"), "{fmu}: an FMU (a zip archive), not a scene file: a scene is TOML text (docs/scenes.md)"),
+    (("export-c", "{fmu}", "-o", "{dir}/c"), "{fmu}: an FMU (a zip archive), not a scene file"),
     # a value given twice: refused, not the last one taken
     (("simulate", "{fmu}", "--set", "gamma_dot=8", "--set", "gamma_dot=9"),
      "--set: 'gamma_dot' given twice (gamma_dot=8, gamma_dot=9)"),

@@ -167,8 +167,8 @@ def test_ensemble_of_a_file_that_is_no_fmu_names_it(tmp_path):
         assert info.value.argument == "fmu" and isinstance(info.value, ValueError)
     # a scene, as a file or a Scene: say so, and how to build the FMU the ensemble needs
     from gyrowheel.fmu_build.scene import load_scene
-    build = ("build its FMU first; taylor needs an FMU built with the Taylor kernel: gyrowheel.build(..., "
-             "taylor=True), `gyrowheel build --taylor`, or solver = \"taylor\" in the scene")
+    build = ("build its FMU with the Taylor kernel first: gyrowheel.build(scene, output, taylor=True) or "
+             "`gyrowheel build --taylor SCENE -o FMU` (or solver = \"taylor\" in the scene's [experiment])")
     for fmu, message in ((SCENES / "paper_moon.toml", f"{SCENES / 'paper_moon.toml'}: a scene, not an FMU; {build}"),
                          (load_scene(SCENES / "paper_moon.toml"), f"fmu: a gyrowheel.Scene, not an FMU; {build}")):
         with pytest.raises(FmuError) as info:

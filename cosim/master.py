@@ -11,7 +11,6 @@ as "<component>.<variable>", sampled at the communication points.
 from __future__ import annotations
 
 import math
-import os
 import shutil
 import time as _time
 from dataclasses import dataclass, field
@@ -21,6 +20,8 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Discard
 
+from gyrowheel.arguments import check_memory
+from gyrowheel.arguments import count as count_text
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.cosim.system import SystemDescription, SystemFileError, coerce_value
 from gyrowheel.cosim.fmi_log import forget_messages, logging_callbacks
@@ -79,22 +80,16 @@ def _set(unit: _Unit, name: str, value) -> None:
     unit.put(v.valueReference, v.type, value)
 
 
-def _physical_memory() -> int:
-    """Bytes of physical memory (0 where the platform does not say)."""
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (ValueError, OSError, AttributeError):
-        return 0
-
-
 def run(system: SystemDescription, step: float, stop_time: float | None = None,
         start_values: dict[str, dict[str, float]] | None = None) -> RunResult:
     """Run the system with communication step `step` [s] to stop_time (default: the system's).
 
     start_values: {component: {variable: value}} on top of the system's own. Raises
     MasterError if a component fails (fmi2Error; the message carries the FMU's logged reason),
-    ValueError for a bad step or stop time (or a result that would not fit in half the machine's
-    memory), SystemFileError (a ValueError) for a system whose connections do not fit its FMUs.
+    ValueError for a bad step or stop time, ArgumentError (a ValueError, naming stop_time) for a
+    result that would take more than half of this machine's memory
+    (gyrowheel.arguments.check_memory), SystemFileError (a ValueError) for a system whose
+    connections do not fit its FMUs.
     """
     if not (step > 0 and math.isfinite(step)):
         raise ValueError(f"step must be a positive number of seconds, got {step!r}")
@@ -114,11 +109,10 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
     system.check()
     columns = 1 + sum(sum(v.causality == "output" for v in read_model_description(str(c.fmu)).modelVariables)
                       for c in system.components)
-    need, have = (n_steps + 1) * columns * 8, _physical_memory()
-    if have and need > have / 2:
-        raise ValueError(f"{n_steps + 1} communication points of {columns} columns would take "
-                         f"{need / 2**30:.3g} GiB, more than half of this machine's {have / 2**30:.3g} GiB: "
-                         f"choose a longer step or a shorter stop time")
+    # the result: every point in one float64 array, copied once at the end (data[:count].copy())
+    check_memory((n_steps + 1) * columns, 16, f"stop_time {stop:g} s with step {step:g} s: "
+                 f"{count_text(n_steps + 1)} communication points of {columns} columns",
+                 "choose a shorter stop_time or a longer step", argument="stop_time")
     units = []
     try:
         for c in system.components:

@@ -42,7 +42,8 @@ _EXPORTS = {
     "RunResult": "gyrowheel.cosim.master", "SystemDescription": "gyrowheel.cosim.system",
     "Timeline": "gyrowheel.animation.timeline",
     # errors
-    "GyrowheelError": "gyrowheel.errors", "ArgumentError": "gyrowheel.errors", "FmuError": "gyrowheel.errors",
+    "GyrowheelError": "gyrowheel.errors", "ArgumentError": "gyrowheel.errors",
+    "ArgumentTypeError": "gyrowheel.errors", "FmuError": "gyrowheel.errors",
     "SweepSpecError": "gyrowheel.errors", "SweepInterrupted": "gyrowheel.errors",
     "MissingExtraError": "gyrowheel.errors", "UnknownNameError": "gyrowheel.errors", "SceneError": "gyrowheel.fmu_build.scene",
     "SimulationError": "gyrowheel.simulation", "ExportError": "gyrowheel.fmu_build.export_c",

@@ -10,7 +10,9 @@ Every function takes a path or the parsed object alike (a scene: a path or a gyr
 an FMU: a path or the BuildResult that built it; a system: a path to an .ssp or its
 SystemDescription; a result: a CSV path or the array simulate returned), returns data, and
 names its own arguments in its errors (`grid['beta_deg'] = '60:89': ...`, `stop_time must be
-> 0`). The `gyrowheel` command calls exactly these functions (gyrowheel/cli.py).
+> 0`), every one a GyrowheelError (gyrowheel/errors.py; the checks every function shares:
+gyrowheel/arguments.py, the FMU a run needs: gyrowheel.description.open_fmu). The `gyrowheel`
+command calls exactly these functions (gyrowheel/cli.py).
 
 Importing this module imports no third-party package: each function imports what it uses,
 and a function whose optional part is not installed raises MissingExtraError
@@ -24,7 +26,9 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
-from gyrowheel.errors import ArgumentError, FmuError, GyrowheelError, SweepSpecError
+from gyrowheel import arguments
+from gyrowheel.arguments import check_memory, count, existing_file, flag, number, path
+from gyrowheel.errors import ArgumentError, ArgumentTypeError, GyrowheelError, SweepSpecError
 from gyrowheel.extras import require
 from gyrowheel.wording import ANIMATE, SWEEP, reworded
 
@@ -37,88 +41,87 @@ def one_line(exc: BaseException) -> str:
     return lines[-1] if lines else type(exc).__name__
 
 
-def _path(value, argument: str, what: str) -> Path:
-    """A str or os.PathLike argument as a Path; TypeError naming the argument otherwise."""
-    if isinstance(value, (str, os.PathLike)):
-        return Path(value)
-    raise TypeError(f"{argument} must be {what}, got {type(value).__name__}")
-
-
 def _scene(scene):
     """(Scene, how errors name it, the scene file's name or '') from a path or a Scene."""
-    from gyrowheel.fmu_build.scene import Scene, load_scene
+    from gyrowheel.fmu_build.scene import Scene, SceneError, load_scene
 
     if isinstance(scene, Scene):
         return scene, f"scene {scene.name!r}", ""
     if isinstance(scene, str) and "\n" in scene:
         raise ArgumentError("scene: got TOML text, not a path; read text with gyrowheel.parse_scene(text) "
                             "and pass the Scene", argument="scene")
-    path = _path(scene, "scene", "a path to a scene file (.toml) or a gyrowheel.Scene")
-    return load_scene(path), str(path), path.name
-
-
-def _fmu_file(fmu, argument: str = "fmu") -> Path:
-    """An FMU argument (a path, or the BuildResult of gyrowheel.build) as the path of a file."""
-    path = _path(fmu, argument, "a path to an FMU (.fmu) or the gyrowheel.BuildResult of one")
-    if path.suffix.lower() == ".toml":
-        raise FmuError(f"{path}: a scene, not an FMU; build its FMU first", argument=argument)
-    if not path.is_file():
-        raise FmuError(f"{path}: no such FMU file", argument=argument)
-    return path
-
-
-def _model_description(path: Path):
-    """fmpy's ModelDescription of an FMU with Co-Simulation; FmuError otherwise."""
-    from fmpy import read_model_description
-    try:
-        md = read_model_description(str(path))
-    except Exception as exc:  # fmpy raises plain Exceptions for broken archives and XML
-        raise FmuError(f"{path}: not a readable FMU: {exc}", argument="fmu") from None
-    if md.coSimulation is None:
-        raise FmuError(f"{path}: the FMU does not support Co-Simulation", argument="fmu")
-    return md
+    file = path(scene, "scene", "a path to a scene file (.toml) or a gyrowheel.Scene")
+    try:  # load_scene says what is wrong with the file (also what it is, when it is no scene)
+        return load_scene(file), str(file), file.name
+    except SceneError as exc:
+        exc.argument = exc.argument or "scene"
+        raise
 
 
 def _seconds(value, argument: str) -> float | None:
     """None, or a finite number of seconds > 0 (ArgumentError naming the argument)."""
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ArgumentError(f"{argument} must be a number of seconds, got {type(value).__name__} {value!r}",
-                            argument=argument)
-    value = float(value)
-    if not math.isfinite(value):
-        raise ArgumentError(f"{argument} must be finite, got {value!r}", argument=argument)
+    value = number(value, argument, what="a number of seconds")
     if not value > 0:
         raise ArgumentError(f"{argument} must be > 0, got {value!r}", argument=argument)
     return value
 
 
-def _flag(value, argument: str) -> bool:
-    if not isinstance(value, bool):
-        raise TypeError(f"{argument} must be True or False, got {type(value).__name__} {value!r}")
-    return value
-
-
-def _output_file(path, argument: str = "output") -> Path:
+def _output_file(value, argument: str = "output") -> Path:
     """A file a function will write: not a directory; its directory is created. Checked before
     the work, not after it. Raises ArgumentError naming the argument (also for a directory that
-    cannot be made because a file is in the way), OSError for other failures (permissions)."""
-    path = _path(path, argument, "a file path")
-    if path.is_dir():
-        raise ArgumentError(f"{argument} {path}: is a directory; give a file name", argument=argument)
+    cannot be made because a file is in the way, or cannot be made at all)."""
+    file = path(value, argument, "a file path")
+    if file.is_dir():
+        raise ArgumentError(f"{argument} {file}: is a directory; give a file name", argument=argument)
+    _make_directory(file.parent, file, argument)
+    return file
+
+
+def _output_directory(value, argument: str) -> Path:
+    """A directory a function will write into: a directory or a path where one can be made
+    (made now); ArgumentError naming the argument otherwise."""
+    directory = path(value, argument, "a directory path")
+    if directory.exists() and not directory.is_dir():
+        raise ArgumentError(f"{argument} {directory}: exists and is not a directory", argument=argument)
+    _make_directory(directory, directory, argument)
+    return directory
+
+
+def _make_directory(directory: Path, given: Path, argument: str) -> None:
+    """Make `directory` (and its parents) for the argument that names `given`; ArgumentError."""
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except (FileExistsError, NotADirectoryError):
-        blocker = next((p for p in reversed(path.parents) if p.exists() and not p.is_dir()), path.parent)
-        raise ArgumentError(f"{argument} {path}: cannot write: {blocker} is not a directory",
+        directory.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):  # a file where a directory goes: name it
+        blocker = next((p for p in (directory, *directory.parents) if p.exists() and not p.is_dir()), directory)
+        raise ArgumentError(f"{argument} {given}: cannot write: {blocker} is not a directory",
                             argument=argument) from None
-    return path
+    except OSError as exc:
+        raise ArgumentError(f"{argument} {given}: cannot write: {exc.strerror or exc}", argument=argument) from None
+
+
+def _written(exc: OSError, paths: Mapping[str, Path | None], error: type = ArgumentError) -> GyrowheelError | None:
+    """An OSError while writing one of `paths` ({argument: path}) as `error` naming that argument
+    (`output /proc/x: cannot write: No such file or directory`); None if it names none of them."""
+    if not exc.filename:
+        return None
+    failed = Path(exc.filename).absolute()
+    for argument, given in paths.items():
+        if given is None:
+            continue
+        mine = given.absolute()
+        inside = failed == mine or mine in failed.parents
+        beside = failed.parent == mine.parent and failed.name.startswith(mine.name)  # its .part while written
+        if inside or beside:
+            return error(f"{argument} {given}: cannot write: {exc.strerror or exc}", argument=argument)
+    return None
 
 
 def _assignments(values, argument: str) -> dict[str, object]:
     """Start values as {name: value}: a mapping, or NAME=VALUE strings as the command line gives
-    them (values stay text, checked later against the FMU). ArgumentError names a bad item."""
+    them (values stay text, checked later against the FMU). ArgumentError names a bad item, and
+    a name given twice (the last does not silently win)."""
     if values is None:
         return {}
     if isinstance(values, Mapping):
@@ -129,12 +132,15 @@ def _assignments(values, argument: str) -> dict[str, object]:
     if isinstance(values, str) or not isinstance(values, Sequence):
         raise ArgumentError(f"{argument}: expected a mapping {{name: value}} or a list of 'NAME=VALUE' "
                             f"strings, got {values!r}", argument=argument)
-    out = {}
+    out: dict[str, object] = {}
     for item in values:
         if not isinstance(item, str) or "=" not in item or not item.split("=", 1)[0].strip():
             raise ArgumentError(f"{argument} {item!r}: expected NAME=VALUE", argument=argument)
-        name, text = item.split("=", 1)
-        out[name.strip()] = text.strip()
+        name, text = (part.strip() for part in item.split("=", 1))
+        if name in out:
+            raise ArgumentError(f"{argument}: {name!r} given twice ({name}={out[name]}, {name}={text})",
+                                argument=argument)
+        out[name] = text
     return out
 
 
@@ -151,20 +157,30 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False):
     Returns a gyrowheel.BuildResult: fmu (the path), spec (the ModelSpec: variables, effects),
     sources (the C sources' directory, kept only with build_dir), identifier (the model
     identifier); it is os.PathLike, so it stands for its FMU in every other function.
-    Raises SceneError (the file, table and key at fault; a combination the model refuses),
-    ArgumentError (output), CompileError (the C compiler failed, with its output), TypeError
-    (an argument of the wrong type), OSError (a file that cannot be written).
+    Raises SceneError (the file, table and key at fault; a file that is no scene, e.g. an FMU; a
+    combination the model refuses), ArgumentError (output or build_dir that cannot be written,
+    named), ArgumentTypeError (an argument of the wrong type), CompileError (the C compiler
+    failed, with its output).
     """
     from gyrowheel.fmu_build import builder
     from gyrowheel.fmu_build.scene import SceneError
 
     parsed, where, _ = _scene(scene)
-    out = _output_file(output if output is not None else f"{parsed.name}.fmu", "output")
-    build_dir = None if build_dir is None else _path(build_dir, "build_dir", "a directory path")
+    out = path(output if output is not None else f"{parsed.name}.fmu", "output", "a file path ending in .fmu")
+    if out.is_dir():  # said first: a directory has no .fmu to check
+        raise ArgumentError(f"output {out}: is a directory; give a file name", argument="output")
+    out = _output_file(builder.check_output(out, parsed.file), "output")  # (.fmu, not the scene: made after)
+    build_dir = None if build_dir is None else _output_directory(build_dir, "build_dir")
+    taylor = flag(taylor, "taylor")
     try:
-        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=_flag(taylor, "taylor"))
+        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=taylor)
     except GyrowheelError:
         raise
+    except OSError as exc:  # the FMU or the build directory could not be written
+        error = _written(exc, {"output": out, "build_dir": build_dir})
+        if error is None:
+            raise
+        raise error from None
     except ValueError as exc:  # a combination the model refuses (the message names the key)
         raise SceneError(f"{where}: {one_line(exc)}") from exc
 
@@ -183,23 +199,26 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
     [s] and every output by name (units: gyrowheel.info). A terminating event (the wheel falling
     flat) ends the run early; its last row is at the event and the Boolean output 'fallen' is
     True there.
-    Raises FmuError (no such file, not an FMU), ArgumentError (a bad time, start value or
-    output path, named), SimulationError (the FMU refused the run: its logged reason),
-    MissingExtraError (plot without matplotlib), TypeError.
+    Raises FmuError (no such file, not an FMI 2.0 FMU that can run here: which and why),
+    ArgumentError (a bad time, start value or output path, named; a run whose rows would take
+    more than half of this machine's memory, naming stop_time and output_interval),
+    ArgumentTypeError (an argument of the wrong type), SimulationError (the FMU refused the run:
+    its logged reason), MissingExtraError (plot without matplotlib).
     """
     from gyrowheel.simulation import SimulationError, check_start_values, run, write_csv
 
-    path = _fmu_file(fmu)
+    checked = _fmu(fmu)
+    path, md = checked.path, checked.model_description
     stop_time, output_interval = _seconds(stop_time, "stop_time"), _seconds(output_interval, "output_interval")
     if plot is not None:
         require("plot", "gyrowheel.simulate(plot=...)")
     csv = _output_file(output, "output") if output is not None else None
     png = _output_file(plot, "plot") if plot is not None else None
-    _model_description(path)
     try:
         starts = check_start_values(path, _assignments(start_values, "start_values"))
     except SimulationError as exc:
         raise ArgumentError(f"start_values: {exc}", argument="start_values") from None
+    _check_rows(md, stop_time, output_interval)
     result = run(path, stop_time=stop_time, output_interval=output_interval, start_values=starts)
     if csv is not None:
         write_csv(result, csv)
@@ -207,6 +226,32 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
         from gyrowheel.plotting import plot_trajectories
         plot_trajectories({path.stem: result}, png, title=path.stem)
     return result
+
+
+def _fmu(fmu, argument: str = "fmu"):
+    """The FMU argument of a run, checked (gyrowheel.description.open_fmu): an FmuFile."""
+    from gyrowheel.description import open_fmu
+    return open_fmu(fmu, argument, to_run=True)
+
+
+def _check_rows(md, stop_time: float | None, output_interval: float | None) -> None:
+    """The memory rule (gyrowheel.arguments.check_memory) for fmpy's run of an FMU: one row of
+    every output per communication point, from the start time to stop_time, as simulate_fmu
+    picks the defaults (the DefaultExperiment, else a stop time of 1 s and 500 intervals)."""
+    exp = md.defaultExperiment
+    start = float(exp.startTime) if exp is not None and exp.startTime else 0.0
+    stop = stop_time if stop_time is not None else (float(exp.stopTime) if exp is not None and exp.stopTime
+                                                    else start + 1.0)
+    interval = output_interval if output_interval is not None else (
+        float(exp.stepSize) if exp is not None and exp.stepSize else (stop - start) / 500)
+    if not (stop > start and interval > 0):
+        return  # fmpy refuses these itself
+    rows = math.floor((stop - start) / interval) + 2  # every point, the last landing on stop_time
+    columns = 1 + sum(v.causality == "output" for v in md.modelVariables)
+    check_memory(rows * columns, arguments.FMPY_BYTES_PER_VALUE,
+                 f"stop_time {stop:g} s with output_interval {interval:g} s: {count(rows)} communication points "
+                 f"of {columns} columns", "choose a shorter stop_time or a longer output_interval",
+                 argument="stop_time" if stop_time is not None or output_interval is None else "output_interval")
 
 
 def info(fmu):
@@ -218,10 +263,11 @@ def info(fmu):
     (typed), unit and description, the effects, the solver choices, the platforms in
     binaries/, whether it carries sources and the Taylor kernel. str(info) is the text
     `gyrowheel info` prints, info.as_dict() the JSON of `gyrowheel info --json`.
-    Raises FmuError (no such file, not a readable FMU), TypeError.
+    Raises FmuError (no such file, not an FMI 2.0 FMU gyrowheel can read: which and why),
+    ArgumentTypeError (fmu of the wrong type).
     """
     from gyrowheel.description import read_info
-    return read_info(_fmu_file(fmu))
+    return read_info(fmu)
 
 
 def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: int = 0, points=None,
@@ -259,22 +305,27 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     Returns a pandas DataFrame, one row per point: point, the inputs, the metrics, status
     ('ok', 'error'), reason, wall_time [s].
     Raises SweepSpecError naming the argument (`grid['beta_deg'] = '60:89': ...`,
-    `fixed['R']: ...`, `stop_time ...`) before anything runs; SweepInterrupted (a
-    KeyboardInterrupt) when Ctrl-C stops it, with the table of the points done;
-    SceneError for a scene that cannot be read or built; MissingExtraError without
-    gyrowheel[sweep]; OSError / TimeoutError for a scheduler that cannot be reached; TypeError
-    for a source of another kind.
+    `fixed['R']: ...`, `stop_time ...`, a value every point sets that the unit refuses, e.g.
+    `rel_tol: ... outside its valid range`, a run whose rows would take more than half of this
+    machine's memory) before anything runs; ArgumentTypeError naming an argument of the wrong
+    type; FmuError for an FMU source that is not an FMI 2.0 FMU that can run here;
+    SweepInterrupted (a KeyboardInterrupt) when Ctrl-C stops it, with the table of the points
+    done; SceneError for a scene that cannot be read or built; MissingExtraError without
+    gyrowheel[sweep]; OSError / TimeoutError for a scheduler that cannot be reached.
     """
-    arguments = dict(locals())  # every argument, forwarded as given (fixed as strings: parsed below)
+    given = dict(locals())  # every argument, forwarded as given (fixed as strings: parsed below)
     require("sweep", "gyrowheel.sweep()")
     from gyrowheel.studies.api import sweep as run_sweep
     from gyrowheel.studies.spec import parse_assignments
 
-    by_name = tuple(name for name in ("grid", "random") if isinstance(arguments[name], Mapping))
-    with reworded(SWEEP, (SweepSpecError,), by_name):
+    if isinstance(source, (str, os.PathLike)) and (Path(source).suffix.lower() == ".fmu"
+                                                   or arguments.file_kind(Path(source)) == "fmu"):
+        _fmu(source, "source")
+    by_name = tuple(name for name in ("grid", "random") if isinstance(given[name], Mapping))
+    with reworded(SWEEP, (SweepSpecError, ArgumentTypeError), by_name):
         if fixed is not None and not isinstance(fixed, Mapping):
-            arguments["fixed"] = parse_assignments(fixed)
-        return run_sweep(**arguments)
+            given["fixed"] = parse_assignments(fixed)
+        return run_sweep(**given)
 
 
 def export_c(scene, output=None, *, check: bool = True):
@@ -285,18 +336,26 @@ def export_c(scene, output=None, *, check: bool = True):
     the user's kept). check: first probe the model name against the C library's declarations,
     and afterwards compile '<model>.c' strictly (C99, all warnings as errors).
     Returns gyrowheel.ExportResult: directory, identifier, files (relative), spec.
-    Raises SceneError, ExportError (a model name C cannot take, a directory that cannot be
-    used), CompileError, TypeError, OSError.
+    Raises SceneError (as build), ExportError (a model name C cannot take, an output directory
+    that cannot be used or written, named), ArgumentTypeError (an argument of the wrong type),
+    CompileError.
     """
+    from gyrowheel.fmu_build.export_c import ExportError
     from gyrowheel.fmu_build.export_c import export_c as write_export
     from gyrowheel.fmu_build.scene import SceneError
 
     parsed, where, scene_file = _scene(scene)
-    out = _path(output if output is not None else f"{parsed.name}_c", "output", "a directory path")
+    out = path(output if output is not None else f"{parsed.name}_c", "output", "a directory path")
+    check = flag(check, "check")
     try:
-        return write_export(parsed, out, check=_flag(check, "check"), scene_file=scene_file)
+        return write_export(parsed, out, check=check, scene_file=scene_file)
     except GyrowheelError:
         raise
+    except OSError as exc:  # the output directory could not be written (e.g. /proc/x)
+        error = _written(exc, {"output": out}, ExportError)
+        if error is None:
+            raise
+        raise error from None
     except ValueError as exc:  # a combination the model refuses, or an output table it cannot hold
         raise SceneError(f"{where}: {one_line(exc)}") from exc
 
@@ -318,13 +377,28 @@ def animate(result, output, *, R: float | None = None, fmu=None, component: str 
     contact track behind the wheel (default: all); start, stop [s]: the part of the run shown.
     Returns the animation's Timeline (frame times, poses, parameters with their sources).
     Raises AnimationError naming the argument or the file, column and row at fault;
-    MissingExtraError without gyrowheel[animate].
+    ArgumentTypeError naming an argument of the wrong type; MissingExtraError without
+    gyrowheel[animate].
     """
     require("animate", "gyrowheel.animate()")
     from gyrowheel.animation import AnimationError
     from gyrowheel.animation import animate as draw
     from gyrowheel.animation.command import parse_size
 
+    if not (isinstance(result, (str, os.PathLike)) or hasattr(result, "dtype") or hasattr(result, "data")):
+        raise ArgumentTypeError(f"result must be a result CSV (a path), the structured array of gyrowheel.simulate "
+                                f"or a gyrowheel.RunResult, got {type(result).__name__}", argument="result")
+    output = path(output, "output", "a file path (.gif, .mp4 or .html)")
+    for name, value in (("fps", fps), ("speed", speed), ("trail", trail), ("start", start), ("stop", stop)):
+        if value is not None or name in ("fps", "speed"):  # their types; the ranges (and R): the engine
+            number(value, name, finite=False)
+    if component is not None and not isinstance(component, str):
+        raise ArgumentTypeError(f"component must be a component's name, got {arguments.shown(component)}",
+                                argument="component")
+    if fmu is not None:
+        fmu = path(fmu, "fmu", "a path to an FMU or .ssp, or a gyrowheel.BuildResult")
+        if fmu.is_dir():
+            raise AnimationError(f"{fmu}: is a directory, not an FMU or SSP file", argument="fmu")
     with reworded(ANIMATE, (AnimationError,)):
         if isinstance(size, str):
             size = parse_size(size)
@@ -332,8 +406,6 @@ def animate(result, output, *, R: float | None = None, fmu=None, component: str 
                   and all(isinstance(v, numbers.Integral) and not isinstance(v, bool) for v in size)):
             raise AnimationError(f"size: expected (WIDTH, HEIGHT) in pixels or 'WIDTHxHEIGHT', got {size!r}",
                                  argument="size")
-        if fmu is not None:
-            fmu = _path(fmu, "fmu", "a path to an FMU or .ssp, or a gyrowheel.BuildResult")
         timeline = draw(result, output, R=R, fmu=fmu, component=component, fps=fps, speed=speed,
                         size=tuple(int(v) for v in size), trail=trail, start=start, stop=stop)
     if timeline.parameters.source.get("R") == "--R":  # the engine's label for a radius given
@@ -354,14 +426,15 @@ def system_run(system, *, step: float = 0.01, stop_time: float | None = None, st
     Returns gyrowheel.cosim.master.RunResult: data (structured array: time [s] and every
     output as '<component>.<variable>'), stopped_by (the component that ended the run early,
     e.g. the wheel falling flat, or None), wall_time [s].
-    Raises SystemFileError (the .ssp, naming the element at fault), ArgumentError (step,
-    stop_time, start_values, output), MasterError (a component failed: its logged reason),
-    TypeError.
+    Raises SystemFileError (the .ssp, naming the element at fault; a file that is no .ssp),
+    ArgumentError (step, stop_time, start_values, output; a run whose rows would take more than
+    half of this machine's memory), ArgumentTypeError (an argument of the wrong type),
+    MasterError (a component failed: its logged reason).
     """
     import tempfile
 
     from gyrowheel.cosim.master import run
-    from gyrowheel.cosim.system import SystemDescription, read_ssp
+    from gyrowheel.cosim.system import SystemDescription, SystemFileError, read_ssp
     from gyrowheel.simulation import write_csv
 
     step = _seconds(step, "step")
@@ -373,7 +446,8 @@ def system_run(system, *, step: float = 0.01, stop_time: float | None = None, st
         if isinstance(system, SystemDescription):
             description = system
         else:
-            description = read_ssp(_path(system, "system", "a path to an .ssp or a SystemDescription"), tmp)
+            description = read_ssp(existing_file(system, "system", "ssp", what="a path to an .ssp or a "
+                                                 "SystemDescription", error=SystemFileError), tmp)
         starts = _system_start_values(description, start_values)
         try:
             result = run(description, step, stop_time, start_values=starts)

@@ -1,15 +1,26 @@
 """The `gyrowheel` command: build, simulate, describe, sweep, animate and export wheel FMUs.
 
 Each verb is one call of gyrowheel's Python API (gyrowheel/api.py) and prints what it returned.
-Errors are one line on stderr and a non-zero exit (2: bad input, 1: failure), never a
-traceback; a verb whose optional part is not installed says which pip command installs it
-(exit 2). Setting up the parser imports no optional part, so `--help` works in the core install.
+Errors are one line on stderr, `gyrowheel: error: ...`, never a traceback, and the exit status
+says which kind (docs/architecture.md, "Errors"):
+
+    0    done (also when the reader of the output goes away: `gyrowheel info --json | head`)
+    2    bad input: an argument the command line itself refuses (argparse), or a ValueError or
+         ImportError of gyrowheel's (a file that is missing or of the wrong kind, a value out of
+         range, a scene, FMU or system that cannot be used, an output that cannot be written, a
+         run too large for the memory, an optional part not installed: its pip command)
+    1    a failure: the FMU, the system or the C compiler failed (their reason), an operating
+         system error
+    130  interrupted (Ctrl-C)
+
+Setting up the parser imports no optional part, so `--help` works in the core install.
 """
 from __future__ import annotations
 
 import argparse
 import json
 import math
+import os
 import re
 import signal
 import sys
@@ -32,6 +43,16 @@ SYSTEM_FLAGS = {"step": "--step", "stop_time": "--stop-time", "start_values": "-
 EXPORT_FLAGS = {"output": "-o"}
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse's parser with its errors in one line, as every other error of the command
+    (argparse prints the usage first): `gyrowheel: error: argument --stop-time: 'nan' is not a
+    finite number (see gyrowheel simulate --help)`, exit 2. The sub-commands' parsers are
+    Parsers too (add_subparsers makes them of the parser's class)."""
+
+    def error(self, message: str):
+        self.exit(EXIT_BAD_INPUT, f"gyrowheel: error: {message} (see {self.prog} --help)\n")
+
+
 class CliError(Exception):
     def __init__(self, message: str, code: int = EXIT_BAD_INPUT):
         super().__init__(message)
@@ -51,12 +72,17 @@ def finite_float(text: str) -> float:
 
 def flagged(exc: BaseException, flags: dict[str, str]) -> str:
     """An API error in the command's words: the engines' own text (they word their errors in the
-    flags already: gyrowheel.wording), or the message with the argument it begins with given as
-    its flag (`stop_time must be > 0` -> `--stop-time must be > 0`)."""
+    flags already: gyrowheel.wording), or the message with the arguments it names given as their
+    flags: the argument it begins with (`stop_time must be > 0` -> `--stop-time must be > 0`)
+    and any other argument whose name cannot be a word of the text (`... choose a shorter
+    stop_time or a longer output_interval` -> `... --stop-time ... --output-interval`)."""
     text = command_line_text(exc)
     argument = getattr(exc, "argument", None)
     if argument in flags and re.match(rf"{re.escape(argument)}(?![\w./\\-])", text):
         text = flags[argument] + text[len(argument):]
+    for name, flag in flags.items():
+        if "_" in name:
+            text = re.sub(rf"(?<![\w.-]){re.escape(name)}(?![\w-])", flag, text)
     return text
 
 
@@ -74,8 +100,8 @@ def cmd_build(args) -> int:
 
     try:
         result = build(args.scene, args.output, build_dir=args.keep_build, taylor=args.taylor)
-    except ArgumentError as exc:  # an FMU it cannot write: a failure of the build, as any OSError
-        raise CliError(flagged(exc, BUILD_FLAGS), EXIT_FAILURE) from None
+    except ArgumentError as exc:  # an output or build directory that cannot be written (exit 2)
+        raise CliError(flagged(exc, BUILD_FLAGS)) from None
     except CompileError as exc:
         raise CliError(f"compiling the FMU failed: {exc}", EXIT_FAILURE) from None
     except GyrowheelError:  # the scene: one line naming the file, table and key (exit 2)
@@ -128,7 +154,7 @@ def cmd_info(args) -> int:
     try:
         description = info(args.fmu)
     except GyrowheelError as exc:
-        raise CliError(str(exc)) from None
+        raise CliError(flagged(exc, {})) from None
     print(json.dumps(description.as_dict(), indent=2) if args.json else description)
     return 0
 
@@ -187,7 +213,7 @@ def make_parser() -> argparse.ArgumentParser:
     from gyrowheel.animation.command import add_arguments as add_animate_arguments
     from gyrowheel.studies.cli import add_parser as add_sweep_parser  # no Dask import until it runs
 
-    parser = argparse.ArgumentParser(prog="gyrowheel", description="Build and run FMI 2.0 FMUs of a rolling wheel.")
+    parser = Parser(prog="gyrowheel", description="Build and run FMI 2.0 FMUs of a rolling wheel.")
     parser.add_argument("--version", action="version", version=f"gyrowheel {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     b = sub.add_parser("build", help="build an FMU from a scene file")
@@ -248,9 +274,18 @@ def _main(argv: list[str] | None) -> int:
         parser = make_parser()
     except KeyboardInterrupt:
         return 130
-    args = parser.parse_args(argv)
     try:
-        return args.func(args)
+        args = parser.parse_args(argv)
+    except SystemExit:  # --help, --version, or argparse's one-line error
+        try:
+            sys.stdout.flush()
+        except BrokenPipeError:  # `gyrowheel --help | head -1`
+            _quiet_stdout()
+        raise
+    try:
+        code = args.func(args)
+        sys.stdout.flush()  # here, where a reader gone away is seen (below), not at Python's exit
+        return code
     except CliError as exc:
         print(f"gyrowheel: error: {exc}", file=sys.stderr)
         return exc.code
@@ -259,10 +294,24 @@ def _main(argv: list[str] | None) -> int:
         return EXIT_BAD_INPUT if isinstance(exc, (ValueError, ImportError)) else EXIT_FAILURE
     except KeyboardInterrupt:
         return 130
+    except BrokenPipeError:  # the reader went away (`gyrowheel info --json | head -2`): no error
+        _quiet_stdout()
+        return 0
     except OSError as exc:  # a file the command could not write or read: one line, never a traceback
         print(f"gyrowheel: error: {exc.filename or ''}{': ' if exc.filename else ''}{exc.strerror or exc}",
               file=sys.stderr)
         return EXIT_FAILURE
+
+
+def _quiet_stdout() -> None:
+    """Send what is left for stdout to /dev/null: its reader has gone, and Python would report
+    the broken pipe again when it flushes stdout at exit."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # stdout is no file (captured): nothing to flush
+        pass
 
 
 if __name__ == "__main__":

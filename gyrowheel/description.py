@@ -5,18 +5,94 @@ DefaultExperiment, the ModelVariables with their types) and from the archive: th
 under binaries/ (section 2.3), whether it carries sources/, and for an FMU built by gyrowheel its
 effects (documentation/index.html) and whether it has the Taylor kernel (the ensemble path).
 str(info) is the text `gyrowheel info` prints; info.as_dict() what `gyrowheel info --json` prints.
+open_fmu is where simulate, info and sweep open an FMU and say what is wrong with one.
 """
 from __future__ import annotations
 
 import html
+import os
 import re
 import zipfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from gyrowheel.arguments import existing_file
 from gyrowheel.errors import FmuError, UnknownNameError
 
 TAYLOR_HEADER = "sources/gw_taylor_model.h"  # holds GW_TL_NVAR when the model has the Taylor kernel
+FMU_WHAT = "a path to an FMU (.fmu) or the gyrowheel.BuildResult of one"
+
+
+@dataclass(frozen=True)
+class FmuFile:
+    """An FMU that open_fmu checked: its path, fmpy's ModelDescription, the archive's file names."""
+
+    path: Path
+    model_description: object
+    names: tuple[str, ...]
+
+
+def open_fmu(fmu, argument: str = "fmu", *, to_run: bool = False) -> FmuFile:
+    """Check that `fmu` is an FMI 2.0 FMU gyrowheel can read, and with to_run also run here;
+    the one place simulate, info and sweep open an FMU and say what is wrong with it.
+
+    fmu: a path (str or os.PathLike: a gyrowheel.BuildResult is one). argument: the name of the
+    calling function's argument, which the errors carry. to_run: also require Co-Simulation
+    (FMI 2.0.4, section 4) and a binary for this platform (section 2.3: binaries/<platform>/
+    <modelIdentifier>.so, e.g. linux64).
+    Returns an FmuFile. Raises FmuError, the message beginning with the file: no such FMU file,
+    a directory, a scene / SSP system instead of an FMU, not a zip archive, no or unreadable
+    modelDescription.xml, FMI 1.0 / 3.0 (`FMI 3.0 is not supported: gyrowheel runs FMI 2.0
+    FMUs`), a modelDescription.xml that breaks the FMI 2.0 schema (its first problem), no
+    Co-Simulation, no binary for this platform (`no binary for linux64; the FMU has binaries
+    for win64`); ArgumentTypeError for a value that is no path; FmuError naming how to build it
+    for a gyrowheel.Scene.
+    """
+    import xml.etree.ElementTree as ET
+
+    from fmpy import platform, read_model_description, sharedLibraryExtension
+
+    if not isinstance(fmu, (str, os.PathLike)):
+        from gyrowheel.fmu_build.scene import Scene
+        if isinstance(fmu, Scene):
+            raise FmuError(f"{argument}: a gyrowheel.Scene, not an FMU; build its FMU first: "
+                           "gyrowheel.build(scene)", argument=argument)
+    path = existing_file(fmu, argument, "fmu", what=FMU_WHAT, error=FmuError)
+    try:
+        with zipfile.ZipFile(path) as zf:
+            names = tuple(zf.namelist())
+            xml = zf.read("modelDescription.xml") if "modelDescription.xml" in names else None
+    except (zipfile.BadZipFile, OSError) as exc:
+        reason = "not a zip archive" if isinstance(exc, zipfile.BadZipFile) else exc.strerror or str(exc)
+        raise FmuError(f"{path}: not a readable FMU: {reason}", argument=argument) from None
+    if xml is None:
+        raise FmuError(f"{path}: not a readable FMU: no modelDescription.xml", argument=argument)
+    try:
+        version = ET.fromstring(xml).get("fmiVersion")
+    except ET.ParseError as exc:
+        raise FmuError(f"{path}: not a readable FMU: modelDescription.xml is not XML ({exc})",
+                       argument=argument) from None
+    if version != "2.0":
+        raise FmuError(f"{path}: FMI {version} is not supported: gyrowheel runs FMI 2.0 FMUs", argument=argument)
+    try:
+        md = read_model_description(str(path))
+    except Exception as exc:  # fmpy raises plain Exceptions: the schema's problems, one a line
+        problems = [line.strip(" -") for line in str(exc).splitlines() if line.strip(" -")]
+        text = problems[0] if problems else type(exc).__name__
+        if text.startswith("Failed to validate") and len(problems) > 1:
+            more = f" (and {len(problems) - 2} more)" if len(problems) > 2 else ""
+            text = f"modelDescription.xml breaks the FMI 2.0 schema: {problems[1]}{more}"
+        raise FmuError(f"{path}: not a readable FMU: {text}", argument=argument) from None
+    if to_run:
+        if md.coSimulation is None:
+            raise FmuError(f"{path}: the FMU does not support Co-Simulation", argument=argument)
+        binary = f"binaries/{platform}/{md.coSimulation.modelIdentifier}{sharedLibraryExtension}"
+        if binary not in names:
+            have = sorted({n.split("/")[1] for n in names
+                           if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")})
+            has = f"the FMU has binaries for {', '.join(have)}" if have else "the FMU has no binaries"
+            raise FmuError(f"{path}: no binary for {platform} ({binary}); {has}", argument=argument)
+    return FmuFile(path, md, names)
 
 
 @dataclass(frozen=True)
@@ -100,7 +176,7 @@ class FmuInfo:
     def __str__(self) -> str:
         exp = self.default_experiment
         lines = [f"model        {self.model_name}  (FMI {self.fmi_version}, generated by {self.generation_tool})",
-                 f"description  {self.description}",
+                 f"description  {self.description or 'none'}",
                  f"guid         {self.guid}"]
         if exp is not None:
             start, stop, step, tol = (_text(x) or "unset" for x in (exp.start_time, exp.stop_time,
@@ -178,21 +254,16 @@ def _effects(index_html: str) -> tuple[str, ...] | None:
 
 
 def read_info(fmu: str | Path) -> FmuInfo:
-    """Describe the FMU at `fmu` (see FmuInfo). Raises FmuError naming the file when it is
-    missing, not a zip archive or has no readable modelDescription.xml."""
-    from fmpy import read_model_description
-
-    path = Path(fmu)
-    if not path.is_file():
-        raise FmuError(f"{path}: no such FMU file", argument="fmu")
+    """Describe the FMU at `fmu` (see FmuInfo). Raises FmuError naming the file when it is not
+    an FMI 2.0 FMU gyrowheel can read (open_fmu)."""
+    checked = open_fmu(fmu)
+    path, md, names = checked.path, checked.model_description, checked.names
     try:
-        md = read_model_description(str(path))
         with zipfile.ZipFile(path) as zf:
-            names = zf.namelist()
             index = (zf.read("documentation/index.html").decode("utf-8", "replace")
                      if "documentation/index.html" in names else "")
             taylor = TAYLOR_HEADER in names and b"GW_TL_NVAR" in zf.read(TAYLOR_HEADER)
-    except Exception as exc:  # fmpy raises plain Exceptions for broken archives and XML
+    except (zipfile.BadZipFile, OSError) as exc:  # an archive changed or broken since it was opened
         raise FmuError(f"{path}: not a readable FMU: {exc}", argument="fmu") from None
     types = {t.name: t for t in md.typeDefinitions}
     variables = []

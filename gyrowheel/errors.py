@@ -6,6 +6,7 @@ GyrowheelError, so `except gyrowheel.GyrowheelError` catches whatever gyrowheel 
 
     GyrowheelError                      the base (Exception)
       ArgumentError (ValueError)        an argument of a gyrowheel function that cannot be used
+        ArgumentTypeError (TypeError)   ... because it is of the wrong type (text where a number goes)
       FmuError (ValueError)             an `fmu` argument that is not a usable FMI 2.0 FMU
       SweepSpecError (ValueError)       a sweep that cannot be run as specified
       UnknownNameError (KeyError)       a name (variable, parameter, output, extra) that is not there
@@ -39,6 +40,12 @@ class GyrowheelError(Exception):
 class ArgumentError(GyrowheelError, ValueError):
     """An argument of a gyrowheel function that cannot be used (a value out of range, an output
     path that cannot be written); `argument` names it."""
+
+
+class ArgumentTypeError(ArgumentError, TypeError):
+    """An argument of a gyrowheel function of the wrong type ('5' or None where a number goes,
+    an int where a path goes); a TypeError, as Python's own for a wrong type, and an
+    ArgumentError (so a ValueError too) naming the argument."""
 
 
 class FmuError(GyrowheelError, ValueError):

@@ -41,7 +41,7 @@ def plot_trajectories(results: dict[str, np.ndarray], path: str | Path, title: s
         if "fallen" in r.dtype.names and bool(r["fallen"][-1]):
             axes[1, col].axvline(t[-1], color="r", ls="--", lw=0.8)
             axes[1, col].text(t[-1], math.degrees(float(r["beta"][-1])), " fallen", color="r", fontsize=8)
-    if title:
+    if title and names != [title]:  # one column already has it as its title
         fig.suptitle(title)
     fig.tight_layout()
     path = Path(path)

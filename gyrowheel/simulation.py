@@ -11,6 +11,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
 
+from gyrowheel.arguments import missing_item_hint
 from gyrowheel.errors import GyrowheelError
 
 # fmpy 0.3.32 forwards every FMU message through ONE process-global logger (the last one given
@@ -82,7 +83,7 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
         except ValueError:
             choices = ""
             if v.type == "Enumeration":
-                choices = "; valid: " + ", ".join(enums.get(v.declaredType.name, {}))
+                choices = "; valid: " + ", ".join(enums.get(v.declaredType.name, {})) + missing_item_hint(name, text)
             raise SimulationError(f"value {text!r} for {name!r} is not a valid {v.type}{choices}") from None
     return out
 

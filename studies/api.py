@@ -13,39 +13,46 @@ errors worded in the argument names. The engine words them in the command line's
 from __future__ import annotations
 
 import contextlib
+import numbers
 import os
 import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
-from gyrowheel.errors import SweepInterrupted
-from gyrowheel.studies.execute import execute
+from gyrowheel.arguments import flag as flag_value
+from gyrowheel.arguments import number, shown, whole
+from gyrowheel.errors import ArgumentTypeError, SweepInterrupted
+from gyrowheel.studies.execute import check_size, execute
 from gyrowheel.studies.output import TableWriter, check_output_path
 from gyrowheel.studies.plan import Plan, make_plan
 from gyrowheel.studies.plot import check_plot_path
-from gyrowheel.studies.spec import (SweepSpecError, as_axis, as_random, parse_grid, parse_random,
-                                  point_table)
+from gyrowheel.studies.spec import (SweepSpecError, as_axis, as_random, items_of, parse_assignments, parse_grid,
+                                  parse_random, point_table)
 from gyrowheel.studies.target import FmuTarget
 
 
 @contextlib.contextmanager
 def open_target(source, fmu_out: str | Path | None = None):
     """A scene (.toml or a Scene: built first), an FMU (.fmu, or the BuildResult of one), a
-    system (.ssp) or a ready target object -> target. TypeError for anything else."""
+    system (.ssp) or a ready target object -> target. ArgumentTypeError (a TypeError) for
+    anything else, SweepSpecError for a path that is none of these."""
     if hasattr(source, "open") and hasattr(source, "variables"):
         yield source
         return
     if not isinstance(source, (str, os.PathLike)):
         from gyrowheel.fmu_build.scene import Scene
         if not isinstance(source, Scene):
-            raise TypeError(f"source must be a path (.toml, .fmu, .ssp), a gyrowheel.Scene, the BuildResult of an "
-                            f"FMU or a sweep target, got {type(source).__name__}")
+            raise ArgumentTypeError(f"source must be a path (.toml, .fmu, .ssp), a gyrowheel.Scene, the BuildResult "
+                                    f"of an FMU or a sweep target, got {type(source).__name__}", argument="source")
         with _built(source, fmu_out) as target:
             yield target
         return
     path = Path(source)
+    if path.is_dir():
+        raise SweepSpecError(f"{path}: is a directory, not a scene, FMU or system file", argument="source")
     suffix = path.suffix.lower()
     if suffix == ".toml":
         from gyrowheel.fmu_build.scene import load_scene
@@ -56,19 +63,21 @@ def open_target(source, fmu_out: str | Path | None = None):
         from gyrowheel.cosim.system import SystemFileError
 
         from gyrowheel.studies.system_target import SspTarget
-        try:
-            yield SspTarget(path)
+        try:  # (only the target's own errors: the caller's block raises its own)
+            target = SspTarget(path)
         except SystemFileError as exc:
             raise SweepSpecError(str(exc)) from None
+        yield target
         return
     if suffix != ".fmu":
         raise SweepSpecError(f"{path}: expected a scene (.toml), an FMU (.fmu) or a system (.ssp)")
     if not path.is_file():
         raise SweepSpecError(f"{path}: no such FMU file")
     try:
-        yield FmuTarget(path)
+        target = FmuTarget(path)
     except ValueError as exc:
         raise SweepSpecError(str(exc)) from None
+    yield target
 
 
 @contextlib.contextmanager
@@ -87,7 +96,8 @@ def _axes(grid) -> list:
         return []
     if isinstance(grid, Mapping):
         return [as_axis(n, s) for n, s in grid.items()]
-    return [parse_grid(item) for item in grid]
+    items = items_of(grid, "--grid", "a mapping or a list of 'NAME=SPEC' strings")
+    return [parse_grid(_item(item, "--grid", "NAME=SPEC")) for item in items]
 
 
 def _randoms(random) -> list:
@@ -95,7 +105,37 @@ def _randoms(random) -> list:
         return []
     if isinstance(random, Mapping):
         return [as_random(n, s) for n, s in random.items()]
-    return [parse_random(item) for item in random]
+    items = items_of(random, "--random", "a mapping or a list of 'NAME=DIST' strings")
+    return [parse_random(_item(item, "--random", "NAME=DIST")) for item in items]
+
+
+def _item(item, flag: str, form: str) -> str:
+    if not isinstance(item, str):
+        raise SweepSpecError(f"{flag} {item!r}: expected {form}")
+    return item
+
+
+def _points(points) -> pd.DataFrame:
+    """An explicit table of points: a DataFrame, a list of {name: value} dicts (one a point) or a
+    {name: values} dict of columns of one length."""
+    columns = isinstance(points, Mapping) and all(
+        isinstance(v, (Sequence, np.ndarray)) and not isinstance(v, str) for v in points.values())
+    if isinstance(points, pd.DataFrame):
+        table = points
+    elif isinstance(points, Sequence) and not isinstance(points, str) and all(isinstance(p, Mapping) for p in points):
+        table = pd.DataFrame(list(points))
+    elif columns and len({len(v) for v in points.values()}) <= 1:
+        table = pd.DataFrame({name: list(v) for name, v in points.items()})
+    elif columns:
+        raise SweepSpecError(f"points: columns of different lengths {sorted({len(v) for v in points.values()})}")
+    else:
+        raise ArgumentTypeError(f"points must be a pandas DataFrame, a list of {{name: value}} dicts (one a point) or "
+                                f"a {{name: values}} dict of columns, got {shown(points)}", argument="points")
+    table = table.reset_index(drop=True)
+    table.index.name = "point"
+    if table.empty:
+        raise SweepSpecError("points: empty table")
+    return table
 
 
 def plan_sweep(target, *, grid=None, random=None, samples: int | None = None, seed: int = 0,
@@ -108,36 +148,54 @@ def plan_sweep(target, *, grid=None, random=None, samples: int | None = None, se
     if points is not None:
         if grid or random:
             raise SweepSpecError("give either points or grid/random, not both")
-        inputs = pd.DataFrame(points).reset_index(drop=True)
-        inputs.index.name = "point"
-        if inputs.empty:
-            raise SweepSpecError("points: empty table")
+        inputs = _points(points)
     else:
         inputs = point_table(_axes(grid), _randoms(random), samples, seed)
-    fixed = dict(fixed or {})
+    fixed = parse_assignments(fixed)
+    settings = {}
     for name, value in (("solver", solver), ("rel_tol", rel_tol), ("abs_tol", abs_tol), ("max_step", max_step)):
         if value is not None:
+            flag = f"--{name.replace('_', '-')}"
             if name in fixed:
-                raise SweepSpecError(f"{name!r} given twice (--{name.replace('_', '-')} and --set {name})")
-            fixed[name] = value
-    return make_plan(target, inputs, fixed=fixed, derive=derive, stop_time=stop_time,
+                raise SweepSpecError(f"{name!r} given twice ({flag} and --set {name})")
+            if name == "solver":
+                if isinstance(value, bool) or not isinstance(value, (str, numbers.Integral)):
+                    raise ArgumentTypeError(f"--solver must be a solver's name (e.g. 'rk4') or its number, "
+                                            f"got {shown(value)}")
+            else:
+                number(value, flag, finite=False)  # its type; the unit checks the value (make_plan)
+            settings[name] = value
+    return make_plan(target, inputs, fixed=fixed, solver_settings=settings, derive=derive, stop_time=stop_time,
                      output_interval=output_interval, start_time=start_time, metrics=metrics,
-                     metric_functions=metric_functions, ensemble=ensemble)
+                     metric_functions=metric_functions, ensemble=flag_value(ensemble, "ensemble"))
 
 
-def check_execution(workers: int | None, batch_size: int | None) -> None:
-    if batch_size is not None and batch_size < 1:
-        raise SweepSpecError(f"--batch-size must be >= 1, got {batch_size}")
-    if workers is not None and workers < 0:
-        raise SweepSpecError(f"--workers must be >= 0, got {workers}")
+def check_execution(workers: int | None, batch_size: int | None, scheduler: str | None = None,
+                    client=None) -> None:
+    """Where the sweep runs, checked: workers a whole number >= 0, batch_size >= 1, scheduler an
+    address, client a distributed.Client, and at most one of workers, scheduler and client."""
+    if batch_size is not None:
+        whole(batch_size, "--batch-size", minimum=1, error=SweepSpecError)
+    if workers is not None:
+        whole(workers, "--workers", minimum=0, error=SweepSpecError)
+    if scheduler is not None and not isinstance(scheduler, str):
+        raise ArgumentTypeError(f"--scheduler must be a Dask scheduler's address (e.g. 'tcp://host:8786'), "
+                                f"got {shown(scheduler)}")
+    if client is not None and not all(callable(getattr(client, m, None)) for m in ("submit", "nthreads", "cancel")):
+        raise ArgumentTypeError(f"client must be a distributed.Client, got {type(client).__name__}", argument="client")
+    given = [name for name, value in (("--workers", workers), ("--scheduler", scheduler), ("client", client))
+             if value is not None]
+    if len(given) > 1:
+        raise SweepSpecError(f"{' and '.join(given)} exclude each other: give one of them")
 
 
 def run_plan(plan: Plan, *, output: str | Path | None = None, workers: int | None = None,
              scheduler: str | None = None, client=None, batch_size: int | None = None,
              progress: bool = False, writer: TableWriter | None = None) -> pd.DataFrame:
     """Run a plan; returns the table (and keeps `output` up to date while it runs)."""
-    check_execution(workers, batch_size)
-    writer = writer or TableWriter(check_output_path(output), plan.inputs)
+    check_execution(workers, batch_size, scheduler, client)
+    check_size(plan, workers=workers, scheduler=scheduler, client=client, batch_size=batch_size)
+    writer = writer or TableWriter(check_output_path(output), plan.inputs, plan.metrics.columns())
     try:
         execute(plan, writer, workers=workers, scheduler=scheduler, client=client, batch_size=batch_size,
                 progress=progress)
@@ -182,14 +240,21 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     """
     output = check_output_path(output)
     check_plot_path(plot)
-    check_execution(workers, batch_size)
+    check_execution(workers, batch_size, scheduler, client)
+    progress = flag_value(progress, "progress")
+    if plot_metric is not None and not isinstance(plot_metric, str):
+        raise ArgumentTypeError(f"--plot-metric must be a column's name, got {shown(plot_metric)}")
+    if on_start is not None and not callable(on_start):
+        raise ArgumentTypeError(f"on_start must be a function of the plan, got {shown(on_start)}",
+                                argument="on_start")
     with open_target(source) as target:
         plan = plan_sweep(target, grid=grid, random=random, samples=samples, seed=seed, points=points,
                           fixed=fixed, derive=derive, stop_time=stop_time, output_interval=output_interval,
                           start_time=start_time, solver=solver, rel_tol=rel_tol, abs_tol=abs_tol,
                           max_step=max_step, metrics=metrics, metric_functions=metric_functions,
                           ensemble=ensemble)
-        writer = TableWriter(output, plan.inputs)
+        check_size(plan, workers=workers, scheduler=scheduler, client=client, batch_size=batch_size)
+        writer = TableWriter(output, plan.inputs, plan.metrics.columns())
         try:  # from here on, Ctrl-C leaves a complete table of the points done (none, if it comes now)
             if on_start is not None:
                 on_start(plan)

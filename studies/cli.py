@@ -5,6 +5,7 @@ anything runs; Ctrl-C stops the sweep with the rows done so far on disk (exit 13
 """
 from __future__ import annotations
 
+import os
 import sys
 
 
@@ -59,10 +60,13 @@ def cmd_sweep(args) -> int:
     require("sweep", "gyrowheel sweep")  # before anything imports Dask or pandas
     from gyrowheel.api import sweep
 
-    if args.workers is not None and args.scheduler:
-        raise CliError("--workers and --scheduler exclude each other")
-    where = args.scheduler or ("in-process loop" if args.workers == 0 else
-                               f"LocalCluster of {args.workers or 'all cores'} worker(s)")
+    if args.scheduler:
+        where = f"the Dask scheduler at {args.scheduler}"
+    elif args.workers == 0:
+        where = "an in-process loop"
+    else:
+        n = args.workers or os.cpu_count() or 1
+        where = f"a LocalCluster of {n} worker{'s' * (n != 1)}" + ("" if args.workers else " (one per core)")
 
     def announce(plan) -> None:
         print(f"sweep: {len(plan.values)} points, t = {plan.settings.start_time:g} .. "

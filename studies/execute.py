@@ -26,6 +26,8 @@ import threading
 import time
 import uuid
 
+from gyrowheel.arguments import check_memory, count
+from gyrowheel.errors import SweepSpecError
 from gyrowheel.studies.batch import run_batch
 from gyrowheel.studies.interrupt import deferred_sigint
 
@@ -40,6 +42,35 @@ TASKS_PER_THREAD = 4
 LOOP_BATCH = 64  # points, the in-process loop's default batch (run_loop)
 CONNECT_TIMEOUT = 20.0  # s, for a scheduler address to connect and answer Dask's handshake
 POLL = 0.02  # s, the longest a Ctrl-C waits for the batch collector to see it
+# a point's trajectory where it runs: its outputs in a float64 array (batch.run_point, or the
+# ensemble's table of a batch), and one copy of them (the structured array metric functions get)
+BYTES_PER_VALUE = 16
+
+
+def check_size(plan, *, workers: int | None = None, scheduler: str | None = None, client=None,
+               batch_size: int | None = None) -> None:
+    """The memory rule (gyrowheel.arguments.check_memory) for the trajectories this machine holds
+    at once: each point's outputs at every communication point (BYTES_PER_VALUE a value), for as
+    many points as run here together: one in the in-process loop, one per worker of our
+    LocalCluster, a whole batch on the ensemble path (its table of every point's grid). On a
+    scheduler or client of your own the workers' machines are not known: one worker's share is
+    checked against this machine's memory. Raises SweepSpecError naming --stop-time and
+    --output-interval."""
+    from gyrowheel.studies.ensemble_path import applies
+
+    n, h = plan.settings.grid()
+    rows, columns, total = n + 1, len(plan.target.outputs) + 1, max(1, len(plan.values))
+    local = client is None and scheduler is None
+    runs = (1 if workers == 0 else workers or os.cpu_count() or 1) if local else 1
+    points = 1
+    if plan.settings.ensemble and applies(plan.target, plan.settings):
+        points = batch_size or (LOOP_BATCH if local and workers == 0 else auto_batch_size(total, runs))
+    at_once = min(runs * points, total)
+    what = (f"--stop-time {plan.settings.stop_time:g} s with --output-interval {h:g} s: {count(rows)} communication "
+            f"points of {columns} columns" + (f" for each of {at_once} points run at once" if at_once > 1 else ""))
+    advice = "choose a shorter --stop-time or a longer --output-interval" + (
+        ", or fewer --workers or a smaller --batch-size" if at_once > 1 else "")
+    check_memory(rows * columns * at_once, BYTES_PER_VALUE, what, advice, argument=None, error=SweepSpecError)
 
 
 def auto_batch_size(n_points: int, n_threads: int) -> int:
@@ -176,7 +207,8 @@ def _cancel(client, futures, timeout: float = 5.0) -> None:
 
 
 def probe_scheduler(address: str, timeout: float | None = None) -> None:
-    """Raise ConnectionError unless a Dask scheduler at `address` completes Dask's handshake in time.
+    """Raise ConnectionError unless a Dask scheduler at `address` completes Dask's handshake in time
+    (SweepSpecError for an address that is none).
 
     distributed.Client bounds the TCP connection by its timeout but not the handshake after it: an
     address where something accepts and stays silent would hang it forever, and one that answers
@@ -207,7 +239,7 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
     if "error" in outcome:
         exc = outcome["error"]
         if isinstance(exc, ValueError):  # a malformed address
-            raise exc
+            raise SweepSpecError(f"--scheduler {address!r}: {exc}") from None
         raise ConnectionError(f"no Dask scheduler at {address}: {type(exc).__name__}: {exc}")
 
 

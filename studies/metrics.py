@@ -14,7 +14,8 @@ Built in (all SI, angles in rad; beta is the paper's lean angle, pi/2 upright):
 A user's function (module:function or path/to/file.py:function, or a Python callable through
 the API) receives the trajectory as a numpy structured array (fields 'time' and every Real
 output, as fmpy.simulate_fmu returns) and, if it takes a second argument, the point's inputs
-as given (dict); it returns a number or a dict of numbers (one column each).
+as given (dict); it returns a number or a dict of numbers (one column each); anything else
+fails the point, with the reason.
 Extremes are taken over the communication points (the output interval), not between them.
 """
 from __future__ import annotations
@@ -23,6 +24,7 @@ import hashlib
 import importlib
 import inspect
 import math
+import numbers
 import types
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,7 +32,8 @@ from typing import Callable
 
 import numpy as np
 
-from gyrowheel.studies.spec import SweepSpecError
+from gyrowheel.arguments import shown
+from gyrowheel.studies.spec import SweepSpecError, items_of
 
 BUILTIN = ("survived", "fall_time", "end_time", "event", "min_beta", "max_beta", "max_lean",
            "final_position", "energy_drift")
@@ -208,8 +211,27 @@ class MetricSet:
                                              f"outputs: {', '.join(outputs)}")
         if defaulted and outputs is not None:  # the defaults adapt to what the unit outputs
             names = tuple(n for n in names if all(v in outputs for v in _needed(n)))
+        if functions and not isinstance(functions, UserFunction):
+            functions = items_of(functions, "--metric-function",
+                                 "a list of 'module:function' references or functions")
         funcs = tuple(f if isinstance(f, UserFunction) else UserFunction.parse(f) for f in functions or ())
         return cls(names, funcs)
+
+    def columns(self) -> dict[str, str]:
+        """The table's metric columns known before anything runs, in order, {column: kind}: kind
+        'bool' (survived), 'text' (event) or 'number'. Every built-in metric's, and a user
+        function's own name for one that returns a number; the columns of a function that returns
+        a dict are its keys, known once a point has run."""
+        out: dict[str, str] = {}
+        for name in self.names:
+            if name == "final_position":
+                out.update(final_x="number", final_y="number")
+            elif ":" in name:
+                kind, var = name.split(":", 1)
+                out[f"{kind}_{var}"] = "number"
+            else:
+                out[name] = {"survived": "bool", "event": "text"}.get(name, "number")
+        return out
 
     def evaluate(self, run: Run, point: dict) -> dict[str, object]:
         """All metric columns of one run; a user function that raises fails the point (PointFailure)."""
@@ -225,8 +247,15 @@ class MetricSet:
                     value = fn.call(traj, dict(point))
                 except Exception as exc:
                     raise PointFailure(f"metric function {fn.ref}: {type(exc).__name__}: {exc}") from None
-                if isinstance(value, dict):
-                    out.update(value)
-                else:
-                    out[fn.name] = value
+                values = value if isinstance(value, dict) else {fn.name: value}
+                for column, v in values.items():
+                    if not isinstance(column, str) or not _is_number(v):
+                        raise PointFailure(f"metric function {fn.ref}: returned {shown(value)}, not a number or a "
+                                           "dict of numbers {column name: number}")
+                out.update(values)
         return out
+
+
+def _is_number(value) -> bool:
+    """A value a metric column holds: a real number (NaN too), a bool, or numpy's."""
+    return isinstance(value, (bool, np.bool_, numbers.Real)) and not isinstance(value, np.ndarray)

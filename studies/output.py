@@ -7,12 +7,14 @@ of the points finished by its last write. Parquet (pyarrow) or CSV, chosen by th
 """
 from __future__ import annotations
 
+import math
 import os
 import time
 from pathlib import Path
 
 import pandas as pd
 
+from gyrowheel.arguments import path as as_path
 from gyrowheel.studies.spec import SweepSpecError
 
 FORMATS = (".parquet", ".csv")
@@ -20,9 +22,12 @@ TAIL = ("status", "reason", "wall_time")
 
 
 def check_output_path(path: str | Path | None) -> Path | None:
+    """The table's file: None, or a path ending in .parquet or .csv in a directory that exists."""
     if path is None:
         return None
-    path = Path(path)
+    path = as_path(path, "-o", "a file path (.parquet or .csv)")
+    if path.is_dir():
+        raise SweepSpecError(f"-o {path}: is a directory; give a file name (.parquet or .csv)")
     if path.suffix.lower() not in FORMATS:
         raise SweepSpecError(f"-o {path}: unknown format {path.suffix or '(no suffix)'!r}; use .parquet or .csv")
     if not path.parent.exists():
@@ -40,29 +45,48 @@ def _dtypes(frame: pd.DataFrame) -> pd.DataFrame:
     return frame
 
 
-def result_table(inputs: pd.DataFrame, rows: list[dict]) -> pd.DataFrame:
+def result_table(inputs: pd.DataFrame, rows: list[dict], columns: dict[str, str] | None = None) -> pd.DataFrame:
     """Join the inputs of the points done with their results, in point order.
 
     Columns: point, the inputs as given, the metric columns, status, reason, wall_time [s].
+    columns: the metric columns known before anything ran, {column: 'bool' | 'text' |
+    'number'} (MetricSet.columns): the table has them, in that order and of that type, whether
+    or not any point succeeded (a failed point's cells are empty: NaN, <NA>, ''); columns a
+    user function returned come after them.
     """
+    known = dict(columns or {})
     if not rows:
-        cols = ["point", *inputs.columns, *TAIL]
-        return pd.DataFrame(columns=cols)
+        frame = pd.DataFrame({"point": pd.Series(dtype="int64"),
+                              **{c: pd.Series(dtype=inputs[c].dtype) for c in inputs.columns},
+                              **{c: pd.Series(dtype=_DTYPES[k]) for c, k in known.items()},
+                              "status": pd.Series(dtype=object), "reason": pd.Series(dtype=object),
+                              "wall_time": pd.Series(dtype="float64")})
+        return frame
     results = pd.DataFrame(rows).set_index("point").sort_index()
-    metric_cols = [c for c in results.columns if c not in TAIL]
+    for column in known:
+        if column not in results:  # no point gave it (every point failed)
+            results[column] = pd.NA if known[column] == "bool" else "" if known[column] == "text" else math.nan
+    metric_cols = list(known) + [c for c in results.columns if c not in TAIL and c not in known]
     frame = inputs.loc[results.index].join(results[metric_cols + list(TAIL)])
-    for text in ("reason", "event"):  # failed points have no event: '' rather than a missing value
+    for text in ("reason", *(c for c, k in known.items() if k == "text")):  # failed points: '', not missing
         if text in frame:
             frame[text] = frame[text].fillna("")
+    for column in (c for c, k in known.items() if k == "bool"):
+        if frame[column].isna().any():  # True/False with gaps (failed points): nullable booleans
+            frame[column] = frame[column].astype("boolean")
     frame = _dtypes(frame.reset_index())
     return frame
+
+
+_DTYPES = {"bool": "boolean", "text": object, "number": "float64"}
 
 
 class TableWriter:
     """Collects rows; keeps `path` a complete table of the rows so far (see module docstring)."""
 
-    def __init__(self, path: Path | None, inputs: pd.DataFrame, interval: float = 1.0):
-        self.path, self.inputs, self.interval = path, inputs, interval
+    def __init__(self, path: Path | None, inputs: pd.DataFrame, columns: dict[str, str] | None = None,
+                 interval: float = 1.0):
+        self.path, self.inputs, self.interval, self.columns = path, inputs, interval, columns
         self.rows: list[dict] = []
         self._last = time.monotonic()
         self._cost = 0.0
@@ -76,7 +100,7 @@ class TableWriter:
             self.flush()
 
     def table(self) -> pd.DataFrame:
-        return result_table(self.inputs, self.rows)
+        return result_table(self.inputs, self.rows, self.columns)
 
     def flush(self) -> pd.DataFrame:
         frame = self.table()

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import pandas as pd
 
+from gyrowheel.arguments import missing_item_hint, number
 from gyrowheel.studies.batch import Settings
 from gyrowheel.studies.metrics import MetricSet, UserFunction
 from gyrowheel.studies.spec import SweepSpecError
@@ -66,7 +67,10 @@ class Resolver:
                 return base, float(self.presets[base][value])
             if v.type == "Boolean" and value.lower() in ("true", "false"):
                 return base, value.lower() == "true"
-            choices = list(v.items) or list(self.presets.get(base, {}))
+            if v.type == "Enumeration":
+                raise SweepSpecError(f"{where}: value {value!r} for {name!r} is not one of its items; valid: "
+                                     f"{', '.join(v.items)} (or their numbers){missing_item_hint(base, value)}")
+            choices = list(self.presets.get(base, {}))
             extra = f"; valid: {', '.join(choices)} or a number" if choices else ""
             raise SweepSpecError(f"{where}: value {value!r} for {name!r} is not a number{extra}")
         value = float(value)
@@ -83,7 +87,8 @@ class Resolver:
             value = int(value)
             if v.type == "Enumeration" and v.items and value not in v.items.values():
                 raise SweepSpecError(f"{where}: {value} is not an item of {name!r}; valid: "
-                                     + ", ".join(f"{k}={i}" for k, i in v.items.items()))
+                                     + ", ".join(f"{k}={i}" for k, i in v.items.items())
+                                     + missing_item_hint(base, value))
         elif v.type == "Boolean":
             value = bool(value)
         return base, value
@@ -113,6 +118,9 @@ def _missing(value) -> bool:
 
 def _times(target, stop_time, output_interval, start_time) -> tuple[float, float]:
     """(stop time, output interval) [s]: given, or the unit's DefaultExperiment; finite and ordered."""
+    for flag, value in (("--stop-time", stop_time), ("--output-interval", output_interval), ("start_time", start_time)):
+        if value is not None:  # their types; finite and ordered: below
+            number(value, flag, what="a number of seconds", finite=False)
     stop = stop_time if stop_time is not None else getattr(target, "default_stop_time", None)
     if stop is None:
         raise SweepSpecError("no stop time: give --stop-time (the unit declares none)")
@@ -127,11 +135,16 @@ def _times(target, stop_time, output_interval, start_time) -> tuple[float, float
     return float(stop), float(min(output_interval, stop - start_time))
 
 
-def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, derive=None,
-              stop_time: float | None = None, output_interval: float | None = None, start_time: float = 0.0,
-              metrics=None, metric_functions=(), ensemble: bool = True) -> Plan:
+def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, solver_settings: Mapping | None = None,
+              derive=None, stop_time: float | None = None, output_interval: float | None = None,
+              start_time: float = 0.0, metrics=None, metric_functions=(), ensemble: bool = True) -> Plan:
     """Check every name and value against the unit and convert the points to unit values.
 
+    fixed: values every point sets (--set); solver_settings: the solver settings every point sets
+    ({'solver': 'rk4', 'rel_tol': 1e-8, ...}: --solver, --rel-tol, --abs-tol, --max-step), named
+    by their flags in errors. A value of these that the unit refuses as it is set (e.g. rel_tol
+    -1, outside its range) is refused here, before anything runs: every point would fail with it
+    (the target's optional refused(values, start_time)).
     A point's empty cell (a key other points have, None, NaN) leaves that variable at the unit's
     start value. A variable with two names (beta and beta_deg; M and wheel.M in a system, through
     the target's optional canonical(name)) may be given only once.
@@ -142,12 +155,15 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, der
     canonical = getattr(target, "canonical", lambda name: name)
     derive_fn = UserFunction.parse(derive, "--derive") if derive is not None else None
     fixed_values: dict = {}
-    for n, v in (fixed or {}).items():
-        base, value = res.resolve(n, v, f"--set {n}")
+    where: dict = {}  # unit variable -> how the sweep's errors name where it was given
+    given = [(n, v, f"--set {n}") for n, v in (fixed or {}).items()]
+    given += [(n, v, f"--{n.replace('_', '-')}") for n, v in (solver_settings or {}).items()]
+    for n, v, flag in given:
+        base, value = res.resolve(n, v, flag)
         if any(canonical(base) == canonical(other) for other in fixed_values):
             raise SweepSpecError(f"{base!r} given twice (--set, --solver/--rel-tol/--abs-tol/--max-step, "
                                  "or under another name)")
-        fixed_values[base] = value
+        fixed_values[base], where[base] = value, flag
     direct = [c for c in inputs.columns if res.known(c)]
     unknown = [c for c in inputs.columns if not res.known(c)]
     if unknown and derive_fn is None:
@@ -160,6 +176,11 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, der
         if name in fixed_targets:
             raise SweepSpecError(f"{name!r} is both swept and fixed with --set")
     stop, interval = _times(target, stop_time, output_interval, start_time)
+    refused = getattr(target, "refused", None)
+    found = refused(fixed_values, float(start_time)) if refused is not None and fixed_values else None
+    if found is not None:
+        name, reason = found
+        raise SweepSpecError(f"{where[name]}: the unit refuses {fixed_values[name]!r} for every point: {reason}")
     starts = {n: v.start for n, v in variables.items() if v.start is not None and v.type != "String"}
     values = []
     for point, row in zip(inputs.index, inputs.to_dict("records")):

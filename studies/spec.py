@@ -22,7 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from gyrowheel.errors import SweepSpecError  # with gyrowheel's other errors: importable without pandas
+from gyrowheel.arguments import shown, whole
+from gyrowheel.errors import ArgumentTypeError, SweepSpecError  # with gyrowheel's other errors: importable without pandas
 
 DISTRIBUTIONS = {"normal": ("mu", "sigma"), "uniform": ("a", "b")}
 MAX_POINTS = 10**7  # a typo such as 1:2:100000 x 1:2:100000 is refused, not allowed to fill the memory
@@ -93,6 +94,9 @@ def parse_grid(item: str) -> Axis:
             raise SweepSpecError(f"{where}: the number of values {parts[2]!r} is not an integer") from None
         if n < 1:
             raise SweepSpecError(f"{where}: the number of values must be >= 1, got {n}")
+        if n > MAX_POINTS:  # before numpy makes the axis: 60:89:1000000000 would fill the memory
+            raise SweepSpecError(f"{where}: {n} values, more than the {MAX_POINTS} points of one sweep "
+                                 "(the table and the plan are held in memory); split it into several sweeps")
         if log:
             if start <= 0 or stop <= 0:
                 raise SweepSpecError(f"{where}: a log grid needs START > 0 and STOP > 0")
@@ -150,10 +154,6 @@ def as_random(name: str, spec) -> RandomVariable:
     raise SweepSpecError(f"random {name!r}: expected 'normal:MU:SIGMA', 'uniform:A:B' or a 3-tuple, got {spec!r}")
 
 
-def _whole(value) -> bool:
-    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
-
-
 def point_table(grid: Sequence[Axis] = (), random: Sequence[RandomVariable] = (), samples: int | None = None,
                 seed: int = 0) -> pd.DataFrame:
     """The sweep's inputs, one row per point, columns named as given (index: point number).
@@ -166,14 +166,15 @@ def point_table(grid: Sequence[Axis] = (), random: Sequence[RandomVariable] = ()
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise SweepSpecError(f"{', '.join(dup)} given more than once (in --grid/--random)")
-    if not _whole(seed) or seed < 0:  # numpy's own message named no field
-        raise SweepSpecError(f"--seed must be a whole number >= 0 (numpy's default_rng), got {seed!r}")
-    if samples is not None and not _whole(samples):
-        raise SweepSpecError(f"--samples must be a whole number >= 1, got {samples!r}")
+    # (numpy's own message for a bad seed named no field)
+    seed = whole(seed, "--seed", minimum=0, what="a whole number >= 0 (numpy's default_rng)", error=SweepSpecError)
     if random and not samples:
         raise SweepSpecError("--random needs --samples N (N >= 1)")
-    if samples is not None and samples < 1:
-        raise SweepSpecError(f"--samples must be >= 1, got {samples}")
+    if samples is not None:
+        samples = whole(samples, "--samples", minimum=1, error=SweepSpecError)
+    if samples is not None and not random:  # it would repeat every grid point N times, identically
+        raise SweepSpecError(f"--samples {samples} without --random: there is nothing to draw; give "
+                             "--random NAME=DIST, or leave --samples out")
     if not grid and not samples:
         raise SweepSpecError("nothing to sweep: give --grid and/or --random with --samples")
     n_samples = samples or 1
@@ -196,15 +197,31 @@ def point_table(grid: Sequence[Axis] = (), random: Sequence[RandomVariable] = ()
     return table
 
 
+def items_of(given, flag: str, expected: str) -> list:
+    """The items of a repeatable option given as a list (or tuple): a single string is refused,
+    not read as a list of characters (`--grid 'b': expected NAME=SPEC`); so is any other type.
+    expected: what the option takes, for the message ("a mapping or a list of 'NAME=SPEC'
+    strings")."""
+    if isinstance(given, str) or not isinstance(given, (Sequence, np.ndarray)):
+        raise ArgumentTypeError(f"{flag}: expected {expected}, got {shown(given)}")
+    return list(given)
+
+
 def parse_assignments(items: Sequence[str] | Mapping[str, object] | None, flag: str = "--set") -> dict[str, object]:
-    """NAME=VALUE strings (or a mapping) -> {name: float or str}."""
+    """NAME=VALUE strings (or a mapping) -> {name: float or str}. A name given twice is refused."""
     if items is None:
         return {}
     if isinstance(items, Mapping):
         return dict(items)
     out: dict[str, object] = {}
-    for item in items:
+    texts: dict[str, str] = {}
+    for item in items_of(items, flag, "a mapping or a list of 'NAME=VALUE' strings"):
+        if not isinstance(item, str):
+            raise SweepSpecError(f"{flag} {item!r}: expected NAME=VALUE")
         name, text = _split(item, flag)
+        if name in texts:
+            raise SweepSpecError(f"{flag} {name}: given twice, as {name}={texts[name]} and {name}={text}")
+        texts[name] = text
         try:
             out[name] = float(text)
         except ValueError:

@@ -66,6 +66,19 @@ class SspTarget:
     def open(self, payload) -> "SystemInstance":
         return SystemInstance(self, payload)
 
+    def refused(self, values: dict, start_time: float) -> tuple[str, str] | None:
+        """The first of `values` ({sweep name: value}) its component refuses as it is set
+        (FmuTarget.refused): (the sweep name, '<component>: <reason>'), or None."""
+        split: dict[str, dict] = {}
+        for alias, value in values.items():
+            component, var = self.where[alias]
+            split.setdefault(component, {})[var] = (alias, value)
+        for component, own in split.items():
+            found = self.components[component].refused({var: v for var, (_, v) in own.items()}, start_time)
+            if found is not None:
+                return own[found[0]][0], f"{component}: {found[1]}"
+        return None
+
 
 class SystemInstance:
     """One instance per component, reused point after point (each reset, set, initialised)."""

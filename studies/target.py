@@ -15,6 +15,8 @@ run by gyrowheel's co-simulation master (studies/system_target.py):
         read(row)                               the outputs into a float64 array
         flags() -> list[str]                    Boolean outputs that are true (e.g. 'fallen')
         close()
+    target.refused(values, start_time) -> None | (name, reason)   optional: the first of the
+                                                values every point sets that the unit refuses
     A point that the instance refuses raises PointFailure(reason); the sweep records it and goes on.
 
 FmuTarget drives a Co-Simulation FMU through fmpy's FMU2Slave and the raw fmi2 functions
@@ -122,6 +124,25 @@ class FmuTarget:
     def open(self, payload: bytes | None) -> "FmuInstance":
         return FmuInstance(self, _unpack(self, payload))
 
+    def refused(self, values: dict[str, object], start_time: float) -> tuple[str, str] | None:
+        """The first of `values` ({variable: value}) the FMU refuses as it is set, each alone in a
+        fresh experiment (fmi2Set*'s own checks, e.g. rel_tol -1 outside its range; not those of
+        initialisation, which depend on the other values): (its name, the FMU's reason); None
+        when it takes them all, or when no instance can be made here (the workers will say)."""
+        try:
+            instance = self.open(self._data)
+        except Exception:  # noqa: BLE001 - e.g. a client that cannot load the workers' binary
+            return None
+        try:
+            for name, value in values.items():
+                try:
+                    instance.set_values({name: value}, start_time)
+                except PointFailure as exc:
+                    return name, str(exc)
+        finally:
+            instance.close()
+        return None
+
 
 def _has_taylor_kernel(data: bytes) -> bool:
     import io
@@ -186,6 +207,12 @@ class FmuInstance:
 
     def enter_initialisation(self, values: dict[str, object], start_time: float) -> None:
         """fmi2Reset (after the first point), fmi2SetupExperiment, set `values`, fmi2EnterInitializationMode."""
+        self.set_values(values, start_time)
+        self._check(self._f["fmi2EnterInitializationMode"](self._c), "fmi2EnterInitializationMode")
+
+    def set_values(self, values: dict[str, object], start_time: float) -> None:
+        """fmi2Reset (after the first point), fmi2SetupExperiment, set `values` (PointFailure with
+        the FMU's reason if it refuses one)."""
         f, c = self._f, self._c
         self.messages.clear()
         if not self._fresh:
@@ -203,7 +230,6 @@ class FmuInstance:
                 vr = (c_uint * len(group))(*[g[0] for g in group])
                 val = (ctype * len(group))(*[g[1] for g in group])
                 self._check(f[setter](c, vr, len(group), val), setter)
-        self._check(f["fmi2EnterInitializationMode"](c), "fmi2EnterInitializationMode")
 
     def exit_initialisation(self) -> None:
         self._check(self._f["fmi2ExitInitializationMode"](self._c), "fmi2ExitInitializationMode")

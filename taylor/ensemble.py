@@ -34,7 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from gyrowheel.errors import ArgumentError, FmuError, GyrowheelError, UnknownNameError
+from gyrowheel import arguments
+from gyrowheel.errors import ArgumentError, ArgumentTypeError, FmuError, GyrowheelError, UnknownNameError
 from gyrowheel.fmu_build.compiler import compile_shared
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR
 
@@ -64,9 +65,7 @@ _LONG_DTYPE = np.int64 if _LONG == 8 else np.int32
 # runtime, compiled for a model through the unity file library_source writes
 LIBRARY_SOURCE = "gw_ensemble_lib.c"
 # what an FMU without the Taylor kernel is told, in the Python API's words and the command's
-NO_KERNEL = ("which the ensemble path needs: build its scene with the kernel, gyrowheel.build(scene, output, "
-             "taylor=True) or `gyrowheel build --taylor SCENE -o FMU` (or solver = \"taylor\" in the scene's "
-             "[experiment])")
+NO_KERNEL = f"which the ensemble path needs: build its scene with the kernel, {arguments.TAYLOR_BUILD}"
 _C_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
@@ -192,14 +191,13 @@ def _numbers(v):
 
 def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
     """The job's numbers checked before the C library sees them (it can only say "bad job"):
-    an ArgumentError naming the field.  Returns the grid as a contiguous float array (empty: none).
+    an ArgumentError naming the field, an ArgumentTypeError for one that is no number ('10', a
+    string, is refused as every gyrowheel function refuses it: gyrowheel.arguments.number).
+    Returns the grid as a contiguous float array (empty: none).
     The ranges the instances check themselves (rel_tol within [10 eps, 1]) are reported per
     trajectory by them.  (math.isfinite on the scalars: numpy's took 2 us of a small run.)"""
     def number(name, v):
-        try:
-            return float(v)
-        except (TypeError, ValueError):
-            raise ArgumentError(f"{name} must be a number, got {v!r}") from None
+        return arguments.number(v, name, finite=False)
     t0, t1, rtol = number("t_start", t_start), number("t_end", t_end), number("rel_tol", rel_tol)
     if not math.isfinite(t0) or not math.isfinite(t1):
         raise ArgumentError(f"t_start and t_end must be finite, got {t0!r} and {t1!r}")
@@ -229,6 +227,46 @@ def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
         if g[-1] != t1:
             raise ArgumentError(f"grid: the last communication point {float(g[-1])!r} must equal t_end = {t1!r}")
     return g
+
+
+def _fmu_path(fmu) -> Path:
+    """The fmu argument (a path; a gyrowheel.BuildResult is one) as a Path: a scene (a .toml, a
+    gyrowheel.Scene) is refused naming how to build the FMU the ensemble needs, anything else
+    that is no path with an ArgumentTypeError."""
+    build = f"build its FMU with the Taylor kernel first: {arguments.TAYLOR_BUILD}"
+    if not isinstance(fmu, (str, os.PathLike)):
+        from gyrowheel.fmu_build.scene import Scene
+        if isinstance(fmu, Scene):
+            raise FmuError(f"fmu: a gyrowheel.Scene, not an FMU; {build}", argument="fmu")
+        raise ArgumentTypeError(f"fmu must be a path to an FMU (.fmu) or the gyrowheel.BuildResult of one, "
+                                f"got {type(fmu).__name__}", argument="fmu")
+    path = Path(fmu)
+    if path.suffix.lower() == ".toml":
+        raise FmuError(f"{path}: a scene, not an FMU; {build}", argument="fmu")
+    return path
+
+
+# the advice of the runtime's budget messages (c_src/gw_solver.c) names what an FMU's user
+# sets; a run of the ensemble sets the communication steps through its grid, not the budget
+_BUDGET_ADVICE = (
+    ("raise max_internal_steps or max_step, or shorten the communication step",
+     "raise max_step, or shorten the communication steps: give run() a grid (the budget of "
+     "max_internal_steps is per communication step; without a grid the run from t_start to t_end "
+     "is one step)"),
+    ("raise max_internal_steps or shorten the communication step",
+     "shorten the communication steps: give run() a grid (the budget of max_internal_steps is per "
+     "communication step; without a grid the run from t_start to t_end is one step), or a shorter "
+     "t_end"),
+    (" or stiff (try solver rosenbrock)", " or stiff (then simulate the FMU with solver rosenbrock: the "
+     "ensemble runs solver taylor)"),
+)
+
+
+def _ensemble_advice(message: str) -> str:
+    """A trajectory's message with the budget's advice in the words of Ensemble.run."""
+    for fmu_words, run_words in _BUDGET_ADVICE:
+        message = message.replace(fmu_words, run_words)
+    return message
 
 
 def _sources(fmu: Path, work: Path) -> tuple[Path, str, str]:
@@ -310,7 +348,7 @@ class Ensemble:
     def __init__(self, fmu: str | Path, lanes: int = LANES, cache: str | Path | None = None,
                  defines: dict | None = None):
         _check_lanes(lanes)
-        lanes, defines, fmu = int(lanes), _checked_defines(defines), Path(fmu)
+        lanes, defines, fmu = int(lanes), _checked_defines(defines), _fmu_path(fmu)
         # the front end is the installed runtime's (its functions and layout are what this class
         # reads), compiled with the FMU's model and runtime
         front = RUNTIME_DIR / LIBRARY_SOURCE
@@ -430,11 +468,16 @@ class Ensemble:
         grid: communication points (s) after t_start, increasing, the last == t_end: each
         trajectory then advances as through fmi2DoStep from point to point and the result holds
         the outputs at t_start and at every point reached (y_grid, n_rows) and the fired events.
-        Raises ArgumentError (a ValueError) naming a bad value or shape, UnknownNameError (a
-        KeyError) for an unknown name, EnsembleError for a refused job.
+        A trajectory that the budget of internal steps (the FMU's max_internal_steps, per
+        communication step) cannot carry to its next point ends with STATUS_ERROR, its message
+        advising a grid of shorter communication steps.
+        Raises ArgumentError (a ValueError) naming a bad value or shape, or a grid whose outputs
+        would take more than half of this machine's memory; ArgumentTypeError (also a TypeError)
+        for a value that is no number (the string '10' too); UnknownNameError (a KeyError) for an
+        unknown name; EnsembleError for a refused job.
         """
         g = _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid)
-        t_start, t_end, rel_tol = float(t_start), float(t_end), float(rel_tol)  # "1.0" passed the check
+        t_start, t_end, rel_tol = float(t_start), float(t_end), float(rel_tol)  # (numpy's numbers too)
         P = self._table("parameter", parameters, self.parameter_names, self.default_parameters, None)
         S = self._table("start value", starts, self.start_names, self.default_starts,
                         None if P is None else P.shape[0])
@@ -449,6 +492,10 @@ class Ensemble:
             lay = self._layout(n, G)
         (grid_at, p_at, s_at, tf_at, xf_at, yf_at, yg_at, floats_end,
          steps_b, rows_b, status_b, flags_b, size) = lay
+        if G:  # the outputs at every communication point of every trajectory: the memory rule
+            arguments.check_memory(size, 8, f"grid: {n} trajectories of {arguments.count(G + 1)} communication "
+                                   f"points of {self.ny} outputs", "give a coarser grid, or fewer trajectories "
+                                   "per run", argument="grid")
         # one buffer, one address (ctypes.c_char.from_buffer: 0.25 us, ndarray.ctypes.data
         # 1 us): the scalars, the grid, P and S (copied: cheaper than their addresses), the
         # float outputs (NaN until written), then the C longs and ints, which the C side writes
@@ -471,6 +518,7 @@ class Ensemble:
             rc = self._run(ctx.ptr, n, G, _address(f), ctx.logger)
         finally:
             self._contexts.append(ctx)
+        messages[:] = [_ensemble_advice(m) for m in messages]
         if rc >= STATUS_ERROR:
             raise EnsembleError("; ".join(messages) or f"ensemble run failed (status {rc})")
         nd, ne = np.ndarray, max(self.ne, 1)

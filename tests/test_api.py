@@ -114,6 +114,9 @@ def test_public_names():
     for name in ("SimulationError", "MasterError", "EnsembleError", "CompileError"):
         assert issubclass(getattr(gyrowheel, name), RuntimeError), name
     assert issubclass(gyrowheel.MissingExtraError, ImportError)
+    # a wrong type: an ArgumentError (so a ValueError) and a TypeError, as Python's own
+    assert issubclass(gyrowheel.ArgumentTypeError, gyrowheel.ArgumentError)
+    assert issubclass(gyrowheel.ArgumentTypeError, TypeError)
     assert issubclass(gyrowheel.SweepInterrupted, KeyboardInterrupt)
     assert not issubclass(gyrowheel.SweepInterrupted, Exception)
 
@@ -212,7 +215,7 @@ def test_simulate_reports_the_fall(moon):
                                                           "directory", "plot"),
     ("{tmp}/missing.fmu", {}, "FmuError", "{tmp}/missing.fmu: no such FMU file", "fmu"),
     (str(SCENES / "paper_moon.toml"), {}, "FmuError", "paper_moon.toml: a scene, not an FMU; build its FMU first", "fmu"),
-    ("{tmp}", {}, "FmuError", "{tmp}: no such FMU file", "fmu"),
+    ("{tmp}", {}, "FmuError", "{tmp}: is a directory, not an FMU file", "fmu"),
     ("{text}", {}, "FmuError", "{text}: not a readable FMU", "fmu"),
     ("{moon}", dict(start_values={"M": -2.0}, stop_time=0.1), "SimulationError",
      "the FMU reported an error: fmi2ExitInitializationMode: M (mass) must be > 0", None),
@@ -578,7 +581,7 @@ def test_system_run_from_an_ssp_and_from_its_description(moon, solo, tmp_path):
     ("{solo}", dict(start_values={"wheel.colour": 3}), "ArgumentError",
      "start_values, component wheel: unknown variable 'colour'", "start_values"),
     ("{solo}", dict(output="{tmp}"), "ArgumentError", "output {tmp}: is a directory", "output"),
-    ("{tmp}/missing.ssp", {}, "SystemFileError", "missing.ssp: no such SSP file", None),
+    ("{tmp}/missing.ssp", {}, "SystemFileError", "missing.ssp: no such SSP file", "system"),
     ("{solo}", dict(start_values={"wheel.M": -1.0}, stop_time=0.1), "MasterError",
      "wheel: fmi2ExitInitializationMode: M (mass) must be > 0", None),
 ])

@@ -270,7 +270,7 @@ def test_unwritable_output_is_one_line(tmp_path, capsys):
     scene.write_text("[effects.gravity]\n")
     blocker = tmp_path / "file"
     blocker.write_text("")
-    assert main(["build", str(scene), "-o", str(blocker / "s.fmu")]) == 1
+    assert main(["build", str(scene), "-o", str(blocker / "s.fmu")]) == 2  # bad input, as for simulate -o
     assert "cannot write" in _one_error_line(capsys)
 
 

@@ -152,3 +152,77 @@ def test_info_json(built):
     g = next(v for v in data["variables"] if v["name"] == "g")
     assert (g["causality"], g["start"], g["unit"]) == ("parameter", 9.81, "m/s2")
     assert "solvers      euler, rk4, dopri5, rosenbrock, dop853" in gyrowheel("info", built).stdout
+
+
+@pytest.mark.parametrize("args, line", [
+    # an output that cannot be written is bad input (exit 2), for build as for simulate
+    (("build", "{scene}", "-o", "{dir}"), "-o {dir}: is a directory; give a file name"),
+    (("simulate", "{fmu}", "-o", "{dir}"), "-o {dir}: is a directory; give a file name"),
+    (("build", "{scene}", "-o", "{csv}/x.fmu"), "-o {csv}/x.fmu: cannot write: {csv} is not a directory"),
+    (("build", "{scene}", "-o", "{dir}/x.fmu", "--keep-build", "{csv}"), "--keep-build {csv}: exists and is not a "
+                                                                          "directory"),
+    # argparse's own errors are one line too, without the usage
+    (("simulate", "{fmu}", "--stop-time", "nan"), "argument --stop-time: 'nan' is not a finite number (see "
+                                                  "gyrowheel simulate --help)"),
+    (("simulate",), "the following arguments are required: fmu (see gyrowheel simulate --help)"),
+    # a run whose rows would not fit in the memory is refused before it starts
+    (("simulate", "{fmu}", "--stop-time", "1e300"), "--stop-time 1e+300 s with --output-interval 0.01 s: 1e+302 "
+                                                    "communication points of 14 columns would take "),
+    # a directory, or a file of another kind, named as such
+    (("simulate", "{dir}"), "{dir}: is a directory, not an FMU file"),
+    (("info", "{dir}"), "{dir}: is a directory, not an FMU file"),
+    (("animate", "{dir}", "-o", "{dir}/x.gif"), "{dir}: is a directory, not a result CSV"),
+    (("system", "run", "{dir}"), "{dir}: is a directory, not an SSP file"),
+    (("system", "run", "{fmu}"), "{fmu}: an FMU, not an SSP system; simulate it with gyrowheel.simulate "
+                                 "(`gyrowheel simulate`)"),
+    (("build", "{fmu}"), "{fmu}: an FMU (a zip archive), not a scene file: a scene is TOML text (docs/scenes.md)"),
+    (("export-c", "{fmu}", "-o", "{dir}/c"), "{fmu}: an FMU (a zip archive), not a scene file"),
+    # a value given twice: refused, not the last one taken
+    (("simulate", "{fmu}", "--set", "gamma_dot=8", "--set", "gamma_dot=9"),
+     "--set: 'gamma_dot' given twice (gamma_dot=8, gamma_dot=9)"),
+    # a value every point of a sweep would fail with: refused, no table of failed rows
+    (("sweep", "{fmu}", "--grid", "beta_deg=60:80:3", "--rel-tol", "-1", "--stop-time", "2", "--workers", "0",
+      "-o", "{dir}/rt.csv"), "--rel-tol: the unit refuses -1.0 for every point: fmi2SetReal: rel_tol = -1 is outside "
+                             "its valid range"),
+])
+def test_bad_input_exits_2_with_one_line(built, tmp_path, args, line):
+    (tmp_path / "moon.csv").write_text("time\n0\n")
+    fill = dict(scene=SCENES / "paper_earth.toml", fmu=built, dir=tmp_path, csv=tmp_path / "moon.csv")
+    r = gyrowheel(*[a.format(**fill) for a in args], cwd=tmp_path)
+    assert (r.returncode, r.stdout) == (2, ""), r.stderr
+    assert r.stderr.startswith("gyrowheel: error: " + line.format(**fill)) and r.stderr.count("\n") == 1, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["moon.csv"]  # nothing written
+
+
+def test_a_reader_that_goes_away_is_no_error(built):
+    """`gyrowheel info moon.fmu --json | head -2`: a reader that has what it wants and goes away
+    is no error (exit 0, nothing on stderr)."""
+    for reader in ("head -2", "true"):  # true reads nothing: the pipe is closed before the first write
+        r = subprocess.run(f"{sys.executable} -m gyrowheel info --json {built} | {reader}; exit ${{PIPESTATUS[0]}}",
+                           shell=True, executable="/bin/bash", capture_output=True, text=True, cwd=ROOT)
+        assert (r.returncode, r.stderr) == (0, ""), r.stderr
+    assert r.stdout == ""
+
+
+def test_the_sweep_says_where_it_runs(monkeypatch, capsys):
+    """The sweep's first line says where it runs in words, with the number of workers."""
+    import os
+    from types import SimpleNamespace
+
+    import gyrowheel.api
+    from gyrowheel.cli import main
+    plan = SimpleNamespace(values=[{}] * 4, settings=SimpleNamespace(start_time=0.0, stop_time=2.0,
+                                                                     output_interval=0.5))
+
+    def spy(source, **kwargs):
+        kwargs["on_start"](plan)
+        raise gyrowheel.SweepSpecError("spy")
+    monkeypatch.setattr(gyrowheel.api, "sweep", spy)
+    cores = os.cpu_count() or 1
+    for argv, where in ((["--workers", "2"], "a LocalCluster of 2 workers"),
+                        (["--workers", "1"], "a LocalCluster of 1 worker"),
+                        ([], f"a LocalCluster of {cores} worker{'s' * (cores != 1)} (one per core)"),
+                        (["--workers", "0"], "an in-process loop"),
+                        (["--scheduler", "tcp://10.0.0.5:8786"], "the Dask scheduler at tcp://10.0.0.5:8786")):
+        assert main(["sweep", "m.fmu", "--grid", "M=1,2", *argv]) == 2
+        assert capsys.readouterr().err.splitlines()[0] == f"sweep: 4 points, t = 0 .. 2 s every 0.5 s, on {where}"

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from c_programs import C_SRC
-from conftest import STATES
-from gyrowheel.errors import ArgumentError, FmuError, UnknownNameError
+from conftest import SCENES, STATES
+from gyrowheel.errors import ArgumentError, ArgumentTypeError, FmuError, UnknownNameError
 from gyrowheel.taylor.ensemble import LANES, STATUS_OK, STATUS_TERMINATED, Ensemble
 from taylor_helpers import TAYLOR, fmu_runner
 
@@ -165,12 +165,24 @@ def test_ensemble_of_a_file_that_is_no_fmu_names_it(tmp_path):
         with pytest.raises(FmuError, match=re.escape(f"{path}: ") + ".*" + re.escape(message)) as info:
             Ensemble(path, cache=tmp_path / "cache")
         assert info.value.argument == "fmu" and isinstance(info.value, ValueError)
+    # a scene, as a file or a Scene: say so, and how to build the FMU the ensemble needs
+    from gyrowheel.fmu_build.scene import load_scene
+    build = ("build its FMU with the Taylor kernel first: gyrowheel.build(scene, output, taylor=True) or "
+             "`gyrowheel build --taylor SCENE -o FMU` (or solver = \"taylor\" in the scene's [experiment])")
+    for fmu, message in ((SCENES / "paper_moon.toml", f"{SCENES / 'paper_moon.toml'}: a scene, not an FMU; {build}"),
+                         (load_scene(SCENES / "paper_moon.toml"), f"fmu: a gyrowheel.Scene, not an FMU; {build}")):
+        with pytest.raises(FmuError) as info:
+            Ensemble(fmu, cache=tmp_path / "cache")
+        assert str(info.value) == message and info.value.argument == "fmu"
+    with pytest.raises(ArgumentTypeError, match="fmu must be a path to an FMU .* got int"):
+        Ensemble(3, cache=tmp_path / "cache")
 
 
 def test_ensemble_bad_values_name_the_field(paper, tmp_path):
     """A value that is not a number names its field (not numpy's "could not convert string to
     float: 'heavy'" for {'M': 'heavy'}, a broadcast error for a 2-D column, a silent NaN start
-    for {'gamma_dot': None}); numbers given as text ("1.0") are numbers."""
+    for {'gamma_dot': None}); a time or tolerance given as text ('10') is refused as every
+    gyrowheel function refuses it, an ArgumentTypeError (a TypeError) naming it."""
     built, _ = paper
     ens = Ensemble(built.fmu, cache=tmp_path)
     cases = [({"parameters": {"M": "heavy"}}, "parameter 'M' must be a number"),
@@ -182,10 +194,14 @@ def test_ensemble_bad_values_name_the_field(paper, tmp_path):
     for kwargs, message in cases:
         with pytest.raises(ValueError, match=re.escape(message)):
             ens.run(1.0, **kwargs)
-    as_text = ens.run("1.0", t_start="0", rel_tol="1e-8", max_step="0.5", grid=[0.5, 1.0])
-    as_numbers = ens.run(1.0, rel_tol=1e-8, max_step=0.5, grid=[0.5, 1.0])
-    assert list(as_text.status) == [STATUS_OK]
-    assert np.array_equal(as_text.x_final, as_numbers.x_final)
+    for name, text in (("t_end", "10"), ("t_start", "0"), ("rel_tol", "1e-8"), ("abs_tol", "1e-10"),
+                       ("max_step", "0.5")):
+        kwargs = {"t_end": 1.0, name: text}
+        with pytest.raises(ArgumentTypeError, match=re.escape(f"{name} must be a number, got str {text!r}")) as info:
+            ens.run(kwargs.pop("t_end"), **kwargs)
+        assert info.value.argument == name and isinstance(info.value, TypeError)
+    as_numpy = ens.run(np.float64(1.0), t_start=np.int64(0), rel_tol=np.float32(1e-8), max_step=0.5, grid=[0.5, 1.0])
+    assert list(as_numpy.status) == [STATUS_OK]
     objects = np.array([ens.default_parameters], dtype=object)  # numbers held as objects still run
     assert np.array_equal(ens.run(1.0, parameters=objects, rel_tol=1e-8).x_final,
                           ens.run(1.0, rel_tol=1e-8).x_final)
@@ -218,3 +234,39 @@ def test_ensemble_lane_innermost_passes_equal_the_per_lane_code(paper, tmp_path,
         np.testing.assert_array_equal(a.x_final, b.x_final)
         if extra:
             np.testing.assert_array_equal(a.y_grid, b.y_grid)
+
+
+def test_ensemble_advice_is_what_run_can_do(paper, tmp_path):
+    """A trajectory the budget of internal steps stops is told what Ensemble.run can change (it
+    has no max_internal_steps): a grid, since the budget is per communication step; and a grid
+    carries the same run through."""
+    built, _ = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    kw = dict(parameters={"g": [1.625]}, starts={"gamma_dot": [8.0]})
+    res = ens.run(1e5, **kw)
+    assert list(res.status) == [3] and len(res.messages) == 1
+    message = res.messages[0]
+    assert message.startswith("ensemble trajectory 0: at t=") and "raise max_internal_steps" not in message
+    assert message.endswith("(then simulate the FMU with solver rosenbrock: the ensemble runs solver taylor); "
+                            "shorten the communication steps: give run() a grid (the budget of max_internal_steps "
+                            "is per communication step; without a grid the run from t_start to t_end is one step), "
+                            "or a shorter t_end"), message
+    res = ens.run(1e5, **kw, grid=np.linspace(1e4, 1e5, 10))
+    assert list(res.status) == [STATUS_OK] and res.t_final[0] == 1e5 and not res.messages
+
+
+def test_ensemble_grid_too_large_for_the_memory(paper, tmp_path, monkeypatch):
+    """The outputs at every point of a grid, for every trajectory, fall under the memory rule of
+    every run that collects rows (gyrowheel.arguments.check_memory): refused naming grid."""
+    import gyrowheel.arguments
+    built, _ = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    monkeypatch.setattr(gyrowheel.arguments, "physical_memory", lambda: 4096)
+    with pytest.raises(ArgumentError) as info:
+        ens.run(1.0, starts={"gamma_dot": [6.0] * 8}, grid=np.linspace(0.01, 1.0, 100))
+    assert info.value.argument == "grid"
+    assert str(info.value).startswith(f"grid: 8 trajectories of 101 communication points of {ens.ny} outputs would "
+                                      f"take ") and str(info.value).endswith(
+        "GiB: give a coarser grid, or fewer trajectories per run")
+    monkeypatch.undo()
+    assert list(ens.run(1.0, starts={"gamma_dot": [6.0] * 8}, grid=np.linspace(0.01, 1.0, 100)).status) == [0] * 8

@@ -10,6 +10,7 @@ from __future__ import annotations
 import socket
 import threading
 import time
+from types import SimpleNamespace
 
 import pytest
 
@@ -38,6 +39,11 @@ def test_bad_names_and_options_refused_before_running(earth_fmu, kwargs, message
     (["--grid", "speed=1,2"], "unknown variable 'speed'; settable: M, R"),
     (["--random", "M=normal:2:0.1"], "--random needs --samples"),
     (["--grid", "M=1,2", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "exclude each other"),
+    (["--grid", "M=1,2", "--samples", "3"], "--samples 3 without --random"),
+    (["--grid", "M=1,2", "--set", "R=0.2", "--set", "R=0.3"], "--set R: given twice, as R=0.2 and R=0.3"),
+    (["--grid", "beta_deg=60:89:1000000000"], "1000000000 values, more than the 10000000 points of one sweep"),
+    (["--grid", "M=1", "--stop-time", "20", "--output-interval", "1e-12"],
+     "--stop-time 20 s with --output-interval 1e-12 s: 2e+13 communication points of"),
 ])
 def test_cli_errors_are_one_line_exit_2(earth_fmu, tmp_path, capsys, argv, message):
     code = main(["sweep", str(earth_fmu), "-o", str(tmp_path / "t.parquet"), "--workers", "0", *argv]
@@ -62,6 +68,13 @@ def test_cli_errors_are_one_line_exit_2(earth_fmu, tmp_path, capsys, argv, messa
     (dict(random={"M": "normal:2:0.1"}, samples=2, seed=-1), "--seed must be a whole number >= 0"),
     (dict(random={"M": "normal:2:0.1"}, samples=2, seed=1.5), "--seed must be a whole number >= 0"),
     (dict(random={"M": "normal:2:0.1"}, samples=2.5), "--samples must be a whole number"),
+    # refused before running: every grid point would run 3 times alike / every row would fail
+    (dict(grid={"M": [1.0]}, samples=3), "--samples 3 without --random: there is nothing to draw"),
+    (dict(grid={"M": [1.0]}, rel_tol=-1.0), r"--rel-tol: the unit refuses -1.0 for every point: fmi2SetReal: "
+                                            r"rel_tol = -1 is outside its valid range \[2.22e-15, 1\]"),
+    (dict(grid={"M": [1.0]}, fixed={"max_step": 0.0}), "--set max_step: the unit refuses 0.0 for every point"),
+    (dict(grid={"M": [1.0]}, client=SimpleNamespace(submit=print, nthreads=dict, cancel=print)),
+     "--workers and client exclude each other: give one of them"),
 ])
 def test_bad_values_refused_before_running(earth_fmu, kwargs, message):
     kwargs.setdefault("stop_time", 0.1)

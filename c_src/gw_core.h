@@ -246,6 +246,17 @@ GW_API size_t gw_state_size(const gw_instance *I);
 GW_API void gw_state_write(const gw_instance *I, const int front[2], unsigned char *buf);
 /* 1 if buf is a state of this model with the right layout and size; else 0, reason logged */
 GW_API int gw_state_check(gw_instance *I, const char *fn, const unsigned char *buf, size_t size);
+/* What the front end's own words (gw_state_front) say about a state, for gw_state_check_run. */
+typedef struct {
+    int initialised; /* saved after a successful initialisation (gw_initialize) */
+    int time_free;   /* the front end lets its caller set t and x at will (Model Exchange) */
+    int terminated;  /* the front end's state is one after a terminating event */
+} gw_state_facts;
+/* 1 if the fields of a checked state agree with each other and pass the live path's checks
+ * (the experiment's times in order, events and their flags, the model's validity checks on its
+ * parameters and start values); else 0, reason logged.  Run before gw_state_apply. */
+GW_API int gw_state_check_run(gw_instance *I, const char *fn, const unsigned char *buf,
+                              const gw_state_facts *facts);
 /* the front end's two ints of a checked state */
 GW_API void gw_state_front(const gw_instance *I, const unsigned char *buf, int front[2]);
 /* restore a checked state */

@@ -12,7 +12,9 @@
  * front[1] packs the last fmi2DoStep status (bits 0-3, fmi2OK..fmi2Fatal) and whether the
  * instance had been initialised (bit 4).  Both front ints are validated on
  * fmi2DeSerializeFMUstate and fmi2SetFMUstate, after the core's checksum and range checks
- * (gw_state.c): a corrupt state is refused with its reason, never applied.
+ * (gw_state.c), against each other and against the core's fields (gw_state_check_run: the
+ * times, the events, the model's validity checks, given what the front ints say): a state
+ * the instance could not have reached itself is refused with its reason, never applied.
  */
 #ifndef GW_UNITY_BUILD
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
@@ -57,6 +59,7 @@ static int gw_fmi2_valid_state(int s) {
  * reason is logged */
 static int gw_fmi2_check_state(gw_fmu *F, const char *fn, const unsigned char *buf, size_t size) {
     gw_instance *I = F->I;
+    gw_state_facts facts;
     int front[2], st, last;
     if (!gw_state_check(I, fn, buf, size)) return 0;
     gw_state_front(I, buf, front);
@@ -77,7 +80,24 @@ static int gw_fmi2_check_state(gw_fmu *F, const char *fn, const unsigned char *b
                    gw_fmi2_is_me(F) ? "Model Exchange" : "Co-Simulation");
         return 0;
     }
-    return 1;
+    facts.initialised = (front[1] & GW_FRONT_INITIALIZED) != 0;
+    facts.time_free = gw_fmi2_is_me(F);
+    facts.terminated = st == GW_ST_STEP_FAILED;
+    /* the states before fmi2ExitInitializationMode succeeded, and those only it leads to;
+     * Error may follow either */
+    if (st != GW_ST_ERROR && facts.initialised != ((st & GW_ST_BEFORE_INIT_END) == 0)) {
+        GW_LOG_ERR(I, "%s: FMU state holds instance state %s %s an initialisation", fn,
+                   gw_fmi2_state_name(st), facts.initialised ? "after" : "without");
+        return 0;
+    }
+    /* fmi2DoStep's status: fmi2OK until the first step, fmi2Discard in StepFailed */
+    if ((!facts.initialised && last != fmi2OK) ||
+        (st == GW_ST_STEP_FAILED && last != fmi2Discard)) {
+        GW_LOG_ERR(I, "%s: FMU state holds last fmi2DoStep status %d in instance state %s", fn,
+                   last, gw_fmi2_state_name(st));
+        return 0;
+    }
+    return gw_state_check_run(I, fn, buf, &facts);
 }
 
 /* Apply a state that gw_fmi2_check_state accepted. */

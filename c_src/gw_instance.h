@@ -159,6 +159,16 @@ GW_INTERNAL GW_MAYBE_UNUSED int gw_eval_pre(gw_instance *I);
 GW_INTERNAL gw_status gw_settings_check(gw_instance *I, const char *fn, const double *value);
 
 /* ---- gw_simulation.c -------------------------------------------------------------------------- */
+/* The checks of gw_setup_experiment's arguments, without storing them: GW_OK, or GW_ERROR with
+ * the reason logged (also what a restored state must pass, gw_state.c). */
+GW_INTERNAL gw_status gw_experiment_check(gw_instance *I, const char *fn, int tolerance_defined,
+                                          double tolerance, double start_time,
+                                          int stop_time_defined, double stop_time);
+/* The model's validity checks c(s, p) > 0 at I->s, I->p (gw_initialize; a restored state):
+ * GW_OK, or GW_ERROR with every failed check logged. */
+GW_INTERNAL gw_status gw_validity_check(gw_instance *I, const char *fn);
+/* nominal = nom(p) at I->p, each finite and > 0: GW_OK, or GW_ERROR with the reason logged. */
+GW_INTERNAL gw_status gw_nominals_check(gw_instance *I, const char *fn, double *nominal);
 /* I->atol_eff from abs_tol and rel_tol: abs_tol, or GW_ATOL_PER_RTOL * rel_tol if it is 0 */
 GW_INTERNAL void gw_update_atol_eff(gw_instance *I);
 

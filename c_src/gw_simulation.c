@@ -20,9 +20,9 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
         return GW_ERROR;                                                                      \
     } while (0)
 
-GW_API gw_status gw_setup_experiment(gw_instance *I, const char *fn, int tolerance_defined,
-                                     double tolerance, double start_time, int stop_time_defined,
-                                     double stop_time) {
+GW_INTERNAL gw_status gw_experiment_check(gw_instance *I, const char *fn, int tolerance_defined,
+                                          double tolerance, double start_time,
+                                          int stop_time_defined, double stop_time) {
     if (!isfinite(start_time)) GW_SIM_FAIL("%s: startTime is not finite", fn);
     if (tolerance_defined &&
         !(tolerance >= GW_REL_TOL_MIN && tolerance <= GW_REL_TOL_MAX))
@@ -33,6 +33,15 @@ GW_API gw_status gw_setup_experiment(gw_instance *I, const char *fn, int toleran
             GW_SIM_FAIL("%s: stopTime %g must be finite and >= startTime %g", fn, stop_time,
                         start_time);
     }
+    return GW_OK;
+}
+
+GW_API gw_status gw_setup_experiment(gw_instance *I, const char *fn, int tolerance_defined,
+                                     double tolerance, double start_time, int stop_time_defined,
+                                     double stop_time) {
+    if (gw_experiment_check(I, fn, tolerance_defined, tolerance, start_time, stop_time_defined,
+                            stop_time) != GW_OK)
+        return GW_ERROR;
     /* the tolerance is resolved against rel_tol at initialisation (gw_resolve_tolerances),
      * so the order of this call and of setting rel_tol does not matter */
     I->tol_defined = tolerance_defined ? 1 : 0;
@@ -169,10 +178,38 @@ GW_INTERNAL void gw_update_atol_eff(gw_instance *I) {
     I->atol_eff = I->abs_tol > 0.0 ? I->abs_tol : GW_ATOL_PER_RTOL * I->rel_tol;
 }
 
+GW_INTERNAL gw_status gw_validity_check(gw_instance *I, const char *fn) {
+    const gw_model *m = I->m;
+    int i, ok = 1;
+    if (m->nc == 0) return GW_OK;
+    if (gw_eval_chk(I, I->c) != 0) GW_SIM_FAIL("%s: evaluation of the validity checks failed", fn);
+    for (i = 0; i < m->nc; i++)
+        if (!(I->c[i] > 0.0)) {
+            GW_LOG_ERR(I, "%s: %s (check value %g)", fn,
+                       (m->check_messages && m->check_messages[i]) ? m->check_messages[i]
+                                                                   : "validity check failed",
+                       I->c[i]);
+            ok = 0;
+        }
+    return ok ? GW_OK : GW_ERROR;
+}
+
+GW_INTERNAL gw_status gw_nominals_check(gw_instance *I, const char *fn, double *nominal) {
+    const gw_model *m = I->m;
+    int i;
+    if (gw_eval_nom(I, nominal) != 0)
+        GW_SIM_FAIL("%s: evaluation of the state nominals failed", fn);
+    for (i = 0; i < m->nx; i++)
+        if (!(nominal[i] > 0.0) || !isfinite(nominal[i]))
+            GW_SIM_FAIL("%s: nominal of state %s is %g (must be finite, > 0)", fn,
+                        m->x_names ? m->x_names[i] : "?", nominal[i]);
+    return GW_OK;
+}
+
 /* settings and the model's validity checks c(s, p) > 0 */
 static gw_status gw_check_setup(gw_instance *I, const char *fn) {
     const gw_model *m = I->m;
-    int i, ok;
+    int ok;
     ok = gw_check_finite_vec(I, fn, I->p, m->np, GW_VAR_PARAM, "parameter");
     ok &= gw_check_finite_vec(I, fn, I->s, m->ns, GW_VAR_START, "start value");
     ok &= gw_check_finite_vec(I, fn, I->u, m->nu, GW_VAR_INPUT, "input");
@@ -182,21 +219,7 @@ static gw_status gw_check_setup(gw_instance *I, const char *fn) {
      * (and for settings a front end does not expose, e.g. the C API's max_internal_steps) */
     if (gw_settings_check(I, fn, NULL) != GW_OK) return GW_ERROR;
     gw_update_atol_eff(I);
-    if (m->nc > 0) {
-        if (gw_eval_chk(I, I->c) != 0)
-            GW_SIM_FAIL("%s: evaluation of the validity checks failed", fn);
-        ok = 1;
-        for (i = 0; i < m->nc; i++)
-            if (!(I->c[i] > 0.0)) {
-                GW_LOG_ERR(I, "%s: %s (check value %g)", fn,
-                           (m->check_messages && m->check_messages[i]) ? m->check_messages[i]
-                                                                       : "validity check failed",
-                           I->c[i]);
-                ok = 0;
-            }
-        if (!ok) return GW_ERROR;
-    }
-    return GW_OK;
+    return gw_validity_check(I, fn);
 }
 
 /* The consistent initial point (gw_initialize after its checks); GW_ERROR on failure. */
@@ -204,12 +227,7 @@ static gw_status gw_initial_point(gw_instance *I, const char *fn) {
     const gw_model *m = I->m;
     int i;
     /* nominal values, initial state, outputs, event indicators */
-    if (gw_eval_nom(I, I->nominal) != 0)
-        GW_SIM_FAIL("%s: evaluation of the state nominals failed", fn);
-    for (i = 0; i < m->nx; i++)
-        if (!(I->nominal[i] > 0.0) || !isfinite(I->nominal[i]))
-            GW_SIM_FAIL("%s: nominal of state %s is %g (must be finite, > 0)", fn,
-                        m->x_names ? m->x_names[i] : "?", I->nominal[i]);
+    if (gw_nominals_check(I, fn, I->nominal) != GW_OK) return GW_ERROR;
     if (gw_eval_init(I, I->x) != 0) GW_SIM_FAIL("%s: evaluation of the initial state failed", fn);
     for (i = 0; i < m->nx; i++)
         if (!isfinite(I->x[i]))

@@ -7,7 +7,8 @@
  *
  * Restoring checks everything before it changes anything (gw_state_check: size, magic,
  * version, model sizes and token, checksum, and every value within the ranges the API
- * accepts), so a refused buffer leaves the instance as it was.  Every refusal is
+ * accepts; gw_state_check_run: the times in order, the events and their flags, the model's
+ * validity checks), so a refused buffer leaves the instance as it was.  Every refusal is
  * GYROWHEEL_ERR_STATE with the core's reason.
  */
 #ifndef GW_UNITY_BUILD
@@ -46,8 +47,14 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(restore_state)(GWC_T *w, const void *buffe
         return gwc_fail(w, GYROWHEEL_ERR_STATE,
                         "%s: a state saved by an FMU, not by this C API (front-end words %d, %d)",
                         fn, front[0], front[1]);
-    gw_state_apply(w->I, b);
+    {
+        const gw_state_facts facts = {1, 0, 0}; /* saved after its initialisation; time only
+                                                    advances through the API */
+        if (!gw_state_check_run(w->I, fn, b, &facts))
+            return gwc_fail_core(w, GYROWHEEL_ERR_STATE, "the state was refused");
+    }
     w->I->in_setup = 0;
+    gw_state_apply(w->I, b);
     w->ready = 1;
     return GYROWHEEL_OK;
 }

@@ -126,6 +126,15 @@ class Slave(_Instance):
         super().__init__(fmu, FMU2Slave, unzipdir, name, md, logging_on)
 
 
+def rolled_state(fmu: str | Path, seconds: float = 1.0) -> tuple[Slave, bytes]:
+    """A Co-Simulation instance initialised with the scene's values and stepped `seconds`, and its
+    serialised FMU state there."""
+    s = Slave(fmu, logging_on=False)
+    s.init()
+    s.slave.doStep(0.0, seconds)
+    return s, bytes(s.slave.serializeFMUstate(s.slave.getFMUstate()))
+
+
 class Model(_Instance):
     """A Model Exchange instance (FMU2Model) with numpy access to the state vector."""
 

@@ -93,15 +93,27 @@ UNSUPPORTED = {"fmi2SetRealInputDerivatives": "canInterpolateInputs=false",
                "fmi2CancelStep": "never asynchronous"}
 
 
+def refusal(iface: str, fn: str, state: str) -> str:
+    """The text the log of an illegal call holds."""
+    if fn in (ME_ONLY if iface == "CS" else CS_ONLY):
+        return f"{fn}: Co-Simulation function" if iface == "ME" else f"{fn}: Model Exchange is not supported"
+    if fn in UNSUPPORTED:
+        return UNSUPPORTED[fn]
+    return f"{fn}: illegal call in state {state}"
+
+
 def functions(iface: str) -> tuple[str, ...]:
     """Every fmi2 function taking an instance, of both interfaces (the other interface's too)."""
     return COMMON + CS_ONLY + ME_ONLY
 
 
-def legal(iface: str, fn: str, state: str) -> bool:
-    """Whether the FMU accepts fn in state (the standard's table plus ANSWERED)."""
+def legal(iface: str, fn: str, state: str, ended: bool = False) -> bool:
+    """Whether the FMU accepts fn in state (the standard's table plus ANSWERED); ended: a
+    terminating event ended the run (fmi2DoStep is then answered in Terminated too)."""
     if fn in UNSUPPORTED or fn in (ME_ONLY if iface == "CS" else CS_ONLY):
         return False
+    if fn == "fmi2DoStep" and ended and state == TERMINATED:
+        return True
     extra = ANSWERED.get((iface, fn), ANSWERED.get(("*", fn), (set(), "")))[0]
     return state in STANDARD[fn] | extra
 

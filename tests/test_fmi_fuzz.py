@@ -1,9 +1,12 @@
 """The seeded fmi2 call-sequence fuzzer (tests/fuzz/fmi2_fuzz.py), a short run: 300 sequences of
 60 calls on paper_earth, Co-Simulation and Model Exchange, with every invariant checked (no
-non-finite value written, every non-OK status logged, fmi2Discard only where allowed, terminate /
-reset / re-initialise / free always work). The run is short but not blind: against a runtime that
-writes arrays despite fmi2Error, leaves fmi2Discard of the status functions unlogged and refuses
-fmi2Terminate after an error it reports 971 violations. The long run and its ASan+UBSan build:
+non-finite value written, every non-OK status logged, fmi2Discard only where allowed, every call
+outside FMI 2.0.4's state tables refused with fmi2Error naming the state, terminate / reset /
+re-initialise / free always work). The run is short but not blind: against a runtime that writes
+arrays despite fmi2Error, leaves fmi2Discard of the status functions unlogged and refuses
+fmi2Terminate after an error it reported 971 violations; against one that accepts fmi2DoStep in
+Initialization Mode, a second fmi2EnterInitializationMode, fmi2ExitInitializationMode in
+StepComplete or fmi2SetupExperiment in StepComplete, 217, 114, 758 and 343. The long run and its ASan+UBSan build:
 docs/fmi.md, "Fuzzing"."""
 from __future__ import annotations
 

@@ -29,7 +29,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 
 from conftest import STATES
-from fmi_helpers import Model, Slave
+from fmi_helpers import Model, Slave, rolled_state
 
 SENTINEL = 12345.0
 
@@ -104,10 +104,7 @@ def test_exit_initialization_refusal_is_the_same_in_both_interfaces(earth_fmu, k
 @pytest.fixture(scope="module")
 def saved(earth_fmu):
     """A paper_earth instance after 1 s and its serialised state."""
-    s = Slave(earth_fmu, logging_on=False)
-    s.init()
-    s.slave.doStep(0.0, 1.0)
-    blob = bytes(s.slave.serializeFMUstate(s.slave.getFMUstate()))
+    s, blob = rolled_state(earth_fmu)
     yield s, blob
     s.free()
 

@@ -23,7 +23,7 @@ import zlib
 
 import pytest
 
-from fmi_helpers import Model, Slave
+from fmi_helpers import Model, rolled_state
 
 OK, ERROR = 0, 3
 INSTANTIATED, STEP_COMPLETE, STEP_FAILED, EVENT_MODE = 1, 4, 8, 128  # gw_fmi2.h's state bits
@@ -189,10 +189,7 @@ def cases(inst, blob: bytes) -> list[tuple[str, dict, str]]:
 @pytest.fixture(scope="module")
 def rolled(earth_fmu):
     """A paper_earth Co-Simulation instance after 1 s, its state blob and its outputs there."""
-    s = Slave(earth_fmu, logging_on=False)
-    s.init()
-    s.slave.doStep(0.0, 1.0)
-    blob = bytes(s.slave.serializeFMUstate(s.slave.getFMUstate()))
+    s, blob = rolled_state(earth_fmu)
     outputs = {n: s.get(n) for n in ("beta", "energy", "z", "vx")}
     yield s, blob, outputs
     s.free()

@@ -179,11 +179,7 @@ def check_cell(inst, iface: str, state: str, fn: str) -> str:
         want = T.ERROR
         if status != ERROR:
             return f"illegal, answered {status}"
-        reason = f"{fn}: illegal call in state {state}"
-        if fn in (T.ME_ONLY if iface == "CS" else T.CS_ONLY):
-            reason = f"{fn}: Co-Simulation function" if iface == "ME" else f"{fn}: Model Exchange is not supported"
-        elif fn in T.UNSUPPORTED:
-            reason = T.UNSUPPORTED[fn]
+        reason = T.refusal(iface, fn, state)
         if not any(reason in m for m in log):
             return f"illegal, fmi2Error without {reason!r}: {log}"
     got = state_now(inst, want, fn)

@@ -14,6 +14,10 @@ Invariants checked after every call (a violation is reported with the seed and t
   allowed      fmi2Discard only from the functions FMI 2.0.4 section 2.1.3 allows it for
   recoverable  fmi2Terminate after an initialisation, fmi2Reset, a new initialisation and
                fmi2FreeInstance always succeed
+  state        a call outside the states FMI 2.0.4's tables allow it in (tests/fmi_state_table.py)
+               returns fmi2Error with its reason logged, naming the state the instance is in
+               (tracked along the sequence: legal calls move it as the standard's diagrams say,
+               every fmi2Error into Error)
 A crash is the process dying: run the long fuzz under ASan+UBSan (docs/fmi.md, "Fuzzing").
 
     python tests/fuzz/fmi2_fuzz.py FMU [--sequences N] [--calls N] [--seed S]
@@ -30,6 +34,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fmpy import extract, read_model_description
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # tests/: the state tables
+import fmi_state_table as ST  # noqa: E402
 
 OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
 DISCARD_ALLOWED = {  # FMI 2.0.4 section 2.1.3 (fmiGetXXXStatus: every status inquiry)
@@ -104,10 +111,17 @@ class Fuzzer:
                 out[i] = SENTINEL
         f = getattr(self.lib, fn)
         f.restype = C.c_int
+        before, allowed = self.fstate, ST.legal(kind, fn, self.fstate, self.ended)
         status = f(C.c_void_p(self.c), *args)
+        self._track(kind, fn, status, allowed, args)
         rep.calls += 1
         rep.statuses[status] = rep.statuses.get(status, 0) + 1
         where = f"seed {seed}: {kind} {fn}{tuple(a for a in args if isinstance(a, (int, float)))} -> {status}"
+        if not allowed:
+            reason = ST.refusal(kind, fn, before)
+            said = [m for _, m in self.messages[n_before:]] or [m for s, m in self.messages if s != OK][-1:]
+            if status != ERROR or not any(reason in m for m in said):
+                rep.violations.append(f"{where}: illegal in state {before}: not fmi2Error with {reason!r}")
         if status == DISCARD and fn not in DISCARD_ALLOWED[kind]:
             rep.violations.append(f"{where}: fmi2Discard is not allowed for {fn}")
         if status != OK:
@@ -122,6 +136,23 @@ class Fuzzer:
             if any(not math.isfinite(v) for v in values):
                 rep.violations.append(f"{where}: non-finite value written {values}")
         return status
+
+    def _track(self, kind: str, fn: str, status: int, allowed: bool, args) -> None:
+        """The instance's state after the call, as the standard's diagrams say."""
+        if status >= ERROR or not allowed:
+            self.fstate = ST.ERROR
+        elif fn == "fmi2DoStep" and status == DISCARD:
+            self.fstate, self.ended = (ST.STEP_FAILED if self.fstate == ST.STEP_COMPLETE else self.fstate), True
+        elif fn == "fmi2Reset":
+            self.fstate, self.ended = ST.INSTANTIATED, False
+        elif fn == "fmi2GetFMUstate":
+            self.saved_states[args[0]._obj.value] = (self.fstate, self.ended)
+        elif fn == "fmi2DeSerializeFMUstate":
+            self.saved_states[args[2]._obj.value] = self.deserialized_from or (self.fstate, self.ended)
+        elif fn == "fmi2SetFMUstate":
+            self.fstate, self.ended = self.saved_states.get(args[0].value, (self.fstate, self.ended))
+        else:
+            self.fstate = ST.after(kind, fn, self.fstate)
 
     # ---- random arguments -------------------------------------------------------------------
     @staticmethod
@@ -146,6 +177,7 @@ class Fuzzer:
         if not self.c:
             rep.violations.append(f"seed {seed}: fmi2Instantiate failed")
             return
+        self.fstate, self.ended, self.saved_states, self.deserialized_from = ST.INSTANTIATED, False, {}, None
         t, initialised, saved = 0.0, False, []
         self._state = None  # FMU states belong to their instance
         ops = self.ops(kind)
@@ -173,14 +205,16 @@ class Fuzzer:
         rep.sequences += 1
 
     def start(self, rep: Report, kind: str, rng: random.Random, seed: int) -> bool:
-        """A valid initialisation, sometimes with a spinless wheel (it falls within 0.5 s) or a
-        tight tolerance; True if it succeeded."""
+        """A valid initialisation, sometimes with a spinless wheel (it falls within 0.5 s), sometimes
+        left in Initialization Mode; True if it ended the initialisation."""
         self.call(rep, kind, "fmi2SetupExperiment", 0, C.c_double(0.0), C.c_double(0.0), 0, C.c_double(0.0), seed=seed)
         spin = [v for v in self.real if v.name == "gamma_dot"]
         if spin and rng.random() < 0.4:
             self.call(rep, kind, "fmi2SetReal", (C.c_uint * 1)(spin[0].valueReference), C.c_size_t(1),
                       (C.c_double * 1)(rng.choice([0.0, 1.0])), seed=seed)
         self.call(rep, kind, "fmi2EnterInitializationMode", seed=seed)
+        if rng.random() < 0.15:  # the sequence goes on in Initialization Mode
+            return False
         if kind == "ME":
             ok = self.call(rep, kind, "fmi2ExitInitializationMode", seed=seed) <= WARNING
             return ok and self.call(rep, kind, "fmi2NewDiscreteStates", C.byref(EventInfo()), seed=seed) == OK \
@@ -323,6 +357,7 @@ class Fuzzer:
         cut = rng.choice([len(raw), len(raw), len(raw) - 1, 10])
         data = (C.c_char * cut).from_buffer_copy(bytes(raw[:cut]))
         new = C.c_void_p()
+        self.deserialized_from = self.saved_states.get(st.value)  # an accepted blob is unchanged
         st2 = self.call(rep, kind, "fmi2DeSerializeFMUstate", data, C.c_size_t(cut), C.byref(new), seed=seed)
         if st2 == OK:
             st2 = self.call(rep, kind, "fmi2SetFMUstate", new, seed=seed)

@@ -23,8 +23,8 @@ from fmpy import simulate_fmu
 from fmi_helpers import Model, Slave
 from gyrowheel.fmu_build import build_fmu, parse_scene
 from gyrowheel.model.build import build_model
-from gyrowheel.studies.scipy_reference import solve_hybrid
 from paper_wheel import PAPER_WHEEL_TOML as WHEEL
+from reference.hybrid_lift_off import to_lift_off
 
 EFFECTS = {"gravity": {}, "slope": {}, "rolling_resistance": {}, "spin_friction": {}, "energy": {}}
 TIGHT = {"rel_tol": 1e-10, "abs_tol": 1e-12}
@@ -66,14 +66,7 @@ def scipy_reference(lean_deg: float, heading: float):
     """(break-away of the rolling law, lift-off) from scipy's DOP853 on the CasADi model."""
     key = (lean_deg, heading)
     if key not in _REFERENCES:
-        start = leaning(lean_deg, heading)
-        spec = build_model(effects=EFFECTS)
-        fns = spec.functions()
-        p = np.array([start.get(q.name, q.start) for q in spec.parameters])
-        x0 = np.array(fns["init"]([start.get(q.name, q.start) for q in spec.starts], p)).ravel()
-        lift = [e.name for e in spec.events].index("lift_off")
-        t_lift, _, switches = solve_hybrid(spec, x0, p, 1.0, stop=lambda t, x: float(fns["evt"](t, x, [], p)[lift]),
-                                           rtol=1e-12, atol=1e-14)
+        t_lift, _, switches = to_lift_off(EFFECTS, leaning(lean_deg, heading), 1.0)
         t_break = [t for t, name in switches if name == "rolling_stiction"]
         _REFERENCES[key] = (t_break, t_lift)
     return _REFERENCES[key]

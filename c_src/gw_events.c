@@ -3,10 +3,15 @@
  * indicators are evaluated at the end of the step; every indicator that went from
  * > 0 to <= 0 is located on the dense output by the Illinois method (bracketing,
  * safeguarded by bisection) to |dt| <= min(1e-12 max(1, |t|), 1e-9 of the step) (at
- * least 4 ulps of t).  The earliest crossing
- * wins; the state at the event is the dense output at the located time, which is
- * the right end of the final bracket, so the indicator there is <= 0 and it
- * cannot fire again until it has become positive.
+ * least 4 ulps of t).  An indicator > 0 at both ends can still cross twice inside the
+ * step (a short dip below 0): the cubic Hermite interpolant of its values and slopes at the
+ * ends (the slopes by one more evaluation per step, a difference along f) flags a dip that
+ * may reach 0, which is then searched for on the dense output (gw_event_dip) and located
+ * from the step's start.  The earliest crossing wins (an indicator found <= 0 at the
+ * winner's time without having been located is located before it, and may win instead);
+ * the state at the event is the dense output at the located time, which is the right end
+ * of the final bracket, so the indicator there is <= 0 and it cannot fire again until it
+ * has become positive.
  * gw_event_update serves a front end that locates crossings itself (Model Exchange).
  *
  * One event instant (gw_event_instant) serves both: the events found crossing fire; a
@@ -29,6 +34,8 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #define GW_EVENT_MAX_ITER 200
 #define GW_EVENT_ITER_MAX 100 /* passes of one event instant */
+#define GW_EVENT_SLOPE_STEP 1.0e-8 /* an indicator's slope: difference over this part of the step */
+#define GW_EVENT_DIP_ITER 40       /* golden-section evaluations of one dip: 0.618^40 = 4e-9 of the step */
 
 static const char *gw_event_name(const gw_instance *I, int i) {
     return (I->m->event_names && I->m->event_names[i]) ? I->m->event_names[i] : "?";
@@ -186,9 +193,120 @@ static gw_ev_result gw_event_instant(gw_instance *I, double t, double *x, double
     return warn ? GW_EV_WARN : GW_EV_NONE;
 }
 
+/* ---- crossings inside a step ---------------------------------------------------- */
+
+/* d[i] = d g_i / d t at (t, x), g = e there: a difference over dt along the solution, on the
+ * straight line x + dt f when f (= f(t, x)) is given, else on the step's dense output (dt < 0:
+ * backwards from the step's end).  Uses I->xtmp and I->eev as scratch. */
+static int gw_event_slopes(gw_instance *I, double t, const double *x, const double *g,
+                           const double *f, double dt, double *d) {
+    const int nx = I->m->nx, ne = I->m->ne;
+    int j;
+    if (f) {
+        for (j = 0; j < nx; j++) I->xtmp[j] = x[j] + dt * f[j];
+    } else {
+        gw_dense_prepare(I);
+        gw_dense_eval(I, t + dt, I->xtmp);
+    }
+    if (gw_eval_evt(I, t + dt, I->xtmp, I->eev) != 0) return -1;
+    for (j = 0; j < ne; j++) d[j] = (I->eev[j] - g[j]) / dt;
+    return 0;
+}
+
+/* The slopes of the indicators at both ends of the step [t0, t1] (I->edot, I->edot_new). */
+static int gw_event_end_slopes(gw_instance *I, double t0, double t1) {
+    const double dt = GW_EVENT_SLOPE_STEP * (t1 - t0);
+    if (!(I->edot_valid && I->edot_t == t0)) {
+        if (gw_event_slopes(I, t0, I->x, I->e, I->fcur_valid ? I->k[0] : NULL, dt, I->edot))
+            return -1;
+        I->edot_t = t0;
+        I->edot_valid = 1;
+    }
+    if (!I->k7_valid && I->solver != GW_SOLVER_TAYLOR && I->solver != GW_SOLVER_ROSENBROCK)
+        gw_dense_prepare(I); /* euler, rk4: f(t1, xnew) into k[6], reused by the next step */
+    if (I->k7_valid) return gw_event_slopes(I, t1, I->xnew, I->enew, I->k[6], dt, I->edot_new);
+    return gw_event_slopes(I, t1, I->xnew, I->enew, NULL, -dt, I->edot_new);
+}
+
+/* g_i at th in (0, 1) of the step: I->xtmp, I->eev as scratch; non-finite counts as <= 0 */
+static int gw_event_at(gw_instance *I, int i, double t0, double h, double th, double *g) {
+    if (gw_event_indicator(I, i, t0 + th * h, g) != 0) return -1;
+    if (!isfinite(*g)) *g = -1.0;
+    return 0;
+}
+
+/* An indicator with the same sign at both ends of the step may still cross inside it: one
+ * > 0 at both ends can dip to <= 0 (and back), one <= 0 at both ends (a warning that has
+ * fired) can rise above 0 and fall back to <= 0, a new firing (a short second slip).  The
+ * cubic Hermite interpolant p of g on [t0, t0 + h] from g and its slope at both ends (one
+ * indicator evaluation per step, gw_event_end_slopes) shows where g has an interior minimum
+ * (maximum); only when p's extremum is beyond half the end value nearer to 0 (a dip that a
+ * step resolved to the tolerance could take across 0) is g itself searched on the dense
+ * output: at p's extremum, then by golden-section search (GW_EVENT_DIP_ITER evaluations at
+ * most) until a point across 0 is found.  Returns 1 with the bracket [*ta, *tb] of a crossing
+ * from > 0 (*fa) to <= 0 (*fb), 0 if none, -1 on a failed evaluation. */
+static int gw_event_dip(gw_instance *I, int i, double t0, double t1, double *ta, double *fa,
+                        double *tb, double *fb) {
+    const double h = t1 - t0, g0 = I->e[i], g1 = I->enew[i];
+    const double d0 = h * I->edot[i], d1 = h * I->edot_new[i];
+    const double A = 3.0 * (2.0 * (g0 - g1) + d0 + d1), B = -2.0 * (3.0 * (g0 - g1) + 2.0 * d0 + d1);
+    const double C = d0;
+    /* s = 1: the minimum of g (both ends > 0); s = -1: its maximum (both <= 0) */
+    const double s = g0 > 0.0 ? 1.0 : -1.0, q0 = s * g0, q1 = s * g1;
+    double roots[2], th = -1.0, a = 0.0, b = 1.0, c, qa = q0, qb = q1, qc, gc, pc;
+    int n = 0, k, it;
+    if ((g0 > 0.0) != (g1 > 0.0) || !isfinite(g0) || !isfinite(g1) || !isfinite(d0) ||
+        !isfinite(d1))
+        return 0;
+    /* p'(th) = A th^2 + B th + C; a minimum of s p where s p'' = s (2 A th + B) > 0 */
+    if (A == 0.0) {
+        if (B != 0.0) roots[n++] = -C / B;
+    } else {
+        const double disc = B * B - 4.0 * A * C;
+        if (disc >= 0.0) {
+            const double q = -0.5 * (B + (B >= 0.0 ? sqrt(disc) : -sqrt(disc)));
+            if (q != 0.0) roots[n++] = C / q;
+            roots[n++] = q / A;
+        }
+    }
+    for (k = 0; k < n; k++)
+        if (roots[k] > 0.0 && roots[k] < 1.0 && s * (2.0 * A * roots[k] + B) > 0.0) th = roots[k];
+    if (th < 0.0) return 0;
+    pc = g0 * (1.0 + th * th * (2.0 * th - 3.0)) + g1 * th * th * (3.0 - 2.0 * th) +
+         d0 * th * (1.0 - th) * (1.0 - th) + d1 * th * th * (th - 1.0);
+    if (!(s * pc < 0.5 * (q0 < q1 ? q0 : q1))) return 0;
+    gw_dense_prepare(I);
+    c = th;
+    if (gw_event_at(I, i, t0, h, c, &gc)) return -1;
+    qc = s * gc;
+    for (it = 0; s > 0.0 ? gc > 0.0 : !(gc > 0.0); it++) {
+        double x, gx, qx;
+        if (it >= GW_EVENT_DIP_ITER || !(qc < qa && qc < qb)) return 0; /* not across 0 */
+        x = (c - a > b - c) ? c - 0.381966011250105 * (c - a) : c + 0.381966011250105 * (b - c);
+        if (gw_event_at(I, i, t0, h, x, &gx)) return -1;
+        qx = s * gx;
+        if (qx < qc) { /* x is the new middle */
+            if (x < c) b = c, qb = qc; else a = c, qa = qc;
+            c = x;
+            qc = qx;
+            gc = gx;
+        } else if (x < c) {
+            a = x, qa = qx;
+        } else {
+            b = x, qb = qx;
+        }
+    }
+    if (s > 0.0) { /* [t0, the point <= 0] */
+        *ta = t0, *fa = g0, *tb = t0 + c * h, *fb = gc;
+    } else {       /* [the point > 0, t1] */
+        *ta = t0 + c * h, *fa = gc, *tb = t1, *fb = g1;
+    }
+    return 1;
+}
+
 GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_event) {
     const gw_model *m = I->m;
-    int i, ne = m->ne, winner = -1, jumped = 0;
+    int i, ne = m->ne, winner = -1, jumped = 0, pass;
     double best = t1;
     if (I->enew_ready) { /* from the Taylor kernel's series at (t1, xnew), GW_TL(evt) */
         I->enew_ready = 0;
@@ -197,16 +315,27 @@ GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, d
         GW_LOG_ERR(I, "evaluation of the event indicators failed at t=%.17g", t1);
         return GW_EV_ERROR;
     }
-    for (i = 0; i < ne; i++)
-        if (I->e[i] > 0.0 && !(I->enew[i] > 0.0)) break;
-    if (i == ne) return GW_EV_NONE;
-
     if (I->tl_fetch) I->tl_fetch(I, I->tl_fetch_env); /* the step's series into I->tl_w */
-    gw_dense_prepare(I);
-    for (; i < ne; i++) {
-        double te;
-        if (!(I->e[i] > 0.0 && !(I->enew[i] > 0.0))) continue;
-        if (gw_event_locate(I, i, t0, I->e[i], t1, isfinite(I->enew[i]) ? I->enew[i] : -I->e[i], &te)) {
+    if (gw_event_end_slopes(I, t0, t1) != 0) {
+        GW_LOG_ERR(I, "evaluation of the event indicators failed at t=%.17g", t1);
+        return GW_EV_ERROR;
+    }
+    for (i = 0; i < ne; i++) {
+        double a = t0, fa = I->e[i], b = t1, fb = isfinite(I->enew[i]) ? I->enew[i] : -I->e[i], te;
+        I->ev_fired[i] = 0; /* here: 1 once its crossing is located */
+        if (!(I->e[i] > 0.0) || I->enew[i] > 0.0) {
+            /* no crossing seen at the ends: one that starts and ends inside the step? */
+            const int dip = gw_event_dip(I, i, t0, t1, &a, &fa, &b, &fb);
+            if (dip < 0) {
+                GW_LOG_ERR(I, "evaluation of the event indicators failed while searching "
+                           "event %s inside the step", gw_event_name(I, i));
+                return GW_EV_ERROR;
+            }
+            if (!dip || (winner >= 0 && a >= best)) continue;
+        }
+        gw_dense_prepare(I);
+        I->ev_fired[i] = 1;
+        if (gw_event_locate(I, i, a, fa, b, fb, &te)) {
             GW_LOG_ERR(I, "evaluation of the event indicators failed while locating event %s",
                        gw_event_name(I, i));
             return GW_EV_ERROR;
@@ -216,11 +345,32 @@ GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, d
             winner = i;
         }
     }
-    /* the state and the indicators at the event */
-    gw_dense_eval(I, best, I->xev);
-    if (gw_eval_evt(I, best, I->xev, I->eev) != 0) {
-        GW_LOG_ERR(I, "evaluation of the event indicators failed at t=%.17g", best);
-        return GW_EV_ERROR;
+    if (winner < 0) return GW_EV_NONE;
+    /* the state and the indicators at the event; an indicator <= 0 there that was not located
+     * (it crossed inside the step, unseen at its ends) is located in [t0, best] and may win */
+    for (pass = 0;; pass++) {
+        int earlier = -1;
+        double te = best;
+        gw_dense_eval(I, best, I->xev);
+        if (gw_eval_evt(I, best, I->xev, I->eev) != 0) {
+            GW_LOG_ERR(I, "evaluation of the event indicators failed at t=%.17g", best);
+            return GW_EV_ERROR;
+        }
+        if (pass > ne) break;
+        for (i = 0; i < ne && earlier < 0; i++) {
+            if (I->ev_fired[i] || !(I->e[i] > 0.0) || I->eev[i] > 0.0) continue;
+            I->ev_fired[i] = 1;
+            if (gw_event_locate(I, i, t0, I->e[i], best,
+                                isfinite(I->eev[i]) ? I->eev[i] : -I->e[i], &te)) {
+                GW_LOG_ERR(I, "evaluation of the event indicators failed while locating "
+                           "event %s", gw_event_name(I, i));
+                return GW_EV_ERROR;
+            }
+            if (te < best) earlier = i;
+        }
+        if (earlier < 0) break;
+        best = te;
+        winner = earlier;
     }
     for (i = 0; i < ne; i++) {
         I->ev_fired[i] = (i == winner) || (I->e[i] > 0.0 && !(I->eev[i] > 0.0));

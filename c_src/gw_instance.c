@@ -111,6 +111,8 @@ GW_API gw_instance *gw_instance_new_with(const gw_model *m, const char *name,
     if (gw_fun_alloc(I, &I->f_upd, &m->upd, 5, 1)) goto fail;
     GW_ALLOC_VEC(I->x_upd, double, nx);
     GW_ALLOC_VEC(I->e_upd, double, ne);
+    GW_ALLOC_VEC(I->edot, double, ne);
+    GW_ALLOC_VEC(I->edot_new, double, ne);
     GW_ALLOC_VEC(I->ev_fired, int, ne);
     gw_fun_bind(I);
     gw_instance_reset(I);
@@ -142,6 +144,8 @@ GW_API void gw_instance_free(gw_instance *I) {
     gw_fun_free(I, &I->f_upd);
     gw_free(I, I->x_upd);
     gw_free(I, I->e_upd);
+    gw_free(I, I->edot);
+    gw_free(I, I->edot_new);
     gw_free(I, I->ev_fired);
     gw_fun_free(I, &I->f_pre);
     gw_free(I, I->pre_c);
@@ -227,6 +231,7 @@ GW_API void gw_instance_reset(gw_instance *I) {
     I->y_valid = 0;
     I->pre_valid = 0;
     I->enew_ready = 0;
+    I->edot_valid = 0;
     I->fcur_valid = 0;
     I->xdot_valid = 0;
     I->dir_valid = 0;

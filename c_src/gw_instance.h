@@ -83,6 +83,11 @@ struct gw_instance {
     gw_fun f_upd;      /* upd(t, x, u, p, k), only if the model has it */
     double *x_upd;     /* nx: upd's result */
     double *e_upd;     /* ne: indicators after an update */
+    /* the indicators' time derivatives (gw_events.c: crossings inside a step): edot at the step's
+     * start (I->t, I->x), valid if edot_valid and edot_t == I->t; edot_new at its end */
+    double *edot, *edot_new;
+    double edot_t;
+    int edot_valid;
     int *ev_fired;     /* ne: 0 not yet, 1 fires now, 2 fired in this instant */
     int x_jumped;      /* front end: an update changed x since the front end last cleared it */
 

@@ -348,6 +348,7 @@ GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end) {
     memcpy(I->xc_bak, I->xc, nxb);
     I->n_call_steps = 0;
     I->t_call = t0;
+    I->edot_valid = 0; /* a front end may have changed the state since */
     if (m->ne > 0) {
         memcpy(I->e_bak, I->e, (size_t)m->ne * sizeof(double));
         memcpy(I->flags_bak, I->flags, (size_t)m->ne * sizeof(int));

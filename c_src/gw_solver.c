@@ -148,7 +148,12 @@ GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events)
     if (ev == GW_EV_NONE) {
         gw_swap_ptr(&I->x, &I->xnew);
         gw_swap_ptr(&I->xc, &I->xcnew);
-        if (I->m->ne > 0) gw_swap_ptr(&I->e, &I->enew);
+        if (I->m->ne > 0) {
+            gw_swap_ptr(&I->e, &I->enew);
+            gw_swap_ptr(&I->edot, &I->edot_new); /* the indicators' slopes at t1 */
+            I->edot_t = t1;
+            I->edot_valid = 1;
+        }
         I->t = t1;
         if (I->k7_valid) {
             gw_swap_ptr(&I->k[0], &I->k[6]);
@@ -164,6 +169,7 @@ GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events)
     gw_swap_ptr(&I->e, &I->eev);
     I->t = te;
     I->fcur_valid = 0; /* restart the integration at the event */
+    I->edot_valid = 0;
     if (ev == GW_EV_TERMINATE) return GW_INT_TERMINATED;
     if (++(*events) > GW_MAX_EVENTS_PER_STEP) {
         GW_LOG_ERR(I, "more than %d events in one communication step at t=%.17g",

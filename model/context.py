@@ -104,13 +104,23 @@ class StickSlip:
         """The row solved for `hold`: s r_dot + (1 - s) H = 0 (affine in accelerations and H)."""
         return self.stuck * rate_dot + (1 - self.stuck) * self.hold
 
+    def holding(self) -> ca.SX:
+        """L |L| (1 + BREAKAWAY)^2 - H^2: > 0 exactly when the stuck mode holds, |H| < L (1 + BREAKAWAY).
+
+        Signed in L, so that it changes sign once per physical crossing: a limit that drops to 0
+        and below (F_n changing sign at lift-off) leaves it negative, where the square L^2 would
+        turn it positive again and make a break-away followed by that drop look like no crossing
+        at the ends of one step. Continuously differentiable (d(L |L|)/dL = 2 |L|).
+        """
+        return self.limit * ca.fabs(self.limit) * (1 + BREAKAWAY)**2 - self.hold**2
+
     def indicator(self) -> ca.SX:
         """Event indicator of the mode switches (fires going from > 0 to <= 0).
 
         Sliding (s = 0): m r, the rate in the mode's direction, reaches 0 (stick or reverse).
-        Stuck (m = 0): (L (1 + BREAKAWAY))^2 - H^2 reaches 0 (breakaway). Smooth, no abs.
+        Stuck (m = 0): `holding` reaches 0 (breakaway). Each sign change is one physical crossing.
         """
-        return self.stuck * ((self.limit * (1 + BREAKAWAY))**2 - self.hold**2) + self.mode.sym * self.rate
+        return self.stuck * self.holding() + self.mode.sym * self.rate
 
 
 @dataclass

@@ -9,12 +9,16 @@ fires when a sliding rate reaches zero or the holding force reaches the breakawa
 L (1 + BREAKAWAY); its update (this module) gives the state after the switch:
 
     x_trial = x with m = 0 and the speeds projected so that r = 0 exactly
-    m+      = 0                if H(x_trial)^2 < (L(x_trial) (1 + BREAKAWAY))^2   (holds: stick)
-            = -sign(H(x_trial)) otherwise                                         (slide that way)
+    m+      = 0                if m != 0 and L |L| (1 + BREAKAWAY)^2 - H^2 > 0 at x_trial   (holds: stick)
+            = -sign(H(x_trial)) otherwise                                           (slide that way)
     x+      = x_trial with m = m+
 
 The same rule serves sticking (a sliding rate reached zero and the holding force needed is
-within the limit), reversing (it is not: the wheel turns back) and breaking away. The
+within the limit, L > 0: the law's `holding` form, the stuck indicator itself), reversing (it is
+not: the wheel turns back) and breaking away (a stuck law fires only when its indicator has
+reached 0, so it always leaves the stuck mode: it cannot re-stick at the located point, whose
+indicator a rounding may leave a hair above 0, and fire again at once). After sticking the stuck
+indicator is > 0; after sliding off, m+ r = 0: neither fires again until it has become > 0. The
 projection changes one independent speed (the one with the largest coefficient in r) by the
 residual rate the event location left, about 1e-12 of the motion, so the kinetic energy changes
 only to second order in it; the stuck constraint itself does no work (H r = 0).
@@ -31,7 +35,8 @@ from gyrowheel.model.context import BREAKAWAY, StickSlip
 def stuck_rate_rows(laws: list[StickSlip], x: ca.SX, bind: Callable) -> dict[int, ca.SX]:
     """{row of x: stuck factor s} for laws whose rate is one state of x (e.g. gamma_dot).
 
-    Their derivative is multiplied by 1 - m^2, so that while stuck the rate stays exactly 0
+    Their derivative is multiplied by s = m^2 (1 while sliding, 0 while stuck: StickSlip.stuck
+    is 1 - m^2, the row's factor its complement), so that while stuck the rate stays exactly 0
     (the linear solve gives r_dot = 0 only to rounding); arithmetic, no branch.
     """
     rows = {}
@@ -97,8 +102,9 @@ def law_update(law: StickSlip, x: ca.SX, bind: Callable, mode_row: int, speed_ro
     x_trial = _with_rows(x, speed_rows, to_state(v_new))
     x_trial[mode_row] = 0
     hold = ca.substitute(bind(law.hold), x, x_trial)
-    limit = ca.substitute(bind(law.limit), x, x_trial)
-    holds = hold**2 < (limit * (1 + BREAKAWAY))**2
+    # a law that fires while stuck has reached its limit: it breaks away, whatever the holding
+    # test gives at the located point (a rounding there must not re-stick it, to fire again)
+    holds = ca.logic_and(x[mode_row] != 0, ca.substitute(bind(law.holding()), x, x_trial) > 0)
     x_new = ca.SX(x_trial)
     x_new[mode_row] = ca.if_else(holds, 0, ca.if_else(hold > 0, -1, 1))
     return x_new

@@ -237,7 +237,7 @@ GW_API int gw_event_ended(const gw_instance *I, int i);
 GW_API int gw_solver_available(int solver); /* 1 for a known gw_solver value */
 GW_API const char *gw_solver_name(int solver);
 
-/* ---- saving and restoring the state (gw_state.c) ---------------------------------------------
+/* ---- saving and restoring the state (gw_state.c, gw_state_checks.c) --------------------------
  * A state is a byte blob (layout in gw_state.c) holding everything but the logging settings,
  * plus two ints of the front end (the FMI layer: its state machine state and the status of
  * the last fmi2DoStep), stored at fixed places so the layout is one for every front end. */

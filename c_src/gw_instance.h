@@ -165,7 +165,7 @@ GW_INTERNAL gw_status gw_settings_check(gw_instance *I, const char *fn, const do
 
 /* ---- gw_simulation.c -------------------------------------------------------------------------- */
 /* The checks of gw_setup_experiment's arguments, without storing them: GW_OK, or GW_ERROR with
- * the reason logged (also what a restored state must pass, gw_state.c). */
+ * the reason logged (also what a restored state must pass, gw_state_checks.c). */
 GW_INTERNAL gw_status gw_experiment_check(gw_instance *I, const char *fn, int tolerance_defined,
                                           double tolerance, double start_time,
                                           int stop_time_defined, double stop_time);

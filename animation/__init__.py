@@ -61,8 +61,13 @@ def animate(result, output: str | Path, R: float | None = None, fmu: str | Path 
     values; or an .ssp: its wheel component's) give the wheel's geometry when the result does
     not (see resolve_parameters); component picks the component of a system's result
     (read_result); options are those of Options (fps, speed, size, trail, start, stop).
-    The output's directory is created.
-    Returns the Timeline drawn. Raises AnimationError for bad input, with a one-line message.
+    The output's directory is created; the file is written whole or not at all
+    (gyrowheel.output_files): an error or a Ctrl-C leaves what was there before. A GIF plays in
+    real time (times speed) to the centisecond, at no more than gif.MAX_FPS frames a second
+    (gif.py, docs/animation.md): its Timeline's options.fps is the fps written and delays_cs
+    each frame's delay.
+    Returns the Timeline drawn. Raises AnimationError for bad input, with a one-line message
+    (an output path that exists and is no regular file included).
     """
     output = Path(output)
     fmt = output.suffix.lower()
@@ -71,7 +76,8 @@ def animate(result, output: str | Path, R: float | None = None, fmu: str | Path 
     if output.parent.is_dir():  # refused before anything runs; a missing directory is created below
         check_output_file(output, "-o", error=AnimationError)
     table = result_table(result, component)
-    timeline = build_timeline(table, resolve_parameters(table, R=R, fmu=fmu), Options(**options), gif=fmt == ".gif")
+    timeline = build_timeline(table, resolve_parameters(table, R=R, fmu=fmu), Options(**options),
+                              gif=fmt == ".gif")
     try:
         output.parent.mkdir(parents=True, exist_ok=True)
         with replaced_atomically(output, "-o", error=AnimationError) as part:

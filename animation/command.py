@@ -27,7 +27,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--component", help="for a system's result (<component>.<variable> columns, "
                         "gyrowheel system run): the component to draw (default: the one with the wheel's columns)")
     parser.add_argument("--R", type=finite_float, help="wheel radius in m (default: the FMU's, or z / sin(beta))")
-    parser.add_argument("--fps", type=finite_float, default=25.0, help="frames per second of playback, (0, 120]; a GIF's at most 50 (default 25)")
+    parser.add_argument("--fps", type=finite_float, default=25.0,
+                        help="frames per second of playback, (0, 120]; a GIF's at most 50 (default 25)")
     parser.add_argument("--speed", type=finite_float, default=1.0,
                         help="simulated seconds per second of playback (default 1)")
     parser.add_argument("--size", default="640x480", help="WIDTHxHEIGHT in pixels (default 640x480)")

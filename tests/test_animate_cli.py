@@ -125,7 +125,8 @@ def _zip(path, xml=FOREIGN_XML):
     (lambda d: _write_bytes(d / "nul.csv", b"time\x00x"), (),
      "nul.csv: not a text file (a result CSV is UTF-8 text): a NUL byte at byte 4"),
     (lambda d: _mkdir(d / "dir.csv"), (), "dir.csv: is a directory, not a result CSV"),
-    (lambda d: _mkfifo(d / "fifo.csv"), (), "fifo.csv: not a regular file (a device, FIFO or socket), not a result CSV"),
+    (lambda d: _mkfifo(d / "fifo.csv"), (),
+     "fifo.csv: not a regular file (a device, FIFO or socket), not a result CSV"),
     (lambda d: d / "none.csv", (), "none.csv: no such result file"),
     (lambda d: rolling_csv(d / "ok.csv"), ("--R", "-1"), "--R must be a finite number > 0 (the wheel radius in m), "
                                                          "got -1"),

@@ -238,3 +238,16 @@ def test_output_directory_is_created_and_a_directory_refused(tmp_path, capsys):
     (tmp_path / "dir.gif").mkdir()
     assert main(["animate", str(csv), "-o", str(tmp_path / "dir.gif")]) == 2
     assert "dir.gif: is a directory; give a file name" in capsys.readouterr().err
+
+
+def test_an_output_that_is_no_regular_file_is_refused(tmp_path, capsys):
+    """A FIFO (or a device) under the output's name: refused before anything is drawn, left as it is."""
+    import stat
+    csv = rolling_csv(tmp_path / "ok.csv", stop=0.5)
+    os.mkfifo(tmp_path / "fifo.gif")
+    assert main(["animate", str(csv), "-o", str(tmp_path / "fifo.gif")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and ("fifo.gif: exists and is not a regular file (a device, FIFO or socket); give a "
+                                     "file name") in err, err
+    assert stat.S_ISFIFO(os.stat(tmp_path / "fifo.gif").st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo.gif", "ok.csv"]

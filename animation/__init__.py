@@ -17,6 +17,7 @@ from pathlib import Path
 from gyrowheel.animation.table import (AnimationError, Parameters, ResultTable, _component_columns, read_result,
                                        resolve_parameters)
 from gyrowheel.animation.timeline import Options, Timeline, build_timeline
+from gyrowheel.output_files import check_output_file, replaced_atomically
 
 FORMATS = (".gif", ".mp4", ".html")
 DATA_NAME = "result"  # how errors name a result given as data (there is no file)
@@ -60,24 +61,32 @@ def animate(result, output: str | Path, R: float | None = None, fmu: str | Path 
     values; or an .ssp: its wheel component's) give the wheel's geometry when the result does
     not (see resolve_parameters); component picks the component of a system's result
     (read_result); options are those of Options (fps, speed, size, trail, start, stop).
-    The output's directory is created.
-    Returns the Timeline drawn. Raises AnimationError for bad input, with a one-line message.
+    The output's directory is created; the file is written whole or not at all
+    (gyrowheel.output_files): an error or a Ctrl-C leaves what was there before. A GIF plays in
+    real time (times speed) to the centisecond, at no more than gif.MAX_FPS frames a second
+    (gif.py, docs/animation.md): its Timeline's options.fps is the fps written and delays_cs
+    each frame's delay.
+    Returns the Timeline drawn. Raises AnimationError for bad input, with a one-line message
+    (an output path that exists and is no regular file included).
     """
     output = Path(output)
-    if output.suffix.lower() not in FORMATS:
+    fmt = output.suffix.lower()
+    if fmt not in FORMATS:
         raise AnimationError(f"{output}: unknown output format {output.suffix!r}: use .gif, .mp4 or .html")
-    if output.is_dir():
-        raise AnimationError(f"{output}: is a directory; give a file name")
+    if output.parent.is_dir():  # refused before anything runs; a missing directory is created below
+        check_output_file(output, "-o", error=AnimationError)
     table = result_table(result, component)
-    timeline = build_timeline(table, resolve_parameters(table, R=R, fmu=fmu), Options(**options))
+    timeline = build_timeline(table, resolve_parameters(table, R=R, fmu=fmu), Options(**options),
+                              gif=fmt == ".gif")
     try:
         output.parent.mkdir(parents=True, exist_ok=True)
-        if output.suffix.lower() == ".html":
-            from gyrowheel.animation.html import write_html
-            write_html(timeline, output, title=f"gyrowheel: {table.path.name}")
-        else:
-            from gyrowheel.animation.render import render_video
-            render_video(timeline, output)
+        with replaced_atomically(output, "-o", error=AnimationError) as part:
+            if fmt == ".html":
+                from gyrowheel.animation.html import write_html
+                write_html(timeline, part, title=f"gyrowheel: {table.path.name}")
+            else:
+                from gyrowheel.animation.render import render_video
+                render_video(timeline, part)
     except OSError as exc:
         raise AnimationError(f"{exc.filename or output}: cannot write: {exc.strerror or exc}") from None
     return timeline

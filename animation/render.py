@@ -1,22 +1,25 @@
 """GIF and MP4 of a run: matplotlib's 3D axes and its animation writers.
 
-GIF through matplotlib's PillowWriter, MP4 (H.264, yuv420p) through its FFMpegWriter with the ffmpeg
-binary that imageio-ffmpeg ships, so nothing has to be installed system-wide. The view follows the
+GIF through gif.GifStream (each frame written as it is drawn, with the delays that make it play in
+real time), MP4 (H.264, yuv420p) through matplotlib's FFMpegWriter with the ffmpeg binary that
+imageio-ffmpeg ships, so nothing has to be installed system-wide. The view follows the
 wheel (a box of 2 * VIEW_HALF_WIDTH R around its centre, ground grid fixed to the world so motion
 shows); an inset draws the whole contact track from above.
 """
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
 from matplotlib import rc_context
-from matplotlib.animation import FFMpegWriter, PillowWriter
+from matplotlib.animation import FFMpegWriter
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
 from gyrowheel.animation.geometry import circle_points
+from gyrowheel.animation.gif import GifStream
 from gyrowheel.animation.table import AnimationError
 from gyrowheel.animation.timeline import Timeline
 
@@ -137,33 +140,47 @@ def _trail(tl: Timeline, k: int, cx: float, cy: float, h: float) -> np.ndarray:
 
 
 def render_video(tl: Timeline, path: str | Path) -> Path:
-    """Write the animation as .gif (pillow) or .mp4 (H.264 by imageio-ffmpeg's ffmpeg); returns the path.
+    """Write the animation as .gif (gif.GifStream, frames streamed) or .mp4 (H.264 by
+    imageio-ffmpeg's ffmpeg) to path, as it is: the caller makes it atomic; returns the path.
 
-    Raises AnimationError for another extension or an MP4 of odd width or height (yuv420p).
+    A GIF needs the Timeline's delays (build_timeline(..., gif=True)). Raises AnimationError for
+    another extension, a GIF timeline without delays or an MP4 of odd width or height (yuv420p).
     """
     path = Path(path)
     fmt = path.suffix.lower()
-    fps = tl.options.fps
     if fmt == ".gif":
-        writer = PillowWriter(fps=fps)
-        ffmpeg = None
-    elif fmt == ".mp4":
-        w, h = tl.options.size
-        if w % 2 or h % 2:
-            raise AnimationError(f"MP4 (H.264, yuv420p) needs an even width and height, got {w}x{h}")
-        import imageio_ffmpeg
-        ffmpeg = imageio_ffmpeg.get_ffmpeg_exe()
-        writer = None
-    else:
+        if tl.delays_cs is None:
+            raise AnimationError(f"{path}: a GIF needs the frames and delays of build_timeline(..., gif=True)")
+        _write_gif(tl, path)
+        return path
+    if fmt != ".mp4":
         raise AnimationError(f"{path}: unknown output format {path.suffix!r}: use .gif, .mp4 or .html")
+    w, h = tl.options.size
+    if w % 2 or h % 2:
+        raise AnimationError(f"MP4 (H.264, yuv420p) needs an even width and height, got {w}x{h}")
+    import imageio_ffmpeg
     scene = _Scene(tl)
-    with rc_context({"animation.ffmpeg_path": ffmpeg or "ffmpeg"}):
-        if writer is None:
-            writer = FFMpegWriter(fps=fps, codec="h264", bitrate=-1,
-                                  extra_args=["-pix_fmt", "yuv420p", "-crf", "23", "-preset", "veryfast"])
+    with rc_context({"animation.ffmpeg_path": imageio_ffmpeg.get_ffmpeg_exe()}):
+        writer = FFMpegWriter(fps=tl.options.fps, codec="h264", bitrate=-1,
+                              extra_args=["-pix_fmt", "yuv420p", "-crf", "23", "-preset", "veryfast"])
         # the writer's own loop (FuncAnimation.save would draw every frame twice on Agg)
         with writer.saving(scene.fig, str(path), dpi=DPI):
             for k in range(len(tl.time)):
                 scene.update(k)
                 writer.grab_frame()
     return path
+
+
+def _write_gif(tl: Timeline, path: Path) -> None:
+    """Draw frame by frame into a GifStream: one frame in memory at a time."""
+    scene = _Scene(tl)
+    w, h = tl.options.size
+    with open(path, "wb") as fp:
+        gif = GifStream(fp, (w, h))
+        for k, delay in enumerate(tl.delays_cs):
+            scene.update(k)
+            buf = io.BytesIO()  # the pixels as matplotlib's animation writers grab them
+            scene.fig.savefig(buf, format="rgba", dpi=DPI)
+            rgba = np.frombuffer(buf.getbuffer(), dtype=np.uint8).reshape(h, w, 4)
+            gif.add(rgba[:, :, :3], int(delay))
+        gif.close()

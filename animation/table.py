@@ -56,11 +56,14 @@ class ResultTable:
 
 
 def _text(path: Path) -> str:
-    """The text of a result CSV; AnimationError saying what the file is when it is none: a
-    directory, an FMU or .ssp (a zip archive: its run's result is wanted), a binary file."""
+    """The text of a result CSV (UTF-8, a byte order mark allowed); AnimationError saying what the
+    file is when it is none: a directory, a device or FIFO, an FMU or .ssp (a zip archive: its
+    run's result is wanted), a binary file."""
     if path.is_dir():
         raise AnimationError(f"{path}: is a directory, not a result CSV")
     if not path.is_file():
+        if path.exists():  # reading a FIFO or a device could block or never end
+            raise AnimationError(f"{path}: not a regular file (a device, FIFO or socket), not a result CSV")
         raise AnimationError(f"{path}: no such result file")
     try:
         raw = path.read_bytes()
@@ -80,6 +83,8 @@ def _text(path: Path) -> str:
     except UnicodeDecodeError as exc:
         raise AnimationError(f"{path}: not a text file (a result CSV is UTF-8 text): {exc.reason} at byte "
                              f"{exc.start}") from None
+    if text.startswith("\ufeff"):  # UTF-8's byte order mark (spreadsheets write one): not part of the header
+        text = text[1:]
     if "\0" in text:
         raise AnimationError(f"{path}: not a text file (a result CSV is UTF-8 text): a NUL byte at byte "
                              f"{raw.index(0)}")

@@ -4,16 +4,19 @@ Frame k shows simulated time start + k * speed / fps (the last frame is the stop
 when one step of speed / fps is longer than the whole window: then start and stop are all), the
 coordinates linearly interpolated between output rows (angles as the FMU writes them: continuous,
 not wrapped). The contact track is drawn from the rows themselves, not from the frames, so a fast
-playback does not cut corners off the path.
+playback does not cut corners off the path. A GIF's frames are those times at no more than
+gif.MAX_FPS frames a second, less the few the GIF's centisecond clock cannot show (gif.py): it
+plays in real time.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from gyrowheel.animation.geometry import Poses, flywheel_radius, wheel_poses
+from gyrowheel.animation.gif import MAX_FPS, gif_schedule
 from gyrowheel.animation.table import GYROVER, AnimationError, Parameters, ResultTable
 
 MAX_FRAMES = 20_000
@@ -57,6 +60,7 @@ class Timeline:
     fly_radius: float  # drawn flywheel radius, m (0 without a gyrover)
     options: Options
     spin_per_frame: float  # largest |gamma| change between frames, rad (aliasing when > pi / 2)
+    delays_cs: np.ndarray | None = None  # (F,) int: a GIF's frame delays, centiseconds; None for MP4, HTML
 
     @property
     def gyrover(self) -> bool:
@@ -106,9 +110,15 @@ def _check_contact(table: ResultTable, rows: np.ndarray, contact: np.ndarray, R:
                              f"{error:.3g} m: R = {R:g} m is not this run's radius")
 
 
-def build_timeline(table: ResultTable, parameters: Parameters, options: Options) -> Timeline:
-    """Frames and track of a run. Raises AnimationError on inconsistent input."""
+def build_timeline(table: ResultTable, parameters: Parameters, options: Options, gif: bool = False) -> Timeline:
+    """Frames and track of a run. Raises AnimationError on inconsistent input.
+
+    gif: the frames of a GIF that plays in real time (gif.gif_schedule): options.fps is then at
+    most gif.MAX_FPS (the Timeline's options say the fps written) and delays_cs gives each
+    frame's delay."""
     options.check()
+    if gif and options.fps > MAX_FPS:
+        options = replace(options, fps=MAX_FPS)
     present = [c for c in GYROVER if c in table]
     if len(present) == 1:
         missing = next(c for c in GYROVER if c not in table)
@@ -116,6 +126,10 @@ def build_timeline(table: ResultTable, parameters: Parameters, options: Options)
     gyrover = len(present) == 2
     t_rows, rows = _rows(table)
     times = frame_times(float(t_rows[0]), float(t_rows[-1]), options)
+    delays = None
+    if gif:
+        kept, delays = gif_schedule((times - times[0]) / options.speed, 1.0 / options.fps)
+        times = times[kept]
     names = ["x", "y", "alpha", "beta", "gamma"] + (list(GYROVER) if gyrover else [])
     data = {n: table.number(n)[rows] for n in names}
     for n in ("vx", "vy"):
@@ -157,4 +171,5 @@ def build_timeline(table: ResultTable, parameters: Parameters, options: Options)
         readout.append(line)
     fly = flywheel_radius(parameters.I_fly_axial, parameters.m_fly, parameters.R) if gyrover else 0.0
     return Timeline(time=times, poses=poses, readout=readout, track_time=track_time, track=track,
-                    parameters=parameters, fly_radius=fly, options=options, spin_per_frame=spin)
+                    parameters=parameters, fly_radius=fly, options=options, spin_per_frame=spin,
+                    delays_cs=delays)

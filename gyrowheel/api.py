@@ -372,7 +372,8 @@ def animate(result, output, *, R: float | None = None, fmu=None, component: str 
     the wheel's columns). output: the file to write; its directory is created.
     R [m]: the wheel radius, or fmu: an FMU (path or BuildResult) or an .ssp whose start values
     give R and the flywheel's geometry (default: z / sin(beta) from the result).
-    fps: frames per second of playback (0, 120]; speed: simulated seconds per second of
+    fps: frames per second of playback (0, 120], a GIF's at most 50 (it plays in real time to the
+    centisecond: docs/animation.md, GIF timing); speed: simulated seconds per second of
     playback; size: (width, height) in pixels or 'WIDTHxHEIGHT', 64 to 4096; trail: seconds of
     contact track behind the wheel (default: all); start, stop [s]: the part of the run shown.
     Returns the animation's Timeline (frame times, poses, parameters with their sources).

@@ -1,6 +1,7 @@
 """`gyrowheel animate`: what it writes and says; bad input is one line on stderr and exit 2."""
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import zipfile
@@ -31,6 +32,22 @@ def test_default_output_name_and_aliasing_note(tmp_path, monkeypatch, capsys):
     assert main(["animate", str(csv), "--fps", "5", "--size", "96x64"]) == 0
     assert (tmp_path / "fast.gif").is_file()
     assert "turns up to 8.0 rad between frames" in capsys.readouterr().err
+
+
+def _mkfifo(path):
+    os.mkfifo(path)
+    return path
+
+
+def test_a_byte_order_mark_is_not_part_of_the_header(tmp_path):
+    """A CSV saved by a spreadsheet starts with UTF-8's byte order mark: the same run."""
+    import gyrowheel
+    csv = rolling_csv(tmp_path / "run.csv", stop=0.5)
+    marked = tmp_path / "marked.csv"
+    marked.write_bytes(b"\xef\xbb\xbf" + csv.read_bytes())
+    a = gyrowheel.animate(csv, tmp_path / "a.html")
+    b = gyrowheel.animate(marked, tmp_path / "b.html")
+    assert list(a.time) == list(b.time) and a.readout == b.readout
 
 
 def _write(path, text):
@@ -108,6 +125,9 @@ def _zip(path, xml=FOREIGN_XML):
     (lambda d: _write_bytes(d / "nul.csv", b"time\x00x"), (),
      "nul.csv: not a text file (a result CSV is UTF-8 text): a NUL byte at byte 4"),
     (lambda d: _mkdir(d / "dir.csv"), (), "dir.csv: is a directory, not a result CSV"),
+    (lambda d: _mkfifo(d / "fifo.csv"), (),
+     "fifo.csv: not a regular file (a device, FIFO or socket), not a result CSV"),
+    (lambda d: d / "none.csv", (), "none.csv: no such result file"),
     (lambda d: rolling_csv(d / "ok.csv"), ("--R", "-1"), "--R must be a finite number > 0 (the wheel radius in m), "
                                                          "got -1"),
     (lambda d: rolling_csv(d / "ok.csv"), ("--R", "0"), "--R must be a finite number > 0"),
@@ -218,3 +238,16 @@ def test_output_directory_is_created_and_a_directory_refused(tmp_path, capsys):
     (tmp_path / "dir.gif").mkdir()
     assert main(["animate", str(csv), "-o", str(tmp_path / "dir.gif")]) == 2
     assert "dir.gif: is a directory; give a file name" in capsys.readouterr().err
+
+
+def test_an_output_that_is_no_regular_file_is_refused(tmp_path, capsys):
+    """A FIFO (or a device) under the output's name: refused before anything is drawn, left as it is."""
+    import stat
+    csv = rolling_csv(tmp_path / "ok.csv", stop=0.5)
+    os.mkfifo(tmp_path / "fifo.gif")
+    assert main(["animate", str(csv), "-o", str(tmp_path / "fifo.gif")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and ("fifo.gif: exists and is not a regular file (a device, FIFO or socket); give a "
+                                     "file name") in err, err
+    assert stat.S_ISFIFO(os.stat(tmp_path / "fifo.gif").st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo.gif", "ok.csv"]

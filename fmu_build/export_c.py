@@ -322,15 +322,18 @@ def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: 
             raise ExportError(str(exc)) from None
     out_dir = Path(out_dir)
     previous = _previous(out_dir)
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
     # written whole into a hidden sibling and compiled there; only then put in out_dir's place
     stage = out_dir.absolute().with_name(f".{out_dir.absolute().name}.part-{os.getpid()}")
-    if stage.exists():
-        shutil.rmtree(stage)
-    stage.mkdir()
     try:
+        out_dir.parent.mkdir(parents=True, exist_ok=True)
+        if stage.exists():
+            shutil.rmtree(stage)
+        stage.mkdir()
         files, spec = _write(scene, model, stage, scene_file, check)
         _commit(stage, out_dir, previous)
+    except OSError as exc:  # the stage or out_dir could not be written: named as the output
+        shutil.rmtree(stage, ignore_errors=True)
+        raise ExportError(f"output {out_dir}: cannot write: {exc.strerror or exc}", argument="output") from None
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
         raise

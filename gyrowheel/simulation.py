@@ -167,7 +167,7 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
     # removed however the run ends (the FMU refusing, a binary that does not load, Ctrl-C)
     with tempfile.TemporaryDirectory(prefix="gyrowheel-run-") as tmp:
         try:
-            unpacked = str(fmu) if Path(fmu).is_dir() else extract(str(fmu), unzipdir=tmp)
+            unpacked = str(fmu) if Path(fmu).is_dir() else str(extract(str(fmu), unzipdir=tmp, include=_read_by_a_run))
             _load_binary(fmu, unpacked, md)
             return simulate_fmu(unpacked, fmi_type="CoSimulation", stop_time=stop_time,
                                 output_interval=output_interval, start_values=start_values or {},
@@ -183,6 +183,11 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
         finally:
             os.chdir(cwd)  # fmpy changes into the binary's directory to load it, and stays on failure
             restore_fmpy_logger()
+
+
+def _read_by_a_run(name: str) -> bool:
+    """The members of an FMU a run reads (fmpy's choice): its description, binaries, resources."""
+    return name == "modelDescription.xml" or name.startswith(("binaries/", "resources/"))
 
 
 def _load_binary(fmu: str | Path, unpacked: str, md) -> None:

@@ -17,7 +17,7 @@ import stat
 import subprocess
 import sys
 import zipfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -35,7 +35,6 @@ class Case:
     line: str  # regex the one stderr line must match (after 'gyrowheel: error: ')
     untouched: tuple[str, ...] = ()  # files (of `files`) that must be as they were
     absent: tuple[str, ...] = ()  # files that must not be made
-    keep: dict = field(default_factory=dict)
 
 
 # The rows: every one of these printed a traceback, exited 1 naming a gyrowheel defect, wrote

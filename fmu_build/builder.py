@@ -20,6 +20,7 @@ from gyrowheel.fmu_build.documentation import write_index_html
 from gyrowheel.fmu_build.model_description import write_model_description
 from gyrowheel.fmu_build.runtime import runtime_sources
 from gyrowheel.errors import ArgumentError
+from gyrowheel.output_files import check_output_file, replaced_atomically
 from gyrowheel.fmu_build.scene import Experiment, Scene, check_scene
 from gyrowheel.fmu_build.variables import build_table
 from gyrowheel.model.build import build_model
@@ -78,7 +79,8 @@ def _spec(scene: Scene) -> ModelSpec:
 def check_output(output: str | Path, scene_file: str | Path | None = None) -> Path:
     """The FMU's output path, refused before anything is built when it cannot be an FMU: a name
     not ending in .fmu (FMI 2.0.4, section 2.1: an FMU is a zip file "*.fmu"; out.toml, noext),
-    or the scene file itself (the FMU would overwrite the scene it is built from).
+    or the scene file itself (the FMU would overwrite the scene it is built from), or an existing
+    path that is not a regular file (gyrowheel.output_files.check_output_file).
     Raises ArgumentError naming `output`."""
     if not isinstance(output, (str, os.PathLike)):
         raise ArgumentError(f"output must be a file path ending in {FMU_SUFFIX}, got {type(output).__name__}",
@@ -92,6 +94,8 @@ def check_output(output: str | Path, scene_file: str | Path | None = None) -> Pa
         got = f"ends in {output.suffix!r}" if output.suffix else "has no extension"
         raise ArgumentError(f"output {output}: {got}; an FMU's file name ends in {FMU_SUFFIX} "
                             "(FMI 2.0.4, section 2.1)", argument="output")
+    if output.exists():  # a directory, a device (/dev/full), a FIFO: refused, never renamed over
+        check_output_file(output, "output")
     return output
 
 
@@ -176,9 +180,10 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
 
 
 def _zip(root: Path, output: Path) -> None:
-    tmp = output.with_suffix(output.suffix + ".part")
-    with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
-        for path in sorted(root.rglob("*")):
-            if path.is_file():
-                zf.write(path, path.relative_to(root).as_posix())
-    tmp.replace(output)
+    """Zip the FMU's tree at `output`, whole or not at all (gyrowheel.output_files: an output
+    that is not a regular file, e.g. /dev/full, is refused, never renamed over)."""
+    with replaced_atomically(output, "output") as part:
+        with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as zf:
+            for path in sorted(root.rglob("*")):
+                if path.is_file():
+                    zf.write(path, path.relative_to(root).as_posix())

@@ -14,7 +14,9 @@ Only <model>_* functions are external, so two exported models link into one prog
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -223,30 +225,66 @@ def render(template: str, values: dict[str, str]) -> str:
     return template
 
 
-def _prepare(out_dir: Path) -> None:
-    """An empty or new directory, or a previous export (its files are removed first). Raises
-    ExportError naming `output` (export_c's out_dir) for any other."""
+def _previous(out_dir: Path) -> list[str] | None:
+    """What is in the way of an export into out_dir: None for a new or empty directory, the
+    files of a previous export (its marker's list) for one. Raises ExportError naming `output`
+    (export_c's out_dir) for anything else. Nothing is changed."""
     if out_dir.exists() and not out_dir.is_dir():
         raise ExportError(f"output {out_dir}: exists and is not a directory; the export is a directory "
                           "(choose a new or empty one)", argument="output")
-    if out_dir.is_dir() and any(out_dir.iterdir()):
-        marker = out_dir / MARKER
-        if not marker.is_file():
-            raise ExportError(f"output {out_dir}: not empty and not a gyrowheel export; choose a new or empty "
-                              "directory", argument="output")
-        try:
-            previous = json.loads(marker.read_text())["files"]
-        except (ValueError, KeyError, TypeError):
-            raise ExportError(f"output {out_dir}: its {MARKER} is unreadable; remove the directory to export "
-                              "into it", argument="output") from None
-        for rel in previous:
-            path = (out_dir / rel).resolve()
-            if out_dir.resolve() in path.parents and path.is_file():
-                path.unlink()
-        for sub in ("src", "examples"):
-            if (out_dir / sub).is_dir() and not any((out_dir / sub).iterdir()):
-                (out_dir / sub).rmdir()
-    out_dir.mkdir(parents=True, exist_ok=True)
+    if not out_dir.is_dir() or not any(out_dir.iterdir()):
+        return None
+    marker = out_dir / MARKER
+    if not marker.is_file():
+        raise ExportError(f"output {out_dir}: not empty and not a gyrowheel export; choose a new or empty "
+                          "directory", argument="output")
+    try:
+        previous = json.loads(marker.read_text())["files"]
+        if not isinstance(previous, list) or not all(isinstance(p, str) for p in previous):
+            raise TypeError
+    except (ValueError, KeyError, TypeError, OSError):
+        raise ExportError(f"output {out_dir}: its {MARKER} is unreadable; remove the directory to export "
+                          "into it", argument="output") from None
+    return previous
+
+
+def _commit(stage: Path, out_dir: Path, previous: list[str] | None) -> None:
+    """Put the whole export written in `stage` into out_dir by renames (gyrowheel.output_files'
+    rule, for a directory): a new out_dir is the stage renamed; into an empty one or a previous
+    export, its files move in, a previous export's own files (its marker's list) move out and
+    are removed, the files the user added stay. On a failure every move is undone: out_dir is
+    as it was."""
+    if not out_dir.exists():
+        stage.rename(out_dir)
+        return
+    old = out_dir.absolute().with_name(f".{out_dir.absolute().name}.old-{os.getpid()}")
+    shutil.rmtree(old, ignore_errors=True)
+    moved: list[tuple[Path, Path]] = []  # (where a file is now, where it was)
+
+    def move(src: Path, dest: Path) -> None:
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        src.rename(dest)
+        moved.append((dest, src))
+    try:
+        root = out_dir.resolve()
+        for rel in [*(previous or []), MARKER]:
+            path = out_dir / rel
+            if root in path.resolve().parents and (path.is_file() or path.is_symlink()):
+                move(path, old / rel)
+        for item in sorted(stage.rglob("*")):
+            if not item.is_dir():
+                rel = item.relative_to(stage)
+                if (out_dir / rel).exists():  # a file of the user's where the export now writes one
+                    move(out_dir / rel, old / rel)
+                move(item, out_dir / rel)
+    except BaseException:
+        for now, was in reversed(moved):
+            with contextlib.suppress(OSError):
+                now.rename(was)
+        raise
+    finally:
+        shutil.rmtree(old, ignore_errors=True)
+        shutil.rmtree(stage, ignore_errors=True)
 
 
 def _files(out_dir: Path) -> set[str]:
@@ -283,8 +321,28 @@ def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: 
         except c_names.ModelNameError as exc:
             raise ExportError(str(exc)) from None
     out_dir = Path(out_dir)
-    _prepare(out_dir)
-    users = _files(out_dir)  # what is left is the user's: never recorded, so never removed
+    previous = _previous(out_dir)
+    # written whole into a hidden sibling and compiled there; only then put in out_dir's place
+    stage = out_dir.absolute().with_name(f".{out_dir.absolute().name}.part-{os.getpid()}")
+    try:
+        out_dir.parent.mkdir(parents=True, exist_ok=True)
+        if stage.exists():
+            shutil.rmtree(stage)
+        stage.mkdir()
+        files, spec = _write(scene, model, stage, scene_file, check)
+        _commit(stage, out_dir, previous)
+    except OSError as exc:  # the stage or out_dir could not be written: named as the output
+        shutil.rmtree(stage, ignore_errors=True)
+        raise ExportError(f"output {out_dir}: cannot write: {exc.strerror or exc}", argument="output") from None
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+    return ExportResult(directory=out_dir, identifier=model, files=files, spec=spec)
+
+
+def _write(scene: Scene, model: str, out_dir: Path, scene_file: str, check: bool) -> tuple[list[str], ModelSpec]:
+    """Write the export of a checked scene into the empty directory out_dir, its marker last,
+    and with check compile it strictly; returns its files (relative, POSIX) and the model."""
     spec = _spec(scene)
     exp = scene.experiment
     table = build_table(spec, exp, scene.outputs)
@@ -316,8 +374,8 @@ def export_c(scene: Scene, out_dir: str | Path, check: bool = True, scene_file: 
         path.write_text(render((EXPORT_DIR / template).read_text(), values))
     shutil.copy2(EXPORT_DIR / "gyrowheel_api.h", out_dir / "gyrowheel_api.h")
     written |= {"src/capi_desc.c", "gyrowheel_api.h", *outputs}
-    files = sorted((_files(out_dir) - users) | written)
+    files = sorted(_files(out_dir) | written)
     (out_dir / MARKER).write_text(json.dumps({"model": model, "files": files}, indent=1) + "\n")
     if check:
         compile_check(out_dir / f"{model}.c")
-    return ExportResult(directory=out_dir, identifier=model, files=files, spec=spec)
+    return files, spec

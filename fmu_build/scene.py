@@ -22,6 +22,7 @@ import dataclasses
 import math
 import numbers
 import os
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,6 +36,16 @@ ANGLES = {"alpha", "beta", "gamma", "beta_min"}
 TOUCHDOWN = "touchdown"  # [wheel] beta_min preset: the lean at which the body must touch the ground
 TABLES = ("model", "wheel", "effects", "initial", "experiment", "outputs")
 ZIP_MAGIC = b"PK\x03\x04"  # the start of a zip archive (an FMU, an .ssp)
+# The model name is the FMU's modelIdentifier, "a short class name according to C syntax"
+# (FMI 2.0.4, section 2.2.1): its binary's file name and the prefix of the C API of export-c,
+# so ASCII letters, digits and _ only (Python's str.isidentifier also takes 'Ωwheel').
+C_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+# [model] description is an attribute of modelDescription.xml's root element. libxml2, the XML
+# reader of fmpy (through lxml) and of many importers, refuses a start tag of 10,000,000 bytes
+# or more without its XML_PARSE_HUGE option (XML_MAX_TEXT_LENGTH, "Buffer size limit
+# exceeded"); a character takes at most 6 bytes there (&quot;), so 1,000,000 characters leave
+# the root's other attributes ample room.
+DESCRIPTION_MAX = 1_000_000
 
 
 class SceneError(GyrowheelError, ValueError):
@@ -302,9 +313,13 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
         if key in meta and not isinstance(meta[key], str):
             raise r.fail("model", key, "must be a string")
     scene.name = meta.get("name", default_name)
-    if not scene.name.isidentifier():
-        raise r.fail("model", "name", f"must be a C identifier (letters, digits, _), got {scene.name!r}")
+    if not C_IDENTIFIER.fullmatch(scene.name):
+        letters = "ASCII letters" if scene.name.isidentifier() else "letters"  # 'Ωwheel': say which letters
+        raise r.fail("model", "name", f"must be a C identifier ({letters}, digits, _), got {scene.name!r}")
     scene.description = meta.get("description", scene.description)
+    if len(scene.description) > DESCRIPTION_MAX:
+        raise r.fail("model", "description", f"has {len(scene.description)} characters, more than the "
+                     f"{DESCRIPTION_MAX} modelDescription.xml readers take (docs/scenes.md)")
     scene.formulation = meta.get("formulation", scene.formulation)
     if scene.formulation not in FORMULATIONS:
         raise r.fail("model", "formulation", f"unknown {scene.formulation!r}; valid: {', '.join(FORMULATIONS)}")
@@ -347,6 +362,9 @@ def parse_scene(text: str, where: str = "<scene>") -> Scene:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{where}: not valid TOML: {exc}") from None
+    except RecursionError:  # tomllib parses nested arrays and inline tables recursively
+        raise SceneError(f"{where}: arrays or inline tables nested too deep for the TOML reader "
+                         "(no scene needs more than keep = [...])") from None
     scene = _validate(_Reader(where), data, Path(where).stem if where != "<scene>" else Scene.name)
     scene.source = text
     return scene

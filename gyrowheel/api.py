@@ -30,6 +30,7 @@ from gyrowheel import arguments
 from gyrowheel.arguments import check_memory, count, existing_file, flag, number, path
 from gyrowheel.errors import ArgumentError, ArgumentTypeError, GyrowheelError, SweepSpecError
 from gyrowheel.extras import require
+from gyrowheel.output_files import check_output_file, replaced_atomically
 from gyrowheel.wording import ANIMATE, SWEEP, reworded
 
 
@@ -69,13 +70,32 @@ def _seconds(value, argument: str) -> float | None:
 
 
 def _output_file(value, argument: str = "output") -> Path:
-    """A file a function will write: not a directory; its directory is created. Checked before
-    the work, not after it. Raises ArgumentError naming the argument (also for a directory that
-    cannot be made because a file is in the way, or cannot be made at all)."""
+    """A file a function will write: not a directory, nor any other path that is not a regular
+    file (a device such as /dev/full, a FIFO: gyrowheel.output_files.check_output_file); its
+    directory is created. Checked before the work, not after it. Raises ArgumentError naming
+    the argument (also for a directory that cannot be made because a file is in the way, or
+    cannot be made at all). Write it with gyrowheel.output_files.replaced_atomically."""
     file = path(value, argument, "a file path")
     if file.is_dir():
         raise ArgumentError(f"{argument} {file}: is a directory; give a file name", argument=argument)
     _make_directory(file.parent, file, argument)
+    check_output_file(file, argument)
+    return file
+
+
+def _figure_file(value, argument: str) -> Path:
+    """An output file for a matplotlib figure (_output_file), its format named by its suffix:
+    one matplotlib writes (FigureCanvasBase.get_supported_filetypes: .png, .pdf, .svg, ...),
+    checked before the work. Raises ArgumentError naming the argument."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    file = _output_file(value, argument)
+    formats = sorted(FigureCanvasBase.get_supported_filetypes())
+    suffix = file.suffix[1:].lower()
+    if suffix not in formats:
+        got = f"'.{suffix}' is not a figure format matplotlib writes" if suffix else "has no extension"
+        raise ArgumentError(f"{argument} {file}: {got}; give a name ending in one of "
+                            f"{', '.join('.' + f for f in formats)}", argument=argument)
     return file
 
 
@@ -213,7 +233,7 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
     if plot is not None:
         require("plot", "gyrowheel.simulate(plot=...)")
     csv = _output_file(output, "output") if output is not None else None
-    png = _output_file(plot, "plot") if plot is not None else None
+    png = _figure_file(plot, "plot") if plot is not None else None
     try:
         starts = check_start_values(path, _assignments(start_values, "start_values"))
     except SimulationError as exc:
@@ -221,10 +241,12 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
     _check_rows(md, stop_time, output_interval)
     result = run(path, stop_time=stop_time, output_interval=output_interval, start_values=starts)
     if csv is not None:
-        write_csv(result, csv)
+        with replaced_atomically(csv, "output") as part:
+            write_csv(result, part)
     if png is not None:
         from gyrowheel.plotting import plot_trajectories
-        plot_trajectories({path.stem: result}, png, title=path.stem)
+        with replaced_atomically(png, "plot") as part:
+            plot_trajectories({path.stem: result}, part, title=path.stem)
     return result
 
 
@@ -458,7 +480,8 @@ def system_run(system, *, step: float = 0.01, stop_time: float | None = None, st
             text = str(exc)
             raise ArgumentError(text, argument="stop_time" if text.startswith("stop time") else None) from None
     if csv is not None:
-        write_csv(result.data, csv)
+        with replaced_atomically(csv, "output") as part:
+            write_csv(result.data, part)
     return result
 
 

@@ -1,18 +1,22 @@
 """Run an FMU with fmpy in Co-Simulation, with start values checked by name and type."""
 from __future__ import annotations
 
+import ctypes
+import math
+import os
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ctypes import byref
 
 import numpy as np
-from fmpy import read_model_description, simulate_fmu
+from fmpy import extract, platform, read_model_description, sharedLibraryExtension, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
 
 from gyrowheel.arguments import missing_item_hint
-from gyrowheel.errors import GyrowheelError
+from gyrowheel.errors import FmuError, GyrowheelError
 
 # fmpy 0.3.32 forwards every FMU message through ONE process-global logger (the last one given
 # to fmpy.logging.addLoggerProxy). simulate_fmu(logger=...) proxies a callback that dies when it
@@ -55,16 +59,24 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
     by_name = {v.name: v for v in md.modelVariables}
     enums = {t.name: {i.name: int(i.value) for i in t.items} for t in md.typeDefinitions}
     out: dict[str, object] = {}
-    for name, text in assignments.items():
+    for given, text in assignments.items():
+        name, degrees = _angle_name(given, by_name)
         v = by_name.get(name)
         if v is None:
             raise SimulationError(f"unknown variable {name!r}; settable: "
-                                  + ", ".join(sorted(n for n, w in by_name.items() if _settable(w))))
+                                  + ", ".join(sorted(n for n, w in by_name.items() if _settable(w)))
+                                  + " (angles also as NAME_deg)")
+        if name in out:
+            raise SimulationError(f"{name!r} given twice (as {name} and {name}_deg)")
         if not _settable(v):
             raise SimulationError(f"variable {name!r} is a calculated {v.causality} and cannot be set")
         try:
             if v.type == "Real":
                 out[name] = float(text)
+                if not math.isfinite(out[name]):
+                    raise SimulationError(f"value {text!r} for {given!r} is not finite")
+                if degrees:
+                    out[name] = math.radians(out[name])
             elif v.type == "Integer":
                 out[name] = int(text)
                 if not -2**31 <= out[name] < 2**31:  # an fmi2Integer is 32 bits: fmpy would wrap it
@@ -80,12 +92,24 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
                 out[name] = text.lower() in ("true", "1")
             else:
                 out[name] = text
+            if degrees and v.type != "Real":
+                raise ValueError
         except ValueError:
             choices = ""
             if v.type == "Enumeration":
                 choices = "; valid: " + ", ".join(enums.get(v.declaredType.name, {})) + missing_item_hint(name, text)
-            raise SimulationError(f"value {text!r} for {name!r} is not a valid {v.type}{choices}") from None
+            raise SimulationError(f"value {text!r} for {given!r} is not a valid {v.type}{choices}") from None
     return out
+
+
+def _angle_name(name: str, by_name: dict) -> tuple[str, bool]:
+    """(the variable, whether the value is in degrees): NAME_deg names the angle NAME (unit rad)
+    in degrees, as scenes and sweeps take it (beta_deg = 80)."""
+    if name not in by_name and name.endswith("_deg"):
+        base = by_name.get(name[:-4])
+        if base is not None and (base.unit or (base.declaredType.unit if base.declaredType else None)) == "rad":
+            return base.name, True
+    return name, False
 
 
 def check_start_values(fmu: str | Path, values: dict[str, object]) -> dict[str, object]:
@@ -134,15 +158,50 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
             raise SimulationError(f"{what} must be a number, got {type(value).__name__} {value!r}")
     if start_values:
         start_values = check_start_values(fmu, start_values)
+    md = read_model_description(str(fmu))
     if output_interval is None:  # fmpy would pick its own; the scene's interval is what users expect
-        exp = read_model_description(str(fmu)).defaultExperiment
+        exp = md.defaultExperiment
         output_interval = float(exp.stepSize) if exp is not None and exp.stepSize else None
+    cwd = os.getcwd()
+    # fmpy unpacks into a directory it removes only when the run succeeds; unpacked here, it is
+    # removed however the run ends (the FMU refusing, a binary that does not load, Ctrl-C)
+    with tempfile.TemporaryDirectory(prefix="gyrowheel-run-") as tmp:
+        try:
+            unpacked = str(fmu) if Path(fmu).is_dir() else str(extract(str(fmu), unzipdir=tmp, include=_read_by_a_run))
+            _load_binary(fmu, unpacked, md)
+            return simulate_fmu(unpacked, fmi_type="CoSimulation", stop_time=stop_time,
+                                output_interval=output_interval, start_values=start_values or {},
+                                relative_tolerance=solver_tolerance, logger=messages, debug_logging=False)
+        except FMICallException as exc:
+            reason = "; ".join(messages.errors()) or str(exc)
+            raise SimulationError(f"the FMU reported an error: {reason}") from None
+        except GyrowheelError:
+            raise
+        except Exception as exc:  # fmpy's own failures are plain Exceptions: one line, the FMU named
+            text = " ".join(str(exc).replace(tmp + os.sep, "").split()) or type(exc).__name__
+            raise SimulationError(f"{fmu}: fmpy could not run the FMU ({type(exc).__name__}: {text})") from None
+        finally:
+            os.chdir(cwd)  # fmpy changes into the binary's directory to load it, and stays on failure
+            restore_fmpy_logger()
+
+
+def _read_by_a_run(name: str) -> bool:
+    """The members of an FMU a run reads (fmpy's choice): its description, binaries, resources."""
+    return name == "modelDescription.xml" or name.startswith(("binaries/", "resources/"))
+
+
+def _load_binary(fmu: str | Path, unpacked: str, md) -> None:
+    """Load the FMU's binary for this platform (FMI 2.0.4, section 2.3: binaries/<platform>/
+    <modelIdentifier><extension>) as fmpy will, to say in one line why it cannot be: FmuError
+    `x.fmu: its binary binaries/linux64/m.so cannot be loaded: file too short`."""
+    if md.coSimulation is None:
+        raise FmuError(f"{fmu}: the FMU does not support Co-Simulation", argument="fmu")
+    relative = f"binaries/{platform}/{md.coSimulation.modelIdentifier}{sharedLibraryExtension}"
+    library = os.path.join(unpacked, *relative.split("/"))
+    if not os.path.isfile(library):
+        raise FmuError(f"{fmu}: no binary for {platform} ({relative})", argument="fmu")
     try:
-        return simulate_fmu(str(fmu), fmi_type="CoSimulation", stop_time=stop_time,
-                            output_interval=output_interval, start_values=start_values or {},
-                            relative_tolerance=solver_tolerance, logger=messages, debug_logging=False)
-    except FMICallException as exc:
-        reason = "; ".join(messages.errors()) or str(exc)
-        raise SimulationError(f"the FMU reported an error: {reason}") from None
-    finally:
-        restore_fmpy_logger()
+        ctypes.CDLL(library)
+    except OSError as exc:
+        reason = str(exc).replace(library + ": ", "").replace(library, relative)
+        raise FmuError(f"{fmu}: its binary {relative} cannot be loaded: {reason}", argument="fmu") from None

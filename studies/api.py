@@ -199,9 +199,10 @@ def run_plan(plan: Plan, *, output: str | Path | None = None, workers: int | Non
     try:
         execute(plan, writer, workers=workers, scheduler=scheduler, client=client, batch_size=batch_size,
                 progress=progress)
-    finally:
-        table = writer.flush()
-    return table
+    except BaseException:  # an error or Ctrl-C: the rows done so far, if any (else `output` as it was)
+        writer.flush(finished=False)
+        raise
+    return writer.flush()
 
 
 def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: int = 0, points=None,
@@ -230,16 +231,21 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     ensemble: when the unit is an FMU with the Taylor kernel and the sweep's solver is taylor,
     each batch runs through the ensemble path (gyrowheel.studies.ensemble_path: several points
     at once, results equal to the plain loop to rounding); False: always one FMU run per point.
-    output: .parquet or .csv, kept current while the sweep runs; plot: a PNG of the table
+    output: .parquet or .csv, kept current while the sweep runs (gyrowheel.studies.output: an
+    existing file is replaced once a point has finished, and left as it was by a sweep that
+    fails or is interrupted before that; a sweep that fails later leaves the table of the points
+    done and raises its error); plot: a PNG of the table
     (plot_metric: the column). on_start(plan): called once everything is checked, just before
     the first point runs.
     Returns a DataFrame with one row per point: point, inputs, metrics, status, reason, wall_time.
     Raises SweepSpecError (a ValueError) for any bad name, value or spec, before anything runs
     (plot_metric: after, when it names no column of the table); SweepInterrupted (a
-    KeyboardInterrupt) when Ctrl-C stops the run, with the points done (on disk in `output`).
+    KeyboardInterrupt) when Ctrl-C stops the run, with the points done (on disk in `output` when
+    there are any).
     """
     output = check_output_path(output)
     check_plot_path(plot)
+    plot = None if plot is None else Path(plot).absolute()  # written after the run, wherever the cwd went
     check_execution(workers, batch_size, scheduler, client)
     progress = flag_value(progress, "progress")
     if plot_metric is not None and not isinstance(plot_metric, str):
@@ -255,14 +261,12 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
                           ensemble=ensemble)
         check_size(plan, workers=workers, scheduler=scheduler, client=client, batch_size=batch_size)
         writer = TableWriter(output, plan.inputs, plan.metrics.columns())
-        try:  # from here on, Ctrl-C leaves a complete table of the points done (none, if it comes now)
+        try:  # from here on, Ctrl-C leaves a complete table of the points done (output as it was if none)
             if on_start is not None:
                 on_start(plan)
             table = run_plan(plan, workers=workers, scheduler=scheduler, client=client,
                              batch_size=batch_size, progress=progress, writer=writer)
         except KeyboardInterrupt as exc:
-            if not writer.flushed:  # stopped before run_plan wrote: no table yet, or a previous sweep's
-                writer.flush()
             raise SweepInterrupted(writer.table(), writer.written, len(plan.values), output) from exc
     if plot:
         from gyrowheel.studies.plot import plot_table

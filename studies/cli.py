@@ -81,8 +81,12 @@ def cmd_sweep(args) -> int:
                       batch_size=args.batch_size, output=args.output, plot=args.plot, plot_metric=args.plot_metric,
                       progress=not args.no_progress, ensemble=not args.no_ensemble, on_start=announce)
     except SweepInterrupted as stop:  # the points done are on disk
-        print(f"gyrowheel: interrupted: {stop.written} of {stop.total} points written to {stop.output}",
-              file=sys.stderr)
+        if stop.written or stop.output is None:
+            print(f"gyrowheel: interrupted: {stop.written} of {stop.total} points written"
+                  + (f" to {args.output}" if stop.output is not None else ""), file=sys.stderr)
+        else:
+            print(f"gyrowheel: interrupted before any point finished: {args.output} left as it was",
+                  file=sys.stderr)
         return 130
     except SweepSpecError as exc:
         raise CliError(command_line_text(exc)) from None

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import atexit
 import hashlib
+import os
 import shutil
 import tempfile
 import threading
@@ -178,8 +179,12 @@ class FmuInstance:
         self.messages: list[str] = []
         self._callbacks, self._id = logging_callbacks(self.messages)
         with _LOCK:
-            self.slave = FMU2Slave(guid=target.guid, unzipDirectory=unzipdir,
-                                   modelIdentifier=target.identifier, instanceName="sweep")
+            cwd = os.getcwd()
+            try:
+                self.slave = FMU2Slave(guid=target.guid, unzipDirectory=unzipdir,
+                                       modelIdentifier=target.identifier, instanceName="sweep")
+            finally:  # fmpy changes into the library's directory and stays there if loading fails
+                os.chdir(cwd)
         self.slave.instantiate(callbacks=self._callbacks, loggingOn=False)
         f = self.slave._functions  # the raw ctypes functions: status codes instead of exceptions
         self._c = self.slave.component

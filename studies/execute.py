@@ -41,6 +41,9 @@ LOCAL_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.worker
 TASKS_PER_THREAD = 4
 LOOP_BATCH = 64  # points, the in-process loop's default batch (run_loop)
 CONNECT_TIMEOUT = 20.0  # s, for a scheduler address to connect and answer Dask's handshake
+# s, how long an address whose connections are refused (or fail otherwise at once) is tried again
+# before the sweep gives up: a scheduler that is just starting gets this long to listen
+REFUSED_WAIT = 2.0
 POLL = 0.02  # s, the longest a Ctrl-C waits for the batch collector to see it
 # a point's trajectory where it runs: its outputs in a float64 array (batch.run_point, or the
 # ensemble's table of a batch), and one copy of them (the structured array metric functions get)
@@ -219,6 +222,9 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
     from distributed.comm import connect
 
     timeout = CONNECT_TIMEOUT if timeout is None else timeout
+    refused = _refusing(address, REFUSED_WAIT)
+    if refused is not None:
+        raise ConnectionError(f"no Dask scheduler at {address}: {refused} (tried for {REFUSED_WAIT:g} s)")
     outcome: dict = {}
 
     async def handshake():
@@ -241,6 +247,39 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
         if isinstance(exc, ValueError):  # a malformed address
             raise SweepSpecError(f"--scheduler {address!r}: {exc}") from None
         raise ConnectionError(f"no Dask scheduler at {address}: {type(exc).__name__}: {exc}")
+
+
+def _refusing(address: str, wait: float) -> str | None:
+    """Why a tcp:// or tls:// address cannot be connected to at all ('connection refused': nothing
+    listens on the port; an unknown host...), after trying again for `wait` s; None when a TCP
+    connection is made, when the attempt is still pending after `wait` s (a silent host: the
+    handshake's timeout decides) or for another kind of address.
+
+    distributed's connect retries a refused connection until its timeout (20 s here, 30 s by
+    default: distributed.comm.timeouts.connect) although nothing will answer there."""
+    import socket
+
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(address)
+        if scheme not in ("tcp", "tls"):
+            return None
+        host, port = parse_host_port(location)
+    except ValueError:  # a malformed address: the handshake says what is wrong with it
+        return None
+    deadline = time.monotonic() + wait
+    while True:
+        try:
+            with socket.create_connection((host, port), timeout=wait):
+                return None
+        except (socket.timeout, TimeoutError):
+            return None
+        except OSError as exc:
+            reason = exc.strerror or str(exc) or type(exc).__name__
+            if time.monotonic() >= deadline:
+                return reason[:1].lower() + reason[1:]
+            time.sleep(min(0.1, max(0.0, deadline - time.monotonic())))
 
 
 class _Startup:

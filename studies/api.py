@@ -25,10 +25,11 @@ import pandas as pd
 from gyrowheel.arguments import flag as flag_value
 from gyrowheel.arguments import number, shown, whole
 from gyrowheel.errors import ArgumentTypeError, SweepInterrupted
-from gyrowheel.studies.execute import check_size, execute
+from gyrowheel.studies.execute import check_size, check_workers, execute
 from gyrowheel.studies.output import TableWriter, check_output_path
 from gyrowheel.studies.plan import Plan, make_plan
 from gyrowheel.studies.plot import check_plot_path
+from gyrowheel.studies.scratch import prefix
 from gyrowheel.studies.spec import (SweepSpecError, as_axis, as_random, items_of, parse_assignments, parse_grid,
                                   parse_random, point_table)
 from gyrowheel.studies.target import FmuTarget
@@ -85,7 +86,7 @@ def _built(scene, fmu_out: str | Path | None):
     """The target of a scene's FMU, built into a temporary directory (or fmu_out) first."""
     from gyrowheel.fmu_build.builder import build_fmu
 
-    with tempfile.TemporaryDirectory(prefix="gyrowheel-sweep-build-") as tmp:
+    with tempfile.TemporaryDirectory(prefix=prefix("build")) as tmp:
         fmu = Path(fmu_out) if fmu_out else Path(tmp) / f"{scene.name}.fmu"
         build_fmu(scene, fmu, build_dir=Path(tmp) / "build")
         yield FmuTarget(fmu)
@@ -172,12 +173,14 @@ def plan_sweep(target, *, grid=None, random=None, samples: int | None = None, se
 
 def check_execution(workers: int | None, batch_size: int | None, scheduler: str | None = None,
                     client=None) -> None:
-    """Where the sweep runs, checked: workers a whole number >= 0, batch_size >= 1, scheduler an
-    address, client a distributed.Client, and at most one of workers, scheduler and client."""
+    """Where the sweep runs, checked: workers a whole number >= 0 and at most WORKERS_PER_CORE
+    per core (gyrowheel.studies.execute.check_workers), batch_size >= 1, scheduler an address,
+    client a distributed.Client, and at most one of workers, scheduler and client."""
     if batch_size is not None:
         whole(batch_size, "--batch-size", minimum=1, error=SweepSpecError)
     if workers is not None:
         whole(workers, "--workers", minimum=0, error=SweepSpecError)
+        check_workers(workers)
     if scheduler is not None and not isinstance(scheduler, str):
         raise ArgumentTypeError(f"--scheduler must be a Dask scheduler's address (e.g. 'tcp://host:8786'), "
                                 f"got {shown(scheduler)}")
@@ -225,7 +228,8 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     fixed: values set for every point; solver, rel_tol, abs_tol, max_step: solver settings.
     stop_time, output_interval, start_time [s]: the communication grid (defaults: the unit's
     DefaultExperiment); metrics: names (gyrowheel.studies.metrics), metric_functions: user functions.
-    workers (0: in-process loop; default: a LocalCluster with one process per core), scheduler
+    workers (0: in-process loop; default: a LocalCluster with one process per core; never more
+    processes than points; more than 4 per core is refused: use a scheduler), scheduler
     (address of a running Dask scheduler) or client (a distributed.Client); batch_size points
     per task (default: gyrowheel.studies.execute.auto_batch_size).
     ensemble: when the unit is an FMU with the Taylor kernel and the sweep's solver is taylor,

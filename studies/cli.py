@@ -85,7 +85,7 @@ def cmd_sweep(args) -> int:
             print(f"gyrowheel: interrupted: {stop.written} of {stop.total} points written"
                   + (f" to {args.output}" if stop.output is not None else ""), file=sys.stderr)
         else:
-            print(f"gyrowheel: interrupted before any point finished: {args.output} left as it was",
+            print(f"gyrowheel: interrupted: 0 of {stop.total} points finished, {args.output} left as it was",
                   file=sys.stderr)
         return 130
     except SweepSpecError as exc:

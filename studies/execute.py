@@ -42,9 +42,9 @@ MAX_BATCH = 500
 WORKER_PRELOAD = "gyrowheel.studies.worker_setup"
 LOCAL_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.worker.preload": [WORKER_PRELOAD]}
 TASKS_PER_THREAD = 4
-# worker processes per core at most in our LocalCluster: each is a Python process of ~100 MB that
-# takes ~0.5 s of a core to start (1000 of them on 2 cores were still starting after 120 s), and
-# more processes than cores only share the cores. A cluster of your own: --scheduler.
+# worker processes per core at most in our LocalCluster: each is a Python process with its own
+# memory and start-up (1000 of them on 2 cores were still starting after 120 s), and more
+# processes than cores only share the cores. A cluster of your own: --scheduler.
 WORKERS_PER_CORE = 4
 LOOP_BATCH = 64  # points, the in-process loop's default batch (run_loop)
 CONNECT_TIMEOUT = 20.0  # s, for a scheduler address to connect and answer Dask's handshake

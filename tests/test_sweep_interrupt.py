@@ -180,5 +180,5 @@ def test_ctrl_c_before_the_run_leaves_a_previous_table_untouched(earth_fmu, tmp_
 
     monkeypatch.setattr(api, "run_plan", interrupted)
     assert main(argv) == 130
-    assert f"interrupted before any point finished: {out} left as it was" in capsys.readouterr().err
+    assert f"interrupted: 0 of 2 points finished, {out} left as it was" in capsys.readouterr().err
     assert out.read_bytes() == before

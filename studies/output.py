@@ -3,11 +3,12 @@
 The file follows gyrowheel's one rule for outputs (gyrowheel.output_files): its path is made
 absolute when the sweep is checked (a working directory changed while the sweep runs, as fmpy
 does when an FMU's library fails to load, cannot move it) and it is rewritten whole, atomically
-(a hidden sibling, then os.replace), at most every `interval` seconds (and never more often than ten times the last write took) and
-once at the end, but never before a point has its row. So an existing file at the path is
-left as it was by a sweep that fails or is stopped (Ctrl-C) before any point finished; after that, whatever stops the sweep, the file is
-a complete, readable table of this sweep's points finished by its last write. Parquet
-(pyarrow) or CSV, chosen by the suffix.
+(a hidden sibling, then os.replace), at most every `interval` seconds (and never more often
+than ten times the last write took) and once at the end, but never before a point has its row.
+So an existing file at the path is left as it was by a sweep that fails or is stopped (Ctrl-C)
+before any point finished; after that, whatever stops the sweep, the file is a complete,
+readable table of this sweep's points finished by its last write. Parquet (pyarrow) or CSV,
+chosen by the suffix.
 """
 from __future__ import annotations
 
@@ -98,7 +99,6 @@ class TableWriter:
         self._last = time.monotonic()
         self._cost = 0.0
         self.written = 0
-        self.flushed = False  # the file holds this sweep's table (not a previous one's, or none)
 
     def add(self, rows: list[dict]) -> None:
         self.rows.extend(rows)
@@ -120,7 +120,6 @@ class TableWriter:
             self._cost = time.monotonic() - t0
             self._last = time.monotonic()
             self.written = len(frame)
-            self.flushed = True
         return frame
 
 

@@ -25,10 +25,11 @@ import pandas as pd
 from gyrowheel.arguments import flag as flag_value
 from gyrowheel.arguments import number, shown, whole
 from gyrowheel.errors import ArgumentTypeError, SweepInterrupted
-from gyrowheel.studies.execute import check_size, execute
+from gyrowheel.studies.execute import check_size, check_workers, execute
 from gyrowheel.studies.output import TableWriter, check_output_path
 from gyrowheel.studies.plan import Plan, make_plan
 from gyrowheel.studies.plot import check_plot_path
+from gyrowheel.studies.scratch import prefix
 from gyrowheel.studies.spec import (SweepSpecError, as_axis, as_random, items_of, parse_assignments, parse_grid,
                                   parse_random, point_table)
 from gyrowheel.studies.target import FmuTarget
@@ -85,7 +86,7 @@ def _built(scene, fmu_out: str | Path | None):
     """The target of a scene's FMU, built into a temporary directory (or fmu_out) first."""
     from gyrowheel.fmu_build.builder import build_fmu
 
-    with tempfile.TemporaryDirectory(prefix="gyrowheel-sweep-build-") as tmp:
+    with tempfile.TemporaryDirectory(prefix=prefix("build")) as tmp:
         fmu = Path(fmu_out) if fmu_out else Path(tmp) / f"{scene.name}.fmu"
         build_fmu(scene, fmu, build_dir=Path(tmp) / "build")
         yield FmuTarget(fmu)
@@ -172,12 +173,14 @@ def plan_sweep(target, *, grid=None, random=None, samples: int | None = None, se
 
 def check_execution(workers: int | None, batch_size: int | None, scheduler: str | None = None,
                     client=None) -> None:
-    """Where the sweep runs, checked: workers a whole number >= 0, batch_size >= 1, scheduler an
-    address, client a distributed.Client, and at most one of workers, scheduler and client."""
+    """Where the sweep runs, checked: workers a whole number >= 0 and at most WORKERS_PER_CORE
+    per core (gyrowheel.studies.execute.check_workers), batch_size >= 1, scheduler an address,
+    client a distributed.Client, and at most one of workers, scheduler and client."""
     if batch_size is not None:
         whole(batch_size, "--batch-size", minimum=1, error=SweepSpecError)
     if workers is not None:
         whole(workers, "--workers", minimum=0, error=SweepSpecError)
+        check_workers(workers)
     if scheduler is not None and not isinstance(scheduler, str):
         raise ArgumentTypeError(f"--scheduler must be a Dask scheduler's address (e.g. 'tcp://host:8786'), "
                                 f"got {shown(scheduler)}")
@@ -199,9 +202,10 @@ def run_plan(plan: Plan, *, output: str | Path | None = None, workers: int | Non
     try:
         execute(plan, writer, workers=workers, scheduler=scheduler, client=client, batch_size=batch_size,
                 progress=progress)
-    finally:
-        table = writer.flush()
-    return table
+    except BaseException:  # an error or Ctrl-C: the rows done so far, if any (else `output` as it was)
+        writer.flush(finished=False)
+        raise
+    return writer.flush()
 
 
 def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: int = 0, points=None,
@@ -224,22 +228,28 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     fixed: values set for every point; solver, rel_tol, abs_tol, max_step: solver settings.
     stop_time, output_interval, start_time [s]: the communication grid (defaults: the unit's
     DefaultExperiment); metrics: names (gyrowheel.studies.metrics), metric_functions: user functions.
-    workers (0: in-process loop; default: a LocalCluster with one process per core), scheduler
+    workers (0: in-process loop; default: a LocalCluster with one process per core; never more
+    processes than points; more than 4 per core is refused: use a scheduler), scheduler
     (address of a running Dask scheduler) or client (a distributed.Client); batch_size points
     per task (default: gyrowheel.studies.execute.auto_batch_size).
     ensemble: when the unit is an FMU with the Taylor kernel and the sweep's solver is taylor,
     each batch runs through the ensemble path (gyrowheel.studies.ensemble_path: several points
     at once, results equal to the plain loop to rounding); False: always one FMU run per point.
-    output: .parquet or .csv, kept current while the sweep runs; plot: a PNG of the table
+    output: .parquet or .csv, kept current while the sweep runs (gyrowheel.studies.output: an
+    existing file is replaced once a point has finished, and left as it was by a sweep that
+    fails or is interrupted before that; a sweep that fails later leaves the table of the points
+    done and raises its error); plot: a PNG of the table
     (plot_metric: the column). on_start(plan): called once everything is checked, just before
     the first point runs.
     Returns a DataFrame with one row per point: point, inputs, metrics, status, reason, wall_time.
     Raises SweepSpecError (a ValueError) for any bad name, value or spec, before anything runs
     (plot_metric: after, when it names no column of the table); SweepInterrupted (a
-    KeyboardInterrupt) when Ctrl-C stops the run, with the points done (on disk in `output`).
+    KeyboardInterrupt) when Ctrl-C stops the run, with the points done (on disk in `output` when
+    there are any).
     """
     output = check_output_path(output)
     check_plot_path(plot)
+    plot = None if plot is None else Path(plot).absolute()  # written after the run, wherever the cwd went
     check_execution(workers, batch_size, scheduler, client)
     progress = flag_value(progress, "progress")
     if plot_metric is not None and not isinstance(plot_metric, str):
@@ -255,14 +265,12 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
                           ensemble=ensemble)
         check_size(plan, workers=workers, scheduler=scheduler, client=client, batch_size=batch_size)
         writer = TableWriter(output, plan.inputs, plan.metrics.columns())
-        try:  # from here on, Ctrl-C leaves a complete table of the points done (none, if it comes now)
+        try:  # from here on, Ctrl-C leaves a complete table of the points done (output as it was if none)
             if on_start is not None:
                 on_start(plan)
             table = run_plan(plan, workers=workers, scheduler=scheduler, client=client,
                              batch_size=batch_size, progress=progress, writer=writer)
         except KeyboardInterrupt as exc:
-            if not writer.flushed:  # stopped before run_plan wrote: no table yet, or a previous sweep's
-                writer.flush()
             raise SweepInterrupted(writer.table(), writer.written, len(plan.values), output) from exc
     if plot:
         from gyrowheel.studies.plot import plot_table

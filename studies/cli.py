@@ -5,7 +5,6 @@ anything runs; Ctrl-C stops the sweep with the rows done so far on disk (exit 13
 """
 from __future__ import annotations
 
-import os
 import sys
 
 
@@ -41,7 +40,8 @@ def add_parser(sub) -> None:
     m.add_argument("--plot", metavar="PNG", help="also plot the table")
     m.add_argument("--plot-metric", help="the column to plot (default: fall_time, else the first metric)")
     x = s.add_argument_group("execution")
-    x.add_argument("--workers", type=int, help="LocalCluster processes (default: one per core; 0: in-process loop)")
+    x.add_argument("--workers", type=int, help="LocalCluster processes (default: one per core; 0: in-process loop; "
+                   "at most 4 per core and one per point)")
     x.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786")
     x.add_argument("--batch-size", type=int, help="points per task (default: about 4 tasks per worker)")
     x.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -60,15 +60,15 @@ def cmd_sweep(args) -> int:
     require("sweep", "gyrowheel sweep")  # before anything imports Dask or pandas
     from gyrowheel.api import sweep
 
-    if args.scheduler:
-        where = f"the Dask scheduler at {args.scheduler}"
-    elif args.workers == 0:
-        where = "an in-process loop"
-    else:
-        n = args.workers or os.cpu_count() or 1
-        where = f"a LocalCluster of {n} worker{'s' * (n != 1)}" + ("" if args.workers else " (one per core)")
+    from gyrowheel.studies.execute import local_workers
 
     def announce(plan) -> None:
+        if args.scheduler:
+            where = f"the Dask scheduler at {args.scheduler}"
+        elif args.workers == 0:
+            where = "an in-process loop"
+        else:
+            where = f"a LocalCluster of {local_workers(args.workers, len(plan.values))[1]}"
         print(f"sweep: {len(plan.values)} points, t = {plan.settings.start_time:g} .. "
               f"{plan.settings.stop_time:g} s every {plan.settings.output_interval:g} s, on {where}", file=sys.stderr)
 
@@ -81,8 +81,12 @@ def cmd_sweep(args) -> int:
                       batch_size=args.batch_size, output=args.output, plot=args.plot, plot_metric=args.plot_metric,
                       progress=not args.no_progress, ensemble=not args.no_ensemble, on_start=announce)
     except SweepInterrupted as stop:  # the points done are on disk
-        print(f"gyrowheel: interrupted: {stop.written} of {stop.total} points written to {stop.output}",
-              file=sys.stderr)
+        if stop.written or stop.output is None:
+            print(f"gyrowheel: interrupted: {stop.written} of {stop.total} points written"
+                  + (f" to {args.output}" if stop.output is not None else ""), file=sys.stderr)
+        else:
+            print(f"gyrowheel: interrupted: 0 of {stop.total} points finished, {args.output} left as it was",
+                  file=sys.stderr)
         return 130
     except SweepSpecError as exc:
         raise CliError(command_line_text(exc)) from None

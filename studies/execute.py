@@ -4,7 +4,9 @@
   the reference the Dask paths must equal bit for bit).
 - workers=N (default: the machine's cores): a distributed.LocalCluster of N worker processes,
   one thread each (the FMU releases the GIL in fmi2DoStep, but one process per core also keeps
-  Python's own work parallel).
+  Python's own work parallel); never more processes than points, and more than
+  WORKERS_PER_CORE per core are refused (local_workers). The cluster's processes keep their
+  temporary files in one directory of the sweep, removed when it ends (studies/scratch.py).
 - scheduler='tcp://host:port': a running cluster (`dask scheduler`, `dask worker ADDRESS`); its
   workers need gyrowheel installed (they import gyrowheel.studies), not the FMU nor user files.
 - client=distributed.Client: an existing client (Python API).
@@ -30,6 +32,7 @@ from gyrowheel.arguments import check_memory, count
 from gyrowheel.errors import SweepSpecError
 from gyrowheel.studies.batch import run_batch
 from gyrowheel.studies.interrupt import deferred_sigint
+from gyrowheel.studies.scratch import remove_stale, sweep_directory
 
 MAX_BATCH = 500
 # The workers' statistical profiler samples every thread's stack every 10 ms: ~4% of the CPU of
@@ -39,8 +42,15 @@ MAX_BATCH = 500
 WORKER_PRELOAD = "gyrowheel.studies.worker_setup"
 LOCAL_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.worker.preload": [WORKER_PRELOAD]}
 TASKS_PER_THREAD = 4
+# worker processes per core at most in our LocalCluster: each is a Python process with its own
+# memory and start-up (1000 of them on 2 cores were still starting after 120 s), and more
+# processes than cores only share the cores. A cluster of your own: --scheduler.
+WORKERS_PER_CORE = 4
 LOOP_BATCH = 64  # points, the in-process loop's default batch (run_loop)
 CONNECT_TIMEOUT = 20.0  # s, for a scheduler address to connect and answer Dask's handshake
+# s, how long an address whose connections are refused (or fail otherwise at once) is tried again
+# before the sweep gives up: a scheduler that is just starting gets this long to listen
+REFUSED_WAIT = 2.0
 POLL = 0.02  # s, the longest a Ctrl-C waits for the batch collector to see it
 # a point's trajectory where it runs: its outputs in a float64 array (batch.run_point, or the
 # ensemble's table of a batch), and one copy of them (the structured array metric functions get)
@@ -61,7 +71,7 @@ def check_size(plan, *, workers: int | None = None, scheduler: str | None = None
     n, h = plan.settings.grid()
     rows, columns, total = n + 1, len(plan.target.outputs) + 1, max(1, len(plan.values))
     local = client is None and scheduler is None
-    runs = (1 if workers == 0 else workers or os.cpu_count() or 1) if local else 1
+    runs = (1 if workers == 0 else local_workers(workers, total)[0]) if local else 1
     points = 1
     if plan.settings.ensemble and applies(plan.target, plan.settings):
         points = batch_size or (LOOP_BATCH if local and workers == 0 else auto_batch_size(total, runs))
@@ -71,6 +81,33 @@ def check_size(plan, *, workers: int | None = None, scheduler: str | None = None
     advice = "choose a shorter --stop-time or a longer --output-interval" + (
         ", or fewer --workers or a smaller --batch-size" if at_once > 1 else "")
     check_memory(rows * columns * at_once, BYTES_PER_VALUE, what, advice, argument=None, error=SweepSpecError)
+
+
+def cores() -> int:
+    """This machine's cores as Python counts them (os.cpu_count(); 1 if it cannot say)."""
+    return os.cpu_count() or 1
+
+
+def check_workers(workers: int | None) -> None:
+    """Refuse a LocalCluster of more than WORKERS_PER_CORE processes per core (SweepSpecError
+    naming --workers, the cores and the most allowed); None (one per core) and 0 (no Dask) pass."""
+    most = WORKERS_PER_CORE * cores()
+    if workers is not None and workers > most:
+        raise SweepSpecError(f"--workers {workers}: more than {WORKERS_PER_CORE} worker processes per core "
+                             f"({cores()} cores here: at most {most}); for more, start a Dask cluster and give "
+                             f"--scheduler")
+
+
+def local_workers(workers: int | None, n_points: int) -> tuple[int, str]:
+    """The worker processes of our LocalCluster for `workers` (None: one per core; checked by
+    check_workers) and a sweep of n_points, and why that many, in words: never more than the
+    points, which leave any further process idle ('2 workers (one per point; --workers 3)')."""
+    asked = workers or cores()
+    n = max(1, min(asked, n_points))
+    why = "one per core" if workers is None else ""
+    if n < asked:
+        why = "one per point" + (f"; --workers {workers}" if workers is not None else f"; {asked} cores")
+    return n, f"{n} worker{'s' * (n != 1)}" + (f" ({why})" if why else "")
 
 
 def auto_batch_size(n_points: int, n_threads: int) -> int:
@@ -219,6 +256,9 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
     from distributed.comm import connect
 
     timeout = CONNECT_TIMEOUT if timeout is None else timeout
+    refused = _refusing(address, REFUSED_WAIT)
+    if refused is not None:
+        raise ConnectionError(f"no Dask scheduler at {address}: {refused} (tried for {REFUSED_WAIT:g} s)")
     outcome: dict = {}
 
     async def handshake():
@@ -241,6 +281,39 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
         if isinstance(exc, ValueError):  # a malformed address
             raise SweepSpecError(f"--scheduler {address!r}: {exc}") from None
         raise ConnectionError(f"no Dask scheduler at {address}: {type(exc).__name__}: {exc}")
+
+
+def _refusing(address: str, wait: float) -> str | None:
+    """Why a tcp:// or tls:// address cannot be connected to at all ('connection refused': nothing
+    listens on the port; an unknown host...), after trying again for `wait` s; None when a TCP
+    connection is made, when the attempt is still pending after `wait` s (a silent host: the
+    handshake's timeout decides) or for another kind of address.
+
+    distributed's connect retries a refused connection until its timeout (20 s here, 30 s by
+    default: distributed.comm.timeouts.connect) although nothing will answer there."""
+    import socket
+
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(address)
+        if scheme not in ("tcp", "tls"):
+            return None
+        host, port = parse_host_port(location)
+    except ValueError:  # a malformed address: the handshake says what is wrong with it
+        return None
+    deadline = time.monotonic() + wait
+    while True:
+        try:
+            with socket.create_connection((host, port), timeout=wait):
+                return None
+        except (socket.timeout, TimeoutError):
+            return None
+        except OSError as exc:
+            reason = exc.strerror or str(exc) or type(exc).__name__
+            if time.monotonic() >= deadline:
+                return reason[:1].lower() + reason[1:]
+            time.sleep(min(0.1, max(0.0, deadline - time.monotonic())))
 
 
 class _Startup:
@@ -296,19 +369,33 @@ def execute(plan, writer, *, workers: int | None = None, scheduler: str | None =
         return run_loop(plan, writer, batch_size, progress)
     if client is not None:
         return run_dask(plan, writer, client=client, batch_size=batch_size, progress=progress)
+    from distributed import Client
+
+    if scheduler is not None:
+        try:
+            probe_scheduler(scheduler)  # a Ctrl-C here is plain: no client, no IO loop yet
+            with deferred_sigint() as interrupt, Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s") as c:
+                interrupt.check()  # a Ctrl-C while the client connected
+                return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
+        finally:  # workers of this machine that were killed (studies/scratch.py)
+            remove_stale()
+    with sweep_directory() as scratch:
+        return _run_local_cluster(plan, writer, local_workers(workers, len(plan.values))[0], scratch, batch_size,
+                                  progress)
+
+
+def _run_local_cluster(plan, writer, n: int, scratch, batch_size: int | None, progress: bool) -> None:
+    """The sweep on a LocalCluster of n processes whose temporary files (TMPDIR, Dask's
+    local_directory) all go beneath `scratch`, a directory the caller removes afterwards."""
     import dask
     from distributed import Client, LocalCluster
 
-    if scheduler is not None:
-        probe_scheduler(scheduler)  # a Ctrl-C here is plain: no client, no IO loop yet
-        with deferred_sigint() as interrupt, Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s") as c:
-            interrupt.check()  # a Ctrl-C while the client connected
-            return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
-    n = workers or os.cpu_count() or 1
     with deferred_sigint() as interrupt:
-        with dask.config.set(LOCAL_CONFIG), _children_ignore_sigint() as startup:
+        with dask.config.set({**LOCAL_CONFIG, "temporary-directory": str(scratch)}), \
+                _children_ignore_sigint() as startup:  # (the scheduler's scratch space too)
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                   dashboard_address=":0")
+                                   dashboard_address=":0", local_directory=str(scratch),
+                                   env={"TMPDIR": str(scratch)})
         if startup.interrupted:
             interrupt.request()
         # the cluster closes before the client: its scheduler, told of workers going or of a last

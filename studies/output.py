@@ -1,20 +1,25 @@
 """The result table: one row per point (inputs, metrics, status, reason, wall time), on disk as it grows.
 
-The file is rewritten whole, atomically (write a sibling, then os.replace), at most every
-`interval` seconds (and never more often than ten times the last write took) and once at the
-end: whatever stops the sweep, Ctrl-C included, the file on disk is a complete, readable table
-of the points finished by its last write. Parquet (pyarrow) or CSV, chosen by the suffix.
+The file follows gyrowheel's one rule for outputs (gyrowheel.output_files): its path is made
+absolute when the sweep is checked (a working directory changed while the sweep runs, as fmpy
+does when an FMU's library fails to load, cannot move it) and it is rewritten whole, atomically
+(a hidden sibling, then os.replace), at most every `interval` seconds (and never more often
+than ten times the last write took) and once at the end, but never before a point has its row.
+So an existing file at the path is left as it was by a sweep that fails or is stopped (Ctrl-C)
+before any point finished; after that, whatever stops the sweep, the file is a complete,
+readable table of this sweep's points finished by its last write. Parquet (pyarrow) or CSV,
+chosen by the suffix.
 """
 from __future__ import annotations
 
 import math
-import os
 import time
 from pathlib import Path
 
 import pandas as pd
 
 from gyrowheel.arguments import path as as_path
+from gyrowheel.output_files import check_output_file, replaced_atomically
 from gyrowheel.studies.spec import SweepSpecError
 
 FORMATS = (".parquet", ".csv")
@@ -22,7 +27,11 @@ TAIL = ("status", "reason", "wall_time")
 
 
 def check_output_path(path: str | Path | None) -> Path | None:
-    """The table's file: None, or a path ending in .parquet or .csv in a directory that exists."""
+    """The table's file: None, or the absolute path of a .parquet or .csv file to write.
+
+    Raises SweepSpecError (`-o ...`) for a path without one of those suffixes, a path that is
+    a directory, a device, a FIFO or a socket, or one whose directory does not exist
+    (gyrowheel.output_files.check_output_file)."""
     if path is None:
         return None
     path = as_path(path, "-o", "a file path (.parquet or .csv)")
@@ -30,9 +39,7 @@ def check_output_path(path: str | Path | None) -> Path | None:
         raise SweepSpecError(f"-o {path}: is a directory; give a file name (.parquet or .csv)")
     if path.suffix.lower() not in FORMATS:
         raise SweepSpecError(f"-o {path}: unknown format {path.suffix or '(no suffix)'!r}; use .parquet or .csv")
-    if not path.parent.exists():
-        raise SweepSpecError(f"-o {path}: directory {path.parent} does not exist")
-    return path
+    return check_output_file(path.absolute(), "-o", error=SweepSpecError, argument="output")
 
 
 def _dtypes(frame: pd.DataFrame) -> pd.DataFrame:
@@ -82,7 +89,8 @@ _DTYPES = {"bool": "boolean", "text": object, "number": "float64"}
 
 
 class TableWriter:
-    """Collects rows; keeps `path` a complete table of the rows so far (see module docstring)."""
+    """Collects rows; keeps `path` a complete table of the rows so far once there is one (see
+    the module docstring). `path`: absolute (check_output_path), or None for no file."""
 
     def __init__(self, path: Path | None, inputs: pd.DataFrame, columns: dict[str, str] | None = None,
                  interval: float = 1.0):
@@ -91,7 +99,6 @@ class TableWriter:
         self._last = time.monotonic()
         self._cost = 0.0
         self.written = 0
-        self.flushed = False  # the file holds this sweep's table (not a previous one's, or none)
 
     def add(self, rows: list[dict]) -> None:
         self.rows.extend(rows)
@@ -102,25 +109,27 @@ class TableWriter:
     def table(self) -> pd.DataFrame:
         return result_table(self.inputs, self.rows, self.columns)
 
-    def flush(self) -> pd.DataFrame:
+    def flush(self, *, finished: bool = True) -> pd.DataFrame:
+        """The table of the rows so far, written to `path` (when there is one) if the sweep
+        `finished` (every point has its row) or has rows to write: a sweep stopped before its
+        first row leaves the file as it was."""
         frame = self.table()
-        if self.path is not None:
+        if self.path is not None and (finished or self.rows):
             t0 = time.monotonic()
             write_table(frame, self.path)
             self._cost = time.monotonic() - t0
             self._last = time.monotonic()
             self.written = len(frame)
-            self.flushed = True
         return frame
 
 
 def write_table(frame: pd.DataFrame, path: Path) -> None:
-    tmp = path.with_name(f".{path.name}.part")
-    if path.suffix.lower() == ".parquet":
-        frame.to_parquet(tmp, index=False, engine="pyarrow")
-    else:
-        frame.to_csv(tmp, index=False)
-    os.replace(tmp, path)
+    """Write `frame` to `path` (.parquet or .csv) whole or not at all (replaced_atomically)."""
+    with replaced_atomically(path, "-o", error=SweepSpecError, argument="output") as part:
+        if path.suffix.lower() == ".parquet":
+            frame.to_parquet(part, index=False, engine="pyarrow")
+        else:
+            frame.to_csv(part, index=False)
 
 
 def read_table(path: str | Path) -> pd.DataFrame:

@@ -16,6 +16,7 @@ import tempfile
 from dataclasses import replace
 from pathlib import Path
 
+from gyrowheel.studies.scratch import prefix
 from gyrowheel.studies.target import FmuTarget
 
 
@@ -26,7 +27,7 @@ class SspTarget:
         from gyrowheel.cosim.system import read_ssp
 
         self.path = Path(path)
-        with tempfile.TemporaryDirectory(prefix="gyrowheel-sweep-ssp-") as tmp:
+        with tempfile.TemporaryDirectory(prefix=prefix("ssp")) as tmp:
             system = read_ssp(self.path, tmp)
             self.components = {c.name: FmuTarget(c.fmu) for c in system.components}
             self._bytes = {name: t.payload() for name, t in self.components.items()}

@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import atexit
 import hashlib
+import os
 import shutil
-import tempfile
 import threading
 import zipfile
 from ctypes import byref, c_double, c_int, c_uint
@@ -37,8 +37,9 @@ from pathlib import Path
 import numpy as np
 
 from gyrowheel.cosim.fmi_log import forget_messages, logging_callbacks
+from gyrowheel.studies.scratch import new_directory
 
-_UNPACKED: dict[str, str] = {}  # FMU digest -> extraction directory, per worker process (removed at its exit)
+_UNPACKED: dict[str, str] = {}  # FMU digest -> extraction directory, per process (removed at its exit)
 _LOCK = threading.Lock()  # fmpy's FMU2Slave() changes the working directory while loading
 
 
@@ -157,8 +158,8 @@ def _unpack(target: FmuTarget, payload: bytes | None) -> str:
     with _LOCK:
         where = _UNPACKED.get(target.digest)
         if where is None:
-            where = tempfile.mkdtemp(prefix=f"gyrowheel-sweep-{target.digest[:12]}-")
-            atexit.register(shutil.rmtree, where, True)
+            where = str(new_directory("unit"))  # (and the directories of dead processes removed)
+            atexit.register(shutil.rmtree, where, True)  # a killed process: studies/scratch.py
             if payload is not None:
                 import io
                 zipfile.ZipFile(io.BytesIO(payload)).extractall(where)
@@ -178,8 +179,12 @@ class FmuInstance:
         self.messages: list[str] = []
         self._callbacks, self._id = logging_callbacks(self.messages)
         with _LOCK:
-            self.slave = FMU2Slave(guid=target.guid, unzipDirectory=unzipdir,
-                                   modelIdentifier=target.identifier, instanceName="sweep")
+            cwd = os.getcwd()
+            try:
+                self.slave = FMU2Slave(guid=target.guid, unzipDirectory=unzipdir,
+                                       modelIdentifier=target.identifier, instanceName="sweep")
+            finally:  # fmpy changes into the library's directory and stays there if loading fails
+                os.chdir(cwd)
         self.slave.instantiate(callbacks=self._callbacks, loggingOn=False)
         f = self.slave._functions  # the raw ctypes functions: status codes instead of exceptions
         self._c = self.slave.component

@@ -7,6 +7,7 @@ that answers but is no Dask scheduler ends the command with one line and exit 1,
 traceback."""
 from __future__ import annotations
 
+import os
 import socket
 import threading
 import time
@@ -44,6 +45,11 @@ def test_bad_names_and_options_refused_before_running(earth_fmu, kwargs, message
     (["--grid", "beta_deg=60:89:1000000000"], "1000000000 values, more than the 10000000 points of one sweep"),
     (["--grid", "M=1", "--stop-time", "20", "--output-interval", "1e-12"],
      "--stop-time 20 s with --output-interval 1e-12 s: 2e+13 communication points of"),
+    # the reported inputs: 1e9 s / 0.01 s (the FMU's step) + 1 and 20 s (its stop time) / 1e-9 s + 1 rows
+    (["--grid", "M=1", "--stop-time", "1e9"],
+     "--stop-time 1e+09 s with --output-interval 0.01 s: 100000000001 communication points of"),
+    (["--grid", "M=1", "--output-interval", "1e-9"],
+     "--stop-time 20 s with --output-interval 1e-09 s: 20000000001 communication points of"),
 ])
 def test_cli_errors_are_one_line_exit_2(earth_fmu, tmp_path, capsys, argv, message):
     code = main(["sweep", str(earth_fmu), "-o", str(tmp_path / "t.parquet"), "--workers", "0", *argv]
@@ -150,3 +156,59 @@ def test_an_address_that_is_no_scheduler_fails_cleanly(earth_fmu, tmp_path, caps
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and err[-1].startswith("gyrowheel: error: ") and server.address in err[-1], err
     assert "Traceback" not in "\n".join(err) and took < 30
+
+
+def test_an_address_that_refuses_fails_within_seconds(earth_fmu, tmp_path, capsys):
+    """Nothing listens on the port: distributed's connect would try again for its whole timeout
+    (20 s here); the sweep gives up after REFUSED_WAIT (2 s) with one line naming the address."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        address = f"tcp://127.0.0.1:{s.getsockname()[1]}"  # bound, not listening: refused
+        t0 = time.monotonic()
+        code = main(["sweep", str(earth_fmu), "--grid", "M=1,2", "--stop-time", "0.1", "--scheduler", address,
+                     "--no-progress", "-o", str(tmp_path / "t.csv")])
+        took = time.monotonic() - t0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and err[-1] == (f"gyrowheel: error: ConnectionError: no Dask scheduler at {address}: "
+                                     "connection refused (tried for 2 s)"), err
+    assert 2.0 <= took < 6.0, took
+
+
+def test_workers_far_above_the_cores_refused_at_once(earth_fmu, tmp_path, capsys):
+    """--workers 1000 on 2 cores was still starting its LocalCluster after 120 s: more than 4
+    worker processes per core is refused in one line before anything runs."""
+    cores = os.cpu_count() or 1
+    t0 = time.monotonic()
+    code = main(["sweep", str(earth_fmu), "--grid", "M=1,2", "--stop-time", "0.1", "--workers", str(4 * cores + 1),
+                 "--no-progress", "-o", str(tmp_path / "t.csv")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and time.monotonic() - t0 < 5 and "\n" not in err, err
+    assert err == (f"gyrowheel: error: --workers {4 * cores + 1}: more than 4 worker processes per core ({cores} "
+                   f"cores here: at most {4 * cores}); for more, start a Dask cluster and give --scheduler")
+    with pytest.raises(SweepSpecError, match=f"workers {4 * cores + 1}: more than 4 worker processes per core"):
+        sweep(earth_fmu, grid={"M": [1.0]}, stop_time=0.1, workers=4 * cores + 1)
+
+
+CORES = os.cpu_count() or 1
+
+
+@pytest.mark.parametrize("workers, points, used", [
+    (3, 2, "2 workers (one per point; --workers 3)"), (2, 5, "2 workers"), (1, 1, "1 worker"),
+    (None, 10**6, f"{CORES} worker{'s' * (CORES != 1)} (one per core)"),
+    (None, 1, f"1 worker (one per point; {CORES} cores)" if CORES > 1 else "1 worker (one per core)")])
+def test_a_local_cluster_has_no_more_processes_than_points(workers, points, used):
+    from gyrowheel.studies.execute import local_workers
+    assert local_workers(workers, points) == (int(used.split()[0]), used)
+
+
+def test_the_command_says_how_many_workers_it_starts(earth_fmu, tmp_path, capsys, monkeypatch):
+    import gyrowheel.studies.api as api
+
+    def stop(*args, **kwargs):  # after the announcement, before any cluster starts
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(api, "run_plan", stop)
+    code = main(["sweep", str(earth_fmu), "--grid", "M=1,2", "--stop-time", "0.1", "--workers", "3", "--no-progress",
+                 "-o", str(tmp_path / "t.csv")])
+    err = capsys.readouterr().err
+    assert code == 130 and "on a LocalCluster of 2 workers (one per point; --workers 3)\n" in err, err

@@ -165,19 +165,20 @@ def test_startup_guard_keeps_a_ctrl_c_for_later(tmp_path, ctrl_c):
     assert out.split() == [str(ctrl_c), "True", "True"], out + err
 
 
-def test_ctrl_c_before_the_run_replaces_a_previous_table(earth_fmu, tmp_path, capsys, monkeypatch):
+def test_ctrl_c_before_the_run_leaves_a_previous_table_untouched(earth_fmu, tmp_path, capsys, monkeypatch):
     """Ctrl-C after the command has printed its plan but before the first row: the file at -o is
-    this sweep's (empty) table, as the message says, not a previous sweep's rows left there."""
+    the previous sweep's table, byte for byte (no empty table over it), as the message says."""
     import gyrowheel.studies.api as api
     out = tmp_path / "t.csv"
     argv = ["sweep", str(earth_fmu), "--grid", "M=1.5,2", "--stop-time", "0.1", "--workers", "0", "--no-progress",
             "-o", str(out)]
     assert main(argv) == 0 and len(read_table(out)) == 2
+    before = out.read_bytes()
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
     monkeypatch.setattr(api, "run_plan", interrupted)
     assert main(argv) == 130
-    assert "interrupted: 0 of 2 points written to" in capsys.readouterr().err
-    assert len(read_table(out)) == 0
+    assert f"interrupted: 0 of 2 points finished, {out} left as it was" in capsys.readouterr().err
+    assert out.read_bytes() == before

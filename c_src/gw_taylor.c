@@ -17,9 +17,10 @@
  *                             where the model has them (GW_TL_HAS_EVT)
  *
  * Two copies (GW_TAYLOR_FAST): on x86-64 with GCC >= 8 or clang >= 14 the kernel is compiled
- * twice, as portable code (gw_tl1d_*) and for AVX2 with FMA (gw_tl1v3_*, target("avx2,fma"), the
- * floating-point instructions of x86-64-v3), with multiply-adds fused (GCC: fp-contract=fast for
- * these functions, as -std=c99 turns it off; clang fuses within an expression by default).
+ * twice, as portable code (gw_tl1d_*) and for x86-64-v3 (gw_tl1v3_*; GCC < 12 and clang, whose
+ * __builtin_cpu_supports cannot ask for the level: for AVX2 and FMA, its floating point), with
+ * multiply-adds fused (GCC: fp-contract=fast for both copies, as -std=c99 turns it off; clang
+ * fuses within an expression by default).
  * Each entry point asks gw_taylor_fast() which copy this CPU runs: __builtin_cpu_supports reads
  * the features the compiler's runtime (libgcc, compiler-rt) detected when the program was
  * loaded, a load and a test per call; nothing is written, no state of the runtime's own.

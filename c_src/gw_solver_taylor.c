@@ -48,6 +48,8 @@
  * non-finite derivative, a non-finite coefficient of the orders that set h, or a non-finite
  * state is an error with its reason.  One kernel call counts as one right-hand side
  * evaluation in n_rhs.
+ * All of this is compiled only with the model's kernel (GW_TAYLOR_KERNEL, gw_taylor.c); without
+ * it the file is the four functions the core calls, refusing solver taylor.
  */
 #ifndef GW_UNITY_BUILD
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */

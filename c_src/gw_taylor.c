@@ -40,8 +40,10 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include "gw_core.h"
 
+/* (the ensemble library built by clang: none, as its passes, below) */
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(GW_NO_CLONES) &&                         \
-    ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && __GNUC__ >= 8))
+    ((defined(__clang__) && __clang_major__ >= 14 && !defined(GW_ENSEMBLE_LANES)) ||                \
+     (!defined(__clang__) && __GNUC__ >= 8))
 #define GW_TAYLOR_FAST 1
 #if !defined(__clang__) && __GNUC__ >= 12
 #define GW_TAYLOR_FAST_TARGET "arch=x86-64-v3"
@@ -67,14 +69,12 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 /* The ensemble library only (not an FMU, not an export: gw_ensemble_lib.c defines
  * GW_ENSEMBLE_LANES): its increments pass (GW_ENS_PASS_FMA, gw_ensemble_passes.h) equals the
  * increments of gw_solver_taylor.c lane by lane, so it is compiled for the same two targets, as
- * target clones chosen by the same CPU check (GCC's resolver of arch=x86-64-v3). */
+ * target clones chosen by the same CPU check (GCC's resolver of arch=x86-64-v3).  Built by
+ * clang the library has one portable copy here, as clang 14's resolvers choose the default
+ * clone of its passes on Intel and AMD CPUs. */
 #if defined(GW_ENSEMBLE_LANES) && GW_TAYLOR_FAST && defined(__ELF__) && defined(__GLIBC__)
-#if defined(__clang__)
-#define GW_TL_CLONED __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
 #define GW_TL_CLONED                                                                               \
     __attribute__((target_clones("arch=x86-64-v3", "default"), optimize("fp-contract=fast")))
-#endif
 #endif
 
 /* the portable copy (the only one without GW_TAYLOR_FAST) */

@@ -118,6 +118,9 @@ GW_INTERNAL void gw_rodas4_dense(gw_instance *I);
 #ifndef GW_TAYLOR_EXTRA_ORDER
 #define GW_TAYLOR_EXTRA_ORDER 4
 #endif
+/* the step's parts, defined only in a unit with the model's Taylor kernel (GW_TAYLOR_KERNEL,
+ * gw_taylor.c; without it gw_solver_taylor.c has only the four functions at the end) */
+#ifdef GW_TAYLOR_KERNEL
 /* order of the series for a relative tolerance: p0 in [3, MAX] plus GW_TAYLOR_EXTRA_ORDER */
 GW_INTERNAL int gw_taylor_order(double rel_tol);
 /* 1: an accepted step's event indicators at its end (t1, xnew) are read from the kernel's
@@ -173,6 +176,8 @@ GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
 GW_INTERNAL gw_int_result gw_taylor_conclude_err(gw_instance *I, double t_end, gw_taylor_run *run,
                                                  double h, double t1, double err, int from_series,
                                                  int *fresh);
+#endif /* GW_TAYLOR_KERNEL */
+/* solver taylor's integration call (without a kernel: refused, logged) */
 GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end);
 /* the Taylor polynomial of the last step at t */
 GW_INTERNAL void gw_taylor_dense_eval(const gw_instance *I, double t, double *x_out);

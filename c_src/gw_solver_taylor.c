@@ -48,6 +48,8 @@
  * non-finite derivative, a non-finite coefficient of the orders that set h, or a non-finite
  * state is an error with its reason.  One kernel call counts as one right-hand side
  * evaluation in n_rhs.
+ * All of this is compiled only with the model's kernel (GW_TAYLOR_KERNEL, gw_taylor.c); without
+ * it the file is the four functions the core calls, refusing solver taylor.
  */
 #ifndef GW_UNITY_BUILD
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
@@ -58,6 +60,33 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include <string.h>
 
 #include "gw_solver.h"
+
+#ifndef GW_TAYLOR_KERNEL
+/* A model without the Taylor kernel (gw_taylor.c): no Taylor code at all, only what the rest of
+ * the core calls.  Solver taylor cannot be chosen (gw_values.c refuses it, naming why); a call
+ * here regardless is refused too. */
+GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end) {
+    (void)t_end;
+    GW_LOG_ERR(I, "solver taylor is not available in this model: %s",
+               I->m->taylor.why_absent ? I->m->taylor.why_absent
+                                       : "it was built without a Taylor kernel");
+    return GW_INT_ERROR;
+}
+
+GW_INTERNAL void gw_taylor_dense_eval(const gw_instance *I, double t, double *x_out) {
+    (void)t; /* no Taylor step was taken: the state at the step's end */
+    memcpy(x_out, I->xnew, (size_t)I->m->nx * sizeof(double));
+}
+
+GW_INTERNAL int gw_taylor_alloc(gw_instance *I) {
+    (void)I;
+    return 0;
+}
+
+GW_INTERNAL void gw_taylor_free(gw_instance *I) { (void)I; }
+
+#else /* GW_TAYLOR_KERNEL */
+
 #include "gw_solver_taylor_step.h" /* gw_fm_step: the step size */
 
 /* The rejection rule's ln and exp (a rejected step's shorter retry; the step size itself is
@@ -122,132 +151,37 @@ GW_INTERNAL double gw_taylor_step_size(const gw_taylor_run *run, int order, doub
     return gw_fm_step(n1, n2, 1.0 / (order - 1), 1.0 / order, run->log2_c);
 }
 
-/* dx = P(h) - x0 = sum_{k>=1} X_k h^k and, if dp is not NULL, dp = P'(h), in one Horner pass:
- * with Q(s) = sum_{k>=1} X_k s^(k-1), dx = h Q(h) and P'(h) = Q(h) + h Q'(h).  The order loop
- * is outside the component loop (blocks of 8 components): the components' Horner chains are
- * independent and overlap, where one chain after the other waited on each multiply-add. */
-/* GW_TL_CLONED: gw_taylor.c's target clones of the kernel (x86-64-v3 with FMA, and default) for
- * the increments too, else plain functions */
-#ifndef GW_TL_CLONED
-#define GW_TL_CLONED
-#endif
+/* The increments (gw_solver_taylor_increment.h), one copy per copy of the kernel
+ * (gw_taylor.c): fused multiply-adds on x86-64-v3 (the Horner chains' latency bounds them), the
+ * portable code elsewhere; gw_taylor_increment_strided asks the CPU as the kernel's entry points
+ * do.  Full blocks of 8 components go through GCC's and clang's vector extension (one SSE2
+ * register: a pair of components); other C99 compilers run the scalar loop (same operations). */
 #if defined(__GNUC__) || defined(__clang__)
-typedef double gw_tl_v2 __attribute__((vector_size(16))); /* one SSE2 register */
-/* a full block of 8 components as 4 pairs: the same multiplies and adds in the same order as
- * the scalar loop below, half the instructions (the scalar loop is bound by the issue of its 4
- * operations per component and order, not by the chains' latency); the ensemble's layout, cloned
- * as its increments pass (gw_ens_increments, fused multiply-adds on x86-64-v3), which equals
- * this lane by lane bit for bit */
-static GW_TL_CLONED void gw_taylor_increment8(const double *x0, size_t si, size_t so, int order,
-                                        double h, double *dx, double *dp) {
-    const gw_tl_v2 hv = {h, h};
-    gw_tl_v2 q[4], dq[4];
-    int c, k;
-    for (c = 0; c < 4; c++) {
-        const double *a = x0 + (size_t)(2 * c) * si + (size_t)order * so;
-        q[c] = (gw_tl_v2){a[0], a[si]};
-        dq[c] = (gw_tl_v2){0.0, 0.0};
-    }
-    for (k = order - 1; k >= 1; k--) {
-        const double *xk = x0 + (size_t)k * so;
-        for (c = 0; c < 4; c++) {
-            const double *a = xk + (size_t)(2 * c) * si;
-            dq[c] = dq[c] * hv + q[c];
-            q[c] = q[c] * hv + (gw_tl_v2){a[0], a[si]};
-        }
-    }
-    for (c = 0; c < 4; c++) {
-        const gw_tl_v2 d = q[c] * hv;
-        dx[2 * c] = d[0];
-        dx[2 * c + 1] = d[1];
-        if (dp) {
-            const gw_tl_v2 e = q[c] + hv * dq[c];
-            dp[2 * c] = e[0];
-            dp[2 * c + 1] = e[1];
-        }
-    }
-}
-
-/* the one-lane path's series (gw_integrate_taylor: the kernel's order-major layout, si = 1),
- * a block of 8 components: the same multiplies and adds per component as above, its 4 pairs
- * held in registers (each order's 8 coefficients are contiguous: a pair is one load), and like
- * the kernel an x86-64-v3 clone with fused multiply-adds (the Horner chains' latency bounds
- * this loop) */
-#define GW_TL_LD2(p) (*(const gw_tl_v2u *)(const void *)(p))
-typedef double gw_tl_v2u __attribute__((vector_size(16), aligned(sizeof(double)), may_alias));
-static GW_TL_CLONED void gw_taylor_increment8_om(const double *x0, size_t so, int order, double h,
-                                                 double *dx, double *dp) {
-    const gw_tl_v2 hv = {h, h};
-    const double *a = x0 + (size_t)order * so;
-    gw_tl_v2 q0 = GW_TL_LD2(a), q1 = GW_TL_LD2(a + 2), q2 = GW_TL_LD2(a + 4),
-             q3 = GW_TL_LD2(a + 6);
-    gw_tl_v2 d0 = {0.0, 0.0}, d1 = d0, d2 = d0, d3 = d0;
-    int k;
-    for (k = order - 1; k >= 1; k--) {
-        a = x0 + (size_t)k * so;
-        d0 = d0 * hv + q0;
-        d1 = d1 * hv + q1;
-        d2 = d2 * hv + q2;
-        d3 = d3 * hv + q3;
-        q0 = q0 * hv + GW_TL_LD2(a);
-        q1 = q1 * hv + GW_TL_LD2(a + 2);
-        q2 = q2 * hv + GW_TL_LD2(a + 4);
-        q3 = q3 * hv + GW_TL_LD2(a + 6);
-    }
-    *(gw_tl_v2u *)(void *)dx = q0 * hv;
-    *(gw_tl_v2u *)(void *)(dx + 2) = q1 * hv;
-    *(gw_tl_v2u *)(void *)(dx + 4) = q2 * hv;
-    *(gw_tl_v2u *)(void *)(dx + 6) = q3 * hv;
-    if (dp) {
-        *(gw_tl_v2u *)(void *)dp = q0 + hv * d0;
-        *(gw_tl_v2u *)(void *)(dp + 2) = q1 + hv * d1;
-        *(gw_tl_v2u *)(void *)(dp + 4) = q2 + hv * d2;
-        *(gw_tl_v2u *)(void *)(dp + 6) = q3 + hv * d3;
-    }
-}
-#undef GW_TL_LD2
 #define GW_TL_INCREMENT8 1
-#else /* other C99 compilers: no vector extension, the scalar loop below (same operations) */
+typedef double gw_tl_v2 __attribute__((vector_size(16))); /* one SSE2 register */
+typedef double gw_tl_v2u __attribute__((vector_size(16), aligned(sizeof(double)), may_alias));
+#define GW_TL_LD2(p) (*(const gw_tl_v2u *)(const void *)(p))
+#else
 #define GW_TL_INCREMENT8 0
 #endif
-
-/* gw_taylor_increment on the series X with state i's coefficient k at X[i si + k so]; cloned
- * like the blocks of 8 and the ensemble's increments pass (gw_ens_increments fuses the last
- * nx mod 8 components' multiply-adds too: unfused here, those components of a single run would
- * be 1 ulp off the ensemble's lane, tests/test_taylor_near_pole.py::
- * test_ensemble_rejected_steps_retry_on_the_lane_series, lunar_rover's 9th state) */
-static GW_TL_CLONED void gw_taylor_increment_strided(const double *X, size_t si, size_t so, int order, int nx,
-                                        double h, double *dx, double *dp) {
-    enum { B = 8 };
-    int i0, b, k;
-    for (i0 = 0; i0 < nx; i0 += B) {
-        const int nb = nx - i0 < B ? nx - i0 : B;
-        const double *x0 = X + (size_t)i0 * si;
-        double q[B], dq[B];
-#if GW_TL_INCREMENT8
-        if (nb == B) {
-            if (si == 1)
-                gw_taylor_increment8_om(x0, so, order, h, dx + i0, dp ? dp + i0 : NULL);
-            else
-                gw_taylor_increment8(x0, si, so, order, h, dx + i0, dp ? dp + i0 : NULL);
-            continue;
-        }
+#define GW_TLI(name) gw_taylor_##name##_base
+#define GW_TLI_ATTR GW_TAYLOR_BASE_ATTR
+#include "gw_solver_taylor_increment.h"
+#undef GW_TLI
+#undef GW_TLI_ATTR
+#if GW_TAYLOR_FAST
+#define GW_TLI(name) gw_taylor_##name##_fast
+#define GW_TLI_ATTR GW_TAYLOR_FAST_ATTR
+#include "gw_solver_taylor_increment.h"
+#undef GW_TLI
+#undef GW_TLI_ATTR
 #endif
-        for (b = 0; b < nb; b++) {
-            q[b] = x0[(size_t)b * si + (size_t)order * so];
-            dq[b] = 0.0;
-        }
-        for (k = order - 1; k >= 1; k--) {
-            const double *xk = x0 + (size_t)k * so;
-            for (b = 0; b < nb; b++) {
-                dq[b] = dq[b] * h + q[b];
-                q[b] = q[b] * h + xk[(size_t)b * si];
-            }
-        }
-        for (b = 0; b < nb; b++) dx[i0 + b] = q[b] * h;
-        if (dp)
-            for (b = 0; b < nb; b++) dp[i0 + b] = q[b] + h * dq[b];
-    }
+#undef GW_TL_LD2
+
+static void gw_taylor_increment_strided(const double *X, size_t si, size_t so, int order, int nx,
+                                        double h, double *dx, double *dp) {
+    GW_TAYLOR_PICK(gw_taylor_increment_strided_fast,
+                   gw_taylor_increment_strided_base)(X, si, so, order, nx, h, dx, dp);
 }
 
 /* lane `lane` of lanes-interleaved series in jet's layout (the ensemble's one-lane check build) */
@@ -432,35 +366,26 @@ static void gw_swap_series(double **a, double **b) {
 #define GW_TAYLOR_DEFECT_RHS 0
 #endif
 
-#ifdef GW_TL1_SERIES
-#define GW_TL_SERIES(order, t, x, c, w) gw_tl1_series(order, t, x, c, w)
-#else
-#define GW_TL_SERIES(order, t, x, c, w) tk->jet(order, t, x, c, w)
-#endif
-
 /* Each step: the series at its start (in I->tl_w), the attempt, then the series at the
  * attempt's end point (I->tl_wn), whose order 1 is f(t1, P(h)) for the defect check; accepted
  * as it was, that series is the next step's.  The last step of the call checks with one
  * right-hand side evaluation instead (the next call may change inputs or the state). */
 GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end) {
-    const gw_taylor_kernel *tk = &I->m->taylor;
     gw_taylor_run run;
     gw_int_result result = GW_INT_OK;
     const double t_begin = I->t;
     int have = 0; /* I->tl_w holds the series at (I->t, I->x) */
     if (gw_taylor_begin(I, &run)) return GW_INT_ERROR;
-#ifdef GW_TL1_SERIES
     I->tl_si = 1; /* the series as the kernel leaves them, coefficient k of state i at
                    * [k GW_TL_NODES + i]: no copy to jet's layout (8% of a jet at order 10) */
     I->tl_so = GW_TL_NODES;
-#endif
-    if (tk->cst) tk->cst(I->u, I->p, I->tl_c);
+    gw_tl1_cst(I->u, I->p, I->tl_c);
     while (I->t < t_end) {
         double h, t1;
         int last, fresh;
         if (!have) {
             double tt = I->t;
-            GW_TL_SERIES(I->tl_order, &tt, I->x, I->tl_c, I->tl_w);
+            gw_tl1_series(I->tl_order, &tt, I->x, I->tl_c, I->tl_w);
             I->n_rhs++;
         }
         result = gw_taylor_attempt(I, t_end, &run, &h, &t1, &last);
@@ -468,9 +393,9 @@ GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end) {
         if (GW_TAYLOR_DEFECT_RHS) last = 1;
         if (!last) {
             double tt = t1;
-            GW_TL_SERIES(I->tl_order, &tt, I->xnew, I->tl_c, I->tl_wn);
+            gw_tl1_series(I->tl_order, &tt, I->xnew, I->tl_c, I->tl_wn);
             I->n_rhs++;
-#if defined(GW_TL1_SERIES) && defined(GW_TL_HAS_EVT) && GW_TL_HAS_EVT && GW_TAYLOR_KERNEL_EVT
+#if defined(GW_TL_HAS_EVT) && GW_TL_HAS_EVT && GW_TAYLOR_KERNEL_EVT
             if (I->m->ne > 0 && gw_eval_pre(I) == 0) { /* the indicators there: its order 0 */
                 gw_tl1_evt(I->tl_wn, t1, I->u, I->p, I->pre_c, I->enew);
                 I->enew_ready = 1;
@@ -507,4 +432,5 @@ GW_INTERNAL void gw_taylor_free(gw_instance *I) {
     I->tl_w = I->tl_wn = I->tl_c = NULL;
 }
 
+#endif /* GW_TAYLOR_KERNEL */
 #endif /* GW_UNITY_BUILD */

@@ -58,10 +58,12 @@ class BuildResult:
 
 
 # runtime files only an FMU with the Taylor kernel carries: the recurrences the kernel includes,
-# and the ensemble path's sources (gyrowheel.taylor.ensemble builds them from the FMU's sources/; not part
-# of the FMU's unity build, compiled on their own they are empty)
-TAYLOR_ONLY = {"gw_taylor_ops.h", "gw_ensemble.c", "gw_ensemble.h", "gw_ensemble_passes.h",
-               "gw_ensemble_ctx.h", "gw_ensemble_batch.h", "gw_ensemble_lib.c", "gw_fm_logexp.h"}
+# solver taylor's step size rule and increments (without a kernel gw_solver_taylor.c includes
+# neither), and the ensemble path's sources (gyrowheel.taylor.ensemble builds them from the FMU's
+# sources/; not part of the FMU's unity build, compiled on their own they are empty)
+TAYLOR_ONLY = {"gw_taylor_ops.h", "gw_solver_taylor_step.h", "gw_solver_taylor_increment.h",
+               "gw_ensemble.c", "gw_ensemble.h", "gw_ensemble_passes.h", "gw_ensemble_ctx.h",
+               "gw_ensemble_batch.h", "gw_ensemble_lib.c", "gw_fm_logexp.h"}
 
 
 def model_spec(scene: Scene) -> ModelSpec:

@@ -26,7 +26,7 @@ from pathlib import Path
 
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build import c_names
-from gyrowheel.fmu_build.builder import _guid, _spec
+from gyrowheel.fmu_build.builder import TAYLOR_ONLY, _guid, _spec
 from gyrowheel.fmu_build.runtime import EXPORT_DIR, runtime_sources
 from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
 from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
@@ -84,9 +84,17 @@ def check_identifier(name: str) -> str:
         raise ExportError(str(exc)) from None
 
 
-def core_sources() -> list[Path]:
-    """The simulation core: every c_src file but the FMI 2.0 layer (gw_fmi2_*, gw_fmu.c)."""
-    return [f for f in runtime_sources() if not f.name.startswith("gw_fmi2") and f.name != "gw_fmu.c"]
+# the ensemble library's files (gyrowheel.taylor.ensemble), never part of <model>.c
+ENSEMBLE_ONLY = frozenset(n for n in TAYLOR_ONLY if n.startswith("gw_ensemble")) | {"gw_fm_logexp.h"}
+
+
+def core_sources(kernel: bool) -> list[Path]:
+    """The simulation core <model>.c includes: every c_src file but the FMI 2.0 layer (gw_fmi2_*,
+    gw_fmu.c) and the ensemble library's (ENSEMBLE_ONLY); with kernel False (a scene without the
+    Taylor kernel) none of solver taylor's either (builder.TAYLOR_ONLY), as its FMU."""
+    leave = ENSEMBLE_ONLY | (frozenset() if kernel else TAYLOR_ONLY)
+    return [f for f in runtime_sources()
+            if not f.name.startswith("gw_fmi2") and f.name != "gw_fmu.c" and f.name not in leave]
 
 
 def api_table(spec: ModelSpec, table: list[Variable]) -> dict[str, list[Row]]:
@@ -353,7 +361,7 @@ def _write(scene: Scene, model: str, out_dir: Path, scene_file: str, check: bool
                  repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]), repr(exp), model)
     write_model_desc(spec, table, exp, model, guid, fns, src, kernel)
     written = set()
-    for f in core_sources():
+    for f in core_sources(kernel=not isinstance(kernel, str)):
         shutil.copy2(f, src / f.name)
         written.add(f"src/{f.name}")
     for name in API_SOURCES:

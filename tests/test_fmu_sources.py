@@ -7,6 +7,9 @@
   test_plain_cc_build_exports_only_fmi2     `cc -shared -fPIC` with no visibility flag, of the
                                             listed source and of every .c file: nm -D lists
                                             exactly the fmi2 functions; nothing writable
+  test_each_compiler_exports_only_fmi2      the listed source built by gcc and by clang, of an FMU
+                                            without and one with the Taylor kernel: nm -D lists
+                                            exactly the fmi2 functions (no `<name>.resolver`)
   test_two_fmus_with_rtld_global            paper_earth and euler_disk built that way, loaded with
                                             RTLD_GLOBAL into one process: both instantiate and
                                             reproduce their own FMU's results
@@ -93,6 +96,20 @@ def test_plain_cc_build_exports_only_fmi2(which, earth_fmu, tmp_path):
     obj = tmp_path / "gw_fmu.o"
     subprocess.run(["cc", "-c", "-O2", f"-I{src}", str(src / "gw_fmu.c"), "-o", str(obj)], check=True)
     assert writable_symbols(obj) == []
+
+
+@pytest.mark.parametrize("cc", ["gcc", "clang"])
+@pytest.mark.parametrize("kernel", [False, True], ids=["no_kernel", "kernel"])
+def test_each_compiler_exports_only_fmi2(kernel, cc, example_build, tmp_path):
+    if shutil.which(cc) is None:
+        pytest.skip(f"{cc} is not installed (make test installs it: Debian package {cc})")
+    src = _unzip(example_build("paper_earth", taylor=kernel).fmu, tmp_path / "fmu") / "sources"
+    assert ("GW_TL_NX" in (src / "gw_taylor_model.h").read_text()) == kernel
+    lib = tmp_path / "paper_earth.so"
+    r = subprocess.run([cc, "-shared", "-fPIC", "-O2", f"-I{src}", str(src / "gw_fmu.c"), "-o", str(lib), "-lm"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert _exports(lib) == fmi2_function_names()
 
 
 CHILD = textwrap.dedent("""

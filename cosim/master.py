@@ -1,7 +1,7 @@
 """gyrowheel's own co-simulation master on fmpy: fixed communication step, Jacobi exchange.
 
 Every component steps from t to t + h with its inputs held, then the connections carry the
-outputs to the inputs, in the levels of gyrowheel.cosim.system.exchange_levels: within a level
+outputs to the inputs, in the levels of gyrowheel.cosim.exchange.exchange_levels: within a level
 every output is read before any input is set (Jacobi: the file's order of the connections does
 not matter); an output with direct feedthrough (ModelStructure dependencies, FMI 2.0.4 section
 2.2.8) is read in a later level than the connections setting the inputs it depends on, so a
@@ -9,9 +9,9 @@ chain of pass-through components carries the value of the communication point th
 algebraic loop is refused before the run (cosim/exchange.py). A connection's linear
 transformation (SSP 1.0 ssc:LinearTransformation) is applied to the value it carries. In
 Initialization Mode the exchange is repeated until a pass sets the values the previous one set
-(consistent initial values); if they keep changing the run is refused, naming the connections. A component that ends the run
-(fmi2Discard with fmi2Terminated, e.g. the wheel falling flat) stops the system there: the
-last row is at its fmi2LastSuccessfulTime. The result holds every output of every component
+(consistent initial values); if they keep changing the run is refused, naming the connections.
+A component that ends the run (fmi2Discard with fmi2Terminated, e.g. the wheel falling flat)
+stops the system there: the last row is at its fmi2LastSuccessfulTime. The result holds every output of every component
 as "<component>.<variable>", sampled at the communication points.
 """
 from __future__ import annotations

@@ -95,8 +95,8 @@ class SystemDescription:
         component names, every component an FMI 2.0 FMU with Co-Simulation, every connection an
         existing output to an existing input of the same type (SSP 1.0 section 5.3.6), each input
         with one source, a linear transformation only on a Real connection (it is defined for
-        continuous values), no algebraic loop (exchange_levels). Raises SystemFileError naming
-        the component, connection or variable. Returns exchange_levels(self)."""
+        continuous values), no algebraic loop. Raises SystemFileError naming the component,
+        connection or variable. Returns gyrowheel.cosim.exchange.exchange_levels(self)."""
         if not self.components:
             raise SystemFileError(f"system {self.name!r} has no components")
         names = [c.name for c in self.components]
@@ -137,99 +137,8 @@ class SystemDescription:
                 if not math.isfinite(getattr(k, what)):
                     raise SystemFileError(f"connection {describe(k)}: {what} {getattr(k, what)!r} is not "
                                           f"a finite number")
+        from gyrowheel.cosim.exchange import exchange_levels  # it reads the FMUs this module checks
         return exchange_levels(self)
-
-
-def exchange_levels(system: SystemDescription) -> list[list[int]]:
-    """The order of a communication point's exchange: levels of indices into system.connections.
-
-    Every connection of a level is read (its output fetched) before any of that level is set, so
-    the file's order of the connections never matters (a Jacobi exchange). A connection whose
-    output has direct feedthrough from an input that another connection sets (the output's
-    ModelStructure/Outputs dependencies, FMI 2.0.4 section 2.2.8: no attribute means every
-    input) comes in a later level than that connection, so it carries the value its source
-    computes from the input just set. A cycle of such connections is an algebraic loop, which a
-    master of fixed steps cannot resolve: SystemFileError naming each connection and each
-    feedthrough of the loop.
-    """
-    feeds = {c.name: feedthrough(c.fmu, c.name) for c in system.components}
-    setters = {(k.end_element, k.end_connector): i for i, k in enumerate(system.connections)}
-    after = {}  # connection -> the connections it must follow
-    for i, k in enumerate(system.connections):
-        inputs = feeds.get(k.start_element, {}).get(k.start_connector, ())
-        after[i] = sorted(setters[(k.start_element, u)] for u in inputs if (k.start_element, u) in setters)
-    levels, placed = [], {}
-    state = {}  # 1: on the current path, 2: done
-
-    def visit(i, path):
-        if state.get(i) == 2:
-            return placed[i]
-        if state.get(i) == 1:
-            raise SystemFileError(f"system {system.name!r}: algebraic loop "
-                                  f"{_loop_text(system, path[path.index(i):][::-1])}: gyrowheel's master "
-                                  f"does not solve algebraic loops: break it with a component whose output does "
-                                  f"not depend directly on its input")
-        state[i] = 1
-        level = 1 + max((visit(j, path + [i]) for j in after[i]), default=-1)
-        state[i], placed[i] = 2, level
-        return level
-
-    for i in range(len(system.connections)):
-        visit(i, [])
-    for i in range(len(system.connections)):
-        while len(levels) <= placed[i]:
-            levels.append([])
-        levels[placed[i]].append(i)
-    return levels
-
-
-def _loop_text(system: SystemDescription, loop: list[int]) -> str:
-    """'A.y -> B.u, B.y -> A.u (B.y depends directly on B.u, A.y on A.u: ...)' for a cycle of
-    connections in the order the values flow."""
-    first = loop.index(min(loop))  # start at the loop's first connection in the file
-    links = [system.connections[j] for j in loop[first:] + loop[:first]]
-    through = [f"{n.start_element}.{n.start_connector} on {k.end_element}.{k.end_connector}"
-               for k, n in zip(links, links[1:] + links[:1])]
-    return (", ".join(describe(k) for k in links) + " (" + through[0].replace(" on ", " depends directly on ", 1)
-            + "".join(", " + t for t in through[1:]) + ": ModelStructure/Outputs dependencies, FMI 2.0.4 "
-            "section 2.2.8)")
-
-
-def feedthrough(fmu: str | Path, component: str = "") -> dict[str, tuple[str, ...]]:
-    """{output: inputs it depends on directly} of an FMI 2.0 FMU, from modelDescription.xml's
-    ModelStructure/Outputs (FMI 2.0.4 section 2.2.8: an Unknown without a dependencies attribute
-    depends on every known, i.e. every input; an empty one on none; of the listed knowns only
-    the inputs count). Outputs with no input dependency are left out. Raises SystemFileError if
-    the file cannot be read."""
-    where = f"component {component!r}: " if component else ""
-    fmu = Path(fmu)
-    try:
-        if fmu.is_dir():
-            text = (fmu / "modelDescription.xml").read_bytes()
-        else:
-            with zipfile.ZipFile(fmu) as zf:
-                text = zf.read("modelDescription.xml")
-        root = ET.fromstring(text)
-    except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
-        raise SystemFileError(f"{where}{fmu.name} is not a readable FMU ({type(exc).__name__}: {exc})") from None
-    variables = root.findall("ModelVariables/ScalarVariable")
-    inputs = [v.get("name") for v in variables if v.get("causality") == "input"]
-    out = {}
-    for unknown in root.findall("ModelStructure/Outputs/Unknown"):
-        try:
-            name = variables[int(unknown.get("index")) - 1].get("name")
-            deps = unknown.get("dependencies")
-            if deps is None:
-                used = list(inputs)
-            else:
-                used = [variables[int(d) - 1].get("name") for d in deps.split()]
-                used = [n for n in used if n in inputs]
-        except (TypeError, ValueError, IndexError):
-            raise SystemFileError(f"{where}{fmu.name}: ModelStructure/Outputs has an Unknown with a bad index "
-                                  f"or dependencies ({ET.tostring(unknown, encoding='unicode').strip()})") from None
-        if used:
-            out[name] = tuple(used)
-    return out
 
 
 def describe(k: "Connection") -> str:

@@ -2,7 +2,7 @@
 
 The same stepping as gyrowheel's own master (cosim/master.py): every communication step each
 component steps from t to t + h with its inputs held, then the connections carry the outputs to
-the inputs in the levels of gyrowheel.cosim.system.exchange_levels (Jacobi within a level,
+the inputs in the levels of gyrowheel.cosim.exchange.exchange_levels (Jacobi within a level,
 outputs with direct feedthrough after the inputs they depend on), each with its linear
 transformation; in Initialization Mode the exchange is repeated until the values settle.
 The sweep's --output-interval is the master's communication step. A component that terminates
@@ -19,7 +19,7 @@ from dataclasses import replace
 from functools import partial
 from pathlib import Path
 
-from gyrowheel.cosim.exchange import exchange, settle
+from gyrowheel.cosim.exchange import exchange, exchange_levels, settle
 from gyrowheel.studies.target import FmuTarget, PointFailure
 
 
@@ -27,7 +27,7 @@ class SspTarget:
     """Components and connections of an .ssp; each worker opens one instance of every component."""
 
     def __init__(self, path: str | Path):
-        from gyrowheel.cosim.system import exchange_levels, read_ssp
+        from gyrowheel.cosim.system import read_ssp
 
         self.path = Path(path)
         with tempfile.TemporaryDirectory(prefix="gyrowheel-sweep-ssp-") as tmp:

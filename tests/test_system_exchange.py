@@ -21,8 +21,8 @@ import pytest
 import xmlschema
 
 from gyrowheel.cosim.master import run
-from gyrowheel.cosim.system import (Component, Connection, SystemDescription, SystemFileError, feedthrough,
-                                    read_ssp, write_ssp)
+from gyrowheel.cosim.exchange import feedthrough
+from gyrowheel.cosim.system import Component, Connection, SystemDescription, SystemFileError, read_ssp, write_ssp
 from gyrowheel.fmu_build.builder import build_spec_fmu
 from gyrowheel.model.system import System
 

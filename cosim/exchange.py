@@ -121,15 +121,16 @@ def feedthrough(fmu: str | Path, component: str = "") -> dict[str, tuple[str, ..
     variables = root.findall("ModelVariables/ScalarVariable")
     inputs = [v.get("name") for v in variables if v.get("causality") == "input"]
     out = {}
+    def named(index: str) -> str:  # a 1-based index into ModelVariables
+        if not 1 <= int(index) <= len(variables):
+            raise IndexError(index)
+        return variables[int(index) - 1].get("name")
+
     for unknown in root.findall("ModelStructure/Outputs/Unknown"):
         try:
-            name = variables[int(unknown.get("index")) - 1].get("name")
+            name = named(unknown.get("index"))
             deps = unknown.get("dependencies")
-            if deps is None:
-                used = list(inputs)
-            else:
-                used = [variables[int(d) - 1].get("name") for d in deps.split()]
-                used = [n for n in used if n in inputs]
+            used = list(inputs) if deps is None else [n for n in map(named, deps.split()) if n in inputs]
         except (TypeError, ValueError, IndexError):
             raise SystemFileError(f"{where}{fmu.name}: ModelStructure/Outputs has an Unknown with a bad index "
                                   f"or dependencies ({ET.tostring(unknown, encoding='unicode').strip()})") from None

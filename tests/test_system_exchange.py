@@ -49,15 +49,29 @@ def chain(fmu: Path, order: str, **linear) -> SystemDescription:
                              [first, second] if order == "flow" else [second, first], 0.0, 1.0)
 
 
-def test_feedthrough_is_read_from_the_model_structure(link_fmu):
+def test_feedthrough_is_read_from_the_model_structure(link_fmu, tmp_path):
+    """FMI 2.0.4 section 2.2.8: an output's dependencies list the knowns it depends on directly
+    (of which only inputs matter to a master); no attribute: every known; an empty one: none."""
     assert feedthrough(link_fmu) == {"y": ("u",)}  # x is a state: no input dependency
+    variables = "".join(f'<ScalarVariable name="{n}" valueReference="{i}" causality="{c}"><Real/></ScalarVariable>'
+                        for i, (n, c) in enumerate([("u", "input"), ("v", "input"), ("s", "local"), ("a", "output"),
+                                                    ("b", "output"), ("c", "output")]))
+    (tmp_path / "modelDescription.xml").write_text(
+        f'<fmiModelDescription fmiVersion="2.0"><ModelVariables>{variables}</ModelVariables><ModelStructure>'
+        '<Outputs><Unknown index="4"/><Unknown index="5" dependencies=""/><Unknown index="6" dependencies="3 2"/>'
+        '</Outputs></ModelStructure></fmiModelDescription>')
+    assert feedthrough(tmp_path) == {"a": ("u", "v"), "c": ("v",)}
+    (tmp_path / "modelDescription.xml").write_text((tmp_path / "modelDescription.xml").read_text().replace(
+        'dependencies="3 2"', 'dependencies="0"'))
+    with pytest.raises(SystemFileError, match="ModelStructure/Outputs has an Unknown with a bad index"):
+        feedthrough(tmp_path)
 
 
 @pytest.mark.parametrize("order", ["flow", "reversed"])
 def test_a_chain_of_pass_throughs_does_not_depend_on_the_file_order(link_fmu, order):
     """B.u = A.y = A.u = src.x = exp(-k t) at every communication point, t = 0 included, with the
-    connections listed either way. Listed against the flow, a copy in file order gave B A's stale
-    start value at t = 0 (B.y = 5) and one step's delay after."""
+    connections listed either way. Listed against the flow, copying connection by connection in
+    file order would give B A's stale start value at t = 0 (B.y = 5) and a step's delay after."""
     r = run(chain(link_fmu, order), STEP, stop_time=1.0).data
     exact = np.exp(-K * r["time"])
     assert r["B.y"][0] == 1.0 and r["A.y"][0] == 1.0
@@ -82,7 +96,7 @@ def test_an_algebraic_loop_is_refused_with_its_name(link_fmu, tmp_path, connecti
 
 def test_a_linear_transformation_is_applied_by_the_master_and_the_sweep(link_fmu, tmp_path):
     """src.x -> A.u with factor 3, offset 0.5: A.y = 3 exp(-k t) + 0.5 and B.y the same, read back
-    from a schema-valid .ssp by the master and by the sweep (where it ran untransformed)."""
+    from a schema-valid .ssp by the master and by the sweep (not the untransformed 3 exp(-k t))."""
     from gyrowheel.studies import sweep
 
     path = write_ssp(chain(link_fmu, "reversed", factor=3.0, offset=0.5), tmp_path / "linear.ssp")

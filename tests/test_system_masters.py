@@ -63,7 +63,8 @@ def test_a_master_passing_its_own_tolerance_gets_the_scenes(earth_loop, tmp_path
 
     scene = tomllib.loads((ROOT / "examples" / "scenes" / "gyrover_mission_earth.toml").read_text())["experiment"]
     system = read_ssp(earth_loop.ssp, tmp_path / "unpacked")
-    expected = {"wheel": (scene["rel_tol"], scene["abs_tol"]), "controller": (loop_accuracy()["controller"]["rel_tol"],)}
+    expected = {"wheel": (scene["rel_tol"], scene["abs_tol"]),
+                "controller": (loop_accuracy()["controller"]["rel_tol"],)}
     for c in system.components:
         md = read_model_description(str(c.fmu))
         vr = {v.name: v.valueReference for v in md.modelVariables}

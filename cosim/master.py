@@ -1,11 +1,17 @@
 """gyrowheel's own co-simulation master on fmpy: fixed communication step, Jacobi exchange.
 
-Like libcosim's fixed-step algorithm: every component steps from t to t + h with its inputs
-held, then every connection copies the output to the input (Jacobi); before the first step,
-in Initialization Mode, the connections are copied once (components with direct feedthrough
-would need more; the Gyrover's controller has none). A component that ends the run
-(fmi2Discard with fmi2Terminated, e.g. the wheel falling flat) stops the system there: the
-last row is at its fmi2LastSuccessfulTime. The result holds every output of every component
+Every component steps from t to t + h with its inputs held, then the connections carry the
+outputs to the inputs, in the levels of gyrowheel.cosim.exchange.exchange_levels: within a level
+every output is read before any input is set (Jacobi: the file's order of the connections does
+not matter); an output with direct feedthrough (ModelStructure dependencies, FMI 2.0.4 section
+2.2.8) is read in a later level than the connections setting the inputs it depends on, so a
+chain of pass-through components carries the value of the communication point through, and an
+algebraic loop is refused before the run (cosim/exchange.py). A connection's linear
+transformation (SSP 1.0 ssc:LinearTransformation) is applied to the value it carries. In
+Initialization Mode the exchange is repeated until a pass sets the values the previous one set
+(consistent initial values); if they keep changing the run is refused, naming the connections.
+A component that ends the run (fmi2Discard with fmi2Terminated, e.g. the wheel falling flat)
+stops the system there: the last row is at its fmi2LastSuccessfulTime. The result holds every output of every component
 as "<component>.<variable>", sampled at the communication points.
 """
 from __future__ import annotations
@@ -14,6 +20,7 @@ import math
 import shutil
 import time as _time
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 from fmpy import extract, read_model_description
@@ -23,7 +30,8 @@ from fmpy.fmi2 import FMU2Slave, fmi2Discard
 from gyrowheel.arguments import check_memory
 from gyrowheel.arguments import count as count_text
 from gyrowheel.errors import GyrowheelError
-from gyrowheel.cosim.system import SystemDescription, SystemFileError, coerce_value
+from gyrowheel.cosim.exchange import exchange, settle
+from gyrowheel.cosim.system import SystemDescription, SystemFileError, describe, coerce_value
 from gyrowheel.cosim.fmi_log import forget_messages, logging_callbacks
 
 
@@ -89,7 +97,8 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
     ValueError for a bad step or stop time, ArgumentError (a ValueError, naming stop_time) for a
     result that would take more than half of this machine's memory
     (gyrowheel.arguments.check_memory), SystemFileError (a ValueError) for a system whose
-    connections do not fit its FMUs.
+    connections do not fit its FMUs or that holds an algebraic loop, MasterError for initial
+    values that do not settle.
     """
     if not (step > 0 and math.isfinite(step)):
         raise ValueError(f"step must be a positive number of seconds, got {step!r}")
@@ -106,7 +115,7 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
         near = f"{below:.12g} or {above:.12g}" if math.floor(steps) >= 1 else f"{above:.12g}"
         raise ValueError(f"stop time {stop:.12g} is not a whole number (>= 1) of steps {step:g} from {t0:g}: "
                          f"stop at {near}, or choose a step that divides {stop - t0:.12g} s")
-    system.check()
+    levels = system.check()
     columns = 1 + sum(sum(v.causality == "output" for v in read_model_description(str(c.fmu)).modelVariables)
                       for c in system.components)
     # the result: every point in one float64 array, copied once at the end (data[:count].copy())
@@ -130,18 +139,19 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
         for k in system.connections:
             src, dst = by_name[k.start_element], by_name[k.end_element]
             sv, dv = src.vars[k.start_connector], dst.vars[k.end_connector]
-            links.append((src, sv.valueReference, sv.type, dst, dv.valueReference, dv.type))
+            links.append((partial(src.get, sv.valueReference, sv.type), partial(dst.put, dv.valueReference, dv.type),
+                          (k.factor, k.offset) if k.transformed else None))
         for c, u in zip(system.components, units):
             u.slave.setupExperiment(startTime=t0)
             for name, value in {**c.start_values, **(start_values or {}).get(c.name, {})}.items():
                 _set(u, name, value)
             u.slave.enterInitializationMode()
 
-        def exchange():  # system.check(): both ends of a connection have one type
-            for src, svr, stype, dst, dvr, dtype in links:
-                dst.put(dvr, dtype, src.get(svr, stype))
-
-        exchange()
+        moving = settle(levels, links)  # system.check(): both ends of a connection have one type
+        if moving:
+            raise MasterError(f"system {system.name!r}: the initial values are not consistent: after "
+                              f"{len(links) + 2} exchanges in Initialization Mode "
+                              + ", ".join(describe(system.connections[i]) for i in moving) + " still change")
         for u in units:
             u.slave.exitInitializationMode()
         names = ["time"] + [f"{u.name}.{o}" for u in units for o in u.outputs]
@@ -174,7 +184,7 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
                 t_end = by_name[stopped_by].slave.getRealStatus(2)  # fmi2LastSuccessfulTime
                 record(t_end)
                 break
-            exchange()
+            exchange(levels, links)
             record(t0 + (k + 1) * step)
         wall = _time.perf_counter() - wall
         for u in units:

@@ -8,6 +8,7 @@ read_ssp() reads an .ssp back (lxml) for gyrowheel's own master (cosim/master.py
 """
 from __future__ import annotations
 
+import math
 import shutil
 import tempfile
 import zipfile
@@ -25,6 +26,8 @@ SSC_NS = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV_NS = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 OSP_NS = "http://opensimulationplatform.com/MSMI/OSPSystemStructure"
 FMU_TYPE = "application/x-fmu-sharedlibrary"
+OMS_NS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
+OMS_ANNOTATION = "org.openmodelica"
 
 
 class SystemFileError(GyrowheelError, ValueError):
@@ -45,12 +48,22 @@ class Component:
 @dataclass
 class Connection:
     """An output of one component feeding an input of another, by names (SSP 1.0 section
-    5.3.6): start_element.start_connector -> end_element.end_connector."""
+    5.3.6): start_element.start_connector -> end_element.end_connector. A Real connection may
+    carry a linear transformation (ssc:LinearTransformation, SSP 1.0 section 5.3.6 and
+    SystemStructureCommon.xsd): the input receives factor * output + offset. Both ends have
+    one unit unless suppress_unit_conversion (unit conversion is not supported)."""
 
     start_element: str
     start_connector: str  # an output
     end_element: str
     end_connector: str  # an input
+    factor: float = 1.0
+    offset: float = 0.0
+    suppress_unit_conversion: bool = False  # the SSP attribute: no conversion between the ends' units
+
+    @property
+    def transformed(self) -> bool:
+        return self.factor != 1.0 or self.offset != 0.0
 
 
 @dataclass
@@ -77,11 +90,13 @@ class SystemDescription:
                 return c
         raise SystemFileError(f"no component {name!r}; components: {', '.join(c.name for c in self.components)}")
 
-    def check(self) -> None:
+    def check(self) -> list[list[int]]:
         """The system is runnable by an FMI 2.0 Co-Simulation master: at least one component, unique
         component names, every component an FMI 2.0 FMU with Co-Simulation, every connection an
         existing output to an existing input of the same type (SSP 1.0 section 5.3.6), each input
-        with one source. Raises SystemFileError naming the component, connection or variable."""
+        with one source, a linear transformation only on a Real connection (it is defined for
+        continuous values), no algebraic loop. Raises SystemFileError naming the component,
+        connection or variable. Returns gyrowheel.cosim.exchange.exchange_levels(self)."""
         if not self.components:
             raise SystemFileError(f"system {self.name!r} has no components")
         names = [c.name for c in self.components]
@@ -98,9 +113,9 @@ class SystemDescription:
                 if not elem or not conn:
                     raise SystemFileError(f"connection {i}: startElement, startConnector, endElement and "
                                           f"endConnector are required (connections to the system's own "
-                                          f"connectors are not supported), got {_describe(k)}")
+                                          f"connectors are not supported), got {describe(k)}")
                 if elem not in variables:
-                    raise SystemFileError(f"connection {_describe(k)}: no component {elem!r}; components: "
+                    raise SystemFileError(f"connection {describe(k)}: no component {elem!r}; components: "
                                           f"{', '.join(names)}")
                 v = variables[elem].get(conn)
                 got = v.causality if v is not None else None
@@ -110,14 +125,24 @@ class SystemDescription:
             src = variables[k.start_element][k.start_connector]
             dst = variables[k.end_element][k.end_connector]
             if _kind(src.type) != _kind(dst.type):
-                raise SystemFileError(f"connection {_describe(k)}: joins a {src.type} to a {dst.type} "
+                raise SystemFileError(f"connection {describe(k)}: joins a {src.type} to a {dst.type} "
                                       f"(a connection joins variables of one type)")
             if (k.end_element, k.end_connector) in seen:
                 raise SystemFileError(f"input {k.end_element}.{k.end_connector} has two sources")
             seen.add((k.end_element, k.end_connector))
+            if k.transformed and src.type != "Real":
+                raise SystemFileError(f"connection {describe(k)}: a linear transformation on a {src.type} "
+                                      f"connection (ssc:LinearTransformation is for Real values)")
+            for what in ("factor", "offset"):
+                if not math.isfinite(getattr(k, what)):
+                    raise SystemFileError(f"connection {describe(k)}: {what} {getattr(k, what)!r} is not "
+                                          f"a finite number")
+        from gyrowheel.cosim.exchange import exchange_levels  # it reads the FMUs this module checks
+        return exchange_levels(self)
 
 
-def _describe(k: "Connection") -> str:
+def describe(k: "Connection") -> str:
+    """'A.y -> B.u': a connection as messages name it."""
     return f"{k.start_element}.{k.start_connector} -> {k.end_element}.{k.end_connector}"
 
 
@@ -147,17 +172,32 @@ def connect_by_name(a: str, outputs: list[str], b: str) -> list[Connection]:
 
 
 # -- SSP ---------------------------------------------------------------------------------------
-def write_ssp(system: SystemDescription, path: str | Path) -> Path:
+def write_ssp(system: SystemDescription, path: str | Path, step: float = 0.01) -> Path:
     """Write <path>.ssp: SystemStructure.ssd (SSP 1.0) and resources/<component>.fmu.
 
+    Besides the components, connections (with their linear transformations), start values and
+    DefaultExperiment, the file carries what other masters need to run it as gyrowheel's does:
+    - each component's accuracy (accuracy_bindings): SSP 1.0 has no tolerance field and a master
+      may pass its own to fmi2SetupExperiment (OMSimulator: 1e-4); the FMU's rel_tol bound as a
+      parameter takes precedence over it (docs/interface.md, "Tolerances");
+    - OMSimulator's system annotation (type "org.openmodelica": oms:FixedStepMaster with the
+      communication step `step` [s] and the smallest tolerance the components declare), without
+      which OMSimulator 3.0's command line cannot tell the system's type; other masters skip it
+      (ssc:TAnnotations are open to any content).
     Raises SystemFileError if a connection does not fit or a start value is not a parameter or
-    an input (check_bindings); MissingExtraError without gyrowheel[system] (pyssp-standard)."""
+    an input (check_bindings), ValueError for a step that is not a positive number;
+    MissingExtraError without gyrowheel[system] (pyssp-standard)."""
+    if not (isinstance(step, (int, float)) and step > 0 and math.isfinite(step)):
+        raise ValueError(f"step must be a positive number of seconds, got {step!r}")
     require("system", "gyrowheel.cosim.system.write_ssp()")  # pyssp-standard: the optional part [system]
     from pyssp_standard.common_content_ssc import TypeReal
     from pyssp_standard.ssd import SSD, Component as SspComponent, Connection as SspConnection
     from pyssp_standard.ssd import Connector, DefaultExperiment, System
 
     system.check()
+    system = SystemDescription(system.name, [Component(c.name, c.fmu, {**accuracy_bindings(c), **c.start_values})
+                                             for c in system.components],
+                               system.connections, system.start_time, system.stop_time)
     for c in system.components:
         check_bindings(c)
     path = Path(path)
@@ -185,6 +225,7 @@ def write_ssp(system: SystemDescription, path: str | Path) -> Path:
             ssd.default_experiment = DefaultExperiment()
             ssd.default_experiment.start_time, ssd.default_experiment.stop_time = system.start_time, system.stop_time
         _add_parameter_bindings(ssd_path, system)
+        _add_connections_and_annotation(ssd_path, system, step)
         tmp_zip = path.with_suffix(path.suffix + ".part")
         with zipfile.ZipFile(tmp_zip, "w", zipfile.ZIP_DEFLATED) as zf:
             zf.write(ssd_path, "SystemStructure.ssd")
@@ -306,6 +347,45 @@ def _add_parameter_bindings(ssd_path: Path, system: SystemDescription) -> None:
         children = list(elem)
         position = next((i for i, ch in enumerate(children) if ch.tag != f"{{{SSD_NS}}}Connectors"), len(children))
         elem.insert(position, bindings)
+    tree.write(ssd_path, xml_declaration=True, encoding="UTF-8")
+
+
+def accuracy_bindings(component: Component) -> dict[str, float]:
+    """{"rel_tol": its start value} for an FMU with a Real parameter rel_tol (gyrowheel's FMUs:
+    the scene's accuracy, docs/interface.md), else {}. Bound in the .ssp, it is set explicitly
+    and so takes precedence over any tolerance a master passes to fmi2SetupExperiment; abs_tol
+    then stays the scene's (docs/interface.md, "Tolerances", rule 1)."""
+    v = fmu_variables(component.fmu, component.name).get("rel_tol")
+    if v is None or v.type != "Real" or v.causality != "parameter" or v.start is None:
+        return {}
+    return {"rel_tol": float(v.start)}
+
+
+def _add_connections_and_annotation(ssd_path: Path, system: SystemDescription, step: float) -> None:
+    """ssc:LinearTransformation and suppressUnitConversion on the connections that carry them
+    (pyssp-standard 0.9 writes neither), and OMSimulator's annotation of the system (write_ssp)."""
+    ET.register_namespace("ssd", SSD_NS)
+    ET.register_namespace("ssc", SSC_NS)
+    ET.register_namespace("ssv", SSV_NS)
+    ET.register_namespace("oms", OMS_NS)
+    tree = ET.parse(ssd_path)
+    sysel = tree.getroot().find("ssd:System", _NS)
+    written = sysel.findall("ssd:Connections/ssd:Connection", _NS)
+    for el, k in zip(written, system.connections):
+        if k.transformed:
+            el.insert(0, ET.Element(f"{{{SSC_NS}}}LinearTransformation", {"factor": repr(float(k.factor)),
+                                                                           "offset": repr(float(k.offset))}))
+        if k.suppress_unit_conversion:
+            el.set("suppressUnitConversion", "true")
+    tolerances = [md.defaultExperiment.tolerance for md in
+                  (read_model_description(str(c.fmu), validate=False) for c in system.components)
+                  if md.defaultExperiment is not None and md.defaultExperiment.tolerance is not None]
+    tolerance = min(float(t) for t in tolerances) if tolerances else 1e-4
+    annotations = ET.SubElement(sysel, f"{{{SSD_NS}}}Annotations")
+    oms = ET.SubElement(ET.SubElement(annotations, f"{{{SSC_NS}}}Annotation", {"type": OMS_ANNOTATION}),
+                        f"{{{OMS_NS}}}Annotations")
+    ET.SubElement(ET.SubElement(oms, f"{{{OMS_NS}}}SimulationInformation"), f"{{{OMS_NS}}}FixedStepMaster",
+                  {"description": "oms-ma", "stepSize": repr(float(step)), "relativeTolerance": repr(tolerance)})
     tree.write(ssd_path, xml_declaration=True, encoding="UTF-8")
 
 
@@ -441,8 +521,8 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
                 raise SystemFileError(f"{path}: system parameter binding {name!r}: expected "
                                       f"<component>.<variable> with a component of {', '.join(raw) or 'none'}")
             raw[comp][var] = value
-    connections = [Connection(k.get("startElement"), k.get("startConnector"), k.get("endElement"),
-                              k.get("endConnector")) for k in sysel.findall("ssd:Connections/ssd:Connection", _NS)]
+    units = _connector_units(sysel)
+    connections = [_connection(k, units, f"{path}: ") for k in sysel.findall("ssd:Connections/ssd:Connection", _NS)]
     exp = root.find("ssd:DefaultExperiment", _NS)
     system = SystemDescription(root.get("name") or sysel.get("name"), components, connections)
     if exp is not None:
@@ -453,6 +533,8 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
                                   f"startTime {system.start_time:g}")
     try:
         system.check()
+        for k in connections:
+            _check_units(k, units, system)
     except SystemFileError as exc:
         raise SystemFileError(f"{path}: {exc}") from None
     for c in components:
@@ -461,10 +543,64 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
     return system
 
 
+# SSP 1.0 transformations (SystemStructureCommon.xsd, GTransformationChoice) the master does not apply
+MAPPINGS = ("BooleanMappingTransformation", "IntegerMappingTransformation", "EnumerationMappingTransformation")
+
+
+def _connection(el, units: dict, where: str) -> Connection:
+    """One ssd:Connection: its ends and its transformation. ssc:LinearTransformation is applied
+    (factor and offset, defaults 1 and 0); each mapping transformation is refused by name."""
+    k = Connection(el.get("startElement"), el.get("startConnector"), el.get("endElement"), el.get("endConnector"))
+    for child in el:
+        kind = child.tag.split("}", 1)[-1]
+        if child.tag == f"{{{SSC_NS}}}LinearTransformation":
+            k.factor = _number(child.get("factor"), 1.0, f"{where}connection {describe(k)}: factor")
+            k.offset = _number(child.get("offset"), 0.0, f"{where}connection {describe(k)}: offset")
+        elif kind in MAPPINGS:
+            raise SystemFileError(f"{where}connection {describe(k)}: ssc:{kind} is not supported by gyrowheel's "
+                                  f"master (of the SSP 1.0 transformations only ssc:LinearTransformation is)")
+    k.suppress_unit_conversion = el.get("suppressUnitConversion", "false").strip() in ("true", "1")
+    return k
+
+
+def _connector_units(sysel) -> dict[tuple[str, str], str]:
+    """{(component, connector): unit} of the components' ssd:Connectors that declare a Real unit."""
+    out = {}
+    for comp in sysel.findall("ssd:Elements/ssd:Component", _NS):
+        for conn in comp.findall("ssd:Connectors/ssd:Connector", _NS):
+            real = conn.find("ssc:Real", _NS)
+            if real is not None and real.get("unit"):
+                out[(comp.get("name"), conn.get("name"))] = real.get("unit")
+    return out
+
+
+def _check_units(k: Connection, units: dict, system: SystemDescription) -> None:
+    """A connection between different units would need the unit conversion SSP 1.0 performs
+    unless suppressUnitConversion="true" (SystemStructureDescription.xsd, Connection): refused.
+    Each end's unit is its connector's, else its FMU variable's."""
+    if k.suppress_unit_conversion:
+        return
+    ends = []
+    for elem, name in ((k.start_element, k.start_connector), (k.end_element, k.end_connector)):
+        unit = units.get((elem, name))
+        if unit is None:
+            v = fmu_variables(system.component(elem).fmu, elem)[name]
+            unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None)
+        ends.append(unit)
+    if ends[0] and ends[1] and ends[0] != ends[1]:
+        raise SystemFileError(f"connection {describe(k)}: from {ends[0]!r} to {ends[1]!r}: unit conversion is not "
+                              f"supported (state the factor with ssc:LinearTransformation and "
+                              f"suppressUnitConversion=\"true\")")
+
+
 # -- OSP (libcosim) ----------------------------------------------------------------------------
 def write_osp(system: SystemDescription, directory: str | Path, step: float) -> Path:
     """OspSystemStructure.xml (with the FMUs beside it) in `directory`, fixed step `step` [s]."""
     system.check()
+    for k in system.connections:
+        if k.transformed:
+            raise SystemFileError(f"connection {describe(k)}: a linear transformation cannot be written to "
+                                  f"OspSystemStructure.xml (its VariableConnection carries none): use the .ssp")
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     ET.register_namespace("", OSP_NS)

@@ -1,8 +1,10 @@
 """A system of FMUs (an SSP 1.0 .ssp, e.g. the Gyrover's wheel + controller) as a sweep target.
 
-The same stepping as gyrowheel's own master (cosim/master.py, libcosim's fixed-step algorithm):
-in Initialization Mode every connection is copied once, then every communication step each
-component steps from t to t + h with its inputs held and the connections are copied (Jacobi).
+The same stepping as gyrowheel's own master (cosim/master.py): every communication step each
+component steps from t to t + h with its inputs held, then the connections carry the outputs to
+the inputs in the levels of gyrowheel.cosim.exchange.exchange_levels (Jacobi within a level,
+outputs with direct feedthrough after the inputs they depend on), each with its linear
+transformation; in Initialization Mode the exchange is repeated until the values settle.
 The sweep's --output-interval is the master's communication step. A component that terminates
 (the wheel falling: fmi2Discard + fmi2Terminated) ends the run there, as a fall, not a failure.
 
@@ -14,10 +16,12 @@ from __future__ import annotations
 
 import tempfile
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
+from gyrowheel.cosim.exchange import exchange, exchange_levels, settle
 from gyrowheel.studies.scratch import prefix
-from gyrowheel.studies.target import FmuTarget
+from gyrowheel.studies.target import FmuTarget, PointFailure
 
 
 class SspTarget:
@@ -31,10 +35,11 @@ class SspTarget:
             system = read_ssp(self.path, tmp)
             self.components = {c.name: FmuTarget(c.fmu) for c in system.components}
             self._bytes = {name: t.payload() for name, t in self.components.items()}
+            self.levels = exchange_levels(system)  # the FMUs' ModelStructure, while they are unpacked
         self.plant = system.components[0].name
         self.starts = {c.name: dict(c.start_values) for c in system.components}
-        self.connections = [(k.start_element, k.start_connector, k.end_element, k.end_connector)
-                            for k in system.connections]
+        self.connections = [(k.start_element, k.start_connector, k.end_element, k.end_connector,
+                             (k.factor, k.offset) if k.transformed else None) for k in system.connections]
         self.default_stop_time = system.stop_time
         steps = [t.default_step for t in self.components.values() if t.default_step]
         self.default_step = min(steps) if steps else None
@@ -94,18 +99,15 @@ class SystemInstance:
             self.close()
             raise
         self.output_names = list(target.outputs)
-        self._links = [(self.units[a], target.components[a].variables()[av].vr,
-                        target.components[a].variables()[av].type,
-                        self.units[b], target.components[b].variables()[bv].vr)
-                       for a, av, b, bv in target.connections]
+        self._links = []
+        for a, av, b, bv, linear in target.connections:
+            kind = target.components[a].variables()[av].type  # both ends of one type: SystemDescription.check
+            self._links.append((partial(self.units[a].get, target.components[a].variables()[av].vr, kind),
+                                partial(self.units[b].put, target.components[b].variables()[bv].vr, kind), linear))
         self._slices, i = [], 0
         for name, unit in self.units.items():
             self._slices.append((unit, slice(i, i + len(unit.output_names))))
             i += len(unit.output_names)
-
-    def _exchange(self) -> None:
-        for src, svr, kind, dst, dvr in self._links:
-            src.copy(svr, kind, dst, dvr)
 
     def start(self, values: dict, start_time: float) -> None:
         split = {name: dict(self.target.starts[name]) for name in self.units}
@@ -114,7 +116,10 @@ class SystemInstance:
             split[component][var] = value
         for name, unit in self.units.items():
             unit.enter_initialisation(split[name], start_time)
-        self._exchange()
+        moving = settle(self.target.levels, self._links)
+        if moving:
+            raise PointFailure("the initial values are not consistent: " + ", ".join(
+                "{}.{} -> {}.{}".format(*self.target.connections[i][:4]) for i in moving) + " still change")
         for unit in self.units.values():
             unit.exit_initialisation()
 
@@ -125,7 +130,7 @@ class SystemInstance:
             if when is not None and ended is None:
                 ended = when
         if ended is None:
-            self._exchange()
+            exchange(self.target.levels, self._links)
         return ended
 
     def read(self, row) -> None:

@@ -239,23 +239,21 @@ class FmuInstance:
     def exit_initialisation(self) -> None:
         self._check(self._f["fmi2ExitInitializationMode"](self._c), "fmi2ExitInitializationMode")
 
-    def copy_real(self, vr: int, to: "FmuInstance", to_vr: int) -> None:
-        """One connection: this instance's Real output vr -> `to`'s input to_vr (fmi2GetReal, fmi2SetReal)."""
-        value, ref = c_double(0.0), c_uint(vr)
-        self._check(self._get_real(self._c, byref(ref), 1, byref(value)), "fmi2GetReal")
-        to._check(to._f["fmi2SetReal"](to._c, byref(c_uint(to_vr)), 1, byref(value)), "fmi2SetReal")
-
-    def copy(self, vr: int, fmi_type: str, to: "FmuInstance", to_vr: int) -> None:
-        """One connection of any FMI 2.0 type but String (both ends of one type: SystemDescription.check;
-        an Enumeration travels as an Integer)."""
-        if fmi_type == "Real":
-            return self.copy_real(vr, to, to_vr)
+    def get(self, vr: int, fmi_type: str):
+        """The value of variable vr of any FMI 2.0 type but String (fmi2GetReal, fmi2GetInteger,
+        fmi2GetBoolean; an Enumeration is an Integer): a float, or an int for the others."""
         if fmi_type == "String":
             raise PointFailure("String connections are not supported by the sweep's master")
-        kind = "Boolean" if fmi_type == "Boolean" else "Integer"
-        value = c_int(0)
+        kind = "Real" if fmi_type == "Real" else "Boolean" if fmi_type == "Boolean" else "Integer"
+        value = c_double(0.0) if kind == "Real" else c_int(0)
         self._check(self._f[f"fmi2Get{kind}"](self._c, byref(c_uint(vr)), 1, byref(value)), f"fmi2Get{kind}")
-        to._check(to._f[f"fmi2Set{kind}"](to._c, byref(c_uint(to_vr)), 1, byref(value)), f"fmi2Set{kind}")
+        return value.value
+
+    def put(self, vr: int, fmi_type: str, value) -> None:
+        """Set variable vr (of the type `get` reads) to value."""
+        kind = "Real" if fmi_type == "Real" else "Boolean" if fmi_type == "Boolean" else "Integer"
+        ctype = c_double if kind == "Real" else c_int
+        self._check(self._f[f"fmi2Set{kind}"](self._c, byref(c_uint(vr)), 1, byref(ctype(value))), f"fmi2Set{kind}")
 
     def _reinstantiate(self) -> None:
         """After fmi2Fatal (or a refused fmi2Reset) the instance is gone: make a new one."""

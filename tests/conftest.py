@@ -176,6 +176,16 @@ def earth_loop(tmp_path_factory):
         load_scene(SCENES / "gyrover_mission_earth.toml"), out, course("earth")))
 
 
+def loop_accuracy() -> dict[str, dict[str, float]]:
+    """The rel_tol the closed loop's .ssp binds on each component: the mission scene's [experiment]
+    (read from the scene file) and the controller's build experiment."""
+    import tomllib
+
+    from gyrowheel.controller.compensator import EXPERIMENT
+    scene = tomllib.loads((SCENES / "gyrover_mission_earth.toml").read_text())
+    return {"wheel": {"rel_tol": scene["experiment"]["rel_tol"]}, "controller": {"rel_tol": EXPERIMENT.rel_tol}}
+
+
 @pytest.fixture(scope="session")
 def earth_design(earth_loop):
     return earth_loop.design

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import xmlschema
 
+from conftest import ROOT, loop_accuracy
 from gyrowheel.cosim import ecos_run, libcosim_run
 from gyrowheel.cosim.master import run
 from gyrowheel.cosim.system import PARAMETER_SET, SystemFileError, read_ssp, write_osp, write_ssp
@@ -27,6 +28,60 @@ def test_ssd_is_valid_ssp_1_0(earth_loop, tmp_path):
     ssd = tmp_path / "SystemStructure.ssd"
     xmlschema.XMLSchema10(SCHEMAS / "SystemStructureDescription.xsd").validate(ssd)
     xmlschema.XMLSchema11(SCHEMAS / "SystemStructureDescription11.xsd").validate(ssd)
+
+
+def test_the_ssp_tells_omsimulator_its_system_type(earth_loop, tmp_path):
+    """OMSimulator 3.0's command line takes a system's type only from its own annotation
+    (ssc:Annotation type "org.openmodelica", oms:SimulationInformation; without it: "[NewSystem]
+    internal error", exit 134). The .ssd carries a fixed-step master with the 10 ms step and the
+    components' tolerance, inside ssd:Annotations, which the SSP schema leaves open (the file
+    stays valid: test_ssd_is_valid_ssp_1_0) and other masters skip."""
+    from xml.etree import ElementTree as ET
+    with zipfile.ZipFile(earth_loop.ssp) as zf:
+        root = ET.fromstring(zf.read("SystemStructure.ssd"))
+    ns = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+          "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+          "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"}
+    annotation = root.findall("ssd:System/ssd:Annotations/ssc:Annotation", ns)
+    assert [a.get("type") for a in annotation] == ["org.openmodelica"]
+    master = annotation[0].find("oms:Annotations/oms:SimulationInformation/oms:FixedStepMaster", ns)
+    assert master is not None and master.get("description") == "oms-ma"
+    assert float(master.get("stepSize")) == 0.01
+    assert float(master.get("relativeTolerance")) == min(t["rel_tol"] for t in loop_accuracy().values())
+
+
+def test_a_master_passing_its_own_tolerance_gets_the_scenes(earth_loop, tmp_path):
+    """SSP 1.0 has no tolerance field; a master that passes its own to fmi2SetupExperiment
+    (OMSimulator: 1e-4, after setting the start values) must still run each component at its own
+    accuracy: the .ssp binds each rel_tol, which takes precedence (docs/interface.md,
+    "Tolerances", rule 1). In force after initialisation: the scene file's rel_tol and abs_tol
+    for the wheel, the controller's build rel_tol (without the binding: 1e-4 and 1e-6)."""
+    import tomllib
+
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    scene = tomllib.loads((ROOT / "examples" / "scenes" / "gyrover_mission_earth.toml").read_text())["experiment"]
+    system = read_ssp(earth_loop.ssp, tmp_path / "unpacked")
+    expected = {"wheel": (scene["rel_tol"], scene["abs_tol"]),
+                "controller": (loop_accuracy()["controller"]["rel_tol"],)}
+    for c in system.components:
+        md = read_model_description(str(c.fmu))
+        vr = {v.name: v.valueReference for v in md.modelVariables}
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(c.fmu), tmp_path / c.name),
+                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName=c.name)
+        fmu.instantiate()
+        try:
+            for name, value in c.start_values.items():  # the file's bindings, as the master applies them
+                fmu.setReal([vr[name]], [value])
+            fmu.setupExperiment(tolerance=1e-4, startTime=0.0)
+            fmu.enterInitializationMode()
+            fmu.exitInitializationMode()
+            in_force = tuple(fmu.getReal([vr[n] for n in ("rel_tol", "abs_tol")[:len(expected[c.name])]]))
+        finally:
+            fmu.terminate()
+            fmu.freeInstance()
+        assert in_force == expected[c.name], (c.name, in_force)
 
 
 def test_ssp_round_trip(earth_loop, tmp_path):
@@ -72,7 +127,7 @@ def test_libcosim_reads_our_ssp_and_agrees(earth_loop, tmp_path):
     system.components[1].start_values = {"gain_scale": 1.2, "mission_rate_2": 0.4}
     bound = write_ssp(system, tmp_path / "bound.ssp")
     again = read_ssp(bound, tmp_path / "bound")
-    assert again.components[0].start_values == {"M": 2.1}
+    assert again.components[0].start_values == {**loop_accuracy()["wheel"], "M": 2.1}
     ours = run(again, 0.01, stop_time=5.0).data
     plain = run(read_ssp(earth_loop.ssp, tmp_path / "plain"), 0.01, stop_time=5.0).data
     assert np.abs(ours["wheel.alpha"] - plain["wheel.alpha"]).max() > 1e-3  # the bindings matter

@@ -220,11 +220,14 @@ def test_two_models_side_by_side(earth, earth_gcc, earth_reference, lunar, tmp_p
     lunar_reference = simulate_fmu(str(lunar_fmu), output_interval=0.02)
     lunar_result = read_csv(csvs[1])
     assert max_difference(lunar_result, lunar_reference) <= 1e-12
-    # the fall ends both runs at the same time; slipping turned true within the API's event time's step
+    # the fall ends both runs at the same time; slipping turned true at 13.94 s (its first firing),
+    # and the event's last firing is the short second slip inside one output interval, which
+    # Model Exchange (CVODE, tests/test_events_inside_step.py) places at 17.4667946 s
     t_fall, t_slip = float(info["fall_time"]), float(info["slip_time"])
     assert lunar_result["time"][-1] == t_fall and lunar_result["fallen"][-1] == 1
     first = int(np.argmax(lunar_reference["slipping"]))
-    assert lunar_reference["time"][first - 1] < t_slip <= lunar_reference["time"][first]
+    assert lunar_reference["time"][first] < t_slip < t_fall
+    assert abs(t_slip - 17.4667946) < 1e-6
     assert "do not match this model" in info["cross_restore"]
 
 

@@ -98,7 +98,7 @@ int main(int argc, char **argv) {
         step_paper_earth(&a);
         step_lunar_rover(&b);
     }
-    /* lunar_rover: slipping (does not end the run) fired once, before the fall */
+    /* lunar_rover: slipping (does not end the run) fired before the fall; its time is the last firing */
     slip = lunar_rover_index(GYROWHEEL_KIND_EVENT, "slipping");
     CHECK(slip == LUNAR_ROVER_E_slipping && b.fired_status >= 1);
     CHECK(lunar_rover_get_event(b.w, slip, &fired, &t_slip) == GYROWHEEL_OK && fired == 1);

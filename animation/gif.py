@@ -26,10 +26,12 @@ from __future__ import annotations
 import io
 import math
 import struct
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
-from PIL import Image
+
+if TYPE_CHECKING:  # Pillow is imported where a frame is written: the schedule needs numpy only
+    from PIL import Image
 
 MAX_FPS = 50.0  # frames per second a GIF can show on time (delays >= MIN_DELAY_CS)
 MIN_DELAY_CS = 2  # shortest delay browsers honour, cs
@@ -112,6 +114,8 @@ def _image_block(rgb: np.ndarray, box: tuple[int, int, int, int]) -> bytes:
     """The rectangle box = (x0, y0, x1, y1) of rgb as one GIF image: Image Descriptor, Local Color
     Table (a palette of that rectangle's colours, quantised by Pillow when there are more than
     256), image data."""
+    from PIL import Image
+
     x0, y0, x1, y1 = box
     part = Image.fromarray(np.ascontiguousarray(rgb[y0:y1, x0:x1]), "RGB")
     if part.getcolors(256) is not None:  # 256 colours or fewer: each its own palette entry, no loss

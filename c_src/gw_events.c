@@ -306,6 +306,10 @@ static int gw_event_dip(gw_instance *I, int i, double t0, double t1, double *ta,
 
 GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_event) {
     const gw_model *m = I->m;
+    /* An ensemble lane (its series fetched lazily, I->tl_fetch) looks at the step's ends only,
+     * as its batch's fast path does (gw_ensemble_batch.h): a lane's steps must not depend on
+     * which of the two concluded them. */
+    const int inside = (I->tl_fetch == NULL);
     int i, ne = m->ne, winner = -1, jumped = 0, pass;
     double best = t1;
     if (I->enew_ready) { /* from the Taylor kernel's series at (t1, xnew), GW_TL(evt) */
@@ -315,8 +319,13 @@ GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, d
         GW_LOG_ERR(I, "evaluation of the event indicators failed at t=%.17g", t1);
         return GW_EV_ERROR;
     }
+    if (!inside) {
+        for (i = 0; i < ne; i++)
+            if (I->e[i] > 0.0 && !(I->enew[i] > 0.0)) break;
+        if (i == ne) return GW_EV_NONE;
+    }
     if (I->tl_fetch) I->tl_fetch(I, I->tl_fetch_env); /* the step's series into I->tl_w */
-    if (gw_event_end_slopes(I, t0, t1) != 0) {
+    if (inside && gw_event_end_slopes(I, t0, t1) != 0) {
         GW_LOG_ERR(I, "evaluation of the event indicators failed at t=%.17g", t1);
         return GW_EV_ERROR;
     }
@@ -325,7 +334,7 @@ GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, d
         I->ev_fired[i] = 0; /* here: 1 once its crossing is located */
         if (!(I->e[i] > 0.0) || I->enew[i] > 0.0) {
             /* no crossing seen at the ends: one that starts and ends inside the step? */
-            const int dip = gw_event_dip(I, i, t0, t1, &a, &fa, &b, &fb);
+            const int dip = inside ? gw_event_dip(I, i, t0, t1, &a, &fa, &b, &fb) : 0;
             if (dip < 0) {
                 GW_LOG_ERR(I, "evaluation of the event indicators failed while searching "
                            "event %s inside the step", gw_event_name(I, i));

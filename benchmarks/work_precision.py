@@ -257,10 +257,21 @@ def cheapest(points: list[Point], target: float) -> dict[str, float]:
 
 
 def plot(name: str, points: list[Point], path: Path) -> None:
+    """Write the work-precision figure of one scenario (error against CPU time, log-log)."""
+    import matplotlib.pyplot as plt
+    fig = figure(name, points)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def figure(name: str, points: list[Point]):
+    """The matplotlib Figure plot writes: one line per method, the legend beside the axes (inside
+    it covered points), log axes labelled at every decade."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    import matplotlib.ticker as ticker
+    fig, ax = plt.subplots(figsize=(10, 5.5))
     colours = plt.cm.tab20.colors
     for k, method in enumerate(dict.fromkeys(p.method for p in points)):
         pts = sorted((p for p in points if p.method == method), key=lambda p: p.seconds)
@@ -271,10 +282,13 @@ def plot(name: str, points: list[Point], path: Path) -> None:
     ax.set_ylabel("final-state error (max norm)")
     ax.set_title(f"work-precision: {name}")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(ticker.LogLocator(base=10, numticks=30))
+        axis.set_minor_locator(ticker.LogLocator(base=10, subs=np.arange(2, 10), numticks=30))
+        axis.set_minor_formatter(ticker.NullFormatter())
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    return fig
 
 
 def error_floor(points: list[Point], prefix: str = "gyrowheel") -> float:

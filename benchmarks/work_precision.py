@@ -26,13 +26,15 @@ the scheduler gives to other processes does not count, so runs of 0.2 ms and of 
 loaded machine), best of 3; compilation (heyoka's JIT, the FMU) is not timed.
 
     python benchmarks/work_precision.py [--quick] [--scenarios paper stiff] [--peers heyoka plain]
-                                        [--out results/bench]
+                                        [--out results/bench] [--png-dir DIR]
 
-Writes <out>/work_precision_<scenario>.png, <out>/work_precision.md and prints the tables.
+Writes <out>/work_precision_<scenario>.png (in --png-dir if given), <out>/work_precision.md and
+prints the tables.
 """
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from dataclasses import dataclass
@@ -346,9 +348,12 @@ def main() -> int:
                         choices=list(SOLVER_CODES), help="gyrowheel solvers to measure")
     parser.add_argument("--quick", action="store_true", help="few settings, no repetitions (a smoke run)")
     parser.add_argument("--out", default="results/bench")
+    parser.add_argument("--png-dir", help="directory for the figures (default: --out; make figures: docs/img)")
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.png_dir:
+        Path(args.png_dir).mkdir(parents=True, exist_ok=True)
     repeat = 1 if args.quick else 3
     global TOLS, FIXED_STEPS
     if args.quick:
@@ -414,12 +419,13 @@ def main() -> int:
                     points += run_fmpy_me(sc, 1)
             if "dop853" in args.solvers and not args.quick:
                 notes.append(step_counts(sc))
-            plot(name, points, out / f"work_precision_{name}.png")
+            plot(name, points, Path(args.png_dir or out) / f"work_precision_{name}.png")
             text_table = table(f"{name} ({stop:g} s)", points)
             print(text_table)
             for note in notes:
                 print(note)
-            report += [text_table, "", f"![{name}](work_precision_{name}.png)", ""]
+            figure_path = os.path.relpath(Path(args.png_dir or out) / f"work_precision_{name}.png", out)
+            report += [text_table, "", f"![{name}]({figure_path})", ""]
             drift = {p.method: p.energy_drift for p in sorted(points, key=lambda p: -p.setting)}
             report.append("Energy drift at the tightest setting: " +
                           ", ".join(f"{m} {d:.1e}" for m, d in drift.items()) + "\n")

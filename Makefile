@@ -99,7 +99,7 @@ figures: $(STAMP)
 	$(PY) -m pip install --quiet -e ".[bench]"
 	$(PY) examples/paper_demo.py --out results --png docs/img/paper_trajectories.png
 	$(PY) examples/sweeps/stability_map.py --workers 2 --png docs/img/sweep_stability.png
-	$(PY) examples/sweeps/paper_figs_5_6.py --workers 2 --png docs/img/sweep_paper_figs_5_6.png
+	$(PY) examples/sweeps/paper_figs_5_6.py --workers 2 --png docs/img/sweep_paper_figs_5_6.png --record docs/img/sweep_paper_figs_5_6.json
 	$(PY) examples/sweeps/monte_carlo.py --workers 2 --png docs/img/sweep_monte_carlo.png --record docs/img/sweep_monte_carlo.json
 	$(PY) examples/sweeps/monte_carlo.py --closed-loop --samples 300 --workers 2 --png docs/img/sweep_monte_carlo_closed_loop.png --record docs/img/sweep_monte_carlo_closed_loop.json
 	$(PY) benchmarks/sweep_scaling.py --png docs/img/sweep_cost.png

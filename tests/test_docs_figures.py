@@ -97,6 +97,13 @@ def test_sweeps_page_quotes_the_monte_carlo_records():
     assert f"the worst lean of a success {push['worst_lean_deg']:.1f} deg" in text
 
 
+def test_sweeps_page_quotes_the_steady_precession_record():
+    c = _record("sweep_paper_figs_5_6.json")
+    quoted = ", ".join(f"{c[n]['agree']}/{c[n]['runs']}" for n in ("region_paper", "region_k030_045"))
+    fig = f"{c['fig5']['agree']}/{c['fig5']['runs']} (Fig. 5), {c['fig6']['agree']}/{c['fig6']['runs']} (Fig. 6)"
+    assert f"agree on {fig}, {quoted.replace(', ', ' and ')} runs" in _flat((DOCS / "sweeps.md").read_text())
+
+
 @pytest.fixture(scope="module")
 def friction_build(example_build):
     return example_build("paper_earth_friction")

@@ -185,7 +185,8 @@ def table_figure(table: pd.DataFrame, inputs: list[str], metric: str | None = No
         for ax, x in zip(axes[0], shown):
             if yes_no and ok[x].nunique() > 1:
                 c, frac, a, b = binned_fraction(ok[x].astype(float), ok[metric].astype(float))
-                ax.errorbar(c, frac, yerr=[frac - a, b - frac], fmt="o-", ms=4, capsize=3)
+                ax.errorbar(c, frac, yerr=[np.maximum(frac - a, 0), np.maximum(b - frac, 0)], fmt="o-", ms=4,
+                            capsize=3)  # at 0% or 100% the interval's end is the rate, to rounding
                 ax.set(ylim=(-0.02, 1.02), ylabel=f"{metric}: fraction (95% interval)")
             else:
                 ax.plot(table[x], values, ".", ms=3)

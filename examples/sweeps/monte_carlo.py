@@ -78,10 +78,22 @@ def success_panel(ax, ok, name: str, nominal: float, s: dict, horizon: float) ->
     rel = (ok[name].astype(float) / nominal - 1) * 100
     c, frac, lo, hi = binned_fraction(rel, ok["survived"].astype(float))
     ax.axhspan(s["lo"], s["hi"], color="0.85", label=f"all runs: {100 * s['success']:.1f}%")
-    ax.errorbar(c, frac, yerr=[frac - lo, hi - frac], fmt="o-", ms=4, capsize=3, label="runs in the bin")
+    ax.errorbar(c, frac, yerr=[np.maximum(frac - lo, 0), np.maximum(hi - frac, 0)], fmt="o-", ms=4, capsize=3,
+                label="runs in the bin")  # at 0% or 100% the interval's end is the rate, to rounding
     ax.set(xlabel=f"{name}: deviation from nominal {nominal:g} [%]", ylim=(-0.02, 1.02),
            ylabel=f"success fraction ({horizon:g} s, 95% interval)")
     ax.grid(True, alpha=0.3)
+
+
+def outcome_panel(ax, ok, horizon: float, title: str) -> None:
+    """The fall times of the runs that fell; when none fell, the largest lean of every run."""
+    fell = ok.loc[~ok["survived"].astype(bool), "fall_time"].astype(float)
+    if len(fell):
+        ax.hist(fell, bins=40, range=(0, horizon), color="tab:red")
+        ax.set(xlabel="fall time of the runs that fell [s]", ylabel="runs", title=f"{title}, {len(fell)} fell")
+    else:
+        ax.hist(np.degrees(ok["max_lean"].astype(float)), bins=30, color="tab:blue")
+        ax.set(xlabel="largest lean from upright [deg]", ylabel="runs", title=f"{title}, none fell")
 
 
 def plot(table, png: Path, s: dict, title: str, horizon: float) -> None:
@@ -90,13 +102,9 @@ def plot(table, png: Path, s: dict, title: str, horizon: float) -> None:
     import matplotlib.pyplot as plt
 
     ok = table[table["status"] == "ok"]
-    fell = ok.loc[~ok["survived"].astype(bool), "fall_time"].astype(float)
     fig, axes = plt.subplots(2, 3, figsize=(13, 7.5), constrained_layout=True)
-    ax = axes[0, 0]
-    ax.hist(fell, bins=40, range=(0, horizon), color="tab:red")
-    ax.set(xlabel="fall time of the runs that fell [s]", ylabel="runs",
-           title=f"success {100 * s['success']:.1f}% [{100 * s['lo']:.1f}, {100 * s['hi']:.1f}] of {s['n']}: "
-                 f"{len(fell)} fell")
+    outcome_panel(axes[0, 0], ok, horizon,
+                  f"success {100 * s['success']:.1f}% [{100 * s['lo']:.1f}, {100 * s['hi']:.1f}]\nof {s['n']} runs")
     nominal = {n: v for n, v in NOMINAL.items() if n in table.columns}
     for ax in axes.ravel()[1 + len(nominal):]:
         ax.axis("off")
@@ -122,11 +130,9 @@ def report_closed_loop(table, png: Path, horizon: float) -> dict:
               f"(95% interval {100 * s['lo']:.1f}-{100 * s['hi']:.1f}%), {s['failed']} inadmissible; worst lean "
               f"of a success {s['worst_lean_deg']:.2f} deg (95th percentile {s['p95_lean_deg']:.2f} deg)")
         ok = table[(table["status"] == "ok") & (table["lean_deg"] == lean)]
-        fell = ok.loc[~ok["survived"].astype(bool), "fall_time"].astype(float)
-        row[0].hist(fell, bins=30, range=(0, horizon), color="tab:red")
-        row[0].set(xlabel="fall time of the runs that fell [s]", ylabel="runs",
-                   title=f"{start}: success {100 * s['success']:.1f}% [{100 * s['lo']:.1f}, {100 * s['hi']:.1f}]"
-                         f" of {s['n']}")
+        outcome_panel(row[0], ok, horizon,
+                      f"{start}: success {100 * s['success']:.1f}% [{100 * s['lo']:.1f}, {100 * s['hi']:.1f}]\n"
+                      f"of {s['n']} runs")
         for ax, name in zip(row[1:], CLOSED_LOOP_NOMINAL):
             success_panel(ax, ok, name, CLOSED_LOOP_NOMINAL[name], s, horizon)
         row[1].legend(loc="best", fontsize=8)

@@ -173,8 +173,8 @@ def draw(rows, png: Path, rate: float) -> None:
 
 
 def figure(rows, rate: float):
-    """The matplotlib Figure draw writes.  The axes span less than two decades, so a log axis
-    labelled only at powers of ten showed one number: every axis is labelled at 1, 2 and 5 times
+    """The matplotlib Figure draw writes.  The axes span less than two decades, where a log axis
+    labelled only at powers of ten shows one number: every axis is labelled at 1, 2 and 5 times
     each power of ten, in plain numbers."""
     import matplotlib
     matplotlib.use("Agg")

@@ -267,8 +267,8 @@ def plot(name: str, points: list[Point], path: Path) -> None:
 
 
 def figure(name: str, points: list[Point]):
-    """The matplotlib Figure plot writes: one line per method, the legend beside the axes (inside
-    it covered points), log axes labelled at every decade."""
+    """The matplotlib Figure plot writes: one line per method, the legend beside the axes (inside,
+    it would cover points), log axes labelled at every decade."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

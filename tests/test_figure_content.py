@@ -67,8 +67,8 @@ def test_steering_legend_has_the_tilt_and_its_command():
 
 
 def test_work_precision_legend_is_beside_the_points():
-    """Fifteen methods' lines filled the axes and the legend (loc 'best') sat on the cvodes
-    points: the legend is now outside the axes, sharing no pixel with them."""
+    """Fifteen methods' lines fill the axes, where any legend position covers some points: the
+    legend is outside the axes, sharing no pixel with them."""
     wp = _module("benchmarks", "work_precision")
     points = [wp.Point(f"method {m}", tol, 1e-4 * (m + 1) / tol ** 0.1, tol * (m + 1), 0.0)
               for m in range(15) for tol in (1e-4, 1e-7, 1e-10, 1e-12)]
@@ -81,7 +81,7 @@ def test_work_precision_legend_is_beside_the_points():
 
 
 def test_sweep_cost_log_axes_have_two_labelled_ticks_or_more():
-    """Axes spanning less than two decades were labelled at one power of ten (10^0 alone)."""
+    """Axes spanning less than two decades, labelled only at powers of ten, show one number."""
     scaling = _module("benchmarks", "sweep_scaling")
     rows = ([("horizon [s]", h, 0.06 * h) for h in (5, 10, 20, 40, 80)]
             + [("rel_tol", t, 0.3 * (1e-4 / t) ** 0.16) for t in (1e-4, 1e-6, 1e-8, 1e-10, 1e-12)]

@@ -28,9 +28,9 @@ def grid_table(fell: set[tuple[float, float]]) -> pd.DataFrame:
 
 
 def test_default_metric_of_a_map_where_most_points_survive_is_not_the_fall_time():
-    """Two falls among 20 points: fall_time would leave 18 of 20 cells grey (the default was
-    fall_time whenever one point fell); the default is the first metric with a value at most
-    points, survived.  Where most points fell, fall_time stays the default."""
+    """Two falls among 20 points: fall_time would leave 18 of 20 cells grey, so the default is
+    the first metric with a value at most points, survived.  Where most points fell, fall_time
+    is the default."""
     few = grid_table({(60.0, 0.0), (70.0, 0.0)})
     assert default_metric(few, ["beta_deg", "gamma_dot"]) == "survived"
     most = grid_table({(b, w) for b in (60.0, 70.0, 80.0, 89.0) for w in (0.0, 3.0, 6.0)})

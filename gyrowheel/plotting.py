@@ -73,6 +73,6 @@ def trajectories_figure(results: dict[str, np.ndarray], title: str = "", changed
     if subtitle:
         heading = f"{heading}\n{subtitle}" if heading else subtitle
     if heading:
-        fig.suptitle(heading, fontsize=10 if subtitle else None)
+        fig.suptitle(heading, **({"fontsize": 10} if subtitle else {}))
     fig.tight_layout()
     return fig

@@ -55,6 +55,9 @@ def test_trajectories_title_and_changed_values_once():
     r = _run()
     fig = trajectories_figure({"a": r, "b": r}, title="runs", changed={"M": 2.5})
     assert fig._suptitle.get_text() == "runs\nset: M=2.5"
+    plain = trajectories_figure({"a": r, "b": r}, title="runs")._suptitle  # the figure title's own size
+    from matplotlib.font_manager import FontProperties
+    assert plain.get_fontsize() == FontProperties(size=matplotlib.rcParams["figure.titlesize"]).get_size_in_points()
     fig = trajectories_figure({"moon": r}, title="moon")
     assert fig._suptitle is None and fig.axes[0].get_title() == "moon"
 

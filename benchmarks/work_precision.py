@@ -28,12 +28,14 @@ loaded machine), best of 3; compilation (heyoka's JIT, the FMU) is not timed.
     python benchmarks/work_precision.py [--quick] [--scenarios paper stiff] [--peers heyoka plain]
                                         [--out results/bench] [--png-dir DIR]
 
-Writes <out>/work_precision_<scenario>.png (in --png-dir if given), <out>/work_precision.md and
-prints the tables.
+Writes <out>/work_precision_<scenario>.png (in --png-dir if given), the figure's points as
+<out>/work_precision_<scenario>.json (method, setting, seconds, error, energy_drift),
+<out>/work_precision.md and prints the tables.
 """
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 import time
@@ -420,6 +422,7 @@ def main() -> int:
             if "dop853" in args.solvers and not args.quick:
                 notes.append(step_counts(sc))
             plot(name, points, Path(args.png_dir or out) / f"work_precision_{name}.png")
+            (out / f"work_precision_{name}.json").write_text(json.dumps([vars(p) for p in points], indent=0) + "\n")
             text_table = table(f"{name} ({stop:g} s)", points)
             print(text_table)
             for note in notes:

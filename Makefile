@@ -7,6 +7,8 @@
 #               one builds the wheel and installs it into a fresh environment (pip, from PyPI)
 #   make bench  the work-precision benchmark (results/bench/*.png, work_precision.md)
 #   make realtime  the exported C in a 1 kHz fixed-step loop (results/c/realtime.md, docs/c_api.md)
+#   make figures   every figure in docs/img and the records of the numbers the docs quote
+#               (docs/figures.toml lists them with their commands)
 PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
@@ -19,7 +21,7 @@ SCENES := paper_earth paper_mars paper_moon
 # apt-get (CI); otherwise named, and the tests needing them say so.
 C_TOOLS := clang cmake valgrind tcc
 
-.PHONY: demo test bench realtime venv browser clean c-tools tbb
+.PHONY: demo test bench realtime figures venv browser clean c-tools tbb
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -89,6 +91,20 @@ bench: $(STAMP)
 # the real-time figures of docs/c_api.md: the exported C in a fixed-step 1 kHz loop (a few minutes)
 realtime: $(STAMP)
 	$(PY) examples/c_realtime.py --out results/c
+
+# Every figure in docs/img, by the commands docs/figures.toml lists (tests/test_docs_figures.py
+# checks that the two agree).  The sweeps take a few minutes on 2 cores; sweep_cost.png and the
+# work-precision figures are timings: run them on a quiet machine.
+figures: $(STAMP)
+	$(PY) -m pip install --quiet -e ".[bench]"
+	$(PY) examples/paper_demo.py --out results --png docs/img/paper_trajectories.png
+	$(PY) examples/sweeps/stability_map.py --workers 2 --png docs/img/sweep_stability.png
+	$(PY) examples/sweeps/paper_figs_5_6.py --workers 2 --png docs/img/sweep_paper_figs_5_6.png --record docs/img/sweep_paper_figs_5_6.json
+	$(PY) examples/sweeps/monte_carlo.py --workers 2 --png docs/img/sweep_monte_carlo.png --record docs/img/sweep_monte_carlo.json
+	$(PY) examples/sweeps/monte_carlo.py --closed-loop --samples 300 --workers 2 --png docs/img/sweep_monte_carlo_closed_loop.png --record docs/img/sweep_monte_carlo_closed_loop.json
+	$(PY) benchmarks/sweep_scaling.py --png docs/img/sweep_cost.png
+	$(PY) benchmarks/work_precision.py --scenarios paper long near_flat --peers heyoka plain --solvers dopri5 dop853 taylor --out results/bench --png-dir docs/img
+	$(PY) benchmarks/work_precision.py --scenarios stiff --out results/bench/stiff --png-dir docs/img
 
 clean:
 	rm -rf results build dist .pytest_cache

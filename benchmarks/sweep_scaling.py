@@ -164,6 +164,18 @@ def main() -> int:
 
 
 def draw(rows, png: Path, rate: float) -> None:
+    """Write the cost figure from rows (kind, x, y): ms per point against the horizon and the
+    tolerance, s per map against its points; rate: points/s per worker, for the title."""
+    import matplotlib.pyplot as plt
+    fig = figure(rows, rate)
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+
+
+def figure(rows, rate: float):
+    """The matplotlib Figure draw writes.  The axes span less than two decades, where a log axis
+    labelled only at powers of ten shows one number: every axis is labelled at 1, 2 and 5 times
+    each power of ten, in plain numbers."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -177,15 +189,17 @@ def draw(rows, png: Path, rate: float) -> None:
         ys = [y for k, _, y in rows if k == kind]
         ax.loglog(xs, ys, "o-")
         ax.set(xlabel=xlabel, ylabel=ylabel)
-        for axis in (ax.xaxis, ax.yaxis):
+        for axis in ([ax.yaxis] if kind == "rel_tol" else [ax.xaxis, ax.yaxis]):
+            axis.set_major_locator(matplotlib.ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+            axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+            axis.set_minor_locator(matplotlib.ticker.LogLocator(base=10, subs=tuple(range(1, 10))))
             axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_title("linear in the horizon")
     axes[1].set_title("dopri5: about tol^(-1/5) per point")
     axes[2].set_title(f"linear in points ({rate:.0f} points/s per worker)")
     fig.suptitle("Cost of a sweep point: paper wheel, dopri5, output every 1 s (measured, in-process)")
-    fig.savefig(png, dpi=110)
-    plt.close(fig)
+    return fig
 
 
 if __name__ == "__main__":

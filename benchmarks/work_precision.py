@@ -26,13 +26,17 @@ the scheduler gives to other processes does not count, so runs of 0.2 ms and of 
 loaded machine), best of 3; compilation (heyoka's JIT, the FMU) is not timed.
 
     python benchmarks/work_precision.py [--quick] [--scenarios paper stiff] [--peers heyoka plain]
-                                        [--out results/bench]
+                                        [--out results/bench] [--png-dir DIR]
 
-Writes <out>/work_precision_<scenario>.png, <out>/work_precision.md and prints the tables.
+Writes <out>/work_precision_<scenario>.png (in --png-dir if given), the figure's points as
+<out>/work_precision_<scenario>.json (method, setting, seconds, error, energy_drift),
+<out>/work_precision.md and prints the tables.
 """
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import sys
 import time
 from dataclasses import dataclass
@@ -257,10 +261,21 @@ def cheapest(points: list[Point], target: float) -> dict[str, float]:
 
 
 def plot(name: str, points: list[Point], path: Path) -> None:
+    """Write the work-precision figure of one scenario (error against CPU time, log-log)."""
+    import matplotlib.pyplot as plt
+    fig = figure(name, points)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def figure(name: str, points: list[Point]):
+    """The matplotlib Figure plot writes: one line per method, the legend beside the axes (inside,
+    it would cover points), log axes labelled at every decade."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    import matplotlib.ticker as ticker
+    fig, ax = plt.subplots(figsize=(10, 5.5))
     colours = plt.cm.tab20.colors
     for k, method in enumerate(dict.fromkeys(p.method for p in points)):
         pts = sorted((p for p in points if p.method == method), key=lambda p: p.seconds)
@@ -271,10 +286,13 @@ def plot(name: str, points: list[Point], path: Path) -> None:
     ax.set_ylabel("final-state error (max norm)")
     ax.set_title(f"work-precision: {name}")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(ticker.LogLocator(base=10, numticks=30))
+        axis.set_minor_locator(ticker.LogLocator(base=10, subs=np.arange(2, 10), numticks=30))
+        axis.set_minor_formatter(ticker.NullFormatter())
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    return fig
 
 
 def error_floor(points: list[Point], prefix: str = "gyrowheel") -> float:
@@ -332,9 +350,12 @@ def main() -> int:
                         choices=list(SOLVER_CODES), help="gyrowheel solvers to measure")
     parser.add_argument("--quick", action="store_true", help="few settings, no repetitions (a smoke run)")
     parser.add_argument("--out", default="results/bench")
+    parser.add_argument("--png-dir", help="directory for the figures (default: --out; make figures: docs/img)")
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.png_dir:
+        Path(args.png_dir).mkdir(parents=True, exist_ok=True)
     repeat = 1 if args.quick else 3
     global TOLS, FIXED_STEPS
     if args.quick:
@@ -400,12 +421,14 @@ def main() -> int:
                     points += run_fmpy_me(sc, 1)
             if "dop853" in args.solvers and not args.quick:
                 notes.append(step_counts(sc))
-            plot(name, points, out / f"work_precision_{name}.png")
+            plot(name, points, Path(args.png_dir or out) / f"work_precision_{name}.png")
+            (out / f"work_precision_{name}.json").write_text(json.dumps([vars(p) for p in points], indent=0) + "\n")
             text_table = table(f"{name} ({stop:g} s)", points)
             print(text_table)
             for note in notes:
                 print(note)
-            report += [text_table, "", f"![{name}](work_precision_{name}.png)", ""]
+            figure_path = os.path.relpath(Path(args.png_dir or out) / f"work_precision_{name}.png", out)
+            report += [text_table, "", f"![{name}]({figure_path})", ""]
             drift = {p.method: p.energy_drift for p in sorted(points, key=lambda p: -p.setting)}
             report.append("Energy drift at the tightest setting: " +
                           ", ".join(f"{m} {d:.1e}" for m, d in drift.items()) + "\n")

@@ -107,6 +107,7 @@ def plot(d: np.ndarray, path: Path, title: str) -> None:
     ax[1, 2].plot(t, d["controller.drive_torque"], label="drive_torque [N.m]")
     ax[1, 2].plot(t, d["wheel.vx"] * np.cos(d["wheel.alpha"]) + d["wheel.vy"] * np.sin(d["wheel.alpha"]) - d["controller.speed_ref"],
                   label="speed error [m/s]")
+    ax[1, 2].set(ylabel="drive torque [N.m], speed error [m/s]")
     for a in ax.flat:
         a.grid(True, alpha=0.3)
         if a is not ax[0, 0]:
@@ -263,7 +264,7 @@ def step_study(name, cl, out: Path) -> list:
     for h, k in zip(hs, ok):
         if not k:
             ax[0].axvline(h, color="r", alpha=0.3)
-    ax[0].set(xlabel="communication step [ms]", title=f"{name}: tracking (red: fell)")
+    ax[0].set(xlabel="communication step [ms]", ylabel="heading error [deg]", title=f"{name}: tracking (red: fell)")
     ax[0].legend()
     ax[1].loglog(hs, [row["wall"] for row in rows], "o-")
     ax[1].set(xlabel="communication step [ms]", ylabel="wall time [s]", title=f"cost of the {cl.system.stop_time:g} s mission")

@@ -41,6 +41,14 @@ def tilt_profile() -> np.ndarray:
 
 
 def plot(r: np.ndarray, path: Path) -> None:
+    """Write the figure: path [m], heading, lean and the tilt with its command [deg] against time [s]."""
+    fig = figure(r)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def figure(r: np.ndarray):
+    """The matplotlib Figure plot writes; r: fmpy's result with x, y, alpha, beta, tilt, tilt_cmd."""
     fig, ax = plt.subplots(2, 2, figsize=(10, 7))
     ax[0, 0].plot(r["x"], r["y"])
     ax[0, 0].set_aspect("equal", adjustable="datalim")
@@ -49,17 +57,16 @@ def plot(r: np.ndarray, path: Path) -> None:
     ax[0, 0].set_title("path")
     for a, name, label in ((ax[0, 1], "alpha", "heading alpha [deg]"), (ax[1, 0], "beta", "lean beta [deg]"),
                            (ax[1, 1], "tilt", "flywheel tilt [deg]")):
-        a.plot(r["time"], np.degrees(r[name]))
+        a.plot(r["time"], np.degrees(r[name]), label=name)
         a.set_xlabel("t [s]")
         a.set_ylabel(label)
     ax[1, 1].plot(r["time"], np.degrees(r["tilt_cmd"]), "--", label="tilt_cmd")
-    ax[1, 1].legend()
+    ax[1, 1].legend(loc="best")
     for a in ax.flat:
         a.grid(True, alpha=0.3)
     fig.suptitle("Gyrover: flywheel tilt steers the wheel")
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    return fig
 
 
 def main() -> int:

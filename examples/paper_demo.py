@@ -4,7 +4,7 @@ Builds one FMU per scene (examples/scenes/paper_*.toml), simulates each in
 Co-Simulation with fmpy, writes the trajectories as CSV and one figure in the
 spirit of the paper's Figs. 7-9, and prints what happened.
 
-    python examples/paper_demo.py --out results
+    python examples/paper_demo.py --out results [--png FIGURE]
 """
 from __future__ import annotations
 
@@ -37,6 +37,8 @@ def summarise(name: str, r: np.ndarray, seconds: float) -> str:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="results", help="output directory")
+    parser.add_argument("--png", help="the figure (default: OUT/paper_trajectories.png; "
+                        "docs/img/paper_trajectories.png is this figure)")
     args = parser.parse_args()
     out = Path(args.out)
     (out / "fmus").mkdir(parents=True, exist_ok=True)
@@ -50,7 +52,7 @@ def main() -> int:
         write_csv(str(out / f"{scene.name}.csv"), r)
         results[name] = r
         print(summarise(name, r, seconds))
-    fig = plot_trajectories(results, out / "paper_trajectories.png",
+    fig = plot_trajectories(results, args.png or out / "paper_trajectories.png",
                             title="Gyrover wheel, beta0 = 80 deg, gamma_dot0 = 6 rad/s (Nandy & Xu, Figs. 7-9)")
     print(f"wrote {', '.join(str(out / (load_scene(HERE / 'scenes' / s).name + '.csv')) for s in SCENES.values())}")
     print(f"wrote {fig}")

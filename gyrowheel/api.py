@@ -235,7 +235,8 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
     csv = _output_file(output, "output") if output is not None else None
     png = _figure_file(plot, "plot") if plot is not None else None
     try:
-        starts = check_start_values(path, _assignments(start_values, "start_values"))
+        given = _assignments(start_values, "start_values")
+        starts = check_start_values(path, given)
     except SimulationError as exc:
         raise ArgumentError(f"start_values: {exc}", argument="start_values") from None
     _check_rows(md, stop_time, output_interval)
@@ -246,7 +247,7 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
     if png is not None:
         from gyrowheel.plotting import plot_trajectories
         with replaced_atomically(png, "plot") as part:
-            plot_trajectories({path.stem: result}, part, title=path.stem)
+            plot_trajectories({path.stem: result}, part, title=path.stem, changed=given)
     return result
 
 

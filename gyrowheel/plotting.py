@@ -18,8 +18,35 @@ def _panel(ax, t, y, label, unit):
     ax.grid(True, alpha=0.3)
 
 
-def plot_trajectories(results: dict[str, np.ndarray], path: str | Path, title: str = "") -> Path:
-    """One column per result (e.g. earth, Mars, moon): x-y path, lean, heading, spin rate."""
+def changed_text(changed: dict[str, object] | None, width: int = 110) -> str:
+    """'set: NAME=VALUE, ...' for the start values a run changed (as given: solver=rk4, not its
+    number), wrapped to lines of at most `width` characters; '' when nothing was changed."""
+    import textwrap
+
+    if not changed:
+        return ""
+    items = ", ".join(f"{name}={value}" for name, value in changed.items())
+    return "\n".join(textwrap.wrap(f"set: {items}", width, break_on_hyphens=False))
+
+
+def plot_trajectories(results: dict[str, np.ndarray], path: str | Path, title: str = "",
+                      changed: dict[str, object] | None = None) -> Path:
+    """Write a PNG with one column per result (e.g. earth, Mars, moon): x-y path [m], lean beta
+    [deg], heading alpha [deg], spin rate gamma_dot [rad/s] against time [s]; a run that fell
+    has its fall marked.  results: {column title: fmpy's structured array with fields time, x, y,
+    alpha, beta, gamma_dot (and fallen)}; title: the figure's title (not repeated when the only
+    column already carries it); changed: {name: value} of the start values the run was given,
+    listed under the title (simulate --set).  Returns the path (its directory is created)."""
+    fig = trajectories_figure(results, title, changed)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def trajectories_figure(results: dict[str, np.ndarray], title: str = "", changed: dict[str, object] | None = None):
+    """The matplotlib Figure plot_trajectories writes (same arguments)."""
     names = list(results)
     fig, axes = plt.subplots(4, len(names), figsize=(4.2 * len(names), 11), squeeze=False)
     for col, name in enumerate(names):
@@ -41,11 +68,11 @@ def plot_trajectories(results: dict[str, np.ndarray], path: str | Path, title: s
         if "fallen" in r.dtype.names and bool(r["fallen"][-1]):
             axes[1, col].axvline(t[-1], color="r", ls="--", lw=0.8)
             axes[1, col].text(t[-1], math.degrees(float(r["beta"][-1])), " fallen", color="r", fontsize=8)
-    if title and names != [title]:  # one column already has it as its title
-        fig.suptitle(title)
+    heading = title if title and names != [title] else ""  # one column already has it as its title
+    subtitle = changed_text(changed, width=int(40 * len(names)))
+    if subtitle:
+        heading = f"{heading}\n{subtitle}" if heading else subtitle
+    if heading:
+        fig.suptitle(heading, **({"fontsize": 10} if subtitle else {}))
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return fig

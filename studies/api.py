@@ -263,6 +263,7 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
                           start_time=start_time, solver=solver, rel_tol=rel_tol, abs_tol=abs_tol,
                           max_step=max_step, metrics=metrics, metric_functions=metric_functions,
                           ensemble=ensemble)
+        units = {name: v.unit for name, v in target.variables().items() if getattr(v, "unit", None)}
         check_size(plan, workers=workers, scheduler=scheduler, client=client, batch_size=batch_size)
         writer = TableWriter(output, plan.inputs, plan.metrics.columns())
         try:  # from here on, Ctrl-C leaves a complete table of the points done (output as it was if none)
@@ -275,7 +276,7 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     if plot:
         from gyrowheel.studies.plot import plot_table
         try:
-            plot_table(table, plot, inputs=list(plan.inputs.columns), metric=plot_metric)
+            plot_table(table, plot, inputs=list(plan.inputs.columns), metric=plot_metric, units=units)
         except ValueError as exc:  # --plot-metric names no column, or the table has no metric to plot
             raise SweepSpecError(str(exc)) from None
     return table

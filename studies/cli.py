@@ -38,7 +38,8 @@ def add_parser(sub) -> None:
                    help="module:function or file.py:function of the trajectory (repeatable)")
     m.add_argument("-o", "--output", default="sweep.parquet", help=".parquet or .csv (default sweep.parquet)")
     m.add_argument("--plot", metavar="PNG", help="also plot the table")
-    m.add_argument("--plot-metric", help="the column to plot (default: fall_time, else the first metric)")
+    m.add_argument("--plot-metric", help="the column to plot (default: fall_time if most points fell, else the first "
+                   "metric with a value at most points)")
     x = s.add_argument_group("execution")
     x.add_argument("--workers", type=int, help="LocalCluster processes (default: one per core; 0: in-process loop; "
                    "at most 4 per core and one per point)")

@@ -19,6 +19,7 @@ controller keeps its nominal gains), the mission's 5 deg lean with zero heading 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import shlex
 import sys
@@ -30,6 +31,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 from gyrowheel.cli import main as gyrowheel  # noqa: E402
 from gyrowheel.studies import read_table  # noqa: E402
+from gyrowheel.studies.plot import binned_fraction, wilson  # noqa: E402
 
 NOMINAL = dict(M=2.0, k_diam=0.25, k_axial=0.4, c_rr=0.003, c_pivot=0.001)
 CLOSED_LOOP_NOMINAL = dict(M=2.0, k_diam=0.25, k_axial=0.4)
@@ -57,14 +59,6 @@ def closed_loop_source(out: Path) -> tuple[str, list[str]]:
     return str(loop.ssp), ["--grid", "lean_deg=0,-5", "--derive", "examples/sweeps/closed_loop_push.py:start"]
 
 
-def wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """95% Wilson score interval of a success rate k/n."""
-    p = k / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return centre - half, centre + half
-
-
 def summary(table) -> dict:
     ok = table[table["status"] == "ok"]
     if "lean_deg" in table and table["lean_deg"].nunique() > 1:
@@ -78,37 +72,52 @@ def summary(table) -> dict:
                 p95_lean_deg=float(np.percentile(lean, 95)), median_fall=float(ok["fall_time"].median()))
 
 
+def success_panel(ax, ok, name: str, nominal: float, s: dict, horizon: float) -> None:
+    """Success fraction in 10 bins of one uncertain value's deviation from nominal, each with its 95%
+    Wilson interval; the overall rate and its interval as the grey band."""
+    rel = (ok[name].astype(float) / nominal - 1) * 100
+    c, frac, lo, hi = binned_fraction(rel, ok["survived"].astype(float))
+    ax.axhspan(s["lo"], s["hi"], color="0.85", label=f"all runs: {100 * s['success']:.1f}%")
+    ax.errorbar(c, frac, yerr=[np.maximum(frac - lo, 0), np.maximum(hi - frac, 0)], fmt="o-", ms=4, capsize=3,
+                label="runs in the bin")  # at 0% or 100% the interval's end is the rate, to rounding
+    ax.set(xlabel=f"{name}: deviation from nominal {nominal:g} [%]", ylim=(-0.02, 1.02),
+           ylabel=f"success fraction ({horizon:g} s, 95% interval)")
+    ax.grid(True, alpha=0.3)
+
+
+def outcome_panel(ax, ok, horizon: float, title: str) -> None:
+    """The fall times of the runs that fell; when none fell, the largest lean of every run."""
+    fell = ok.loc[~ok["survived"].astype(bool), "fall_time"].astype(float)
+    if len(fell):
+        ax.hist(fell, bins=40, range=(0, horizon), color="tab:red")
+        ax.set(xlabel="fall time of the runs that fell [s]", ylabel="runs", title=f"{title}, {len(fell)} fell")
+    else:
+        ax.hist(np.degrees(ok["max_lean"].astype(float)), bins=30, color="tab:blue")
+        ax.set(xlabel="largest lean from upright [deg]", ylabel="runs", title=f"{title}, none fell")
+
+
 def plot(table, png: Path, s: dict, title: str, horizon: float) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    ok = table[table["status"] == "ok"].copy()
-    ok["t_end"] = ok["fall_time"].fillna(horizon)
-    ok = ok.astype({"max_lean": float})
+    ok = table[table["status"] == "ok"]
     fig, axes = plt.subplots(2, 3, figsize=(13, 7.5), constrained_layout=True)
-    ax = axes[0, 0]
-    ax.hist(ok["t_end"], bins=40, color="tab:blue")
-    ax.axvline(horizon, color="k", ls="--")
-    ax.set(xlabel=f"fall time [s] ({horizon:g}: success)", ylabel="runs",
-           title=f"success {100 * s['success']:.1f}% [{100 * s['lo']:.1f}, {100 * s['hi']:.1f}] of {s['n']}")
+    outcome_panel(axes[0, 0], ok, horizon,
+                  f"success {100 * s['success']:.1f}% [{100 * s['lo']:.1f}, {100 * s['hi']:.1f}]\nof {s['n']} runs")
     nominal = {n: v for n, v in NOMINAL.items() if n in table.columns}
     for ax in axes.ravel()[1 + len(nominal):]:
         ax.axis("off")
     for ax, name in zip(axes.ravel()[1:], nominal):
-        rel = (ok[name] / nominal[name] - 1) * 100
-        sc = ax.scatter(rel, ok["t_end"], c=np.degrees(ok["max_lean"]), s=6, cmap="viridis")
-        corr = np.corrcoef(rel, ok["t_end"])[0, 1]
-        ax.set(xlabel=f"{name}: deviation from nominal {nominal[name]:g} [%]", ylabel=f"fall time [s] ({horizon:g}: success)",
-               title=f"correlation {corr:+.2f}")
-    fig.colorbar(sc, ax=axes, label="largest lean from upright [deg]")
-    fig.suptitle(f"{title}: worst lean of a success {s['worst_lean_deg']:.1f} deg from upright "
-                 f"({s['failed']} inadmissible samples)")
+        success_panel(ax, ok, name, nominal[name], s, horizon)
+    axes[0, 1].legend(loc="lower left", fontsize=8)
+    fig.suptitle(f"{title}\nsuccess = above 30 deg for {horizon:g} s; worst lean of a success "
+                 f"{s['worst_lean_deg']:.1f} deg from upright ({s['failed']} inadmissible samples)")
     fig.savefig(png, dpi=110)
     plt.close(fig)
 
 
-def report_closed_loop(table, png: Path, horizon: float) -> int:
+def report_closed_loop(table, png: Path, horizon: float) -> dict:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -121,21 +130,44 @@ def report_closed_loop(table, png: Path, horizon: float) -> int:
               f"(95% interval {100 * s['lo']:.1f}-{100 * s['hi']:.1f}%), {s['failed']} inadmissible; worst lean "
               f"of a success {s['worst_lean_deg']:.2f} deg (95th percentile {s['p95_lean_deg']:.2f} deg)")
         ok = table[(table["status"] == "ok") & (table["lean_deg"] == lean)]
-        t_end = ok["fall_time"].fillna(horizon)
-        row[0].hist(t_end, bins=30)
-        row[0].set(xlabel=f"fall time [s] ({horizon:g}: success)", ylabel="runs",
-                   title=f"{start}: success {100 * s['success']:.1f}% [{100 * s['lo']:.1f}, {100 * s['hi']:.1f}]")
+        outcome_panel(row[0], ok, horizon,
+                      f"{start}: success {100 * s['success']:.1f}% [{100 * s['lo']:.1f}, {100 * s['hi']:.1f}]\n"
+                      f"of {s['n']} runs")
         for ax, name in zip(row[1:], CLOSED_LOOP_NOMINAL):
-            rel = (ok[name] / CLOSED_LOOP_NOMINAL[name] - 1) * 100
-            sc = ax.scatter(rel, t_end, c=np.degrees(ok["max_lean"].astype(float)), s=6, cmap="viridis", vmin=0, vmax=60)
-            ax.set(xlabel=f"{name}: deviation from nominal [%]", ylabel="fall time [s]")
-    fig.colorbar(sc, ax=axes, label="largest lean from upright [deg]")
+            success_panel(ax, ok, name, CLOSED_LOOP_NOMINAL[name], s, horizon)
+        row[1].legend(loc="best", fontsize=8)
     fig.suptitle("Gyrover closed loop, earth mission 60 s, fixed nominal gains; wheel mass and inertia "
-                 "uniform +/-20%")
+                 "uniform +/-20%; success = above 30 deg for the whole run")
     fig.savefig(png, dpi=100)
     plt.close(fig)
     print(f"wrote {png}")
-    return 0
+    return {f"lean_deg={lean:g}": s for lean, s in cases.items()}
+
+
+def samples_of(table, nominal: dict, count: int = 3) -> list[dict]:
+    """The first `count` admissible points that survived and the first `count` that fell: their
+    uncertain values and outcome, for a rerun that checks the figure is not stale."""
+    ok = table[table["status"] == "ok"]
+    picked = [ok[ok["survived"].astype(bool)].head(count), ok[~ok["survived"].astype(bool)].head(count)]
+    rows = []
+    for part in picked:
+        for _, r in part.iterrows():
+            fall = float(r["fall_time"])
+            rows.append({**{n: float(r[n]) for n in nominal}, "survived": bool(r["survived"]),
+                         "fall_time": None if math.isnan(fall) else fall})
+    return rows
+
+
+def write_record(path: Path, argv: list[str], summary_: dict, samples: list[dict]) -> None:
+    """The numbers the figure shows (and docs/sweeps.md quotes) as JSON, with the command that made them."""
+    def rounded(v):
+        return {k: rounded(x) for k, x in v.items()} if isinstance(v, dict) else (
+            (None if math.isnan(v) else round(v, 6)) if isinstance(v, float) else v)
+    argv = [a if not a.startswith(str(ROOT)) else str(Path(a).relative_to(ROOT)) for a in argv]
+    argv = argv[:-1] + [Path(argv[-1]).name]  # the table's directory is the caller's
+    record = {"command": "gyrowheel " + shlex.join(argv), "summary": rounded(summary_), "samples": samples}
+    path.write_text(json.dumps(record, indent=1) + "\n")
+    print(f"wrote {path}")
 
 
 def main() -> int:
@@ -150,6 +182,8 @@ def main() -> int:
     ap.add_argument("--out", default="results/sweeps", help="directory for the table")
     ap.add_argument("--png", help="the figure (default: OUT/sweep_monte_carlo[_closed_loop].png; "
                     "docs/img/ holds these figures)")
+    ap.add_argument("--record", help="also write the figure's numbers as JSON (make figures: "
+                    "docs/img/sweep_monte_carlo[_closed_loop].json, which docs/sweeps.md quotes)")
     args = ap.parse_args()
     out = Path(args.out)
     png = Path(args.png or out / f"sweep_monte_carlo{'_closed_loop' if args.closed_loop else ''}.png")
@@ -171,7 +205,10 @@ def main() -> int:
         return code
     table = read_table(out / f"{name}.parquet")
     if args.closed_loop:
-        return report_closed_loop(table, png, horizon)
+        cases = report_closed_loop(table, png, horizon)
+        if args.record:
+            write_record(Path(args.record), argv, cases, [])
+        return 0
     s = summary(table)
     print(f"success (above 30 deg for {horizon:g} s): {100 * s['success']:.1f}% of {s['n']} runs "
           f"(95% interval {100 * s['lo']:.1f}-{100 * s['hi']:.1f}%), {s['failed']} failed; "
@@ -179,6 +216,8 @@ def main() -> int:
           f"{s['p95_lean_deg']:.1f} deg; median fall time {s['median_fall']:.2f} s")
     plot(table, png, s, title, horizon)
     print(f"wrote {png}")
+    if args.record:
+        write_record(Path(args.record), argv, s, samples_of(table, nominal))
     return 0
 
 

@@ -14,6 +14,7 @@ linearisation of the model's own equations (gyrowheel.studies.steady) has a grow
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import shlex
 import sys
@@ -132,6 +133,8 @@ def main() -> int:
     ap.add_argument("--out", default="results/sweeps", help="directory for the tables")
     ap.add_argument("--png", help="the figure (default: OUT/sweep_paper_figs_5_6.png; "
                     "docs/img/sweep_paper_figs_5_6.png is this figure)")
+    ap.add_argument("--record", help="also write the counts of runs, steady runs and agreements with the "
+                    "linearisation as JSON (make figures: docs/img/sweep_paper_figs_5_6.json)")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -148,6 +151,20 @@ def main() -> int:
         tables[name] = read_table(out / f"steady_{name}.parquet")
     plot(tables, Path(args.png))
     print(f"wrote {args.png}")
+    counts = agreement(tables)
+    for name, c in counts.items():
+        print(f"{name}: {c['runs']} runs, {c['steady']} stayed steady, {c['failed']} failed; simulation agrees "
+              f"with the linearisation on {c['agree']}")
+    if args.record:
+        Path(args.record).write_text(json.dumps(counts, indent=1) + "\n")
+        print(f"wrote {args.record}")
+    return 0
+
+
+def agreement(tables: dict) -> dict:
+    """Per sweep: runs, runs that stayed steady, failed runs, and runs where the simulation and
+    the linearisation (a growing mode or not) agree."""
+    counts = {}
     for name, t in tables.items():
         wheel = OTHER if name == "region_k030_045" else PAPER
         g = t["g"].map(GRAVITY) if "g" in t else 9.81
@@ -155,9 +172,9 @@ def main() -> int:
         linear = np.array([precession_growth_rate(math.radians(b), r, g=gv, **wheel) <= 1e-6
                            for b, r, gv in zip(t["beta_deg"], t["rho"], t["g_value"])])
         simulated = t["steady"].fillna(False).astype(bool).values
-        print(f"{name}: {len(t)} runs, {int(simulated.sum())} stayed steady, {int((t['status'] != 'ok').sum())} "
-              f"failed; simulation agrees with the linearisation on {int((linear == simulated).sum())}")
-    return 0
+        counts[name] = dict(runs=len(t), steady=int(simulated.sum()), failed=int((t["status"] != "ok").sum()),
+                            agree=int((linear == simulated).sum()))
+    return counts
 
 
 if __name__ == "__main__":

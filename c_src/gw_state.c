@@ -26,7 +26,8 @@
  *           8*nu       double u
  *           8*np       double p
  *           8*ny       double y
- *           8*ne       double e (event indicators at t)
+ *           8*ne       double e (event indicators at t, as of the last event update;
+ *                             checked against those recomputed from t, x, u, p)
  *           8*nx       double x nominal
  *           8*ne       double t_events (time of each event's last firing)
  *           8*nx       double xc (compensation of the state's summation: x + xc is the

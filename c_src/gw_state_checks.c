@@ -2,8 +2,8 @@
  * gw_state_checks.c -- what a state must be before it is restored: every field within the
  * range fmi2Set* and the core accept (gw_state_check), and the fields against each other and
  * the model, through the live path's own checks (gw_state_check_run: the settings and the
- * experiment, the times in order, the events and their flags, the parameters and start
- * values).  So a restored state is one the instance could have reached itself.  The layout
+ * experiment, the times in order, the events and their flags with the indicators recomputed
+ * from the state, the parameters and start values).  So a restored state is one the instance could have reached itself.  The layout
  * and its reader are gw_state.c's; this file is included after it by gw_core.c.
  */
 #ifndef GW_UNITY_BUILD
@@ -190,19 +190,77 @@ static int gw_state_check_times(gw_instance *I, const char *fn, const gw_state_s
     return 1;
 }
 
+/* The event indicators at the blob's own point, evt(t, x, u, p) with ode_pre(p), into e_out
+ * (ne); the instance's functions are called on copies of the blob's x, u, p and a scratch
+ * ode_pre, and every binding is put back: nothing of the instance changes (not even its count
+ * of indicator evaluations).  1 or reason logged. */
+static int gw_state_indicators(gw_instance *I, const char *fn, const unsigned char *buf, double t,
+                               double *e_out) {
+    const gw_model *m = I->m;
+    const int n_pre = I->f_pre.eval ? m->n_pre : 0;
+    double *x, *u, *p, *pre;
+    const double *bound[5];
+    int i, r = 0;
+    if (!I->f_evt.eval) return 1; /* ne == 0 */
+    x = (double *)gw_alloc(I, (size_t)(m->nx + m->nu + m->np + n_pre) + 1, sizeof(double));
+    if (!x) {
+        GW_LOG_ERR(I, "%s: out of memory", fn);
+        return 0;
+    }
+    u = x + m->nx;
+    p = u + m->nu;
+    pre = p + m->np;
+    for (i = 0; i < m->nx; i++) x[i] = gw_state_vec_at(I, buf, 0, i);
+    for (i = 0; i < m->nu; i++) u[i] = gw_state_vec_at(I, buf, 2, i);
+    for (i = 0; i < m->np; i++) p[i] = gw_state_vec_at(I, buf, 3, i);
+    for (i = 0; i < 5; i++) bound[i] = i < I->f_evt.n_arg ? I->f_evt.arg[i] : NULL;
+    if (n_pre > 0) {
+        const double *pre_arg = I->f_pre.arg[0];
+        double *pre_res = I->f_pre.res[0];
+        I->f_pre.arg[0] = p;
+        I->f_pre.res[0] = pre;
+        r = gw_fun_call(&I->f_pre);
+        I->f_pre.arg[0] = pre_arg;
+        I->f_pre.res[0] = pre_res;
+        I->f_evt.arg[4] = pre;
+    }
+    I->f_evt.arg[2] = u;
+    I->f_evt.arg[3] = p;
+    if (r == 0) r = gw_fun_call_txup(&I->f_evt, t, x, e_out);
+    for (i = 0; i < 5 && i < I->f_evt.n_arg; i++) I->f_evt.arg[i] = bound[i];
+    gw_free(I, x);
+    if (r != 0) GW_LOG_ERR(I, "%s: evaluation of the FMU state's event indicators failed", fn);
+    return r == 0;
+}
+
 /* The events against the run (after the initialisation; before it, gw_initialize recomputes
  * them): an event whose indicator is at or below 0 has fired (every event fires when its
  * indicator reaches 0: gw_events_check, gw_event_update, gw_events_initial), a flag and its
  * firing time go together (0 and 0, or 1 and a time of the run), and the run terminated
- * exactly when a terminating event fired.  1 or reason logged. */
+ * exactly when a terminating event fired.  The indicator is both the stored one (the one at
+ * the last event update or, once positive, seen since: gw_event_update, gw_event_observe) and,
+ * unless the front end lets its caller set the state (Model Exchange: fmi2SetContinuousStates
+ * takes any finite state, past a crossing until the next event update), the one recomputed
+ * from the state's own t, x, u, p (gw_state_indicators): a step ends at a crossing, so a state
+ * past it with the event not fired (a fallen wheel not fallen) is refused.  1 or reason
+ * logged. */
 static int gw_state_check_events(gw_instance *I, const char *fn, const unsigned char *buf,
                                  const gw_state_scalars *sc, const gw_state_facts *facts) {
     const gw_model *m = I->m;
     const double t = sc->dbl[GW_SD_T];
     const double tol_t = 1e-9 * (fabs(t) > 1.0 ? fabs(t) : 1.0);
-    int i, ended = 0;
+    double *e_now = NULL;
+    int i, ended = 0, ok = 1;
     if (!facts->initialised) return 1;
-    for (i = 0; i < m->ne; i++) {
+    if (!facts->time_free && m->ne > 0) {
+        e_now = (double *)gw_alloc(I, (size_t)m->ne, sizeof(double));
+        if (!e_now) {
+            GW_LOG_ERR(I, "%s: out of memory", fn);
+            return 0;
+        }
+        ok = gw_state_indicators(I, fn, buf, t, e_now);
+    }
+    for (i = 0; ok && i < m->ne; i++) {
         const char *name = m->event_names && m->event_names[i] ? m->event_names[i] : "?";
         const double e = gw_state_vec_at(I, buf, 5, i), te = gw_state_vec_at(I, buf, 7, i);
         const int flag = gw_state_flag_at(I, buf, i);
@@ -210,20 +268,26 @@ static int gw_state_check_events(gw_instance *I, const char *fn, const unsigned 
             GW_LOG_ERR(I, "%s: FMU state holds e[%d] = %g (event %s) at or below 0 but the "
                        "event has not fired (an event fires when its indicator reaches 0)", fn,
                        i, e, name);
-            return 0;
-        }
-        if (!flag && te != 0.0) {
+            ok = 0;
+        } else if (e_now && !(e_now[i] > 0.0) && !flag) {
+            GW_LOG_ERR(I, "%s: FMU state holds a state at which event %s has indicator %.4g, at or "
+                       "below 0, but the event has not fired (a step ends where an indicator "
+                       "reaches 0)", fn, name, e_now[i]);
+            ok = 0;
+        } else if (!flag && te != 0.0) {
             GW_LOG_ERR(I, "%s: FMU state holds t_events[%d] = %.17g (event %s) but the event has "
                        "not fired (then 0)", fn, i, te, name);
-            return 0;
-        }
-        if (flag && !facts->time_free && !(te >= sc->dbl[GW_SD_T_START] && te <= t + tol_t)) {
+            ok = 0;
+        } else if (flag && !facts->time_free &&
+                   !(te >= sc->dbl[GW_SD_T_START] && te <= t + tol_t)) {
             GW_LOG_ERR(I, "%s: FMU state holds t_events[%d] = %.17g (event %s) outside the run "
                        "[t_start, t] = [%.17g, %.17g]", fn, i, te, name, sc->dbl[GW_SD_T_START], t);
-            return 0;
+            ok = 0;
         }
         if (flag && gw_event_action_of(I, i) == GW_EVENT_TERMINATE) ended = 1;
     }
+    gw_free(I, e_now);
+    if (!ok) return 0;
     if (sc->ints[GW_SI_TERMINATED] != ended || (facts->terminated && !ended)) {
         GW_LOG_ERR(I, "%s: FMU state holds terminated = %d, but %s terminating event has fired%s",
                    fn, sc->ints[GW_SI_TERMINATED], ended ? "a" : "no",

@@ -276,3 +276,28 @@ def test_model_exchange_states_let_the_time_be_anything(earth_fmu):
         assert "e[0] = -1 (event fall) at or below 0" in m.log_text()
     finally:
         m.free()
+
+
+@pytest.mark.parametrize("beta", [-0.5, 1e300])
+def test_a_state_past_the_fall_without_the_fall_is_refused(rolled, beta):
+    """The reported case: the state vector of an upright Co-Simulation state changed to a tilt past
+    the fall (beta = -0.5 below beta_min = 0.001, or beta = 1e300), the fall not fired, the stored
+    indicator and the checksum left right: the instance read beta = -0.5 with fallen = false and its
+    next step reported the fall. A Co-Simulation step ends at the fall when the fall indicator
+    sin(beta) - sin(beta_min) reaches 0, so no reachable state holds an indicator at or below 0 with
+    the fall not fired: sin(-0.5) - sin(0.001) = -0.4804 and sin(1e300) - sin(0.001) = -0.8189
+    (Python's math.sin, not the FMU) are, and the state is refused naming the event."""
+    s, blob, outputs = rolled
+    _fresh(s, blob)
+    beta_index = index_of(s, blob, "x", "beta")
+    assert read(blob, "flags[0]") == 0 and read(blob, "e[0]") > 0.0
+    indicator = math.sin(beta) - math.sin(s.get("beta_min"))
+    assert indicator < -0.4
+    n = len(s.messages)
+    assert restore(s, changed(blob, **{f"x[{beta_index}]": beta})) == ERROR
+    log = "\n".join(m for _, _, m in s.messages[n:])
+    assert "event fall" in log and f"indicator {indicator:.4g}" in log, log
+    assert s.raw("fmi2DoStep", ctypes.c_double(1.0), ctypes.c_double(0.1), 1) == ERROR
+    _fresh(s, blob)
+    assert s.get("beta") == outputs["beta"] and s.get("fallen") == 0.0
+

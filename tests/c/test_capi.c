@@ -303,6 +303,10 @@ static void save_restore(void) {
      * with a valid checksum: refused by the value checks */
     crafted_refused(w, buf, bad, size, &x2[PAPER_EARTH_X_beta], nan, "FMU state holds an invalid x[");
     CHECK(paper_earth_get_states(w, x) == GYROWHEEL_OK && !isnan(x[PAPER_EARTH_X_beta]));
+    /* the wheel past the fall (beta = -0.5 below beta_min, or 1e300: sin(beta) - sin(beta_min)
+     * < 0) with the fall not fired and its stored indicator left positive: no step ends there */
+    crafted_refused(w, buf, bad, size, &x2[PAPER_EARTH_X_beta], -0.5, "event fall has indicator");
+    crafted_refused(w, buf, bad, size, &x2[PAPER_EARTH_X_beta], 1e300, "event fall has indicator");
     {
         const double budget = 1e6;
         crafted_refused(w, buf, bad, size, &budget, 0.5,

@@ -4,7 +4,8 @@ The .ssp is written with pyssp-standard (SSP 1.0, namespace http://ssp-standard.
 SystemStructure.ssd plus resources/<component>.fmu. Every connection joins an output of one
 component to an input of another by variable name (SSP 1.0 section 5.3.6). The same system
 is written as OspSystemStructure.xml for libcosim (Open Simulation Platform, MSMI schema 0.1).
-read_ssp() reads an .ssp back (lxml) for gyrowheel's own master (cosim/master.py).
+read_ssp() reads an .ssp back for gyrowheel's own master (cosim/master.py) and the sweep,
+refusing what it does not understand and what is not valid against the vendored SSP 1.0 schemas.
 """
 from __future__ import annotations
 
@@ -192,7 +193,8 @@ def write_ssp(system: SystemDescription, path: str | Path, step: float = 0.01) -
       communication step `step` [s] and the smallest tolerance the components declare), without
       which OMSimulator 3.0's command line cannot tell the system's type; other masters skip it
       (ssc:TAnnotations are open to any content).
-    Raises SystemFileError if a connection does not fit or a start value is not a parameter or
+    Raises SystemFileError, before anything is written, if the system fails the check read_ssp
+    applies (SystemDescription.check: types, units, loops) or a start value is not a parameter or
     an input (check_bindings), ValueError for a step that is not a positive number;
     MissingExtraError without gyrowheel[system] (pyssp-standard)."""
     if not (isinstance(step, (int, float)) and step > 0 and math.isfinite(step)):
@@ -432,7 +434,6 @@ def _parameter_values(binding, root: Path, where: str) -> dict[str, tuple[str, s
             pset = ET.parse(ssv).getroot()
         except ET.ParseError as exc:
             raise SystemFileError(f"{where}: {source} is not well-formed XML: {exc}") from None
-        _valid(ssv, SSV_SCHEMA, f"{where}: {source}")
     else:
         values = binding.find("ssd:ParameterValues", _NS)
         if values is None:
@@ -457,6 +458,8 @@ def _parameter_values(binding, root: Path, where: str) -> dict[str, tuple[str, s
         if typed[0].get("value") is None:
             raise SystemFileError(f"{where}: parameter {name!r} has no value")
         out[prefix + name] = (kind, typed[0].get("value"), typed[0].get("unit"))
+    if source:
+        _valid(ssv, SSV_SCHEMA, f"{where}: {source}")
     return out
 
 
@@ -523,7 +526,12 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
     """Read an .ssp (SSP 1.0): components with their FMUs unpacked under unpack_dir, connections,
     parameter bindings (inline or .ssv files in the archive, of the components and of the system
     with names '<component>.<variable>'; the system's take precedence, SSP 1.0 section 5.3.5)
-    and the DefaultExperiment. Raises SystemFileError naming the file and the element at fault."""
+    and the DefaultExperiment. Nothing is skipped: a child element the reader does not know
+    (_understood), more than one transformation on a connection, an unsupported transformation
+    or binding, and finally anything SystemStructure.ssd or an .ssv breaks of the vendored SSP
+    1.0 schemas (cosim/schemas/ssp1, XSD 1.0) is refused; the system passes
+    SystemDescription.check with the connectors' units. Raises SystemFileError naming the file
+    and the element at fault, in one line."""
     path = Path(path)
     if not path.is_file():
         raise SystemFileError(f"{path}: no such SSP file")
@@ -589,7 +597,6 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
         if not system.stop_time > system.start_time:
             raise SystemFileError(f"{path}: DefaultExperiment stopTime {system.stop_time:g} is not after "
                                   f"startTime {system.start_time:g}")
-    _valid(ssd, SSD_SCHEMA, f"{path}: SystemStructure.ssd")
     try:
         system.check(units)
     except SystemFileError as exc:
@@ -597,6 +604,7 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
     for c in components:
         c.start_values = _bound(raw[c.name], c.name, fmu_variables(c.fmu, c.name), f"{path}: ")
         c.start_values = check_bindings(c, f"{path}: ")
+    _valid(ssd, SSD_SCHEMA, f"{path}: SystemStructure.ssd")  # what the checks above leave: the standard's rules
     return system
 
 

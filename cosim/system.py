@@ -4,7 +4,8 @@ The .ssp is written with pyssp-standard (SSP 1.0, namespace http://ssp-standard.
 SystemStructure.ssd plus resources/<component>.fmu. Every connection joins an output of one
 component to an input of another by variable name (SSP 1.0 section 5.3.6). The same system
 is written as OspSystemStructure.xml for libcosim (Open Simulation Platform, MSMI schema 0.1).
-read_ssp() reads an .ssp back (lxml) for gyrowheel's own master (cosim/master.py).
+read_ssp() reads an .ssp back for gyrowheel's own master (cosim/master.py) and the sweep,
+refusing what it does not understand and what is not valid against the vendored SSP 1.0 schemas.
 """
 from __future__ import annotations
 
@@ -90,13 +91,20 @@ class SystemDescription:
                 return c
         raise SystemFileError(f"no component {name!r}; components: {', '.join(c.name for c in self.components)}")
 
-    def check(self) -> list[list[int]]:
+    def check(self, connector_units: dict[tuple[str, str], str] | None = None) -> list[list[int]]:
         """The system is runnable by an FMI 2.0 Co-Simulation master: at least one component, unique
         component names, every component an FMI 2.0 FMU with Co-Simulation, every connection an
         existing output to an existing input of the same type (SSP 1.0 section 5.3.6), each input
         with one source, a linear transformation only on a Real connection (it is defined for
-        continuous values), no algebraic loop. Raises SystemFileError naming the component,
-        connection or variable. Returns gyrowheel.cosim.exchange.exchange_levels(self)."""
+        continuous values), both ends of a connection in one unit unless it suppresses unit
+        conversion (check_units), no algebraic loop. The reader (read_ssp), the writers
+        (write_ssp, write_osp) and the master (gyrowheel.cosim.master.run) all apply it, so a file
+        gyrowheel writes is one it reads.
+
+        connector_units: {(component, connector): unit} declared by an .ssd's connectors (they
+        take precedence over the FMU variables' units); None: the FMUs' units only.
+        Raises SystemFileError naming the component, connection or variable. Returns
+        gyrowheel.cosim.exchange.exchange_levels(self)."""
         if not self.components:
             raise SystemFileError(f"system {self.name!r} has no components")
         names = [c.name for c in self.components]
@@ -137,6 +145,7 @@ class SystemDescription:
                 if not math.isfinite(getattr(k, what)):
                     raise SystemFileError(f"connection {describe(k)}: {what} {getattr(k, what)!r} is not "
                                           f"a finite number")
+            check_units(k, variables, connector_units or {})
         from gyrowheel.cosim.exchange import exchange_levels  # it reads the FMUs this module checks
         return exchange_levels(self)
 
@@ -184,7 +193,8 @@ def write_ssp(system: SystemDescription, path: str | Path, step: float = 0.01) -
       communication step `step` [s] and the smallest tolerance the components declare), without
       which OMSimulator 3.0's command line cannot tell the system's type; other masters skip it
       (ssc:TAnnotations are open to any content).
-    Raises SystemFileError if a connection does not fit or a start value is not a parameter or
+    Raises SystemFileError, before anything is written, if the system fails the check read_ssp
+    applies (SystemDescription.check: types, units, loops) or a start value is not a parameter or
     an input (check_bindings), ValueError for a step that is not a positive number;
     MissingExtraError without gyrowheel[system] (pyssp-standard)."""
     if not (isinstance(step, (int, float)) and step > 0 and math.isfinite(step)):
@@ -407,6 +417,7 @@ def _number(text: str | None, default: float, what: str) -> float:
 def _parameter_values(binding, root: Path, where: str) -> dict[str, tuple[str, str, str | None]]:
     """{name (with the binding's prefix): (SSV type, value text, unit)} of one ssd:ParameterBinding,
     inline (ssd:ParameterValues) or from its source .ssv in the archive (SSP 1.0 section 5.3.5)."""
+    _understood(binding, ("ssd:ParameterValues", "ssd:ParameterMapping", "ssd:Annotations"), where)
     kind = binding.get("type", PARAMETER_SET_TYPE)
     if kind != PARAMETER_SET_TYPE:
         raise SystemFileError(f"{where}: parameter binding of type {kind!r} (only {PARAMETER_SET_TYPE})")
@@ -424,7 +435,11 @@ def _parameter_values(binding, root: Path, where: str) -> dict[str, tuple[str, s
         except ET.ParseError as exc:
             raise SystemFileError(f"{where}: {source} is not well-formed XML: {exc}") from None
     else:
-        pset = binding.find("ssd:ParameterValues/ssv:ParameterSet", _NS)
+        values = binding.find("ssd:ParameterValues", _NS)
+        if values is None:
+            return {}
+        _understood(values, ("ssv:ParameterSet",), f"{where}: ssd:ParameterValues")
+        pset = values.find("ssv:ParameterSet", _NS)
         if pset is None:
             return {}
     if pset.tag != f"{{{SSV_NS}}}ParameterSet":
@@ -443,6 +458,8 @@ def _parameter_values(binding, root: Path, where: str) -> dict[str, tuple[str, s
         if typed[0].get("value") is None:
             raise SystemFileError(f"{where}: parameter {name!r} has no value")
         out[prefix + name] = (kind, typed[0].get("value"), typed[0].get("unit"))
+    if source:
+        _valid(ssv, SSV_SCHEMA, f"{where}: {source}")
     return out
 
 
@@ -474,11 +491,47 @@ def _bound(binding_values: dict, component: str, variables: dict, where: str) ->
     return out
 
 
+# The child elements the reader knows (SystemStructureDescription.xsd): those it reads, those it
+# refuses by name, and those that carry no value (geometry, annotations, unit and enumeration
+# definitions); anything else is refused rather than ignored.
+ROOT_CHILDREN = ("ssd:System", "ssd:Enumerations", "ssd:Units", "ssd:DefaultExperiment", "ssd:Annotations")
+SYSTEM_CHILDREN = ("ssd:Connectors", "ssd:ElementGeometry", "ssd:Elements", "ssd:Connections",
+                   "ssd:SignalDictionaries", "ssd:SystemGeometry", "ssd:GraphicalElements",
+                   "ssd:ParameterBindings", "ssd:Annotations")
+ELEMENTS = ("ssd:Component", "ssd:SignalDictionaryReference", "ssd:System")
+COMPONENT_CHILDREN = ("ssd:Connectors", "ssd:ElementGeometry", "ssd:ParameterBindings", "ssd:Annotations")
+CONNECTOR_CHILDREN = ("ssc:Real", "ssc:Integer", "ssc:Boolean", "ssc:String", "ssc:Enumeration", "ssc:Binary",
+                      "ssd:ConnectorGeometry", "ssd:Annotations")
+SCHEMAS = Path(__file__).resolve().parent / "schemas" / "ssp1"  # the SSP 1.0.1 schemas (XSD 1.0), BSD licence
+SSD_SCHEMA = "SystemStructureDescription.xsd"
+SSV_SCHEMA = "SystemStructureParameterValues.xsd"
+
+
+def _valid(document: Path, schema: str, where: str) -> None:
+    """Validate an SSP 1.0 document against its vendored schema (lxml, which fmpy requires);
+    SystemFileError with the schema's first message, one line, naming its line and element."""
+    from lxml import etree
+    validator = etree.XMLSchema(etree.parse(str(SCHEMAS / schema)))
+    try:
+        ok = validator.validate(etree.parse(str(document)))
+    except etree.XMLSyntaxError as exc:
+        raise SystemFileError(f"{where} is not well-formed XML: {exc}") from None
+    if not ok:
+        first = validator.error_log[0]
+        message = " ".join(_qname(first.message).split())
+        raise SystemFileError(f"{where}, line {first.line}: not valid SSP 1.0 ({schema}): {message}")
+
+
 def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
     """Read an .ssp (SSP 1.0): components with their FMUs unpacked under unpack_dir, connections,
     parameter bindings (inline or .ssv files in the archive, of the components and of the system
     with names '<component>.<variable>'; the system's take precedence, SSP 1.0 section 5.3.5)
-    and the DefaultExperiment. Raises SystemFileError naming the file and the element at fault."""
+    and the DefaultExperiment. Nothing is skipped: a child element the reader does not know
+    (_understood), more than one transformation on a connection, an unsupported transformation
+    or binding, and finally anything SystemStructure.ssd or an .ssv breaks of the vendored SSP
+    1.0 schemas (cosim/schemas/ssp1, XSD 1.0) is refused; the system passes
+    SystemDescription.check with the connectors' units. Raises SystemFileError naming the file
+    and the element at fault, in one line."""
     path = Path(path)
     if not path.is_file():
         raise SystemFileError(f"{path}: no such SSP file")
@@ -498,6 +551,12 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
     sysel = root.find("ssd:System", _NS)
     if sysel is None:
         raise SystemFileError(f"{path}: SystemStructure.ssd has no ssd:System")
+    _understood(root, ROOT_CHILDREN, f"{path}: ssd:SystemStructureDescription")
+    _understood(sysel, SYSTEM_CHILDREN, f"{path}: system {sysel.get('name')!r}")
+    for group, child in (("Elements", ELEMENTS), ("Connections", ("ssd:Connection",)),
+                         ("ParameterBindings", ("ssd:ParameterBinding",))):
+        for el in sysel.findall(f"ssd:{group}", _NS):
+            _understood(el, child, f"{path}: system {sysel.get('name')!r}, ssd:{group}")
     if sysel.find("ssd:Elements/ssd:System", _NS) is not None or sysel.find("ssd:Elements/ssd:SignalDictionaryReference", _NS) is not None:
         raise SystemFileError(f"{path}: nested systems and signal dictionaries are not supported "
                               "(components of FMUs only)")
@@ -509,6 +568,13 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
         where = f"{path}: component {name!r}"
         if el.get("type", FMU_TYPE) != FMU_TYPE:
             raise SystemFileError(f"{where} is not an FMU ({el.get('type')})")
+        _understood(el, COMPONENT_CHILDREN, where)
+        for connectors in el.findall("ssd:Connectors", _NS):
+            _understood(connectors, ("ssd:Connector",), f"{where}, ssd:Connectors")
+            for conn in connectors:
+                _understood(conn, CONNECTOR_CHILDREN, f"{where}, connector {conn.get('name')!r}")
+        for bindings in el.findall("ssd:ParameterBindings", _NS):
+            _understood(bindings, ("ssd:ParameterBinding",), f"{where}, ssd:ParameterBindings")
         fmu = _inside(root_dir, source, where)
         components.append(Component(name, fmu))
         raw[name] = {}
@@ -532,14 +598,13 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
             raise SystemFileError(f"{path}: DefaultExperiment stopTime {system.stop_time:g} is not after "
                                   f"startTime {system.start_time:g}")
     try:
-        system.check()
-        for k in connections:
-            _check_units(k, units, system)
+        system.check(units)
     except SystemFileError as exc:
         raise SystemFileError(f"{path}: {exc}") from None
     for c in components:
         c.start_values = _bound(raw[c.name], c.name, fmu_variables(c.fmu, c.name), f"{path}: ")
         c.start_values = check_bindings(c, f"{path}: ")
+    _valid(ssd, SSD_SCHEMA, f"{path}: SystemStructure.ssd")  # what the checks above leave: the standard's rules
     return system
 
 
@@ -547,17 +612,48 @@ def read_ssp(path: str | Path, unpack_dir: str | Path) -> SystemDescription:
 MAPPINGS = ("BooleanMappingTransformation", "IntegerMappingTransformation", "EnumerationMappingTransformation")
 
 
+def _qname(tag: str) -> str:
+    """'ssc:LinearTransformation' for '{http://ssp-standard.org/SSP1/SystemStructureCommon}LinearTransformation'."""
+    for prefix, ns in _NS.items():
+        tag = tag.replace(f"{{{ns}}}", f"{prefix}:")
+    return tag
+
+
+def _understood(el, allowed: tuple[str, ...], where: str) -> None:
+    """Refuse any child element of el the reader does not understand (allowed: 'ssd:Connectors', ...,
+    the SSP 1.0 children it reads or that carry no value: geometry, annotations), naming it."""
+    for child in el:
+        if not isinstance(child.tag, str):  # a comment or processing instruction
+            continue
+        if _qname(child.tag) not in allowed:
+            raise SystemFileError(f"{where}: {_qname(child.tag)} is not an element gyrowheel's reader knows "
+                                  f"here (known: {', '.join(allowed)})")
+
+
+CONNECTION_CHILDREN = ("ssc:LinearTransformation", *(f"ssc:{m}" for m in MAPPINGS), "ssd:ConnectionGeometry",
+                       "ssd:Annotations")
+
+
 def _connection(el, units: dict, where: str) -> Connection:
     """One ssd:Connection: its ends and its transformation. ssc:LinearTransformation is applied
-    (factor and offset, defaults 1 and 0); each mapping transformation is refused by name."""
+    (factor and offset, defaults 1 and 0); each mapping transformation is refused by name, and so
+    is more than one transformation (SSP 1.0 GTransformationChoice: at most one) and any child
+    that is not an SSP 1.0 child of a connection."""
     k = Connection(el.get("startElement"), el.get("startConnector"), el.get("endElement"), el.get("endConnector"))
+    here = f"{where}connection {describe(k)}"
+    _understood(el, CONNECTION_CHILDREN, here)
+    transformations = [_qname(ch.tag) for ch in el if isinstance(ch.tag, str) and _qname(ch.tag) in
+                       CONNECTION_CHILDREN[:4]]
+    if len(transformations) > 1:
+        raise SystemFileError(f"{here}: {len(transformations)} transformations ({', '.join(transformations)}): "
+                              f"SSP 1.0 allows at most one per connection")
     for child in el:
-        kind = child.tag.split("}", 1)[-1]
+        kind = child.tag.split("}", 1)[-1] if isinstance(child.tag, str) else ""
         if child.tag == f"{{{SSC_NS}}}LinearTransformation":
-            k.factor = _number(child.get("factor"), 1.0, f"{where}connection {describe(k)}: factor")
-            k.offset = _number(child.get("offset"), 0.0, f"{where}connection {describe(k)}: offset")
+            k.factor = _number(child.get("factor"), 1.0, f"{here}: factor")
+            k.offset = _number(child.get("offset"), 0.0, f"{here}: offset")
         elif kind in MAPPINGS:
-            raise SystemFileError(f"{where}connection {describe(k)}: ssc:{kind} is not supported by gyrowheel's "
+            raise SystemFileError(f"{here}: ssc:{kind} is not supported by gyrowheel's "
                                   f"master (of the SSP 1.0 transformations only ssc:LinearTransformation is)")
     k.suppress_unit_conversion = el.get("suppressUnitConversion", "false").strip() in ("true", "1")
     return k
@@ -574,17 +670,19 @@ def _connector_units(sysel) -> dict[tuple[str, str], str]:
     return out
 
 
-def _check_units(k: Connection, units: dict, system: SystemDescription) -> None:
+def check_units(k: Connection, variables: dict, connector_units: dict) -> None:
     """A connection between different units would need the unit conversion SSP 1.0 performs
-    unless suppressUnitConversion="true" (SystemStructureDescription.xsd, Connection): refused.
-    Each end's unit is its connector's, else its FMU variable's."""
+    unless suppressUnitConversion="true" (SystemStructureDescription.xsd, Connection); no master
+    of gyrowheel's converts, so it is refused (SystemFileError naming the connection and both
+    units). Each end's unit is its connector's (connector_units, {(component, connector): unit}),
+    else its FMU variable's (variables: {component: fmu_variables(...)})."""
     if k.suppress_unit_conversion:
         return
     ends = []
     for elem, name in ((k.start_element, k.start_connector), (k.end_element, k.end_connector)):
-        unit = units.get((elem, name))
+        unit = connector_units.get((elem, name))
         if unit is None:
-            v = fmu_variables(system.component(elem).fmu, elem)[name]
+            v = variables[elem][name]
             unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None)
         ends.append(unit)
     if ends[0] and ends[1] and ends[0] != ends[1]:

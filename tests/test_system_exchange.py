@@ -170,3 +170,63 @@ def test_connector_units_that_differ_are_refused_unless_conversion_is_suppressed
     suppressed = _edit(path, tmp_path / "suppressed.ssp", lambda s: s.replace(
         '<ssd:Connection startElement="src"', '<ssd:Connection suppressUnitConversion="true" startElement="src"'))
     assert read_ssp(suppressed, tmp_path / "s").connections[0].suppress_unit_conversion
+
+
+# A connection's children that SSP 1.0 refuses (SystemStructureDescription.xsd: a connection holds at
+# most one of ssc:GTransformationChoice, then ConnectionGeometry and Annotations; no attribute factor)
+NOT_SSP = {
+    "unknown_element": ('<ssc:FooTransformation factor="3"/>', "",
+                        "connection src.x -> A.u: ssc:FooTransformation is not an element gyrowheel's reader "
+                        "knows here (known: ssc:LinearTransformation, "),
+    "two_transformations": ('<ssc:LinearTransformation factor="3"/><ssc:LinearTransformation factor="7"/>', "",
+                            "connection src.x -> A.u: 2 transformations (ssc:LinearTransformation, "
+                            "ssc:LinearTransformation): SSP 1.0 allows at most one per connection"),
+    "unknown_attribute": ("", ' factor="3"',
+                          "not valid SSP 1.0 (SystemStructureDescription.xsd): "
+                          "Element 'ssd:Connection', attribute 'factor': The attribute 'factor' is not allowed."),
+}
+
+
+@pytest.mark.parametrize("case", sorted(NOT_SSP))
+def test_a_connection_the_standard_does_not_allow_is_refused_in_one_line(plain_chain, tmp_path, case):
+    """Invalid against the vendored SSP 1.0 schema (checked here with xmlschema, a validator the
+    reader does not use): refused by read_ssp, `gyrowheel system run` (one line, exit 2) and a
+    sweep, not run untransformed (the unknown element, the attribute: A.y = exp(-k t)) or with one
+    of the two transformations silently chosen (the last: A.y = 7 exp(-k t))."""
+    from gyrowheel import SweepSpecError
+    from gyrowheel.studies import sweep
+
+    inner, attribute, message = NOT_SSP[case]
+    path = _edit(plain_chain, tmp_path / f"{case}.ssp", lambda s: re.sub(
+        r'(<ssd:Connection startElement="src"[^>]*?)\s*/>', rf"\1{attribute}>{inner}</ssd:Connection>", s, count=1))
+    with zipfile.ZipFile(path) as zf:
+        zf.extract("SystemStructure.ssd", tmp_path)
+    assert not xmlschema.XMLSchema10(SCHEMAS / "SystemStructureDescription.xsd").is_valid(
+        tmp_path / "SystemStructure.ssd")
+    with pytest.raises(SystemFileError, match=re.escape(message)):
+        read_ssp(path, tmp_path / "u")
+    r = subprocess.run([sys.executable, "-m", "gyrowheel", "system", "run", str(path)], capture_output=True,
+                       text=True, cwd=tmp_path)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and message in r.stderr, r.stderr
+    with pytest.raises(SweepSpecError, match=re.escape(message)):
+        sweep(path, grid={"src.k": [K]}, metrics=["final:A.y"], stop_time=1.0, output_interval=STEP, workers=0)
+
+
+def test_an_element_the_reader_does_not_know_is_refused_where_it_is(plain_chain, tmp_path):
+    """Schema-valid places the reader reads (a component, a connector, a binding's values, which
+    SSP 1.0 leaves open to any element) never hide an element it would skip: each is named."""
+    cases = {
+        "component": (lambda s: s.replace("</ssd:Connectors>", "</ssd:Connectors><ssd:Foo/>", 1),
+                      "component 'src': ssd:Foo is not an element gyrowheel's reader knows here"),
+        "connector": (lambda s: s.replace('kind="output">', 'kind="output"><ssd:Bar/>', 1),
+                      "component 'src', connector 'x': ssd:Bar is not an element gyrowheel's reader knows here"),
+        "values": (lambda s: s.replace("</ssd:Connectors>", "</ssd:Connectors><ssd:ParameterBindings>"
+                                       "<ssd:ParameterBinding><ssd:ParameterValues><Baz k='1'/></ssd:ParameterValues>"
+                                       "</ssd:ParameterBinding></ssd:ParameterBindings>", 1),
+                   "component 'src', parameter binding: ssd:ParameterValues: Baz is not an element gyrowheel's "
+                   "reader knows here (known: ssv:ParameterSet)"),
+    }
+    for case, (edit, message) in cases.items():
+        path = _edit(plain_chain, tmp_path / f"{case}.ssp", edit)
+        with pytest.raises(SystemFileError, match=re.escape(message)):
+            read_ssp(path, tmp_path / case)

@@ -40,14 +40,19 @@ def _ssv_ns(ssd: str) -> str:
 
 
 def bind(ssd: str, comp: str | None, params: str = "", attrs: str = "") -> str:
-    """ssd with a ParameterBinding on component `comp` (after its Connectors) or on the system
-    (after its Connections); params: ssv:Parameter elements inline, attrs: the binding's attributes."""
+    """ssd with a ParameterBinding on component `comp` (after its Connectors, beside the bindings
+    it has) or on the system (before its Elements), where SSP 1.0 puts them (the file stays
+    schema-valid); params: ssv:Parameter elements inline, attrs: the binding's attributes."""
     binding = BINDING.format(attrs=attrs, values=VALUES.format(params) if params else "")
     ssd = _ssv_ns(ssd)
     if comp is None:
-        return ssd.replace("</ssd:Connections>", "</ssd:Connections>" + binding, 1)
+        return ssd.replace("<ssd:Elements>", binding + "<ssd:Elements>", 1)
     head, tail = ssd.split(f'<ssd:Component name="{comp}"', 1)
     first, rest = tail.split("</ssd:Connectors>", 1)
+    if rest.lstrip().startswith("<ssd:ParameterBindings>"):  # one ParameterBindings per element
+        binding = binding.removeprefix("<ssd:ParameterBindings>").removesuffix("</ssd:ParameterBindings>")
+        rest = rest.replace("<ssd:ParameterBindings>", "<ssd:ParameterBindings>" + binding, 1)
+        binding = ""
     return head + f'<ssd:Component name="{comp}"' + first + "</ssd:Connectors>" + binding + rest
 
 
@@ -278,3 +283,33 @@ def test_cli_system_run_set(earth_loop, tmp_path):
                            (("--set", "wheel.solver=rk45"), "not a valid Enumeration; valid: euler, rk4")):
         r = gyrowheel("system", "run", earth_loop.ssp, "--stop-time", "0.1", "-o", out, *args, cwd=tmp_path)
         assert r.returncode == 2 and r.stderr.count("\n") == 1 and fragment in r.stderr, r.stderr
+
+
+def _unit(fmu: Path, name: str) -> str:
+    """A variable's unit read straight from modelDescription.xml (its Real's unit or declared type's)."""
+    from xml.etree import ElementTree as ET
+    with zipfile.ZipFile(fmu) as zf:
+        md = ET.fromstring(zf.read("modelDescription.xml"))
+    real = md.find(f"ModelVariables/ScalarVariable[@name='{name}']/Real")
+    unit = real.get("unit")
+    if unit is None:
+        unit = md.find(f"TypeDefinitions/SimpleType[@name='{real.get('declaredType')}']/Real").get("unit")
+    return unit
+
+
+def test_write_ssp_refuses_a_file_read_ssp_would_refuse(earth_loop, tmp_path):
+    """wheel.beta (rad) -> controller.vx (m/s) needs a unit conversion the readers refuse: the
+    writer refuses it too, before writing anything, with the reader's message; suppressing the
+    conversion (SSP 1.0 suppressUnitConversion) writes a file the reader reads back."""
+    from gyrowheel.cosim.system import Component, Connection, SystemDescription
+    assert (_unit(earth_loop.wheel_fmu, "beta"), _unit(earth_loop.controller_fmu, "vx")) == ("rad", "m/s")
+    components = [Component("wheel", earth_loop.wheel_fmu), Component("controller", earth_loop.controller_fmu)]
+    system = SystemDescription("units", components, [Connection("wheel", "beta", "controller", "vx")], 0.0, 1.0)
+    message = ("connection wheel.beta -> controller.vx: from 'rad' to 'm/s': unit conversion is not supported "
+               "(state the factor with ssc:LinearTransformation and suppressUnitConversion=\"true\")")
+    with pytest.raises(SystemFileError, match=re.escape(message)):
+        write_ssp(system, tmp_path / "out" / "units.ssp")
+    assert not (tmp_path / "out").exists()
+    system.connections[0].suppress_unit_conversion = True
+    path = write_ssp(system, tmp_path / "suppressed.ssp")
+    assert read_ssp(path, tmp_path / "u").connections[0].suppress_unit_conversion

@@ -47,7 +47,7 @@ def _core(code: str, cwd) -> subprocess.CompletedProcess:
 
 def test_extras_are_those_of_pyproject():
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    assert sorted(_distribution(r) for r in project["dependencies"]) == ["casadi", "fmpy", "numpy"]
+    assert sorted(_distribution(r) for r in project["dependencies"]) == ["casadi", "fmpy", "lxml", "numpy"]
     optional = project["optional-dependencies"]
     for extra, names in EXTRAS.items():
         assert sorted({IMPORT_NAMES[_distribution(r)] for r in optional[extra]}) == sorted(names), extra

@@ -5,7 +5,7 @@ The tests form one scenario and run in the order written (pytest keeps a file's 
 pytest-xdist `--dist loadfile` the file stays on one worker):
 1. the wheel: its files are the repository's package folders, nothing else (one top-level
    name, `gyrowheel`, beside its dist-info), its script and its core dependencies;
-2. the core install (casadi, fmpy, numpy from PyPI): build an FMU from a scene, simulate it,
+2. the core install (casadi, fmpy, lxml, numpy from PyPI): build an FMU from a scene, simulate it,
    describe it, rebuild it from its sources, export the C and compile its example; the verbs of
    an extra (sweep, animate, simulate --plot) say which extra to install;
 3. the [sweep] extra installed into the same environment: a 4-point sweep in-process, the
@@ -41,7 +41,7 @@ PACKAGE_DIR: dict[str, str] = PYPROJECT["tool"]["setuptools"]["package-dir"]
 VERSION = gyrowheel.__version__
 DIST_INFO = f"gyrowheel-{VERSION}.dist-info"
 SCENE = ROOT / "examples" / "scenes" / "paper_earth.toml"
-CORE = {"casadi", "fmpy", "numpy"}
+CORE = {"casadi", "fmpy", "lxml", "numpy"}
 # modules that only the extras bring (pyproject [project.optional-dependencies]): absent from the
 # core install, so that its commands are seen to work without them
 EXTRA_MODULES = ["matplotlib", "pandas", "dask", "distributed", "pyarrow", "tqdm", "PIL",

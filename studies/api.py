@@ -247,8 +247,7 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     there are any).
     """
     output = check_output_path(output)
-    check_plot_path(plot)
-    plot = None if plot is None else Path(plot).absolute()  # written after the run, wherever the cwd went
+    plot = check_plot_path(plot)  # absolute: written after the run, wherever the cwd went
     check_execution(workers, batch_size, scheduler, client)
     progress = flag_value(progress, "progress")
     if plot_metric is not None and not isinstance(plot_metric, str):

@@ -45,7 +45,7 @@ def check_output_file(path: str | os.PathLike, name: str, *, error: type = Argum
     target = path.resolve() if path.is_symlink() else path
     try:
         mode = os.stat(target).st_mode
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):  # (a file where a directory goes: named below)
         mode = None
     except OSError as exc:
         raise error(f"{name} {path}: cannot be written ({exc.strerror})", argument=argument) from None

@@ -61,7 +61,7 @@ def animate(result, output: str | Path, R: float | None = None, fmu: str | Path 
     values; or an .ssp: its wheel component's) give the wheel's geometry when the result does
     not (see resolve_parameters); component picks the component of a system's result
     (read_result); options are those of Options (fps, speed, size, trail, start, stop).
-    The output's directory is created; the file is written whole or not at all
+    The output's directory must exist (it is not made); the file is written whole or not at all
     (gyrowheel.output_files): an error or a Ctrl-C leaves what was there before. A GIF plays in
     real time (times speed) to the centisecond, at no more than gif.MAX_FPS frames a second
     (gif.py, docs/animation.md): its Timeline's options.fps is the fps written and delays_cs
@@ -73,13 +73,11 @@ def animate(result, output: str | Path, R: float | None = None, fmu: str | Path 
     fmt = output.suffix.lower()
     if fmt not in FORMATS:
         raise AnimationError(f"{output}: unknown output format {output.suffix!r}: use .gif, .mp4 or .html")
-    if output.parent.is_dir():  # refused before anything runs; a missing directory is created below
-        check_output_file(output, "-o", error=AnimationError)
+    check_output_file(output, "-o", error=AnimationError)  # refused before anything runs
     table = result_table(result, component)
     timeline = build_timeline(table, resolve_parameters(table, R=R, fmu=fmu), Options(**options),
                               gif=fmt == ".gif")
     try:
-        output.parent.mkdir(parents=True, exist_ok=True)
         with replaced_atomically(output, "-o", error=AnimationError) as part:
             if fmt == ".html":
                 from gyrowheel.animation.html import write_html

@@ -163,10 +163,9 @@ def _fmu_parameters(fmu: Path, component: str | None = None) -> dict[str, float]
         raise AnimationError(f"{fmu}: no such FMU file")
     names = ("R",) + FLYWHEEL_PARAMETERS
     if fmu.suffix.lower() == ".ssp":
-        import tempfile
-
         from gyrowheel.cosim.system import SystemFileError, read_ssp
-        with tempfile.TemporaryDirectory(prefix="gyrowheel-animate-") as tmp:
+        from gyrowheel.scratch import temporary_directory
+        with temporary_directory("animate") as tmp:
             try:
                 system = read_ssp(fmu, tmp)
             except SystemFileError as exc:

@@ -30,6 +30,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2Discard
 from gyrowheel.arguments import check_memory
 from gyrowheel.arguments import count as count_text
 from gyrowheel.errors import GyrowheelError
+from gyrowheel.scratch import new_directory
 from gyrowheel.cosim.exchange import exchange, settle
 from gyrowheel.cosim.system import SystemDescription, SystemFileError, describe, coerce_value
 from gyrowheel.cosim.fmi_log import forget_messages, logging_callbacks
@@ -48,7 +49,7 @@ class _Unit:
     messages: list = field(default_factory=list)  # the FMU's logged errors (fmi2Error, fmi2Fatal)
     callbacks: object = None
     log_id: int = 0
-    unzipdir: str | None = None  # fmpy.extract's temporary directory, removed after the run
+    unzipdir: str | None = None  # the FMU unpacked (gyrowheel.scratch), removed after the run
 
     def get(self, vr: int, fmi_type: str):
         if fmi_type == "Real":
@@ -130,7 +131,8 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
                          [v.name for v in md.modelVariables if v.causality == "output"])
             unit.callbacks, unit.log_id = logging_callbacks(unit.messages)
             units.append(unit)
-            unit.unzipdir = extract(str(c.fmu))
+            unit.unzipdir = str(new_directory("unit"))
+            extract(str(c.fmu), unzipdir=unit.unzipdir)
             unit.slave = FMU2Slave(guid=md.guid, unzipDirectory=unit.unzipdir,
                                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName=c.name)
             unit.slave.instantiate(callbacks=unit.callbacks, loggingOn=False)

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import shutil
-import tempfile
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,6 +20,7 @@ from fmpy import read_model_description
 
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.extras import require
+from gyrowheel.scratch import temporary_directory
 
 SSD_NS = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC_NS = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -212,7 +212,7 @@ def write_ssp(system: SystemDescription, path: str | Path, step: float = 0.01) -
         check_bindings(c)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="gyrowheel-ssp-") as tmp:
+    with temporary_directory("ssp") as tmp:
         root = Path(tmp)
         (root / "resources").mkdir()
         ssd_path = root / "SystemStructure.ssd"

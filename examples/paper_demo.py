@@ -52,7 +52,9 @@ def main() -> int:
         write_csv(str(out / f"{scene.name}.csv"), r)
         results[name] = r
         print(summarise(name, r, seconds))
-    fig = plot_trajectories(results, args.png or out / "paper_trajectories.png",
+    png = Path(args.png) if args.png else out / "paper_trajectories.png"
+    png.parent.mkdir(parents=True, exist_ok=True)  # the library writes only into directories that exist
+    fig = plot_trajectories(results, png,
                             title="Gyrover wheel, beta0 = 80 deg, gamma_dot0 = 6 rad/s (Nandy & Xu, Figs. 7-9)")
     print(f"wrote {', '.join(str(out / (load_scene(HERE / 'scenes' / s).name + '.csv')) for s in SCENES.values())}")
     print(f"wrote {fig}")

@@ -8,7 +8,6 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
-import tempfile
 import uuid
 import zipfile
 from dataclasses import dataclass, field
@@ -21,6 +20,7 @@ from gyrowheel.fmu_build.model_description import write_model_description
 from gyrowheel.fmu_build.runtime import runtime_sources
 from gyrowheel.errors import ArgumentError
 from gyrowheel.output_files import check_output_file, replaced_atomically
+from gyrowheel.scratch import new_directory
 from gyrowheel.fmu_build.scene import Experiment, Scene, check_scene
 from gyrowheel.fmu_build.variables import build_table
 from gyrowheel.model.build import build_model
@@ -82,7 +82,8 @@ def check_output(output: str | Path, scene_file: str | Path | None = None) -> Pa
     """The FMU's output path, refused before anything is built when it cannot be an FMU: a name
     not ending in .fmu (FMI 2.0.4, section 2.1: an FMU is a zip file "*.fmu"; out.toml, noext),
     or the scene file itself (the FMU would overwrite the scene it is built from), or an existing
-    path that is not a regular file (gyrowheel.output_files.check_output_file).
+    path that is not a regular file, or a directory that does not exist
+    (gyrowheel.output_files.check_output_file).
     Raises ArgumentError naming `output`."""
     if not isinstance(output, (str, os.PathLike)):
         raise ArgumentError(f"output must be a file path ending in {FMU_SUFFIX}, got {type(output).__name__}",
@@ -96,8 +97,7 @@ def check_output(output: str | Path, scene_file: str | Path | None = None) -> Pa
         got = f"ends in {output.suffix!r}" if output.suffix else "has no extension"
         raise ArgumentError(f"output {output}: {got}; an FMU's file name ends in {FMU_SUFFIX} "
                             "(FMI 2.0.4, section 2.1)", argument="output")
-    if output.exists():  # a directory, a device (/dev/full), a FIFO: refused, never renamed over
-        check_output_file(output, "output")
+    check_output_file(output, "output")  # a directory, a device, a FIFO, no such directory: refused
     return output
 
 
@@ -142,8 +142,8 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     output = check_output(output)
     tmp = None
     if build_dir is None:
-        tmp = tempfile.TemporaryDirectory(prefix="gyrowheel-")
-        build_dir = tmp.name
+        tmp = new_directory("build")
+        build_dir = tmp
     build_dir = Path(build_dir)
     root = build_dir / "fmu"
     if root.exists():
@@ -173,12 +173,11 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         (root / "documentation").mkdir(exist_ok=True)
         (root / "documentation" / "index.html").write_text(write_index_html(spec, experiment, table, identifier, guid,
                                                                                    source))
-        output.parent.mkdir(parents=True, exist_ok=True)
         _zip(root, output)
         return BuildResult(fmu=output, spec=spec, sources=src if tmp is None else None, identifier=identifier)
     finally:
         if tmp is not None:
-            tmp.cleanup()
+            shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _zip(root: Path, output: Path) -> None:

@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import re
 import subprocess
-import tempfile
 from pathlib import Path
+
+from gyrowheel.scratch import temporary_directory
 
 C_KEYWORDS = frozenset("""auto break case char const continue default do double else enum extern float
 for goto if inline int long register restrict return short signed sizeof static struct switch typedef
@@ -65,7 +66,7 @@ def check(name: str) -> str:
 
 def _compiles(cc: str, headers: list[str], name: str) -> bool:
     source = "".join(f"#include <{h}.h>\n" for h in headers) + f"typedef struct {name} {name};\n"
-    with tempfile.TemporaryDirectory(prefix="gyrowheel-name-") as tmp:
+    with temporary_directory("name") as tmp:
         path = Path(tmp) / "probe.c"
         path.write_text(source)
         proc = subprocess.run([cc, "-std=c99", "-fsyntax-only", str(path)], capture_output=True, text=True)

@@ -16,6 +16,7 @@ from pathlib import Path
 import fmpy
 
 from gyrowheel.errors import GyrowheelError
+from gyrowheel.scratch import temporary_directory
 
 STANDARD = ["-std=c99"]
 WARNINGS = ["-Wall", "-Wextra", "-Wpedantic", "-Werror"]
@@ -47,7 +48,10 @@ def compiler() -> str:
 
 
 def _run(cmd: list[str]) -> None:
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+    """Run the compiler; its own temporary files (gcc's cc*.s) go into a directory of ours
+    (gyrowheel.scratch), so a build killed while compiling leaves none past the next verb."""
+    with temporary_directory("cc") as tmp:
+        proc = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "TMPDIR": str(tmp)})
     if proc.returncode != 0:
         raise CompileError(f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
 

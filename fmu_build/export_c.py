@@ -20,7 +20,6 @@ import os
 import re
 import shutil
 import subprocess
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -33,6 +32,7 @@ from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileEr
 from gyrowheel.fmu_build.scene import Scene, check_scene
 from gyrowheel.fmu_build.variables import Variable, build_table
 from gyrowheel.model.spec import ModelSpec
+from gyrowheel.scratch import temporary_directory
 
 API_SOURCES = ("gw_capi.h", "gw_capi.c", "gw_capi_names.c", "gw_capi_state.c")
 MARKER = ".gyrowheel-export"
@@ -302,7 +302,7 @@ def _files(out_dir: Path) -> set[str]:
 
 def compile_check(unity: Path) -> None:
     """Compile <model>.c as a user would, strictly (C99, all warnings as errors)."""
-    with tempfile.TemporaryDirectory(prefix="gyrowheel-export-") as tmp:
+    with temporary_directory("export") as tmp:
         cmd = [compiler(), *STANDARD, *WARNINGS, *OPTIMISE, "-c", str(unity), "-o", str(Path(tmp) / "model.o")]
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0:

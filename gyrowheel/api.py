@@ -31,6 +31,7 @@ from gyrowheel.arguments import check_memory, count, existing_file, flag, number
 from gyrowheel.errors import ArgumentError, ArgumentTypeError, GyrowheelError, SweepSpecError
 from gyrowheel.extras import require
 from gyrowheel.output_files import check_output_file, replaced_atomically
+from gyrowheel.scratch import temporary_directory
 from gyrowheel.wording import ANIMATE, SWEEP, reworded
 
 
@@ -71,14 +72,11 @@ def _seconds(value, argument: str) -> float | None:
 
 def _output_file(value, argument: str = "output") -> Path:
     """A file a function will write: not a directory, nor any other path that is not a regular
-    file (a device such as /dev/full, a FIFO: gyrowheel.output_files.check_output_file); its
-    directory is created. Checked before the work, not after it. Raises ArgumentError naming
-    the argument (also for a directory that cannot be made because a file is in the way, or
-    cannot be made at all). Write it with gyrowheel.output_files.replaced_atomically."""
+    file (a device such as /dev/full, a FIFO), in a directory that exists
+    (gyrowheel.output_files.check_output_file: a missing directory is refused, not made).
+    Checked before the work, not after it. Raises ArgumentError naming the argument. Write it
+    with gyrowheel.output_files.replaced_atomically."""
     file = path(value, argument, "a file path")
-    if file.is_dir():
-        raise ArgumentError(f"{argument} {file}: is a directory; give a file name", argument=argument)
-    _make_directory(file.parent, file, argument)
     check_output_file(file, argument)
     return file
 
@@ -100,25 +98,22 @@ def _figure_file(value, argument: str) -> Path:
 
 
 def _output_directory(value, argument: str) -> Path:
-    """A directory a function will write into: a directory or a path where one can be made
-    (made now); ArgumentError naming the argument otherwise."""
+    """A directory a function will write into: a directory, or a new one made now in a directory
+    that exists (its parents are never made: the rule of check_output_file). Raises
+    ArgumentError naming the argument otherwise."""
     directory = path(value, argument, "a directory path")
     if directory.exists() and not directory.is_dir():
         raise ArgumentError(f"{argument} {directory}: exists and is not a directory", argument=argument)
-    _make_directory(directory, directory, argument)
-    return directory
-
-
-def _make_directory(directory: Path, given: Path, argument: str) -> None:
-    """Make `directory` (and its parents) for the argument that names `given`; ArgumentError."""
+    if not directory.absolute().parent.is_dir():
+        blocker = next((p for p in directory.absolute().parents if p.exists() and not p.is_dir()), None)
+        reason = f"{blocker} is not a directory" if blocker else f"directory {directory.parent} does not exist"
+        raise ArgumentError(f"{argument} {directory}: cannot write: {reason}", argument=argument)
     try:
-        directory.mkdir(parents=True, exist_ok=True)
-    except (FileExistsError, NotADirectoryError):  # a file where a directory goes: name it
-        blocker = next((p for p in (directory, *directory.parents) if p.exists() and not p.is_dir()), directory)
-        raise ArgumentError(f"{argument} {given}: cannot write: {blocker} is not a directory",
-                            argument=argument) from None
+        directory.mkdir(exist_ok=True)
     except OSError as exc:
-        raise ArgumentError(f"{argument} {given}: cannot write: {exc.strerror or exc}", argument=argument) from None
+        raise ArgumentError(f"{argument} {directory}: cannot write: {exc.strerror or exc}",
+                            argument=argument) from None
+    return directory
 
 
 def _written(exc: OSError, paths: Mapping[str, Path | None], error: type = ArgumentError) -> GyrowheelError | None:
@@ -455,8 +450,6 @@ def system_run(system, *, step: float = 0.01, stop_time: float | None = None, st
     half of this machine's memory), ArgumentTypeError (an argument of the wrong type),
     MasterError (a component failed: its logged reason).
     """
-    import tempfile
-
     from gyrowheel.cosim.master import run
     from gyrowheel.cosim.system import SystemDescription, SystemFileError, read_ssp
     from gyrowheel.simulation import write_csv
@@ -466,7 +459,7 @@ def system_run(system, *, step: float = 0.01, stop_time: float | None = None, st
         raise ArgumentError("step must be a number of seconds > 0, got None", argument="step")
     stop_time = _seconds(stop_time, "stop_time")
     csv = _output_file(output, "output") if output is not None else None
-    with tempfile.TemporaryDirectory(prefix="gyrowheel-system-") as tmp:
+    with temporary_directory("system") as tmp:
         if isinstance(system, SystemDescription):
             description = system
         else:

@@ -30,6 +30,7 @@ from pathlib import Path
 from gyrowheel import __version__
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.extras import require
+from gyrowheel.scratch import remove_stale
 from gyrowheel.wording import command_line_text
 
 EXIT_BAD_INPUT = 2
@@ -283,6 +284,7 @@ def _main(argv: list[str] | None) -> int:
             _quiet_stdout()
         raise
     try:
+        remove_stale()  # the temporary directories of killed gyrowheel processes (gyrowheel.scratch)
         code = args.func(args)
         sys.stdout.flush()  # here, where a reader gone away is seen (below), not at Python's exit
         return code

@@ -5,7 +5,10 @@ written to a hidden sibling in the same directory and moved over the final name 
 os.replace only when it is whole. An error or a Ctrl-C while writing removes the sibling and
 leaves what was there before (a previous run's file, or nothing). An existing path that is not
 a regular file (a directory, a device such as /dev/full, a FIFO, a socket) is refused before
-anything runs: renaming over it would replace the device node or the directory entry.
+anything runs: renaming over it would replace the device node or the directory entry. A
+process killed while writing (SIGKILL) cannot remove its sibling: the next write of the same
+file removes the siblings of processes that are gone (remove_stale_parts). The directory of
+the file must exist: it is never made (a typo in a path is refused, not a new directory).
 
     with replaced_atomically(path, "output") as part:
         figure.savefig(part)          # `part` keeps path's suffix: writers choosing by suffix work
@@ -16,11 +19,13 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import stat
 from collections.abc import Iterator
 from pathlib import Path
 
 from gyrowheel.errors import ArgumentError
+from gyrowheel.scratch import alive
 
 
 def check_output_file(path: str | os.PathLike, name: str, *, error: type = ArgumentError,
@@ -32,14 +37,15 @@ def check_output_file(path: str | os.PathLike, name: str, *, error: type = Argum
     Returns the path (pathlib.Path) the file will be moved to.
     Raises `error` (ArgumentError by default; `argument` its attribute, else `name` when that is
     an identifier) when the path exists and is not a regular file (a directory, a device, a
-    FIFO, a socket) or its directory does not exist.
+    FIFO, a socket) or its directory does not exist (a missing directory is refused, never
+    made: every verb of gyrowheel writes only into directories that exist) or is a file.
     """
     path = Path(path)
     argument = argument if argument is not None else (name if name.isidentifier() else None)
     target = path.resolve() if path.is_symlink() else path
     try:
         mode = os.stat(target).st_mode
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):  # (a file where a directory goes: named below)
         mode = None
     except OSError as exc:
         raise error(f"{name} {path}: cannot be written ({exc.strerror})", argument=argument) from None
@@ -48,7 +54,10 @@ def check_output_file(path: str | os.PathLike, name: str, *, error: type = Argum
     if mode is not None and not stat.S_ISREG(mode):
         raise error(f"{name} {path}: exists and is not a regular file (a device, FIFO or socket); "
                     "give a file name", argument=argument)
-    if not target.parent.is_dir():
+    if not target.parent.is_dir():  # never made: a typo in a path is not a new directory
+        blocker = next((p for p in target.parents if p.exists() and not p.is_dir()), None)
+        if blocker is not None:
+            raise error(f"{name} {path}: cannot write: {blocker} is not a directory", argument=argument)
         raise error(f"{name} {path}: directory {target.parent} does not exist", argument=argument)
     return target
 
@@ -56,6 +65,31 @@ def check_output_file(path: str | os.PathLike, name: str, *, error: type = Argum
 def partial_path(target: Path) -> Path:
     """The hidden sibling a file is written to before it replaces `target` (same suffix)."""
     return target.with_name(f".{target.stem}.part-{os.getpid()}{target.suffix}")
+
+
+def remove_stale_parts(target: Path) -> list[Path]:
+    """Remove the siblings `.STEM.part-PID.SUFFIX` of `target` (partial_path) left by a process
+    that was killed while writing it: regular files of this user whose PID no longer exists on
+    this machine (gyrowheel.scratch.alive). Returns the files removed; nothing where processes
+    cannot be asked (not POSIX)."""
+    if os.name != "posix":
+        return []
+    pattern = re.compile(rf"^\.{re.escape(target.stem)}\.part-([0-9]+){re.escape(target.suffix)}$")
+    removed = []
+    try:
+        entries = list(os.scandir(target.parent))
+    except OSError:
+        return []
+    for entry in entries:
+        match = pattern.match(entry.name)
+        if match is None or int(match[1]) == os.getpid() or alive(int(match[1])):
+            continue
+        with contextlib.suppress(OSError):
+            info = entry.stat(follow_symlinks=False)
+            if stat.S_ISREG(info.st_mode) and info.st_uid == os.getuid():
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+    return removed
 
 
 @contextlib.contextmanager
@@ -67,9 +101,11 @@ def replaced_atomically(path: str | os.PathLike, name: str = "output", *, error:
     that turned into a directory or device meanwhile is still refused). The yielded Path is in
     the same directory (os.replace is then atomic on POSIX and Windows) with the same suffix.
     If the block raises (any exception, KeyboardInterrupt included) the sibling is removed and
-    `path` is left as it was. Raises `error` if the block wrote nothing to the sibling.
+    `path` is left as it was; the siblings of `path` left by killed processes are removed
+    first (remove_stale_parts). Raises `error` if the block wrote nothing to the sibling.
     """
     target = check_output_file(path, name, error=error, argument=argument)
+    remove_stale_parts(target)
     part = partial_path(target)
     try:
         yield part

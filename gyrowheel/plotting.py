@@ -36,10 +36,10 @@ def plot_trajectories(results: dict[str, np.ndarray], path: str | Path, title: s
     has its fall marked.  results: {column title: fmpy's structured array with fields time, x, y,
     alpha, beta, gamma_dot (and fallen)}; title: the figure's title (not repeated when the only
     column already carries it); changed: {name: value} of the start values the run was given,
-    listed under the title (simulate --set).  Returns the path (its directory is created)."""
+    listed under the title (simulate --set).  Returns the path; its directory must exist (it is
+    not made: the rule of every output, gyrowheel.output_files)."""
     fig = trajectories_figure(results, title, changed)
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path

@@ -4,7 +4,6 @@ from __future__ import annotations
 import ctypes
 import math
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -17,6 +16,7 @@ from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMes
 
 from gyrowheel.arguments import missing_item_hint
 from gyrowheel.errors import FmuError, GyrowheelError
+from gyrowheel.scratch import temporary_directory
 
 # fmpy 0.3.32 forwards every FMU message through ONE process-global logger (the last one given
 # to fmpy.logging.addLoggerProxy). simulate_fmu(logger=...) proxies a callback that dies when it
@@ -165,7 +165,8 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
     cwd = os.getcwd()
     # fmpy unpacks into a directory it removes only when the run succeeds; unpacked here, it is
     # removed however the run ends (the FMU refusing, a binary that does not load, Ctrl-C)
-    with tempfile.TemporaryDirectory(prefix="gyrowheel-run-") as tmp:
+    with temporary_directory("run") as where:
+        tmp = str(where)
         try:
             unpacked = str(fmu) if Path(fmu).is_dir() else str(extract(str(fmu), unzipdir=tmp, include=_read_by_a_run))
             _load_binary(fmu, unpacked, md)

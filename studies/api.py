@@ -15,7 +15,6 @@ from __future__ import annotations
 import contextlib
 import numbers
 import os
-import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
@@ -29,7 +28,7 @@ from gyrowheel.studies.execute import check_size, check_workers, execute
 from gyrowheel.studies.output import TableWriter, check_output_path
 from gyrowheel.studies.plan import Plan, make_plan
 from gyrowheel.studies.plot import check_plot_path
-from gyrowheel.studies.scratch import prefix
+from gyrowheel.scratch import temporary_directory
 from gyrowheel.studies.spec import (SweepSpecError, as_axis, as_random, items_of, parse_assignments, parse_grid,
                                   parse_random, point_table)
 from gyrowheel.studies.target import FmuTarget
@@ -86,7 +85,7 @@ def _built(scene, fmu_out: str | Path | None):
     """The target of a scene's FMU, built into a temporary directory (or fmu_out) first."""
     from gyrowheel.fmu_build.builder import build_fmu
 
-    with tempfile.TemporaryDirectory(prefix=prefix("build")) as tmp:
+    with temporary_directory("sweep-build") as tmp:
         fmu = Path(fmu_out) if fmu_out else Path(tmp) / f"{scene.name}.fmu"
         build_fmu(scene, fmu, build_dir=Path(tmp) / "build")
         yield FmuTarget(fmu)
@@ -248,8 +247,7 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     there are any).
     """
     output = check_output_path(output)
-    check_plot_path(plot)
-    plot = None if plot is None else Path(plot).absolute()  # written after the run, wherever the cwd went
+    plot = check_plot_path(plot)  # absolute: written after the run, wherever the cwd went
     check_execution(workers, batch_size, scheduler, client)
     progress = flag_value(progress, "progress")
     if plot_metric is not None and not isinstance(plot_metric, str):

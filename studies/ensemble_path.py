@@ -17,7 +17,6 @@ the plain way, so its row carries the FMU's own reason.
 from __future__ import annotations
 
 import shutil
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -25,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from gyrowheel.studies.metrics import Run
-from gyrowheel.studies.scratch import prefix
+from gyrowheel.scratch import temporary_directory
 from gyrowheel.studies.target import PointFailure
 
 TAYLOR = 6  # the solver enumeration's value (c_src/gw_model.h)
@@ -43,7 +42,7 @@ def _ensemble(target, payload):
             # the FMU's bytes in a private directory, removed once the library is loaded (the
             # library itself is cached by content): nothing is left in the shared temp
             # directory, and no file there that another user could have put is trusted
-            with tempfile.TemporaryDirectory(prefix=prefix("ens")) as tmp:
+            with temporary_directory("sweep-ens") as tmp:
                 fmu = Path(tmp) / "unit.fmu"
                 if payload is not None:
                     fmu.write_bytes(payload)

@@ -6,7 +6,7 @@
   one thread each (the FMU releases the GIL in fmi2DoStep, but one process per core also keeps
   Python's own work parallel); never more processes than points, and more than
   WORKERS_PER_CORE per core are refused (local_workers). The cluster's processes keep their
-  temporary files in one directory of the sweep, removed when it ends (studies/scratch.py).
+  temporary files in one directory of the sweep, removed when it ends (gyrowheel/scratch.py).
 - scheduler='tcp://host:port': a running cluster (`dask scheduler`, `dask worker ADDRESS`); its
   workers need gyrowheel installed (they import gyrowheel.studies), not the FMU nor user files.
 - client=distributed.Client: an existing client (Python API).
@@ -32,7 +32,7 @@ from gyrowheel.arguments import check_memory, count
 from gyrowheel.errors import SweepSpecError
 from gyrowheel.studies.batch import run_batch
 from gyrowheel.studies.interrupt import deferred_sigint
-from gyrowheel.studies.scratch import remove_stale, sweep_directory
+from gyrowheel.scratch import remove_stale, sweep_directory
 
 MAX_BATCH = 500
 # The workers' statistical profiler samples every thread's stack every 10 ms: ~4% of the CPU of
@@ -377,7 +377,7 @@ def execute(plan, writer, *, workers: int | None = None, scheduler: str | None =
             with deferred_sigint() as interrupt, Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s") as c:
                 interrupt.check()  # a Ctrl-C while the client connected
                 return run_dask(plan, writer, client=c, batch_size=batch_size, progress=progress)
-        finally:  # workers of this machine that were killed (studies/scratch.py)
+        finally:  # workers of this machine that were killed (gyrowheel/scratch.py)
             remove_stale()
     with sweep_directory() as scratch:
         return _run_local_cluster(plan, writer, local_workers(workers, len(plan.values))[0], scratch, batch_size,

@@ -23,21 +23,27 @@ SKIP = {"point", "status", "reason", "wall_time", "event"}
 
 
 def check_plot_path(path: str | Path | None) -> Path | None:
-    """Refuse, before a sweep runs, a plot it could not write: an unknown image format or no such directory."""
+    """Refuse, before a sweep runs, a plot it could not write: returns the path, absolute (the
+    file written after the run, wherever the working directory went), or None.
+
+    Raises SweepSpecError (`--plot ...`, argument 'plot') for a path that exists and is not a
+    regular file (a directory, a device such as /dev/full or a link to it, a FIFO, a socket), a
+    directory that does not exist (gyrowheel.output_files.check_output_file), or a suffix that
+    is no image format matplotlib writes (FigureCanvasBase.get_supported_filetypes)."""
     if path is None:
         return None
     from matplotlib.backend_bases import FigureCanvasBase
 
+    from gyrowheel.output_files import check_output_file
     from gyrowheel.studies.spec import SweepSpecError
 
     path = Path(path)
+    check_output_file(path, "--plot", error=SweepSpecError, argument="plot")
     formats = FigureCanvasBase.get_supported_filetypes()
     if path.suffix.lower().lstrip(".") not in formats:
         raise SweepSpecError(f"--plot {path}: unknown image format {path.suffix or '(no suffix)'!r}; "
-                             f"use .{', .'.join(sorted(formats))}")
-    if not path.parent.is_dir():
-        raise SweepSpecError(f"--plot {path}: directory {path.parent} does not exist")
-    return path
+                             f"use .{', .'.join(sorted(formats))}", argument="plot")
+    return path.absolute()
 
 
 # units of the built-in metrics (studies/metrics.py); final:/max:/min:/mean:NAME take NAME's unit
@@ -123,14 +129,22 @@ def plot_table(table: pd.DataFrame, path: str | Path, inputs: list[str], metric:
 
     table: the sweep's table (a row per point: its inputs, status and metrics); inputs: the
     table's input columns; metric: the column to plot (default: default_metric); units: {input
-    name: unit} for the axes (the FMU's variables' units).  Raises ValueError when `metric` names
-    no column or the table has no numeric metric."""
+    name: unit} for the axes (the FMU's variables' units).  The file is written whole or not at
+    all (gyrowheel.output_files.replaced_atomically). Raises ValueError when `metric` names no
+    column or the table has no numeric metric; SweepSpecError (a ValueError) when `path` cannot
+    be written (check_plot_path)."""
     import matplotlib.pyplot as plt
+
+    from gyrowheel.output_files import replaced_atomically
+    from gyrowheel.studies.spec import SweepSpecError
 
     fig = table_figure(table, inputs, metric, units)
     path = Path(path)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    try:
+        with replaced_atomically(path, "--plot", error=SweepSpecError, argument="plot") as part:
+            fig.savefig(part, dpi=110, bbox_inches="tight")
+    finally:
+        plt.close(fig)
     return path
 
 

@@ -14,13 +14,12 @@ beta, x ...), so the built-in metrics read its outputs; every component's variab
 """
 from __future__ import annotations
 
-import tempfile
 from dataclasses import replace
 from functools import partial
 from pathlib import Path
 
 from gyrowheel.cosim.exchange import exchange, exchange_levels, settle
-from gyrowheel.studies.scratch import prefix
+from gyrowheel.scratch import temporary_directory
 from gyrowheel.studies.target import FmuTarget, PointFailure
 
 
@@ -31,7 +30,7 @@ class SspTarget:
         from gyrowheel.cosim.system import read_ssp
 
         self.path = Path(path)
-        with tempfile.TemporaryDirectory(prefix=prefix("ssp")) as tmp:
+        with temporary_directory("sweep-ssp") as tmp:
             system = read_ssp(self.path, tmp)
             self.components = {c.name: FmuTarget(c.fmu) for c in system.components}
             self._bytes = {name: t.payload() for name, t in self.components.items()}

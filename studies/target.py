@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from gyrowheel.cosim.fmi_log import forget_messages, logging_callbacks
-from gyrowheel.studies.scratch import new_directory
+from gyrowheel.scratch import new_directory
 
 _UNPACKED: dict[str, str] = {}  # FMU digest -> extraction directory, per process (removed at its exit)
 _LOCK = threading.Lock()  # fmpy's FMU2Slave() changes the working directory while loading
@@ -158,8 +158,8 @@ def _unpack(target: FmuTarget, payload: bytes | None) -> str:
     with _LOCK:
         where = _UNPACKED.get(target.digest)
         if where is None:
-            where = str(new_directory("unit"))  # (and the directories of dead processes removed)
-            atexit.register(shutil.rmtree, where, True)  # a killed process: studies/scratch.py
+            where = str(new_directory("sweep-unit"))  # (and the directories of dead processes removed)
+            atexit.register(shutil.rmtree, where, True)  # a killed process: gyrowheel/scratch.py
             if payload is not None:
                 import io
                 zipfile.ZipFile(io.BytesIO(payload)).extractall(where)

@@ -38,6 +38,7 @@ from gyrowheel import arguments
 from gyrowheel.errors import ArgumentError, ArgumentTypeError, FmuError, GyrowheelError, UnknownNameError
 from gyrowheel.fmu_build.compiler import compile_shared
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR
+from gyrowheel.scratch import temporary_directory
 
 __all__ = ["Ensemble", "EnsembleResult", "EnsembleError", "STATUS_OK", "STATUS_TERMINATED",
            "STATUS_ERROR", "LANES"]
@@ -352,7 +353,7 @@ class Ensemble:
         # the front end is the installed runtime's (its functions and layout are what this class
         # reads), compiled with the FMU's model and runtime
         front = RUNTIME_DIR / LIBRARY_SOURCE
-        with tempfile.TemporaryDirectory(prefix="gyrowheel-ens-") as tmp:
+        with temporary_directory("ens") as tmp:
             src, self.identifier, self.guid = _sources(fmu, Path(tmp))
             unity_text = library_source(self.identifier, lanes, defines)
             digest = hashlib.sha256(fmu.read_bytes() + unity_text.encode() + front.read_bytes()

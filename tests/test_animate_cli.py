@@ -230,11 +230,13 @@ def test_non_finite_numbers_are_refused(tmp_path, capsys, option, value):
     assert f"argument {option}: '{value}' is not a finite number" in capsys.readouterr().err
 
 
-def test_output_directory_is_created_and_a_directory_refused(tmp_path, capsys):
+def test_a_missing_output_directory_and_a_directory_refused(tmp_path, capsys):
+    """No verb makes the directory of its output (gyrowheel.output_files.check_output_file)."""
     csv = rolling_csv(tmp_path / "ok.csv", stop=0.5)
-    assert main(["animate", str(csv), "-o", str(tmp_path / "new" / "dir" / "run.html")]) == 0
-    assert (tmp_path / "new" / "dir" / "run.html").is_file()
-    capsys.readouterr()
+    missing = tmp_path / "new" / "dir"
+    assert main(["animate", str(csv), "-o", str(missing / "run.html")]) == 2
+    assert f"directory {missing} does not exist" in capsys.readouterr().err
+    assert not (tmp_path / "new").exists()
     (tmp_path / "dir.gif").mkdir()
     assert main(["animate", str(csv), "-o", str(tmp_path / "dir.gif")]) == 2
     assert "dir.gif: is a directory; give a file name" in capsys.readouterr().err

@@ -87,6 +87,34 @@ CASES = {
                        r"-o .*fifo\.fmu: exists and is not a regular file", untouched=("fifo",)),
     "export-over-file": Case(("export-c", str(EARTH), "-o", "{scene}"), 2,
                              r"-o .*scene\.toml: exists and is not a directory", untouched=("scene",)),
+    # -- a missing output directory: refused by every verb, never made (before: simulate, system
+    # run, animate and build made it, even /nonexistent_dir at the root; sweep refused)
+    "simulate-no-dir": Case(("simulate", "{fmu}", "--stop-time", "0.1", "-o", "nodir/x.csv"), 2,
+                            r"-o nodir/x\.csv: directory nodir does not exist", absent=("nodir",)),
+    "simulate-plot-no-dir": Case(("simulate", "{fmu}", "--stop-time", "0.1", "--plot", "nodir/x.png"), 2,
+                                 r"--plot nodir/x\.png: directory nodir does not exist", absent=("nodir",)),
+    "system-no-dir": Case(("system", "run", "{ssp}", "--step", "0.01", "--stop-time", "0.1", "-o", "nodir/x.csv"), 2,
+                          r"-o nodir/x\.csv: directory nodir does not exist", absent=("nodir",)),
+    "animate-no-dir": Case(("animate", "{run_csv}", "--fmu", "{fmu}", "-o", "nodir/a.html"), 2,
+                           r"-o nodir/a\.html: directory nodir does not exist", absent=("nodir",)),
+    "build-no-dir": Case(("build", str(EARTH), "-o", "nodir/e.fmu"), 2,
+                         r"-o nodir/e\.fmu: directory nodir does not exist", absent=("nodir",)),
+    "build-keep-no-parent": Case(("build", str(EARTH), "-o", "e.fmu", "--keep-build", "nodir/src"), 2,
+                                 r"--keep-build nodir/src: cannot write: directory nodir does not exist",
+                                 absent=("nodir", "e.fmu")),
+    "sweep-no-dir": Case(("sweep", "{fmu}", "--grid", "M=2", "--workers", "0", "-o", "nodir/t.csv"), 2,
+                         r"-o .*nodir/t\.csv: directory .*nodir does not exist", absent=("nodir",)),
+    # -- sweep --plot that cannot be written: refused before the run (before: the sweep ran, wrote
+    # its table, then failed: "File or stream is not seekable.", "OSError: [Errno 28] ...")
+    "sweep-plot-directory": Case(("sweep", "{fmu}", "--grid", "M=2", "--workers", "0", "-o", "{out_csv}",
+                                  "--plot", "{png_dir}"), 2, r"--plot .*p\.png: is a directory; give a file name",
+                                 untouched=("png_dir",), absent=("out.csv",)),
+    "sweep-plot-fifo": Case(("sweep", "{fmu}", "--grid", "M=2", "--workers", "0", "-o", "{out_csv}",
+                             "--plot", "{fifo_png}"), 2, r"--plot .*fifo\.png: exists and is not a regular file",
+                            untouched=("fifo_png",), absent=("out.csv",)),
+    "sweep-plot-device": Case(("sweep", "{fmu}", "--grid", "M=2", "--workers", "0", "-o", "{out_csv}",
+                               "--plot", "{full_png}"), 2, r"--plot .*full\.png: exists and is not a regular file",
+                              untouched=("full_png",), absent=("out.csv",)),
     # -- the one memory rule (gyrowheel.arguments.check_memory), before the run ------------------
     "stop-time-1e9": Case(("simulate", "{fmu}", "--stop-time", "1e9", "-o", "{out_csv}"), 2,
                           r"--stop-time 1e\+09 s with --output-interval 0\.01 s: 100000000002 communication points "
@@ -156,6 +184,11 @@ def files(earth_fmu, tmp_path_factory) -> dict[str, Path]:
     for name, text in scenes.items():
         out[name] = d / f"{name}.toml"
         out[name].write_text(text)
+    from gyrowheel.cosim.system import Component, SystemDescription, write_ssp
+    out["ssp"] = write_ssp(SystemDescription("one", [Component("wheel", fmu, {})], [], 0.0, 1.0), d / "one.ssp")
+    out["run_csv"] = d / "run.csv"
+    subprocess.run([sys.executable, "-m", "gyrowheel", "simulate", str(fmu), "--stop-time", "0.1", "-o",
+                    str(out["run_csv"])], check=True, capture_output=True)
     return out
 
 
@@ -171,6 +204,10 @@ def _outputs(tmp_path: Path) -> dict[str, Path]:
         out[name].symlink_to("/dev/full" if os.path.exists("/dev/full") else "/dev/null")
     out["fifo"] = tmp_path / "fifo.fmu"
     os.mkfifo(out["fifo"])
+    out["fifo_png"] = tmp_path / "fifo.png"
+    os.mkfifo(out["fifo_png"])
+    out["png_dir"] = tmp_path / "p.png"
+    out["png_dir"].mkdir()
     return out
 
 

@@ -3,7 +3,7 @@
 A killed process runs no atexit: a worker killed by a point (or the OOM killer) left its
 unpacked FMU (gyrowheel-sweep-*, 2.2 MB) in the temporary directory forever. Our LocalCluster's
 processes now keep their files in a directory of the sweep that the command removes, and every
-sweep removes the directories of this machine's processes that are gone (studies/scratch.py)."""
+sweep removes the directories of this machine's processes that are gone (gyrowheel/scratch.py)."""
 from __future__ import annotations
 
 import os
@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from gyrowheel.studies import read_table
-from gyrowheel.studies.scratch import host_tag, owner, prefix, remove_stale
+from gyrowheel.scratch import host_tag, owner, prefix, remove_stale
 
 KILL = '''
 import os, signal

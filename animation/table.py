@@ -163,7 +163,8 @@ def _fmu_parameters(fmu: Path, component: str | None = None) -> dict[str, float]
         raise AnimationError(f"{fmu}: no such FMU file")
     names = ("R",) + FLYWHEEL_PARAMETERS
     if fmu.suffix.lower() == ".ssp":
-        from gyrowheel.cosim.system import SystemFileError, read_ssp
+        from gyrowheel.cosim.system import SystemFileError
+        from gyrowheel.cosim.ssp import read_ssp
         from gyrowheel.scratch import temporary_directory
         with temporary_directory("animate") as tmp:
             try:

@@ -9,7 +9,7 @@ built from OpenModelica/OMSimulator's sources with CMake; its command line runs 
     OMSimulator --stopTime=T --tolerance=TOL --resultFile=oms.csv SYSTEM.ssp
 
 (the system's type and its communication step come from the .ssd's org.openmodelica annotation,
-which gyrowheel.cosim.system.write_ssp writes; OMSimulator 3.0 does not apply --stepSize to an
+which gyrowheel.cosim.ssp.write_ssp writes; OMSimulator 3.0 does not apply --stepSize to an
 .ssp, and gyrowheel's master runs at that annotation's step too). `--tolerance` is the tolerance OMSimulator passes to
 every FMU's fmi2SetupExperiment (its default 1e-4); the file's rel_tol bindings take precedence
 (docs/system.md). `--without-accuracy` runs a copy of the file with those bindings removed, to
@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from gyrowheel.cosim.master import run
-from gyrowheel.cosim.system import read_ssp
+from gyrowheel.cosim.ssp import read_ssp
 
 
 def without_accuracy(ssp: Path, out: Path) -> Path:
@@ -57,7 +57,7 @@ def annotated_step(ssp: Path) -> float:
         found = re.search(rb'<oms:FixedStepMaster [^>]*stepSize="([^"]+)"', zf.read("SystemStructure.ssd"))
     if found is None:
         sys.exit(f"{ssp}: no oms:FixedStepMaster annotation (OMSimulator's command line cannot run it); "
-                 "write it with gyrowheel.cosim.system.write_ssp")
+                 "write it with gyrowheel.cosim.ssp.write_ssp")
     return float(found.group(1))
 
 

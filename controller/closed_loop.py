@@ -16,7 +16,8 @@ from pathlib import Path
 from gyrowheel.controller.compensator import EXPERIMENT, controller_spec
 from gyrowheel.controller.mission import Mission, standard
 from gyrowheel.controller.schedule import Schedule, design_schedule, uniform
-from gyrowheel.cosim.system import Component, SystemDescription, connect_by_name, write_ssp
+from gyrowheel.cosim.system import Component, SystemDescription, connect_by_name
+from gyrowheel.cosim.ssp import write_ssp
 from gyrowheel.fmu_build.builder import build_fmu, build_spec_fmu, model_spec
 from gyrowheel.fmu_build.scene import Scene
 from gyrowheel.model.spec import ModelSpec

@@ -14,7 +14,7 @@ def run(ssp: str, step: float, stop_time: float, variables: dict[str, list[str]]
         parameter_set: str | None = None) -> np.ndarray:
     """Simulate the .ssp with ecos at fixed step `step` [s] to stop_time and sample `variables`
     ({component: [names]}). ecos applies parameter bindings only of the set named at
-    initialisation: parameter_set (the files gyrowheel.cosim.system.write_ssp writes name every set
+    initialisation: parameter_set (the files gyrowheel.cosim.ssp.write_ssp writes name every set
     gyrowheel.cosim.system.PARAMETER_SET, "start"). Raises RuntimeError if ecos refuses the file or a step."""
     from ecospy import EcosSimulation
 

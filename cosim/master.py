@@ -32,7 +32,8 @@ from gyrowheel.arguments import count as count_text
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.scratch import new_directory
 from gyrowheel.cosim.exchange import exchange, settle
-from gyrowheel.cosim.system import SystemDescription, SystemFileError, describe, coerce_value
+from gyrowheel.cosim.system import SystemDescription, SystemFileError, describe
+from gyrowheel.cosim.ssp import coerce_value
 from gyrowheel.cosim.fmi_log import forget_messages, logging_callbacks
 
 

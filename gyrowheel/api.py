@@ -451,7 +451,8 @@ def system_run(system, *, step: float = 0.01, stop_time: float | None = None, st
     MasterError (a component failed: its logged reason).
     """
     from gyrowheel.cosim.master import run
-    from gyrowheel.cosim.system import SystemDescription, SystemFileError, read_ssp
+    from gyrowheel.cosim.system import SystemDescription, SystemFileError
+    from gyrowheel.cosim.ssp import read_ssp
     from gyrowheel.simulation import write_csv
 
     step = _seconds(step, "step")

@@ -27,7 +27,7 @@ class SspTarget:
     """Components and connections of an .ssp; each worker opens one instance of every component."""
 
     def __init__(self, path: str | Path):
-        from gyrowheel.cosim.system import read_ssp
+        from gyrowheel.cosim.ssp import read_ssp
 
         self.path = Path(path)
         with temporary_directory("sweep-ssp") as tmp:

@@ -52,7 +52,8 @@ def moon_from_scene(tmp_path_factory):
 @pytest.fixture(scope="module")
 def solo(moon, tmp_path_factory):
     """A system of one component (the moon wheel) as an .ssp."""
-    from gyrowheel.cosim.system import Component, SystemDescription, write_ssp
+    from gyrowheel.cosim.system import Component, SystemDescription
+    from gyrowheel.cosim.ssp import write_ssp
     path = tmp_path_factory.mktemp("api_system") / "solo.ssp"
     return write_ssp(SystemDescription("solo", [Component("wheel", moon.fmu)], [], 0.0, 1.0), path)
 
@@ -552,7 +553,7 @@ def test_animate_bad_results(moon, tmp_path):
 # -- system_run -----------------------------------------------------------------------------------
 
 def test_system_run_from_an_ssp_and_from_its_description(moon, solo, tmp_path):
-    from gyrowheel.cosim.system import read_ssp
+    from gyrowheel.cosim.ssp import read_ssp
     a = gyrowheel.system_run(solo, stop_time=0.5, start_values={"wheel.gamma_dot": 7.0}, output=tmp_path / "s.csv")
     b = gyrowheel.system_run(read_ssp(solo, tmp_path / "unpacked"), stop_time=0.5,
                              start_values={"wheel": {"gamma_dot": 7.0}})

@@ -26,7 +26,8 @@ def moon(example_build):
 @pytest.fixture(scope="module")
 def solo(moon, tmp_path_factory):
     """A system of one component (the moon wheel) as an .ssp."""
-    from gyrowheel.cosim.system import Component, SystemDescription, write_ssp
+    from gyrowheel.cosim.system import Component, SystemDescription
+    from gyrowheel.cosim.ssp import write_ssp
     path = tmp_path_factory.mktemp("errors_system") / "solo.ssp"
     return write_ssp(SystemDescription("solo", [Component("wheel", moon.fmu)], [], 0.0, 1.0), path)
 

@@ -184,7 +184,8 @@ def files(earth_fmu, tmp_path_factory) -> dict[str, Path]:
     for name, text in scenes.items():
         out[name] = d / f"{name}.toml"
         out[name].write_text(text)
-    from gyrowheel.cosim.system import Component, SystemDescription, write_ssp
+    from gyrowheel.cosim.system import Component, SystemDescription
+    from gyrowheel.cosim.ssp import write_ssp
     out["ssp"] = write_ssp(SystemDescription("one", [Component("wheel", fmu, {})], [], 0.0, 1.0), d / "one.ssp")
     out["run_csv"] = d / "run.csv"
     subprocess.run([sys.executable, "-m", "gyrowheel", "simulate", str(fmu), "--stop-time", "0.1", "-o",

@@ -84,7 +84,8 @@ def test_a_verb_without_its_extra_is_one_line_and_exit_2(tmp_path, argv, extra, 
 def test_the_core_install_runs_the_core_verbs(earth_fmu, tmp_path):
     """build, simulate, info (text and JSON), export-c and system run, and every --help, with no
     optional part installed; none of them imports one."""
-    from gyrowheel.cosim.system import Component, SystemDescription, write_ssp
+    from gyrowheel.cosim.system import Component, SystemDescription
+    from gyrowheel.cosim.ssp import write_ssp
     ssp = write_ssp(SystemDescription("solo", [Component("wheel", earth_fmu)], [], 0.0, 1.0), tmp_path / "solo.ssp")
     scene = SCENES / "paper_moon.toml"
     code = f"""
@@ -135,7 +136,8 @@ def test_the_api_names_the_extra_it_needs(earth_fmu, tmp_path):
         says(lambda: gyrowheel.animate("x.csv", "x.gif"))
         says(lambda: gyrowheel.simulate({str(earth_fmu)!r}, plot="x.png"))
         says(lambda: __import__("gyrowheel.controller.design"))
-        from gyrowheel.cosim.system import Component, SystemDescription, write_ssp
+        from gyrowheel.cosim.system import Component, SystemDescription
+        from gyrowheel.cosim.ssp import write_ssp
         says(lambda: write_ssp(SystemDescription("s", [Component("w", {str(earth_fmu)!r})], []), "s.ssp"))
         import gyrowheel.controller.mission  # no scipy in it: there in the core install
         """
@@ -146,5 +148,5 @@ def test_the_api_names_the_extra_it_needs(earth_fmu, tmp_path):
         '`gyrowheel.animate()` needs the optional part \'animate\': pip install "gyrowheel[animate]"',
         '`gyrowheel.simulate(plot=...)` needs the optional part \'plot\': pip install "gyrowheel[plot]"',
         '`gyrowheel.controller` needs the optional part \'system\': pip install "gyrowheel[system]"',
-        '`gyrowheel.cosim.system.write_ssp()` needs the optional part \'system\': pip install "gyrowheel[system]"']
+        '`gyrowheel.cosim.ssp.write_ssp()` needs the optional part \'system\': pip install "gyrowheel[system]"']
     assert list(tmp_path.iterdir()) == []

@@ -74,7 +74,8 @@ def test_a_killed_simulate_leaves_nothing_past_the_next_verb(earth_fmu, tmp_path
 def test_a_killed_system_run_leaves_nothing_past_the_next_verb(earth_fmu, tmp_path, tmpdir_):
     """system run killed mid-run: the system's FMUs and each component's unpacked FMU (fmpy's
     extract goes into a directory of ours) go with the next verb."""
-    from gyrowheel.cosim.system import Component, SystemDescription, write_ssp
+    from gyrowheel.cosim.system import Component, SystemDescription
+    from gyrowheel.cosim.ssp import write_ssp
     ssp = write_ssp(SystemDescription("one", [Component("wheel", earth_fmu, {})], [], 0.0, 1.0), tmp_path / "one.ssp")
     proc = _start(tmpdir_, tmp_path, "system", "run", ssp, "--step", "0.001", "--stop-time", "2000", "-o", "run.csv")
     _kill_when(proc, lambda: any(n.startswith("gyrowheel-unit-") for n in _ours(tmpdir_)))

@@ -22,7 +22,8 @@ import xmlschema
 
 from gyrowheel.cosim.master import run
 from gyrowheel.cosim.exchange import feedthrough
-from gyrowheel.cosim.system import Component, Connection, SystemDescription, SystemFileError, read_ssp, write_ssp
+from gyrowheel.cosim.system import Component, Connection, SystemDescription, SystemFileError
+from gyrowheel.cosim.ssp import read_ssp, write_ssp
 from gyrowheel.fmu_build.builder import build_spec_fmu
 from gyrowheel.model.system import System
 

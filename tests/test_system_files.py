@@ -17,7 +17,8 @@ import xmlschema
 
 from conftest import ROOT, loop_accuracy
 from gyrowheel.cosim.master import MasterError, run
-from gyrowheel.cosim.system import SystemFileError, read_ssp, write_ssp
+from gyrowheel.cosim.system import SystemFileError
+from gyrowheel.cosim.ssp import read_ssp, write_ssp
 
 SCHEMAS = Path(__file__).resolve().parent.parent / "cosim" / "schemas" / "ssp1"
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"

@@ -13,7 +13,8 @@ import xmlschema
 from conftest import ROOT, loop_accuracy
 from gyrowheel.cosim import ecos_run, libcosim_run
 from gyrowheel.cosim.master import run
-from gyrowheel.cosim.system import PARAMETER_SET, SystemFileError, read_ssp, write_osp, write_ssp
+from gyrowheel.cosim.system import SystemFileError, write_osp
+from gyrowheel.cosim.ssp import PARAMETER_SET, read_ssp, write_ssp
 
 SCHEMAS = Path(__file__).resolve().parent.parent / "cosim" / "schemas" / "ssp1"
 COMPARED = {"wheel": ["beta", "alpha", "x", "y", "tilt"], "controller": ["tilt_cmd", "drive_torque"]}

@@ -25,7 +25,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from gyrowheel.errors import ArgumentError
-from gyrowheel.scratch import alive
+from gyrowheel.scratch import remove_orphans
 
 
 def check_output_file(path: str | os.PathLike, name: str, *, error: type = ArgumentError,
@@ -70,26 +70,15 @@ def partial_path(target: Path) -> Path:
 def remove_stale_parts(target: Path) -> list[Path]:
     """Remove the siblings `.STEM.part-PID.SUFFIX` of `target` (partial_path) left by a process
     that was killed while writing it: regular files of this user whose PID no longer exists on
-    this machine (gyrowheel.scratch.alive). Returns the files removed; nothing where processes
-    cannot be asked (not POSIX)."""
-    if os.name != "posix":
-        return []
+    this machine (gyrowheel.scratch.remove_orphans). Returns the files removed; nothing where
+    processes cannot be asked (not POSIX)."""
     pattern = re.compile(rf"^\.{re.escape(target.stem)}\.part-([0-9]+){re.escape(target.suffix)}$")
-    removed = []
-    try:
-        entries = list(os.scandir(target.parent))
-    except OSError:
-        return []
-    for entry in entries:
-        match = pattern.match(entry.name)
-        if match is None or int(match[1]) == os.getpid() or alive(int(match[1])):
-            continue
-        with contextlib.suppress(OSError):
-            info = entry.stat(follow_symlinks=False)
-            if stat.S_ISREG(info.st_mode) and info.st_uid == os.getuid():
-                os.unlink(entry.path)
-                removed.append(Path(entry.path))
-    return removed
+
+    def pid_of(name: str) -> int | None:
+        match = pattern.match(name)
+        return None if match is None else int(match[1])
+
+    return remove_orphans(target.parent, pid_of, stat.S_IFREG)
 
 
 @contextlib.contextmanager

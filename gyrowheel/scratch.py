@@ -32,7 +32,7 @@ import shutil
 import socket
 import stat
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 PREFIX = "gyrowheel-"
@@ -89,32 +89,52 @@ def alive(pid: int) -> bool:
     return True
 
 
-def remove_stale(where: str | os.PathLike | None = None) -> list[Path]:
-    """Remove the directories in `where` (default: the temporary directory) whose process is
-    gone: named by prefix() with this machine's host tag, owned by this user, and no process of
-    their pid exists. Returns the directories removed. Nothing is removed where processes
-    cannot be asked (not POSIX: there os.kill(pid, 0) is no question) or for a directory of
-    another machine (a temporary directory shared between machines)."""
+def remove_orphans(where: str | os.PathLike, pid_of: Callable[[str], int | None], kind: int) -> list[Path]:
+    """Remove the entries of `where` left by processes of this machine that are gone: those whose
+    name gives a pid (pid_of(name), None: not ours), not this process's, of no existing process,
+    owned by this user and of file type `kind` (stat.S_IFDIR: removed with their content;
+    stat.S_IFREG). Returns the entries removed; nothing where processes cannot be asked (not
+    POSIX: there os.kill(pid, 0) is no question) or `where` cannot be read."""
     if os.name != "posix":
         return []
-    where = Path(tempfile.gettempdir() if where is None else where)
-    host, uid, removed = host_tag(), os.getuid(), []
+    uid, removed = os.getuid(), []
     try:
         entries = list(os.scandir(where))
     except OSError:
         return []
     for entry in entries:
-        found = owner(entry.name)
-        if found is None or found[1] != host or found[0] == os.getpid() or alive(found[0]):
+        pid = pid_of(entry.name)
+        if pid is None or pid == os.getpid() or alive(pid):
             continue
         try:
             info = entry.stat(follow_symlinks=False)
         except OSError:
             continue
-        if stat.S_ISDIR(info.st_mode) and info.st_uid == uid:
+        if stat.S_IFMT(info.st_mode) != kind or info.st_uid != uid:
+            continue
+        if kind == stat.S_IFDIR:
             shutil.rmtree(entry.path, ignore_errors=True)
-            removed.append(Path(entry.path))
+        else:
+            try:
+                os.unlink(entry.path)
+            except OSError:
+                continue
+        removed.append(Path(entry.path))
     return removed
+
+
+def remove_stale(where: str | os.PathLike | None = None) -> list[Path]:
+    """Remove the directories in `where` (default: the temporary directory) whose process is
+    gone: named by prefix() with this machine's host tag, owned by this user, and no process of
+    their pid exists (remove_orphans). Returns the directories removed. A directory of another
+    machine (a temporary directory shared between machines) is left alone."""
+    host = host_tag()
+
+    def pid_of(name: str) -> int | None:
+        found = owner(name)
+        return found[0] if found is not None and found[1] == host else None
+
+    return remove_orphans(tempfile.gettempdir() if where is None else where, pid_of, stat.S_IFDIR)
 
 
 @contextlib.contextmanager

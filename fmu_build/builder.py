@@ -14,7 +14,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
-from gyrowheel.fmu_build.compiler import UNITY_SOURCE, compile_shared, fmi_headers_dir
+from gyrowheel.fmu_build.compiler import (STANDARD, UNITY_SOURCE, WARNINGS, compile_shared, fmi_headers_dir,
+                                          optimisation_for)
+from gyrowheel.fmu_build import platforms as _platforms
 from gyrowheel.fmu_build.documentation import write_index_html
 from gyrowheel.fmu_build.model_description import write_model_description
 from gyrowheel.fmu_build.runtime import runtime_sources
@@ -27,7 +29,6 @@ from gyrowheel.model.build import build_model
 from gyrowheel.model.spec import ModelSpec
 
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
-PLATFORM = "linux64"
 FMU_SUFFIX = ".fmu"  # an FMU's file name extension (FMI 2.0.4, section 2.1: "*.fmu")
 
 
@@ -107,39 +108,48 @@ def _guid(*parts: str) -> str:
 
 
 def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = None,
-              taylor: bool = False) -> BuildResult:
+              taylor: bool = False, platforms=None) -> BuildResult:
     """Build the FMU of `scene` at `output`: the wheel's ModelSpec through build_spec_fmu.
 
     scene: a Scene, checked first by the scene file's rules (check_scene); output: the .fmu to
     write (check_output: a name ending in .fmu, not the scene's own file); build_dir: keep the
     generated C there (BuildResult.sources), else a temporary directory is used and removed;
     taylor: also generate the Taylor kernel (solver taylor, the ensemble path) when the scene's
-    solver is not taylor already.
+    solver is not taylor already; platforms: the platforms to carry binaries for
+    (fmu_build/platforms.py parse_platforms: "all", names, a list; None: the host only).
     Returns the BuildResult. Raises SceneError (the scene, naming the field), ArgumentError
     (output), and what build_spec_fmu raises.
     """
     scene = check_scene(scene)
     output = check_output(output, scene.file)
     return build_spec_fmu(_spec(scene), output, scene.experiment, build_dir=build_dir,
-                          keep=scene.outputs, source=scene.source, taylor=taylor)
+                          keep=scene.outputs, source=scene.source, taylor=taylor, platforms=platforms)
 
 
 def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment | None = None,
                    build_dir: str | Path | None = None, keep: list[str] | None = None,
-                   source: str = "", taylor: bool = False) -> BuildResult:
+                   source: str = "", taylor: bool = False, platforms=None) -> BuildResult:
     """Build the FMI 2.0 FMU of any ModelSpec (a wheel's, a controller's: model/system.py).
 
     experiment: DefaultExperiment and the solver settings' defaults (Experiment() if None);
     keep: the outputs to expose (None: all); source: text shipped in documentation/index.html
     (the scene file, the gains); taylor: generate the Taylor kernel of solver taylor and the
-    ensemble path even if experiment.solver is not "taylor" (only those FMUs carry it).
+    ensemble path even if experiment.solver is not "taylor" (only those FMUs carry it);
+    platforms: the platforms whose binaries the FMU carries (parse_platforms; None: the host
+    only): the host's compiled by the host's C compiler, the others by zig (write_binaries).
     Sources stay in build_dir if given (BuildResult.sources; None without build_dir).
-    Raises ArgumentError for an output that is no .fmu name (check_output), ValueError for a bad
-    table, gyrowheel.taylor.graph.TaylorUnsupportedError (a ValueError) for a kernel the ode's
-    operations do not allow, CompileError if the C compiler fails.
+    Raises ArgumentError for an output that is no .fmu name (check_output) or an unknown
+    platform (naming `platforms`), ValueError for a bad table,
+    gyrowheel.taylor.graph.TaylorUnsupportedError (a ValueError) for a kernel the ode's
+    operations do not allow, CompileError if a C compiler fails (a cross build: naming the
+    platform and the compiler's first error), MissingExtraError when a platform other than the
+    host's needs zig and ziglang is not installed (before anything is generated).
     """
     experiment = experiment or Experiment()
     output = check_output(output)
+    wanted = _platforms.parse_platforms(platforms)
+    if any(n != _platforms.host_platform().name for n in wanted):
+        _platforms.zig_command()
     tmp = None
     if build_dir is None:
         tmp = new_directory("build")
@@ -165,7 +175,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
                      repr(experiment), identifier)
         write_model_desc(spec, table, experiment, identifier, guid, fns, src, kernel)
         # one translation unit: only fmi2* symbols are global, whatever flags an importer uses
-        compile_shared(src / UNITY_SOURCE, [src], root / "binaries" / PLATFORM / f"{identifier}.so")
+        write_binaries(src / UNITY_SOURCE, [src], root / "binaries", identifier, wanted)
         xml = write_model_description(spec.name, experiment, table, identifier, guid, [UNITY_SOURCE], spec.description,
                                       model_exchange=True, directional=True,
                                       taylor=not isinstance(kernel, str))
@@ -178,6 +188,37 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     finally:
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_binaries(source: Path, include_dirs: list[Path], binaries: Path, identifier: str,
+                   names: tuple[str, ...]) -> dict[str, Path]:
+    """Compile the unity source for each platform of `names` into
+    binaries/<folder>/<identifier><extension> (FMI 2.0.4, section 2.3: folders linux64, win64,
+    darwin64 for 64-bit x86, platform tuples for the others).
+
+    The host's binary is built by the host's C compiler (compile_shared), the others by zig with
+    the same standard, warnings and optimisation, all at once. With both Mac platforms, darwin64
+    holds a universal binary of both slices (fmu_build/platforms.py). Returns {name: library}.
+    Raises CompileError (naming the platform for a cross build)."""
+    host = _platforms.host_platform()
+    libraries: dict[str, Path] = {}
+    cross = []
+    for name in names:
+        p = host if name == host.name else _platforms.PLATFORMS[name]
+        libraries[name] = binaries / p.fmi2_dir / f"{identifier}{p.extension}"
+        if name != host.name:
+            cross.append(p)
+    if host.name in names:
+        compile_shared(source, include_dirs, libraries[host.name])
+    flags = [*STANDARD, *optimisation_for(source.parent), *WARNINGS]
+    _platforms.cross_compile_all(cross, source, include_dirs, [libraries[p.name] for p in cross], flags)
+    if all(n in names for n in _platforms.UNIVERSAL_DARWIN):
+        intel, arm = (libraries[n] for n in _platforms.UNIVERSAL_DARWIN)
+        thin = intel.with_name(intel.name + ".x86_64")
+        intel.rename(thin)
+        _platforms.write_universal([thin, arm], intel)
+        thin.unlink()
+    return libraries
 
 
 def _zip(root: Path, output: Path) -> None:

@@ -1,0 +1,226 @@
+"""The platforms an FMU carries binaries for, and the cross compiler that builds them.
+
+An FMU holds one shared library per platform under binaries/ (FMI 2.0.4, section 2.3 "FMU
+Distribution"). FMI 2.0.4 names six folders: win32, win64, linux32, linux64, darwin32 and
+darwin64, where 32 and 64 stand for 32- and 64-bit x86; "for any other platforms the platform
+tuples defined in the FMI 3.0 Specification, 2.5.1.4.1" are used (aarch64-linux,
+aarch64-darwin, aarch64-windows). FMI 3.0 FMUs use the tuples for every platform.
+
+The host's binary is compiled by the host's C compiler (fmu_build/compiler.py); every other
+platform by zig's C compiler (clang with the C libraries of every target, PyPI `ziglang`, the
+optional part `gyrowheel[platforms]`), with the same language standard, warnings and
+optimisation. A universal Mach-O (x86_64 and arm64 slices) goes to darwin64 when both Mac
+platforms are built: darwin64 then still runs on 64-bit x86, and importers that look only in
+darwin64 on Apple silicon (fmpy 0.3's FMI 2 loader) find an arm64 slice there too.
+"""
+from __future__ import annotations
+
+import os
+import platform as _platform
+import re
+import shutil
+import struct
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+from gyrowheel.errors import ArgumentError, MissingExtraError
+from gyrowheel.scratch import temporary_directory
+
+
+@dataclass(frozen=True)
+class Platform:
+    """One platform an FMU can carry a binary for.
+
+    name        the FMI 3.0 platform tuple <arch>-<sys> (FMI 3.0, section 2.5.1.4.1), the name
+                users give (`--platforms`, [build] platforms)
+    fmi2_dir    its folder under binaries/ in an FMI 2 FMU (FMI 2.0.4, section 2.3)
+    extension   the shared library's extension: .so, .dll, .dylib
+    zig_target  zig's -target for it (Linux: the oldest glibc the binary needs, 2.17)
+    description what it is, in words
+    """
+
+    name: str
+    fmi2_dir: str
+    extension: str
+    zig_target: str
+    description: str
+
+    @property
+    def fmi3_dir(self) -> str:
+        """Its folder under binaries/ in an FMI 3 FMU: the platform tuple."""
+        return self.name
+
+
+PLATFORMS: dict[str, Platform] = {p.name: p for p in (
+    Platform("x86_64-linux", "linux64", ".so", "x86_64-linux-gnu.2.17", "Linux on 64-bit x86"),
+    Platform("aarch64-linux", "aarch64-linux", ".so", "aarch64-linux-gnu.2.17", "Linux on 64-bit ARM"),
+    Platform("x86_64-windows", "win64", ".dll", "x86_64-windows-gnu", "Windows on 64-bit x86"),
+    Platform("x86-windows", "win32", ".dll", "x86-windows-gnu", "Windows on 32-bit x86"),
+    Platform("aarch64-windows", "aarch64-windows", ".dll", "aarch64-windows-gnu", "Windows on 64-bit ARM"),
+    Platform("x86_64-darwin", "darwin64", ".dylib", "x86_64-macos", "macOS on 64-bit x86 (Intel)"),
+    Platform("aarch64-darwin", "aarch64-darwin", ".dylib", "aarch64-macos", "macOS on Apple silicon"),
+)}
+
+# `all`: the platforms users run FMU importers on (Windows tools, Macs, Linux workstations and
+# ARM rigs); x86-windows and aarch64-windows are built when named
+ALL = ("x86_64-linux", "aarch64-linux", "x86_64-windows", "x86_64-darwin", "aarch64-darwin")
+UNIVERSAL_DARWIN = ("x86_64-darwin", "aarch64-darwin")  # both built: darwin64 holds both slices
+
+_ARCH = {"x86_64": "x86_64", "amd64": "x86_64", "aarch64": "aarch64", "arm64": "aarch64",
+         "i386": "x86", "i686": "x86", "x86": "x86"}
+_SYSTEM = {"Linux": ("linux", ".so"), "Windows": ("windows", ".dll"), "Darwin": ("darwin", ".dylib")}
+_FMI2_X86 = {("x86_64", "linux"): "linux64", ("x86", "linux"): "linux32", ("x86_64", "windows"): "win64",
+             ("x86", "windows"): "win32", ("x86_64", "darwin"): "darwin64", ("x86", "darwin"): "darwin32"}
+
+
+def host_platform() -> Platform:
+    """The platform this Python runs on, from platform.system() and platform.machine() (and the
+    interpreter's pointer size: 32-bit Python on 64-bit x86 is x86). A platform outside
+    PLATFORMS (e.g. riscv64-linux) gets its tuple as its folder, as FMI 2.0.4 says."""
+    machine = _platform.machine().lower()
+    arch = _ARCH.get(machine, machine)
+    if arch == "x86_64" and sys.maxsize <= 2 ** 32:
+        arch = "x86"
+    system, extension = _SYSTEM.get(_platform.system(), (_platform.system().lower(), ".so"))
+    name = f"{arch}-{system}"
+    if name in PLATFORMS:
+        return PLATFORMS[name]
+    return Platform(name, _FMI2_X86.get((arch, system), name), extension, "", f"{system} on {arch}")
+
+
+def parse_platforms(value, argument: str = "platforms") -> tuple[str, ...]:
+    """The platform names `value` asks for, in PLATFORMS' order, each once.
+
+    value: None or "host" (the host only), "all" (ALL), a comma-separated string or a list of
+    names, where "host" and "all" may appear among the names. Raises ArgumentError naming
+    `argument` with the valid names for an unknown name, an empty list or a value of another type.
+    """
+    if value is None:
+        return (host_platform().name,)
+    if isinstance(value, str):
+        names = [v.strip() for v in value.split(",")]
+    elif isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
+        names = [v.strip() for v in value]
+    else:
+        raise ArgumentError(f"{argument}: expected platform names (a list of strings or one comma-separated "
+                            f"string), got {type(value).__name__}; valid: {_valid()}", argument=argument)
+    if not names or any(not n for n in names):
+        raise ArgumentError(f"{argument}: an empty platform name in {value!r}; valid: {_valid()}", argument=argument)
+    wanted: set[str] = set()
+    for n in names:
+        if n == "all":
+            wanted.update(ALL)
+        elif n == "host":
+            wanted.add(host_platform().name)
+        elif n in PLATFORMS:
+            wanted.add(n)
+        else:
+            raise ArgumentError(f"{argument}: unknown platform {n!r}; valid: {_valid()}", argument=argument)
+    order = list(PLATFORMS)
+    return tuple(sorted(wanted, key=lambda n: order.index(n) if n in order else -1))
+
+
+def _valid() -> str:
+    return ", ".join(["all", "host", *PLATFORMS])
+
+
+def platform_of_folder(folder: str) -> str:
+    """The platform tuple of a binaries/ folder of an FMI 2 or FMI 3 FMU (linux64 ->
+    x86_64-linux, aarch64-linux -> aarch64-linux); a folder no standard names is returned as it is."""
+    for p in PLATFORMS.values():
+        if folder in (p.fmi2_dir, p.fmi3_dir):
+            return p.name
+    return {v: f"{a}-{s}" for (a, s), v in _FMI2_X86.items()}.get(folder, folder)
+
+
+def zig_command(verb: str = "gyrowheel build --platforms") -> list[str]:
+    """The command that runs zig (`python -m ziglang`, PyPI ziglang). Raises MissingExtraError
+    naming the optional part 'platforms' when ziglang is not installed."""
+    try:
+        import ziglang  # noqa: F401  (the package holds the zig executable)
+    except ImportError:
+        raise MissingExtraError("platforms", verb, ["ziglang"]) from None
+    return [sys.executable, "-m", "ziglang"]
+
+
+def first_error(output: str) -> str:
+    """The compiler's first error line in `output` (clang: '<file>:<line>:<col>: error: ...'),
+    else its first non-empty line."""
+    lines = [line.strip() for line in output.splitlines() if line.strip()]
+    for line in lines:
+        if re.search(r"\berror\b", line):
+            return line
+    return lines[0] if lines else "(no output)"
+
+
+def cross_compile(target: Platform, source: Path, include_dirs: list[Path], output: Path,
+                  flags: list[str]) -> Path:
+    """Compile the unity source `source` into `output`, the shared library of `target`, with
+    zig's C compiler and `flags` (the host's standard, warnings and optimisation).
+
+    zig writes its by-products (Windows: an import library and a PDB) beside its output, so the
+    library is linked in a directory of ours and only it is copied to `output`. Debug
+    information is stripped (-s), as the host's binary carries none.
+    Raises CompileError naming the target, the command and the compiler's first error, with its
+    whole output below."""
+    from gyrowheel.fmu_build.compiler import CompileError
+
+    zig = zig_command()
+    with temporary_directory("zig") as tmp:
+        built = Path(tmp) / f"lib{target.extension}"
+        cmd = [*zig, "cc", "-target", target.zig_target, "-shared", *([] if target.extension == ".dll" else ["-fPIC"]),
+               *flags, "-s", *[f"-I{d}" for d in include_dirs], str(source), "-o", str(built), "-lm"]
+        proc = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "TMPDIR": str(tmp)})
+        if proc.returncode != 0 or not built.is_file():
+            out = proc.stdout + proc.stderr
+            raise CompileError(f"cross build for {target.name} failed (zig cc -target {target.zig_target}): "
+                               f"{first_error(out)}\n{' '.join(cmd)}\n{out}")
+        output.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(built, output)
+    return output
+
+
+def cross_compile_all(targets: list[Platform], source: Path, include_dirs: list[Path], outputs: list[Path],
+                      flags: list[str]) -> list[Path]:
+    """cross_compile each target into its output, as many at once as the machine has cores.
+    The first failure (in `targets`' order) is raised after every compile has ended."""
+    if not targets:
+        return []
+    with ThreadPoolExecutor(max_workers=max(1, min(len(targets), os.cpu_count() or 1))) as pool:
+        futures = [pool.submit(cross_compile, t, source, include_dirs, o, flags) for t, o in zip(targets, outputs)]
+    return [f.result() for f in futures]
+
+
+# Mach-O universal ("fat") file: a big-endian header, one entry per slice, each slice aligned
+# (mach-o/fat.h: FAT_MAGIC 0xcafebabe, struct fat_arch {cputype, cpusubtype, offset, size, align})
+FAT_MAGIC = 0xCAFEBABE
+MH_MAGIC_64 = 0xFEEDFACF
+FAT_ALIGN = 14  # 2^14 = 16 KiB, the arm64 page size (x86_64's 4 KiB divides it)
+
+
+def write_universal(slices: list[Path], output: Path) -> Path:
+    """Write the universal Mach-O `output` holding the thin 64-bit Mach-O files `slices`.
+    Raises ValueError for a slice that is not a thin 64-bit Mach-O."""
+    headers, blobs = [], []
+    for s in slices:
+        data = Path(s).read_bytes()
+        magic, cputype, cpusubtype = struct.unpack_from("<III", data, 0)
+        if magic != MH_MAGIC_64:
+            raise ValueError(f"{s}: not a thin 64-bit Mach-O file (magic {magic:#x})")
+        headers.append((cputype, cpusubtype))
+        blobs.append(data)
+    align = 1 << FAT_ALIGN
+    offset = align  # the header and its table fit in the first page
+    table, body = [], b""
+    for (cputype, cpusubtype), data in zip(headers, blobs):
+        table.append(struct.pack(">IIIII", cputype, cpusubtype, offset, len(data), FAT_ALIGN))
+        pad = offset - align - len(body)
+        body += b"\0" * pad + data
+        offset = align + len(body)
+        offset = (offset + align - 1) // align * align
+    head = struct.pack(">II", FAT_MAGIC, len(slices)) + b"".join(table)
+    output.write_bytes(head + b"\0" * (align - len(head)) + body)
+    return output

@@ -168,6 +168,21 @@ def earth_fmu(earth_build) -> Path:
 
 
 @pytest.fixture(scope="session")
+def all_platforms_build(tmp_path_factory):
+    """The paper's earth scene with the Taylor kernel and binaries for every platform of `all`
+    (gyrowheel.fmu_build.platforms.ALL), built once per run, sources kept (.sources).  zig keeps
+    its C libraries in its global cache: on a fresh machine the first build also builds them
+    (about 80 s, most of it Windows' C library); later runs take about 10 s."""
+    path = SCENES / "paper_earth.toml"
+
+    def make(out: Path):
+        built = build_fmu(load_scene(path), out / "paper_earth.fmu", build_dir=out / "build", taylor=True,
+                          platforms="all")
+        return _Built(built, path.read_text(), path.name)
+    return shared_build(tmp_path_factory, "paper_earth_all_platforms", make).result()
+
+
+@pytest.fixture(scope="session")
 def earth_loop(tmp_path_factory):
     """The Gyrover closed loop on earth (wheel + controller FMUs, .ssp) on the earth's course, built once."""
     from gyrowheel.controller.closed_loop import build_closed_loop

@@ -116,14 +116,18 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
     generated C there (BuildResult.sources), else a temporary directory is used and removed;
     taylor: also generate the Taylor kernel (solver taylor, the ensemble path) when the scene's
     solver is not taylor already; platforms: the platforms to carry binaries for
-    (fmu_build/platforms.py parse_platforms: "all", names, a list; None: the host only).
+    (fmu_build/platforms.py parse_platforms: "all", "host", a comma-separated string or a list
+    of FMI 3.0 platform tuples), overriding the scene's [build] platforms; None: the scene's
+    [build] platforms, and without one the host only.
     Returns the BuildResult. Raises SceneError (the scene, naming the field), ArgumentError
-    (output), and what build_spec_fmu raises.
+    (output; platforms: an unknown platform, the valid ones listed), and what build_spec_fmu
+    raises.
     """
     scene = check_scene(scene)
     output = check_output(output, scene.file)
+    wanted = _wanted_platforms(scene.platforms if platforms is None else platforms)  # before the model
     return build_spec_fmu(_spec(scene), output, scene.experiment, build_dir=build_dir,
-                          keep=scene.outputs, source=scene.source, taylor=taylor, platforms=platforms)
+                          keep=scene.outputs, source=scene.source, taylor=taylor, platforms=wanted)
 
 
 def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment | None = None,
@@ -147,9 +151,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     """
     experiment = experiment or Experiment()
     output = check_output(output)
-    wanted = _platforms.parse_platforms(platforms)
-    if any(n != _platforms.host_platform().name for n in wanted):
-        _platforms.zig_command()
+    wanted = _wanted_platforms(platforms)
     tmp = None
     if build_dir is None:
         tmp = new_directory("build")
@@ -188,6 +190,15 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     finally:
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _wanted_platforms(platforms) -> tuple[str, ...]:
+    """The platform names `platforms` asks for (parse_platforms), zig found if any is not the
+    host's. Raises ArgumentError naming `platforms`, MissingExtraError naming gyrowheel[platforms]."""
+    wanted = _platforms.parse_platforms(platforms)
+    if any(n != _platforms.host_platform().name for n in wanted):
+        _platforms.zig_command()
+    return wanted
 
 
 def write_binaries(source: Path, include_dirs: list[Path], binaries: Path, identifier: str,

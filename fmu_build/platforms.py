@@ -26,7 +26,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-from gyrowheel.errors import ArgumentError, MissingExtraError
+from gyrowheel.errors import ArgumentError, ArgumentTypeError, MissingExtraError
 from gyrowheel.scratch import temporary_directory
 
 
@@ -96,7 +96,8 @@ def parse_platforms(value, argument: str = "platforms") -> tuple[str, ...]:
 
     value: None or "host" (the host only), "all" (ALL), a comma-separated string or a list of
     names, where "host" and "all" may appear among the names. Raises ArgumentError naming
-    `argument` with the valid names for an unknown name, an empty list or a value of another type.
+    `argument` with the valid names for an unknown name or an empty list, ArgumentTypeError (an
+    ArgumentError) for a value of another type.
     """
     if value is None:
         return (host_platform().name,)
@@ -105,7 +106,7 @@ def parse_platforms(value, argument: str = "platforms") -> tuple[str, ...]:
     elif isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
         names = [v.strip() for v in value]
     else:
-        raise ArgumentError(f"{argument}: expected platform names (a list of strings or one comma-separated "
+        raise ArgumentTypeError(f"{argument}: expected platform names (a list of strings or one comma-separated "
                             f"string), got {type(value).__name__}; valid: {_valid()}", argument=argument)
     if not names or any(not n for n in names):
         raise ArgumentError(f"{argument}: an empty platform name in {value!r}; valid: {_valid()}", argument=argument)

@@ -9,6 +9,8 @@ Scene objects they are read into (docs/scenes.md).
     [experiment]  start_time, stop_time, output_interval, solver, rel_tol, abs_tol, max_step,
                   max_internal_steps
     [outputs]     keep = [...] to expose only some outputs (optional)
+    [build]       platforms = "all" or a list of platform tuples: the binaries the FMU carries
+                  (optional; default the host only; `gyrowheel build --platforms` overrides it)
 
 One set of rules serves both ways in: parse_scene reads a file's tables through it, and
 check_scene puts a Scene made or changed in Python (dataclasses.replace, attribute assignment)
@@ -28,13 +30,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gyrowheel.errors import GyrowheelError
+from gyrowheel.fmu_build.platforms import parse_platforms
 from gyrowheel.model.build import BETA_MIN_DEFAULT, FORMULATIONS, start_values, touchdown_lean, wheel_parameters
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 
 SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
 TOUCHDOWN = "touchdown"  # [wheel] beta_min preset: the lean at which the body must touch the ground
-TABLES = ("model", "wheel", "effects", "initial", "experiment", "outputs")
+TABLES = ("model", "wheel", "effects", "initial", "experiment", "outputs", "build")
 ZIP_MAGIC = b"PK\x03\x04"  # the start of a zip archive (an FMU, an .ssp)
 # The model name is the FMU's modelIdentifier, "a short class name according to C syntax"
 # (FMI 2.0.4, section 2.2.1): its binary's file name and the prefix of the C API of export-c,
@@ -112,6 +115,10 @@ class Scene:
     experiment   an Experiment: DefaultExperiment and the solver parameters' defaults
     outputs      the optional outputs to expose ([outputs] keep), or None: all of them; the
                  names are checked when the FMU is built
+    platforms    the platforms whose binaries the FMU carries ([build] platforms): "all",
+                 "host", or a list of FMI 3.0 platform tuples (gyrowheel.fmu_build.platforms:
+                 x86_64-linux, aarch64-linux, x86_64-windows, ...); None (the default): the host
+                 only; a `platforms` argument of build_fmu / gyrowheel.build overrides it
     source       the scene's TOML text, shipped in the FMU's documentation/index.html
                  ("Built from"); check_scene writes it anew when it no longer describes the
                  scene (a Scene changed in Python, or made there)
@@ -127,6 +134,7 @@ class Scene:
     effects: dict[str, dict] = field(default_factory=lambda: {"gravity": {}})
     experiment: Experiment = field(default_factory=Experiment)
     outputs: list[str] | None = None
+    platforms: str | list[str] | None = None
     source: str = ""  # the TOML text, shipped in the FMU's documentation
     file: Path | None = field(default=None, compare=False)  # where load_scene read it from
 
@@ -335,7 +343,24 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
         if not isinstance(keep, list) or not all(isinstance(k, str) for k in keep):
             raise r.fail("outputs", "keep", "must be a list of output names")
         scene.outputs = list(keep)
+    build = r.table(data, "build")
+    r.unknown("build", build, {"platforms"})
+    if "platforms" in build:
+        scene.platforms = _platforms(r, build["platforms"])
     return scene
+
+
+def _platforms(r: _Reader, value) -> str | list[str]:
+    """[build] platforms: a string as `gyrowheel build --platforms` takes it ("all", "host", a
+    platform or several, comma-separated) or a list of platform names, each checked against
+    gyrowheel.fmu_build.platforms.PLATFORMS; kept as given."""
+    if not (isinstance(value, str) or (isinstance(value, list) and value and all(isinstance(v, str) for v in value))):
+        raise r.fail("build", "platforms", f'must be "all", "host" or a list of platform names, got {value!r}')
+    try:
+        parse_platforms(value)
+    except ValueError as exc:  # ArgumentError: "platforms: unknown platform 'x'; valid: ..."
+        raise r.fail("build", "platforms", str(exc).split(": ", 1)[1]) from None
+    return value if isinstance(value, str) else list(value)
 
 
 def parse_scene(text: str, where: str = "<scene>") -> Scene:
@@ -378,7 +403,8 @@ def _tables(r: _Reader, scene: Scene) -> dict:
     return {"model": {"name": scene.name, "description": scene.description, "formulation": scene.formulation},
             "wheel": scene.wheel, "effects": scene.effects, "initial": scene.initial,
             "experiment": {f.name: getattr(scene.experiment, f.name) for f in dataclasses.fields(Experiment)},
-            "outputs": {} if scene.outputs is None else {"keep": scene.outputs}}
+            "outputs": {} if scene.outputs is None else {"keep": scene.outputs},
+            "build": {} if scene.platforms is None else {"platforms": scene.platforms}}
 
 
 def _content(scene: Scene) -> tuple:
@@ -463,6 +489,8 @@ def scene_toml(scene: Scene) -> str:
     table("experiment", dataclasses.asdict(scene.experiment))
     if scene.outputs is not None:
         table("outputs", {"keep": scene.outputs})
+    if scene.platforms is not None:
+        table("build", {"platforms": scene.platforms})
     return "\n".join(lines) + "\n"
 
 

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from gyrowheel import arguments
 from gyrowheel.arguments import check_memory, count, existing_file, flag, number, path
-from gyrowheel.errors import ArgumentError, ArgumentTypeError, GyrowheelError, SweepSpecError
+from gyrowheel.errors import ArgumentError, ArgumentTypeError, GyrowheelError, MissingExtraError, SweepSpecError
 from gyrowheel.extras import require
 from gyrowheel.output_files import check_output_file, replaced_atomically
 from gyrowheel.scratch import temporary_directory
@@ -161,7 +161,7 @@ def _assignments(values, argument: str) -> dict[str, object]:
 
 # -- the verbs ---------------------------------------------------------------------------------
 
-def build(scene, output=None, *, build_dir=None, taylor: bool = False):
+def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms=None):
     """Build the FMI 2.0 FMU of a scene (Co-Simulation and Model Exchange, sources included).
 
     scene: a scene file (str or os.PathLike, TOML: docs/scenes.md) or a gyrowheel.Scene.
@@ -169,13 +169,24 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False):
     directory is created. build_dir: keep the generated C and objects there (default: a
     temporary directory, removed). taylor: also generate the Taylor kernel (solver taylor at
     run time, gyrowheel.Ensemble); implied by solver = "taylor" in the scene.
+    platforms: the platforms whose binaries the FMU carries, as FMI 3.0 platform tuples
+    (FMI 3.0, section 2.5.1.4.1; each in the folder FMI 2.0.4, section 2.3 prescribes:
+    docs/fmi.md, "Platforms"): "all" (x86_64-linux, aarch64-linux, x86_64-windows,
+    x86_64-darwin, aarch64-darwin), "host" (this machine's only), a list of tuples such as
+    ["x86_64-linux", "x86_64-windows"] or the same as one comma-separated string (also
+    x86-windows, aarch64-windows); None (default): the scene's [build] platforms, else the
+    host only. The host's binary is compiled by the host's C compiler, every other by zig's
+    (needs gyrowheel[platforms]).
     Returns a gyrowheel.BuildResult: fmu (the path), spec (the ModelSpec: variables, effects),
     sources (the C sources' directory, kept only with build_dir), identifier (the model
     identifier); it is os.PathLike, so it stands for its FMU in every other function.
     Raises SceneError (the file, table and key at fault; a file that is no scene, e.g. an FMU; a
     combination the model refuses), ArgumentError (output or build_dir that cannot be written,
-    named), ArgumentTypeError (an argument of the wrong type), CompileError (the C compiler
-    failed, with its output).
+    named; platforms: an unknown platform, in one line listing the valid ones),
+    ArgumentTypeError (an argument of the wrong type), MissingExtraError (a platform other than
+    the host's without gyrowheel[platforms]: its pip command), CompileError (a C compiler
+    failed, with its output; a cross build names the platform and the compiler's first error;
+    no FMU is written then, and an FMU already at output is left as it was).
     """
     from gyrowheel.fmu_build import builder
     from gyrowheel.fmu_build.scene import SceneError
@@ -188,7 +199,10 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False):
     build_dir = None if build_dir is None else _output_directory(build_dir, "build_dir")
     taylor = flag(taylor, "taylor")
     try:
-        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=taylor)
+        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=taylor, platforms=platforms)
+    except MissingExtraError as exc:  # zig, for a platform not the host's: checked before the model is built
+        verb = "gyrowheel.build(platforms=...)" if platforms is not None else "gyrowheel.build() ([build] platforms)"
+        raise MissingExtraError(exc.extra, verb, exc.missing) from None
     except GyrowheelError:
         raise
     except OSError as exc:  # the FMU or the build directory could not be written

@@ -37,7 +37,7 @@ EXIT_BAD_INPUT = 2
 EXIT_FAILURE = 1
 
 # API argument -> the flag that gives it, per verb (errors naming an argument name the flag)
-BUILD_FLAGS = {"output": "-o", "build_dir": "--keep-build"}
+BUILD_FLAGS = {"output": "-o", "build_dir": "--keep-build", "platforms": "--platforms"}
 SIMULATE_FLAGS = {"stop_time": "--stop-time", "output_interval": "--output-interval", "start_values": "--set",
                   "output": "-o", "plot": "--plot"}
 SYSTEM_FLAGS = {"step": "--step", "stop_time": "--stop-time", "start_values": "--set", "output": "-o"}
@@ -96,12 +96,16 @@ def _failed(what: str, where: str, exc: BaseException) -> CliError:
 
 def cmd_build(args) -> int:
     from gyrowheel.api import build
-    from gyrowheel.errors import ArgumentError
+    from gyrowheel.errors import ArgumentError, MissingExtraError
     from gyrowheel.fmu_build.compiler import CompileError
 
     try:
-        result = build(args.scene, args.output, build_dir=args.keep_build, taylor=args.taylor)
-    except ArgumentError as exc:  # an output or build directory that cannot be written (exit 2)
+        result = build(args.scene, args.output, build_dir=args.keep_build, taylor=args.taylor,
+                       platforms=args.platforms)
+    except MissingExtraError as exc:  # zig, for a platform not the host's (exit 2)
+        verb = "gyrowheel build --platforms" if args.platforms is not None else "gyrowheel build ([build] platforms)"
+        raise MissingExtraError(exc.extra, verb, exc.missing) from None
+    except ArgumentError as exc:  # an output or build directory that cannot be written, a platform (exit 2)
         raise CliError(flagged(exc, BUILD_FLAGS)) from None
     except CompileError as exc:
         raise CliError(f"compiling the FMU failed: {exc}", EXIT_FAILURE) from None
@@ -224,6 +228,12 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("--taylor", action="store_true",
                    help="also generate the Taylor kernel (solver taylor at run time, the ensemble "
                         "path); implied by solver = \"taylor\" in the scene")
+    b.add_argument("--platforms", metavar="LIST",
+                   help="the platforms to carry binaries for, comma-separated FMI 3.0 tuples "
+                        "(x86_64-linux, aarch64-linux, x86_64-windows, x86-windows, aarch64-windows, "
+                        "x86_64-darwin, aarch64-darwin), 'all' (the five of them without x86-windows "
+                        "and aarch64-windows) or 'host'; default: the scene's [build] platforms, else "
+                        "the host only; others than the host's need gyrowheel[platforms] (zig)")
     b.set_defaults(func=cmd_build)
     s = sub.add_parser("simulate", help="simulate an FMU in Co-Simulation with fmpy")
     s.add_argument("fmu")

@@ -2,8 +2,8 @@
 
 From modelDescription.xml (FMI 2.0.4, section 2.2: the model's attributes, the
 DefaultExperiment, the ModelVariables with their types) and from the archive: the platforms
-under binaries/ (section 2.3), whether it carries sources/, and for an FMU built by gyrowheel its
-effects (documentation/index.html) and whether it has the Taylor kernel (the ensemble path).
+under binaries/ (section 2.3; named by their FMI 3.0 platform tuples), whether it carries
+sources/, and for an FMU built by gyrowheel its effects (documentation/index.html) and whether it has the Taylor kernel (the ensemble path).
 str(info) is the text `gyrowheel info` prints; info.as_dict() what `gyrowheel info --json` prints.
 open_fmu is where simulate, info and sweep open an FMU and say what is wrong with one.
 """
@@ -129,6 +129,25 @@ class DefaultExperiment:
 
 
 @dataclass(frozen=True)
+class PlatformInfo:
+    """One platform an FMU carries a binary for.
+
+    name: its FMI 3.0 platform tuple (FMI 3.0, section 2.5.1.4.1: 'x86_64-linux',
+    'aarch64-darwin'); folder: the archive's folder holding its binary ('binaries/linux64':
+    FMI 2.0.4, section 2.3 names 32/64-bit x86 win32, win64, linux32, linux64, darwin32,
+    darwin64, and every other platform by its tuple). A folder that names no platform either
+    standard knows keeps its own name as `name`.
+    str(): 'x86_64-linux (binaries/linux64)'.
+    """
+
+    name: str
+    folder: str
+
+    def __str__(self) -> str:
+        return f"{self.name} ({self.folder})"
+
+
+@dataclass(frozen=True)
 class FmuInfo:
     """What an FMU is (gyrowheel.info).
 
@@ -138,8 +157,9 @@ class FmuInfo:
     default_experiment: DefaultExperiment or None. variables: every ScalarVariable, in the file's
     order. effects: the effects an FMU built by gyrowheel simulates
     (docs/effects.md; () for none), None for an FMU that does not say. solvers: the items of
-    its `solver` parameter (the integrators it can run), () without one. platforms: the
-    directories of binaries/ holding a file (e.g. 'linux64'); sources: it carries its C sources
+    its `solver` parameter (the integrators it can run), () without one. platforms: a
+    PlatformInfo for every folder of binaries/ holding a file, by platform tuple
+    (x86_64-linux in binaries/linux64); sources: it carries its C sources
     (sources/); taylor: it has the Taylor kernel (solver taylor, gyrowheel.Ensemble).
     """
 
@@ -156,7 +176,7 @@ class FmuInfo:
     variables: tuple[VariableInfo, ...]
     effects: tuple[str, ...] | None
     solvers: tuple[str, ...]
-    platforms: tuple[str, ...]
+    platforms: tuple[PlatformInfo, ...]
     sources: bool
     taylor: bool
 
@@ -188,7 +208,7 @@ class FmuInfo:
                   f"generated    {self.generation_date or 'unknown'}",
                   f"effects      {'not recorded' if self.effects is None else ', '.join(self.effects) or 'none'}",
                   f"solvers      {', '.join(self.solvers) or 'none declared'}",
-                  f"platforms    {', '.join(self.platforms) or 'none (no binaries)'}",
+                  f"platforms    {', '.join(map(str, self.platforms)) or 'none (no binaries)'}",
                   f"sources      {'yes' if self.sources else 'no'}"
                   + (", with the Taylor kernel (solver taylor, the ensemble path)" if self.taylor else "")]
         # the variable table: every column as wide as its longest entry, two spaces apart
@@ -256,6 +276,8 @@ def _effects(index_html: str) -> tuple[str, ...] | None:
 def read_info(fmu: str | Path) -> FmuInfo:
     """Describe the FMU at `fmu` (see FmuInfo). Raises FmuError naming the file when it is not
     an FMI 2.0 FMU gyrowheel can read (open_fmu)."""
+    from gyrowheel.fmu_build.platforms import platform_of_folder
+
     checked = open_fmu(fmu)
     path, md, names = checked.path, checked.model_description, checked.names
     try:
@@ -278,8 +300,8 @@ def read_info(fmu: str | Path) -> FmuInfo:
             items=items))
     solver = next((v for v in variables if v.name == "solver" and v.items), None)
     exp = md.defaultExperiment
-    platforms = sorted({n.split("/")[1] for n in names
-                        if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")})
+    folders = {n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")}
+    platforms = sorted(PlatformInfo(platform_of_folder(f), f"binaries/{f}") for f in folders)
     return FmuInfo(
         path=path, model_name=md.modelName, description=md.description, fmi_version=md.fmiVersion,
         generation_tool=md.generationTool, generation_date=md.generationDateAndTime, guid=md.guid,

@@ -9,7 +9,10 @@ exports FMUs and runs a system of FMUs. The rest comes with an extra (pyproject.
     animate  `gyrowheel animate` (GIF, MP4)                matplotlib, pillow, imageio-ffmpeg
     system   the Gyrover's controller design, writing      scipy, pyssp-standard, matplotlib
              SSP 1.0 systems
-    all      every one of them
+    all      every one of them but platforms
+    platforms `gyrowheel build --platforms` (binaries for  ziglang
+             other platforms: zig's C compiler; raised
+             by gyrowheel.fmu_build.platforms.zig_command)
 
 require(extra, verb) looks each import name up with importlib.util.find_spec, which imports
 nothing, and raises MissingExtraError naming the pip command when one is missing.

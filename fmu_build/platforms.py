@@ -163,17 +163,20 @@ def cross_compile(target: Platform, source: Path, include_dirs: list[Path], outp
     zig's C compiler and `flags` (the host's standard, warnings and optimisation).
 
     zig writes its by-products (Windows: an import library and a PDB) beside its output, so the
-    library is linked in a directory of ours and only it is copied to `output`. Debug
-    information is stripped (-s), as the host's binary carries none.
+    library is linked in a directory of ours, under its own file name (a DLL's export table
+    names it), and only it is copied to `output`. A Mach-O library's install name is
+    @rpath/<its file name>, not the path it was linked at (which would differ on every build).
+    Debug information is stripped (-s), as the host's binary carries none.
     Raises CompileError naming the target, the command and the compiler's first error, with its
     whole output below."""
     from gyrowheel.fmu_build.compiler import CompileError
 
     zig = zig_command()
     with temporary_directory("zig") as tmp:
-        built = Path(tmp) / f"lib{target.extension}"
+        built = Path(tmp) / output.name
+        install_name = [f"-Wl,-install_name,@rpath/{output.name}"] if target.extension == ".dylib" else []
         cmd = [*zig, "cc", "-target", target.zig_target, "-shared", *([] if target.extension == ".dll" else ["-fPIC"]),
-               *flags, "-s", *[f"-I{d}" for d in include_dirs], str(source), "-o", str(built), "-lm"]
+               *flags, "-s", *[f"-I{d}" for d in include_dirs], str(source), "-o", str(built), "-lm", *install_name]
         proc = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "TMPDIR": str(tmp)})
         if proc.returncode != 0 or not built.is_file():
             out = proc.stdout + proc.stderr

@@ -301,7 +301,8 @@ def read_info(fmu: str | Path) -> FmuInfo:
     solver = next((v for v in variables if v.name == "solver" and v.items), None)
     exp = md.defaultExperiment
     folders = {n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")}
-    platforms = sorted(PlatformInfo(platform_of_folder(f), f"binaries/{f}") for f in folders)
+    platforms = sorted((PlatformInfo(platform_of_folder(f), f"binaries/{f}") for f in folders),
+                       key=lambda p: (p.name, p.folder))
     return FmuInfo(
         path=path, model_name=md.modelName, description=md.description, fmi_version=md.fmiVersion,
         generation_tool=md.generationTool, generation_date=md.generationDateAndTime, guid=md.guid,

@@ -287,7 +287,9 @@ def test_info_from_a_path_and_the_build_result_against_the_model_description(moo
     assert info.variable("g").start == 1.625 and info.variable("g").unit == "m/s2"
     with zipfile.ZipFile(moon.fmu) as zf:
         platforms = {n.split("/")[1] for n in zf.namelist() if n.startswith("binaries/") and not n.endswith("/")}
-    assert info.platforms == tuple(sorted(platforms)) == ("linux64",) and info.sources
+    assert tuple(p.folder for p in info.platforms) == tuple(f"binaries/{f}" for f in sorted(platforms)) \
+        == ("binaries/linux64",) and info.sources
+    assert [(p.name, str(p)) for p in info.platforms] == [("x86_64-linux", "x86_64-linux (binaries/linux64)")]
     assert info.effects == tuple(moon.spec.effects) == ("gravity",)
     with pytest.raises(KeyError, match="no variable 'nope'; variables: M, R"):
         info.variable("nope")
@@ -319,7 +321,7 @@ def test_info_text_and_json(moon, capsys):
             f"experiment   {e.startTime} .. {e.stopTime} s, step {e.stepSize}, tolerance {e.tolerance}",
             "interfaces   Co-Simulation (paper_moon), Model Exchange (paper_moon)",
             f"generated    {md.generationDateAndTime}", "effects      gravity",
-            "solvers      euler, rk4, dopri5, rosenbrock, dop853", "platforms    linux64", "sources      yes"]
+            "solvers      euler, rk4, dopri5, rosenbrock, dop853", "platforms    x86_64-linux (binaries/linux64)", "sources      yes"]
     assert lines[:len(head)] == head
     table = lines[len(head):]
     assert len(table) == 1 + len(md.modelVariables)
@@ -601,7 +603,8 @@ def test_system_run_errors_name_the_argument(solo, tmp_path, system, kwargs, err
 # -- the command calls the API --------------------------------------------------------------------
 
 @pytest.mark.parametrize("argv, verb, expected", [
-    (["build", "s.toml", "-o", "x.fmu", "--taylor"], "build", (("s.toml", "x.fmu"), dict(build_dir=None, taylor=True))),
+    (["build", "s.toml", "-o", "x.fmu", "--taylor", "--platforms", "all"], "build",
+     (("s.toml", "x.fmu"), dict(build_dir=None, taylor=True, platforms="all"))),
     (["simulate", "m.fmu", "--stop-time", "2", "--set", "M=2", "-o", "o.csv"], "simulate",
      (("m.fmu",), dict(stop_time=2.0, output_interval=None, start_values=["M=2"], output="o.csv", plot=None))),
     (["info", "m.fmu"], "info", (("m.fmu",), {})),

@@ -148,7 +148,8 @@ def test_info_json(built):
     r = gyrowheel("info", "--json", built)
     assert r.returncode == 0, r.stderr
     data = json.loads(r.stdout)
-    assert data["model_name"] == "paper_earth" and data["fmi_version"] == "2.0" and data["platforms"] == ["linux64"]
+    assert data["model_name"] == "paper_earth" and data["fmi_version"] == "2.0" and data["platforms"] == [
+        {"name": "x86_64-linux", "folder": "binaries/linux64"}]
     g = next(v for v in data["variables"] if v["name"] == "g")
     assert (g["causality"], g["start"], g["unit"]) == ("parameter", 9.81, "m/s2")
     assert "solvers      euler, rk4, dopri5, rosenbrock, dop853" in gyrowheel("info", built).stdout

@@ -55,25 +55,30 @@ def schedule_for(spec: ModelSpec, speed: float, mission: Mission, scene: str = "
 
 
 def build_controller_fmu(schedule: Schedule, mission: Mission, wheel: ModelSpec, output: Path,
-                         name: str = "gyrover_controller") -> Path:
-    """The controller FMU of a schedule (gains built in, mission as parameter start values)."""
+                         name: str = "gyrover_controller", platforms=None) -> Path:
+    """The controller FMU of a schedule (gains built in, mission as parameter start values);
+    platforms: the platforms it carries binaries for (build_spec_fmu; None: the host only)."""
     source = json.dumps({"design": schedule.scene, "speed": schedule.speed, "g": schedule.g, "rates": schedule.rates,
                          "tilts": schedule.tilts, "mission": mission.points}, indent=1)
-    return build_spec_fmu(controller_spec(schedule, mission, wheel, name=name), output, EXPERIMENT, source=source).fmu
+    return build_spec_fmu(controller_spec(schedule, mission, wheel, name=name), output, EXPERIMENT, source=source,
+                          platforms=platforms).fmu
 
 
 def build_closed_loop(scene: Scene, out_dir: str | Path, mission: Mission | None = None, speed: float = 1.5,
-                      schedule: Schedule | None = None, stop_time: float | None = None) -> ClosedLoop:
+                      schedule: Schedule | None = None, stop_time: float | None = None,
+                      platforms=None) -> ClosedLoop:
     """Wheel and controller FMUs and the .ssp of the closed loop, in out_dir (stop time: the
-    mission's duration unless given)."""
+    mission's duration unless given); both FMUs carry binaries for `platforms` (build_fmu:
+    None: the scene's [build] platforms, else the host only)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     mission = mission or standard(speed)
     spec = model_spec(scene)
     schedule = schedule or schedule_for(spec, speed, mission, scene=scene.name)
-    wheel = build_fmu(scene, out_dir / f"{scene.name}.fmu").fmu
+    platforms = scene.platforms if platforms is None else platforms
+    wheel = build_fmu(scene, out_dir / f"{scene.name}.fmu", platforms=platforms).fmu
     ctrl = build_controller_fmu(schedule, mission, spec, out_dir / f"{scene.name}_controller.fmu",
-                                name=f"{scene.name}_controller")
+                                name=f"{scene.name}_controller", platforms=platforms)
     system = closed_loop_system(f"{scene.name}_closed_loop", wheel, ctrl, stop_time or mission.duration)
     ssp = write_ssp(system, out_dir / f"{scene.name}_closed_loop.ssp")
     return ClosedLoop(system, schedule, wheel, ctrl, ssp)

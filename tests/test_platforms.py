@@ -1,8 +1,9 @@
 """The binaries of an FMU built for every platform of `all`, read with LIEF (ELF, PE, Mach-O):
 each in the folder FMI 2.0.4 section 2.3 prescribes and for that folder's machine, exporting
 exactly the fmi2 functions of fmi2Functions.h, depending on the system's C library only, and
-needing no CPU feature it does not check for (docs/fmi.md, "Platforms"). Running them (qemu,
-Wine) is another module's; macOS binaries are only read here."""
+needing no CPU feature it does not check for (docs/fmi.md, "Platforms"); and the names
+gyrowheel info gives the folders of any FMU. Running the binaries (qemu, Wine) is
+tests/test_platforms_run.py's; macOS binaries are only read, here."""
 from __future__ import annotations
 
 import re
@@ -171,3 +172,21 @@ def test_the_arm_builds_have_no_x86_code(all_platforms_build):
         assert "fmi2DoStep" in text and "gw_taylor_attempt" in text, platform  # the unity source, Taylor too
     x86 = preprocessed(PLATFORMS["x86_64-windows"].zig_target)  # what the ARM checks would find: there, checked
     assert re.search(r"__attribute__\s*\(\(\s*target\s*\(", x86) and "__builtin_cpu_supports" in x86
+
+
+def test_info_names_the_platforms_of_any_fmu(earth_fmu, tmp_path):
+    """Folders as other exporters write them (the Reference FMUs' set, and one no standard
+    names): each by its FMI 3.0 tuple, an unknown folder by its own name."""
+    folders = {"win32": ".dll", "win64": ".dll", "linux64": ".so", "darwin64": ".dylib", "aarch64-darwin": ".dylib",
+               "x86_64-windows": ".dll", "riscv64-linux": ".so"}
+    other = tmp_path / "other.fmu"
+    with zipfile.ZipFile(earth_fmu) as src, zipfile.ZipFile(other, "w") as dst:
+        for name in src.namelist():
+            if not name.startswith("binaries/"):
+                dst.writestr(name, src.read(name))
+        for folder, extension in folders.items():
+            dst.writestr(f"binaries/{folder}/paper_earth{extension}", b"")
+    assert [str(p) for p in gyrowheel.info(other).platforms] == [
+        "aarch64-darwin (binaries/aarch64-darwin)", "riscv64-linux (binaries/riscv64-linux)",
+        "x86-windows (binaries/win32)", "x86_64-darwin (binaries/darwin64)", "x86_64-linux (binaries/linux64)",
+        "x86_64-windows (binaries/win64)", "x86_64-windows (binaries/x86_64-windows)"]

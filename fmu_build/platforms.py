@@ -107,7 +107,7 @@ def parse_platforms(value, argument: str = "platforms") -> tuple[str, ...]:
         names = [v.strip() for v in value]
     else:
         raise ArgumentTypeError(f"{argument}: expected platform names (a list of strings or one comma-separated "
-                            f"string), got {type(value).__name__}; valid: {_valid()}", argument=argument)
+                                f"string), got {type(value).__name__}; valid: {_valid()}", argument=argument)
     if not names or any(not n for n in names):
         raise ArgumentError(f"{argument}: an empty platform name in {value!r}; valid: {_valid()}", argument=argument)
     wanted: set[str] = set()

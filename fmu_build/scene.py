@@ -9,8 +9,9 @@ Scene objects they are read into (docs/scenes.md).
     [experiment]  start_time, stop_time, output_interval, solver, rel_tol, abs_tol, max_step,
                   max_internal_steps
     [outputs]     keep = [...] to expose only some outputs (optional)
-    [build]       platforms = "all" or a list of platform tuples: the binaries the FMU carries
-                  (optional; default the host only; `gyrowheel build --platforms` overrides it)
+    [build]       platforms = "all", "host" or platform tuples (a list, or comma-separated): the
+                  binaries the FMU carries (optional; default the host only; `gyrowheel build
+                  --platforms` overrides it)
 
 One set of rules serves both ways in: parse_scene reads a file's tables through it, and
 check_scene puts a Scene made or changed in Python (dataclasses.replace, attribute assignment)
@@ -116,9 +117,10 @@ class Scene:
     outputs      the optional outputs to expose ([outputs] keep), or None: all of them; the
                  names are checked when the FMU is built
     platforms    the platforms whose binaries the FMU carries ([build] platforms): "all",
-                 "host", or a list of FMI 3.0 platform tuples (gyrowheel.fmu_build.platforms:
-                 x86_64-linux, aarch64-linux, x86_64-windows, ...); None (the default): the host
-                 only; a `platforms` argument of build_fmu / gyrowheel.build overrides it
+                 "host", or FMI 3.0 platform tuples, a list or comma-separated
+                 (gyrowheel.fmu_build.platforms: x86_64-linux, aarch64-linux, x86_64-windows,
+                 ...); None (the default): the host only; a `platforms` argument of build_fmu /
+                 gyrowheel.build overrides it
     source       the scene's TOML text, shipped in the FMU's documentation/index.html
                  ("Built from"); check_scene writes it anew when it no longer describes the
                  scene (a Scene changed in Python, or made there)

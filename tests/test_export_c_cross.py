@@ -13,9 +13,10 @@ cache, ~/.cache/zig, shared with the FMUs' cross builds):
   test_aarch64_cmake_toolchain        the README's CMake command (cmake/zig.cmake) for
                                       aarch64-linux, strict: its example under qemu equals the
                                       zig cc build byte for byte
-  test_compiles_for[platform]         the library and the examples compile strictly and silently
-                                      for every other platform (compile only: linking Windows and
-                                      macOS programs would build their C runtimes first)
+  test_compiles_for[platform]         for every other platform the library (through
+                                      cmake/zig.cmake) and the examples (zig cc) compile strictly
+                                      and silently (compile only: linking Windows and macOS
+                                      programs would build their C runtimes first)
   test_ensemble_library_portable      the ensemble library (gw_ensemble_lib.c) compiles strictly for
                                       aarch64-linux (linked) and x86_64-windows; preprocessed for
                                       aarch64 it holds no target_clones, no target attribute and
@@ -91,6 +92,12 @@ def command(text: str) -> list[str]:
     return [sys.executable, *argv[1:]] if argv[0] == "python" else argv
 
 
+def with_python_on_path() -> dict:
+    """The environment with this interpreter's directory first on PATH: cmake/zig.cmake finds
+    zig through the first python3 there (this one has ziglang)."""
+    return {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
+
+
 def csv(text: str) -> np.ndarray:
     lines = text.splitlines()
     return np.loadtxt(lines[1:], delimiter=",", ndmin=2)
@@ -158,9 +165,8 @@ def test_aarch64_cmake_toolchain(copy, host_csv):
     cc build's (the same compiler; measured: the same bytes)."""
     cmake = readme_commands(copy)["aarch64-linux"][0]
     configure, build = (command(part) for part in cmake.split(" && "))
-    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
-    run([shutil.which("cmake"), *configure[1:], f"-D{MODEL.upper()}_STRICT=ON"], cwd=copy, env=env)
-    r = run([shutil.which("cmake"), *build[1:]], cwd=copy, env=env)
+    run([shutil.which("cmake"), *configure[1:], f"-D{MODEL.upper()}_STRICT=ON"], cwd=copy, env=with_python_on_path())
+    r = run([shutil.which("cmake"), *build[1:]], cwd=copy)
     assert "warning" not in (r.stdout + r.stderr).lower(), r.stdout + r.stderr
     b = copy / "build-aarch64-linux"
     assert (b / f"{MODEL}_realtime").is_file()
@@ -169,13 +175,21 @@ def test_aarch64_cmake_toolchain(copy, host_csv):
     assert a.shape == h.shape and np.max(np.abs(a - h)) <= 1e-12
 
 
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="cmake is not installed (make test installs it)")
 @pytest.mark.parametrize("platform", [p for p in PLATFORMS if p != "aarch64-linux"])  # that one runs, above
 def test_compiles_for(platform, copy, tmp_path):
-    """The library and the examples (the real-time one where there is clock_nanosleep: Linux)
-    compile for `platform` with the strict warnings and print nothing."""
+    """For `platform`: the library target through cmake/zig.cmake (CMake's checks compiling
+    without linking: a Windows or macOS program would need its C runtime built first) and the
+    examples (the real-time one where there is clock_nanosleep: Linux) by zig cc, all with the
+    strict warnings, and nothing printed but CMake's progress."""
     target = PLATFORMS[platform].zig_target
-    sources = [f"{MODEL}.c", "examples/main.c", *(["examples/realtime.c"] if platform.endswith("linux") else [])]
-    for src in sources:
+    b = tmp_path / "build"
+    run([shutil.which("cmake"), "-S", copy, "-B", b, f"-DCMAKE_TOOLCHAIN_FILE={TOOLCHAIN}", f"-DZIG_TARGET={target}",
+         "-DCMAKE_BUILD_TYPE=Release", f"-D{MODEL.upper()}_STRICT=ON", "-DCMAKE_TRY_COMPILE_TARGET_TYPE=STATIC_LIBRARY"],
+        cwd=copy, env=with_python_on_path())
+    r = run([shutil.which("cmake"), "--build", b, "--target", MODEL], cwd=copy)
+    assert "warning" not in (r.stdout + r.stderr).lower() and any(b.glob(f"*{MODEL}.*")), r.stdout + r.stderr
+    for src in ["examples/main.c", *(["examples/realtime.c"] if platform.endswith("linux") else [])]:
         r = run([*ZIG, "cc", "-target", target, *STRICT, "-O2", "-I.", "-c", src, "-o",
                  tmp_path / (Path(src).stem + ".o")], cwd=copy)
         assert r.stdout + r.stderr == "", f"{platform} {src}:\n{r.stdout}{r.stderr}"

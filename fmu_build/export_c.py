@@ -9,6 +9,10 @@ with the model's name, one translation unit <model>.c, a CMakeLists.txt and two 
     <model>.h  gyrowheel_api.h  <model>.c  CMakeLists.txt  README.md
     src/        the model, the core and the API implementation (parts of <model>.c)
     examples/   main.c, realtime.c
+    cmake/      zig.cmake: a toolchain file cross-compiling for the FMU platforms
+                (gyrowheel.fmu_build.platforms.PLATFORMS) with zig's C compiler
+
+The README names one command per platform for each route (cross_commands).
 
 Only <model>_* functions are external, so two exported models link into one program.
 """
@@ -29,12 +33,14 @@ from gyrowheel.fmu_build.builder import TAYLOR_ONLY, _guid, _spec
 from gyrowheel.fmu_build.runtime import EXPORT_DIR, runtime_sources
 from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
 from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
+from gyrowheel.fmu_build.platforms import PLATFORMS, Platform
 from gyrowheel.fmu_build.scene import Scene, check_scene
 from gyrowheel.fmu_build.variables import Variable, build_table
 from gyrowheel.model.spec import ModelSpec
 from gyrowheel.scratch import temporary_directory
 
 API_SOURCES = ("gw_capi.h", "gw_capi.c", "gw_capi_names.c", "gw_capi_state.c")
+TOOLCHAIN = "cmake/zig.cmake"  # the export's CMake toolchain file (c_src/export/cmake/zig.cmake)
 MARKER = ".gyrowheel-export"
 KINDS = ("PARAMETER", "INITIAL", "INPUT", "STATE", "OUTPUT", "EVENT")  # gyrowheel_kind order
 MACRO_LETTER = {"PARAMETER": "P", "INITIAL": "I", "INPUT": "U", "STATE": "X", "OUTPUT": "Y", "EVENT": "E"}
@@ -223,6 +229,46 @@ def force_kinds(spec) -> dict[str, str]:
             "other_forces": str(int(bool(kinds - {"dissipative", "actuator"})))}
 
 
+@dataclass(frozen=True)
+class CrossCommand:
+    """How to build an export's examples for one platform (README.md, docs/c_api.md).
+
+    platform  the Platform (gyrowheel.fmu_build.platforms.PLATFORMS)
+    cmake     the one shell command configuring and building with CMake and cmake/zig.cmake,
+              into build-<platform name>/
+    cc        the one shell command building examples/main.c with zig's C compiler (PyPI
+              ziglang), without CMake, into <model>_example (.exe on Windows)
+    """
+
+    platform: Platform
+    cmake: str
+    cc: str
+
+
+def cross_commands(model: str) -> list[CrossCommand]:
+    """The commands that cross-compile the export of `model` for every platform of PLATFORMS, in
+    its order: the same zig targets (zig_target: Linux's against glibc 2.17) and the same
+    C99 as an FMU's binaries.  The real-time example needs POSIX clock_nanosleep: the CMake
+    route builds it for Linux targets only; the cc commands build examples/main.c."""
+    out = []
+    for p in PLATFORMS.values():
+        build = f"build-{p.name}"
+        exe = f"{model}_example{'.exe' if p.extension == '.dll' else ''}"
+        out.append(CrossCommand(
+            p, f"cmake -S . -B {build} -DCMAKE_TOOLCHAIN_FILE={TOOLCHAIN} -DZIG_TARGET={p.zig_target} "
+               f"-DCMAKE_BUILD_TYPE=Release && cmake --build {build}",
+            f"python -m ziglang cc -target {p.zig_target} -std=c99 -O2 -I. examples/main.c {model}.c -lm -o {exe}"))
+    return out
+
+
+def cross_section(model: str) -> str:
+    """README.md's per-platform commands (cross_commands) as Markdown."""
+    lines = []
+    for c in cross_commands(model):
+        lines += ["", f"{c.platform.description} (`{c.platform.name}`):", "", "```sh", c.cmake, c.cc, "```"]
+    return "\n".join(lines[1:])
+
+
 def render(template: str, values: dict[str, str]) -> str:
     """@key@ placeholders (as CMake's configure_file); an unknown one left over is an error."""
     for key, value in values.items():
@@ -372,7 +418,7 @@ def _write(scene: Scene, model: str, out_dir: Path, scene_file: str, check: bool
     values = {"model": model, "MODEL": model.upper(), "guid": guid,
               "scene_file": scene_file or f"scene {model!r}",
               "description": _comment(spec.description).rstrip(".") + ".",
-              "macros": header_macros(model, rows, scene), **force_kinds(spec)}
+              "macros": header_macros(model, rows, scene), "cross": cross_section(model), **force_kinds(spec)}
     outputs = {f"{model}.h": "model.h.in", f"{model}.c": "model.c.in", "CMakeLists.txt": "CMakeLists.txt.in",
                "examples/main.c": "examples/main.c", "examples/realtime.c": "examples/realtime.c",
                "README.md": "README.md.in"}
@@ -381,7 +427,9 @@ def _write(scene: Scene, model: str, out_dir: Path, scene_file: str, check: bool
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(render((EXPORT_DIR / template).read_text(), values))
     shutil.copy2(EXPORT_DIR / "gyrowheel_api.h", out_dir / "gyrowheel_api.h")
-    written |= {"src/capi_desc.c", "gyrowheel_api.h", *outputs}
+    (out_dir / TOOLCHAIN).parent.mkdir(exist_ok=True)
+    shutil.copy2(EXPORT_DIR / TOOLCHAIN, out_dir / TOOLCHAIN)
+    written |= {"src/capi_desc.c", "gyrowheel_api.h", TOOLCHAIN, *outputs}
     files = sorted(_files(out_dir) | written)
     (out_dir / MARKER).write_text(json.dumps({"model": model, "files": files}, indent=1) + "\n")
     if check:

@@ -94,10 +94,10 @@ def test_export_layout(earth, tmp_path):
     files = json.loads((earth / MARKER).read_text())["files"]
     for name in ("paper_earth.h", "paper_earth.c", "gyrowheel_api.h", "CMakeLists.txt", "README.md",
                  "examples/main.c", "examples/realtime.c", "src/gw_funcs.c", "src/model_desc.c",
-                 "src/capi_desc.c", "src/gw_core.c", "src/gw_capi.c", "src/gw_solver_rodas4.c"):
+                 "src/capi_desc.c", "src/gw_core.c", "src/gw_capi.c", "src/gw_solver_rodas4.c", "cmake/zig.cmake"):
         assert name in files and (earth / name).is_file(), name
     assert sorted(p.relative_to(earth).as_posix() for p in earth.rglob("*") if p.name != MARKER) \
-        == sorted(files + ["examples", "src"])
+        == sorted(files + ["cmake", "examples", "src"])
     for path in earth.rglob("*.[ch]"):
         text = path.read_text()
         assert "fmi2" not in path.name and not re.search(r'#\s*include\s+"fmi2', text), path

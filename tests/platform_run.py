@@ -26,6 +26,7 @@ FMI_HEADERS = Path(fmpy.__file__).resolve().parent / "c-code"
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2"]
 AARCH64_ROOT = Path("/usr/aarch64-linux-gnu")  # Debian libc6-arm64-cross: qemu-aarch64 -L
 AARCH64_LOADER = AARCH64_ROOT / "lib" / "ld-linux-aarch64.so.1"
+DEBIAN_WINE64 = Path("/usr/lib/wine/wine64")  # Debian's wine64: the loader `wine` runs 64-bit programs with
 DRIVER_PLATFORMS = ("x86_64-linux", "aarch64-linux", "x86_64-windows")
 
 
@@ -71,12 +72,13 @@ def require_aarch64_libc() -> None:
 
 
 def wine_command() -> str:
-    """wine64 when on the PATH, else Debian's `wine` (which starts 64-bit programs with
-    /usr/lib/wine/wine64); fails naming the Debian packages when neither is."""
-    found = shutil.which("wine64") or shutil.which("wine")
-    if found is None or not (shutil.which("wine64") or Path("/usr/lib/wine/wine64").exists()):
-        pytest.fail("wine64 is missing: install Debian's wine and wine64 (make test installs them as root)")
-    return found
+    """wine64 when on the PATH, else Debian's `wine`, which starts a 64-bit program with
+    /usr/lib/wine/wine64 (package wine64); fails naming the Debian packages when either is missing."""
+    wine64 = shutil.which("wine64") or (DEBIAN_WINE64 if DEBIAN_WINE64.exists() else None)
+    wine = shutil.which("wine")
+    if wine64 is None or (wine is None and not shutil.which("wine64")):
+        pytest.fail("wine or wine64 is missing: install Debian's wine and wine64 (make test installs them as root)")
+    return shutil.which("wine64") or wine
 
 
 def windows_path(path: Path) -> str:

@@ -7,8 +7,8 @@ and under Wine.
 Two runs on each: the paper scenario (the scene's experiment, with the scene's solver and with
 solver taylor: the FMU carries the Taylor kernel) and a fall.  The states at every
 communication point equal the x86_64-linux binary's (the reference, natively) to 1e-12: absolute
-for a value below 1 in magnitude, relative above (|a - b| <= 1e-12 max(1, |ref|); x, y in m and
-beta, beta_dot stay below 1, alpha and gamma grow past 100 rad).  Measured: aarch64's dopri5
+for a value below 1 in magnitude, relative above (|a - b| <= 1e-12 max(1, |ref|): x, y in m and
+beta in rad stay below 1, alpha and gamma grow past 100 rad, the rates reach a few rad/s).  Measured: aarch64's dopri5
 differs by at most 1.5e-13 (its fused multiply-adds), its taylor run not at all; Windows' taylor
 by at most 3e-14 (the portable copy of the kernel, as zig's binaries run: below), its dopri5 not
 at all.
@@ -58,8 +58,9 @@ def fmu(all_platforms_build, tmp_path_factory):
 @pytest.fixture(scope="module")
 def wine_env(tmp_path_factory):
     """A private Wine prefix for this run (WINEDEBUG=-all; mscoree and mshtml off, so the first
-    start installs neither Mono nor Gecko).  The first start creates the prefix: measured 9 s,
-    about 700 MB, removed at the end with its wineserver stopped."""
+    start installs neither Mono nor Gecko).  Slow once: the first start creates the prefix
+    (measured 2 to 9 s, 6 s typical; about 700 MB, removed at the end with its wineserver
+    stopped); each run after it takes 0.02-0.04 s."""
     wine = wine_command()
     prefix = tmp_path_factory.mktemp("wineprefix")
     env = {"WINEPREFIX": str(prefix), "WINEDEBUG": "-all", "WINEDLLOVERRIDES": "mscoree,mshtml="}

@@ -19,7 +19,6 @@ import math
 import os
 import shutil
 import subprocess
-import time
 import zipfile
 from pathlib import Path
 

@@ -21,7 +21,7 @@ SCENES := paper_earth paper_mars paper_moon
 # apt-get (CI); otherwise named, and the tests needing them say so.
 C_TOOLS := clang cmake valgrind tcc
 
-.PHONY: demo test bench realtime figures venv browser clean c-tools tbb
+.PHONY: demo test bench realtime figures venv browser clean c-tools tbb platform-tools
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -73,6 +73,23 @@ tbb:
 	    echo "libtbb12 is missing and apt-get is not usable here: install Debian's libtbb12 for ecospy (tests/test_importers.py)"; \
 	  fi; }
 
+# Debian packages that run the FMU's binaries for other platforms (tests/test_platforms_run.py):
+# qemu-user (qemu-aarch64; qemu-x86_64 for a CPU without AVX2), libc6-arm64-cross (the aarch64 C
+# library qemu-aarch64 -L loads), wine and wine64 (the Windows binary).  Installed when missing
+# and we are root with apt-get (CI); otherwise named, and the tests fail naming them.
+platform-tools:
+	@missing=""; \
+	command -v qemu-aarch64 >/dev/null 2>&1 && command -v qemu-x86_64 >/dev/null 2>&1 || missing="$$missing qemu-user"; \
+	[ -e /usr/aarch64-linux-gnu/lib/ld-linux-aarch64.so.1 ] || missing="$$missing libc6-arm64-cross"; \
+	command -v wine >/dev/null 2>&1 || missing="$$missing wine"; \
+	[ -e /usr/lib/wine/wine64 ] || command -v wine64 >/dev/null 2>&1 || missing="$$missing wine64"; \
+	if [ -n "$$missing" ]; then \
+	    if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	        echo "installing$$missing (tests/test_platforms_run.py)"; \
+	        apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing >/dev/null; \
+	    else echo "make test: missing$$missing (Debian: apt-get install$$missing)"; fi; \
+	fi
+
 # The suite on every core (pytest-xdist, one worker per logical CPU, at most 4).  --dist loadfile
 # keeps a file's tests on one worker, so a module fixture is built once; the FMUs several files
 # share are built once per run for all workers (tests/conftest.py, shared_build).  One file, no
@@ -81,7 +98,7 @@ tbb:
 # restarting workers re-ran it until the limit, and a crash in mid-file hung --dist loadfile
 # (pytest-xdist 3.8's scheduler; one process would have died without any report).
 TEST_WORKERS ?= logical
-test: $(STAMP) browser c-tools tbb
+test: $(STAMP) browser c-tools tbb platform-tools
 	$(PY) -m pytest -q -n $(TEST_WORKERS) --maxprocesses 4 --dist loadfile --max-worker-restart 0
 
 bench: $(STAMP)

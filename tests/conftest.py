@@ -241,3 +241,13 @@ def earth_gcc(earth, tmp_path_factory) -> dict:
         built["diagnostics"] = diagnostics
         return built
     return shared_build(tmp_path_factory, "export_paper_earth_gcc", make)
+
+
+@pytest.fixture(scope="session")
+def platform_drivers(all_platforms_build, tmp_path_factory) -> dict:
+    """tests/platform_driver/fmu_driver.c built for x86_64-linux (gcc), aarch64-linux and
+    x86_64-windows (zig), once per run: {platform: executable} (tests/platform_run.py).  After
+    the all-platforms build, whose zig C libraries it reuses from zig's cache (a fresh machine
+    builds Windows' once, in that build)."""
+    from platform_run import build_drivers
+    return shared_build(tmp_path_factory, "platform_drivers", build_drivers)

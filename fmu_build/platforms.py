@@ -157,6 +157,13 @@ def first_error(output: str) -> str:
     return lines[0] if lines else "(no output)"
 
 
+# The runtime's x86-64 fast paths (the Taylor kernel's copy for AVX2 with FMA, c_src/gw_taylor.c)
+# ask __builtin_cpu_supports; zig 0.17's compiler-rt answers it with a stub that reports no
+# feature (lib/compiler_rt/fmv.zig), so a zig-built binary would carry a copy it never runs:
+# it is built with the portable copy only (GW_NO_CLONES), the copy any x86-64 CPU runs.
+ZIG_DEFINES = ["-DGW_NO_CLONES"]
+
+
 def cross_compile(target: Platform, source: Path, include_dirs: list[Path], output: Path,
                   flags: list[str]) -> Path:
     """Compile the unity source `source` into `output`, the shared library of `target`, with
@@ -166,7 +173,8 @@ def cross_compile(target: Platform, source: Path, include_dirs: list[Path], outp
     library is linked in a directory of ours, under its own file name (a DLL's export table
     names it), and only it is copied to `output`. A Mach-O library's install name is
     @rpath/<its file name>, not the path it was linked at (which would differ on every build).
-    Debug information is stripped (-s), as the host's binary carries none.
+    Debug information is stripped (-s), as the host's binary carries none; ZIG_DEFINES say
+    which copies of the runtime's machine-specific code zig's binaries hold.
     Raises CompileError naming the target, the command and the compiler's first error, with its
     whole output below."""
     from gyrowheel.fmu_build.compiler import CompileError
@@ -176,7 +184,7 @@ def cross_compile(target: Platform, source: Path, include_dirs: list[Path], outp
         built = Path(tmp) / output.name
         install_name = [f"-Wl,-install_name,@rpath/{output.name}"] if target.extension == ".dylib" else []
         cmd = [*zig, "cc", "-target", target.zig_target, "-shared", *([] if target.extension == ".dll" else ["-fPIC"]),
-               *flags, "-s", *[f"-I{d}" for d in include_dirs], str(source), "-o", str(built), "-lm", *install_name]
+               *flags, *ZIG_DEFINES, "-s", *[f"-I{d}" for d in include_dirs], str(source), "-o", str(built), "-lm", *install_name]
         proc = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "TMPDIR": str(tmp)})
         if proc.returncode != 0 or not built.is_file():
             out = proc.stdout + proc.stderr

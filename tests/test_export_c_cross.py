@@ -48,23 +48,15 @@ import pytest
 from export_c_helpers import ROOT, STRICT
 from gyrowheel.fmu_build.compiler import STANDARD, WARNINGS, optimisation_for
 from gyrowheel.fmu_build.export_c import TOOLCHAIN, cross_commands
-from gyrowheel.fmu_build.platforms import PLATFORMS
+from gyrowheel.fmu_build.platforms import PLATFORMS, zig_command
+from platform_run import AARCH64_ROOT, require, require_aarch64_libc
 from gyrowheel.fmu_build.runtime import EXPORT_DIR, RUNTIME_DIR
 from gyrowheel.taylor.ensemble import FLAGS, LIBRARY_SOURCE, Ensemble, library_source
 
-try:
-    import ziglang  # noqa: F401
-except ImportError:
-    pytest.skip("ziglang is not installed (pip install 'gyrowheel[platforms]'; make test installs it)",
-                allow_module_level=True)
+ZIG = zig_command("tests/test_export_c_cross.py")  # ziglang, of the [test] extra (gyrowheel[platforms])
+ARM_ROOT = AARCH64_ROOT  # Debian libc6-arm64-cross: the aarch64 C library
 
-ZIG = [sys.executable, "-m", "ziglang"]
-QEMU = shutil.which("qemu-aarch64")
-ARM_ROOT = Path("/usr/aarch64-linux-gnu")  # Debian libc6-arm64-cross: the aarch64 C library
-needs_qemu = pytest.mark.skipif(
-    QEMU is None or not (ARM_ROOT / "lib" / "ld-linux-aarch64.so.1").exists(),
-    reason="qemu-aarch64 or the aarch64 C library missing (Debian qemu-user, libc6-arm64-cross; make "
-           "test installs them)")
+
 MODEL = "paper_earth"
 # the ensemble run: seven trajectories (two batches of 4 lanes, one lane idle), 2 s of the paper
 START, VALUES, T_END, REL_TOL = "gamma_dot", [6.0, 5.0, 4.0, 3.0, 2.0, 1.0, 0.5], 2.0, 1e-10
@@ -82,8 +74,10 @@ def run(cmd, cwd=None, env=None) -> subprocess.CompletedProcess:
 
 
 def on_aarch64(program: Path, *args) -> str:
-    """program's stdout, run under qemu-aarch64 with the aarch64 C library."""
-    return run([QEMU, "-L", ARM_ROOT, program, *args]).stdout
+    """program's stdout, run under qemu-aarch64 with the aarch64 C library (make test installs
+    both: a missing one fails the test, naming its Debian package)."""
+    require_aarch64_libc()
+    return run([require("qemu-aarch64", "qemu-user"), "-L", ARM_ROOT, program, *args]).stdout
 
 
 def command(text: str) -> list[str]:
@@ -135,7 +129,6 @@ def test_readme_gives_every_platform(earth):
 
 
 # slow (5-10 s): two builds of the whole library for aarch64 (fused and unfused) and two runs under qemu
-@needs_qemu
 def test_aarch64_example_under_qemu(copy, host_csv):
     """The README's one command for aarch64-linux, with the strict warnings: silent, an aarch64
     executable whose CSV equals the host's to 1e-12 (measured 2.3e-13, most values differ in
@@ -157,7 +150,6 @@ def test_aarch64_example_under_qemu(copy, host_csv):
 
 # slow (5 s, 20 s with a cold zig cache): CMake's compiler checks link aarch64 test programs, the
 # library is built at -O3, then the two examples and a run under qemu
-@needs_qemu
 @pytest.mark.skipif(shutil.which("cmake") is None, reason="cmake is not installed (make test installs it)")
 def test_aarch64_cmake_toolchain(copy, host_csv):
     """cmake/zig.cmake as the README says (zig found through this Python's ziglang), strict:
@@ -235,7 +227,6 @@ def test_ensemble_library_portable(ensemble_unity, tmp_path):
 
 # slow (5-10 s): the ensemble library compiled twice at -O3, for aarch64 (with the driver) and for
 # the host (gyrowheel.Ensemble)
-@needs_qemu
 def test_ensemble_under_qemu(ensemble_unity, tmp_path):
     """Seven trajectories (a batch of 4 lanes, then 3) of the paper wheel, 2 s at rel_tol 1e-10,
     through the library's C entry point on aarch64 under qemu: the status, time, states and steps

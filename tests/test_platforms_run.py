@@ -10,7 +10,7 @@ communication point equal the x86_64-linux binary's (the reference, natively) to
 for a value below 1 in magnitude, relative above (|a - b| <= 1e-12 max(1, |ref|): x, y in m and
 beta in rad stay below 1, alpha and gamma grow past 100 rad, the rates reach a few rad/s).  Measured: aarch64's dopri5
 differs by at most 1.5e-13 (its fused multiply-adds), its taylor run not at all; Windows' taylor
-by at most 3e-14 (the portable copy of the kernel, as zig's binaries run: below), its dopri5 not
+by at most 3e-14 (the portable copy of the kernel, the only one zig's binaries carry), its dopri5 not
 at all.
 """
 from __future__ import annotations
@@ -179,28 +179,18 @@ def test_x86_64_without_avx2_runs_the_portable_kernel(run, case):
         assert abs(got.fall - ref.fall) <= TOL
 
 
-def test_windows_taylor_dispatch_runs_under_wine(run, platform_drivers, wine_env):
-    """The Windows DLL's Taylor kernel asks the CPU through __builtin_cpu_supports (compiler-rt's
-    __cpu_model, in the DLL): under Wine it loads and runs solver taylor to the reference's
-    results (the paper run also in test_platform_equals_reference)."""
+def test_windows_taylor_runs_under_wine(run, platform_drivers, wine_env):
+    """The Windows DLL runs solver taylor under Wine to the reference's results (the paper run
+    also in test_platform_equals_reference)."""
     ref, got = run("x86_64-linux", "fall", "taylor"), run("x86_64-windows", "fall", "taylor")
     assert largest_difference(got, ref) <= TOL and got.fall == pytest.approx(ref.fall, abs=TOL)
 
 
-def _host_has(*flags: str) -> bool:
-    text = Path("/proc/cpuinfo").read_text()
-    return all(f" {flag}" in text for flag in flags)
-
-
-@pytest.mark.xfail(strict=True, reason="zig 0.17's compiler-rt answers every __builtin_cpu_supports "
-                   "with 0 (lib/compiler_rt/fmv.zig: a stub whose __cpu_indicator_init sets nothing): "
-                   "the x86_64 binaries zig builds always run the portable copy of the Taylor kernel")
-def test_zig_windows_programs_see_the_cpu_features(platform_drivers, wine_env):
-    """A program zig builds for Windows sees this CPU's AVX2 and FMA under Wine, as the DLL's
-    kernel must to run its fast copy (the driver and the DLL link the same compiler-rt)."""
-    if not _host_has("avx2", "fma"):
-        pytest.skip("this CPU has no AVX2 with FMA: both copies are the portable one")
-    status, stdout, stderr, _ = run_quietly([wine_env["wine"], windows_path(platform_drivers["x86_64-windows"]),
-                                             "--cpu"], wine_env["env"], timeout=120)
-    assert status == 0, stderr
-    assert stdout.split() == ["avx2=1", "fma=1"], stdout
+def test_zig_binaries_run_the_portable_kernel(run):
+    """zig's binaries carry the portable copy of the Taylor kernel only (platforms.ZIG_DEFINES:
+    zig's compiler-rt cannot tell the CPU's features): the Windows DLL's taylor runs give the
+    bits of the gcc binary's portable copy (the linux64 binary on qemu64, a CPU without AVX2
+    and FMA), not those of its copy for AVX2 with FMA (3e-14 apart on the paper run)."""
+    for case in ("paper", "fall"):
+        windows, portable = run("x86_64-windows", case, "taylor"), run("x86_64-linux", case, "taylor", cpu="qemu64")
+        assert windows.rows == portable.rows and windows.fall == portable.fall, case

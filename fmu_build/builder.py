@@ -43,6 +43,8 @@ class BuildResult:
                 directory (build_dir/fmu/sources), or None when no build_dir was given (the
                 temporary build directory is removed)
     identifier  the FMU's modelIdentifier (the scene's name): its binary and C prefix
+    platforms   the platforms it carries binaries for, as FMI 3.0 platform tuples
+                (fmu_build/platforms.py), e.g. ('x86_64-linux', 'aarch64-linux')
 
     A BuildResult is os.PathLike: it stands for its FMU wherever a path of one does
     (gyrowheel.simulate, info, sweep, Ensemble). repr() shows the FMU and its identifier.
@@ -52,6 +54,7 @@ class BuildResult:
     spec: ModelSpec = field(repr=False)
     sources: Path | None = field(repr=False)  # directory holding every C file of the FMU, if kept
     identifier: str
+    platforms: tuple[str, ...] = ()  # the platforms (FMI 3.0 tuples) whose binaries it carries
 
     def __fspath__(self) -> str:
         """The FMU's path: a BuildResult serves wherever a path of its FMU does (os.PathLike)."""
@@ -186,7 +189,8 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         (root / "documentation" / "index.html").write_text(write_index_html(spec, experiment, table, identifier, guid,
                                                                                    source))
         _zip(root, output)
-        return BuildResult(fmu=output, spec=spec, sources=src if tmp is None else None, identifier=identifier)
+        return BuildResult(fmu=output, spec=spec, sources=src if tmp is None else None, identifier=identifier,
+                           platforms=wanted)
     finally:
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)

@@ -109,7 +109,8 @@ def parse_platforms(value, argument: str = "platforms") -> tuple[str, ...]:
         raise ArgumentTypeError(f"{argument}: expected platform names (a list of strings or one comma-separated "
                                 f"string), got {type(value).__name__}; valid: {_valid()}", argument=argument)
     if not names or any(not n for n in names):
-        raise ArgumentError(f"{argument}: an empty platform name in {value!r}; valid: {_valid()}", argument=argument)
+        what = "no platform named" if not names else "an empty platform name"
+        raise ArgumentError(f"{argument}: {what} in {value!r}; valid: {_valid()}", argument=argument)
     wanted: set[str] = set()
     for n in names:
         if n == "all":
@@ -164,6 +165,38 @@ def first_error(output: str) -> str:
 ZIG_DEFINES = ["-DGW_NO_CLONES"]
 
 
+# A cold build of Windows' C library takes 60-110 s on 2 cores; a compiler still running after
+# this long is stuck (zig 0.17 spins without a word when its cache cannot be written)
+ZIG_TIMEOUT = 1800.0
+
+
+def zig_cache_dir() -> Path:
+    """The directory zig 0.17 keeps its global cache in (the C libraries it builds per target):
+    ZIG_GLOBAL_CACHE_DIR, else $XDG_CACHE_HOME/zig, else ~/.cache/zig."""
+    if os.environ.get("ZIG_GLOBAL_CACHE_DIR"):
+        return Path(os.environ["ZIG_GLOBAL_CACHE_DIR"])
+    if os.environ.get("XDG_CACHE_HOME"):
+        return Path(os.environ["XDG_CACHE_HOME"]) / "zig"
+    return Path.home() / ".cache" / "zig"
+
+
+def check_zig_cache() -> Path:
+    """zig_cache_dir(), made if missing; CompileError when it cannot be made or written (zig
+    itself then spins without a word instead of failing)."""
+    from gyrowheel.fmu_build.compiler import CompileError
+
+    cache = zig_cache_dir()
+    try:
+        cache.mkdir(parents=True, exist_ok=True)
+        writable = os.access(cache, os.W_OK | os.X_OK)
+    except OSError as exc:
+        writable, cache = False, f"{cache} ({exc.strerror})"
+    if not writable:
+        raise CompileError(f"zig's cache directory {cache} cannot be written: set ZIG_GLOBAL_CACHE_DIR "
+                           "to a writable directory")
+    return zig_cache_dir()
+
+
 def cross_compile(target: Platform, source: Path, include_dirs: list[Path], output: Path,
                   flags: list[str]) -> Path:
     """Compile the unity source `source` into `output`, the shared library of `target`, with
@@ -180,16 +213,24 @@ def cross_compile(target: Platform, source: Path, include_dirs: list[Path], outp
     from gyrowheel.fmu_build.compiler import CompileError
 
     zig = zig_command()
+    check_zig_cache()
     with temporary_directory("zig") as tmp:
         built = Path(tmp) / output.name
         install_name = [f"-Wl,-install_name,@rpath/{output.name}"] if target.extension == ".dylib" else []
         cmd = [*zig, "cc", "-target", target.zig_target, "-shared", *([] if target.extension == ".dll" else ["-fPIC"]),
                *flags, *ZIG_DEFINES, "-s", *[f"-I{d}" for d in include_dirs], str(source), "-o", str(built), "-lm", *install_name]
-        proc = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "TMPDIR": str(tmp)})
+        failed = f"cross build for {target.name} failed (zig cc -target {target.zig_target})"
+        try:
+            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=ZIG_TIMEOUT,
+                                  env={**os.environ, "TMPDIR": str(tmp)})
+        except subprocess.TimeoutExpired:
+            raise CompileError(f"{failed}: no result after {ZIG_TIMEOUT:.0f} s (zig's cache: "
+                               f"{zig_cache_dir()})\n{' '.join(cmd)}") from None
         if proc.returncode != 0 or not built.is_file():
             out = proc.stdout + proc.stderr
-            raise CompileError(f"cross build for {target.name} failed (zig cc -target {target.zig_target}): "
-                               f"{first_error(out)}\n{' '.join(cmd)}\n{out}")
+            why = first_error(out) if out.strip() or proc.returncode >= 0 else \
+                f"the compiler was ended by signal {-proc.returncode}"
+            raise CompileError(f"{failed}: {why}\n{' '.join(cmd)}\n{out}")
         output.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(built, output)
     return output
@@ -201,8 +242,17 @@ def cross_compile_all(targets: list[Platform], source: Path, include_dirs: list[
     The first failure (in `targets`' order) is raised after every compile has ended."""
     if not targets:
         return []
-    with ThreadPoolExecutor(max_workers=max(1, min(len(targets), os.cpu_count() or 1))) as pool:
+    pool = ThreadPoolExecutor(max_workers=max(1, min(len(targets), os.cpu_count() or 1)))
+    try:
         futures = [pool.submit(cross_compile, t, source, include_dirs, o, flags) for t, o in zip(targets, outputs)]
+        for f in futures:
+            f.exception()  # wait: Ctrl-C lands here, in the main thread
+    except BaseException:
+        # interrupted: start no queued target (it would make a scratch directory while the
+        # process ends); the running compilers got the same SIGINT from the terminal
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
     return [f.result() for f in futures]
 
 

@@ -116,7 +116,8 @@ def cmd_build(args) -> int:
                        EXIT_FAILURE) from None
     except Exception as exc:  # CasADi or a defect of gyrowheel: still one line, never a traceback
         raise _failed("building the FMU", args.scene, exc) from None
-    print(f"built {result.fmu} (model {result.identifier}, effects: {', '.join(result.spec.effects) or 'none'})")
+    print(f"built {result.fmu} (model {result.identifier}, effects: {', '.join(result.spec.effects) or 'none'}; "
+          f"platforms: {', '.join(result.platforms)})")
     return 0
 
 

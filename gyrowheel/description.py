@@ -90,7 +90,9 @@ def open_fmu(fmu, argument: str = "fmu", *, to_run: bool = False) -> FmuFile:
         if binary not in names:
             have = sorted({n.split("/")[1] for n in names
                            if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")})
-            has = f"the FMU has binaries for {', '.join(have)}" if have else "the FMU has no binaries"
+            from gyrowheel.fmu_build.platforms import platform_of_folder
+            has = (f"the FMU has binaries for {', '.join(f'{platform_of_folder(f)} (binaries/{f})' for f in have)}"
+                   if have else "the FMU has no binaries")
             raise FmuError(f"{path}: no binary for {platform} ({binary}); {has}", argument=argument)
     return FmuFile(path, md, names)
 

@@ -116,7 +116,8 @@ def test_one_memory_rule_for_simulate_system_run_and_sweep(moon, solo, monkeypat
 
 @pytest.mark.parametrize("kind, message", [
     ("fmi3", "fmi3.fmu: FMI 3.0 is not supported: gyrowheel runs FMI 2.0 FMUs"),
-    ("win", "win.fmu: no binary for linux64 (binaries/linux64/paper_moon.so); the FMU has binaries for win64"),
+    ("win", "win.fmu: no binary for linux64 (binaries/linux64/paper_moon.so); the FMU has binaries for "
+            "x86_64-windows (binaries/win64)"),
     ("schema", "bad3.fmu: not a readable FMU: modelDescription.xml breaks the FMI 2.0 schema: "),
 ])
 def test_an_fmu_that_cannot_run_here_says_why(foreign, capsys, kind, message):

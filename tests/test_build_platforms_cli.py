@@ -162,3 +162,78 @@ def test_a_failed_cross_build_names_the_platform_and_leaves_no_fmu(tmp_path, cap
     with pytest.raises(CompileError, match=r"^cross build for aarch64-linux failed .*error: \"no aarch64 build here\""):
         builder.build_spec_fmu(_small_spec(), fresh, platforms="x86_64-linux,aarch64-linux")
     assert not fresh.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["paper.fmu"]
+
+
+def test_the_build_line_names_the_platforms(tmp_path, capsys):
+    """`gyrowheel build` says which platforms the FMU carries (a scene's [build] platforms
+    chooses them silently otherwise); the BuildResult holds them."""
+    code, out, err = _cli(capsys, "build", PAPER, "-o", tmp_path / "e.fmu")
+    assert (code, err) == (0, "")
+    assert out == f"built {tmp_path / 'e.fmu'} (model paper_earth, effects: gravity; platforms: {host_platform().name})\n"
+    assert gyrowheel.build(PAPER, tmp_path / "f.fmu").platforms == (host_platform().name,)
+
+
+def test_an_empty_list_names_no_platform(tmp_path):
+    with pytest.raises(ArgumentError, match=r"^platforms: no platform named in \[\]; valid: all, host, "):
+        gyrowheel.build(PAPER, tmp_path / "e.fmu", platforms=[])
+
+
+def test_an_unwritable_zig_cache_is_refused_not_waited_on(tmp_path, monkeypatch):
+    """zig 0.17 spins without a word when its cache cannot be written: the build refuses first,
+    naming the directory and ZIG_GLOBAL_CACHE_DIR, and writes nothing."""
+    monkeypatch.setenv("ZIG_GLOBAL_CACHE_DIR", "/proc/no-such-cache")
+    with pytest.raises(CompileError, match=r"^zig's cache directory /proc/no-such-cache .*cannot be written: "
+                                           r"set ZIG_GLOBAL_CACHE_DIR to a writable directory$"):
+        gyrowheel.build(PAPER, tmp_path / "e.fmu", platforms="aarch64-linux")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_compiler_ended_by_a_signal_is_named(tmp_path, monkeypatch):
+    """A compiler killed (no output, a negative return code) is reported as such, not as
+    '(no output)'."""
+    import subprocess
+
+    from gyrowheel.fmu_build import platforms
+
+    monkeypatch.setattr(platforms.subprocess, "run",
+                        lambda cmd, **kw: subprocess.CompletedProcess(cmd, -9, "", ""))
+    source = tmp_path / "gw_fmu.c"
+    source.write_text("")
+    with pytest.raises(CompileError) as exc:
+        platforms.cross_compile(PLATFORMS["aarch64-linux"], source, [tmp_path], tmp_path / "m.so", [])
+    assert str(exc.value).splitlines()[0] == ("cross build for aarch64-linux failed (zig cc -target "
+                                              "aarch64-linux-gnu.2.17): the compiler was ended by signal 9")
+
+
+def test_an_interrupted_build_starts_no_queued_target(tmp_path, monkeypatch):
+    """Ctrl-C while the cross builds run: the targets still queued never start (each would make
+    a scratch directory while the process ends), the running ones are waited for, and the
+    KeyboardInterrupt reaches the caller."""
+    import signal
+    import threading
+
+    from gyrowheel.fmu_build import platforms
+
+    started, release = [], threading.Event()
+    main_thread = threading.main_thread().ident
+
+    def compile_one(target, *args):
+        started.append(target.name)
+        if len(started) == 2:  # both workers busy, three targets queued: the terminal's SIGINT
+            signal.pthread_kill(main_thread, signal.SIGINT)
+        release.wait(5)
+
+    monkeypatch.setattr(platforms, "cross_compile", compile_one)
+    monkeypatch.setattr(platforms.os, "cpu_count", lambda: 2)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    timer = threading.Timer(0.5, release.set)  # the running compilers end (as zig does on SIGINT)
+    try:
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            platforms.cross_compile_all([PLATFORMS[n] for n in ALL], tmp_path / "s.c", [],
+                                        [tmp_path / n for n in ALL], [])
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        timer.cancel()
+        release.set()
+    assert started == list(ALL[:2])

@@ -47,7 +47,8 @@ class BuildResult:
                 (fmu_build/platforms.py), e.g. ('x86_64-linux', 'aarch64-linux')
 
     A BuildResult is os.PathLike: it stands for its FMU wherever a path of one does
-    (gyrowheel.simulate, info, sweep, Ensemble). repr() shows the FMU and its identifier.
+    (gyrowheel.simulate, info, sweep, Ensemble). repr() shows the FMU, its identifier and
+    platforms.
     """
 
     fmu: Path

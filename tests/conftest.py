@@ -126,14 +126,16 @@ class _Built:
     from the scene (cheap, deterministic: the same model_spec the build used)."""
 
     def __init__(self, built, scene_text: str, scene_name: str):
-        self.fmu, self.sources, self.identifier = built.fmu, built.sources, built.identifier
+        self.fmu, self.sources, self.identifier, self.platforms = built.fmu, built.sources, built.identifier, \
+            built.platforms
         self.scene_text, self.scene_name = scene_text, scene_name
 
     def result(self):
         from gyrowheel.fmu_build.builder import BuildResult, model_spec
         from gyrowheel.fmu_build.scene import parse_scene
         spec = model_spec(parse_scene(self.scene_text, self.scene_name))
-        return BuildResult(fmu=self.fmu, spec=spec, sources=self.sources, identifier=self.identifier)
+        return BuildResult(fmu=self.fmu, spec=spec, sources=self.sources, identifier=self.identifier,
+                           platforms=self.platforms)
 
 
 @pytest.fixture(scope="session")

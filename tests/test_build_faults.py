@@ -28,6 +28,7 @@ from conftest import SCENES
 from gyrowheel.fmu_build import build_fmu, parse_scene
 from gyrowheel.cli import main
 from gyrowheel.errors import ArgumentError
+from gyrowheel.fmu_build.platforms import host_platform
 from gyrowheel.fmu_build.scene import Experiment, Scene, SceneError, check_scene, load_scene
 from gyrowheel.model import build_model
 from gyrowheel.model.build import FORMULATIONS
@@ -236,7 +237,8 @@ def test_a_scene_object_builds_the_fmu_of_its_file(tmp_path):
     assert _members(built.fmu) == _members(from_file.fmu)
     assert built.sources is None and from_file.sources == tmp_path / "b" / "fmu" / "sources"
     assert (from_file.sources / "gw_funcs.c").is_file()
-    assert repr(built) == f"BuildResult(fmu={tmp_path / 'object.fmu'!r}, identifier='paper_moon')"
+    assert repr(built) == (f"BuildResult(fmu={tmp_path / 'object.fmu'!r}, identifier='paper_moon', "
+                           f"platforms=({host_platform().name!r},))")
 
 
 def test_unexpected_build_failure_is_one_line(tmp_path, capsys, monkeypatch):

@@ -26,7 +26,9 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-from gyrowheel.errors import ArgumentError, ArgumentTypeError, MissingExtraError
+from gyrowheel.errors import ArgumentError, ArgumentTypeError
+from gyrowheel.extras import require
+from gyrowheel.fmu_build.compiler import CompileError
 from gyrowheel.scratch import temporary_directory
 
 
@@ -140,11 +142,8 @@ def platform_of_folder(folder: str) -> str:
 
 def zig_command(verb: str = "gyrowheel build --platforms") -> list[str]:
     """The command that runs zig (`python -m ziglang`, PyPI ziglang). Raises MissingExtraError
-    naming the optional part 'platforms' when ziglang is not installed."""
-    try:
-        import ziglang  # noqa: F401  (the package holds the zig executable)
-    except ImportError:
-        raise MissingExtraError("platforms", verb, ["ziglang"]) from None
+    naming the optional part 'platforms' when ziglang is not installed (gyrowheel.extras)."""
+    require("platforms", verb)
     return [sys.executable, "-m", "ziglang"]
 
 
@@ -183,18 +182,16 @@ def zig_cache_dir() -> Path:
 def check_zig_cache() -> Path:
     """zig_cache_dir(), made if missing; CompileError when it cannot be made or written (zig
     itself then spins without a word instead of failing)."""
-    from gyrowheel.fmu_build.compiler import CompileError
-
     cache = zig_cache_dir()
     try:
         cache.mkdir(parents=True, exist_ok=True)
-        writable = os.access(cache, os.W_OK | os.X_OK)
+        why = "" if os.access(cache, os.W_OK | os.X_OK) else " "
     except OSError as exc:
-        writable, cache = False, f"{cache} ({exc.strerror})"
-    if not writable:
-        raise CompileError(f"zig's cache directory {cache} cannot be written: set ZIG_GLOBAL_CACHE_DIR "
+        why = f" ({exc.strerror}) "
+    if why:
+        raise CompileError(f"zig's cache directory {cache}{why}cannot be written: set ZIG_GLOBAL_CACHE_DIR "
                            "to a writable directory")
-    return zig_cache_dir()
+    return cache
 
 
 def cross_compile(target: Platform, source: Path, include_dirs: list[Path], output: Path,
@@ -210,8 +207,6 @@ def cross_compile(target: Platform, source: Path, include_dirs: list[Path], outp
     which copies of the runtime's machine-specific code zig's binaries hold.
     Raises CompileError naming the target, the command and the compiler's first error, with its
     whole output below."""
-    from gyrowheel.fmu_build.compiler import CompileError
-
     zig = zig_command()
     check_zig_cache()
     with temporary_directory("zig") as tmp:
@@ -264,25 +259,18 @@ FAT_ALIGN = 14  # 2^14 = 16 KiB, the arm64 page size (x86_64's 4 KiB divides it)
 
 
 def write_universal(slices: list[Path], output: Path) -> Path:
-    """Write the universal Mach-O `output` holding the thin 64-bit Mach-O files `slices`.
+    """Write the universal Mach-O `output` holding the thin 64-bit Mach-O files `slices`, each
+    at an offset aligned to 2^FAT_ALIGN after the header's page.
     Raises ValueError for a slice that is not a thin 64-bit Mach-O."""
-    headers, blobs = [], []
+    align = 1 << FAT_ALIGN
+    head, body = struct.pack(">II", FAT_MAGIC, len(slices)), bytearray()
     for s in slices:
         data = Path(s).read_bytes()
         magic, cputype, cpusubtype = struct.unpack_from("<III", data, 0)
         if magic != MH_MAGIC_64:
             raise ValueError(f"{s}: not a thin 64-bit Mach-O file (magic {magic:#x})")
-        headers.append((cputype, cpusubtype))
-        blobs.append(data)
-    align = 1 << FAT_ALIGN
-    offset = align  # the header and its table fit in the first page
-    table, body = [], b""
-    for (cputype, cpusubtype), data in zip(headers, blobs):
-        table.append(struct.pack(">IIIII", cputype, cpusubtype, offset, len(data), FAT_ALIGN))
-        pad = offset - align - len(body)
-        body += b"\0" * pad + data
-        offset = align + len(body)
-        offset = (offset + align - 1) // align * align
-    head = struct.pack(">II", FAT_MAGIC, len(slices)) + b"".join(table)
-    output.write_bytes(head + b"\0" * (align - len(head)) + body)
+        body += bytes(-len(body) % align)  # the slice starts on a boundary
+        head += struct.pack(">IIIII", cputype, cpusubtype, align + len(body), len(data), FAT_ALIGN)
+        body += data
+    output.write_bytes(head + bytes(align - len(head)) + body)
     return output

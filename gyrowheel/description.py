@@ -88,11 +88,8 @@ def open_fmu(fmu, argument: str = "fmu", *, to_run: bool = False) -> FmuFile:
             raise FmuError(f"{path}: the FMU does not support Co-Simulation", argument=argument)
         binary = f"binaries/{platform}/{md.coSimulation.modelIdentifier}{sharedLibraryExtension}"
         if binary not in names:
-            have = sorted({n.split("/")[1] for n in names
-                           if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")})
-            from gyrowheel.fmu_build.platforms import platform_of_folder
-            has = (f"the FMU has binaries for {', '.join(f'{platform_of_folder(f)} (binaries/{f})' for f in have)}"
-                   if have else "the FMU has no binaries")
+            have = platform_infos(names)
+            has = f"the FMU has binaries for {', '.join(map(str, have))}" if have else "the FMU has no binaries"
             raise FmuError(f"{path}: no binary for {platform} ({binary}); {has}", argument=argument)
     return FmuFile(path, md, names)
 
@@ -147,6 +144,16 @@ class PlatformInfo:
 
     def __str__(self) -> str:
         return f"{self.name} ({self.folder})"
+
+
+def platform_infos(names) -> list[PlatformInfo]:
+    """A PlatformInfo for every folder of binaries/ holding a file among an FMU's member
+    `names`, sorted by platform tuple, then folder."""
+    from gyrowheel.fmu_build.platforms import platform_of_folder  # (loads the model's packages: only here)
+
+    folders = {n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")}
+    return sorted((PlatformInfo(platform_of_folder(f), f"binaries/{f}") for f in folders),
+                  key=lambda p: (p.name, p.folder))
 
 
 @dataclass(frozen=True)
@@ -278,8 +285,6 @@ def _effects(index_html: str) -> tuple[str, ...] | None:
 def read_info(fmu: str | Path) -> FmuInfo:
     """Describe the FMU at `fmu` (see FmuInfo). Raises FmuError naming the file when it is not
     an FMI 2.0 FMU gyrowheel can read (open_fmu)."""
-    from gyrowheel.fmu_build.platforms import platform_of_folder
-
     checked = open_fmu(fmu)
     path, md, names = checked.path, checked.model_description, checked.names
     try:
@@ -302,9 +307,7 @@ def read_info(fmu: str | Path) -> FmuInfo:
             items=items))
     solver = next((v for v in variables if v.name == "solver" and v.items), None)
     exp = md.defaultExperiment
-    folders = {n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")}
-    platforms = sorted((PlatformInfo(platform_of_folder(f), f"binaries/{f}") for f in folders),
-                       key=lambda p: (p.name, p.folder))
+    platforms = platform_infos(names)
     return FmuInfo(
         path=path, model_name=md.modelName, description=md.description, fmi_version=md.fmiVersion,
         generation_tool=md.generationTool, generation_date=md.generationDateAndTime, guid=md.guid,

@@ -9,10 +9,11 @@ exports FMUs and runs a system of FMUs. The rest comes with an extra (pyproject.
     animate  `gyrowheel animate` (GIF, MP4)                matplotlib, pillow, imageio-ffmpeg
     system   the Gyrover's controller design, writing      scipy, pyssp-standard, matplotlib
              SSP 1.0 systems
-    all      every one of them but platforms
     platforms `gyrowheel build --platforms` (binaries for  ziglang
-             other platforms: zig's C compiler; raised
-             by gyrowheel.fmu_build.platforms.zig_command)
+             other platforms: zig's C compiler;
+             gyrowheel.fmu_build.platforms.zig_command)
+    all      every one of them but platforms (IN_ALL: zig is a whole C toolchain, ~400 MB,
+             and a machine can build its own binary without it)
 
 require(extra, verb) looks each import name up with importlib.util.find_spec, which imports
 nothing, and raises MissingExtraError naming the pip command when one is missing.
@@ -30,7 +31,9 @@ EXTRAS: dict[str, tuple[str, ...]] = {
     "sweep": ("dask", "distributed", "pandas", "pyarrow", "tqdm", "matplotlib"),
     "animate": ("matplotlib", "PIL", "imageio_ffmpeg"),
     "system": ("scipy", "pyssp_standard", "matplotlib"),
+    "platforms": ("ziglang",),
 }
+IN_ALL = tuple(e for e in EXTRAS if e != "platforms")  # the extras gyrowheel[all] installs
 
 
 def _found(name: str) -> bool:

@@ -15,12 +15,12 @@ import pytest
 
 from conftest import ROOT, SCENES
 from gyrowheel.errors import GyrowheelError, MissingExtraError
-from gyrowheel.extras import EXTRAS, missing, require
+from gyrowheel.extras import EXTRAS, IN_ALL, missing, require
 
 # distribution (pyproject.toml) -> top-level import name
 IMPORT_NAMES = {"matplotlib": "matplotlib", "dask": "dask", "distributed": "distributed", "pandas": "pandas",
                 "pyarrow": "pyarrow", "tqdm": "tqdm", "pillow": "PIL", "imageio-ffmpeg": "imageio_ffmpeg",
-                "scipy": "scipy", "pyssp-standard": "pyssp_standard"}
+                "scipy": "scipy", "pyssp-standard": "pyssp_standard", "ziglang": "ziglang"}
 BLOCKED = sorted({name for names in EXTRAS.values() for name in names})
 CORE = textwrap.dedent(f"""
     import sys
@@ -51,7 +51,7 @@ def test_extras_are_those_of_pyproject():
     optional = project["optional-dependencies"]
     for extra, names in EXTRAS.items():
         assert sorted({IMPORT_NAMES[_distribution(r)] for r in optional[extra]}) == sorted(names), extra
-    assert optional["all"] == [f"gyrowheel[{','.join(EXTRAS)}]"]
+    assert optional["all"] == [f"gyrowheel[{','.join(IN_ALL)}]"]
 
 
 def test_require_names_the_pip_command(monkeypatch):

@@ -185,11 +185,11 @@ def check_zig_cache() -> Path:
     cache = zig_cache_dir()
     try:
         cache.mkdir(parents=True, exist_ok=True)
-        why = "" if os.access(cache, os.W_OK | os.X_OK) else " "
+        reason = None if os.access(cache, os.W_OK | os.X_OK) else ""
     except OSError as exc:
-        why = f" ({exc.strerror}) "
-    if why:
-        raise CompileError(f"zig's cache directory {cache}{why}cannot be written: set ZIG_GLOBAL_CACHE_DIR "
+        reason = f" ({exc.strerror})"
+    if reason is not None:
+        raise CompileError(f"zig's cache directory {cache}{reason} cannot be written: set ZIG_GLOBAL_CACHE_DIR "
                            "to a writable directory")
     return cache
 

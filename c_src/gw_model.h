@@ -72,7 +72,9 @@ typedef enum {
     GW_VAR_SETTING = 4, /* runtime setting, index is a gw_setting (solver, tolerances) */
     GW_VAR_EVENT = 5,   /* Boolean: true once event indicator `index` has fired */
     GW_VAR_STATE = 6,   /* x[index], a continuous state with no start variable of its own (local) */
-    GW_VAR_DERIVATIVE = 7 /* xdot[index], the derivative of continuous state `index` (local) */
+    GW_VAR_DERIVATIVE = 7, /* xdot[index], the derivative of continuous state `index` (local) */
+    GW_VAR_INDICATOR = 8   /* e[index], event indicator `index` (FMI 3.0 only: a local variable
+                              that <EventIndicator> of ModelStructure names) */
 } gw_kind;
 
 /* Runtime settings exposed as FMI parameters (kind GW_VAR_SETTING). */

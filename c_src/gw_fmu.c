@@ -26,6 +26,10 @@
 /* the simulation core */
 #include "gw_core.c"
 
+/* the work of the calls both FMI versions share: Model Exchange, FMU states */
+#include "gw_me.c"
+#include "gw_state_blob.c"
+
 /* the FMI 2.0 layer */
 #include "gw_fmi2_common.c"
 #include "gw_fmi2_variables.c"

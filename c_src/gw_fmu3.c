@@ -25,6 +25,10 @@
 /* the simulation core */
 #include "gw_core.c"
 
+/* the work of the calls both FMI versions share: Model Exchange, FMU states */
+#include "gw_me.c"
+#include "gw_state_blob.c"
+
 /* the FMI 3.0 layer */
 #include "gw_fmi3_common.c"
 #include "gw_fmi3_variables.c"

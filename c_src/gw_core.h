@@ -231,6 +231,8 @@ GW_API void gw_event_observe(gw_instance *I, const double *e);
  * flag alone does not say it: warning events and update events (stiction modes: "switched at
  * least once") set theirs and the simulation goes on. */
 GW_API int gw_event_ended(const gw_instance *I, int i);
+/* name of the terminating event that stopped the simulation, or "a terminating event" */
+GW_API const char *gw_event_stop_reason(const gw_instance *I);
 
 /* ---- solvers (gw_solver.c) ------------------------------------------------------------------ */
 
@@ -251,6 +253,8 @@ typedef struct {
     int initialised; /* saved after a successful initialisation (gw_initialize) */
     int time_free;   /* the front end lets its caller set t and x at will (Model Exchange) */
     int terminated;  /* the front end's state is one after a terminating event */
+    int pending_event; /* the front end stopped at a located crossing and has not yet run its
+                          event update (FMI 3.0 Co-Simulation's early return, Event Mode) */
 } gw_state_facts;
 /* 1 if the fields of a checked state agree with each other and pass the live path's checks
  * (the experiment's times in order, events and their flags, the model's validity checks on its

@@ -105,15 +105,6 @@ GW_INTERNAL void gw_fmi2_allow_discard(gw_fmu *F) {
     F->I->nonfinite_status = (gw_fmi2_is_me(F) && (F->state & GW_ST_ME)) ? GW_DISCARD : GW_ERROR;
 }
 
-GW_INTERNAL const char *gw_fmi2_stop_reason(const gw_instance *I) {
-    const gw_model *m = I->m;
-    int i;
-    for (i = 0; i < m->ne; i++)
-        if (gw_event_ended(I, i) && m->event_names && m->event_names[i])
-            return m->event_names[i];
-    return "a terminating event";
-}
-
 GW_INTERNAL gw_status gw_fmi2_copy_finite(gw_fmu *F, const char *fn, double *dst,
                                           const double *src, size_t n, const char *what,
                                           const char *const *names) {

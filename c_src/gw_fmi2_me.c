@@ -64,7 +64,7 @@ fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
         gw_log(I, GW_OK, GW_LOG_EVENTS,
                "%s: the simulation terminated at t=%.17g (%s); terminateSimulation stays "
                "true: call fmi2Terminate",
-               fn, I->last_successful_time, gw_fmi2_stop_reason(I));
+               fn, I->last_successful_time, gw_event_stop_reason(I));
     gw_fmi2_set_state(F, GW_ST_CONT_TIME_MODE);
     GW_FRAME_END();
 }

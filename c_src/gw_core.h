@@ -231,8 +231,6 @@ GW_API void gw_event_observe(gw_instance *I, const double *e);
  * flag alone does not say it: warning events and update events (stiction modes: "switched at
  * least once") set theirs and the simulation goes on. */
 GW_API int gw_event_ended(const gw_instance *I, int i);
-/* name of the terminating event that stopped the simulation, or "a terminating event" */
-GW_API const char *gw_event_stop_reason(const gw_instance *I);
 
 /* ---- solvers (gw_solver.c) ------------------------------------------------------------------ */
 

@@ -422,15 +422,6 @@ GW_API int gw_event_ended(const gw_instance *I, int i) {
     return I->flags[i] && gw_event_action_of(I, i) == GW_EVENT_TERMINATE;
 }
 
-GW_API const char *gw_event_stop_reason(const gw_instance *I) {
-    const gw_model *m = I->m;
-    int i;
-    for (i = 0; i < m->ne; i++)
-        if (gw_event_ended(I, i) && m->event_names && m->event_names[i])
-            return m->event_names[i];
-    return "a terminating event";
-}
-
 GW_API void gw_event_observe(gw_instance *I, const double *e) {
     int i;
     for (i = 0; i < I->m->ne; i++)

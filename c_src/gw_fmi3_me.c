@@ -15,6 +15,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #else
 
 #include "gw_fmi3.h"
+#include "gw_front.h"
 
 /* the frames of this file's functions (GW3_FRAME, gw_fmi3.h): interface, legal states
  * (FMI 3.0.2 sections 3.2 and 4.2, as modelica/Reference-FMUs' masks; the getters also in
@@ -100,7 +101,7 @@ fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
         gw_log(I, GW_OK, GW_LOG_EVENTS,
                "%s: the simulation terminated at t=%.17g (%s); terminateSimulation stays "
                "true: call fmi3Terminate",
-               fn, I->last_successful_time, gw_event_stop_reason(I));
+               fn, I->last_successful_time, gw_front_stop_reason(I));
     gw_fmi3_set_state(F, GW3_ST_CONT_TIME_MODE);
     GW3_FRAME_END();
 }

@@ -25,7 +25,8 @@
 /* the simulation core */
 #include "gw_core.c"
 
-/* the work of the calls both FMI versions share: Model Exchange, FMU states */
+/* what the FMI 2.0 and FMI 3.0 layers share */
+#include "gw_front.c"
 #include "gw_me.c"
 #include "gw_state_blob.c"
 

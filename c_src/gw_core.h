@@ -253,6 +253,8 @@ typedef struct {
     int initialised; /* saved after a successful initialisation (gw_initialize) */
     int time_free;   /* the front end lets its caller set t and x at will (Model Exchange) */
     int terminated;  /* the front end's state is one after a terminating event */
+    int pending_event; /* the front end stopped at a located crossing and has not yet run its
+                          event update (FMI 3.0 Co-Simulation's early return, Event Mode) */
 } gw_state_facts;
 /* 1 if the fields of a checked state agree with each other and pass the live path's checks
  * (the experiment's times in order, events and their flags, the model's validity checks on its

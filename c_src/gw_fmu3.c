@@ -27,6 +27,8 @@
 
 /* what the FMI 2.0 and FMI 3.0 layers share */
 #include "gw_front.c"
+#include "gw_me.c"
+#include "gw_state_blob.c"
 
 /* the FMI 3.0 layer */
 #include "gw_fmi3_common.c"

@@ -33,7 +33,9 @@ from gyrowheel.errors import GyrowheelError
 from gyrowheel.cosim.exchange import exchange, settle
 from gyrowheel.cosim.system import SystemDescription, SystemFileError, describe
 from gyrowheel.cosim.ssp import coerce_value
-from gyrowheel.cosim.units import Unit, new_unit
+from gyrowheel.cosim.units import Unit, kind_of, new_unit
+
+NUMERIC = ("Real", "Integer", "Boolean")  # recorded as numbers; String and Binary outputs as NaN
 
 
 class MasterError(GyrowheelError, RuntimeError):
@@ -129,7 +131,7 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
             for u in units:
                 for o in u.outputs:
                     v = u.vars[o]
-                    row.append(float(u.get(v.valueReference, v.type)) if v.type != "String" else math.nan)
+                    row.append(float(u.get(v.valueReference, v.type)) if kind_of(v.type) in NUMERIC else math.nan)
             data[count] = tuple(row)
             count += 1
 

@@ -102,10 +102,10 @@ def _loop_text(system: SystemDescription, loop: list[int]) -> str:
 
 
 def feedthrough(fmu: str | Path, component: str = "") -> dict[str, tuple[str, ...]]:
-    """{output: inputs it depends on directly} of an FMI 2.0 FMU, from modelDescription.xml's
-    ModelStructure/Outputs (FMI 2.0.4 section 2.2.8: an Unknown without a dependencies attribute
-    depends on every known, i.e. every input; an empty one on none; of the listed knowns only
-    the inputs count). Outputs with no input dependency are left out. Raises SystemFileError if
+    """{output: inputs it depends on directly} of an FMI 2.0 or 3.0 FMU, from modelDescription.xml's
+    ModelStructure (FMI 2.0.4 section 2.2.8, FMI 3.0.2 section 2.4.8: an output without a
+    dependencies attribute depends on every known, i.e. every input; an empty one on none; of
+    the listed knowns only the inputs count). Outputs with no input dependency are left out. Raises SystemFileError if
     the file cannot be read."""
     where = f"component {component!r}: " if component else ""
     fmu = Path(fmu)
@@ -118,21 +118,36 @@ def feedthrough(fmu: str | Path, component: str = "") -> dict[str, tuple[str, ..
         root = ET.fromstring(text)
     except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
         raise SystemFileError(f"{where}{fmu.name} is not a readable FMU ({type(exc).__name__}: {exc})") from None
-    variables = root.findall("ModelVariables/ScalarVariable")
+    if root.get("fmiVersion", "").startswith("3."):
+        # FMI 3.0.2 section 2.4.8: ModelStructure/Output names its variable and its dependencies
+        # by value reference; the variables are ModelVariables' children of every type
+        listed = root.find("ModelVariables")
+        variables = list(listed) if listed is not None else []
+        by_vr = {v.get("valueReference"): v for v in variables}
+        unknowns, key = root.findall("ModelStructure/Output"), "valueReference"
+        bad = "ModelStructure has an Output with a bad valueReference"
+
+        def named(ref: str) -> str:
+            return by_vr[ref].get("name")
+    else:
+        # FMI 2.0.4 section 2.2.8: ModelStructure/Outputs/Unknown by 1-based index into ModelVariables
+        variables = root.findall("ModelVariables/ScalarVariable")
+        unknowns, key = root.findall("ModelStructure/Outputs/Unknown"), "index"
+        bad = "ModelStructure/Outputs has an Unknown with a bad index"
+
+        def named(index: str) -> str:
+            if not 1 <= int(index) <= len(variables):
+                raise IndexError(index)
+            return variables[int(index) - 1].get("name")
     inputs = [v.get("name") for v in variables if v.get("causality") == "input"]
     out = {}
-    def named(index: str) -> str:  # a 1-based index into ModelVariables
-        if not 1 <= int(index) <= len(variables):
-            raise IndexError(index)
-        return variables[int(index) - 1].get("name")
-
-    for unknown in root.findall("ModelStructure/Outputs/Unknown"):
+    for unknown in unknowns:
         try:
-            name = named(unknown.get("index"))
+            name = named(unknown.get(key))
             deps = unknown.get("dependencies")
             used = list(inputs) if deps is None else [n for n in map(named, deps.split()) if n in inputs]
-        except (TypeError, ValueError, IndexError):
-            raise SystemFileError(f"{where}{fmu.name}: ModelStructure/Outputs has an Unknown with a bad index "
+        except (TypeError, ValueError, IndexError, KeyError):
+            raise SystemFileError(f"{where}{fmu.name}: {bad} "
                                   f"or dependencies ({ET.tostring(unknown, encoding='unicode').strip()})") from None
         if used:
             out[name] = tuple(used)

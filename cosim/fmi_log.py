@@ -53,3 +53,14 @@ def logging_callbacks(messages: list[str]):
 def forget_messages(ident: int) -> None:
     """The instance is freed: its messages are no longer collected."""
     _MESSAGES.pop(ident, None)
+
+
+def fmi3_logger(messages: list[str]):
+    """An fmi3LogMessageCallback (FMI 3.0.2 section 2.3.1) for one instance: it appends the
+    messages of status fmi3Error and fmi3Fatal to `messages`. FMI 3.0 hands the callback each
+    instance's own function and an already formatted message, so no dispatcher is needed; fmpy
+    keeps the C callback alive on its FMU3Slave (slave.logMessage)."""
+    def log(env, status, category, message):
+        if status >= 3:  # fmi3Error, fmi3Fatal
+            messages.append((message or b"").decode(errors="replace"))
+    return log

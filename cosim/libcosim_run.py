@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 from fmpy import read_model_description
 
-from gyrowheel.cosim.system import SystemDescription
+from gyrowheel.cosim.system import SystemDescription, SystemFileError
 
 NS = 1_000_000_000
 
@@ -18,12 +18,14 @@ def run(config: str, system: SystemDescription, step: float, stop_time: float,
     """Simulate with libcosim and sample `variables` ({component: [names]}) at every step.
 
     config: path of an .ssp archive (libcosim's SSP loader, fixed step) or of an
-    OspSystemStructure.xml. Raises RuntimeError if libcosim refuses the file or the run.
+    OspSystemStructure.xml. Raises RuntimeError if libcosim refuses the file or the run,
+    SystemFileError for a component that is an FMI 3.0 FMU (refuse_fmi3).
     """
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimObserver import CosimObserver
 
+    refuse_fmi3(system)
     h = int(round(step * NS))
     if config.endswith(".xml"):
         execution = CosimExecution.from_osp_config_file(config)
@@ -57,3 +59,13 @@ def run(config: str, system: SystemDescription, step: float, stop_time: float,
     for nm, col in zip(names[1:], columns):
         data[nm] = [col[k] for k in steps]
     return data
+
+
+def refuse_fmi3(system: SystemDescription) -> None:
+    """libcosim (libcosimpy 0.0.x, libcosim 0.10) loads FMI 1.0 and 2.0 FMUs only: an FMI 3.0
+    component is refused here, naming its file, rather than by libcosim's loader mid-setup."""
+    for c in system.components:
+        version = read_model_description(str(c.fmu), validate=False).fmiVersion
+        if version.startswith("3."):
+            raise SystemFileError(f"component {c.name!r}: {c.fmu}: an FMI {version} FMU; libcosim runs FMI 1.0 "
+                                  f"and 2.0 FMUs only (gyrowheel's master and ecos run FMI 3.0)")

@@ -10,66 +10,36 @@ algebraic loop is refused before the run (cosim/exchange.py). A connection's lin
 transformation (SSP 1.0 ssc:LinearTransformation) is applied to the value it carries. In
 Initialization Mode the exchange is repeated until a pass sets the values the previous one set
 (consistent initial values); if they keep changing the run is refused, naming the connections.
-A component that ends the run (fmi2Discard with fmi2Terminated, e.g. the wheel falling flat)
-stops the system there: the last row is at its fmi2LastSuccessfulTime. The result holds every output of every component
-as "<component>.<variable>", sampled at the communication points.
+Components may be FMI 2.0 and FMI 3.0 Co-Simulation FMUs side by side (cosim/units.py). A
+component that ends the run (FMI 2.0: fmi2Discard with fmi2Terminated; FMI 3.0: fmi3DoStep's
+terminateSimulation; e.g. the wheel falling flat) stops the system there: the last row is at its
+last successful time (fmi2LastSuccessfulTime, fmi3DoStep's lastSuccessfulTime). The result holds
+every output of every component as "<component>.<variable>", sampled at the communication points.
 """
 from __future__ import annotations
 
 import math
 import shutil
 import time as _time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
-from fmpy import extract, read_model_description
-from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave, fmi2Discard
+from fmpy import read_model_description
 
 from gyrowheel.arguments import check_memory
 from gyrowheel.arguments import count as count_text
 from gyrowheel.errors import GyrowheelError
-from gyrowheel.scratch import new_directory
 from gyrowheel.cosim.exchange import exchange, settle
 from gyrowheel.cosim.system import SystemDescription, SystemFileError, describe
 from gyrowheel.cosim.ssp import coerce_value
-from gyrowheel.cosim.fmi_log import forget_messages, logging_callbacks
+from gyrowheel.cosim.units import Unit, kind_of, new_unit
+
+NUMERIC = ("Real", "Integer", "Boolean")  # recorded as numbers; String and Binary outputs as NaN
 
 
 class MasterError(GyrowheelError, RuntimeError):
     """A component refused a call; the message names the component and carries its log."""
-
-
-@dataclass
-class _Unit:
-    name: str
-    slave: FMU2Slave
-    vars: dict
-    outputs: list[str]
-    messages: list = field(default_factory=list)  # the FMU's logged errors (fmi2Error, fmi2Fatal)
-    callbacks: object = None
-    log_id: int = 0
-    unzipdir: str | None = None  # the FMU unpacked (gyrowheel.scratch), removed after the run
-
-    def get(self, vr: int, fmi_type: str):
-        if fmi_type == "Real":
-            return self.slave.getReal([vr])[0]
-        if fmi_type == "Boolean":
-            return self.slave.getBoolean([vr])[0]
-        if fmi_type == "String":
-            return self.slave.getString([vr])[0]
-        return self.slave.getInteger([vr])[0]
-
-    def put(self, vr: int, fmi_type: str, value) -> None:
-        if fmi_type == "Real":
-            self.slave.setReal([vr], [value])
-        elif fmi_type == "Boolean":
-            self.slave.setBoolean([vr], [value])
-        elif fmi_type == "String":
-            self.slave.setString([vr], [value])
-        else:
-            self.slave.setInteger([vr], [value])
 
 
 @dataclass
@@ -79,7 +49,7 @@ class RunResult:
     wall_time: float  # seconds spent in the stepping loop
 
 
-def _set(unit: _Unit, name: str, value) -> None:
+def _set(unit: Unit, name: str, value) -> None:
     v = unit.vars.get(name)
     if v is None:
         raise MasterError(f"{unit.name}: no variable {name!r}")
@@ -95,7 +65,7 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
     """Run the system with communication step `step` [s] to stop_time (default: the system's).
 
     start_values: {component: {variable: value}} on top of the system's own. Raises
-    MasterError if a component fails (fmi2Error; the message carries the FMU's logged reason),
+    MasterError if a component fails (fmi2Error, fmi3Error; the message carries the FMU's logged reason),
     ValueError for a bad step or stop time, ArgumentError (a ValueError, naming stop_time) for a
     result that would take more than half of this machine's memory
     (gyrowheel.arguments.check_memory), SystemFileError (a ValueError) for a system whose
@@ -127,16 +97,10 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
     units = []
     try:
         for c in system.components:
-            md = read_model_description(str(c.fmu))
-            unit = _Unit(c.name, None, {v.name: v for v in md.modelVariables},
-                         [v.name for v in md.modelVariables if v.causality == "output"])
-            unit.callbacks, unit.log_id = logging_callbacks(unit.messages)
+            unit = new_unit(c.name, read_model_description(str(c.fmu)))
             units.append(unit)
-            unit.unzipdir = str(new_directory("unit"))
-            extract(str(c.fmu), unzipdir=unit.unzipdir)
-            unit.slave = FMU2Slave(guid=md.guid, unzipDirectory=unit.unzipdir,
-                                   modelIdentifier=md.coSimulation.modelIdentifier, instanceName=c.name)
-            unit.slave.instantiate(callbacks=unit.callbacks, loggingOn=False)
+            unit.unpack(c.fmu)
+            unit.instantiate()
         by_name = {u.name: u for u in units}
         links = []
         for k in system.connections:
@@ -145,10 +109,10 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
             links.append((partial(src.get, sv.valueReference, sv.type), partial(dst.put, dv.valueReference, dv.type),
                           (k.factor, k.offset) if k.transformed else None))
         for c, u in zip(system.components, units):
-            u.slave.setupExperiment(startTime=t0)
+            u.before_start_values(t0)
             for name, value in {**c.start_values, **(start_values or {}).get(c.name, {})}.items():
                 _set(u, name, value)
-            u.slave.enterInitializationMode()
+            u.enter_initialization(t0)
 
         moving = settle(levels, links)  # system.check(): both ends of a connection have one type
         if moving:
@@ -167,24 +131,20 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
             for u in units:
                 for o in u.outputs:
                     v = u.vars[o]
-                    row.append(float(u.get(v.valueReference, v.type)) if v.type != "String" else math.nan)
+                    row.append(float(u.get(v.valueReference, v.type)) if kind_of(v.type) in NUMERIC else math.nan)
             data[count] = tuple(row)
             count += 1
 
         record(t0)
-        stopped_by = None
+        stopped_by = t_end = None
         wall = _time.perf_counter()
         for k in range(n_steps):
             t = t0 + k * step
             for u in units:
-                try:
-                    u.slave.doStep(t, step)
-                except FMICallException as exc:
-                    if exc.status != fmi2Discard:
-                        raise
-                    stopped_by = u.name
+                ended = u.do_step(t, step)
+                if ended is not None and stopped_by is None:
+                    stopped_by, t_end = u.name, ended
             if stopped_by:
-                t_end = by_name[stopped_by].slave.getRealStatus(2)  # fmi2LastSuccessfulTime
                 record(t_end)
                 break
             exchange(levels, links)
@@ -195,16 +155,11 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
         return RunResult(data[:count].copy(), stopped_by, wall)
     except MasterError:
         raise
-    except Exception as exc:  # fmpy raises FMICallException (fmi2Error) and plain Exceptions
+    except Exception as exc:  # fmpy raises FMICallException (fmi2Error, fmi3Error) and plain Exceptions
         logged = "; ".join(f"{u.name}: {m}" for u in units for m in u.messages)
         raise MasterError(f"{logged} ({exc})" if logged else str(exc)) from None
     finally:
         for u in units:
-            try:
-                if u.slave is not None:
-                    u.slave.freeInstance()  # also unloads the shared library
-            except Exception:
-                pass
-            forget_messages(u.log_id)
+            u.free()
             if u.unzipdir:
                 shutil.rmtree(u.unzipdir, ignore_errors=True)

@@ -20,6 +20,7 @@ from fmpy import read_model_description
 
 from gyrowheel.cosim.system import (FMU_TYPE, OMS_ANNOTATION, OMS_NS, SSC_NS, SSD_NS, SSV_NS, Component, Connection,
                                     SystemDescription, SystemFileError, describe, fmu_variables)
+from gyrowheel.cosim.units import integer_range, kind_of
 from gyrowheel.extras import require
 from gyrowheel.scratch import temporary_directory
 
@@ -135,7 +136,7 @@ def coerce_value(v, value, where: str):
     """value (a number, or the text of an SSV value attribute) as the type of FMU variable v."""
     text = value.strip() if isinstance(value, str) else value
     try:
-        if v.type == "Real":
+        if kind_of(v.type) == "Real":
             if isinstance(text, bool):
                 raise ValueError
             return float(text)
@@ -150,8 +151,9 @@ def coerce_value(v, value, where: str):
         if v.type == "String":
             return str(value)
         number = float(text)
-        if isinstance(text, bool) or not number.is_integer() or not -2**31 <= number < 2**31:
-            raise ValueError  # an fmi2Integer is 32 bits: ctypes would wrap a larger one
+        low, high = integer_range(v.type)
+        if isinstance(text, bool) or not number.is_integer() or not low <= number < high:
+            raise ValueError  # ctypes would wrap a value outside the type's range
         return int(number)
     except (TypeError, ValueError):
         raise SystemFileError(f"{where}: {value!r} is not a valid {v.type}") from None
@@ -160,7 +162,7 @@ def coerce_value(v, value, where: str):
 def _ssv_element(v, value) -> tuple[str, str]:
     """(SSV element name, value attribute) of a binding of FMU variable v (SSP 1.0 ssv:TParameter;
     never ssv:Enumeration, which libcosim's SSP parser (0.0.6) aborts the process on)."""
-    if v.type == "Real":
+    if kind_of(v.type) == "Real":
         return "Real", repr(float(value))
     if v.type == "Boolean":
         return "Boolean", "true" if value else "false"
@@ -209,7 +211,7 @@ def accuracy_bindings(component: Component) -> dict[str, float]:
     and so takes precedence over any tolerance a master passes to fmi2SetupExperiment; abs_tol
     then stays the scene's (docs/interface.md, "Tolerances", rule 1)."""
     v = fmu_variables(component.fmu, component.name).get("rel_tol")
-    if v is None or v.type != "Real" or v.causality != "parameter" or v.start is None:
+    if v is None or kind_of(v.type) != "Real" or v.causality != "parameter" or v.start is None:
         return {}
     return {"rel_tol": float(v.start)}
 
@@ -319,13 +321,14 @@ def _inside(root: Path, source: str, where: str) -> Path:
 def _bound(binding_values: dict, component: str, variables: dict, where: str) -> dict:
     """Check each binding's SSV type and unit against the FMU variable; {name: value text}."""
     out = {}
-    for name, (kind, text, unit) in binding_values.items():
+    for name, (value_kind, text, unit) in binding_values.items():
         v = variables.get(name)
         if v is not None:
             # an Integer may bind an Enumeration (by value) or a Real
-            if kind != v.type and not (kind == "Integer" and v.type in ("Enumeration", "Real")):
-                raise SystemFileError(f"{where}{component}.{name}: bound as ssv:{kind}, the FMU's variable is "
-                                      f"a {v.type}")
+            fmu_kind = "Enumeration" if v.type == "Enumeration" else kind_of(v.type)
+            if value_kind != fmu_kind and not (value_kind == "Integer" and fmu_kind in ("Enumeration", "Real")):
+                raise SystemFileError(f"{where}{component}.{name}: bound as ssv:{value_kind}, the FMU's variable "
+                                      f"is a {v.type}")
             fmu_unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None)
             if unit and fmu_unit and unit != fmu_unit:
                 raise SystemFileError(f"{where}{component}.{name}: value in {unit!r}, the FMU's unit is "

@@ -16,6 +16,7 @@ from xml.etree import ElementTree as ET
 from fmpy import read_model_description
 
 from gyrowheel.errors import GyrowheelError
+from gyrowheel.cosim.units import kind_of
 
 SSD_NS = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC_NS = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -87,9 +88,10 @@ class SystemDescription:
         raise SystemFileError(f"no component {name!r}; components: {', '.join(c.name for c in self.components)}")
 
     def check(self, connector_units: dict[tuple[str, str], str] | None = None) -> list[list[int]]:
-        """The system is runnable by an FMI 2.0 Co-Simulation master: at least one component, unique
-        component names, every component an FMI 2.0 FMU with Co-Simulation, every connection an
-        existing output to an existing input of the same type (SSP 1.0 section 5.3.6), each input
+        """The system is runnable by gyrowheel's Co-Simulation master: at least one component, unique
+        component names, every component an FMI 2.0 or FMI 3.0 FMU with Co-Simulation, every
+        connection an existing output to an existing input of the same kind of value (SSP 1.0
+        section 5.3.6; an FMI 2.0 Real joins an FMI 3.0 Float64, cosim/units.py kind), each input
         with one source, a linear transformation only on a Real connection (it is defined for
         continuous values), both ends of a connection in one unit unless it suppresses unit
         conversion (check_units), no algebraic loop. The reader (read_ssp), the writers
@@ -127,13 +129,13 @@ class SystemDescription:
                                           f"is {got or 'not a variable'}")
             src = variables[k.start_element][k.start_connector]
             dst = variables[k.end_element][k.end_connector]
-            if _kind(src.type) != _kind(dst.type):
+            if kind_of(src.type) != kind_of(dst.type):
                 raise SystemFileError(f"connection {describe(k)}: joins a {src.type} to a {dst.type} "
                                       f"(a connection joins variables of one type)")
             if (k.end_element, k.end_connector) in seen:
                 raise SystemFileError(f"input {k.end_element}.{k.end_connector} has two sources")
             seen.add((k.end_element, k.end_connector))
-            if k.transformed and src.type != "Real":
+            if k.transformed and kind_of(src.type) != "Real":
                 raise SystemFileError(f"connection {describe(k)}: a linear transformation on a {src.type} "
                                       f"connection (ssc:LinearTransformation is for Real values)")
             for what in ("factor", "offset"):
@@ -150,21 +152,17 @@ def describe(k: "Connection") -> str:
     return f"{k.start_element}.{k.start_connector} -> {k.end_element}.{k.end_connector}"
 
 
-def _kind(fmi_type: str) -> str:
-    """Connection compatibility: Enumeration values travel as Integers (FMI 2.0 section 2.2.7)."""
-    return "Integer" if fmi_type == "Enumeration" else fmi_type
-
-
 def fmu_variables(fmu: str | Path, component: str = "") -> dict:
-    """{name: fmpy ScalarVariable} of an FMI 2.0 Co-Simulation FMU; SystemFileError if it is not one."""
+    """{name: fmpy ModelVariable} of an FMI 2.0 or FMI 3.0 Co-Simulation FMU; SystemFileError if
+    it is not one."""
     where = f"component {component!r}: " if component else ""
     try:
         md = read_model_description(str(fmu), validate=False)
     except Exception as exc:  # fmpy raises plain Exceptions (BadZipFile, KeyError, XML errors)
         raise SystemFileError(f"{where}{Path(fmu).name} is not a readable FMU "
                               f"({type(exc).__name__}: {exc})") from None
-    if md.fmiVersion != "2.0":
-        raise SystemFileError(f"{where}{Path(fmu).name} is an FMI {md.fmiVersion} FMU (FMI 2.0 needed)")
+    if md.fmiVersion != "2.0" and not md.fmiVersion.startswith("3."):
+        raise SystemFileError(f"{where}{Path(fmu).name} is an FMI {md.fmiVersion} FMU (FMI 2.0 or 3.0 needed)")
     if md.coSimulation is None:
         raise SystemFileError(f"{where}{Path(fmu).name} does not support Co-Simulation")
     return {v.name: v for v in md.modelVariables}
@@ -218,14 +216,15 @@ def write_osp(system: SystemDescription, directory: str | Path, step: float) -> 
                                                            "stepSize": repr(float(step))})
         if c.start_values:  # OSP's value elements: Real, Integer (Enumerations too), Boolean, String
             init = ET.SubElement(sim, f"{{{OSP_NS}}}InitialValues")
-            types = {n: v.type for n, v in fmu_variables(c.fmu, c.name).items()}
+            types = {n: kind_of(v.type) for n, v in fmu_variables(c.fmu, c.name).items()}
             for name, value in c.start_values.items():
-                kind = types.get(name, "Real")
-                kind, text = (("Real", repr(float(value))) if kind == "Real" else
-                              ("Boolean", "true" if value in (True, "true", "1", 1) else "false") if kind == "Boolean" else
-                              ("String", str(value)) if kind == "String" else ("Integer", str(int(value))))
+                value_kind = types.get(name, "Real")
+                value_kind, text = (("Real", repr(float(value))) if value_kind == "Real" else
+                                    ("Boolean", "true" if value in (True, "true", "1", 1) else "false")
+                                    if value_kind == "Boolean" else
+                                    ("String", str(value)) if value_kind == "String" else ("Integer", str(int(value))))
                 iv = ET.SubElement(init, f"{{{OSP_NS}}}InitialValue", {"variable": name})
-                ET.SubElement(iv, f"{{{OSP_NS}}}{kind}", {"value": text})
+                ET.SubElement(iv, f"{{{OSP_NS}}}{value_kind}", {"value": text})
     conns = ET.SubElement(root, f"{{{OSP_NS}}}Connections")
     for k in system.connections:
         vc = ET.SubElement(conns, f"{{{OSP_NS}}}VariableConnection")

@@ -2,6 +2,7 @@
 
     python examples/gyrover_control.py --out results/system            # earth and moon
     python examples/gyrover_control.py --out results/system --study    # + communication-step study
+    python examples/gyrover_control.py --out results/system3 --fmi 3   # both FMUs as FMI 3.0
 
 For each world (examples/scenes/gyrover_mission_<world>.toml; the scene's start is the mission's
 disturbance: rolling upright at 1.5 m/s with a 5 deg lean and zero heading rate):
@@ -183,7 +184,7 @@ def fly(cl, step: float, **start) -> tuple[object, dict]:
         return None, {"up_s": float("nan"), "fell": True, "stopped_by": f"error: {exc}"}
 
 
-def world(name: str, out: Path, study: bool) -> dict:
+def world(name: str, out: Path, study: bool, fmi=None) -> dict:
     scene = load_scene(ROOT / "examples" / "scenes" / f"gyrover_mission_{name}.toml")
     spec = model_spec(scene)
     course = COURSES[name]
@@ -196,7 +197,7 @@ def world(name: str, out: Path, study: bool) -> dict:
     print(f"[{name}] centre design: regulator slowest {max(e[0] for e in d.eig_regulator if abs(complex(*e)) > 1e-7):.3f}, "
           f"fastest |lambda| {max(abs(complex(*e)) for e in d.eig_regulator):.1f}; observer slowest "
           f"{max(e[0] for e in d.eig_observer):.3f}, fastest {max(abs(complex(*e)) for e in d.eig_observer):.1f} 1/s")
-    cl = build_closed_loop(scene, out / name, mission, SPEED, schedule)
+    cl = build_closed_loop(scene, out / name, mission, SPEED, schedule, fmi=fmi)
     print(f"[{name}] linear check: {linear_check(cl, out, name)}")
     r, m = fly(cl, 0.01)
     if r is None:
@@ -276,17 +277,27 @@ def step_study(name, cl, out: Path) -> list:
     return rows
 
 
+def fmi_versions(text: str):
+    """--fmi: '3' for both FMUs, or 'wheel=3,controller=2' per component."""
+    if "=" not in text:
+        return int(text)
+    return {c.strip(): int(v) for c, v in (item.split("=", 1) for item in text.split(","))}
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="results/system")
     parser.add_argument("--worlds", nargs="*", default=["earth", "moon"], choices=sorted(COURSES),
                         help="worlds with a mission scene and a course (default: earth moon)")
     parser.add_argument("--study", action="store_true", help="also the communication-step study")
+    parser.add_argument("--fmi", type=fmi_versions, metavar="VERSION",
+                        help="FMI version of both FMUs (2 or 3), or per component, e.g. wheel=3,controller=2 "
+                             "(default: the scene's [build] fmi)")
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     for w in args.worlds:
-        world(w, out, args.study)
+        world(w, out, args.study, args.fmi)
     return 0
 
 

@@ -196,6 +196,17 @@ def earth_loop(tmp_path_factory):
         load_scene(SCENES / "gyrover_mission_earth.toml"), out, course("earth")))
 
 
+@pytest.fixture(scope="session")
+def earth_loop_fmi3(tmp_path_factory, earth_loop):
+    """The same closed loop (the earth loop's schedule, mission and scene) with both FMUs built as
+    FMI 3.0, built once; its .ssp is written by the same path."""
+    from gyrowheel.controller.closed_loop import build_closed_loop
+    from gyrowheel.controller.mission import course
+    return shared_build(tmp_path_factory, "closed_loop_earth_fmi3", lambda out: build_closed_loop(
+        load_scene(SCENES / "gyrover_mission_earth.toml"), out, course("earth"), schedule=earth_loop.schedule,
+        fmi=3))
+
+
 def loop_accuracy() -> dict[str, dict[str, float]]:
     """The rel_tol the closed loop's .ssp binds on each component: the mission scene's [experiment]
     (read from the scene file) and the controller's build experiment."""

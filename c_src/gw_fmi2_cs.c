@@ -10,6 +10,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include <math.h>
 
 #include "gw_fmi2.h"
+#include "gw_front.h"
 
 /* the frames of this file's functions (GW_FRAME, gw_fmi2.h): interface, legal states */
 #define GW_IFACE_SetRealInputDerivatives fmi2CoSimulation
@@ -85,7 +86,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         gw_log(I, GW_DISCARD, GW_LOG_DISCARD,
                "%s: the simulation terminated at t=%.17g (%s); no further step is "
                "computed (fmi2Discard until fmi2Reset)", fn, I->last_successful_time,
-               gw_fmi2_stop_reason(I));
+               gw_front_stop_reason(I));
         F->last_dostep_status = fmi2Discard;
         return fmi2Discard;
     }
@@ -118,7 +119,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         gw_log(I, GW_DISCARD, GW_LOG_DISCARD,
                "%s: %s at t=%.17g: the simulation terminated inside the step to "
                "t=%.17g (fmi2Terminated = true, fmi2LastSuccessfulTime = %.17g)",
-               fn, gw_fmi2_stop_reason(I), I->t, t_end, I->t);
+               fn, gw_front_stop_reason(I), I->t, t_end, I->t);
     }
     status = gw_fmi2_status(r);
     if (gw_log_enabled(I, GW_LOG_SOLVER))

@@ -11,6 +11,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include <string.h>
 
 #include "gw_fmi2.h"
+#include "gw_front.h"
 
 /* the frames of this file's functions (GW_FRAME, gw_fmi2.h): interface, legal states */
 #define GW_IFACE_EnterEventMode fmi2ModelExchange
@@ -83,7 +84,7 @@ fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
         gw_log(I, GW_OK, GW_LOG_EVENTS,
                "%s: the simulation terminated at t=%.17g (%s); terminateSimulation stays "
                "true: call fmi2Terminate",
-               fn, I->last_successful_time, gw_fmi2_stop_reason(I));
+               fn, I->last_successful_time, gw_front_stop_reason(I));
     gw_fmi2_set_state(F, GW_ST_CONT_TIME_MODE);
     GW_FRAME_END();
 }

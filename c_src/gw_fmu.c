@@ -26,6 +26,9 @@
 /* the simulation core */
 #include "gw_core.c"
 
+/* what the FMI 2.0 and FMI 3.0 layers share */
+#include "gw_front.c"
+
 /* the FMI 2.0 layer */
 #include "gw_fmi2_common.c"
 #include "gw_fmi2_variables.c"

@@ -25,6 +25,9 @@
 /* the simulation core */
 #include "gw_core.c"
 
+/* what the FMI 2.0 and FMI 3.0 layers share */
+#include "gw_front.c"
+
 /* the FMI 3.0 layer */
 #include "gw_fmi3_common.c"
 #include "gw_fmi3_variables.c"

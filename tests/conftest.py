@@ -170,6 +170,29 @@ def earth_fmu(earth_build) -> Path:
 
 
 @pytest.fixture(scope="session")
+def fmi3_fmu(tmp_path_factory):
+    """fmi3_fmu("slope_hold"): the FMI 3.0 FMU of examples/scenes/<name>.toml, built once per
+    test run (for every module and xdist worker that asks)."""
+    cache: dict = {}
+
+    def _build(name: str) -> Path:
+        if name not in cache:
+            path = SCENES / f"{name}.toml"
+
+            def make(out: Path):
+                return build_fmu(load_scene(path), out / f"{name}.fmu", fmi=3).fmu
+            cache[name] = shared_build(tmp_path_factory, f"{name}_fmi3", make)
+        return cache[name]
+    return _build
+
+
+@pytest.fixture(scope="session")
+def fmi3_earth_fmu(fmi3_fmu) -> Path:
+    """The paper's earth scene as an FMI 3.0 FMU."""
+    return fmi3_fmu("paper_earth")
+
+
+@pytest.fixture(scope="session")
 def all_platforms_build(tmp_path_factory):
     """The paper's earth scene with the Taylor kernel and binaries for every platform of `all`
     (gyrowheel.fmu_build.platforms.ALL), built once per run, sources kept (.sources).  zig keeps

@@ -278,7 +278,7 @@ class Fuzzer:
         fn = f"fmi3{rng.choice(['Get', 'Set'])}{t}"
         bad = "a value reference of no such variable" if n else ""
         if t == "Binary":
-            return self.call(rep, fn, vr, n, (C.c_size_t * 2)(1, 1), (C.c_void_p * 2)(), n, bad=bad, seed=seed)
+            return self.call(rep, fn, vr, n, (C.c_size_t * 2)(1, 1), (C.POINTER(C.c_ubyte) * 2)(), n, bad=bad, seed=seed)
         typ = {"Float32": C.c_float, "Int8": C.c_int8, "UInt8": C.c_uint8, "Int16": C.c_int16, "UInt16": C.c_uint16,
                "UInt32": C.c_uint32, "UInt64": C.c_uint64, "String": C.c_char_p}[t]
         vals = (typ * 2)(*([b"x", b"y"] if t == "String" else [1, 2]))
@@ -450,7 +450,10 @@ def _show(a):
         return a
     if isinstance(a, (C.c_double, C.c_bool)):
         return a.value
-    return type(a).__name__
+    if isinstance(a, C.Array):
+        items = list(a)[:6]
+        return [x.value if isinstance(x, C.c_void_p) else x for x in items] if not isinstance(a[0], bytes) else items
+    return "&" if hasattr(a, "_obj") else type(a).__name__
 
 
 def fuzz(fmu: str | Path, sequences: int, calls: int, seed: int = 0, unzipdir=None) -> Report:

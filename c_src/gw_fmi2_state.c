@@ -92,12 +92,7 @@ static int gw_fmi2_check_front(void *front_end, const char *fn, const int front[
     return 1;
 }
 
-/* 1 if this instance may take the blob (gw_blob_check); else the reason is logged */
-static int gw_fmi2_check_state(gw_fmu *F, const char *fn, const unsigned char *buf, size_t size) {
-    return gw_blob_check(F->I, fn, buf, size, gw_fmi2_check_front, F);
-}
-
-/* Apply a state that gw_fmi2_check_state accepted. */
+/* Apply a state that gw_blob_check accepted. */
 static void gw_fmi2_apply_state(gw_fmu *F, const unsigned char *buf) {
     gw_instance *I = F->I;
     int front[2];
@@ -122,7 +117,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     const gw_blob *b = (const gw_blob *)FMUstate;
     GW_FRAME(SetFMUstate);
     if (!b) GW_FAIL("%s: FMUstate is NULL", fn);
-    if (gw_fmi2_check_state(F, fn, b->data, b->size))
+    if (gw_blob_check(I, fn, b->data, b->size, gw_fmi2_check_front, F))
         gw_fmi2_apply_state(F, b->data);
     else
         status = fmi2Error;
@@ -157,7 +152,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
                                    fmi2FMUstate *FMUstate) {
     GW_FRAME(DeSerializeFMUstate);
     if (!FMUstate) GW_FAIL("%s: FMUstate is NULL", fn);
-    if (!gw_fmi2_check_state(F, fn, (const unsigned char *)serializedState, size)) {
+    if (!gw_blob_check(I, fn, (const unsigned char *)serializedState, size,
+                       gw_fmi2_check_front, F)) {
         status = fmi2Error;
         goto END;
     }

@@ -27,8 +27,6 @@
 
 /* what the FMI 2.0 and FMI 3.0 layers share */
 #include "gw_front.c"
-
-/* the work of the calls both FMI versions share: Model Exchange, FMU states */
 #include "gw_me.c"
 #include "gw_state_blob.c"
 

@@ -27,13 +27,14 @@ typedef int (*gw_blob_front_check)(void *front_end, const char *fn, const int fr
 
 /* 1 if the core accepts buf as a state of this model (layout, checksum, ranges), the front
  * end accepts its two ints, and the fields agree with each other and with the live path's
- * checks (gw_state_check_run); else 0, the reason logged.  Run before gw_blob_apply. */
+ * checks (gw_state_check_run); else 0, the reason logged.  Run before applying it. */
 GW_INTERNAL int gw_blob_check(gw_instance *I, const char *fn, const unsigned char *buf,
                               size_t size, gw_blob_front_check check_front, void *front_end) {
     gw_state_facts facts;
     int front[2];
     if (!gw_state_check(I, fn, buf, size)) return 0;
     gw_state_front(I, buf, front);
+    memset(&facts, 0, sizeof(facts));
     if (!check_front(front_end, fn, front, &facts)) return 0;
     return gw_state_check_run(I, fn, buf, &facts);
 }

@@ -36,5 +36,7 @@
 #include "gw_fmi2_variables.c"
 #include "gw_fmi2_cs.c"
 #include "gw_fmi2_me.c"
+/* the partial derivatives of gw_fmi2_dirder.c, interface-neutral */
+#include "gw_partials.c"
 #include "gw_fmi2_dirder.c"
 #include "gw_fmi2_state.c"

@@ -35,6 +35,8 @@
 #include "gw_fmi3_variables.c"
 #include "gw_fmi3_cs.c"
 #include "gw_fmi3_me.c"
+/* the partial derivatives of gw_fmi3_dirder.c, interface-neutral */
+#include "gw_partials.c"
 #include "gw_fmi3_dirder.c"
 #include "gw_fmi3_state.c"
 #include "gw_fmi3_absent.c"

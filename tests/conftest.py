@@ -173,20 +173,9 @@ def earth_fmu(earth_build) -> Path:
 
 
 @pytest.fixture(scope="session")
-def fmi3_fmu(tmp_path_factory):
-    """fmi3_fmu("slope_hold"): the FMI 3.0 FMU of examples/scenes/<name>.toml, built once per
-    test run (for every module and xdist worker that asks)."""
-    cache: dict = {}
-
-    def _build(name: str) -> Path:
-        if name not in cache:
-            path = SCENES / f"{name}.toml"
-
-            def make(out: Path):
-                return build_fmu(load_scene(path), out / f"{name}.fmu", fmi=3).fmu
-            cache[name] = shared_build(tmp_path_factory, f"{name}_fmi3", make)
-        return cache[name]
-    return _build
+def fmi3_fmu(example_build):
+    """fmi3_fmu("slope_hold"): the FMI 3.0 FMU of examples/scenes/<name>.toml, built once."""
+    return lambda name: example_build(name, fmi=3).fmu
 
 
 @pytest.fixture(scope="session")

@@ -72,30 +72,22 @@ class Instance3:
     def vr(self, name: str) -> int:
         return self.vars[name].valueReference
 
+    # a variable's type -> the fmpy accessor's name and the Python type of its values
+    ACCESS = {"Float64": ("Float64", float), "Int32": ("Int32", int), "Int64": ("Int64", int),
+              "Enumeration": ("Int64", int), "Boolean": ("Boolean", bool)}
+
     def set(self, **values) -> None:
         for name, value in values.items():
             v = self.vars[name]
-            if v.type == "Float64":
-                self.fmu3.setFloat64([v.valueReference], [float(value)])
-            elif v.type == "Int32":
-                self.fmu3.setInt32([v.valueReference], [int(value)])
-            elif v.type in ("Int64", "Enumeration"):
-                self.fmu3.setInt64([v.valueReference], [int(value)])
-            elif v.type == "Boolean":
-                self.fmu3.setBoolean([v.valueReference], [bool(value)])
+            kind, cast = self.ACCESS[v.type]
+            getattr(self.fmu3, f"set{kind}")([v.valueReference], [cast(value)])
 
     def get(self, *names: str):
         out = []
         for name in names:
             v = self.vars[name]
-            if v.type == "Float64":
-                out.append(self.fmu3.getFloat64([v.valueReference])[0])
-            elif v.type == "Int32":
-                out.append(self.fmu3.getInt32([v.valueReference])[0])
-            elif v.type in ("Int64", "Enumeration"):
-                out.append(self.fmu3.getInt64([v.valueReference])[0])
-            else:
-                out.append(bool(self.fmu3.getBoolean([v.valueReference])[0]))
+            kind, cast = self.ACCESS[v.type]
+            out.append(cast(getattr(self.fmu3, f"get{kind}")([v.valueReference])[0]))
         return out[0] if len(out) == 1 else out
 
     def init(self, start_time: float = 0.0, tolerance: float | None = None, stop_time: float | None = None,

@@ -49,6 +49,7 @@ STANDARD: dict[str, set[str]] = {
     "fmi3GetDirectionalDerivative": {INIT_MODE} | _INITIALIZED | {TERMINATED, ERROR},
     "fmi3GetAdjointDerivative": {INIT_MODE} | _INITIALIZED | {TERMINATED, ERROR},
     "fmi3UpdateDiscreteStates": {EVENT_MODE},
+    "fmi3GetClock": {EVENT_MODE}, "fmi3SetClock": {EVENT_MODE},  # (no clock: only an empty list is right)
     # Model Exchange
     "fmi3EnterContinuousTimeMode": {EVENT_MODE},
     "fmi3CompletedIntegratorStep": {CT_MODE},
@@ -71,7 +72,6 @@ CS_ONLY = ("fmi3EnterStepMode", "fmi3GetOutputDerivatives", "fmi3DoStep")
 
 # what the FMU does not have: fmi3Error with the reason logged, in every state, both interfaces
 ABSENT: dict[str, str] = {
-    "fmi3GetClock": "clock", "fmi3SetClock": "clock",
     "fmi3GetIntervalDecimal": "clock", "fmi3GetIntervalFraction": "clock",
     "fmi3GetShiftDecimal": "clock", "fmi3GetShiftFraction": "clock",
     "fmi3SetIntervalDecimal": "clock", "fmi3SetIntervalFraction": "clock",
@@ -89,6 +89,9 @@ ABSENT: dict[str, str] = {
 # why); docs/fmi.md says each.
 ANSWERED: dict[tuple[str, str], tuple[set[str], str]] = {
     ("*", "fmi3Terminate"): ({TERMINATED, ERROR}, "a second fmi3Terminate, or one after fmi3Error: fmi3Warning"),
+    ("*", "fmi3GetClock"): (_ALL, "no clock: an empty list is fmi3OK in any state, as every typed getter"),
+    ("*", "fmi3SetClock"): (_ALL, "as fmi3GetClock"),
+    ("ME", "fmi3GetNominalsOfContinuousStates"): ({INSTANTIATED}, "the nominals are constants, as in FMI 2.0"),
 }
 
 FUNCTIONS = tuple(STANDARD) + tuple(f for f in ABSENT if f not in STANDARD)
@@ -115,13 +118,17 @@ def refusal(iface: str, fn: str, state: str, event_mode_used: bool = True) -> st
     return f"{fn}: illegal call in state {state}"
 
 
-def legal(iface: str, fn: str, state: str, event_mode_used: bool = True) -> bool:
+def legal(iface: str, fn: str, state: str, event_mode_used: bool = True, ended: bool = False) -> bool:
     """Whether the FMU accepts fn in state (the standard's states plus ANSWERED); event_mode_used:
-    the Co-Simulation instance was instantiated with it (else fmi3EnterEventMode is refused)."""
+    the Co-Simulation instance was instantiated with it (else fmi3EnterEventMode is refused);
+    ended: a terminating event ended the run (fmi3DoStep is then answered in Terminated too:
+    fmi3Discard, as after fmi2DoStep's fall, docs/fmi.md "After the simulation terminated")."""
     if fn in ABSENT or other_interface(iface, fn):
         return False
     if iface == "CS" and fn == "fmi3EnterEventMode" and not event_mode_used:
         return False
+    if fn == "fmi3DoStep" and ended and state == TERMINATED:
+        return True
     extra = ANSWERED.get((iface, fn), ANSWERED.get(("*", fn), (set(), "")))[0]
     return state in STANDARD[fn] | extra
 

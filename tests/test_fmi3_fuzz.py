@@ -9,11 +9,13 @@ import pytest
 from fuzz.fmi3_fuzz import fuzz
 
 
-@pytest.mark.parametrize("scene,sequences", [("paper_earth", 300), ("slope_hold", 150)])
-def test_short_seeded_fmi3_fuzz_run_keeps_every_invariant(fmi3_fmu, scene, sequences):
+@pytest.mark.parametrize("scene,sequences,event", [("paper_earth", 300, "terminateSimulation"),
+                                                  ("slope_hold", 150, "eventHandlingNeeded")])
+def test_short_seeded_fmi3_fuzz_run_keeps_every_invariant(fmi3_fmu, scene, sequences, event):
     report = fuzz(fmi3_fmu(scene), sequences=sequences, calls=60, seed=0)
     print(report.totals())
     print(report.summary())
     assert report.sequences == sequences and report.calls > 40 * sequences
-    assert report.statuses.get(2, 0) > 0 and report.statuses.get(3, 0) > 0  # it does go astray
+    assert report.statuses.get(3, 0) > 0  # it does go astray
+    assert report.seen.get(event, 0) > 0 and report.seen.get("earlyReturn", 0) > 0  # and meets the scene's events
     assert report.violations == [], "\n".join(report.violations[:20])

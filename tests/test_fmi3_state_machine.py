@@ -17,7 +17,8 @@ import ctypes as C
 import pytest
 
 import fmi3_state_table as T
-from fmi3_helpers import B, OK, WARNING, DISCARD, ERROR, Instance3, well_formed
+from fmi_state_table import named_state
+from fmi3_helpers import B, ERROR, OK, WARNING, Instance3, well_formed
 
 D = C.c_double
 
@@ -67,12 +68,7 @@ def state_now(inst: Instance3, expected: str, last: str) -> str:
                  and not T.legal(inst.iface, p, expected, inst.event_mode_used))
     n = len(inst.messages)
     status = well_formed(inst, probe)
-    if status != ERROR:
-        return f"not {expected}: {probe} answered {status}"
-    for _, _, text in inst.messages[n:]:
-        if text.startswith(f"{probe}: illegal call in state "):
-            return text.split("illegal call in state ", 1)[1]
-    return f"? {inst.messages[n:]}"
+    return named_state(probe, status, [m for _, _, m in inst.messages[n:]], expected)
 
 
 def check_cell(inst: Instance3, state: str, fn: str) -> str:

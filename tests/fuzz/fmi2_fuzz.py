@@ -40,7 +40,7 @@ from fmpy import extract, read_model_description
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # tests/: the state tables
 import fmi_state_table as ST  # noqa: E402
 from fuzz.fuzz_common import (DISCARD, ERROR, HOSTILE, OK, WARNING, Report, check_call, cli,  # noqa: E402
-                              prefill)
+                              prefill, run_in_process)
 
 DISCARD_ALLOWED = {  # FMI 2.0.4 section 2.1.3 (fmiGetXXXStatus: every status inquiry)
     "ME": {"fmi2SetReal", "fmi2SetInteger", "fmi2SetBoolean", "fmi2SetString", "fmi2SetContinuousStates",
@@ -391,13 +391,7 @@ class Fuzzer:
 
 def fuzz(fmu: str | Path, sequences: int, calls: int, seed: int = 0, unzipdir=None) -> Report:
     """sequences sequences of `calls` calls from seed on, in this process."""
-    fz = Fuzzer(fmu, unzipdir)
-    rep = Report(api="fmi2")
-    t0 = time.perf_counter()
-    for k in range(sequences):
-        fz.sequence(rep, seed + k, calls)
-    rep.seconds = time.perf_counter() - t0
-    return rep
+    return run_in_process(Fuzzer(fmu, unzipdir), "fmi2", seed, sequences, calls)
 
 
 def main(argv=None) -> int:

@@ -40,7 +40,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # tests/
 import fmi3_state_table as ST  # noqa: E402
 from fmi3_helpers import B, Instance3, well_formed  # noqa: E402
 from fuzz.fuzz_common import (DISCARD, ERROR, HOSTILE, OK, WARNING, Report, check_call, cli,  # noqa: E402
-                              prefill)
+                              prefill, run_in_process)
 
 D = C.c_double
 # fmi3Discard: the call failed, the FMU is as before and the master may try otherwise (2.2.3):
@@ -49,7 +49,7 @@ DISCARD_ALLOWED = {"fmi3DoStep", "fmi3SetFloat64", "fmi3SetInt32", "fmi3SetInt64
                    "fmi3SetContinuousStates", "fmi3SetTime", "fmi3GetFloat64", "fmi3GetContinuousStateDerivatives",
                    "fmi3GetContinuousStates", "fmi3GetEventIndicators", "fmi3CompletedIntegratorStep",
                    "fmi3UpdateDiscreteStates", "fmi3GetDirectionalDerivative", "fmi3GetAdjointDerivative"}
-STEPS = [0.01, 0.01, 0.1, 0.5, 2.0, 1e-9, 1e-16, 0.0, -0.1, math.nan, math.inf, -math.inf]
+STEPS = [0.01, 0.01, 0.1, 0.5, 2.0, 3.0, 3.0, 1e-9, 1e-16, 0.0, -0.1, math.nan, math.inf, -math.inf]
 
 
 class Fuzzer:
@@ -76,11 +76,11 @@ class Fuzzer:
     def call(self, rep: Report, fn: str, *args, out=None, bad: str = "", seed=0) -> int:
         """fn(instance, *args) with every invariant checked; bad: why the arguments cannot be right
         (the call must answer fmi3Error)."""
-        I = self.i
+        I, self.rep = self.i, rep
         n_before = len(I.messages)
         prefill(out)
         before = self.fstate
-        allowed = ST.legal(self.kind, fn, before, self.emu)
+        allowed = ST.legal(self.kind, fn, before, self.emu, self.ended)
         reason = "" if allowed else ST.refusal(self.kind, fn, before, self.emu)
         if allowed and fn == "fmi3DoStep" and self.pending:
             allowed, reason = False, "enter Event Mode first"
@@ -118,7 +118,10 @@ class Fuzzer:
         elif fn == "fmi3EnterInitializationMode":
             self.fstate, self.t = ST.INIT_MODE, args[2].value
         elif fn == "fmi3DoStep" and status <= WARNING:
-            need, term, last = args[3]._obj.value, args[4]._obj.value, args[6]._obj.value
+            need, term, early, last = (a._obj.value for a in args[3:7])
+            for flag, name in ((need, "eventHandlingNeeded"), (term, "terminateSimulation"), (early, "earlyReturn")):
+                if flag:
+                    self.rep.saw(name)
             self.ended, self.pending = self.ended or term, bool(need)
             self.t = last if math.isfinite(last) else self.t
         elif fn == "fmi3SetTime" and status <= WARNING:
@@ -227,7 +230,7 @@ class Fuzzer:
             self.op_corrupt_state, self.op_dirder, self.op_dirder, self.op_debug_logging, self.op_event_mode,
             self.op_update, self.op_update, self.op_any, self.op_any, self.op_any]
         if self.kind == "CS":
-            return common + [self.op_step] * 8 + [self.op_step_mode] * 2
+            return common + [self.op_step] * 8 + [self.op_step_mode] * 2 + [self.op_handle_event] * 2
         return common + [self.op_ct_mode, self.op_ct_mode, self.op_completed, self.op_set_time, self.op_set_states,
                          self.op_set_states, self.op_me_array, self.op_me_array, self.op_me_array]
 
@@ -314,6 +317,13 @@ class Fuzzer:
         flags, t_next = [B() for _ in range(5)], D()
         return self.call(rep, "fmi3UpdateDiscreteStates", *[C.byref(f) for f in flags], C.byref(t_next), seed=seed)
 
+    def op_handle_event(self, rep, rng, seed):
+        """a master's event handling (FMI 3.0.2 section 4.2.4): Event Mode, the update, Step Mode"""
+        st = self.call(rep, "fmi3EnterEventMode", seed=seed)
+        if st <= WARNING:
+            st = self.op_update(rep, rng, seed)
+        return self.call(rep, "fmi3EnterStepMode", seed=seed) if st <= WARNING else st
+
     def op_step_mode(self, rep, rng, seed):
         return self.call(rep, "fmi3EnterStepMode", seed=seed)
 
@@ -324,7 +334,8 @@ class Fuzzer:
         h = rng.choice(STEPS)
         t = self.t if rng.random() < 0.85 else self.value(rng)
         flags, last = [B(), B(), B()], D(ST_SENTINEL)
-        pending, ended, legal = self.pending, self.ended, self.fstate == ST.STEP_MODE
+        pending, ended = self.pending, self.ended
+        legal = ST.legal("CS", "fmi3DoStep", self.fstate, True, ended)
         bad = "" if math.isfinite(h) and h > 0 and math.isfinite(t) else "a step size or time that cannot be"
         st = self.call(rep, "fmi3DoStep", D(t), D(h), B(rng.random() < 0.5), *[C.byref(f) for f in flags],
                        C.byref(last), bad=bad if not ended else "", seed=seed)
@@ -458,13 +469,7 @@ def _show(a):
 
 def fuzz(fmu: str | Path, sequences: int, calls: int, seed: int = 0, unzipdir=None) -> Report:
     """sequences sequences of `calls` calls from seed on, in this process."""
-    fz = Fuzzer(fmu, unzipdir)
-    rep = Report(api="fmi3")
-    t0 = time.perf_counter()
-    for k in range(sequences):
-        fz.sequence(rep, seed + k, calls)
-    rep.seconds = time.perf_counter() - t0
-    return rep
+    return run_in_process(Fuzzer(fmu, unzipdir), "fmi3", seed, sequences, calls)
 
 
 def main(argv=None) -> int:

@@ -51,11 +51,15 @@ class Report:
     violations: list[str] = field(default_factory=list)
     breaches: dict[str, int] = field(default_factory=dict)
     seconds: float = 0.0
+    seen: dict[str, int] = field(default_factory=dict)  # what the calls ran into (events, ...)
 
     def breach(self, kind: str, text: str) -> None:
         self.breaches[kind] = self.breaches.get(kind, 0) + 1
         if len(self.violations) < KEEP:
             self.violations.append(text)
+
+    def saw(self, what: str) -> None:
+        self.seen[what] = self.seen.get(what, 0) + 1
 
     def count(self, status: int) -> None:
         self.calls += 1
@@ -68,12 +72,15 @@ class Report:
             self.statuses[int(k)] = self.statuses.get(int(k), 0) + v
         for k, v in other.breaches.items():
             self.breaches[k] = self.breaches.get(k, 0) + v
+        for k, v in other.seen.items():
+            self.seen[k] = self.seen.get(k, 0) + v
         self.violations.extend(other.violations[:max(0, KEEP - len(self.violations))])
 
     def summary(self) -> str:
         names = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}
         counts = ", ".join(f"{names.get(k, k)} {v}" for k, v in sorted(self.statuses.items()))
-        return (f"{self.sequences} sequences, {self.calls} {self.api} calls in {self.seconds:.1f} s ({counts}); "
+        seen = "".join(f", {k} {v}" for k, v in sorted(self.seen.items()))
+        return (f"{self.sequences} sequences, {self.calls} {self.api} calls in {self.seconds:.1f} s ({counts}{seen}); "
                 f"{sum(self.breaches.values())} violations")
 
     def totals(self) -> str:
@@ -117,6 +124,16 @@ def _logged(fn: str, status: int, new, history, named: bool) -> bool:
         return True
     last = [(s, m) for s, m in [*history, *new] if s != OK][-1:]  # a repeat the FMU counts, not logs
     return bool(last) and fits(*last[0])
+
+
+def run_in_process(fuzzer, api: str, first: int, count: int, calls: int) -> Report:
+    """Sequences first .. first+count-1 of `calls` calls in this process (a crash ends it)."""
+    rep = Report(api=api)
+    t0 = time.perf_counter()
+    for seed in range(first, first + count):
+        fuzzer.sequence(rep, seed, calls)
+    rep.seconds = time.perf_counter() - t0
+    return rep
 
 
 def prefill(out) -> None:
@@ -265,10 +282,7 @@ def cli(argv, api: str, doc: str, fuzzer_class, script: str) -> int:
             env = sanitized_library(unzipdir, fuzzer_class.UNITY, lib, fuzzer_class.HEADERS)
         t0 = time.perf_counter()
         if a.in_process:
-            rep = Report(api=api)
-            fz = fuzzer_class(a.fmu, unzipdir)
-            for seed in range(a.seed, a.seed + a.sequences):
-                fz.sequence(rep, seed, a.calls)
+            rep = run_in_process(fuzzer_class(a.fmu, unzipdir), api, a.seed, a.sequences, a.calls)
         else:
             cmd = [sys.executable, script, a.fmu, "--child", "--calls", str(a.calls)]
             if unzipdir:

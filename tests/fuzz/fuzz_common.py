@@ -188,8 +188,7 @@ def run_isolated(child_cmd: list[str], api: str, first: int, count: int, env: di
                 code = proc.wait()
                 reader.join(5)
                 if seed < end or code != 0:
-                    tail = "".join(err[-30:]).strip()
-                    total.breach("crash", f"seed {seed}: the process exited with {code}: {tail[-3000:]}")
+                    total.breach("crash", f"seed {seed}: the process exited with {code}: {_crash_report(err)}")
                     seed += 1
                 break
             msg = json.loads(line)
@@ -199,6 +198,13 @@ def run_isolated(child_cmd: list[str], api: str, first: int, count: int, env: di
         sel.close()
         proc.stdout.close()
     return total
+
+
+def _crash_report(err: list[str]) -> str:
+    """The head of a sanitizer's report (what and where), else the end of stderr."""
+    starts = [k for k, line in enumerate(err) if "ERROR: AddressSanitizer" in line or "runtime error:" in line]
+    lines = err[starts[0]:starts[0] + 14] if starts else err[-20:]
+    return "".join(lines).strip()[:3000]
 
 
 def run_parallel(child_cmd: list[str], api: str, first: int, count: int, jobs: int,
@@ -241,6 +247,7 @@ def sanitized_library(unzipdir: str | Path, unity: str, library: str | Path, hea
     env["LD_PRELOAD"] = ":".join(runtimes)
     env["ASAN_OPTIONS"] = "detect_leaks=0:abort_on_error=0"  # python's own allocations are no finding
     env["UBSAN_OPTIONS"] = "print_stacktrace=1:halt_on_error=1"
+    env["PYTHONMALLOC"] = "malloc"  # the caller's arrays in ASan's heap: a write past one is reported
     return env
 
 

@@ -231,7 +231,7 @@ class Fuzzer:
             self.op_update, self.op_update, self.op_any, self.op_any, self.op_any]
         if self.kind == "CS":
             return common + [self.op_step] * 8 + [self.op_step_mode] * 2 + [self.op_handle_event] * 2
-        return common + [self.op_ct_mode, self.op_ct_mode, self.op_completed, self.op_set_time, self.op_set_states,
+        return common + [self.op_ct_mode, self.op_ct_mode, self.op_completed, self.op_numbers, self.op_set_time, self.op_set_states,
                          self.op_set_states, self.op_me_array, self.op_me_array, self.op_me_array]
 
     def op_set_float64(self, rep, rng, seed):
@@ -315,7 +315,19 @@ class Fuzzer:
 
     def op_update(self, rep, rng, seed):
         flags, t_next = [B() for _ in range(5)], D()
-        return self.call(rep, "fmi3UpdateDiscreteStates", *[C.byref(f) for f in flags], C.byref(t_next), seed=seed)
+        st = self.call(rep, "fmi3UpdateDiscreteStates", *[C.byref(f) for f in flags], C.byref(t_next), seed=seed)
+        if st <= WARNING and flags[4].value and not math.isfinite(t_next.value):
+            rep.breach("non-finite", f"seed {seed}: fmi3UpdateDiscreteStates: nextEventTime {t_next.value}")
+        return st
+
+    def op_numbers(self, rep, rng, seed):
+        """fmi3GetNumberOf...: the sizes modelDescription.xml gives"""
+        fn, want = rng.choice([("fmi3GetNumberOfContinuousStates", self.nx), ("fmi3GetNumberOfEventIndicators", self.nz)])
+        n = C.c_size_t(12345)
+        st = self.call(rep, fn, C.byref(n), seed=seed)
+        if st <= WARNING and n.value != want:
+            rep.breach("other", f"seed {seed}: {fn} says {n.value}, modelDescription.xml {want}")
+        return st
 
     def op_handle_event(self, rep, rng, seed):
         """a master's event handling (FMI 3.0.2 section 4.2.4): Event Mode, the update, Step Mode"""

@@ -10,8 +10,8 @@ eventModeUsed), StepMode, Terminated; Model Exchange the same with ContinuousTim
 ConfigurationMode, ReconfigurationMode, ClockActivationMode and IntermediateUpdateMode need what
 the FMU does not have (structural parameters, clocks, Scheduled Execution, intermediate update).
 FMI 3.0.2 sends an instance whose call returned fmi3Error to Terminated (2.3.1); the FMU calls that
-state Error and allows in it what Terminated allows plus fmi3Terminate (a master's clean-up), so a
-master cannot tell the difference except by the name in the messages.
+state Error and allows in it what Terminated allows, and fmi3Terminate (a master's clean-up:
+fmi3Warning, the last consistent state kept, after an initialisation).
 """
 from __future__ import annotations
 
@@ -70,19 +70,20 @@ ME_ONLY = ("fmi3EnterContinuousTimeMode", "fmi3CompletedIntegratorStep", "fmi3Se
            "fmi3GetNominalsOfContinuousStates", "fmi3GetNumberOfContinuousStates", "fmi3GetNumberOfEventIndicators")
 CS_ONLY = ("fmi3EnterStepMode", "fmi3GetOutputDerivatives", "fmi3DoStep")
 
-# what the FMU does not have: fmi3Error with the reason logged, in every state, both interfaces
+# what the FMU does not have: fmi3Error in every state, both interfaces, the reason logged (holding
+# the text here)
 ABSENT: dict[str, str] = {
-    "fmi3GetIntervalDecimal": "clock", "fmi3GetIntervalFraction": "clock",
-    "fmi3GetShiftDecimal": "clock", "fmi3GetShiftFraction": "clock",
-    "fmi3SetIntervalDecimal": "clock", "fmi3SetIntervalFraction": "clock",
-    "fmi3SetShiftDecimal": "clock", "fmi3SetShiftFraction": "clock",
+    "fmi3GetIntervalDecimal": "no clocks", "fmi3GetIntervalFraction": "no clocks",
+    "fmi3GetShiftDecimal": "no clocks", "fmi3GetShiftFraction": "no clocks",
+    "fmi3SetIntervalDecimal": "no clocks", "fmi3SetIntervalFraction": "no clocks",
+    "fmi3SetShiftDecimal": "no clocks", "fmi3SetShiftFraction": "no clocks",
     "fmi3ActivateModelPartition": "Scheduled Execution",
-    "fmi3EvaluateDiscreteStates": "providesEvaluateDiscreteStates",
+    "fmi3EvaluateDiscreteStates": "providesEvaluateDiscreteStates=false",
     "fmi3EnterConfigurationMode": "structural parameter",
     "fmi3ExitConfigurationMode": "structural parameter",
-    "fmi3GetOutputDerivatives": "maxOutputDerivativeOrder",
-    "fmi3GetNumberOfVariableDependencies": "dependenc",
-    "fmi3GetVariableDependencies": "dependenc",
+    "fmi3GetOutputDerivatives": "maxOutputDerivativeOrder=0",
+    "fmi3GetNumberOfVariableDependencies": "providesPerElementDependencies=false",
+    "fmi3GetVariableDependencies": "providesPerElementDependencies=false",
 }
 
 # Where the FMU answers a call the standard does not list, (interface or "*", function) -> (states,
@@ -112,9 +113,9 @@ def refusal(iface: str, fn: str, state: str, event_mode_used: bool = True) -> st
     if other_interface(iface, fn):
         return f"{fn}: Model Exchange function" if iface == "CS" else f"{fn}: Co-Simulation function"
     if fn in ABSENT:
-        return f"{fn}: "
+        return ABSENT[fn]
     if iface == "CS" and fn == "fmi3EnterEventMode" and not event_mode_used and state == STEP_MODE:
-        return f"{fn}: "
+        return "instantiated with eventModeUsed = false"
     return f"{fn}: illegal call in state {state}"
 
 

@@ -173,6 +173,18 @@ def earth_fmu(earth_build) -> Path:
 
 
 @pytest.fixture(scope="session")
+def fmi3_fmu(example_build):
+    """fmi3_fmu("slope_hold"): the FMI 3.0 FMU of examples/scenes/<name>.toml, built once."""
+    return lambda name: example_build(name, fmi=3).fmu
+
+
+@pytest.fixture(scope="session")
+def fmi3_earth_fmu(fmi3_fmu) -> Path:
+    """The paper's earth scene as an FMI 3.0 FMU."""
+    return fmi3_fmu("paper_earth")
+
+
+@pytest.fixture(scope="session")
 def all_platforms_build(tmp_path_factory):
     """The paper's earth scene with the Taylor kernel and binaries for every platform of `all`
     (gyrowheel.fmu_build.platforms.ALL), built once per run, sources kept (.sources).  zig keeps

@@ -133,3 +133,15 @@ def after(iface: str, fn: str, state: str) -> str:
     if fn == "fmi2EnterContinuousTimeMode":
         return CT_MODE
     return state
+
+
+def named_state(probe: str, status: int, texts: list[str], expected: str) -> str:
+    """The state an instance is in as its refusal of a probe call names it ("<probe>: illegal call
+    in state <state>" among texts, the messages the call logged), for FMI 2 and FMI 3 alike; else
+    what the answer was instead."""
+    if status != 3:  # fmi2Error, fmi3Error
+        return f"not {expected}: {probe} answered {status}"
+    for text in texts:
+        if text.startswith(f"{probe}: illegal call in state "):
+            return text.split("illegal call in state ", 1)[1]
+    return f"? {texts}"

@@ -155,12 +155,7 @@ def state_now(inst, expected: str, last: str) -> str:
         probe = "fmi2SetupExperiment"
     n = len(inst.messages)
     status = call(inst, probe)
-    if status != ERROR:
-        return f"not {expected}: {probe} answered {status}"
-    for _, _, text in inst.messages[n:]:
-        if text.startswith(f"{probe}: illegal call in state "):
-            return text.split("illegal call in state ", 1)[1]
-    return f"? {inst.messages[n:]}"
+    return T.named_state(probe, status, [m for _, _, m in inst.messages[n:]], expected)
 
 
 def check_cell(inst, iface: str, state: str, fn: str) -> str:

@@ -9,8 +9,9 @@ The library is called through ctypes directly (no fmpy wrapper), with a logger o
 Invariants checked after every call (a violation is reported with the seed and the call):
   finite       no value written to a caller's array is non-finite; with a status above
                fmi2Warning the array is left untouched
-  logged       every status other than fmi2OK comes with a logged message of that status
-               (or is a repeat the FMU collapses: then the last such message had that status)
+  logged       every status other than fmi2OK comes with a logged message of that status, starting
+               with the function's name (or is a repeat the FMU collapses: then the last such
+               message had that status)
   allowed      fmi2Discard only from the functions FMI 2.0.4 section 2.1.3 allows it for
   recoverable  fmi2Terminate after an initialisation, fmi2Reset, a new initialisation and
                fmi2FreeInstance always succeed
@@ -18,36 +19,35 @@ Invariants checked after every call (a violation is reported with the seed and t
                returns fmi2Error with its reason logged, naming the state the instance is in
                (tracked along the sequence: legal calls move it as the standard's diagrams say,
                every fmi2Error into Error)
-A crash is the process dying: run the long fuzz under ASan+UBSan (docs/fmi.md, "Fuzzing").
+The invariants' checks, the report and the command line are tests/fuzz/fuzz_common.py's: a
+crash is a child process dying, best seen with the library built with ASan+UBSan (--sanitize;
+docs/fmi.md, "Fuzzing").
 
-    python tests/fuzz/fmi2_fuzz.py FMU [--sequences N] [--calls N] [--seed S]
+    python tests/fuzz/fmi2_fuzz.py FMU [--sequences N] [--calls N] [--seed S] [--jobs J] [--sanitize]
 """
 from __future__ import annotations
 
-import argparse
 import ctypes as C
 import math
 import random
 import sys
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
+import fmpy
 from fmpy import extract, read_model_description
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # tests/: the state tables
 import fmi_state_table as ST  # noqa: E402
+from fuzz.fuzz_common import (DISCARD, ERROR, HOSTILE, OK, WARNING, Report, check_call, cli,  # noqa: E402
+                              prefill, run_in_process)
 
-OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
 DISCARD_ALLOWED = {  # FMI 2.0.4 section 2.1.3 (fmiGetXXXStatus: every status inquiry)
     "ME": {"fmi2SetReal", "fmi2SetInteger", "fmi2SetBoolean", "fmi2SetString", "fmi2SetContinuousStates",
            "fmi2GetReal", "fmi2GetDerivatives", "fmi2GetContinuousStates", "fmi2GetEventIndicators"},
     "CS": {"fmi2SetReal", "fmi2SetInteger", "fmi2SetBoolean", "fmi2SetString", "fmi2DoStep", "fmi2GetStatus",
            "fmi2GetRealStatus", "fmi2GetIntegerStatus", "fmi2GetBooleanStatus", "fmi2GetStringStatus"},
 }
-HOSTILE = [math.nan, math.inf, -math.inf, 1e308, -1e308, 5e-324, -5e-324, 0.0, -1.0, 1e-300, 1e6, 42.0]
-SENTINEL = 12345.678
-
 LOGGER = C.CFUNCTYPE(None, C.c_void_p, C.c_char_p, C.c_int, C.c_char_p, C.c_char_p)
 ALLOC = C.CFUNCTYPE(C.c_void_p, C.c_size_t, C.c_size_t)
 FREE = C.CFUNCTYPE(None, C.c_void_p)
@@ -68,22 +68,10 @@ class EventInfo(C.Structure):
                 ("nextEventTimeDefined", C.c_int), ("nextEventTime", C.c_double)]
 
 
-@dataclass
-class Report:
-    sequences: int = 0
-    calls: int = 0
-    statuses: dict[int, int] = field(default_factory=dict)
-    violations: list[str] = field(default_factory=list)
-    seconds: float = 0.0
-
-    def summary(self) -> str:
-        names = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}
-        counts = ", ".join(f"{names.get(k, k)} {v}" for k, v in sorted(self.statuses.items()))
-        return (f"{self.sequences} sequences, {self.calls} fmi2 calls in {self.seconds:.1f} s ({counts}); "
-                f"{len(self.violations)} violations")
-
-
 class Fuzzer:
+    PLATFORM, UNITY = "linux64", "gw_fmu.c"  # where its library is, what builds it (--sanitize)
+    HEADERS = Path(fmpy.__file__).resolve().parent / "c-code"
+
     def __init__(self, fmu: str | Path, unzipdir: str | Path | None = None):
         self.md = read_model_description(str(fmu))
         self.unzipdir = Path(unzipdir or extract(str(fmu)))
@@ -106,35 +94,19 @@ class Fuzzer:
     # ---- one call, with the invariants ----------------------------------------------------
     def call(self, rep: Report, kind: str, fn: str, *args, out=None, seed=0) -> int:
         n_before = len(self.messages)
-        if out is not None:
-            for i in range(len(out)):
-                out[i] = SENTINEL
+        prefill(out)
         f = getattr(self.lib, fn)
         f.restype = C.c_int
         before, allowed = self.fstate, ST.legal(kind, fn, self.fstate, self.ended)
+        t0 = time.perf_counter()
         status = f(C.c_void_p(self.c), *args)
+        seconds = time.perf_counter() - t0
         self._track(kind, fn, status, allowed, args)
-        rep.calls += 1
-        rep.statuses[status] = rep.statuses.get(status, 0) + 1
+        rep.count(status)
         where = f"seed {seed}: {kind} {fn}{tuple(a for a in args if isinstance(a, (int, float)))} -> {status}"
-        if not allowed:
-            reason = ST.refusal(kind, fn, before)
-            said = [m for _, m in self.messages[n_before:]] or [m for s, m in self.messages if s != OK][-1:]
-            if status != ERROR or not any(reason in m for m in said):
-                rep.violations.append(f"{where}: illegal in state {before}: not fmi2Error with {reason!r}")
-        if status == DISCARD and fn not in DISCARD_ALLOWED[kind]:
-            rep.violations.append(f"{where}: fmi2Discard is not allowed for {fn}")
-        if status != OK:
-            new = [s for s, _ in self.messages[n_before:] if s == status]
-            last = [s for s, _ in self.messages if s != OK]
-            if not new and not (last and last[-1] == status):
-                rep.violations.append(f"{where}: status {status} without a logged reason")
-        if out is not None:
-            values = list(out)
-            if status > WARNING and any(v != SENTINEL for v in values):
-                rep.violations.append(f"{where}: array written despite status {status}")
-            if any(not math.isfinite(v) for v in values):
-                rep.violations.append(f"{where}: non-finite value written {values}")
+        check_call(rep, where + f" (state {before})", fn, status, self.messages[n_before:], self.messages[:n_before],
+                   allowed=allowed, reason="" if allowed else ST.refusal(kind, fn, before), out=out,
+                   discard_ok=fn in DISCARD_ALLOWED[kind], named=True, seconds=seconds)
         return status
 
     def _track(self, kind: str, fn: str, status: int, allowed: bool, args) -> None:
@@ -175,7 +147,7 @@ class Fuzzer:
         self.c = self.lib.fmi2Instantiate(b"fuzz", 0 if kind == "ME" else 1, self.md.guid.encode(), b"",
                                           C.byref(self._cb), 0, int(rng.random() < 0.3))
         if not self.c:
-            rep.violations.append(f"seed {seed}: fmi2Instantiate failed")
+            rep.breach("other", f"seed {seed}: fmi2Instantiate failed")
             return
         self.fstate, self.ended, self.saved_states, self.deserialized_from = ST.INSTANTIATED, False, {}, None
         t, initialised, saved = 0.0, False, []
@@ -236,9 +208,9 @@ class Fuzzer:
             # restored, or an error in the initialisation itself)
             if not any(k in why for k in ("state Instantiated", "state InitializationMode",
                                           "failed before its initialisation")):
-                rep.violations.append(f"seed {seed}: fmi2Terminate failed after an initialisation: {why}")
+                rep.breach("other", f"seed {seed}: fmi2Terminate failed after an initialisation: {why}")
         if self.call(rep, kind, "fmi2Reset", seed=seed) != OK:
-            rep.violations.append(f"seed {seed}: fmi2Reset failed")
+            rep.breach("other", f"seed {seed}: fmi2Reset failed")
             return
         ok = self.call(rep, kind, "fmi2SetupExperiment", 0, C.c_double(0.0), C.c_double(0.0), 0, C.c_double(0.0),
                        seed=seed) == OK
@@ -251,7 +223,7 @@ class Fuzzer:
             ok = ok and self.call(rep, kind, "fmi2GetDerivatives", x, C.c_size_t(self.nx), out=x, seed=seed) == OK
         ok = ok and self.call(rep, kind, "fmi2Terminate", seed=seed) == OK
         if not ok:
-            rep.violations.append(f"seed {seed}: not usable after fmi2Reset: {self.messages[-3:]}")
+            rep.breach("other", f"seed {seed}: not usable after fmi2Reset: {self.messages[-3:]}")
 
     # ---- the operations ------------------------------------------------------------------------
     def ops(self, kind: str):
@@ -418,27 +390,12 @@ class Fuzzer:
 
 
 def fuzz(fmu: str | Path, sequences: int, calls: int, seed: int = 0, unzipdir=None) -> Report:
-    fz = Fuzzer(fmu, unzipdir)
-    rep = Report()
-    t0 = time.perf_counter()
-    for k in range(sequences):
-        fz.sequence(rep, seed + k, calls)
-    rep.seconds = time.perf_counter() - t0
-    return rep
+    """sequences sequences of `calls` calls from seed on, in this process."""
+    return run_in_process(Fuzzer(fmu, unzipdir), "fmi2", seed, sequences, calls)
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("fmu")
-    ap.add_argument("--sequences", type=int, default=20000)
-    ap.add_argument("--calls", type=int, default=60)
-    ap.add_argument("--seed", type=int, default=0)
-    a = ap.parse_args(argv)
-    rep = fuzz(a.fmu, a.sequences, a.calls, a.seed)
-    print(rep.summary())
-    for v in rep.violations[:50]:
-        print("  " + v)
-    return 1 if rep.violations else 0
+    return cli(argv, "fmi2", __doc__, Fuzzer, __file__)
 
 
 if __name__ == "__main__":

@@ -99,3 +99,41 @@ def test_fmu_manipulation_toolbox_reads_and_repacks(earth_fmu, tmp_path):
     a = simulate_fmu(str(earth_fmu), stop_time=1.0, output=STATES)
     b = simulate_fmu(str(tmp_path / "repacked.fmu"), stop_time=1.0, output=STATES)
     assert all(a[n][-1] == b[n][-1] for n in STATES)
+
+
+def test_ecospy_runs_the_fmi3_wheel_through_the_fall(example_build, capfd):
+    """ecospy 0.7.2 loads FMI 3.0 Co-Simulation FMUs (through fmi4c): the spinless FMI 3.0 wheel
+    falls at t = 0.4335 s; ecos reads neither terminateSimulation nor lastSuccessfulTime and steps
+    on to 2 s. The FMU answers every further fmi3DoStep with fmi3Discard, keeps the state at the
+    fall and logs the refusal once (repeats counted). That state is gyrowheel's master's last row
+    (which ends at lastSuccessfulTime) to 1e-9: ecos sums its steps into its time (2 s ends at
+    1.9900000000000015), the master takes t0 + k h, so the located fall differs by about 5e-14 s
+    and the falling beta_dot (-9.5 rad/s) by about 2.5e-12 rad/s."""
+    from ecospy import EcosLib, EcosSimulation, EcosSimulationStructure
+
+    from gyrowheel.cosim.master import run
+    from gyrowheel.cosim.system import Component, SystemDescription
+
+    fmu = example_build("paper_earth", fmi=3).fmu
+    EcosLib.set_log_level("debug")  # ecospy prints the FMU's messages at debug level
+    try:
+        with EcosSimulationStructure() as structure:
+            structure.add_model("wheel", str(fmu))
+            structure.add_parameter_set("nospin", {"wheel::gamma_dot": 0.0})
+            with EcosSimulation(structure=structure, step_size=0.01) as sim:
+                sim.init(parameter_set="nospin")
+                sim.step_until(2.0)
+                assert sim.get_time() == pytest.approx(2.0, abs=0.011)
+                values = [sim.get_real(f"wheel::{n}") for n in STATES]
+                assert sim.get_bool("wheel::fallen")
+                sim.terminate()
+    finally:
+        EcosLib.set_log_level("warn")
+    out = capfd.readouterr().out
+    ours = run(SystemDescription("alone", [Component("wheel", fmu)], [], stop_time=2.0), 0.01,
+               start_values={"wheel": {"gamma_dot": 0.0}})
+    assert ours.stopped_by == "wheel" and ours.data["time"][-1] == pytest.approx(0.4335, abs=1e-3)
+    np.testing.assert_allclose(values, [ours.data[f"wheel.{n}"][-1] for n in STATES], rtol=1e-9, atol=1e-10)
+    assert "Error" not in out and "illegal call" not in out
+    assert out.count("fmi3DoStep: the simulation terminated at") == 1
+    assert "(the previous message was repeated 154 more times)" in out

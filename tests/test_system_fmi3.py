@@ -114,3 +114,53 @@ def test_the_closed_loop_fmi_option():
         component_versions({"wheels": 3}, 2)
     with pytest.raises(ArgumentError, match="fmi: must be 2 or 3"):
         component_versions(4, 2)
+
+
+@pytest.mark.parametrize("fmi_type, value, expected", [
+    ("Float64", "2.5", 2.5), ("Int32", 7, 7), ("UInt8", 255, 255), ("Enumeration", "3", 3), ("Boolean", "true", True)])
+def test_fmi3_values_are_read_as_their_type(fmi_type, value, expected):
+    from types import SimpleNamespace
+
+    from gyrowheel.cosim.ssp import coerce_value
+    assert coerce_value(SimpleNamespace(type=fmi_type), value, "c.v") == expected
+
+
+@pytest.mark.parametrize("fmi_type, value", [("UInt8", 256), ("UInt8", -1), ("Int8", 128), ("Int32", 2**31),
+                                             ("Int32", 1.5), ("Float64", True)])
+def test_fmi3_values_outside_their_type_are_refused(fmi_type, value):
+    """A value ctypes would wrap or truncate is refused, naming the variable and its type."""
+    from types import SimpleNamespace
+
+    from gyrowheel.cosim.ssp import coerce_value
+    with pytest.raises(SystemFileError, match=f"c.v: {value!r} is not a valid {fmi_type}"):
+        coerce_value(SimpleNamespace(type=fmi_type), value, "c.v")
+
+
+FMI3_DESCRIPTION = """<fmiModelDescription fmiVersion="3.0" modelName="m" instantiationToken="t">
+  <CoSimulation modelIdentifier="m"/>
+  <ModelVariables>
+    <Float64 name="time" valueReference="0" causality="independent" variability="continuous"/>
+    <Float64 name="u" valueReference="1" causality="input" start="0"/>
+    <Int32 name="k" valueReference="2" causality="input" start="0"/>
+    <Float64 name="y" valueReference="3" causality="output"/>
+    <Float64 name="z" valueReference="4" causality="output"/>
+    <Float64 name="w" valueReference="5" causality="output"/>
+  </ModelVariables>
+  <ModelStructure>
+    <Output valueReference="3" dependencies="1 0"/>
+    <Output valueReference="4" dependencies=""/>
+    <Output valueReference="5"/>
+    {extra}
+  </ModelStructure>
+</fmiModelDescription>"""
+
+
+def test_fmi3_feedthrough_reads_outputs_by_value_reference(tmp_path):
+    """FMI 3.0 ModelStructure/Output: variables and dependencies by value reference; of the
+    dependencies only inputs count; no attribute means every input (FMI 3.0.2 section 2.4.8)."""
+    (tmp_path / "modelDescription.xml").write_text(FMI3_DESCRIPTION.format(extra=""))
+    assert feedthrough(tmp_path) == {"y": ("u",), "w": ("u", "k")}
+    (tmp_path / "modelDescription.xml").write_text(FMI3_DESCRIPTION.format(extra='<Output valueReference="9"/>'))
+    with pytest.raises(SystemFileError, match="ModelStructure has an Output with a bad valueReference or "
+                                              "dependencies"):
+        feedthrough(tmp_path)

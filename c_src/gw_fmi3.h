@@ -60,6 +60,7 @@ typedef struct {
     int event_mode_used;
     int early_return_allowed;
     int event_pending;
+    const char *call; /* name of the fmi3 function being called (set by its frame) */
     /* the last message with a status other than fmi3OK (hash) and how often it repeated
      * since: a run of identical reasons is logged once, then counted */
     unsigned long long log_last_hash;

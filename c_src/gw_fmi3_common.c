@@ -81,6 +81,7 @@ GW_INTERNAL int gw_fmi3_begin(gw_fmu3 *F, const char *fn, int mask) {
 
 GW_INTERNAL int gw_fmi3_interface(gw_fmu3 *F, const char *fn, int iface) {
     if (!F) return 0;
+    F->call = fn; /* every frame starts here: the name the logger puts before core messages */
     if (F->iface & iface) return 1;
     if (iface == GW3_IFACE_ME)
         GW_LOG_ERR(F->I, "%s: Model Exchange function, not available in an instance "
@@ -131,8 +132,14 @@ GW_INTERNAL void gw_fmi3_flush_log(gw_fmu3 *F) {
 static void gw_fmi3_logger(void *env, const char *name, gw_status status, const char *category,
                            const char *message) {
     gw_fmu3 *F = (gw_fmu3 *)env;
-    char buf[2048];
+    char raw[2048], buf[2048];
     (void)name;
+    /* The core's own messages (the solver's, the events') do not name the FMI call they come
+     * from; in FMI 3 every message of a call starts with the call's name */
+    if (F->call && strncmp(message, "fmi3", 4) != 0) {
+        snprintf(raw, sizeof(raw), "%s: %s", F->call, message);
+        message = raw;
+    }
     if (status != GW_OK) {
         unsigned long long h = gw_front_hash(message, (int)status);
         if (F->log_last_category && h == F->log_last_hash) {

@@ -110,16 +110,19 @@ static fmi3Status gw_fmi3_get(gw_fmu3 *F, const char *fn, const fmi3ValueReferen
     int need = 0, time;
     size_t k;
     if (!gw_fmi3_arrays_ok(I, fn, vr, nvr, values, nValues)) return fmi3Error;
-    for (k = 0; k < nvr; k++) need |= gw_front_needs(I, gw_variable_find(I->m, vr[k]));
+    /* every reference first: a bad one is fmi3Error whatever the values of the others */
+    for (k = 0; k < nvr; k++) {
+        const gw_variable *v = gw_fmi3_lookup(I, fn, vr[k], type, &time);
+        if (!v && !time) return fmi3Error;
+        need |= gw_front_needs(I, v);
+    }
     if (need & GW_NEED_OUTPUTS) GW3_TRY(gw_update_outputs(I, fn));
     if (need & GW_NEED_DERIVATIVES) GW3_TRY(gw_update_derivatives(I, fn));
     if (need & GW_NEED_INDICATORS) GW3_TRY(gw_front_indicators(I, fn));
-    for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_fmi3_lookup(I, fn, vr[k], type, &time);
+    for (k = 0; k < nvr && type == GW_REAL; k++) {
+        const gw_variable *v = gw_variable_find(I->m, vr[k]);
         double d;
-        if (time) continue;
-        if (!v) return fmi3Error;
-        if (type == GW_REAL) GW3_TRY(gw_front_get_finite(I, fn, v, &d));
+        if (v) GW3_TRY(gw_front_get_finite(I, fn, v, &d));
     }
     for (k = 0; k < nvr; k++) {
         const gw_variable *v = gw_variable_find(I->m, vr[k]);
@@ -250,8 +253,9 @@ static fmi3Status gw_fmi3_no_such_type(fmi3Instance instance, const char *fn, in
     return gw_fmi3_end(F, fmi3Error);
 }
 
-/* fmi3Get<T> and fmi3Set<T> of a type T (C type CT) without variables */
-#define GW3_NO_SUCH_TYPE(T, CT)                                                                 \
+/* fmi3Get<T> and fmi3Set<T> of a type T (C type CT) without variables; SET_MASK: the states
+ * of the setter (a Float32 may be continuous, settable in Continuous-Time Mode) */
+#define GW3_NO_SUCH_TYPE(T, CT, SET_MASK)                                                      \
     fmi3Status fmi3Get##T(fmi3Instance instance, const fmi3ValueReference valueReferences[],   \
                           size_t nValueReferences, CT values[], size_t nValues) {               \
         (void)values;                                                                           \
@@ -263,18 +267,18 @@ static fmi3Status gw_fmi3_no_such_type(fmi3Instance instance, const char *fn, in
                           size_t nValueReferences, const CT values[], size_t nValues) {         \
         (void)values;                                                                           \
         (void)nValues;                                                                          \
-        return gw_fmi3_no_such_type(instance, "fmi3Set" #T, GW3_MASK_SetDiscrete,              \
+        return gw_fmi3_no_such_type(instance, "fmi3Set" #T, SET_MASK,                          \
                                     valueReferences, nValueReferences);                         \
     }
 
-GW3_NO_SUCH_TYPE(Float32, fmi3Float32)
-GW3_NO_SUCH_TYPE(Int8, fmi3Int8)
-GW3_NO_SUCH_TYPE(UInt8, fmi3UInt8)
-GW3_NO_SUCH_TYPE(Int16, fmi3Int16)
-GW3_NO_SUCH_TYPE(UInt16, fmi3UInt16)
-GW3_NO_SUCH_TYPE(UInt32, fmi3UInt32)
-GW3_NO_SUCH_TYPE(UInt64, fmi3UInt64)
-GW3_NO_SUCH_TYPE(String, fmi3String)
+GW3_NO_SUCH_TYPE(Float32, fmi3Float32, GW3_MASK_Set)
+GW3_NO_SUCH_TYPE(Int8, fmi3Int8, GW3_MASK_SetDiscrete)
+GW3_NO_SUCH_TYPE(UInt8, fmi3UInt8, GW3_MASK_SetDiscrete)
+GW3_NO_SUCH_TYPE(Int16, fmi3Int16, GW3_MASK_SetDiscrete)
+GW3_NO_SUCH_TYPE(UInt16, fmi3UInt16, GW3_MASK_SetDiscrete)
+GW3_NO_SUCH_TYPE(UInt32, fmi3UInt32, GW3_MASK_SetDiscrete)
+GW3_NO_SUCH_TYPE(UInt64, fmi3UInt64, GW3_MASK_SetDiscrete)
+GW3_NO_SUCH_TYPE(String, fmi3String, GW3_MASK_SetDiscrete)
 
 fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                          size_t nValueReferences, size_t valueSizes[], fmi3Binary values[],

@@ -120,12 +120,13 @@ static const gw_variable *gw_fmi3_lookup(gw_instance *I, const char *fn, fmi3Val
     return v;
 }
 
-/* the number of values of the references vr (section 2.2.7.1: the serialized variables
- * concatenated): one per scalar, n per array; an unknown reference counts one (it is refused
- * with its own reason) */
-static size_t gw_fmi3_n_values(const gw_model *m, const fmi3ValueReference vr[], size_t nvr) {
+/* the number of values of the references vr of a getter or setter of base type `type`
+ * (section 2.2.7.1: the serialized variables concatenated): one per scalar, n per array (all
+ * Float64); a reference of another type or unknown counts one (refused with its own reason) */
+static size_t gw_fmi3_n_values(const gw_model *m, const fmi3ValueReference vr[], size_t nvr,
+                               int type) {
     size_t k, n = nvr;
-    if (m->n_arrays == 0 || !vr) return nvr;
+    if (m->n_arrays == 0 || !vr || type != GW_REAL) return nvr;
     for (k = 0; k < nvr; k++) {
         const gw_array *a = gw_fmi3_array_find(m, vr[k]);
         if (a) n += (size_t)a->n - 1;
@@ -136,8 +137,8 @@ static size_t gw_fmi3_n_values(const gw_model *m, const fmi3ValueReference vr[],
 /* the arrays of a call: present when there are values, nValues the sum of the sizes of the
  * referenced variables (section 2.2.7.2) */
 static int gw_fmi3_arrays_ok(gw_instance *I, const char *fn, const fmi3ValueReference vr[],
-                             size_t nvr, const void *values, size_t nValues) {
-    size_t want = gw_fmi3_n_values(I->m, vr, nvr);
+                             size_t nvr, const void *values, size_t nValues, int type) {
+    size_t want = gw_fmi3_n_values(I->m, vr, nvr, type);
     if (nValues != want && I->m->n_arrays == 0) {
         GW_LOG_ERR(I, "%s: nValues = %lu for %lu value references (every variable of this FMU "
                    "is a scalar)", fn, (unsigned long)nValues, (unsigned long)nvr);
@@ -167,7 +168,7 @@ static fmi3Status gw_fmi3_get(gw_fmu3 *F, const char *fn, const fmi3ValueReferen
     fmi3Status status = fmi3OK;
     int need = 0, time, i;
     size_t k, j;
-    if (!gw_fmi3_arrays_ok(I, fn, vr, nvr, values, nValues)) return fmi3Error;
+    if (!gw_fmi3_arrays_ok(I, fn, vr, nvr, values, nValues, type)) return fmi3Error;
     for (k = 0; k < nvr; k++) {
         const gw_array *a = type == GW_REAL ? gw_fmi3_array_find(I->m, vr[k]) : NULL;
         if (a) {
@@ -261,7 +262,7 @@ static fmi3Status gw_fmi3_set(gw_fmu3 *F, const char *fn, const fmi3ValueReferen
     fmi3Status status = fmi3OK;
     int time;
     size_t k;
-    if (!gw_fmi3_arrays_ok(I, fn, vr, nvr, values, nValues)) return fmi3Error;
+    if (!gw_fmi3_arrays_ok(I, fn, vr, nvr, values, nValues, type)) return fmi3Error;
     for (k = 0; k < nvr; k++) {
         const gw_array *a = type == GW_REAL ? gw_fmi3_array_find(I->m, vr[k]) : NULL;
         const gw_variable *v;

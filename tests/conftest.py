@@ -140,22 +140,32 @@ class _Built:
 
 @pytest.fixture(scope="session")
 def example_build(tmp_path_factory):
-    """example_build("euler_disk", taylor=False): the BuildResult of examples/scenes/<name>.toml,
-    built once per test run (for every module and xdist worker that asks; sources kept beside).
-    Several modules test the same example FMU; the build is the same call, made once."""
+    """example_build("euler_disk", taylor=False, fmi=2): the BuildResult of
+    examples/scenes/<name>.toml, built once per test run (for every module and xdist worker that
+    asks; sources kept beside); fmi=3: its FMI 3.0 FMU.  Several modules test the same example
+    FMU; the build is the same call, made once."""
     cache: dict = {}
 
-    def _build(name: str, taylor: bool = False):
-        key = f"{name}{'_taylor' if taylor else ''}"
+    def _build(name: str, taylor: bool = False, fmi: int = 2):
+        key = f"{name}{'_taylor' if taylor else ''}{'_fmi3' if fmi == 3 else ''}"
         if key not in cache:
             path = SCENES / f"{name}.toml"
+            version = {"fmi": 3} if fmi == 3 else {}
 
             def make(out: Path):
-                built = build_fmu(load_scene(path), out / f"{name}.fmu", build_dir=out / "build", taylor=taylor)
+                built = build_fmu(load_scene(path), out / f"{name}.fmu", build_dir=out / "build", taylor=taylor,
+                                  **version)
                 return _Built(built, path.read_text(), path.name)
             cache[key] = shared_build(tmp_path_factory, key, make).result()
         return cache[key]
     return _build
+
+
+@pytest.fixture(scope="session")
+def fmi3_build(example_build):
+    """fmi3_build("paper_earth"): the FMI 3.0 BuildResult of an example scene, built once per
+    test run (example_build(name, fmi=3)); its FMI 2.0 twin is example_build(name)."""
+    return lambda name: example_build(name, fmi=3)
 
 
 @pytest.fixture(scope="session")

@@ -184,7 +184,8 @@ GW_API gw_status gw_setup_experiment(gw_instance *I, const char *fn, int toleran
  * instance still in its set-up phase. */
 GW_API gw_status gw_initialize(gw_instance *I, const char *fn);
 /* Integrate from I->t to t_end (> I->t) with the selected solver, locating events.
- * GW_OK: I->t == t_end.  GW_DISCARD: a terminating event; I->t is the event time,
+ * GW_OK: I->t == t_end, or, if the front end set I->stop_at_update (gw_instance.h), the time
+ * of an update event the call stopped at (I->stopped_at_update).  GW_DISCARD: a terminating event; I->t is the event time,
  * I->terminated set.  GW_ERROR: reason logged (messages start with fn), instance back at
  * its state before the call.  Outputs are current afterwards.  Never allocates. */
 GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end);
@@ -221,7 +222,8 @@ typedef enum {
  * is <= 0 now and TERMINATE and not yet fired) fires: flag set, logged; an UPDATE event
  * changes I->x (and sets I->x_jumped), and crossings that jump causes fire in the same
  * instant (each event at most once per instant).  Then I->e = the indicators at the final
- * state. */
+ * state.  An instant gw_advance stopped at with its update pending (I->update_pending) is
+ * applied as it was located there (e_now is not used). */
 GW_API gw_ev_result gw_event_update(gw_instance *I, const double *e_now);
 /* Indicators the front end evaluated on the current trajectory (Model Exchange,
  * fmi2GetEventIndicators): one that is > 0 arms its event (I->e[i] = e[i]), so that a later
@@ -251,6 +253,8 @@ typedef struct {
     int initialised; /* saved after a successful initialisation (gw_initialize) */
     int time_free;   /* the front end lets its caller set t and x at will (Model Exchange) */
     int terminated;  /* the front end's state is one after a terminating event */
+    int pending_event; /* the front end stopped at a located crossing and has not yet run its
+                          event update (FMI 3.0 Co-Simulation's early return, Event Mode) */
 } gw_state_facts;
 /* 1 if the fields of a checked state agree with each other and pass the live path's checks
  * (the experiment's times in order, events and their flags, the model's validity checks on its

@@ -304,6 +304,18 @@ static int gw_event_dip(gw_instance *I, int i, double t0, double t1, double *ta,
     return 1;
 }
 
+/* I->stop_at_update == GW_STOP_BEFORE_UPDATE: the located instant (I->ev_fired) is left
+ * pending if an update event fires in it and no terminating one (the end needs no Event Mode) */
+static int gw_event_deferred(const gw_instance *I) {
+    int i, update = 0;
+    for (i = 0; i < I->m->ne; i++) {
+        if (!I->ev_fired[i]) continue;
+        if (gw_event_action_of(I, i) == GW_EVENT_TERMINATE) return 0;
+        if (gw_event_action_of(I, i) == GW_EVENT_UPDATE) update = 1;
+    }
+    return update;
+}
+
 GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_event) {
     const gw_model *m = I->m;
     /* An ensemble lane (its series fetched lazily, I->tl_fetch) looks at the step's ends only,
@@ -386,6 +398,10 @@ GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, d
         if (I->ev_fired[i] && I->eev[i] > 0.0) I->eev[i] = 0.0; /* the winner is at its crossing */
     }
     *t_event = best;
+    if (I->stop_at_update == GW_STOP_BEFORE_UPDATE && gw_event_deferred(I)) {
+        I->update_pending = 1; /* gw_event_update applies it: the instant as located here */
+        return GW_EV_UPDATE;
+    }
     return gw_event_instant(I, best, I->xev, I->eev, 0, &jumped);
 }
 
@@ -401,7 +417,9 @@ GW_API gw_ev_result gw_event_update(gw_instance *I, const double *e_now) {
     const gw_model *m = I->m;
     int i, jumped = 0;
     gw_ev_result r;
-    for (i = 0; i < m->ne; i++) {
+    /* an instant gw_advance stopped at (GW_STOP_BEFORE_UPDATE): its events and indicators as
+     * located there, exactly what integrating through it would have applied */
+    for (i = 0; i < m->ne && !I->update_pending; i++) {
         const int was_positive = I->e[i] > 0.0;
         const int now_le = !(e_now[i] > 0.0);
         if (gw_event_action_of(I, i) == GW_EVENT_TERMINATE)
@@ -410,6 +428,7 @@ GW_API gw_ev_result gw_event_update(gw_instance *I, const double *e_now) {
             I->ev_fired[i] = now_le && was_positive;
         I->e[i] = e_now[i];
     }
+    I->update_pending = 0;
     r = gw_event_instant(I, I->t, I->x, I->e, 0, &jumped);
     if (jumped) {
         gw_point_changed(I);

@@ -95,8 +95,6 @@ GW_INTERNAL fmi2Status gw_fmi2_end(gw_fmu *F, fmi2Status status);
 GW_INTERNAL void gw_fmi2_allow_discard(gw_fmu *F);
 /* log "(the previous message was repeated N more times)" if a run of repeats is pending */
 GW_INTERNAL void gw_fmi2_flush_log(gw_fmu *F);
-/* name of the terminating event that stopped the simulation, or "a terminating event" */
-GW_INTERNAL const char *gw_fmi2_stop_reason(const gw_instance *I);
 /* copy n values to the caller's array only if every one is finite; else leaves dst untouched,
  * logs which value is not (names[i] or what) and returns the answer to non-finite values
  * (a gw_status, for GW_TRY) */

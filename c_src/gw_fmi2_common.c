@@ -7,12 +7,12 @@
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
 #else
 
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "gw_fmi2.h"
+#include "gw_front.h"
 
 /* the frames of this file's functions (GW_FRAME, gw_fmi2.h): interface, legal states */
 #define GW_IFACE_SetDebugLogging GW_IFACE_BOTH
@@ -105,48 +105,10 @@ GW_INTERNAL void gw_fmi2_allow_discard(gw_fmu *F) {
     F->I->nonfinite_status = (gw_fmi2_is_me(F) && (F->state & GW_ST_ME)) ? GW_DISCARD : GW_ERROR;
 }
 
-GW_INTERNAL const char *gw_fmi2_stop_reason(const gw_instance *I) {
-    const gw_model *m = I->m;
-    int i;
-    for (i = 0; i < m->ne; i++)
-        if (gw_event_ended(I, i) && m->event_names && m->event_names[i])
-            return m->event_names[i];
-    return "a terminating event";
-}
-
 GW_INTERNAL gw_status gw_fmi2_copy_finite(gw_fmu *F, const char *fn, double *dst,
                                           const double *src, size_t n, const char *what,
                                           const char *const *names) {
-    gw_instance *I = F->I;
-    size_t i;
-    for (i = 0; i < n; i++)
-        if (!isfinite(src[i])) {
-            GW_LOG_NONFINITE(I, "%s: %s %s is not finite (%g) at t=%.17g; nothing returned", fn,
-                             what, names && names[i] ? names[i] : "", src[i], I->t);
-            return I->nonfinite_status;
-        }
-    if (n > 0) memcpy(dst, src, n * sizeof(double));
-    return GW_OK;
-}
-
-/* Escape '%': importers may treat the message as a printf format. */
-static void gw_fmi2_escape(char *buf, size_t size, const char *raw) {
-    size_t i, j = 0;
-    for (i = 0; raw[i] != '\0' && j + 2 < size; i++) {
-        if (raw[i] == '%') buf[j++] = '%';
-        buf[j++] = raw[i];
-    }
-    buf[j] = '\0';
-}
-
-/* FNV-1a, 64 bit, of a message and its status */
-static unsigned long long gw_fmi2_hash(const char *text, int status) {
-    unsigned long long h = 14695981039346656037ULL ^ (unsigned long long)(unsigned)status;
-    for (; *text; text++) {
-        h ^= (unsigned char)*text;
-        h *= 1099511628211ULL;
-    }
-    return h;
+    return gw_front_copy_finite(F->I, fn, dst, src, n, what, names);
 }
 
 GW_INTERNAL void gw_fmi2_flush_log(gw_fmu *F) {
@@ -167,7 +129,7 @@ static void gw_fmi2_logger(void *env, const char *name, gw_status status, const 
     gw_fmu *F = (gw_fmu *)env;
     char buf[2048];
     if (status != GW_OK) {
-        unsigned long long h = gw_fmi2_hash(message, (int)status);
+        unsigned long long h = gw_front_hash(message, (int)status);
         if (F->log_last_category && h == F->log_last_hash) {
             F->log_repeats++;
             return;
@@ -177,7 +139,7 @@ static void gw_fmi2_logger(void *env, const char *name, gw_status status, const 
         F->log_last_status = gw_fmi2_status(status);
         F->log_last_category = category;
     }
-    gw_fmi2_escape(buf, sizeof(buf), message);
+    gw_front_escape(buf, sizeof(buf), message);
     F->logger(F->env, name, gw_fmi2_status(status), category, buf);
 }
 
@@ -199,7 +161,7 @@ static void gw_fmi2_instantiate_error(const fmi2CallbackFunctions *cb, const cha
     va_start(ap, fmt);
     vsnprintf(raw, sizeof(raw), fmt, ap);
     va_end(ap);
-    gw_fmi2_escape(buf, sizeof(buf), raw);
+    gw_front_escape(buf, sizeof(buf), raw);
     cb->logger(cb->componentEnvironment, name, fmi2Error, "logStatusError", buf);
 }
 

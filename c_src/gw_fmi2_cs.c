@@ -7,9 +7,8 @@
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
 #else
 
-#include <math.h>
-
 #include "gw_fmi2.h"
+#include "gw_front.h"
 
 /* the frames of this file's functions (GW_FRAME, gw_fmi2.h): interface, legal states */
 #define GW_IFACE_SetRealInputDerivatives fmi2CoSimulation
@@ -70,8 +69,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentCommunicationPoint) {
     const double tc = currentCommunicationPoint, h = communicationStepSize;
-    double t_end, tol;
-    unsigned long long rhs0, acc0, rej0;
+    double t_end;
+    gw_front_counts c0;
     gw_status r;
     GW_FRAME_OPEN(DoStep);
     (void)noSetFMUStatePriorToCurrentCommunicationPoint;
@@ -85,31 +84,13 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         gw_log(I, GW_DISCARD, GW_LOG_DISCARD,
                "%s: the simulation terminated at t=%.17g (%s); no further step is "
                "computed (fmi2Discard until fmi2Reset)", fn, I->last_successful_time,
-               gw_fmi2_stop_reason(I));
+               gw_front_stop_reason(I));
         F->last_dostep_status = fmi2Discard;
         return fmi2Discard;
     }
     GW_FRAME_CHECK_STATE();
-    if (!isfinite(h) || !(h > 0.0))
-        GW_FAIL("%s: communication step size %g must be finite and > 0", fn, h);
-    if (!isfinite(tc)) GW_FAIL("%s: currentCommunicationPoint is not finite", fn);
-    if (tc + h == tc)
-        GW_FAIL("%s: communication step size %g is below the resolution of "
-                "currentCommunicationPoint %.17g (t + h == t): the step would not advance time",
-                fn, h, tc);
-    tol = 1e-9 * (fabs(tc) > 1.0 ? fabs(tc) : 1.0);
-    if (fabs(tc - I->t) > tol)
-        GW_FAIL("%s: currentCommunicationPoint %.17g does not match the FMU time %.17g", fn, tc,
-                I->t);
-    t_end = tc + h;
-    if (I->stop_defined) {
-        double eps = 1e-9 * (fabs(I->t_stop) > 1.0 ? fabs(I->t_stop) : 1.0);
-        if (t_end > I->t_stop + eps)
-            GW_FAIL("%s: step to t=%.17g goes beyond stopTime %.17g", fn, t_end, I->t_stop);
-    }
-    rhs0 = I->n_rhs;
-    acc0 = I->n_accepted;
-    rej0 = I->n_rejected;
+    GW_TRY(gw_front_step_check(I, fn, tc, h, &t_end));
+    gw_front_counts_take(I, &c0);
     I->t = tc; /* the communication point, not the FMU's rounding of it */
 
     r = gw_advance(I, fn, t_end);
@@ -118,15 +99,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         gw_log(I, GW_DISCARD, GW_LOG_DISCARD,
                "%s: %s at t=%.17g: the simulation terminated inside the step to "
                "t=%.17g (fmi2Terminated = true, fmi2LastSuccessfulTime = %.17g)",
-               fn, gw_fmi2_stop_reason(I), I->t, t_end, I->t);
+               fn, gw_front_stop_reason(I), I->t, t_end, I->t);
     }
     status = gw_fmi2_status(r);
-    if (gw_log_enabled(I, GW_LOG_SOLVER))
-        gw_log(I, GW_OK, GW_LOG_SOLVER,
-               "%s t=%.17g h=%.17g -> t=%.17g solver=%s accepted=%llu rejected=%llu "
-               "rhs=%llu h_next=%g status=%s",
-               fn, tc, h, I->t, gw_solver_name(I->solver), I->n_accepted - acc0,
-               I->n_rejected - rej0, I->n_rhs - rhs0, I->h_adapt, gw_fmi2_status_name(status));
+    gw_front_step_log(I, fn, tc, h, &c0, gw_fmi2_status_name(status));
     F->last_dostep_status = status;
     GW_FRAME_END();
 }

@@ -7,10 +7,8 @@
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
 #else
 
-#include <math.h>
-#include <string.h>
-
 #include "gw_fmi2.h"
+#include "gw_front.h"
 
 /* the frames of this file's functions (GW_FRAME, gw_fmi2.h): interface, legal states */
 #define GW_IFACE_EnterEventMode fmi2ModelExchange
@@ -42,26 +40,10 @@ fmi2Status fmi2EnterEventMode(fmi2Component c) {
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
-    const gw_model *m;
-    int i;
-    gw_ev_result r = GW_EV_NONE;
+    gw_ev_result r;
     GW_FRAME(NewDiscreteStates);
-    m = I->m;
     if (!eventInfo) GW_FAIL("%s: eventInfo is NULL", fn);
-    if (m->ne > 0) {
-        if (gw_eval_evt(I, I->t, I->x, I->e_me) != 0)
-            GW_FAIL("%s: evaluation of the event indicators failed at t=%.17g", fn, I->t);
-        r = gw_event_update(I, I->e_me);
-    }
-    if (r == GW_EV_TERMINATE && !I->terminated) {
-        I->terminated = 1;
-        I->last_successful_time = I->t;
-        for (i = 0; i < m->ne; i++)
-            if (gw_event_ended(I, i) && !(I->e[i] > 0.0) && gw_log_enabled(I, GW_LOG_EVENTS))
-                gw_log(I, GW_OK, GW_LOG_EVENTS,
-                       "%s: event %s: terminateSimulation = true at t=%.17g", fn,
-                       m->event_names ? m->event_names[i] : "?", I->t);
-    }
+    GW_TRY(gw_me_event_update(I, fn, &r));
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = I->terminated ? fmi2True : fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
@@ -83,7 +65,7 @@ fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
         gw_log(I, GW_OK, GW_LOG_EVENTS,
                "%s: the simulation terminated at t=%.17g (%s); terminateSimulation stays "
                "true: call fmi2Terminate",
-               fn, I->last_successful_time, gw_fmi2_stop_reason(I));
+               fn, I->last_successful_time, gw_front_stop_reason(I));
     gw_fmi2_set_state(F, GW_ST_CONT_TIME_MODE);
     GW_FRAME_END();
 }
@@ -103,35 +85,18 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
     GW_FRAME(SetTime);
-    if (!isfinite(time)) GW_FAIL("%s: time %g is not finite", fn, time);
-    if (time != I->t) {
-        I->t = time;
-        gw_point_changed(I);
-    }
+    GW_TRY(gw_me_set_time(I, fn, time));
     GW_FRAME_END();
 }
 
 /* nx of a state-vector call must be the model's (in a frame: fn, I) */
 #define GW_CHECK_NX(arr, n)                                                                     \
-    do {                                                                                        \
-        if ((n) != (size_t)I->m->nx)                                                            \
-            GW_FAIL("%s: nx = %lu, the model has %d continuous states", fn, (unsigned long)(n), \
-                    I->m->nx);                                                                  \
-        if ((n) > 0 && !(arr)) GW_FAIL("%s: array is NULL", fn);                               \
-    } while (0)
+    GW_TRY(gw_me_check_size(I, fn, arr, n, I->m->nx, "nx", "continuous states"))
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
-    size_t i;
     GW_FRAME(SetContinuousStates);
     GW_CHECK_NX(x, nx);
-    for (i = 0; i < nx; i++)
-        if (!isfinite(x[i]))
-            GW_FAIL("%s: state %s = %g is not finite", fn,
-                    I->m->x_names ? I->m->x_names[i] : "?", x[i]);
-    if (nx > 0 && memcmp(I->x, x, nx * sizeof(double)) != 0) {
-        memcpy(I->x, x, nx * sizeof(double));
-        gw_point_changed(I);
-    }
+    GW_TRY(gw_me_set_states(I, fn, x, nx));
     GW_FRAME_END();
 }
 
@@ -146,37 +111,17 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
-    const gw_model *m;
-    int i;
     GW_FRAME(GetEventIndicators);
     gw_fmi2_allow_discard(F);
-    m = I->m;
-    if (ni != (size_t)m->ne)
-        GW_FAIL("%s: ni = %lu, the model has %d event indicators", fn, (unsigned long)ni,
-                m->ne);
-    if (ni == 0) goto END;
-    if (!eventIndicators) GW_FAIL("%s: array is NULL", fn);
-    if (I->in_setup && gw_eval_init(I, I->x) != 0)
-        GW_FAIL("%s: evaluation of the initial state failed", fn);
-    if (gw_eval_evt(I, I->t, I->x, I->e_me) != 0)
-        GW_FAIL("%s: evaluation of the event indicators failed at t=%.17g", fn, I->t);
-    for (i = 0; i < m->ne; i++)
-        if (!isfinite(I->e_me[i])) {
-            GW_LOG_NONFINITE(I, "%s: event indicator %s is not finite (%g) at t=%.17g", fn,
-                             m->event_names ? m->event_names[i] : "?", I->e_me[i], I->t);
-            status = gw_fmi2_status(I->nonfinite_status);
-            goto END;
-        }
-    memcpy(eventIndicators, I->e_me, ni * sizeof(double));
-    if (!I->in_setup) gw_event_observe(I, I->e_me); /* positive values arm their events */
+    GW_TRY(gw_me_check_size(I, fn, eventIndicators, ni, I->m->ne, "ni", "event indicators"));
+    GW_TRY(gw_me_event_indicators(I, fn, eventIndicators, ni));
     GW_FRAME_END();
 }
 
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
     GW_FRAME(GetContinuousStates);
     GW_CHECK_NX(x, nx);
-    if (I->in_setup && gw_eval_init(I, I->x) != 0)
-        GW_FAIL("%s: evaluation of the initial state failed", fn);
+    GW_TRY(gw_me_current_states(I, fn));
     /* the states are finite after initialisation (checked wherever they are set); the
      * initial state from init(s, p) may not be: bad start values, fmi2Error */
     GW_TRY(gw_fmi2_copy_finite(F, fn, x, I->x, nx, "state", I->m->x_names));
@@ -184,18 +129,9 @@ fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
 }
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
-    size_t i;
     GW_FRAME(GetNominalsOfContinuousStates);
     GW_CHECK_NX(x_nominal, nx);
-    if (nx == 0) goto END;
-    if (I->in_setup) { /* from the current parameters; 1 where not usable */
-        if (gw_eval_nom(I, x_nominal) != 0)
-            GW_FAIL("%s: evaluation of the nominals failed", fn);
-        for (i = 0; i < nx; i++)
-            if (!(x_nominal[i] > 0.0) || !isfinite(x_nominal[i])) x_nominal[i] = 1.0;
-    } else {
-        memcpy(x_nominal, I->nominal, nx * sizeof(double));
-    }
+    GW_TRY(gw_me_nominals(I, fn, x_nominal, nx));
     GW_FRAME_END();
 }
 

@@ -1,8 +1,8 @@
 /*
  * gw_fmi2_state.c -- fmi2Get/Set/FreeFMUstate and fmi2(De)SerializeFMUstate.  An fmi2FMUstate
- * is one blob holding the core's serialised state (gw_state.c, layout there) with the FMI
- * state and the last fmi2DoStep status as the front end's two ints, so get/set and
- * (de)serialise share one code path.
+ * is one blob (gw_state_blob.c) holding the core's serialised state (gw_state.c, layout
+ * there) with the FMI state and the last fmi2DoStep status as the front end's two ints, so
+ * get/set and (de)serialise share one code path.
  *
  * The fmi state may also be a Model Exchange one (EventMode, ContinuousTimeMode); a state of
  * one interface's own modes is refused by an instance of the other interface (the modes both
@@ -19,8 +19,6 @@
 #ifndef GW_UNITY_BUILD
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
 #else
-
-#include <string.h>
 
 #include "gw_fmi2.h"
 
@@ -41,11 +39,6 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #define GW_MASK_SerializeFMUstate GW_MASK_FMUstate
 #define GW_MASK_DeSerializeFMUstate GW_MASK_FMUstate
 
-typedef struct {
-    size_t size;
-    unsigned char data[]; /* size bytes */
-} gw_blob;
-
 static int gw_fmi2_valid_state(int s) {
     return s == GW_ST_INSTANTIATED || s == GW_ST_INIT_MODE || s == GW_ST_STEP_COMPLETE ||
            s == GW_ST_STEP_FAILED || s == GW_ST_TERMINATED || s == GW_ST_ERROR ||
@@ -55,14 +48,13 @@ static int gw_fmi2_valid_state(int s) {
 #define GW_FRONT_STATUS_MASK 0xF
 #define GW_FRONT_INITIALIZED 0x10
 
-/* 1 if the core accepts the blob and its front ints are valid for this instance; else the
- * reason is logged */
-static int gw_fmi2_check_state(gw_fmu *F, const char *fn, const unsigned char *buf, size_t size) {
+/* The front ints of a state the core accepted, for this instance (gw_blob_front_check): 1
+ * and *facts, or 0 with the reason logged. */
+static int gw_fmi2_check_front(void *front_end, const char *fn, const int front[2],
+                               gw_state_facts *facts) {
+    gw_fmu *F = (gw_fmu *)front_end;
     gw_instance *I = F->I;
-    gw_state_facts facts;
-    int front[2], st, last;
-    if (!gw_state_check(I, fn, buf, size)) return 0;
-    gw_state_front(I, buf, front);
+    int st, last;
     st = front[0];
     last = front[1] & GW_FRONT_STATUS_MASK;
     if (!gw_fmi2_valid_state(st)) {
@@ -80,27 +72,27 @@ static int gw_fmi2_check_state(gw_fmu *F, const char *fn, const unsigned char *b
                    gw_fmi2_is_me(F) ? "Model Exchange" : "Co-Simulation");
         return 0;
     }
-    facts.initialised = (front[1] & GW_FRONT_INITIALIZED) != 0;
-    facts.time_free = gw_fmi2_is_me(F);
-    facts.terminated = st == GW_ST_STEP_FAILED;
+    facts->initialised = (front[1] & GW_FRONT_INITIALIZED) != 0;
+    facts->time_free = gw_fmi2_is_me(F);
+    facts->terminated = st == GW_ST_STEP_FAILED;
     /* the states before fmi2ExitInitializationMode succeeded, and those only it leads to;
      * Error may follow either */
-    if (st != GW_ST_ERROR && facts.initialised != ((st & GW_ST_BEFORE_INIT_END) == 0)) {
+    if (st != GW_ST_ERROR && facts->initialised != ((st & GW_ST_BEFORE_INIT_END) == 0)) {
         GW_LOG_ERR(I, "%s: FMU state holds instance state %s %s an initialisation", fn,
-                   gw_fmi2_state_name(st), facts.initialised ? "after" : "without");
+                   gw_fmi2_state_name(st), facts->initialised ? "after" : "without");
         return 0;
     }
     /* fmi2DoStep's status: fmi2OK until the first step, fmi2Discard in StepFailed */
-    if ((!facts.initialised && last != fmi2OK) ||
+    if ((!facts->initialised && last != fmi2OK) ||
         (st == GW_ST_STEP_FAILED && last != fmi2Discard)) {
         GW_LOG_ERR(I, "%s: FMU state holds last fmi2DoStep status %d in instance state %s", fn,
                    last, gw_fmi2_state_name(st));
         return 0;
     }
-    return gw_state_check_run(I, fn, buf, &facts);
+    return 1;
 }
 
-/* Apply a state that gw_fmi2_check_state accepted. */
+/* Apply a state that gw_blob_check accepted. */
 static void gw_fmi2_apply_state(gw_fmu *F, const unsigned char *buf) {
     gw_instance *I = F->I;
     int front[2];
@@ -111,36 +103,13 @@ static void gw_fmi2_apply_state(gw_fmu *F, const unsigned char *buf) {
     gw_state_apply(I, buf);
 }
 
-/* The blob *FMUstate if it has the right size, else a new one (the old one freed). */
-static gw_blob *gw_fmi2_blob(gw_instance *I, const char *fn, fmi2FMUstate *FMUstate, size_t size) {
-    gw_blob *b = (gw_blob *)*FMUstate;
-    if (b && b->size != size) {
-        gw_free(I, b);
-        b = NULL;
-        *FMUstate = NULL;
-    }
-    if (!b) {
-        b = (gw_blob *)gw_alloc(I, 1, sizeof(gw_blob) + size);
-        if (b) b->size = size;
-    }
-    if (!b) GW_LOG_ERR(I, "%s: out of memory", fn);
-    return b;
-}
-
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    gw_blob *b;
     int front[2];
     GW_FRAME(GetFMUstate);
     if (!FMUstate) GW_FAIL("%s: FMUstate is NULL", fn);
-    b = gw_fmi2_blob(I, fn, FMUstate, gw_state_size(I));
-    if (!b) {
-        status = fmi2Error;
-        goto END;
-    }
     front[0] = F->state;
     front[1] = (int)F->last_dostep_status | (F->initialized ? GW_FRONT_INITIALIZED : 0);
-    gw_state_write(I, front, b->data);
-    *FMUstate = (fmi2FMUstate)b;
+    GW_TRY(gw_blob_take(I, fn, FMUstate, front));
     GW_FRAME_END();
 }
 
@@ -148,7 +117,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     const gw_blob *b = (const gw_blob *)FMUstate;
     GW_FRAME(SetFMUstate);
     if (!b) GW_FAIL("%s: FMUstate is NULL", fn);
-    if (gw_fmi2_check_state(F, fn, b->data, b->size))
+    if (gw_blob_check(I, fn, b->data, b->size, gw_fmi2_check_front, F))
         gw_fmi2_apply_state(F, b->data);
     else
         status = fmi2Error;
@@ -157,10 +126,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     GW_FRAME(FreeFMUstate);
-    if (FMUstate && *FMUstate) {
-        gw_free(I, *FMUstate);
-        *FMUstate = NULL;
-    }
+    gw_blob_free(I, FMUstate);
     GW_FRAME_END();
 }
 
@@ -178,29 +144,20 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
     GW_FRAME(SerializeFMUstate);
     if (!b || !serializedState)
         GW_FAIL("%s: FMUstate or serializedState is NULL", fn);
-    if (size < b->size)
-        GW_FAIL("%s: buffer of %lu bytes, %lu needed", fn, (unsigned long)size,
-                (unsigned long)b->size);
-    memcpy(serializedState, b->data, b->size);
+    GW_TRY(gw_blob_serialize(I, fn, b, (unsigned char *)serializedState, size));
     GW_FRAME_END();
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate) {
-    gw_blob *b;
     GW_FRAME(DeSerializeFMUstate);
     if (!FMUstate) GW_FAIL("%s: FMUstate is NULL", fn);
-    if (!gw_fmi2_check_state(F, fn, (const unsigned char *)serializedState, size)) {
+    if (!gw_blob_check(I, fn, (const unsigned char *)serializedState, size,
+                       gw_fmi2_check_front, F)) {
         status = fmi2Error;
         goto END;
     }
-    b = gw_fmi2_blob(I, fn, FMUstate, size);
-    if (!b) {
-        status = fmi2Error;
-        goto END;
-    }
-    memcpy(b->data, serializedState, size);
-    *FMUstate = (fmi2FMUstate)b;
+    GW_TRY(gw_blob_load(I, fn, (const unsigned char *)serializedState, size, FMUstate));
     GW_FRAME_END();
 }
 

@@ -10,6 +10,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include <math.h>
 
 #include "gw_fmi2.h"
+#include "gw_front.h"
 
 /* the frames of this file's functions (GW_FRAME, gw_fmi2.h): interface, legal states
  * (GW_MASK_Set, GW_MASK_SetDiscrete: gw_fmi2.h) */
@@ -60,56 +61,21 @@ static const gw_variable *gw_fmi2_lookup(gw_instance *I, const char *fn, fmi2Val
     return v;
 }
 
-static int gw_fmi2_needs_derivatives(const gw_instance *I, const fmi2ValueReference vr[],
-                                     size_t nvr) {
+/* what reading the variables needs first (gw_front_needs: GW_NEED_*) */
+static int gw_fmi2_needs(const gw_instance *I, const fmi2ValueReference vr[], size_t nvr) {
+    int need = 0;
     size_t k;
-    for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_variable_find(I->m, vr[k]);
-        if (v && v->kind == GW_VAR_DERIVATIVE) return 1;
-    }
-    return 0;
-}
-
-static int gw_fmi2_needs_outputs(const gw_instance *I, const fmi2ValueReference vr[],
-                                 size_t nvr) {
-    size_t k;
-    for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_variable_find(I->m, vr[k]);
-        if (!v) continue;
-        if (v->kind == GW_VAR_OUTPUT) return 1;
-        if (v->kind == GW_VAR_START && v->out_index >= 0 && !I->in_setup) return 1;
-        if (v->kind == GW_VAR_STATE && I->in_setup) return 1; /* x = init(s, p) */
-    }
-    return 0;
+    for (k = 0; k < nvr; k++) need |= gw_front_needs(I, gw_variable_find(I->m, vr[k]));
+    return need;
 }
 
 /* Check that v may be set now; the value is already known to be valid. */
 static int gw_fmi2_settable(gw_fmu *F, const char *fn, const gw_variable *v) {
-    gw_instance *I = F->I;
-    int ok;
-    switch (v->kind) {
-    case GW_VAR_PARAM: /* tunable: in Model Exchange only in Event Mode, not in CT Mode */
-        ok = v->tunable ? (F->state & GW_MASK_Set & ~GW_ST_CONT_TIME_MODE) != 0 : I->in_setup;
-        break;
-    case GW_VAR_STATE:
-        GW_LOG_ERR(I, "%s: variable %s (vr=%u) is a continuous state and cannot be set%s", fn,
-                   v->name, v->vr, gw_fmi2_is_me(F) ? " (use fmi2SetContinuousStates)" : "");
-        return 0;
-    case GW_VAR_DERIVATIVE:
-        GW_LOG_ERR(I, "%s: variable %s (vr=%u) is a state derivative and cannot be set", fn,
-                   v->name, v->vr);
-        return 0;
-    case GW_VAR_START:
-    case GW_VAR_SETTING: ok = I->in_setup; break;
-    case GW_VAR_INPUT: ok = (F->state & GW_MASK_Set) != 0; break;
-    default:
-        GW_LOG_ERR(I, "%s: variable %s (vr=%u) is read-only", fn, v->name, v->vr);
-        return 0;
-    }
-    if (!ok)
-        GW_LOG_ERR(I, "%s: variable %s (vr=%u) cannot be set in state %s", fn, v->name, v->vr,
-                   gw_fmi2_state_name(F->state));
-    return ok;
+    /* tunable parameters: in Model Exchange only in Event Mode, not in CT Mode */
+    return gw_front_settable(F->I, fn, v, (F->state & GW_MASK_Set) != 0,
+                             (F->state & GW_MASK_Set & ~GW_ST_CONT_TIME_MODE) != 0,
+                             gw_fmi2_state_name(F->state),
+                             gw_fmi2_is_me(F) ? " (use fmi2SetContinuousStates)" : "");
 }
 
 /* (in a frame: fn, I) */
@@ -122,11 +88,14 @@ static int gw_fmi2_settable(gw_fmu *F, const char *fn, const gw_variable *v) {
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[]) {
     size_t k;
+    int need;
     GW_FRAME(GetReal);
     gw_fmi2_allow_discard(F);
     GW_CHECK_ARRAYS(vr, nvr, value);
-    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, fn));
-    if (gw_fmi2_needs_derivatives(I, vr, nvr)) GW_TRY(gw_update_derivatives(I, fn));
+    need = gw_fmi2_needs(I, vr, nvr);
+    if (need & GW_NEED_OUTPUTS) GW_TRY(gw_update_outputs(I, fn));
+    if (need & GW_NEED_DERIVATIVES) GW_TRY(gw_update_derivatives(I, fn));
+    if (need & GW_NEED_INDICATORS) GW_TRY(gw_front_indicators(I, fn));
     /* every reference and value checked before anything is written: the caller's array
      * never receives a non-finite value, nor a partial answer */
     for (k = 0; k < nvr; k++) {
@@ -136,13 +105,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
             status = fmi2Error;
             goto END;
         }
-        d = gw_value_get(I, v);
-        if (!isfinite(d)) {
-            GW_LOG_NONFINITE(I, "%s: variable %s (vr=%u) is not finite (%g) at t=%.17g; "
-                             "nothing returned", fn, v->name, v->vr, d, I->t);
-            status = gw_fmi2_status(I->nonfinite_status);
-            goto END;
-        }
+        GW_TRY(gw_front_get_finite(I, fn, v, &d));
     }
     for (k = 0; k < nvr; k++) value[k] = gw_value_get(I, gw_variable_find(I->m, vr[k]));
     GW_FRAME_END();
@@ -153,7 +116,7 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     size_t k;
     GW_FRAME(GetInteger);
     GW_CHECK_ARRAYS(vr, nvr, value);
-    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, fn));
+    if (gw_fmi2_needs(I, vr, nvr) & GW_NEED_OUTPUTS) GW_TRY(gw_update_outputs(I, fn));
     for (k = 0; k < nvr; k++) {
         const gw_variable *v = gw_fmi2_lookup(I, fn, vr[k], GW_INTEGER);
         double d;
@@ -172,7 +135,7 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
     size_t k;
     GW_FRAME(GetBoolean);
     GW_CHECK_ARRAYS(vr, nvr, value);
-    if (gw_fmi2_needs_outputs(I, vr, nvr)) GW_TRY(gw_update_outputs(I, fn));
+    if (gw_fmi2_needs(I, vr, nvr) & GW_NEED_OUTPUTS) GW_TRY(gw_update_outputs(I, fn));
     for (k = 0; k < nvr; k++) {
         const gw_variable *v = gw_fmi2_lookup(I, fn, vr[k], GW_BOOLEAN);
         if (!v) {

@@ -26,10 +26,17 @@
 /* the simulation core */
 #include "gw_core.c"
 
+/* what the FMI 2.0 and FMI 3.0 layers share */
+#include "gw_front.c"
+#include "gw_me.c"
+#include "gw_state_blob.c"
+
 /* the FMI 2.0 layer */
 #include "gw_fmi2_common.c"
 #include "gw_fmi2_variables.c"
 #include "gw_fmi2_cs.c"
 #include "gw_fmi2_me.c"
+/* the partial derivatives of gw_fmi2_dirder.c, interface-neutral */
+#include "gw_partials.c"
 #include "gw_fmi2_dirder.c"
 #include "gw_fmi2_state.c"

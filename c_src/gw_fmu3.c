@@ -25,11 +25,18 @@
 /* the simulation core */
 #include "gw_core.c"
 
+/* what the FMI 2.0 and FMI 3.0 layers share */
+#include "gw_front.c"
+#include "gw_me.c"
+#include "gw_state_blob.c"
+
 /* the FMI 3.0 layer */
 #include "gw_fmi3_common.c"
 #include "gw_fmi3_variables.c"
 #include "gw_fmi3_cs.c"
 #include "gw_fmi3_me.c"
+/* the partial derivatives of gw_fmi3_dirder.c, interface-neutral */
+#include "gw_partials.c"
 #include "gw_fmi3_dirder.c"
 #include "gw_fmi3_state.c"
 #include "gw_fmi3_absent.c"

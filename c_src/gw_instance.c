@@ -210,6 +210,8 @@ GW_API void gw_instance_reset(gw_instance *I) {
     I->tol_defined = 0;
     I->tolerance = 0.0;
     I->t = 0.0;
+    I->update_pending = 0;
+    I->stopped_at_update = 0;
     for (i = 0; i < m->ns; i++) I->s[i] = m->s_start ? m->s_start[i] : 0.0;
     for (i = 0; i < m->nu; i++) I->u[i] = m->u_start ? m->u_start[i] : 0.0;
     for (i = 0; i < m->np; i++) I->p[i] = m->p_start ? m->p_start[i] : 0.0;

@@ -56,6 +56,15 @@ struct gw_instance {
                          part of gw_state's blob */
     int terminated;
     double last_successful_time;
+    /* front end: what gw_advance does at a located update event (GW_EVENT_UPDATE, a mode
+     * switch): GW_STOP_NEVER integrates through it (the default); GW_STOP_AFTER_UPDATE stops
+     * at its time with the updated state; GW_STOP_BEFORE_UPDATE stops there with the state
+     * before the update, which stays pending (update_pending: the instant's events as located,
+     * in ev_fired and e) until gw_event_update applies it.  stopped_at_update: the last
+     * gw_advance stopped so (I->t is the event's time, before the t_end asked for). */
+    int stop_at_update;
+    int update_pending;
+    int stopped_at_update;
 
     /* caches */
     int y_valid;    /* y == out(t, x, u, p) */
@@ -186,8 +195,12 @@ GW_INTERNAL void gw_update_atol_eff(gw_instance *I);
 typedef enum {
     GW_INT_OK = 0,
     GW_INT_TERMINATED = 1, /* a terminating event was located; state at the event */
-    GW_INT_ERROR = 2       /* logged; caller restores the state */
+    GW_INT_ERROR = 2,      /* logged; caller restores the state */
+    GW_INT_EVENT = 3       /* stopped at an update event (I->stop_at_update); state at the event */
 } gw_int_result;
+
+/* I->stop_at_update */
+enum { GW_STOP_NEVER = 0, GW_STOP_AFTER_UPDATE = 1, GW_STOP_BEFORE_UPDATE = 2 };
 
 /* Integrate from I->t exactly to t_end, handling events. */
 GW_INTERNAL gw_int_result gw_integrate(gw_instance *I, double t_end);

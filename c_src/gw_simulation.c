@@ -348,6 +348,7 @@ GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end) {
     memcpy(I->xc_bak, I->xc, nxb);
     I->n_call_steps = 0;
     I->t_call = t0;
+    I->stopped_at_update = 0;
     I->edot_valid = 0; /* a front end may have changed the state since */
     if (m->ne > 0) {
         memcpy(I->e_bak, I->e, (size_t)m->ne * sizeof(double));
@@ -359,8 +360,10 @@ GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end) {
     if (r != GW_INT_ERROR && gw_update_outputs(I, fn) != GW_OK) r = GW_INT_ERROR;
     if (r == GW_INT_ERROR) {
         gw_restore_step_start(I, t0, h0, err0);
+        I->update_pending = 0;
         return GW_ERROR;
     }
+    I->stopped_at_update = r == GW_INT_EVENT;
     memcpy(I->xc_x, I->x, nxb);
     if (r == GW_INT_TERMINATED) I->terminated = 1;
     I->last_successful_time = I->t;

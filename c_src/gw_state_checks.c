@@ -240,7 +240,8 @@ static int gw_state_indicators(gw_instance *I, const char *fn, const unsigned ch
  * exactly when a terminating event fired.  The indicator is both the stored one (the one at
  * the last event update or, once positive, seen since: gw_event_update, gw_event_observe) and,
  * unless the front end lets its caller set the state (Model Exchange: fmi2SetContinuousStates
- * takes any finite state, past a crossing until the next event update), the one recomputed
+ * takes any finite state, past a crossing until the next event update) or stopped at a
+ * crossing whose update is pending, the one recomputed
  * from the state's own t, x, u, p (gw_state_indicators): a step ends at a crossing, so a state
  * past it with the event not fired (a fallen wheel not fallen) is refused.  1 or reason
  * logged. */
@@ -252,7 +253,7 @@ static int gw_state_check_events(gw_instance *I, const char *fn, const unsigned 
     double *e_now = NULL;
     int i, ended = 0, ok = 1;
     if (!facts->initialised) return 1;
-    if (!facts->time_free && m->ne > 0) {
+    if (!facts->time_free && !facts->pending_event && m->ne > 0) {
         e_now = (double *)gw_alloc(I, (size_t)m->ne, sizeof(double));
         if (!e_now) {
             GW_LOG_ERR(I, "%s: out of memory", fn);

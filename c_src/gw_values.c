@@ -61,6 +61,7 @@ GW_API double gw_value_get(const gw_instance *I, const gw_variable *v) {
     case GW_VAR_EVENT: return I->flags[v->index] ? 1.0 : 0.0;
     case GW_VAR_STATE: return I->x[v->index];
     case GW_VAR_DERIVATIVE: return I->xdot[v->index];
+    case GW_VAR_INDICATOR: return I->e_me[v->index]; /* as the front end last read them */
     default: return 0.0;
     }
 }

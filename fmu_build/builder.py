@@ -14,21 +14,25 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
-from gyrowheel.fmu_build.compiler import (STANDARD, UNITY_SOURCE, WARNINGS, compile_shared, fmi_headers_dir,
+from gyrowheel.fmu_build.compiler import (STANDARD, WARNINGS, compile_shared, fmi_headers_dir,
                                           optimisation_for)
 from gyrowheel.fmu_build import platforms as _platforms
 from gyrowheel.fmu_build.documentation import write_index_html
 from gyrowheel.fmu_build.model_description import write_model_description
-from gyrowheel.fmu_build.runtime import runtime_sources
+from gyrowheel.fmu_build.model_description3 import write_build_description, write_model_description3
+from gyrowheel.fmu_build.runtime import UNITY_SOURCES, runtime_sources
 from gyrowheel.errors import ArgumentError
 from gyrowheel.output_files import check_output_file, replaced_atomically
 from gyrowheel.scratch import new_directory
-from gyrowheel.fmu_build.scene import Experiment, Scene, check_scene
+from gyrowheel.fmu_build.scene import Experiment, Scene, check_scene, fmi_problem
 from gyrowheel.fmu_build.variables import build_table
 from gyrowheel.model.build import build_model
 from gyrowheel.model.spec import ModelSpec
 
-FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+# the headers of each FMI version an FMU's sources/ carries (fmpy's copies: compiler.fmi_headers_dir)
+FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
+               3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
+BUILD_DESCRIPTION = "buildDescription.xml"  # an FMI 3 FMU's list of sources (FMI 3.0.2, section 2.5.1.2)
 FMU_SUFFIX = ".fmu"  # an FMU's file name extension (FMI 2.0.4, section 2.1: "*.fmu")
 
 
@@ -45,6 +49,7 @@ class BuildResult:
     identifier  the FMU's modelIdentifier (the scene's name): its binary and C prefix
     platforms   the platforms it carries binaries for, as FMI 3.0 platform tuples
                 (fmu_build/platforms.py), e.g. ('x86_64-linux', 'aarch64-linux')
+    fmi         its FMI version: 2 (FMI 2.0.4) or 3 (FMI 3.0.2); left out of repr()
 
     A BuildResult is os.PathLike: it stands for its FMU wherever a path of one does
     (gyrowheel.simulate, info, sweep, Ensemble). repr() shows the FMU, its identifier and
@@ -56,6 +61,7 @@ class BuildResult:
     sources: Path | None = field(repr=False)  # directory holding every C file of the FMU, if kept
     identifier: str
     platforms: tuple[str, ...] = ()  # the platforms (FMI 3.0 tuples) whose binaries it carries
+    fmi: int = field(default=2, repr=False)  # its FMI version, 2 or 3
 
     def __fspath__(self) -> str:
         """The FMU's path: a BuildResult serves wherever a path of its FMU does (os.PathLike)."""
@@ -106,13 +112,22 @@ def check_output(output: str | Path, scene_file: str | Path | None = None) -> Pa
     return output
 
 
+def check_fmi(fmi) -> int:
+    """The FMI version `fmi` asks for: 2 or 3 (an int). Raises ArgumentError naming `fmi`,
+    e.g. `fmi: must be 2 or 3 (the FMI version), got 4`."""
+    problem = fmi_problem(fmi)
+    if problem is not None:
+        raise ArgumentError(f"fmi: {problem}", argument="fmi")
+    return int(fmi)
+
+
 def _guid(*parts: str) -> str:
     digest = hashlib.sha256("\0".join(parts).encode()).digest()
     return "{" + str(uuid.UUID(bytes=digest[:16], version=5)) + "}"
 
 
 def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = None,
-              taylor: bool = False, platforms=None) -> BuildResult:
+              taylor: bool = False, platforms=None, fmi: int | None = None) -> BuildResult:
     """Build the FMU of `scene` at `output`: the wheel's ModelSpec through build_spec_fmu.
 
     scene: a Scene, checked first by the scene file's rules (check_scene); output: the .fmu to
@@ -122,38 +137,46 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
     solver is not taylor already; platforms: the platforms to carry binaries for
     (fmu_build/platforms.py parse_platforms: "all", "host", a comma-separated string or a list
     of FMI 3.0 platform tuples), overriding the scene's [build] platforms; None: the scene's
-    [build] platforms, and without one the host only.
+    [build] platforms, and without one the host only; fmi: the FMI version, 2 or 3, overriding
+    the scene's [build] fmi; None: the scene's (default 2).
     Returns the BuildResult. Raises SceneError (the scene, naming the field), ArgumentError
-    (output; platforms: an unknown platform, the valid ones listed), and what build_spec_fmu
-    raises.
+    (output; platforms: an unknown platform, the valid ones listed; fmi: not 2 or 3), and what
+    build_spec_fmu raises.
     """
     scene = check_scene(scene)
+    version = scene.fmi if fmi is None else check_fmi(fmi)
     output = check_output(output, scene.file)
     wanted = _wanted_platforms(scene.platforms if platforms is None else platforms)  # before the model
     return build_spec_fmu(_spec(scene), output, scene.experiment, build_dir=build_dir,
-                          keep=scene.outputs, source=scene.source, taylor=taylor, platforms=wanted)
+                          keep=scene.outputs, source=scene.source, taylor=taylor, platforms=wanted, fmi=version)
 
 
 def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment | None = None,
                    build_dir: str | Path | None = None, keep: list[str] | None = None,
-                   source: str = "", taylor: bool = False, platforms=None) -> BuildResult:
-    """Build the FMI 2.0 FMU of any ModelSpec (a wheel's, a controller's: model/system.py).
+                   source: str = "", taylor: bool = False, platforms=None, fmi: int = 2) -> BuildResult:
+    """Build the FMI 2.0 or 3.0 FMU of any ModelSpec (a wheel's, a controller's: model/system.py),
+    Co-Simulation and Model Exchange, its C sources included.
 
     experiment: DefaultExperiment and the solver settings' defaults (Experiment() if None);
     keep: the outputs to expose (None: all); source: text shipped in documentation/index.html
     (the scene file, the gains); taylor: generate the Taylor kernel of solver taylor and the
     ensemble path even if experiment.solver is not "taylor" (only those FMUs carry it);
     platforms: the platforms whose binaries the FMU carries (parse_platforms; None: the host
-    only): the host's compiled by the host's C compiler, the others by zig (write_binaries).
+    only): the host's compiled by the host's C compiler, the others by zig (write_binaries);
+    fmi: the FMI version, 2 (FMI 2.0.4: modelDescription.xml lists gw_fmu.c, binaries in
+    linux64, win64, darwin64, ...) or 3 (FMI 3.0.2: the event indicators as variables,
+    sources/buildDescription.xml lists gw_fmu3.c, binaries in platform-tuple folders); each
+    FMU carries its own version's layer and headers only (runtime_sources).
     Sources stay in build_dir if given (BuildResult.sources; None without build_dir).
-    Raises ArgumentError for an output that is no .fmu name (check_output) or an unknown
-    platform (naming `platforms`), ValueError for a bad table,
+    Raises ArgumentError for an output that is no .fmu name (check_output), an unknown
+    platform (naming `platforms`) or an fmi other than 2 and 3 (naming `fmi`), ValueError for a bad table,
     gyrowheel.taylor.graph.TaylorUnsupportedError (a ValueError) for a kernel the ode's
     operations do not allow, CompileError if a C compiler fails (a cross build: naming the
     platform and the compiler's first error), MissingExtraError when a platform other than the
     host's needs zig and ziglang is not installed (before anything is generated).
     """
     experiment = experiment or Experiment()
+    fmi = check_fmi(fmi)
     output = check_output(output)
     wanted = _wanted_platforms(platforms)
     tmp = None
@@ -166,32 +189,38 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         shutil.rmtree(root)
     src = root / "sources"
     try:
-        table = build_table(spec, experiment, keep)
+        table = build_table(spec, experiment, keep, fmi)
         identifier = spec.name
+        unity = UNITY_SOURCES[fmi]
         fns = generate_functions(spec, src, table)
         kernel = generate_taylor(fns, spec.name, src, wanted=taylor or experiment.solver == "taylor")
-        for f in runtime_sources():
+        for f in runtime_sources(fmi):
             if f.name in TAYLOR_ONLY and isinstance(kernel, str):
                 continue  # no kernel: nothing of solver taylor beyond the one-comment model file
             shutil.copy2(f, src / f.name)
-        for h in FMI_HEADERS:
+        for h in FMI_HEADERS[fmi]:
             shutil.copy2(fmi_headers_dir() / h, src / h)
         funcs_c = (src / f"{FUNCTION_FILE}.c").read_text()
         guid = _guid(funcs_c, repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]),
-                     repr(experiment), identifier)
-        write_model_desc(spec, table, experiment, identifier, guid, fns, src, kernel)
-        # one translation unit: only fmi2* symbols are global, whatever flags an importer uses
-        write_binaries(src / UNITY_SOURCE, [src], root / "binaries", identifier, wanted)
-        xml = write_model_description(spec.name, experiment, table, identifier, guid, [UNITY_SOURCE], spec.description,
-                                      model_exchange=True, directional=True,
-                                      taylor=not isinstance(kernel, str))
+                     repr(experiment), identifier, *(["FMI 3.0"] if fmi == 3 else []))
+        write_model_desc(spec, table, experiment, identifier, guid, fns, src, kernel, unity=unity)
+        # one translation unit: only fmi2* (fmi3*) symbols are global, whatever flags an importer uses
+        write_binaries(src / unity, [src], root / "binaries", identifier, wanted, fmi)
+        has_kernel = not isinstance(kernel, str)
+        if fmi == 3:
+            xml = write_model_description3(spec.name, experiment, table, identifier, guid, spec.description,
+                                           taylor=has_kernel, reinit=any(e.action == "update" for e in spec.events))
+            (src / BUILD_DESCRIPTION).write_text(write_build_description(identifier, unity))
+        else:
+            xml = write_model_description(spec.name, experiment, table, identifier, guid, [unity], spec.description,
+                                          model_exchange=True, directional=True, taylor=has_kernel)
         (root / "modelDescription.xml").write_text(xml)
         (root / "documentation").mkdir(exist_ok=True)
         (root / "documentation" / "index.html").write_text(write_index_html(spec, experiment, table, identifier, guid,
-                                                                                   source))
+                                                                                   source, fmi))
         _zip(root, output)
         return BuildResult(fmu=output, spec=spec, sources=src if tmp is None else None, identifier=identifier,
-                           platforms=wanted)
+                           platforms=wanted, fmi=fmi)
     finally:
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
@@ -207,28 +236,30 @@ def _wanted_platforms(platforms) -> tuple[str, ...]:
 
 
 def write_binaries(source: Path, include_dirs: list[Path], binaries: Path, identifier: str,
-                   names: tuple[str, ...]) -> dict[str, Path]:
+                   names: tuple[str, ...], fmi: int = 2) -> dict[str, Path]:
     """Compile the unity source for each platform of `names` into
-    binaries/<folder>/<identifier><extension> (FMI 2.0.4, section 2.3: folders linux64, win64,
-    darwin64 for 64-bit x86, platform tuples for the others).
+    binaries/<folder>/<identifier><extension>: for fmi 2, FMI 2.0.4 section 2.3's folders
+    (linux64, win64, darwin64 for 64-bit x86, platform tuples for the others); for fmi 3, the
+    platform tuple for every platform (FMI 3.0.2, section 2.5.1.4.1: x86_64-linux, ...).
 
     The host's binary is built by the host's C compiler (compile_shared), the others by zig with
-    the same standard, warnings and optimisation, all at once. With both Mac platforms, darwin64
-    holds a universal binary of both slices (fmu_build/platforms.py). Returns {name: library}.
+    the same standard, warnings and optimisation, all at once. FMI 2 with both Mac platforms:
+    darwin64 holds a universal binary of both slices (fmu_build/platforms.py); FMI 3 keeps
+    them apart (x86_64-darwin, aarch64-darwin). Returns {name: library}.
     Raises CompileError (naming the platform for a cross build)."""
     host = _platforms.host_platform()
     libraries: dict[str, Path] = {}
     cross = []
     for name in names:
         p = host if name == host.name else _platforms.PLATFORMS[name]
-        libraries[name] = binaries / p.fmi2_dir / f"{identifier}{p.extension}"
+        libraries[name] = binaries / (p.fmi2_dir if fmi == 2 else p.fmi3_dir) / f"{identifier}{p.extension}"
         if name != host.name:
             cross.append(p)
     if host.name in names:
         compile_shared(source, include_dirs, libraries[host.name])
     flags = [*STANDARD, *optimisation_for(source.parent), *WARNINGS]
     _platforms.cross_compile_all(cross, source, include_dirs, [libraries[p.name] for p in cross], flags)
-    if all(n in names for n in _platforms.UNIVERSAL_DARWIN):
+    if fmi == 2 and all(n in names for n in _platforms.UNIVERSAL_DARWIN):
         intel, arm = (libraries[n] for n in _platforms.UNIVERSAL_DARWIN)
         thin = intel.with_name(intel.name + ".x86_64")
         intel.rename(thin)

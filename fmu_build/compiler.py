@@ -1,10 +1,11 @@
-"""Compile the FMU's C sources into binaries/linux64/<identifier>.so.
+"""Compile the FMU's C sources into binaries/<platform>/<identifier>.so (linux64 in FMI 2,
+x86_64-linux in FMI 3).
 
-The FMU is one translation unit (c_src/gw_fmu.c includes the generated model, the core and
-the FMI layer), so the build is a single compiler call with the flags a strict user would
-use: C99, -Wall -Wextra -Wpedantic -Werror, portable optimisation (no -march=native).  No
-flag hides symbols: every internal function is static, and only the fmi2* functions (default
-visibility through FMI2_Export) are exported.
+The FMU is one translation unit (c_src/gw_fmu.c, or gw_fmu3.c for FMI 3, includes the
+generated model, the core and the FMI layer), so the build is a single compiler call with the
+flags a strict user would use: C99, -Wall -Wextra -Wpedantic -Werror, portable optimisation
+(no -march=native).  No flag hides symbols: every internal function is static, and only the
+fmi2* (fmi3*) functions (default visibility through FMI2_Export, FMI3_Export) are exported.
 """
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from pathlib import Path
 import fmpy
 
 from gyrowheel.errors import GyrowheelError
+from gyrowheel.fmu_build.runtime import UNITY_SOURCES
 from gyrowheel.scratch import temporary_directory
 
 STANDARD = ["-std=c99"]
@@ -28,7 +30,7 @@ OPTIMISE = ["-O2", "-fno-math-errno"]
 # Past this size the FMU is compiled at -O1.
 LARGE_SOURCE_BYTES = 1_500_000
 OPTIMISE_LARGE = ["-O1", "-fno-math-errno"]
-UNITY_SOURCE = "gw_fmu.c"  # the FMU's only <SourceFiles> entry
+UNITY_SOURCE = UNITY_SOURCES[2]  # an FMI 2 FMU's only <SourceFiles> entry
 
 
 class CompileError(GyrowheelError, RuntimeError):
@@ -36,7 +38,7 @@ class CompileError(GyrowheelError, RuntimeError):
 
 
 def fmi_headers_dir() -> Path:
-    """FMI 2.0 headers shipped with fmpy, not a copy in the repository (docs/architecture.md)."""
+    """FMI 2.0 and 3.0 headers shipped with fmpy, not a copy in the repository (docs/architecture.md)."""
     return Path(fmpy.__file__).parent / "c-code"
 
 
@@ -64,7 +66,7 @@ def optimisation_for(source_dir: Path) -> list[str]:
 
 def compile_shared(source: Path, include_dirs: list[Path], output: Path,
                    extra_flags: list[str] | None = None) -> Path:
-    """Compile the unity source (gw_fmu.c) into the shared library `output`.
+    """Compile the unity source (gw_fmu.c, or gw_fmu3.c for FMI 3) into the shared library `output`.
 
     Raises CompileError with the compiler's output. The optimisation level is optimisation_for()
     the source's directory (the unity build includes the generated C beside it)."""

@@ -30,7 +30,7 @@ from pathlib import Path
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build import c_names
 from gyrowheel.fmu_build.builder import TAYLOR_ONLY, _guid, _spec
-from gyrowheel.fmu_build.runtime import EXPORT_DIR, runtime_sources
+from gyrowheel.fmu_build.runtime import EXPORT_DIR, fmi_version_of, runtime_sources
 from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
 from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
 from gyrowheel.fmu_build.platforms import PLATFORMS, Platform
@@ -95,12 +95,12 @@ ENSEMBLE_ONLY = frozenset(n for n in TAYLOR_ONLY if n.startswith("gw_ensemble"))
 
 
 def core_sources(kernel: bool) -> list[Path]:
-    """The simulation core <model>.c includes: every c_src file but the FMI 2.0 layer (gw_fmi2_*,
-    gw_fmu.c) and the ensemble library's (ENSEMBLE_ONLY); with kernel False (a scene without the
+    """The simulation core <model>.c includes: every c_src file but the FMI layers (gw_fmi2_*,
+    gw_fmu.c, gw_fmi3_*, gw_fmu3.c: runtime.fmi_version_of) and the ensemble library's (ENSEMBLE_ONLY); with kernel False (a scene without the
     Taylor kernel) none of solver taylor's either (builder.TAYLOR_ONLY), as its FMU."""
     leave = ENSEMBLE_ONLY | (frozenset() if kernel else TAYLOR_ONLY)
     return [f for f in runtime_sources()
-            if not f.name.startswith("gw_fmi2") and f.name != "gw_fmu.c" and f.name not in leave]
+            if fmi_version_of(f.name) is None and f.name not in leave]
 
 
 def api_table(spec: ModelSpec, table: list[Variable]) -> dict[str, list[Row]]:

@@ -94,47 +94,19 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
         for name in sources:
             ET.SubElement(files, "File", {"name": name})
 
-    used = sorted({u for v in table if (u := _unit_of(v))})
-    unknown = [u for u in used if u not in UNITS]
-    if unknown:
-        raise ValueError(f"unit {unknown[0]!r} has no definition in gyrowheel.fmu_build.model_description.UNITS")
-    units = ET.SubElement(root, "UnitDefinitions")
-    for name in used:
-        base, displays = UNITS[name]
-        unit = ET.SubElement(units, "Unit", {"name": name})
-        ET.SubElement(unit, "BaseUnit", {k: str(e) for k, e in base.items()})
-        for dname, factor in displays.items():
-            ET.SubElement(unit, "DisplayUnit", {"name": dname, "factor": _fmt(factor)})
+    write_units(root, {u for v in table if (u := _unit_of(v))})
 
     types = ET.SubElement(root, "TypeDefinitions")
     solver_type = ET.SubElement(types, "SimpleType", {"name": "Solver"})
     enum = ET.SubElement(solver_type, "Enumeration")
-    for name, value in SOLVERS.items():
-        if name != "taylor" or taylor:
-            ET.SubElement(enum, "Item", {"name": name, "value": str(value)})
+    for name, value in solver_items(taylor):
+        ET.SubElement(enum, "Item", {"name": name, "value": str(value)})
 
-    cats = ET.SubElement(root, "LogCategories")
-    for name, desc in LOG_CATEGORIES.items():
-        ET.SubElement(cats, "Category", {"name": name, "description": desc})
-
-    # The scene's tolerance: importers that forward DefaultExperiment's tolerance to
-    # fmi2SetupExperiment (PyFMI, OMSimulator, fmpy) get the scene's accuracy; without it they
-    # forward their own 1e-4. A rel_tol set explicitly still wins (docs/fmi.md, "Tolerances").
-    ET.SubElement(root, "DefaultExperiment", {
-        "startTime": _fmt(exp.start_time), "stopTime": _fmt(exp.stop_time),
-        "tolerance": _fmt(exp.rel_tol), "stepSize": _fmt(exp.output_interval),
-    })
+    write_log_categories_and_experiment(root, exp, LOG_CATEGORIES)
 
     mvs = ET.SubElement(root, "ModelVariables")
     for v in table:
-        attrs = {"name": v.name, "valueReference": str(v.vr)}
-        if v.quantity.description:
-            attrs["description"] = v.quantity.description
-        attrs["causality"] = v.causality
-        attrs["variability"] = v.variability
-        if v.initial:
-            attrs["initial"] = v.initial
-        sv = ET.SubElement(mvs, "ScalarVariable", attrs)
+        sv = ET.SubElement(mvs, "ScalarVariable", variable_attrs(v))
         type_attrs: dict[str, str] = {}
         if v.declared_type:
             type_attrs["declaredType"] = v.declared_type
@@ -145,13 +117,8 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
                 type_attrs["derivative"] = str(v.derivative_of)
             if v.quantity.display_unit:
                 type_attrs["displayUnit"] = v.quantity.display_unit
-        if v.initial in ("exact", "approx") or v.causality == "input":
-            if v.type == "Real":
-                type_attrs["start"] = _fmt(v.start)
-            elif v.type == "Boolean":
-                type_attrs["start"] = "true" if v.start else "false"
-            else:
-                type_attrs["start"] = str(int(v.start))
+        if (start := start_text(v)) is not None:
+            type_attrs["start"] = start
         ET.SubElement(sv, v.type, type_attrs)
 
     ms = ET.SubElement(root, "ModelStructure")
@@ -173,6 +140,69 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
         ms.remove(initial)
     ET.indent(root, "  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def variable_attrs(v: Variable) -> dict[str, str]:
+    """The attributes every variable has in FMI 2.0.4 (ScalarVariable, section 2.2.7) and FMI
+    3.0.2 (section 2.4.7): name, valueReference, description, causality, variability, initial."""
+    attrs = {"name": v.name, "valueReference": str(v.vr)}
+    if v.quantity.description:
+        attrs["description"] = v.quantity.description
+    attrs["causality"] = v.causality
+    attrs["variability"] = v.variability
+    if v.initial:
+        attrs["initial"] = v.initial
+    return attrs
+
+
+def solver_items(taylor: bool) -> list[tuple[str, int]]:
+    """The Solver enumeration's items (name, value): every solver, taylor only with the kernel."""
+    return [(name, value) for name, value in SOLVERS.items() if name != "taylor" or taylor]
+
+
+def start_text(v: Variable) -> str | None:
+    """The start attribute of a variable that has one (initial exact or approx, or an input:
+    FMI 2.0.4 section 2.2.7, FMI 3.0.2 section 2.4.7.5), else None."""
+    if v.initial not in ("exact", "approx") and v.causality != "input":
+        return None
+    if v.type == "Real":
+        return _fmt(v.start)
+    if v.type == "Boolean":
+        return "true" if v.start else "false"
+    return str(int(v.start))
+
+
+def write_units(root: ET.Element, used: set[str]) -> None:
+    """<UnitDefinitions> of the units `used` (by name, sorted), from UNITS: the same element in
+    FMI 2.0.4 (section 2.2.2) and FMI 3.0.2 (section 2.4.3). Raises ValueError for a unit UNITS
+    does not define."""
+    unknown = sorted(u for u in used if u not in UNITS)
+    if unknown:
+        raise ValueError(f"unit {unknown[0]!r} has no definition in gyrowheel.fmu_build.model_description.UNITS")
+    units = ET.SubElement(root, "UnitDefinitions")
+    for name in sorted(used):
+        base, displays = UNITS[name]
+        unit = ET.SubElement(units, "Unit", {"name": name})
+        ET.SubElement(unit, "BaseUnit", {k: str(e) for k, e in base.items()})
+        for dname, factor in displays.items():
+            ET.SubElement(unit, "DisplayUnit", {"name": dname, "factor": _fmt(factor)})
+
+
+def write_log_categories_and_experiment(root: ET.Element, exp: Experiment, categories: dict[str, str]) -> None:
+    """<LogCategories> ({name: description}) and <DefaultExperiment>: the same elements in FMI
+    2.0.4 (sections 2.2.4, 2.2.5) and FMI 3.0.2 (sections 2.4.5, 2.4.6)."""
+    cats = ET.SubElement(root, "LogCategories")
+    for name, desc in categories.items():
+        ET.SubElement(cats, "Category", {"name": name, "description": desc})
+
+    # The scene's tolerance: importers that forward DefaultExperiment's tolerance to
+    # fmi2SetupExperiment / fmi3EnterInitializationMode (PyFMI, OMSimulator, fmpy) get the
+    # scene's accuracy; without it they forward their own 1e-4. A rel_tol set explicitly still
+    # wins (docs/fmi.md, "Tolerances").
+    ET.SubElement(root, "DefaultExperiment", {
+        "startTime": _fmt(exp.start_time), "stopTime": _fmt(exp.stop_time),
+        "tolerance": _fmt(exp.rel_tol), "stepSize": _fmt(exp.output_interval),
+    })
 
 
 def _unknown_attrs(index: int, deps: tuple[int, ...] | None) -> dict[str, str]:

@@ -12,6 +12,8 @@ Scene objects they are read into (docs/scenes.md).
     [build]       platforms = "all", "host" or platform tuples (a list, or comma-separated): the
                   binaries the FMU carries (optional; default the host only; `gyrowheel build
                   --platforms` overrides it)
+                  fmi = 2 or 3: the FMI version of the FMU (optional; default 2; `gyrowheel
+                  build --fmi` overrides it)
 
 One set of rules serves both ways in: parse_scene reads a file's tables through it, and
 check_scene puts a Scene made or changed in Python (dataclasses.replace, attribute assignment)
@@ -121,6 +123,9 @@ class Scene:
                  (gyrowheel.fmu_build.platforms: x86_64-linux, aarch64-linux, x86_64-windows,
                  ...); None (the default): the host only; a `platforms` argument of build_fmu /
                  gyrowheel.build overrides it
+    fmi          the FMI version of the FMU ([build] fmi): 2 (the default: FMI 2.0.4) or 3
+                 (FMI 3.0.2, Co-Simulation and Model Exchange from the same model); an `fmi`
+                 argument of build_fmu / gyrowheel.build overrides it
     source       the scene's TOML text, shipped in the FMU's documentation/index.html
                  ("Built from"); check_scene writes it anew when it no longer describes the
                  scene (a Scene changed in Python, or made there)
@@ -137,6 +142,7 @@ class Scene:
     experiment: Experiment = field(default_factory=Experiment)
     outputs: list[str] | None = None
     platforms: str | list[str] | None = None
+    fmi: int = 2
     source: str = ""  # the TOML text, shipped in the FMU's documentation
     file: Path | None = field(default=None, compare=False)  # where load_scene read it from
 
@@ -346,10 +352,31 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
             raise r.fail("outputs", "keep", "must be a list of output names")
         scene.outputs = list(keep)
     build = r.table(data, "build")
-    r.unknown("build", build, {"platforms"})
+    r.unknown("build", build, {"platforms", "fmi"})
     if "platforms" in build:
         scene.platforms = _platforms(r, build["platforms"])
+    if "fmi" in build:
+        scene.fmi = _fmi(r, build["fmi"])
     return scene
+
+
+FMI_VERSIONS = (2, 3)  # the FMI versions an FMU can be built for: 2.0.4 and 3.0.2
+
+
+def fmi_problem(value) -> str | None:
+    """Why `value` is no FMI version an FMU can be built for (FMI_VERSIONS: the integer 2 or
+    3), or None when it is one."""
+    if isinstance(value, bool) or value not in FMI_VERSIONS or not isinstance(value, numbers.Integral):
+        return f"must be 2 or 3 (the FMI version), got {value!r}"
+    return None
+
+
+def _fmi(r: _Reader, value) -> int:
+    """[build] fmi: 2 or 3, an integer (fmi_problem)."""
+    problem = fmi_problem(value)
+    if problem is not None:
+        raise r.fail("build", "fmi", problem)
+    return int(value)
 
 
 def _platforms(r: _Reader, value) -> str | list[str]:
@@ -406,7 +433,7 @@ def _tables(r: _Reader, scene: Scene) -> dict:
             "wheel": scene.wheel, "effects": scene.effects, "initial": scene.initial,
             "experiment": {f.name: getattr(scene.experiment, f.name) for f in dataclasses.fields(Experiment)},
             "outputs": {} if scene.outputs is None else {"keep": scene.outputs},
-            "build": {} if scene.platforms is None else {"platforms": scene.platforms}}
+            "build": {**({} if scene.platforms is None else {"platforms": scene.platforms}), "fmi": scene.fmi}}
 
 
 def _content(scene: Scene) -> tuple:
@@ -491,8 +518,10 @@ def scene_toml(scene: Scene) -> str:
     table("experiment", dataclasses.asdict(scene.experiment))
     if scene.outputs is not None:
         table("outputs", {"keep": scene.outputs})
-    if scene.platforms is not None:
-        table("build", {"platforms": scene.platforms})
+    build = {**({} if scene.platforms is None else {"platforms": scene.platforms}),
+             **({} if scene.fmi == 2 else {"fmi": scene.fmi})}
+    if build:
+        table("build", build)
     return "\n".join(lines) + "\n"
 
 

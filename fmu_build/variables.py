@@ -19,7 +19,7 @@ REQUIRED_OUTPUTS = ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot",
 # C enums of c_src/gw_model.h
 KIND = {"param": "GW_VAR_PARAM", "start": "GW_VAR_START", "input": "GW_VAR_INPUT",
         "output": "GW_VAR_OUTPUT", "setting": "GW_VAR_SETTING", "event": "GW_VAR_EVENT",
-        "state": "GW_VAR_STATE", "derivative": "GW_VAR_DERIVATIVE"}
+        "state": "GW_VAR_STATE", "derivative": "GW_VAR_DERIVATIVE", "indicator": "GW_VAR_INDICATOR"}
 TYPE = {"Real": "GW_REAL", "Integer": "GW_INTEGER", "Boolean": "GW_BOOLEAN", "Enumeration": "GW_ENUM"}
 SETTING_INDEX = {"solver": 0, "rel_tol": 1, "abs_tol": 2, "max_step": 3, "max_internal_steps": 4}
 
@@ -38,7 +38,7 @@ class Variable:
     index: int
     out_index: int = -1
     declared_type: str | None = None
-    dependencies: tuple[int, ...] | None = None  # 1-based indices, for ModelStructure
+    dependencies: tuple[int, ...] | None = None  # value references (= 1-based rows), for ModelStructure
     initial_dependencies: tuple[int, ...] | None = None
     state_index: int = -1  # the continuous state this variable is (start or state kinds)
     derivative_of: int | None = None  # derivative kind: 1-based index of the state's variable
@@ -52,8 +52,22 @@ class Variable:
         return self.quantity.start
 
 
-def solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
-    """The runtime's own parameters (docs/interface.md, "Solver settings")."""
+# the FMI 3.0 calls that take the place of the FMI 2.0 calls the settings' descriptions name
+FMI3_CALLS = {"fmi2SetupExperiment": "fmi3EnterInitializationMode", "fmi2DoStep": "fmi3DoStep"}
+
+
+def solver_settings(exp: Experiment, fmi: int = 2) -> list[tuple[Quantity, str, str | None]]:
+    """The runtime's own parameters (docs/interface.md, "Solver settings"), their descriptions
+    naming the calls of FMI version `fmi` (2 or 3: FMI3_CALLS)."""
+    settings = _solver_settings(exp)
+    if fmi == 3:
+        for q, _, _ in settings:
+            for old, new in FMI3_CALLS.items():
+                q.description = q.description.replace(old, new)
+    return settings
+
+
+def _solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
     return [
         (Quantity("solver", "", "internal Co-Simulation integrator", SOLVERS[exp.solver]), "Enumeration", "Solver"),
         (Quantity("rel_tol", "1", "relative error tolerance of adaptive solvers, in [2.2e-15, 1]; "
@@ -79,8 +93,15 @@ def _depends(expr: ca.SX, syms: ca.SX) -> list[bool]:
     return [bool(d) for d in ca.which_depends(expr, syms, 1, False)]
 
 
-def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None) -> list[Variable]:
-    """All variables, value references 1.., in the order of modelDescription.xml."""
+def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None, fmi: int = 2) -> list[Variable]:
+    """All variables, value references 1.., in the order of modelDescription.xml.
+
+    spec: the model; exp: the solver settings' defaults; keep: the outputs to expose (None:
+    all; the required ones always), ValueError naming an unknown one; fmi: 2 or 3, the FMI
+    version of the FMU. FMI 3 appends, after the FMI 2 rows (whose value references it keeps),
+    one local Float64 per event indicator, `<event>_indicator` (kind "indicator", index the
+    event's: FMI 3.0.2 section 2.4.8, <EventIndicator> names variables, not a count).
+    Returns the rows, row i having value reference i + 1."""
     rows: list[Variable] = []
 
     def add(**kw):
@@ -89,7 +110,7 @@ def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None)
     for i, q in enumerate(spec.parameters):
         add(quantity=q, type="Real", causality="parameter",
             variability="tunable" if q.tunable else "fixed", initial="exact", kind="param", index=i)
-    for q, typ, declared in solver_settings(exp):
+    for q, typ, declared in solver_settings(exp, fmi):
         add(quantity=q, type=typ, causality="parameter", variability="fixed", initial="exact",
             kind="setting", index=SETTING_INDEX[q.name], declared_type=declared)
     for i, q in enumerate(spec.inputs):
@@ -114,6 +135,12 @@ def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None)
         add(quantity=ev.flag, type="Boolean", causality="output", variability="discrete",
             initial="calculated", kind="event", index=k)
     _states(spec, rows, add)
+    if fmi == 3:
+        for k, ev in enumerate(spec.events):
+            add(quantity=Quantity(f"{ev.name}_indicator", "1", f"event indicator of {ev.name}: the event "
+                                  "fires when it goes from > 0 to <= 0"),
+                type="Real", causality="local", variability="continuous", initial="calculated",
+                kind="indicator", index=k)
     _structure(spec, rows)
     return rows
 
@@ -166,9 +193,9 @@ def _structure(spec: ModelSpec, rows: list[Variable]) -> None:
     y = [e for _, e in spec.outputs]
     x0 = spec.init
     for row in rows:
-        if row.causality != "output" and row.kind not in ("derivative", "state"):
+        if row.causality != "output" and row.kind not in ("derivative", "state", "indicator"):
             continue
-        if row.kind == "event":
+        if row.kind in ("event", "indicator"):
             expr = spec.events[row.index].expr
         elif row.kind == "derivative":
             expr = spec.ode[row.index]
@@ -180,7 +207,7 @@ def _structure(spec: ModelSpec, rows: list[Variable]) -> None:
         deps = {state_var[i] for i, d in enumerate(_depends(expr, spec.x)) if d and row.kind != "state"}
         deps |= {by_kind_index[("input", i)] for i, d in enumerate(_depends(expr, spec.u)) if d}
         row.dependencies = tuple(sorted(deps))
-        if row.initial == "calculated":
+        if row.initial == "calculated" and row.kind != "indicator":  # no InitialUnknown
             at_start = ca.substitute(expr, spec.x, x0)
             deps = {by_kind_index[("start", i)] for i, d in enumerate(_depends(at_start, spec.s))
                     if d and ("start", i) in by_kind_index}

@@ -161,8 +161,9 @@ def _assignments(values, argument: str) -> dict[str, object]:
 
 # -- the verbs ---------------------------------------------------------------------------------
 
-def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms=None):
-    """Build the FMI 2.0 FMU of a scene (Co-Simulation and Model Exchange, sources included).
+def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms=None, fmi=None):
+    """Build the FMI 2.0 or 3.0 FMU of a scene (Co-Simulation and Model Exchange, sources
+    included).
 
     scene: a scene file (str or os.PathLike, TOML: docs/scenes.md) or a gyrowheel.Scene.
     output: the .fmu to write (default: '<scene name>.fmu' in the working directory); its
@@ -176,13 +177,17 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms
     ["x86_64-linux", "x86_64-windows"] or the same as one comma-separated string (also
     x86-windows, aarch64-windows); None (default): the scene's [build] platforms, else the
     host only. The host's binary is compiled by the host's C compiler, every other by zig's
-    (needs gyrowheel[platforms]).
+    (needs gyrowheel[platforms]). An FMI 3 FMU keeps every binary in its platform tuple's
+    folder (FMI 3.0.2, section 2.5.1.4.1), both Mac ones apart.
+    fmi: the FMI version, 2 (FMI 2.0.4) or 3 (FMI 3.0.2: the event indicators as variables,
+    early return from fmi3DoStep at events, Event Mode in Co-Simulation: docs/fmi.md); None
+    (default): the scene's [build] fmi, else 2.
     Returns a gyrowheel.BuildResult: fmu (the path), spec (the ModelSpec: variables, effects),
     sources (the C sources' directory, kept only with build_dir), identifier (the model
     identifier); it is os.PathLike, so it stands for its FMU in every other function.
     Raises SceneError (the file, table and key at fault; a file that is no scene, e.g. an FMU; a
     combination the model refuses), ArgumentError (output or build_dir that cannot be written,
-    named; platforms: an unknown platform, in one line listing the valid ones),
+    named; platforms: an unknown platform, in one line listing the valid ones; fmi: not 2 or 3),
     ArgumentTypeError (an argument of the wrong type), MissingExtraError (a platform other than
     the host's without gyrowheel[platforms]: its pip command), CompileError (a C compiler
     failed, with its output; a cross build names the platform and the compiler's first error;
@@ -199,7 +204,7 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms
     build_dir = None if build_dir is None else _output_directory(build_dir, "build_dir")
     taylor = flag(taylor, "taylor")
     try:
-        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=taylor, platforms=platforms)
+        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=taylor, platforms=platforms, fmi=fmi)
     except MissingExtraError as exc:  # zig, for a platform not the host's: checked before the model is built
         verb = "gyrowheel.build(platforms=...)" if platforms is not None else "gyrowheel.build() ([build] platforms)"
         raise MissingExtraError(exc.extra, verb, exc.missing) from None
@@ -260,10 +265,11 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
     return result
 
 
-def _fmu(fmu, argument: str = "fmu"):
-    """The FMU argument of a run, checked (gyrowheel.description.open_fmu): an FmuFile."""
+def _fmu(fmu, argument: str = "fmu", **which):
+    """The FMU argument of a run, checked (gyrowheel.description.open_fmu; `which`: its
+    versions and reader): an FmuFile."""
     from gyrowheel.description import open_fmu
-    return open_fmu(fmu, argument, to_run=True)
+    return open_fmu(fmu, argument, to_run=True, **which)
 
 
 def _check_rows(md, stop_time: float | None, output_interval: float | None) -> None:
@@ -352,7 +358,7 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
 
     if isinstance(source, (str, os.PathLike)) and (Path(source).suffix.lower() == ".fmu"
                                                    or arguments.file_kind(Path(source)) == "fmu"):
-        _fmu(source, "source")
+        _fmu(source, "source", versions=("2.0",), reader="a sweep")  # its runner calls the FMI 2.0 API
     by_name = tuple(name for name in ("grid", "random") if isinstance(given[name], Mapping))
     with reworded(SWEEP, (SweepSpecError, ArgumentTypeError), by_name):
         if fixed is not None and not isinstance(fixed, Mapping):

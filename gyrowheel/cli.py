@@ -37,7 +37,7 @@ EXIT_BAD_INPUT = 2
 EXIT_FAILURE = 1
 
 # API argument -> the flag that gives it, per verb (errors naming an argument name the flag)
-BUILD_FLAGS = {"output": "-o", "build_dir": "--keep-build", "platforms": "--platforms"}
+BUILD_FLAGS = {"output": "-o", "build_dir": "--keep-build", "platforms": "--platforms", "fmi": "--fmi"}
 SIMULATE_FLAGS = {"stop_time": "--stop-time", "output_interval": "--output-interval", "start_values": "--set",
                   "output": "-o", "plot": "--plot"}
 SYSTEM_FLAGS = {"step": "--step", "stop_time": "--stop-time", "start_values": "--set", "output": "-o"}
@@ -101,7 +101,7 @@ def cmd_build(args) -> int:
 
     try:
         result = build(args.scene, args.output, build_dir=args.keep_build, taylor=args.taylor,
-                       platforms=args.platforms)
+                       platforms=args.platforms, fmi=args.fmi)
     except MissingExtraError as exc:  # zig, for a platform not the host's (exit 2)
         verb = "gyrowheel build --platforms" if args.platforms is not None else "gyrowheel build ([build] platforms)"
         raise MissingExtraError(exc.extra, verb, exc.missing) from None
@@ -117,7 +117,7 @@ def cmd_build(args) -> int:
     except Exception as exc:  # CasADi or a defect of gyrowheel: still one line, never a traceback
         raise _failed("building the FMU", args.scene, exc) from None
     print(f"built {result.fmu} (model {result.identifier}, effects: {', '.join(result.spec.effects) or 'none'}; "
-          f"platforms: {', '.join(result.platforms)})")
+          f"platforms: {', '.join(result.platforms)}{'; FMI 3.0' if result.fmi == 3 else ''})")
     return 0
 
 
@@ -219,7 +219,7 @@ def make_parser() -> argparse.ArgumentParser:
     from gyrowheel.animation.command import add_arguments as add_animate_arguments
     from gyrowheel.studies.cli import add_parser as add_sweep_parser  # no Dask import until it runs
 
-    parser = Parser(prog="gyrowheel", description="Build and run FMI 2.0 FMUs of a rolling wheel.")
+    parser = Parser(prog="gyrowheel", description="Build and run FMI 2.0 and 3.0 FMUs of a rolling wheel.")
     parser.add_argument("--version", action="version", version=f"gyrowheel {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     b = sub.add_parser("build", help="build an FMU from a scene file")
@@ -235,6 +235,9 @@ def make_parser() -> argparse.ArgumentParser:
                         "x86_64-darwin, aarch64-darwin), 'all' (the five of them without x86-windows "
                         "and aarch64-windows) or 'host'; default: the scene's [build] platforms, else "
                         "the host only; others than the host's need gyrowheel[platforms] (zig)")
+    b.add_argument("--fmi", type=int, choices=(2, 3),
+                   help="the FMI version of the FMU: 2 (FMI 2.0) or 3 (FMI 3.0); default: the scene's "
+                        "[build] fmi, else 2")
     b.set_defaults(func=cmd_build)
     s = sub.add_parser("simulate", help="simulate an FMU in Co-Simulation with fmpy")
     s.add_argument("fmu")

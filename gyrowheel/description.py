@@ -1,8 +1,9 @@
 """What an FMU says about itself, as data: gyrowheel.info(fmu) -> FmuInfo.
 
-From modelDescription.xml (FMI 2.0.4, section 2.2: the model's attributes, the
-DefaultExperiment, the ModelVariables with their types) and from the archive: the platforms
-under binaries/ (section 2.3; named by their FMI 3.0 platform tuples), whether it carries
+From modelDescription.xml (FMI 2.0.4, section 2.2; FMI 3.0.2, section 2.4: the model's
+attributes, the DefaultExperiment, the ModelVariables with their types) and from the archive:
+the platforms under binaries/ (FMI 2.0.4, section 2.3; FMI 3.0.2, section 2.5.1.4; named by
+their FMI 3.0 platform tuples), whether it carries
 sources/, and for an FMU built by gyrowheel its effects (documentation/index.html) and whether it has the Taylor kernel (the ensemble path).
 str(info) is the text `gyrowheel info` prints; info.as_dict() what `gyrowheel info --json` prints.
 open_fmu is where simulate, info and sweep open an FMU and say what is wrong with one.
@@ -21,6 +22,18 @@ from gyrowheel.errors import FmuError, UnknownNameError
 
 TAYLOR_HEADER = "sources/gw_taylor_model.h"  # holds GW_TL_NVAR when the model has the Taylor kernel
 FMU_WHAT = "a path to an FMU (.fmu) or the gyrowheel.BuildResult of one"
+FMI_VERSIONS = ("2.0", "3.0")  # the fmiVersion attributes gyrowheel reads and runs
+
+
+def binary_path(md) -> str:
+    """The archive member of the FMU's Co-Simulation binary for this platform: binaries/
+    <folder>/<modelIdentifier><extension>, the folder FMI 2.0.4 section 2.3 names for an FMI 2
+    FMU (linux64), the platform tuple for an FMI 3 FMU (x86_64-linux: FMI 3.0.2, section
+    2.5.1.4.1)."""
+    from fmpy import platform, platform_tuple, sharedLibraryExtension
+
+    folder = platform_tuple if md.fmiVersion.startswith("3.") else platform
+    return f"binaries/{folder}/{md.coSimulation.modelIdentifier}{sharedLibraryExtension}"
 
 
 @dataclass(frozen=True)
@@ -32,25 +45,28 @@ class FmuFile:
     names: tuple[str, ...]
 
 
-def open_fmu(fmu, argument: str = "fmu", *, to_run: bool = False) -> FmuFile:
-    """Check that `fmu` is an FMI 2.0 FMU gyrowheel can read, and with to_run also run here;
-    the one place simulate, info and sweep open an FMU and say what is wrong with it.
+def open_fmu(fmu, argument: str = "fmu", *, to_run: bool = False, versions: tuple[str, ...] = FMI_VERSIONS,
+             reader: str = "gyrowheel") -> FmuFile:
+    """Check that `fmu` is an FMI 2.0 or 3.0 FMU gyrowheel can read, and with to_run also run
+    here; the one place simulate, info and sweep open an FMU and say what is wrong with it.
 
     fmu: a path (str or os.PathLike: a gyrowheel.BuildResult is one). argument: the name of the
     calling function's argument, which the errors carry. to_run: also require Co-Simulation
-    (FMI 2.0.4, section 4) and a binary for this platform (section 2.3: binaries/<platform>/
-    <modelIdentifier>.so, e.g. linux64).
+    (FMI 2.0.4, section 4; FMI 3.0.2, section 4) and a binary for this platform (binary_path:
+    binaries/linux64/<modelIdentifier>.so in FMI 2, binaries/x86_64-linux/... in FMI 3).
+    versions: the fmiVersion values the caller takes (FMI_VERSIONS, or fewer), reader: what
+    the caller is, as the refusal of another version names it.
     Returns an FmuFile. Raises FmuError, the message beginning with the file: no such FMU file,
     a directory, a scene / SSP system instead of an FMU, not a zip archive, no or unreadable
-    modelDescription.xml, FMI 1.0 / 3.0 (`FMI 3.0 is not supported: gyrowheel runs FMI 2.0
-    FMUs`), a modelDescription.xml that breaks the FMI 2.0 schema (its first problem), no
-    Co-Simulation, no binary for this platform (`no binary for linux64; the FMU has binaries
-    for win64`); ArgumentTypeError for a value that is no path; FmuError naming how to build it
-    for a gyrowheel.Scene.
+    modelDescription.xml, another FMI version (`FMI 1.0 is not supported: gyrowheel runs FMI
+    2.0 and 3.0 FMUs`), a modelDescription.xml that breaks its version's schema (its first
+    problem), no Co-Simulation, no binary for this platform (`no binary for linux64; the FMU
+    has binaries for win64`); ArgumentTypeError for a value that is no path; FmuError naming
+    how to build it for a gyrowheel.Scene.
     """
     import xml.etree.ElementTree as ET
 
-    from fmpy import platform, read_model_description, sharedLibraryExtension
+    from fmpy import read_model_description
 
     if not isinstance(fmu, (str, os.PathLike)):
         from gyrowheel.fmu_build.scene import Scene
@@ -72,8 +88,9 @@ def open_fmu(fmu, argument: str = "fmu", *, to_run: bool = False) -> FmuFile:
     except ET.ParseError as exc:
         raise FmuError(f"{path}: not a readable FMU: modelDescription.xml is not XML ({exc})",
                        argument=argument) from None
-    if version != "2.0":
-        raise FmuError(f"{path}: FMI {version} is not supported: gyrowheel runs FMI 2.0 FMUs", argument=argument)
+    if version not in versions:
+        runs = " and ".join(versions)
+        raise FmuError(f"{path}: FMI {version} is not supported: {reader} runs FMI {runs} FMUs", argument=argument)
     try:
         md = read_model_description(str(path))
     except Exception as exc:  # fmpy raises plain Exceptions: the schema's problems, one a line
@@ -81,30 +98,32 @@ def open_fmu(fmu, argument: str = "fmu", *, to_run: bool = False) -> FmuFile:
         text = problems[0] if problems else type(exc).__name__
         if text.startswith("Failed to validate") and len(problems) > 1:
             more = f" (and {len(problems) - 2} more)" if len(problems) > 2 else ""
-            text = f"modelDescription.xml breaks the FMI 2.0 schema: {problems[1]}{more}"
+            text = f"modelDescription.xml breaks the FMI {version} schema: {problems[1]}{more}"
         raise FmuError(f"{path}: not a readable FMU: {text}", argument=argument) from None
     if to_run:
         if md.coSimulation is None:
             raise FmuError(f"{path}: the FMU does not support Co-Simulation", argument=argument)
-        binary = f"binaries/{platform}/{md.coSimulation.modelIdentifier}{sharedLibraryExtension}"
+        binary = binary_path(md)
         if binary not in names:
             have = platform_infos(names)
             has = f"the FMU has binaries for {', '.join(map(str, have))}" if have else "the FMU has no binaries"
-            raise FmuError(f"{path}: no binary for {platform} ({binary}); {has}", argument=argument)
+            raise FmuError(f"{path}: no binary for {binary.split('/')[1]} ({binary}); {has}", argument=argument)
     return FmuFile(path, md, names)
 
 
 @dataclass(frozen=True)
 class VariableInfo:
-    """One ScalarVariable (FMI 2.0.4, section 2.2.7).
+    """One variable: a ScalarVariable (FMI 2.0.4, section 2.2.7) or an FMI 3.0 variable
+    (FMI 3.0.2, section 2.4.7), `type` as its FMI version names it.
 
-    start is typed by `type`: float (Real), int (Integer, Enumeration), bool (Boolean), str
-    (String); None when the variable has none (a calculated output). unit: the variable's own
-    or its declared type's. items: an Enumeration's items, {name: value}; empty otherwise.
+    start is typed by `type`: float (Real, Float32, Float64), int (Integer, Int8 ... UInt64,
+    Enumeration), bool (Boolean), str (String); None when the variable has none (a calculated
+    output, FMI 3.0's independent variable time). unit: the variable's own or its declared
+    type's. items: an Enumeration's items, {name: value}; empty otherwise.
     """
 
     name: str
-    type: str  # Real, Integer, Enumeration, Boolean, String
+    type: str  # FMI 2: Real, Integer, Enumeration, Boolean, String; FMI 3: Float64, Int32, ...
     causality: str  # parameter, calculatedParameter, input, output, local, independent
     variability: str  # constant, fixed, tunable, discrete, continuous
     initial: str | None  # exact, approx, calculated
@@ -255,9 +274,9 @@ def _typed(text: str | None, fmi_type: str):
     if text is None:
         return None
     try:
-        if fmi_type == "Real":
+        if fmi_type == "Real" or fmi_type.startswith("Float"):
             return float(text)
-        if fmi_type in ("Integer", "Enumeration"):
+        if fmi_type in ("Integer", "Enumeration") or fmi_type.startswith(("Int", "UInt")):
             return int(text)
     except ValueError:
         return text
@@ -284,7 +303,7 @@ def _effects(index_html: str) -> tuple[str, ...] | None:
 
 def read_info(fmu: str | Path) -> FmuInfo:
     """Describe the FMU at `fmu` (see FmuInfo). Raises FmuError naming the file when it is not
-    an FMI 2.0 FMU gyrowheel can read (open_fmu)."""
+    an FMI 2.0 or 3.0 FMU gyrowheel can read (open_fmu)."""
     checked = open_fmu(fmu)
     path, md, names = checked.path, checked.model_description, checked.names
     try:

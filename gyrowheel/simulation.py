@@ -1,4 +1,5 @@
-"""Run an FMU with fmpy in Co-Simulation, with start values checked by name and type."""
+"""Run an FMU (FMI 2.0 or 3.0) with fmpy in Co-Simulation, with start values checked by name
+and type."""
 from __future__ import annotations
 
 import ctypes
@@ -10,7 +11,7 @@ from pathlib import Path
 from ctypes import byref
 
 import numpy as np
-from fmpy import extract, platform, read_model_description, sharedLibraryExtension, simulate_fmu
+from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMessage
 
@@ -35,22 +36,29 @@ def restore_fmpy_logger() -> None:
     addLoggerProxy(byref(callbacks))
 
 
+REAL_TYPES = ("Real", "Float64")  # a gyrowheel FMU's real variables: FMI 2.0, FMI 3.0
+INTEGER_TYPES = ("Integer", "Int32")
+
+
 class SimulationError(GyrowheelError, RuntimeError):
     """The FMU refused a value or failed; the message carries the FMU's logged reason."""
 
 
 @dataclass
 class Messages:
-    """Collects the FMU's log messages (fmi2 logger callback)."""
+    """Collects the FMU's log messages: the logger callback of FMI 2.0 (component,
+    instanceName, status, category, message) and FMI 3.0 (instanceEnvironment, status, category,
+    message); both end with status, category, message, and number the statuses alike."""
 
     lines: list[tuple[int, str]] = field(default_factory=list)
 
-    def __call__(self, component, instance_name, status, category, message):
+    def __call__(self, *arguments):
+        status, _, message = arguments[-3:]
         text = message.decode(errors="replace") if isinstance(message, bytes) else str(message)
         self.lines.append((int(status), text))
 
     def errors(self) -> list[str]:
-        return [m for s, m in self.lines if s >= 3]  # fmi2Error, fmi2Fatal
+        return [m for s, m in self.lines if s >= 3]  # fmi2Error / fmi3Error, fmi2Fatal / fmi3Fatal
 
 
 def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[str, object]:
@@ -71,15 +79,15 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
         if not _settable(v):
             raise SimulationError(f"variable {name!r} is a calculated {v.causality} and cannot be set")
         try:
-            if v.type == "Real":
+            if v.type in REAL_TYPES:
                 out[name] = float(text)
                 if not math.isfinite(out[name]):
                     raise SimulationError(f"value {text!r} for {given!r} is not finite")
                 if degrees:
                     out[name] = math.radians(out[name])
-            elif v.type == "Integer":
+            elif v.type in INTEGER_TYPES:
                 out[name] = int(text)
-                if not -2**31 <= out[name] < 2**31:  # an fmi2Integer is 32 bits: fmpy would wrap it
+                if not -2**31 <= out[name] < 2**31:  # an fmi2Integer, fmi3Int32: 32 bits; fmpy would wrap it
                     raise ValueError
             elif v.type == "Enumeration":
                 items = enums.get(v.declaredType.name if v.declaredType else "", {})
@@ -92,7 +100,7 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
                 out[name] = text.lower() in ("true", "1")
             else:
                 out[name] = text
-            if degrees and v.type != "Real":
+            if degrees and v.type not in REAL_TYPES:
                 raise ValueError
         except ValueError:
             choices = ""
@@ -192,15 +200,18 @@ def _read_by_a_run(name: str) -> bool:
 
 
 def _load_binary(fmu: str | Path, unpacked: str, md) -> None:
-    """Load the FMU's binary for this platform (FMI 2.0.4, section 2.3: binaries/<platform>/
-    <modelIdentifier><extension>) as fmpy will, to say in one line why it cannot be: FmuError
+    """Load the FMU's binary for this platform (description.binary_path: FMI 2.0.4, section
+    2.3, binaries/linux64/<modelIdentifier>.so; FMI 3.0.2, section 2.5.1.4.1,
+    binaries/x86_64-linux/...) as fmpy will, to say in one line why it cannot be: FmuError
     `x.fmu: its binary binaries/linux64/m.so cannot be loaded: file too short`."""
+    from gyrowheel.description import binary_path
+
     if md.coSimulation is None:
         raise FmuError(f"{fmu}: the FMU does not support Co-Simulation", argument="fmu")
-    relative = f"binaries/{platform}/{md.coSimulation.modelIdentifier}{sharedLibraryExtension}"
+    relative = binary_path(md)
     library = os.path.join(unpacked, *relative.split("/"))
     if not os.path.isfile(library):
-        raise FmuError(f"{fmu}: no binary for {platform} ({relative})", argument="fmu")
+        raise FmuError(f"{fmu}: no binary for {relative.split('/')[1]} ({relative})", argument="fmu")
     try:
         ctypes.CDLL(library)
     except OSError as exc:

@@ -1,8 +1,9 @@
 """Build and run the C test programs of tests/c/: the runtime + a toy model + a driver.
 
 The runtime and the toy model form one translation unit, exactly as in an FMU: c_src/gw_fmu.c
-with GW_MODEL_SOURCE naming the toy (docs/runtime.md); the driver is a second translation unit
-that sees only the fmi2* functions.  Each program is built with the project's strict flags
+(FMI 2.0) or c_src/gw_fmu3.c (FMI 3.0, fmi=3) with GW_MODEL_SOURCE naming the toy
+(docs/runtime.md); the driver is a second translation unit that sees only the fmi2* (fmi3*)
+functions.  Each program is built with the project's strict flags
 (no flag hiding symbols), with AddressSanitizer and UndefinedBehaviorSanitizer, or for
 valgrind; `run` asserts a clean exit and the harness's "0 failures" line (tests/c/harness.h).
 """
@@ -24,6 +25,7 @@ VALGRIND = shutil.which("valgrind") or "/usr/bin/valgrind"
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
 UNITY = C_SRC / "gw_fmu.c"
+UNITY3 = C_SRC / "gw_fmu3.c"  # the FMI 3.0 FMU's unity file
 MODES = ("strict", "sanitizers", "valgrind")
 MODE_FLAGS = {
     "strict": ["-O2", "-g"],
@@ -36,12 +38,14 @@ SANITIZER_ENV = {"ASAN_OPTIONS": "detect_leaks=1:abort_on_error=0",
 
 
 def unity_flags(toy: str) -> list[str]:
-    """Flags that make c_src/gw_fmu.c the runtime with tests/c/toy_<toy>.c as its model."""
+    """Flags that make c_src/gw_fmu.c (gw_fmu3.c) the runtime with tests/c/toy_<toy>.c as its
+    model."""
     return [f"-I{FMI_HEADERS}", f"-I{C_SRC}", f"-I{TESTS_C}", f'-DGW_MODEL_SOURCE="toy_{toy}.c"']
 
 
-def compile_program(driver: str, toy: str | None, out: Path, extra: list[str]) -> Path:
-    """tests/c/test_<driver>.c + c_src/gw_fmu.c with tests/c/toy_<toy>.c -> an executable.
+def compile_program(driver: str, toy: str | None, out: Path, extra: list[str], fmi: int = 2) -> Path:
+    """tests/c/test_<driver>.c + c_src/gw_fmu.c (fmi 3: gw_fmu3.c) with tests/c/toy_<toy>.c ->
+    an executable.
 
     toy None: the driver is a whole program by itself (test_core.c includes its model and the
     core), built without the FMI headers on the include path."""
@@ -49,7 +53,8 @@ def compile_program(driver: str, toy: str | None, out: Path, extra: list[str]) -
     if toy is None:
         sources, flags = [TESTS_C / f"test_{driver}.c"], [f"-I{C_SRC}", f"-I{TESTS_C}"]
     else:
-        sources, flags = [UNITY, TESTS_C / f"test_{driver}.c"], unity_flags(toy)
+        unity = {2: UNITY, 3: UNITY3}[fmi]
+        sources, flags = [unity, TESTS_C / f"test_{driver}.c"], unity_flags(toy)
     cmd = ["gcc", *STRICT, *extra, *flags, *map(str, sources), "-lm", "-o", str(exe)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     assert r.returncode == 0, f"compile failed:\n{' '.join(cmd)}\n{r.stdout}{r.stderr}"
@@ -82,9 +87,11 @@ def run(cmd: list[str], timeout: float = 900, env: dict | None = None) -> subpro
     return r
 
 
-def run_program(driver: str, toy: str | None, out: Path, mode: str) -> subprocess.CompletedProcess:
-    """Build in `mode` (strict | sanitizers | valgrind) and run; returns the finished process."""
-    return run_built(compile_program(driver, toy, out, MODE_FLAGS[mode]), mode)
+def run_program(driver: str, toy: str | None, out: Path, mode: str,
+                fmi: int = 2) -> subprocess.CompletedProcess:
+    """Build in `mode` (strict | sanitizers | valgrind) over the FMI `fmi` unity file and run;
+    returns the finished process."""
+    return run_built(compile_program(driver, toy, out, MODE_FLAGS[mode], fmi=fmi), mode)
 
 
 def run_built(exe: Path, mode: str, args: list[str] | None = None) -> subprocess.CompletedProcess:

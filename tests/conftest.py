@@ -128,6 +128,7 @@ class _Built:
     def __init__(self, built, scene_text: str, scene_name: str):
         self.fmu, self.sources, self.identifier, self.platforms = built.fmu, built.sources, built.identifier, \
             built.platforms
+        self.fmi = built.fmi
         self.scene_text, self.scene_name = scene_text, scene_name
 
     def result(self):
@@ -135,26 +136,25 @@ class _Built:
         from gyrowheel.fmu_build.scene import parse_scene
         spec = model_spec(parse_scene(self.scene_text, self.scene_name))
         return BuildResult(fmu=self.fmu, spec=spec, sources=self.sources, identifier=self.identifier,
-                           platforms=self.platforms)
+                           platforms=self.platforms, fmi=self.fmi)
 
 
 @pytest.fixture(scope="session")
 def example_build(tmp_path_factory):
     """example_build("euler_disk", taylor=False, fmi=2): the BuildResult of
-    examples/scenes/<name>.toml, built once per test run (for every module and xdist worker that
-    asks; sources kept beside); fmi=3: its FMI 3.0 FMU.  Several modules test the same example
-    FMU; the build is the same call, made once."""
+    examples/scenes/<name>.toml (as an FMI 3 FMU with fmi=3), built once per test run (for every
+    module and xdist worker that asks; sources kept beside). Several modules test the same
+    example FMU; the build is the same call, made once."""
     cache: dict = {}
 
     def _build(name: str, taylor: bool = False, fmi: int = 2):
         key = f"{name}{'_taylor' if taylor else ''}{'_fmi3' if fmi == 3 else ''}"
         if key not in cache:
             path = SCENES / f"{name}.toml"
-            version = {"fmi": 3} if fmi == 3 else {}
 
             def make(out: Path):
                 built = build_fmu(load_scene(path), out / f"{name}.fmu", build_dir=out / "build", taylor=taylor,
-                                  **version)
+                                  fmi=fmi)
                 return _Built(built, path.read_text(), path.name)
             cache[key] = shared_build(tmp_path_factory, key, make).result()
         return cache[key]

@@ -34,7 +34,7 @@ def solo(moon, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def foreign(moon, tmp_path_factory):
-    """FMUs gyrowheel did not build as they come: FMI 3.0, FMI 2.0 with a win64 binary only, a
+    """FMUs gyrowheel did not build as they come: FMI 1.0, FMI 2.0 with a win64 binary only, a
     modelDescription.xml that breaks the FMI 2.0 schema, and one without a description."""
     where = tmp_path_factory.mktemp("foreign")
     with zipfile.ZipFile(moon.fmu) as zf:
@@ -46,12 +46,11 @@ def foreign(moon, tmp_path_factory):
             for member, data in content.items():
                 zf.writestr(member, data)
         return where / name
-    fmi3 = ('<?xml version="1.0" encoding="UTF-8"?>\n<fmiModelDescription fmiVersion="3.0" modelName="x" '
-            'instantiationToken="{1}"><CoSimulation modelIdentifier="x"/><ModelVariables><Float64 name="time" '
-            'valueReference="0" causality="independent" variability="continuous"/></ModelVariables>'
-            '<ModelStructure/></fmiModelDescription>')
+    fmi1 = ('<?xml version="1.0" encoding="UTF-8"?>\n<fmiModelDescription fmiVersion="1.0" modelName="x" '
+            'modelIdentifier="x" guid="{1}" numberOfContinuousStates="0" numberOfEventIndicators="0">'
+            '<ModelVariables/></fmiModelDescription>')
     return dict(
-        fmi3=write("fmi3.fmu", {"modelDescription.xml": fmi3, "binaries/x86_64-linux/x.so": b""}),
+        fmi1=write("fmi1.fmu", {"modelDescription.xml": fmi1, "binaries/linux64/x.so": b""}),
         win=write("win.fmu", {n.replace("linux64/paper_moon.so", "win64/paper_moon.dll"): d for n, d in files.items()}),
         schema=write("bad3.fmu", {**files, "modelDescription.xml": xml.replace('causality="parameter"',
                                                                                'causality="nonsense"', 1)}),
@@ -115,13 +114,13 @@ def test_one_memory_rule_for_simulate_system_run_and_sweep(moon, solo, monkeypat
 # -- an FMU: the one place that opens it, for simulate, info and sweep ------------------------------
 
 @pytest.mark.parametrize("kind, message", [
-    ("fmi3", "fmi3.fmu: FMI 3.0 is not supported: gyrowheel runs FMI 2.0 FMUs"),
+    ("fmi1", "fmi1.fmu: FMI 1.0 is not supported: gyrowheel runs FMI 2.0 and 3.0 FMUs"),
     ("win", "win.fmu: no binary for linux64 (binaries/linux64/paper_moon.so); the FMU has binaries for "
             "x86_64-windows (binaries/win64)"),
     ("schema", "bad3.fmu: not a readable FMU: modelDescription.xml breaks the FMI 2.0 schema: "),
 ])
 def test_an_fmu_that_cannot_run_here_says_why(foreign, capsys, kind, message):
-    """FMI 3.0, a binary for another platform only, a modelDescription.xml breaking the schema:
+    """FMI 1.0, a binary for another platform only, a modelDescription.xml breaking the schema:
     an FmuError saying which, in one line (fmpy's own words are a plain Exception or several
     lines of validation); the command exits 2 with that line."""
     from gyrowheel.cli import main

@@ -48,7 +48,7 @@ def test_only_the_fmi_layer_includes_fmi_headers():
 
 
 def test_each_part_alone_is_empty(tmp_path):
-    parts = [p for p in sorted(C_SRC.glob("*.c")) if p.name != "gw_fmu.c"]
+    parts = [p for p in sorted(C_SRC.glob("*.c")) if p.name not in ("gw_fmu.c", "gw_fmu3.c")]
     assert len(parts) >= 18
     for src in parts:
         obj = tmp_path / (src.stem + ".o")

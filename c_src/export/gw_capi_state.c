@@ -48,7 +48,7 @@ GYROWHEEL_EXPORT gyrowheel_status GWC(restore_state)(GWC_T *w, const void *buffe
                         "%s: a state saved by an FMU, not by this C API (front-end words %d, %d)",
                         fn, front[0], front[1]);
     {
-        const gw_state_facts facts = {1, 0, 0}; /* saved after its initialisation; time only
+        const gw_state_facts facts = {1, 0, 0, 0}; /* saved after its initialisation; time only
                                                     advances through the API */
         if (!gw_state_check_run(w->I, fn, b, &facts))
             return gwc_fail_core(w, GYROWHEEL_ERR_STATE, "the state was refused");

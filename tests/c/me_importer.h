@@ -60,6 +60,24 @@ static fmi2Component me(const char *name) {
     return c;
 }
 
+/* analytic D of toy_me at x, f (k = 1, use_force = 1, parameter c): rows der(pos), der(vel),
+ * der(w), pos, vel, energy, force, wpos; columns pos, vel, w, f */
+static inline void me_analytic_jacobian(double c, const double *x, double f, double D[8][4]) {
+    memset(D, 0, 8 * 4 * sizeof(double));
+    D[0][1] = 1.0;
+    D[1][0] = -1.0 - 3.0 * c * x[0] * x[0];
+    D[1][3] = 1.0;
+    D[2][1] = f;
+    D[2][3] = x[1];
+    D[3][0] = 1.0;
+    D[4][1] = 1.0;
+    D[5][0] = x[0] + c * x[0] * x[0] * x[0];
+    D[5][1] = x[1];
+    D[6][3] = 1.0;
+    D[7][0] = x[2];
+    D[7][2] = x[0];
+}
+
 /* unknowns: der(pos), der(vel), der(w), pos, vel, energy, force, wpos (rows of D), w */
 static const fmi2ValueReference UNK[9] = {VR_DPOS, VR_DVEL, VR_DW, VR_POS, VR_VEL,
                                           VR_ENERGY, VR_FORCE, VR_WPOS, VR_W};

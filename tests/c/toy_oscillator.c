@@ -86,22 +86,31 @@ static const double u_start[] = {0.0};
 /* k, pos_lim, n_int, use_force */
 static const double p_start[] = {1.0, -2.0, 3.0, 1.0};
 
+/* GW_TOY_VR_BASE: value references from this base (the FMI 3.0 tests: 1, as in a generated
+ * model, 0 being time there) */
+#ifndef GW_TOY_VR_BASE
+#define GW_TOY_VR_BASE 0
+#endif
+#define VR(n) (GW_TOY_VR_BASE + (n))
 static const gw_variable vars[] = {
-    {0, "k", GW_REAL, GW_VAR_PARAM, 0, -1, 0, -1},
-    {1, "pos_lim", GW_REAL, GW_VAR_PARAM, 1, -1, 1, -1},
-    {2, "n_int", GW_INTEGER, GW_VAR_PARAM, 2, -1, 0, -1},
-    {3, "use_force", GW_BOOLEAN, GW_VAR_PARAM, 3, -1, 0, -1},
-    {10, "pos", GW_REAL, GW_VAR_START, 0, 0, 0, 0},
-    {11, "vel", GW_REAL, GW_VAR_START, 1, 1, 0, 1},
-    {20, "energy", GW_REAL, GW_VAR_OUTPUT, 2, -1, 0, -1},
-    {21, "force", GW_REAL, GW_VAR_OUTPUT, 3, -1, 0, -1},
-    {30, "f", GW_REAL, GW_VAR_INPUT, 0, -1, 0, -1},
-    {40, "solver", GW_ENUM, GW_VAR_SETTING, GW_SET_SOLVER, -1, 0, -1},
-    {41, "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0, -1},
-    {42, "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0, -1},
-    {43, "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0, -1},
-    {44, "max_internal_steps", GW_INTEGER, GW_VAR_SETTING, GW_SET_MAX_INTERNAL_STEPS, -1, 0, -1},
-    {50, "hit", GW_BOOLEAN, GW_VAR_EVENT, 0, -1, 0, -1},
+    {VR(0), "k", GW_REAL, GW_VAR_PARAM, 0, -1, 0, -1},
+    {VR(1), "pos_lim", GW_REAL, GW_VAR_PARAM, 1, -1, 1, -1},
+    {VR(2), "n_int", GW_INTEGER, GW_VAR_PARAM, 2, -1, 0, -1},
+    {VR(3), "use_force", GW_BOOLEAN, GW_VAR_PARAM, 3, -1, 0, -1},
+    {VR(10), "pos", GW_REAL, GW_VAR_START, 0, 0, 0, 0},
+    {VR(11), "vel", GW_REAL, GW_VAR_START, 1, 1, 0, 1},
+    {VR(20), "energy", GW_REAL, GW_VAR_OUTPUT, 2, -1, 0, -1},
+    {VR(21), "force", GW_REAL, GW_VAR_OUTPUT, 3, -1, 0, -1},
+    {VR(30), "f", GW_REAL, GW_VAR_INPUT, 0, -1, 0, -1},
+    {VR(40), "solver", GW_ENUM, GW_VAR_SETTING, GW_SET_SOLVER, -1, 0, -1},
+    {VR(41), "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0, -1},
+    {VR(42), "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0, -1},
+    {VR(43), "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0, -1},
+    {VR(44), "max_internal_steps", GW_INTEGER, GW_VAR_SETTING, GW_SET_MAX_INTERNAL_STEPS, -1, 0, -1},
+    {VR(50), "hit", GW_BOOLEAN, GW_VAR_EVENT, 0, -1, 0, -1},
+#if GW_TOY_VR_BASE > 0 /* an FMI 3.0 model's row: the event indicator as a variable */
+    {VR(60), "hit_indicator", GW_REAL, GW_VAR_INDICATOR, 0, -1, 0, -1},
+#endif
 };
 
 static const char *const x_names[] = {"pos", "vel"};

@@ -88,18 +88,24 @@ static const double s_start[] = {0.0, 0.0};
 static const double u_start[] = {0.0};
 static const double p_start[] = {1.2, 1.0};
 
+/* GW_TOY_VR_BASE: value references from this base (the FMI 3.0 tests: 1, as in a generated
+ * model, 0 being time there) */
+#ifndef GW_TOY_VR_BASE
+#define GW_TOY_VR_BASE 0
+#endif
+#define VR(n) (GW_TOY_VR_BASE + (n))
 static const gw_variable vars[] = {
-    {0, "F0", GW_REAL, GW_VAR_PARAM, 0, -1, 0, -1},
-    {1, "L", GW_REAL, GW_VAR_PARAM, 1, -1, 0, -1},
-    {2, "pos", GW_REAL, GW_VAR_START, 0, 0, 0, 0},
-    {3, "v", GW_REAL, GW_VAR_START, 1, 1, 0, 1},
-    {4, "m", GW_REAL, GW_VAR_STATE, 2, -1, 0, 2},
-    {5, "friction", GW_REAL, GW_VAR_OUTPUT, 3, -1, 0, -1},
-    {6, "solver", GW_ENUM, GW_VAR_SETTING, GW_SET_SOLVER, -1, 0, -1},
-    {7, "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0, -1},
-    {8, "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0, -1},
-    {9, "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0, -1},
-    {10, "stuck", GW_BOOLEAN, GW_VAR_EVENT, 1, -1, 0, -1},
+    {VR(0), "F0", GW_REAL, GW_VAR_PARAM, 0, -1, 0, -1},
+    {VR(1), "L", GW_REAL, GW_VAR_PARAM, 1, -1, 0, -1},
+    {VR(2), "pos", GW_REAL, GW_VAR_START, 0, 0, 0, 0},
+    {VR(3), "v", GW_REAL, GW_VAR_START, 1, 1, 0, 1},
+    {VR(4), "m", GW_REAL, GW_VAR_STATE, 2, -1, 0, 2},
+    {VR(5), "friction", GW_REAL, GW_VAR_OUTPUT, 3, -1, 0, -1},
+    {VR(6), "solver", GW_ENUM, GW_VAR_SETTING, GW_SET_SOLVER, -1, 0, -1},
+    {VR(7), "rel_tol", GW_REAL, GW_VAR_SETTING, GW_SET_REL_TOL, -1, 0, -1},
+    {VR(8), "abs_tol", GW_REAL, GW_VAR_SETTING, GW_SET_ABS_TOL, -1, 0, -1},
+    {VR(9), "max_step", GW_REAL, GW_VAR_SETTING, GW_SET_MAX_STEP, -1, 0, -1},
+    {VR(10), "stuck", GW_BOOLEAN, GW_VAR_EVENT, 1, -1, 0, -1},
 };
 
 static const char *const x_names[] = {"pos", "v", "m"};

@@ -9,13 +9,11 @@ from __future__ import annotations
 
 import ctypes
 import re
-import shutil
-import weakref
 from pathlib import Path
 
-import numpy as np
-from fmpy import extract, read_model_description
 from fmpy.fmi3 import FMU3Model, FMU3Slave
+
+from fmi_helpers import StateVector, unpack
 
 EVENT = re.compile(r"event (\w+) at t=(\S+?):? ")
 
@@ -26,19 +24,16 @@ def event_times(messages: list[str]) -> list[tuple[str, float]]:
     return [(m.group(1), float(m.group(2))) for line in messages for m in [EVENT.search(line + " ")] if m]
 
 
-class Instance3:
-    """One FMI 3.0 instance (Co-Simulation or Model Exchange) with named access to its variables."""
+class Instance3(StateVector):
+    """One FMI 3.0 instance (Co-Simulation or Model Exchange) with named access to its variables
+    (and, in Model Exchange, numpy access to its state vector: StateVector)."""
+
+    get_derivatives = "getContinuousStateDerivatives"
 
     def __init__(self, fmu: str | Path, interface: str = "CoSimulation", name: str = "wheel",
                  logging_on: bool = True, event_mode_used: bool = False, early_return_allowed: bool = False,
                  unzipdir: str | Path | None = None, md=None):
-        self.fmu = str(fmu)
-        self.md = md or read_model_description(self.fmu)
-        self.unzipdir = str(unzipdir or extract(self.fmu))
-        if unzipdir is None:  # fmpy.extract's temporary directory: ours to remove when we go
-            weakref.finalize(self, shutil.rmtree, self.unzipdir, True)
-        self.vars = {v.name: v for v in self.md.modelVariables}
-        self.messages: list[tuple[int, str, str]] = []
+        unpack(self, fmu, unzipdir, md)
         messages = self.messages  # the callback must not keep the instance alive
 
         def logger(env, status, category, message):
@@ -53,6 +48,7 @@ class Instance3:
                                   earlyReturnAllowed=early_return_allowed, logMessage=logger)
         else:
             self.fmu3.instantiate(loggingOn=logging_on, logMessage=logger)
+        self.me = self.fmu3
         self.nx = self.md.numberOfContinuousStates
         self.nz = self.md.numberOfEventIndicators
 
@@ -112,23 +108,3 @@ class Instance3:
         st = self.raw("fmi3DoStep", ctypes.c_double(t), ctypes.c_double(h), ctypes.c_bool(no_set_prior),
                       *[ctypes.byref(f) for f in flags], ctypes.byref(last))
         return (st, *[f.value for f in flags], last.value)
-
-    # ---- Model Exchange: the state vector
-    @staticmethod
-    def _ptr(a: np.ndarray):
-        return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
-
-    def states(self) -> np.ndarray:
-        x = np.zeros(self.nx)
-        self.fmu3.getContinuousStates(self._ptr(x), self.nx)
-        return x
-
-    def set_states(self, t: float, x: np.ndarray) -> None:
-        self.fmu3.setTime(t)
-        xc = np.ascontiguousarray(x, dtype=float)
-        self.fmu3.setContinuousStates(self._ptr(xc), self.nx)
-
-    def derivatives(self) -> np.ndarray:
-        d = np.zeros(self.nx)
-        self.fmu3.getContinuousStateDerivatives(self._ptr(d), self.nx)
-        return d

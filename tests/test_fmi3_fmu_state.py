@@ -30,6 +30,22 @@ def continue_cs(f, t: float, until: float, dt: float = 0.1) -> np.ndarray:
     return np.array(rows, dtype=float)
 
 
+def repeated_after_restore(f, run) -> tuple[np.ndarray, bytes]:
+    """run() from f's current state, then again after fmi3SetFMUState of that state and after
+    fmi3DeserializeFMUState of its serialization: bit-identical.  (run()'s rows, the bytes)"""
+    state = f.fmu3.getFMUState()
+    blob = f.fmu3.serializeFMUState(state)
+    first = run()
+    f.fmu3.setFMUState(state)
+    np.testing.assert_array_equal(run(), first)
+    copy = f.fmu3.deserializeFMUState(blob)
+    f.fmu3.setFMUState(copy)
+    np.testing.assert_array_equal(run(), first)
+    f.fmu3.freeFMUState(copy)
+    f.fmu3.freeFMUState(state)
+    return first, blob
+
+
 def test_co_simulation_state_restored_and_continued_bit_identically(fmi3_build):
     fmu = fmi3_build("slope_hold").fmu
     f = Instance3(fmu)
@@ -37,17 +53,8 @@ def test_co_simulation_state_restored_and_continued_bit_identically(fmi3_build):
     try:
         f.init()
         continue_cs(f, 0.0, 1.5)
-        state = f.fmu3.getFMUState()
-        blob = f.fmu3.serializeFMUState(state)
-        first = continue_cs(f, 1.5, 3.0)
+        first, blob = repeated_after_restore(f, lambda: continue_cs(f, 1.5, 3.0))
         assert first[0, outputs(f).index("gamma_dot")] != 0.0 and first[-1, outputs(f).index("gamma_dot")] == 0.0
-        f.fmu3.setFMUState(state)
-        np.testing.assert_array_equal(continue_cs(f, 1.5, 3.0), first)
-        copy = f.fmu3.deserializeFMUState(blob)
-        f.fmu3.setFMUState(copy)
-        np.testing.assert_array_equal(continue_cs(f, 1.5, 3.0), first)
-        f.fmu3.freeFMUState(copy)
-        f.fmu3.freeFMUState(state)
         # another instance, initialised with other start values, takes the serialized state
         other.init(gamma_dot=1.0)
         copy = other.fmu3.deserializeFMUState(blob)
@@ -98,20 +105,11 @@ def test_model_exchange_state_restored_and_continued_bit_identically(fmi3_build)
             pass
         f.fmu3.enterContinuousTimeMode()
         continue_me(f, 0.0, 1.5)
-        state = f.fmu3.getFMUState()
-        blob = f.fmu3.serializeFMUState(state)
-        first = continue_me(f, 1.5, 3.0)
+        first, _ = repeated_after_restore(f, lambda: continue_me(f, 1.5, 3.0))
         i_gd = outputs(f).index("gamma_dot")
         i_mode = len(outputs(f)) + [d.variable.derivative.name for d in f.md.derivatives].index("rolling_mode")
         assert first[0, i_gd] < 0.0 and first[0, i_mode] == -1.0  # rolling uphill
         assert first[-1, i_gd] == 0.0 and first[-1, i_mode] == 0.0  # stopped and held: the switch was crossed
-        f.fmu3.setFMUState(state)
-        np.testing.assert_array_equal(continue_me(f, 1.5, 3.0), first)
-        copy = f.fmu3.deserializeFMUState(blob)
-        f.fmu3.setFMUState(copy)
-        np.testing.assert_array_equal(continue_me(f, 1.5, 3.0), first)
-        f.fmu3.freeFMUState(copy)
-        f.fmu3.freeFMUState(state)
         assert [m for m in f.messages if m[0] > 0] == []
     finally:
         f.free()

@@ -172,8 +172,7 @@ fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState,
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[],
                                    size_t size, fmi3FMUState *FMUState) {
     GW3_FRAME(DeserializeFMUState);
-    if (!FMUState || !serializedState)
-        GW3_FAIL("%s: serializedState or FMUState is NULL", fn);
+    if (!FMUState) GW3_FAIL("%s: FMUState is NULL", fn);
     if (!gw_blob_check(I, fn, serializedState, size, gw_fmi3_check_front, F)) {
         status = fmi3Error;
         goto END;

@@ -46,7 +46,7 @@ class FmuFile:
 
 
 def open_fmu(fmu, argument: str = "fmu", *, to_run: bool = False, versions: tuple[str, ...] = FMI_VERSIONS,
-             reader: str = "gyrowheel") -> FmuFile:
+             reader: str = "") -> FmuFile:
     """Check that `fmu` is an FMI 2.0 or 3.0 FMU gyrowheel can read, and with to_run also run
     here; the one place simulate, info and sweep open an FMU and say what is wrong with it.
 
@@ -55,7 +55,8 @@ def open_fmu(fmu, argument: str = "fmu", *, to_run: bool = False, versions: tupl
     (FMI 2.0.4, section 4; FMI 3.0.2, section 4) and a binary for this platform (binary_path:
     binaries/linux64/<modelIdentifier>.so in FMI 2, binaries/x86_64-linux/... in FMI 3).
     versions: the fmiVersion values the caller takes (FMI_VERSIONS, or fewer), reader: what
-    the caller is, as the refusal of another version names it.
+    the caller is, as the refusal of a version gyrowheel reads but the caller does not names it
+    (`FMI 3.0 is not supported: a sweep runs FMI 2.0 FMUs`).
     Returns an FmuFile. Raises FmuError, the message beginning with the file: no such FMU file,
     a directory, a scene / SSP system instead of an FMU, not a zip archive, no or unreadable
     modelDescription.xml, another FMI version (`FMI 1.0 is not supported: gyrowheel runs FMI
@@ -88,9 +89,10 @@ def open_fmu(fmu, argument: str = "fmu", *, to_run: bool = False, versions: tupl
     except ET.ParseError as exc:
         raise FmuError(f"{path}: not a readable FMU: modelDescription.xml is not XML ({exc})",
                        argument=argument) from None
-    if version not in versions:
-        runs = " and ".join(versions)
-        raise FmuError(f"{path}: FMI {version} is not supported: {reader} runs FMI {runs} FMUs", argument=argument)
+    if version not in versions:  # another version than gyrowheel's, or one this caller does not run
+        reader, runs = ("gyrowheel", FMI_VERSIONS) if version not in FMI_VERSIONS else (reader, versions)
+        raise FmuError(f"{path}: FMI {version} is not supported: {reader} runs FMI {' and '.join(runs)} FMUs",
+                       argument=argument)
     try:
         md = read_model_description(str(path))
     except Exception as exc:  # fmpy raises plain Exceptions: the schema's problems, one a line

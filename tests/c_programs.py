@@ -43,9 +43,11 @@ def unity_flags(toy: str) -> list[str]:
     return [f"-I{FMI_HEADERS}", f"-I{C_SRC}", f"-I{TESTS_C}", f'-DGW_MODEL_SOURCE="toy_{toy}.c"']
 
 
-def compile_program(driver: str, toy: str | None, out: Path, extra: list[str], fmi: int = 2) -> Path:
-    """tests/c/test_<driver>.c + c_src/gw_fmu.c (fmi 3: gw_fmu3.c) with tests/c/toy_<toy>.c ->
-    an executable.
+def compile_program(driver: str, toy: str | None, out: Path, extra: list[str],
+                    fmi: int | tuple[int, ...] = 2) -> Path:
+    """tests/c/test_<driver>.c + c_src/gw_fmu.c (fmi 3: gw_fmu3.c; (2, 3): both, an FMI 2.0
+    and an FMI 3.0 FMU of the same toy in one program) with tests/c/toy_<toy>.c -> an
+    executable.
 
     toy None: the driver is a whole program by itself (test_core.c includes its model and the
     core), built without the FMI headers on the include path."""
@@ -53,8 +55,8 @@ def compile_program(driver: str, toy: str | None, out: Path, extra: list[str], f
     if toy is None:
         sources, flags = [TESTS_C / f"test_{driver}.c"], [f"-I{C_SRC}", f"-I{TESTS_C}"]
     else:
-        unity = {2: UNITY, 3: UNITY3}[fmi]
-        sources, flags = [unity, TESTS_C / f"test_{driver}.c"], unity_flags(toy)
+        unities = [{2: UNITY, 3: UNITY3}[k] for k in (fmi if isinstance(fmi, tuple) else (fmi,))]
+        sources, flags = [*unities, TESTS_C / f"test_{driver}.c"], unity_flags(toy)
     cmd = ["gcc", *STRICT, *extra, *flags, *map(str, sources), "-lm", "-o", str(exe)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     assert r.returncode == 0, f"compile failed:\n{' '.join(cmd)}\n{r.stdout}{r.stderr}"
@@ -88,7 +90,7 @@ def run(cmd: list[str], timeout: float = 900, env: dict | None = None) -> subpro
 
 
 def run_program(driver: str, toy: str | None, out: Path, mode: str,
-                fmi: int = 2) -> subprocess.CompletedProcess:
+                fmi: int | tuple[int, ...] = 2) -> subprocess.CompletedProcess:
     """Build in `mode` (strict | sanitizers | valgrind) over the FMI `fmi` unity file and run;
     returns the finished process."""
     return run_built(compile_program(driver, toy, out, MODE_FLAGS[mode], fmi=fmi), mode)

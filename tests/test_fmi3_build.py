@@ -263,3 +263,12 @@ def test_info_and_simulate_read_fmi3(earth3, earth_build):
     assert len(three) == len(two) and three.dtype.names == two.dtype.names
     for name in two.dtype.names:  # same model, same core: the same numbers
         np.testing.assert_array_equal(three[name], two[name], err_msg=name)
+
+
+def test_a_sweep_refuses_an_fmi3_fmu_in_one_line(earth3):
+    """The sweep's runner calls the FMI 2.0 API: an FMI 3 FMU is refused before it starts."""
+    import gyrowheel
+    with pytest.raises(gyrowheel.FmuError) as exc:
+        gyrowheel.sweep(earth3, grid={"M": [2.0]}, workers=0)
+    assert exc.value.argument == "source"
+    assert str(exc.value) == f"{earth3.fmu}: FMI 3.0 is not supported: a sweep runs FMI 2.0 FMUs"

@@ -43,6 +43,17 @@ static inline int getb3(fmi3Instance c, fmi3ValueReference vr) {
     return b ? 1 : 0;
 }
 
+/* a Co-Simulation instance logging into h_log (checked non-NULL) */
+static inline fmi3Instance cs3_new(const char *name, const char *token, int event_mode,
+                                   int early_return) {
+    fmi3Instance c = fmi3InstantiateCoSimulation(name, token, NULL, fmi3False, fmi3False,
+                                                 event_mode ? fmi3True : fmi3False,
+                                                 early_return ? fmi3True : fmi3False, NULL, 0,
+                                                 NULL, h_logger3, NULL);
+    CHECK(c != NULL);
+    return c;
+}
+
 /* the result of one fmi3DoStep */
 typedef struct {
     fmi3Status status;

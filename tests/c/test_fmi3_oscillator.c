@@ -14,12 +14,7 @@ enum { VR_TIME = 0, VR_K = 1, VR_POS_LIM = 2, VR_N_INT = 3, VR_USE_FORCE = 4, VR
        VR_MAX_INTERNAL_STEPS = 45, VR_HIT = 51, VR_HIT_INDICATOR = 61 };
 
 static fmi3Instance cs3(int event_mode, int early_return) {
-    fmi3Instance c = fmi3InstantiateCoSimulation("osc3", TOKEN, NULL, fmi3False, fmi3False,
-                                                 event_mode ? fmi3True : fmi3False,
-                                                 early_return ? fmi3True : fmi3False, NULL, 0,
-                                                 NULL, h_logger3, NULL);
-    CHECK(c != NULL);
-    return c;
+    return cs3_new("osc3", TOKEN, event_mode, early_return);
 }
 
 static fmi2Component cs2(void) {

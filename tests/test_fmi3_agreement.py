@@ -7,10 +7,10 @@ max(1, |value|)).  Model Exchange: fmpy's CVode at relative tolerance 1e-10 with
 location drives both; they agree to that tolerance.  fmpy.validate_fmu finds nothing in the
 FMI 3.0 FMU (schema, names, ModelStructure, start values, causality/variability, units).
 
-paper_earth_friction's Model Exchange run stops at 5 s: at 5.275 s fmpy's CVode re-locates the
-pivot_stiction event again and again at nanosecond spacing (15 000 events by 6.3 s, more than ten
-minutes to 20 s, with either FMU version); Co-Simulation, whose runtime locates events itself,
-runs the whole 20 s (33 events).
+paper_earth_friction's Model Exchange run stops at 5 s: from 5.275 s on fmpy's CVode locates the
+pivot_stiction event again and again at nanosecond spacing (measured with the FMI 2.0 FMU: 15 000
+events by 6.3 s, more than ten minutes to 20 s; the FMI 3.0 FMU takes the same steps up to 5 s);
+Co-Simulation, whose runtime locates events itself, runs the whole 20 s (33 events).
 """
 from __future__ import annotations
 

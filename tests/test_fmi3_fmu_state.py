@@ -13,8 +13,10 @@ from fmpy.fmi1 import FMICallException
 
 from fmi3_helpers import Instance3
 from fmi_helpers import rolled_state
+from test_fmi_state_fields import changed, read
 
 FMI3_ERROR = 3
+PENDING = 0x20  # the FMI 3 word's bit: an event pending for Event Mode (c_src/gw_fmi3_state.c)
 
 
 def outputs(inst) -> list[str]:
@@ -70,33 +72,70 @@ def test_co_simulation_state_restored_and_continued_bit_identically(fmi3_build):
     np.testing.assert_array_equal(np.array([list(row)[1:] for row in r[1:]], dtype=float), first)
 
 
-@pytest.mark.xfail(strict=True, reason="fmi3SetFMUState refuses a state taken with an update event pending: "
-                   "the pending update is not in the state, the indicator at or below 0 reads as unfired")
-def test_state_taken_with_an_event_pending_is_restored(fmi3_build):
-    """Event Mode used: a state taken when fmi3DoStep returned early with eventHandlingNeeded (the
-    stop at 2.111 s, its update still the master's) is set back and handled again alike."""
+def at_pending_update(fmi3_build):
+    """A slope_hold Co-Simulation instance with Event Mode used, stepped on fmpy's 0.1 s grid until
+    fmi3DoStep returns early with eventHandlingNeeded (the stop at 2.111 s): (instance, time)."""
     f = Instance3(fmi3_build("slope_hold").fmu, event_mode_used=True, early_return_allowed=True)
+    f.init()
+    while f.fmu3.updateDiscreteStates()[0]:
+        pass
+    f.fmu3.enterStepMode()
+    t, k = 0.0, 0
+    while True:
+        st, handling, _, early, t = f.do_step(t, (k + 1) * 0.1 - t)
+        assert st == 0 and t < 3.0
+        if early:
+            break
+        k += 1
+    assert handling and t == pytest.approx(2.111427723, abs=1e-9)
+    return f, t
+
+
+def test_state_taken_with_an_event_pending_is_restored(fmi3_build):
+    """Event Mode used: a state taken when fmi3DoStep returned early with eventHandlingNeeded (its
+    update still the master's) is set back and handled again alike: the same update
+    (fmi3UpdateDiscreteStates' results, the states it leaves), the same steps after."""
+    f, t = at_pending_update(fmi3_build)
+    states = [d.variable.derivative.name for d in f.md.derivatives]
     try:
-        f.init()
-        while f.fmu3.updateDiscreteStates()[0]:
-            pass
-        f.fmu3.enterStepMode()
-        t, k = 0.0, 0
-        while True:
-            st, handling, _, early, t = f.do_step(t, (k + 1) * 0.1 - t)
-            assert st == 0 and t < 3.0
-            if early:
-                break
-            k += 1
-        assert handling and t == pytest.approx(2.111427723, abs=1e-9)
+        before = f.get(*states)
+        updates = []
 
         def handle_and_continue():
             f.fmu3.enterEventMode()
-            f.fmu3.updateDiscreteStates()
+            update = f.update_discrete_states()
+            after = f.get(*states)
             f.fmu3.enterStepMode()
-            return continue_cs(f, t, t + 0.5, 0.01)
-        first, _ = repeated_after_restore(f, handle_and_continue)
-        assert first[-1, outputs(f).index("gamma_dot")] == 0.0
+            rows = continue_cs(f, t, t + 0.5, 0.01)
+            updates.append((update, after))
+            return np.concatenate([update, after, rows.ravel(), f.get(*states)])
+        repeated_after_restore(f, handle_and_continue)
+        (update, after), *_ = updates
+        assert update[0] == 0 and update[4]  # fmi3OK, valuesOfContinuousStatesChanged: applied
+        assert after != before  # the update changed the states
+        assert f.get("gamma_dot") == 0.0  # the wheel holds on the slope after it
+        assert [m for m in f.messages if m[0] > 0] == []
+    finally:
+        f.free()
+
+
+def test_state_whose_pending_update_and_word_disagree_is_refused(fmi3_build):
+    """The pending update is in the core's event bytes (bit 1: fires when it is applied) and in the
+    FMI 3 word (event pending): a state with one and not the other is refused, reason logged."""
+    f, _ = at_pending_update(fmi3_build)
+    try:
+        blob = bytes(f.fmu3.serializeFMUState(f.fmu3.getFMUState()))
+        pending = [i for i in range(read(blob, "ne")) if read(blob, f"flags[{i}]") & 2]
+        assert pending and read(blob, "front_word") & PENDING
+        cases = [({f"flags[{i}]": read(blob, f"flags[{i}]") & 1 for i in pending},
+                  "an event pending for Event Mode but no update event to apply"),
+                 ({"front_word": read(blob, "front_word") & ~PENDING},
+                  f"event flag {pending[0]} = {read(blob, f'flags[{pending[0]}]')} (must be 0 or 1)")]
+        for values, reason in cases:
+            n = len(f.messages)
+            with pytest.raises(FMICallException):
+                f.fmu3.deserializeFMUState(changed(blob, **values))
+            assert reason in "\n".join(m for _, _, m in f.messages[n:]), reason
     finally:
         f.free()
 

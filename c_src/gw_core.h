@@ -254,7 +254,8 @@ typedef struct {
     int time_free;   /* the front end lets its caller set t and x at will (Model Exchange) */
     int terminated;  /* the front end's state is one after a terminating event */
     int pending_event; /* the front end stopped at a located crossing and has not yet run its
-                          event update (FMI 3.0 Co-Simulation's early return, Event Mode) */
+                          event update (FMI 3.0 Co-Simulation's early return, Event Mode): the
+                          state holds that update (I->update_pending), and only then */
 } gw_state_facts;
 /* 1 if the fields of a checked state agree with each other and pass the live path's checks
  * (the experiment's times in order, events and their flags, the model's validity checks on its

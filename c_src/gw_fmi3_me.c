@@ -76,9 +76,9 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
     int jumped;
     GW3_FRAME(UpdateDiscreteStates);
     GW3_TRY(gw_me_event_update(I, fn, &r));
+    F->event_pending = 0; /* the core's pending update is consumed, even by a failed one */
     if (r == GW_EV_ERROR)
         GW3_FAIL("%s: the event update at t=%.17g failed", fn, I->t);
-    F->event_pending = 0;
     /* an update event (or the initial settling of the model's modes) changed the states */
     jumped = I->x_jumped;
     I->x_jumped = 0;

@@ -6,8 +6,10 @@
  *   front[0]  the FMI 3 state the state was taken in (one GW3_ST_* bit)
  *   front[1]  GW3_FRONT_FMI3 (this layer's mark), GW3_FRONT_INITIALIZED (fmi3ExitInitialization
  *             Mode had succeeded), GW3_FRONT_EVENT_PENDING (Co-Simulation: an fmi3DoStep
- *             returned early at an update event that Event Mode has not applied yet)
- * so that restoring gives back the instance exactly, Event Mode and pending event included.
+ *             returned early at an update event that Event Mode has not applied yet; the
+ *             core's state holds that update itself, the events it fires: gw_state.c)
+ * so that restoring gives back the instance exactly, Event Mode and pending event included:
+ * fmi3UpdateDiscreteStates after a restore applies the update it would have applied.
  * The mark keeps the two layers' states apart: the FMI 2.0 layer refuses a word with bits it
  * does not know, this one a word without the mark.
  *

@@ -33,7 +33,12 @@
  *           8*nx       double xc (compensation of the state's summation: x + xc is the
  *                             state to twice the working precision; 0 if x was written
  *                             since the solver left it)
- *           ne         uint8 event flags
+ *           ne         uint8 per event: bit 0 its flag (it has fired); bit 1 it fires in the
+ *                             instant whose update is pending (I->ev_fired of a gw_advance
+ *                             that stopped before the update, GW_STOP_BEFORE_UPDATE: FMI 3.0
+ *                             Co-Simulation's early return for Event Mode), so that the
+ *                             update applied after a restore is the one located there.  No
+ *                             other front end stops so: their bytes are 0 or 1
  *           4          uint32 CRC-32 (IEEE 802.3, as zlib's crc32) of every byte before it
  *
  * Reading (gw_state_check, gw_state_checks.c) refuses, with the reason logged: a wrong
@@ -41,7 +46,8 @@
  * single-bit and burst error up to 32 bits in the blob is caught); and any field outside the range that fmi2Set* and
  * the core accept: non-finite numbers, a solver that does not exist, tolerances, max_step or
  * max_internal_steps outside their ranges (gw_core.h: abs_tol 0 is valid, the budget a
- * whole number), flags that are neither 0 nor 1, non-positive nominals, a negative step
+ * whole number), flags that are neither 0 nor 1 (event bytes above 3; bit 1 is checked
+ * against the front end's word by gw_state_check_run), non-positive nominals, a negative step
  * size, err_old outside [0, 1] (an accepted step's error norm), a compensation xc_i larger
  * than an ulp of x_i (TwoSum leaves at most half of one).
  * So a restored state is one the instance could have reached itself.  The two front-end
@@ -66,6 +72,9 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #define GW_STATE_NINT 9
 #define GW_STATE_NDBL 11
 #define GW_STATE_NU64 5
+/* the bits of an event's byte */
+#define GW_STATE_FLAG_FIRED 1u
+#define GW_STATE_FLAG_PENDING 2u
 
 /* ---- CRC-32 (reflected polynomial 0xEDB88320), bitwise: the blobs are small ------------ */
 
@@ -201,7 +210,9 @@ static void gw_write_state(const gw_instance *I, const int front[2], gw_writer *
         gw_put(w, vec[i], (size_t)len[i] * sizeof(double));
     }
     for (i = 0; i < m->ne; i++) {
-        unsigned char f = I->flags[i] ? 1 : 0;
+        unsigned char f = (unsigned char)((I->flags[i] ? GW_STATE_FLAG_FIRED : 0) |
+                                          (I->update_pending && I->ev_fired[i] == 1
+                                               ? GW_STATE_FLAG_PENDING : 0));
         gw_put(w, &f, 1);
     }
     if (w->buf) {
@@ -371,10 +382,13 @@ GW_API void gw_state_apply(gw_instance *I, const unsigned char *buf) {
     I->n_events = sc.u64[4];
     gw_vectors_of(I, vec, len);
     for (i = 0; i < GW_STATE_NVEC; i++) gw_get(&r, vec[i], (size_t)len[i] * sizeof(double));
+    I->update_pending = 0;
     for (i = 0; i < m->ne; i++) {
         unsigned char f;
         gw_get(&r, &f, 1);
-        I->flags[i] = f ? 1 : 0;
+        I->flags[i] = (f & GW_STATE_FLAG_FIRED) != 0;
+        I->ev_fired[i] = (f & GW_STATE_FLAG_PENDING) != 0; /* 1: fires when the update is applied */
+        I->update_pending |= I->ev_fired[i];
     }
     memcpy(I->xc_x, I->x, (size_t)m->nx * sizeof(double)); /* xc belongs to this x */
     gw_update_atol_eff(I);

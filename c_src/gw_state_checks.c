@@ -110,9 +110,9 @@ static int gw_state_check_fields(gw_instance *I, const char *fn, const unsigned 
     for (i = 0; i < m->ne; i++) {
         unsigned char f;
         gw_get(&r, &f, 1);
-        if (f > 1) {
-            GW_LOG_ERR(I, "%s: FMU state holds event flag %d = %u (must be 0 or 1)", fn, i,
-                       (unsigned)f);
+        if (f > (GW_STATE_FLAG_FIRED | GW_STATE_FLAG_PENDING)) {
+            GW_LOG_ERR(I, "%s: FMU state holds event flag %d = %u (must be 0 or 1; 2 or 3 with "
+                       "an event update pending)", fn, i, (unsigned)f);
             return 0;
         }
     }
@@ -136,8 +136,8 @@ static double gw_state_vec_at(const gw_instance *I, const unsigned char *buf, in
     return d;
 }
 
-/* the event flags of a checked blob, after its vectors */
-static int gw_state_flag_at(const gw_instance *I, const unsigned char *buf, int i) {
+/* the byte of event i of a checked blob, after its vectors (GW_STATE_FLAG_* bits) */
+static unsigned gw_state_flag_at(const gw_instance *I, const unsigned char *buf, int i) {
     gw_reader r = gw_state_body(I, buf);
     gw_state_scalars sc;
     double *vec[GW_STATE_NVEC];
@@ -145,7 +145,7 @@ static int gw_state_flag_at(const gw_instance *I, const unsigned char *buf, int 
     gw_read_scalars(&r, &sc);
     gw_vectors_of(I, vec, len);
     for (j = 0; j < GW_STATE_NVEC; j++) r.pos += 8 * (size_t)len[j];
-    return buf[r.pos + (size_t)i] != 0;
+    return buf[r.pos + (size_t)i];
 }
 
 /* The times against each other: before the initialisation t is the start time and nothing has
@@ -234,17 +234,17 @@ static int gw_state_indicators(gw_instance *I, const char *fn, const unsigned ch
 }
 
 /* The events against the run (after the initialisation; before it, gw_initialize recomputes
- * them): an event whose indicator is at or below 0 has fired (every event fires when its
- * indicator reaches 0: gw_events_check, gw_event_update, gw_events_initial), a flag and its
- * firing time go together (0 and 0, or 1 and a time of the run), and the run terminated
- * exactly when a terminating event fired.  The indicator is both the stored one (the one at
- * the last event update or, once positive, seen since: gw_event_update, gw_event_observe) and,
- * unless the front end lets its caller set the state (Model Exchange: fmi2SetContinuousStates
- * takes any finite state, past a crossing until the next event update) or stopped at a
- * crossing whose update is pending, the one recomputed
- * from the state's own t, x, u, p (gw_state_indicators): a step ends at a crossing, so a state
- * past it with the event not fired (a fallen wheel not fallen) is refused.  1 or reason
- * logged. */
+ * them): an event whose indicator is at or below 0 has fired or fires in the pending update
+ * (every event fires when its indicator reaches 0: gw_events_check, gw_event_update,
+ * gw_events_initial), a flag and its firing time go together (0 and 0, or 1 and a time of
+ * the run), and the run terminated exactly when a terminating event fired.  The indicator is
+ * both the stored one (the one at the last event update or, once positive, seen since, or at
+ * the crossing whose update is pending: gw_event_update, gw_event_observe, gw_events_check)
+ * and, unless the front end lets its caller set the state (Model Exchange:
+ * fmi2SetContinuousStates takes any finite state, past a crossing until the next event
+ * update), the one recomputed from the state's own t, x, u, p (gw_state_indicators): a step
+ * ends at a crossing, so a state past it with the event not fired (a fallen wheel not fallen)
+ * is refused.  1 or reason logged. */
 static int gw_state_check_events(gw_instance *I, const char *fn, const unsigned char *buf,
                                  const gw_state_scalars *sc, const gw_state_facts *facts) {
     const gw_model *m = I->m;
@@ -253,7 +253,7 @@ static int gw_state_check_events(gw_instance *I, const char *fn, const unsigned 
     double *e_now = NULL;
     int i, ended = 0, ok = 1;
     if (!facts->initialised) return 1;
-    if (!facts->time_free && !facts->pending_event && m->ne > 0) {
+    if (!facts->time_free && m->ne > 0) {
         e_now = (double *)gw_alloc(I, (size_t)m->ne, sizeof(double));
         if (!e_now) {
             GW_LOG_ERR(I, "%s: out of memory", fn);
@@ -264,13 +264,15 @@ static int gw_state_check_events(gw_instance *I, const char *fn, const unsigned 
     for (i = 0; ok && i < m->ne; i++) {
         const char *name = m->event_names && m->event_names[i] ? m->event_names[i] : "?";
         const double e = gw_state_vec_at(I, buf, 5, i), te = gw_state_vec_at(I, buf, 7, i);
-        const int flag = gw_state_flag_at(I, buf, i);
-        if (!(e > 0.0) && !flag) {
+        const unsigned byte = gw_state_flag_at(I, buf, i);
+        const int flag = (byte & GW_STATE_FLAG_FIRED) != 0;
+        const int fires = (byte & GW_STATE_FLAG_PENDING) != 0;
+        if (!(e > 0.0) && !flag && !fires) {
             GW_LOG_ERR(I, "%s: FMU state holds e[%d] = %g (event %s) at or below 0 but the "
                        "event has not fired (an event fires when its indicator reaches 0)", fn,
                        i, e, name);
             ok = 0;
-        } else if (e_now && !(e_now[i] > 0.0) && !flag) {
+        } else if (e_now && !(e_now[i] > 0.0) && !flag && !fires) {
             GW_LOG_ERR(I, "%s: FMU state holds a state at which event %s has indicator %.4g, at or "
                        "below 0, but the event has not fired (a step ends where an indicator "
                        "reaches 0)", fn, name, e_now[i]);
@@ -328,12 +330,57 @@ static int gw_state_check_model(gw_instance *I, const char *fn, const unsigned c
     return ok;
 }
 
+/* The pending update (the event bytes' GW_STATE_FLAG_PENDING, gw_state.c) against the front
+ * end's word (facts->pending_event): both or neither.  It is what gw_events_check leaves
+ * pending (gw_event_deferred): its events at their crossing (indicator at or below 0), at
+ * least one update event and no terminating one, in a run that has not terminated.  1 or
+ * reason logged. */
+static int gw_state_check_pending(gw_instance *I, const char *fn, const unsigned char *buf,
+                                  const gw_state_scalars *sc, const gw_state_facts *facts) {
+    const gw_model *m = I->m;
+    int i, fires = 0, update = 0;
+    for (i = 0; i < m->ne; i++) {
+        const char *name = m->event_names && m->event_names[i] ? m->event_names[i] : "?";
+        const unsigned byte = gw_state_flag_at(I, buf, i);
+        const double e = gw_state_vec_at(I, buf, 5, i);
+        if (!(byte & GW_STATE_FLAG_PENDING)) continue;
+        if (!facts->pending_event) {
+            GW_LOG_ERR(I, "%s: FMU state holds event flag %d = %u (must be 0 or 1)", fn, i, byte);
+            return 0;
+        }
+        if (gw_event_action_of(I, i) == GW_EVENT_TERMINATE) {
+            GW_LOG_ERR(I, "%s: FMU state holds terminating event %s in its pending update (a "
+                       "step stops before an update only without one)", fn, name);
+            return 0;
+        }
+        if (e > 0.0) {
+            GW_LOG_ERR(I, "%s: FMU state holds e[%d] = %g (event %s) above 0 in its pending "
+                       "update (an event fires where its indicator reaches 0)", fn, i, e, name);
+            return 0;
+        }
+        fires = 1;
+        update |= gw_event_action_of(I, i) == GW_EVENT_UPDATE;
+    }
+    if (facts->pending_event && !update) {
+        GW_LOG_ERR(I, "%s: FMU state holds an event pending for Event Mode but no update event "
+                   "to apply", fn);
+        return 0;
+    }
+    if (fires && sc->ints[GW_SI_TERMINATED]) {
+        GW_LOG_ERR(I, "%s: FMU state holds an update pending after the simulation terminated",
+                   fn);
+        return 0;
+    }
+    return 1;
+}
+
 GW_API int gw_state_check_run(gw_instance *I, const char *fn, const unsigned char *buf,
                               const gw_state_facts *facts) {
     gw_reader r = gw_state_body(I, buf);
     gw_state_scalars sc;
     gw_read_scalars(&r, &sc);
-    return gw_state_check_times(I, fn, &sc, facts) &&
+    return gw_state_check_pending(I, fn, buf, &sc, facts) &&
+           gw_state_check_times(I, fn, &sc, facts) &&
            gw_state_check_events(I, fn, buf, &sc, facts) &&
            gw_state_check_model(I, fn, buf, facts);
 }

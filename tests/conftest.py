@@ -162,6 +162,13 @@ def example_build(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
+def fmi3_build(example_build):
+    """fmi3_build("paper_earth"): the FMI 3.0 BuildResult of an example scene, built once per
+    test run (example_build(name, fmi=3)); its FMI 2.0 twin is example_build(name)."""
+    return lambda name: example_build(name, fmi=3)
+
+
+@pytest.fixture(scope="session")
 def earth_build(example_build):
     """The paper's earth scene, built once (sources kept: earth_build.sources)."""
     return example_build("paper_earth")

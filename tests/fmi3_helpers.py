@@ -2,49 +2,51 @@
 any fmi3 function of it with well-formed arguments.
 
 FMI 3.0 passes the logger to fmi3Instantiate* itself (no process-global proxy as fmpy has for FMI
-2.0): each instance logs through a callback of its own into its own message list, kept alive as
-long as the instance.
+2.0): each instance logs through a callback of its own (fmpy holds it on the FMU object) into its
+own message list.  Values are accessed by name with the getter/setter of the variable's FMI 3.0 type
+(Float64, Int32, Enumeration as Int64, Boolean).
 """
 from __future__ import annotations
 
 import ctypes as C
-import shutil
-import weakref
+import re
 from pathlib import Path
 
-from fmpy import extract, read_model_description
 from fmpy.fmi3 import FMU3Model, FMU3Slave
+
+from fmi_helpers import StateVector, unpack
 
 OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
 B = C.c_bool  # fmi3Boolean
+EVENT = re.compile(r"event (\w+) at t=(\S+?):? ")
 
 
-class Instance3:
-    """One FMI 3 instance ("CS" or "ME") with named access to its variables; raw(fn, ...) calls any
-    fmi3 function of the library with fmpy's argument types and returns the fmi3Status (fmpy's
-    wrappers raise above fmi3Warning)."""
+def event_times(messages: list[str]) -> list[tuple[str, float]]:
+    """The events an FMU logged in category logEvents ("event NAME at t=%.17g..."), in order: the
+    17 digits give the located time exactly."""
+    return [(m.group(1), float(m.group(2))) for line in messages for m in [EVENT.search(line + " ")] if m]
+
+
+class Instance3(StateVector):
+    """One FMI 3 instance, iface "CS" (Co-Simulation) or "ME" (Model Exchange), with named access to
+    its variables (and, in Model Exchange, numpy access to its state vector: StateVector);
+    raw(fn, ...) calls any fmi3 function of the library with fmpy's argument types and returns the
+    fmi3Status (fmpy's wrappers raise above fmi3Warning)."""
+
+    get_derivatives = "getContinuousStateDerivatives"
 
     def __init__(self, fmu: str | Path, iface: str = "CS", unzipdir=None, md=None, name: str = "wheel",
                  logging_on: bool = True, event_mode_used: bool = False, early_return_allowed: bool = False):
-        self.fmu = str(fmu)
+        unpack(self, fmu, unzipdir, md)
         self.iface = iface
-        self.md = md or read_model_description(self.fmu)
-        self.unzipdir = str(unzipdir or extract(self.fmu))
-        if unzipdir is None:  # fmpy.extract's temporary directory: ours to remove when we go
-            weakref.finalize(self, shutil.rmtree, self.unzipdir, True)
-        self.vars = {v.name: v for v in self.md.modelVariables}
         self.nx = len(self.md.derivatives)
         self.nz = len(self.md.eventIndicators)
-        self.messages: list[tuple[int, str, str]] = []
         cls = FMU3Slave if iface == "CS" else FMU3Model
         ident = (self.md.coSimulation if iface == "CS" else self.md.modelExchange).modelIdentifier
         self.fmu3 = cls(guid=self.md.guid, unzipDirectory=self.unzipdir, modelIdentifier=ident,
                         instanceName=name)
+        self.me = self.fmu3
         self.instantiate(logging_on, event_mode_used, early_return_allowed)
-
-    def _log(self, env, status, category, message) -> None:
-        self.messages.append((int(status), (category or b"").decode(errors="replace"),
-                              (message or b"").decode(errors="replace")))
 
     def instantiate(self, logging_on: bool = True, event_mode_used: bool = False,
                     early_return_allowed: bool = False) -> None:
@@ -52,11 +54,16 @@ class Instance3:
         if getattr(self.fmu3, "component", None):
             self.free()
         self.event_mode_used, self.early_return_allowed = event_mode_used, early_return_allowed
+        messages = self.messages  # the callback must not keep the instance alive
+
+        def logger(env, status, category, message):
+            messages.append((int(status), (category or b"").decode(errors="replace"),
+                             (message or b"").decode(errors="replace")))
         if self.iface == "CS":
             self.fmu3.instantiate(loggingOn=logging_on, eventModeUsed=event_mode_used,
-                                  earlyReturnAllowed=early_return_allowed, logMessage=self._log)
+                                  earlyReturnAllowed=early_return_allowed, logMessage=logger)
         else:
-            self.fmu3.instantiate(loggingOn=logging_on, logMessage=self._log)
+            self.fmu3.instantiate(loggingOn=logging_on, logMessage=logger)
 
     @property
     def slave(self):
@@ -66,8 +73,11 @@ class Instance3:
         """out: the array the call writes (for a caller that checks it; unused here)"""
         return self.fmu3._functions[fn](self.fmu3.component, *args)
 
+    def log(self) -> list[str]:
+        return [m for _, _, m in self.messages]
+
     def log_text(self) -> str:
-        return "\n".join(m for _, _, m in self.messages)
+        return "\n".join(self.log())
 
     def vr(self, name: str) -> int:
         return self.vars[name].valueReference

@@ -43,18 +43,24 @@ def reproxy() -> None:
     addLoggerProxy(byref(callbacks))
 
 
+def unpack(inst, fmu: str | Path, unzipdir=None, md=None) -> None:
+    """An instance's FMU file, model description, unzipped directory (fmpy.extract's temporary
+    one, removed with the instance, unless given), variables by name and empty message list."""
+    inst.fmu = str(fmu)
+    inst.md = md or read_model_description(inst.fmu)
+    inst.unzipdir = str(unzipdir or extract(inst.fmu))
+    if unzipdir is None:
+        weakref.finalize(inst, shutil.rmtree, inst.unzipdir, True)
+    inst.vars = {v.name: v for v in inst.md.modelVariables}
+    inst.messages = []
+
+
 class _Instance:
     """One FMU instance of either interface with named access to its variables."""
 
     def __init__(self, fmu: str | Path, cls, unzipdir=None, name: str = "wheel", md=None,
                  logging_on: bool = True):
-        self.fmu = str(fmu)
-        self.md = md or read_model_description(self.fmu)
-        self.unzipdir = str(unzipdir or extract(self.fmu))
-        if unzipdir is None:  # fmpy.extract's temporary directory: ours to remove when we go
-            weakref.finalize(self, shutil.rmtree, self.unzipdir, True)
-        self.vars = {v.name: v for v in self.md.modelVariables}
-        self.messages: list[tuple[int, str, str]] = []
+        unpack(self, fmu, unzipdir, md)
         self.env_id = next(_IDS)
         _INSTANCES[self.env_id] = self
         self._callbacks = fmi2CallbackFunctions()
@@ -135,14 +141,14 @@ def rolled_state(fmu: str | Path, seconds: float = 1.0) -> tuple[Slave, bytes]:
     return s, bytes(s.slave.serializeFMUstate(s.slave.getFMUstate()))
 
 
-class Model(_Instance):
-    """A Model Exchange instance (FMU2Model) with numpy access to the state vector."""
+class StateVector:
+    """numpy access to the continuous states of a Model Exchange instance: self.me is the fmpy
+    FMU2Model or FMU3Model, self.nx the number of states, self.get_derivatives the name of the
+    version's derivatives function."""
 
-    def __init__(self, fmu: str | Path, unzipdir: str | Path | None = None, name: str = "wheel",
-                 md=None, logging_on: bool = True):
-        super().__init__(fmu, FMU2Model, unzipdir, name, md, logging_on)
-        self.nx = len(self.md.derivatives)
-        self.nz = self.md.numberOfEventIndicators
+    me = None
+    nx = 0
+    get_derivatives = "getDerivatives"
 
     @staticmethod
     def _ptr(a: np.ndarray):
@@ -150,18 +156,29 @@ class Model(_Instance):
 
     def states(self) -> np.ndarray:
         x = np.zeros(self.nx)
-        self.fmu2.getContinuousStates(self._ptr(x), self.nx)
+        self.me.getContinuousStates(self._ptr(x), self.nx)
         return x
 
     def set_states(self, t: float, x: np.ndarray) -> None:
-        self.fmu2.setTime(t)
+        self.me.setTime(t)
         xc = np.ascontiguousarray(x, dtype=float)
-        self.fmu2.setContinuousStates(self._ptr(xc), self.nx)
+        self.me.setContinuousStates(self._ptr(xc), self.nx)
 
     def derivatives(self) -> np.ndarray:
         d = np.zeros(self.nx)
-        self.fmu2.getDerivatives(self._ptr(d), self.nx)
+        getattr(self.me, self.get_derivatives)(self._ptr(d), self.nx)
         return d
+
+
+class Model(StateVector, _Instance):
+    """A Model Exchange instance (FMU2Model) with numpy access to the state vector."""
+
+    def __init__(self, fmu: str | Path, unzipdir: str | Path | None = None, name: str = "wheel",
+                 md=None, logging_on: bool = True):
+        super().__init__(fmu, FMU2Model, unzipdir, name, md, logging_on)
+        self.me = self.fmu2
+        self.nx = len(self.md.derivatives)
+        self.nz = self.md.numberOfEventIndicators
 
     def indicators(self) -> np.ndarray:
         z = np.zeros(self.nz)

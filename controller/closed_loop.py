@@ -3,7 +3,8 @@
 build_closed_loop(scene) builds the wheel from its scene (the same path as `gyrowheel build`),
 designs the gain-scheduled controller on the scene's own model (controller/schedule.py) unless a
 schedule is given, builds the controller FMU through the general path (model/system.py ->
-gyrowheel.fmu_build.builder.build_spec_fmu) and writes <name>.ssp. Connections are by name:
+gyrowheel.fmu_build.builder.build_spec_fmu) and writes <name>.ssp; each FMU as FMI 2.0 or 3.0
+(build_closed_loop's fmi). Connections are by name:
 wheel outputs alpha, alpha_dot, beta, beta_dot, vx, vy, tilt -> controller inputs;
 controller outputs tilt_cmd, drive_torque -> wheel inputs.
 """

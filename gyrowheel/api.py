@@ -453,8 +453,9 @@ def animate(result, output, *, R: float | None = None, fmu=None, component: str 
 
 
 def system_run(system, *, step: float = 0.01, stop_time: float | None = None, start_values=None, output=None):
-    """Run a system of FMUs (SSP 1.0) with gyrowheel's own master on fmpy: fixed communication
-    step, Jacobi exchange, like libcosim's fixed-step algorithm (docs/system.md).
+    """Run a system of FMUs (SSP 1.0; FMI 2.0 and FMI 3.0 Co-Simulation FMUs, side by side) with
+    gyrowheel's own master on fmpy: fixed communication step, Jacobi exchange, like libcosim's
+    fixed-step algorithm (docs/system.md).
 
     system: an .ssp file (a path; its FMUs are unpacked into a temporary directory, removed
     after the run) or a gyrowheel.cosim.system.SystemDescription. step [s]: the communication

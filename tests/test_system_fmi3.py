@@ -2,7 +2,6 @@
 the fall as fmi3DoStep's terminateSimulation, the FMU's own error messages, ecos and libcosim."""
 from __future__ import annotations
 
-import math
 import zipfile
 from pathlib import Path
 
@@ -63,19 +62,18 @@ def test_fmi2_and_fmi3_components_in_one_system(earth_loop, earth_loop_fmi3, whe
     assert _largest_difference(run(mixed, 0.01, stop_time=5.0).data, run(plain, 0.01, stop_time=5.0).data) == 0.0
 
 
-def test_an_fmi3_component_ends_the_run_at_its_last_successful_time(earth_loop, earth_loop_fmi3):
-    """The wheel alone, not spinning, falls: fmi3DoStep says terminateSimulation and
-    lastSuccessfulTime (the located fall); the system's last row is there, at the time and
-    state the FMI 2.0 wheel reports through fmi2Discard and fmi2LastSuccessfulTime."""
-    starts = {"wheel": {"gamma_dot": 0.0}}
+def test_an_fmi3_component_ends_the_run_at_its_last_successful_time(earth_fmu, example_build):
+    """The paper's wheel alone, not spinning, falls at t = 0.4335 s, inside a 10 ms step: the FMI 3.0
+    wheel says so with fmi3DoStep's terminateSimulation and lastSuccessfulTime; the system's last
+    row is there, at the time and state the FMI 2.0 wheel reports through fmi2Discard and
+    fmi2LastSuccessfulTime."""
     ends = []
-    for loop in (earth_loop, earth_loop_fmi3):
-        r = run(SystemDescription("alone", [Component("wheel", loop.wheel_fmu)], [], stop_time=5.0), 0.01,
-                start_values=starts)
+    for fmu in (earth_fmu, example_build("paper_earth", fmi=3).fmu):
+        r = run(SystemDescription("alone", [Component("wheel", fmu)], [], stop_time=2.0), 0.01,
+                start_values={"wheel": {"gamma_dot": 0.0}})
         assert r.stopped_by == "wheel"
         ends.append(r.data)
-    fall = ends[1]["time"][-1]
-    assert 0.0 < fall < 5.0 and not math.isclose(fall * 100, round(fall * 100), abs_tol=1e-6)  # between points
+    assert ends[1]["time"][-1] == pytest.approx(0.4335, abs=1e-3) and len(ends[1]) == 45  # 0 .. 0.43, the fall
     assert _largest_difference(ends[0], ends[1]) == 0.0
 
 
@@ -116,3 +114,53 @@ def test_the_closed_loop_fmi_option():
         component_versions({"wheels": 3}, 2)
     with pytest.raises(ArgumentError, match="fmi: must be 2 or 3"):
         component_versions(4, 2)
+
+
+@pytest.mark.parametrize("fmi_type, value, expected", [
+    ("Float64", "2.5", 2.5), ("Int32", 7, 7), ("UInt8", 255, 255), ("Enumeration", "3", 3), ("Boolean", "true", True)])
+def test_fmi3_values_are_read_as_their_type(fmi_type, value, expected):
+    from types import SimpleNamespace
+
+    from gyrowheel.cosim.ssp import coerce_value
+    assert coerce_value(SimpleNamespace(type=fmi_type), value, "c.v") == expected
+
+
+@pytest.mark.parametrize("fmi_type, value", [("UInt8", 256), ("UInt8", -1), ("Int8", 128), ("Int32", 2**31),
+                                             ("Int32", 1.5), ("Float64", True)])
+def test_fmi3_values_outside_their_type_are_refused(fmi_type, value):
+    """A value ctypes would wrap or truncate is refused, naming the variable and its type."""
+    from types import SimpleNamespace
+
+    from gyrowheel.cosim.ssp import coerce_value
+    with pytest.raises(SystemFileError, match=f"c.v: {value!r} is not a valid {fmi_type}"):
+        coerce_value(SimpleNamespace(type=fmi_type), value, "c.v")
+
+
+FMI3_DESCRIPTION = """<fmiModelDescription fmiVersion="3.0" modelName="m" instantiationToken="t">
+  <CoSimulation modelIdentifier="m"/>
+  <ModelVariables>
+    <Float64 name="time" valueReference="0" causality="independent" variability="continuous"/>
+    <Float64 name="u" valueReference="1" causality="input" start="0"/>
+    <Int32 name="k" valueReference="2" causality="input" start="0"/>
+    <Float64 name="y" valueReference="3" causality="output"/>
+    <Float64 name="z" valueReference="4" causality="output"/>
+    <Float64 name="w" valueReference="5" causality="output"/>
+  </ModelVariables>
+  <ModelStructure>
+    <Output valueReference="3" dependencies="1 0"/>
+    <Output valueReference="4" dependencies=""/>
+    <Output valueReference="5"/>
+    {extra}
+  </ModelStructure>
+</fmiModelDescription>"""
+
+
+def test_fmi3_feedthrough_reads_outputs_by_value_reference(tmp_path):
+    """FMI 3.0 ModelStructure/Output: variables and dependencies by value reference; of the
+    dependencies only inputs count; no attribute means every input (FMI 3.0.2 section 2.4.8)."""
+    (tmp_path / "modelDescription.xml").write_text(FMI3_DESCRIPTION.format(extra=""))
+    assert feedthrough(tmp_path) == {"y": ("u",), "w": ("u", "k")}
+    (tmp_path / "modelDescription.xml").write_text(FMI3_DESCRIPTION.format(extra='<Output valueReference="9"/>'))
+    with pytest.raises(SystemFileError, match="ModelStructure has an Output with a bad valueReference or "
+                                              "dependencies"):
+        feedthrough(tmp_path)

@@ -157,3 +157,42 @@ def test_euler_disk_scene_starts_in_steady_precession():
     xdot = np.array(fns["ode"](0.0, x0, [], p)).ravel()
     assert abs(xdot[6]) < 1e-9 * x0[5] ** 2  # beta_ddot against the scale alpha_dot^2
     assert np.abs(xdot[:2]).max() < 1e-15 * w["R"] * x0[5]
+
+
+# -- docs/fmi.md: what the FMI 3.0 FMU does not have, and how it answers ----------------------
+
+def _absent_rows():
+    text = (DOCS / "fmi.md").read_text()
+    section = text[text.index("### What the FMU does not have"):text.index("### The state machine", text.index("## FMI 3.0"))]
+    return [line.split(" | ") for line in section.splitlines() if line.startswith("| `fmi3")]
+
+
+def _named_functions(cell: str) -> set[str]:
+    """`fmi3Get/SetX` names fmi3GetX and fmi3SetX; `...Y` after it, fmi3GetY and fmi3SetY."""
+    names, pair = set(), ("fmi3",)
+    for token in re.findall(r"`([^`]+)`", cell):
+        if token.startswith("fmi3Get/Set"):
+            pair = ("fmi3Get", "fmi3Set")
+            token = token[len("fmi3Get/Set"):]
+        elif token.startswith("..."):
+            token = token[3:]
+        else:
+            pair = ("",)
+        names |= {prefix + token for prefix in pair}
+    return names
+
+
+def test_fmi_docs_list_every_absent_function_with_its_logged_reason():
+    """docs/fmi.md, "What the FMU does not have": the table names exactly the functions of
+    c_src/gw_fmi3_absent.c, and every reason it quotes is made of the C source's text."""
+    source = (ROOT / "c_src" / "gw_fmi3_absent.c").read_text()
+    defined = set(re.findall(r"^fmi3Status (fmi3\w+)\(", source, re.M))
+    rows = _absent_rows()
+    listed = set().union(*(_named_functions(cells[0]) for cells in rows))
+    assert listed == defined
+    c_text = re.sub(r'"\s*\n\s*"', "", source)  # C's adjacent string literals joined
+    quoted = [q for cells in rows for q in re.findall(r'"([^"]+)"', cells[1])]
+    assert len(quoted) >= 4
+    for q in quoted:  # the pieces a message is put together from ("%s: %s")
+        for part in re.split(r"\.\.\.|: ", q):
+            assert part.strip() in c_text, part

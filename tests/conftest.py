@@ -191,19 +191,34 @@ def fmi3_earth_fmu(fmi3_fmu) -> Path:
     return fmi3_fmu("paper_earth")
 
 
+def _all_platforms(tmp_path_factory, fmi: int):
+    """The paper's earth scene with the Taylor kernel and binaries for every platform of `all`,
+    as an FMI `fmi` FMU, built once per run, sources kept."""
+    path = SCENES / "paper_earth.toml"
+
+    def make(out: Path):
+        built = build_fmu(load_scene(path), out / "paper_earth.fmu", build_dir=out / "build", taylor=True,
+                          platforms="all", fmi=fmi)
+        return _Built(built, path.read_text(), path.name)
+    key = "paper_earth_all_platforms" + ("_fmi3" if fmi == 3 else "")
+    return shared_build(tmp_path_factory, key, make).result()
+
+
 @pytest.fixture(scope="session")
 def all_platforms_build(tmp_path_factory):
     """The paper's earth scene with the Taylor kernel and binaries for every platform of `all`
     (gyrowheel.fmu_build.platforms.ALL), built once per run, sources kept (.sources).  zig keeps
     its C libraries in its global cache: on a fresh machine the first build also builds them
     (about 80 s, most of it Windows' C library); later runs take about 10 s."""
-    path = SCENES / "paper_earth.toml"
+    return _all_platforms(tmp_path_factory, 2)
 
-    def make(out: Path):
-        built = build_fmu(load_scene(path), out / "paper_earth.fmu", build_dir=out / "build", taylor=True,
-                          platforms="all")
-        return _Built(built, path.read_text(), path.name)
-    return shared_build(tmp_path_factory, "paper_earth_all_platforms", make).result()
+
+@pytest.fixture(scope="session")
+def all_platforms_build_fmi3(tmp_path_factory):
+    """The same FMU as all_platforms_build as an FMI 3.0 FMU: binaries in the platform-tuple
+    folders (x86_64-linux, ..., x86_64-darwin and aarch64-darwin apart).  zig's C libraries
+    are those of the FMI 2 build, from zig's cache: about 10 s more."""
+    return _all_platforms(tmp_path_factory, 3)
 
 
 @pytest.fixture(scope="session")
@@ -286,3 +301,11 @@ def platform_drivers(all_platforms_build, tmp_path_factory) -> dict:
     builds Windows' once, in that build)."""
     from platform_run import build_drivers
     return shared_build(tmp_path_factory, "platform_drivers", build_drivers)
+
+
+@pytest.fixture(scope="session")
+def platform_drivers_fmi3(all_platforms_build_fmi3, tmp_path_factory) -> dict:
+    """tests/platform_driver/fmu3_driver.c (an FMI 3.0 Co-Simulation master) built as
+    platform_drivers builds the FMI 2.0 one: {platform: executable}."""
+    from platform_run import build_drivers
+    return shared_build(tmp_path_factory, "platform_drivers_fmi3", lambda out: build_drivers(out, fmi=3))

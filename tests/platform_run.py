@@ -1,5 +1,6 @@
 """Run an FMU's binaries for other platforms on this machine: tests/platform_driver/fmu_driver.c
-(a minimal Co-Simulation master) built for each platform, and the emulators that run it.
+(a minimal FMI 2.0 Co-Simulation master) or fmu3_driver.c (FMI 3.0) built for each platform,
+and the emulators that run it.
 
 x86_64-linux runs natively (the driver built by gcc); aarch64-linux under qemu-user with the
 aarch64 C library of Debian's libc6-arm64-cross; x86_64-windows under Wine with a private
@@ -21,7 +22,8 @@ import fmpy
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-DRIVER = ROOT / "tests" / "platform_driver" / "fmu_driver.c"
+DRIVERS = {2: ROOT / "tests" / "platform_driver" / "fmu_driver.c",  # each FMI version's master
+           3: ROOT / "tests" / "platform_driver" / "fmu3_driver.c"}
 FMI_HEADERS = Path(fmpy.__file__).resolve().parent / "c-code"
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2"]
 AARCH64_ROOT = Path("/usr/aarch64-linux-gnu")  # Debian libc6-arm64-cross: qemu-aarch64 -L
@@ -30,16 +32,21 @@ DEBIAN_WINE64 = Path("/usr/lib/wine/wine64")  # Debian's wine64: the loader `win
 DRIVER_PLATFORMS = ("x86_64-linux", "aarch64-linux", "x86_64-windows")
 
 
-def build_drivers(out: Path) -> dict[str, Path]:
-    """fmu_driver.c built for DRIVER_PLATFORMS into `out`, all at once: x86_64-linux by gcc,
-    the others by zig's C compiler (gyrowheel.fmu_build.platforms.zig_command), each with the
-    strict flags; a warning is an error.  Returns {platform: executable}."""
+def build_drivers(out: Path, fmi: int = 2) -> dict[str, Path]:
+    """The driver of FMI version `fmi` (DRIVERS) built for DRIVER_PLATFORMS into `out`, all at
+    once: x86_64-linux by gcc, the others by zig's C compiler
+    (gyrowheel.fmu_build.platforms.zig_command), each with the strict flags; a warning is an
+    error.  Returns {platform: executable}."""
     from gyrowheel.fmu_build.platforms import PLATFORMS, zig_command
 
     zig = zig_command()
-    common = [*STRICT, f"-I{FMI_HEADERS}", str(DRIVER)]
-    exes = {"x86_64-linux": out / "fmu_driver", "aarch64-linux": out / "fmu_driver_aarch64",
-            "x86_64-windows": out / "fmu_driver.exe"}
+    source = DRIVERS[fmi]
+    # fmi3FunctionTypes.h declares two callbacks without a prototype, void (*)(), which zig's
+    # clang reports under -Wpedantic (c_src/gw_fmi3.h turns it off around its include)
+    quiet = ["-Wno-strict-prototypes"] if fmi == 3 else []
+    common = [*STRICT, *quiet, f"-I{FMI_HEADERS}", str(source)]
+    exes = {"x86_64-linux": out / source.stem, "aarch64-linux": out / f"{source.stem}_aarch64",
+            "x86_64-windows": out / f"{source.stem}.exe"}
     commands = {
         "x86_64-linux": ["gcc", *common, "-ldl", "-o", str(exes["x86_64-linux"])],
         # glibc 2.17 (the FMU's aarch64 binary's target) keeps dlopen in libdl
@@ -53,7 +60,7 @@ def build_drivers(out: Path) -> dict[str, Path]:
                                            commands.values())))
     for name, r in done.items():
         assert r.returncode == 0 and not (r.stdout + r.stderr).strip(), \
-            f"fmu_driver.c for {name}: {' '.join(commands[name])}\n{r.stdout}{r.stderr}"
+            f"{source.name} for {name}: {' '.join(commands[name])}\n{r.stdout}{r.stderr}"
     return exes
 
 
@@ -88,25 +95,31 @@ def windows_path(path: Path) -> str:
 
 @dataclass
 class Run:
-    """What fmu_driver printed: rows[i] = [time, value...] at each communication point (the
-    last one at the fall when the FMU ended the run), fall = the fall's time or None, seconds
-    = the wall time of the run (with its emulator)."""
+    """What a driver printed: rows[i] = [time, value...] at each communication point (the
+    last one at the fall when the FMU ended the run), fall = the fall's time or None,
+    terminated = the FMU ended the run (FMI 2: fmi2Terminated after fmi2Discard; FMI 3:
+    terminateSimulation), early = FMI 3's earlyReturn with it, seconds = the wall time of the
+    run (with its emulator)."""
     rows: list[list[float]]
     fall: float | None
     terminated: bool
     seconds: float
     stderr: str
+    early: bool = False
 
 
-def parse(stdout: str) -> tuple[list[list[float]], float | None, bool]:
-    rows, fall, terminated = [], None, False
+def parse(stdout: str) -> tuple[list[list[float]], float | None, bool, bool]:
+    """(rows, fall, terminated, early) of a driver's output: `# discard terminated=0|1 time=T`
+    (fmu_driver) or `# terminate early=0|1 time=T` (fmu3_driver) ends a run at T."""
+    rows, fall, terminated, early = [], None, False, False
     for line in stdout.splitlines():
-        if line.startswith("# discard"):
+        if line.startswith(("# discard", "# terminate")):
             fields = dict(f.split("=") for f in line.split()[2:])
-            terminated, fall = fields["terminated"] == "1", float(fields["time"])
+            terminated = fields.get("terminated", "1") == "1"
+            fall, early = float(fields["time"]), fields.get("early") == "1"
         elif line.strip():
             rows.append([float(v) for v in line.split()])
-    return rows, fall, terminated
+    return rows, fall, terminated, early
 
 
 def run_quietly(command: list[str], env: dict | None = None, timeout: float = 300):
@@ -124,8 +137,8 @@ def run_quietly(command: list[str], env: dict | None = None, timeout: float = 30
 
 
 def run_driver(command: list[str], env: dict | None = None, timeout: float = 300) -> Run:
-    """Run fmu_driver (with its emulator in front); asserts exit 0."""
+    """Run a driver (with its emulator in front); asserts exit 0."""
     status, stdout, stderr, seconds = run_quietly(command, env, timeout)
     assert status == 0, f"{' '.join(command)} exited {status}\n{stderr}\n{stdout[-2000:]}"
-    rows, fall, terminated = parse(stdout)
-    return Run(rows, fall, terminated, seconds, stderr)
+    rows, fall, terminated, early = parse(stdout)
+    return Run(rows, fall, terminated, seconds, stderr, early)

@@ -1,20 +1,25 @@
-"""A built FMU's sources/ as an importer builds them (docs/runtime.md).
+"""A built FMU's sources/ as an importer builds them (docs/runtime.md), for the FMI 2.0 FMU
+and the FMI 3.0 FMU of a scene (parametrized by fmi: FMI 2 lists its source in
+modelDescription.xml <SourceFiles>, FMI 3 in sources/buildDescription.xml).
 
   test_every_source_file_is_warning_clean   each .c of sources/ alone and the unity file, with
                                             -std=c99 -Wall -Wextra -Wpedantic -Werror, gcc and
                                             clang (clang skipped only where it is not installed;
                                             `make test` and CI install it)
-  test_plain_cc_build_exports_only_fmi2     `cc -shared -fPIC` with no visibility flag, of the
-                                            listed source and of every .c file: nm -D lists
-                                            exactly the fmi2 functions; nothing writable
-  test_each_compiler_exports_only_fmi2      the listed source built by gcc and by clang, of an FMU
-                                            without and one with the Taylor kernel: nm -D lists
-                                            exactly the fmi2 functions (no `<name>.resolver`)
+  test_plain_cc_build_exports_only_the_fmi_functions   `cc -shared -fPIC` with no visibility
+                                            flag, of the listed source and of every .c file:
+                                            nm -D lists exactly the functions of the version's
+                                            header; nothing writable
+  test_each_compiler_exports_only_the_fmi_functions   the listed source built by gcc and by
+                                            clang, of an FMU without and one with the Taylor
+                                            kernel: nm -D lists exactly those functions (no
+                                            `<name>.resolver`)
   test_two_fmus_with_rtld_global            paper_earth and euler_disk built that way, loaded with
                                             RTLD_GLOBAL into one process: both instantiate and
                                             reproduce their own FMU's results
-  test_fmpy_build_platform_binary_strict    fmpy's CMake build (only the listed <SourceFiles>)
-                                            with all warnings as errors, then simulated
+  test_fmpy_build_platform_binary_strict    fmpy's CMake build (only the listed source files)
+                                            with all warnings as errors, then simulated: the
+                                            results of the FMU as built
   test_make_internal_*                      gyrowheel.fmu_build.casadi_c on CasADi-shaped input
 """
 from __future__ import annotations
@@ -37,11 +42,17 @@ STRICT_C99 = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror"]
 STATES = ["x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot"]
 
 
-def fmi2_function_names() -> set[str]:
+FMI_VERSIONS = (2, 3)
+UNITY = {2: "gw_fmu.c", 3: "gw_fmu3.c"}  # the one source file each version's FMU lists
+BINARIES = {2: "linux64", 3: "x86_64-linux"}  # this machine's folder (FMI 2.0.4 section 2.3; FMI 3.0 tuple)
+
+
+def fmi_function_names(fmi: int = 2) -> set[str]:
+    """The functions fmi<fmi>Functions.h declares (FMI<N>_Export fmi<N>XTYPE fmi<N>X;)."""
     import re
-    names = set(re.findall(r"FMI2_Export\s+fmi2\w+TYPE\s+(fmi2\w+)\s*;",
-                           (FMI_HEADERS / "fmi2Functions.h").read_text()))
-    assert len(names) >= 40
+    names = set(re.findall(rf"FMI{fmi}_Export\s+fmi{fmi}\w+TYPE\s+(fmi{fmi}\w+)\s*;",
+                           (FMI_HEADERS / f"fmi{fmi}Functions.h").read_text()))
+    assert len(names) == {2: 44, 3: 75}[fmi]
     return names
 
 
@@ -67,49 +78,54 @@ def _exports(lib: Path) -> set[str]:
     return {line.split()[-1] for line in nm.stdout.splitlines() if line.strip()}
 
 
+@pytest.mark.parametrize("fmi", FMI_VERSIONS)
 @pytest.mark.parametrize("cc", ["gcc", "clang"])
-def test_every_source_file_is_warning_clean(cc, earth_fmu, tmp_path):
+def test_every_source_file_is_warning_clean(cc, fmi, example_build, tmp_path):
     if shutil.which(cc) is None:
         pytest.skip(f"{cc} is not installed (make test installs it: Debian package {cc})")
-    src = _unzip(earth_fmu, tmp_path / "fmu") / "sources"
+    src = _unzip(example_build("paper_earth", fmi=fmi).fmu, tmp_path / "fmu") / "sources"
     files = sorted(src.glob("*.c"))
-    assert len(files) >= 20 and (src / "gw_funcs.c") in files and (src / "gw_fmu.c") in files
+    assert len(files) >= 20 and (src / "gw_funcs.c") in files and (src / UNITY[fmi]) in files
     for path in files:
         r = subprocess.run([cc, *STRICT_C99, "-c", f"-I{src}", str(path), "-o", str(tmp_path / "x.o")],
                            capture_output=True, text=True)
         assert r.returncode == 0, f"{cc} {path.name}:\n{r.stderr}"
     # the library itself, optimised as importers do (more warnings appear with optimisation)
-    r = subprocess.run([cc, *STRICT_C99, "-O2", "-shared", "-fPIC", f"-I{src}", str(src / "gw_fmu.c"),
+    r = subprocess.run([cc, *STRICT_C99, "-O2", "-shared", "-fPIC", f"-I{src}", str(src / UNITY[fmi]),
                         "-o", str(tmp_path / "lib.so"), "-lm"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
 
 
+@pytest.mark.parametrize("fmi", FMI_VERSIONS)
 @pytest.mark.parametrize("which", ["listed", "every_c_file"])
-def test_plain_cc_build_exports_only_fmi2(which, earth_fmu, tmp_path):
-    root = _unzip(earth_fmu, tmp_path / "fmu")
+def test_plain_cc_build_exports_only_the_fmi_functions(which, fmi, example_build, tmp_path):
+    """The listed source: modelDescription.xml's <SourceFiles> (FMI 2), sources/buildDescription.xml
+    (FMI 3, read by fmpy); every .c file: the same library, the parts compiled alone are empty."""
+    root = _unzip(example_build("paper_earth", fmi=fmi).fmu, tmp_path / "fmu")
     src = root / "sources"
     listed = read_model_description(str(root)).buildConfigurations[0].sourceFileSets[0].sourceFiles
-    assert listed == ["gw_fmu.c"]
+    assert listed == [UNITY[fmi]]
     files = [src / n for n in listed] if which == "listed" else sorted(src.glob("*.c"))
     lib = _plain_cc(files, src, tmp_path / "paper_earth.so")
-    assert _exports(lib) == fmi2_function_names()
-    obj = tmp_path / "gw_fmu.o"
-    subprocess.run(["cc", "-c", "-O2", f"-I{src}", str(src / "gw_fmu.c"), "-o", str(obj)], check=True)
+    assert _exports(lib) == fmi_function_names(fmi)
+    obj = tmp_path / "unity.o"
+    subprocess.run(["cc", "-c", "-O2", f"-I{src}", str(src / UNITY[fmi]), "-o", str(obj)], check=True)
     assert writable_symbols(obj) == []
 
 
+@pytest.mark.parametrize("fmi", FMI_VERSIONS)
 @pytest.mark.parametrize("cc", ["gcc", "clang"])
 @pytest.mark.parametrize("kernel", [False, True], ids=["no_kernel", "kernel"])
-def test_each_compiler_exports_only_fmi2(kernel, cc, example_build, tmp_path):
+def test_each_compiler_exports_only_the_fmi_functions(kernel, cc, fmi, example_build, tmp_path):
     if shutil.which(cc) is None:
         pytest.skip(f"{cc} is not installed (make test installs it: Debian package {cc})")
-    src = _unzip(example_build("paper_earth", taylor=kernel).fmu, tmp_path / "fmu") / "sources"
+    src = _unzip(example_build("paper_earth", taylor=kernel, fmi=fmi).fmu, tmp_path / "fmu") / "sources"
     assert ("GW_TL_NX" in (src / "gw_taylor_model.h").read_text()) == kernel
     lib = tmp_path / "paper_earth.so"
-    r = subprocess.run([cc, "-shared", "-fPIC", "-O2", f"-I{src}", str(src / "gw_fmu.c"), "-o", str(lib), "-lm"],
+    r = subprocess.run([cc, "-shared", "-fPIC", "-O2", f"-I{src}", str(src / UNITY[fmi]), "-o", str(lib), "-lm"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    assert _exports(lib) == fmi2_function_names()
+    assert _exports(lib) == fmi_function_names(fmi)
 
 
 CHILD = textwrap.dedent("""
@@ -145,19 +161,24 @@ def test_two_fmus_with_rtld_global(earth_fmu, disk_fmu, tmp_path):
         np.testing.assert_allclose(g, e, rtol=1e-9, atol=1e-12)
 
 
-def test_fmpy_build_platform_binary_strict(earth_fmu, tmp_path):
+@pytest.mark.parametrize("fmi", FMI_VERSIONS)
+def test_fmpy_build_platform_binary_strict(fmi, example_build, tmp_path):
+    """fmpy's CMake build reads the listed sources (FMI 3: sources/buildDescription.xml) and
+    writes this machine's folder (FMI 3: the platform tuple); the rebuilt FMU (of either
+    version) simulates as the FMI 2 FMU as built."""
     if shutil.which("cmake") is None:
         pytest.skip("cmake is not installed (make test installs it: Debian package cmake)")
     from fmpy.build import build_platform_binary
-    root = _unzip(earth_fmu, tmp_path / "fmu")
-    lib = root / "binaries" / "linux64" / "paper_earth.so"
+    fmu = example_build("paper_earth", fmi=fmi).fmu
+    root = _unzip(fmu, tmp_path / "fmu")
+    lib = root / "binaries" / BINARIES[fmi] / "paper_earth.so"
     lib.unlink()
     (tmp_path / "build").mkdir()
     build_platform_binary(root, build_dir=tmp_path / "build", all_warnings=True,
                           cmake_options={"CMAKE_COMPILE_WARNING_AS_ERROR:BOOL": "ON"})
-    assert lib.exists() and _exports(lib) == fmi2_function_names()
+    assert lib.exists() and _exports(lib) == fmi_function_names(fmi)
     got = simulate_fmu(str(root), stop_time=1.0, output_interval=0.1)
-    ref = simulate_fmu(str(earth_fmu), stop_time=1.0, output_interval=0.1)
+    ref = simulate_fmu(str(example_build("paper_earth").fmu), stop_time=1.0, output_interval=0.1)
     for name in STATES:
         np.testing.assert_allclose(got[name], ref[name], rtol=1e-9, atol=1e-12)
 

@@ -2,8 +2,10 @@
 each in the folder FMI 2.0.4 section 2.3 prescribes and for that folder's machine, exporting
 exactly the fmi2 functions of fmi2Functions.h, depending on the system's C library only, and
 needing no CPU feature it does not check for (docs/fmi.md, "Platforms"); and the names
-gyrowheel info gives the folders of any FMU. Running the binaries (qemu, Wine) is
-tests/test_platforms_run.py's; macOS binaries are only read, here."""
+gyrowheel info gives the folders of any FMU. The FMI 3.0 FMU of the same scene likewise: each
+binary in its platform-tuple folder (FMI 3.0.2, section 2.5.1.4.1), exporting exactly the fmi3
+functions of fmi3Functions.h. Running the binaries (qemu, Wine) is tests/test_platforms_run.py's;
+macOS binaries are only read, here."""
 from __future__ import annotations
 
 import re
@@ -24,6 +26,10 @@ from gyrowheel.fmu_build.platforms import ALL, PLATFORMS, platform_of_folder, zi
 # the functions fmi2Functions.h declares (FMI 2.0.4, section 2.1.1), its `#define fmi2X fmi2FullName(fmi2X)`
 FMI2 = frozenset(re.findall(r"^#define\s+(fmi2\w+)\s+fmi2FullName\(", (fmi_headers_dir() / "fmi2Functions.h").read_text(),
                             re.M))
+# ... and those fmi3Functions.h declares (FMI 3.0.2, section 2.3), `#define fmi3X fmi3FullName(fmi3X)`
+FMI3 = frozenset(re.findall(r"^#define\s+(fmi3\w+)\s+fmi3FullName\(", (fmi_headers_dir() / "fmi3Functions.h").read_text(),
+                            re.M))
+FUNCTIONS = {2: FMI2, 3: FMI3}
 # zig's Mach-O linker (zig 0.17) also exports these two linker-defined symbols (the image's
 # Mach-O header and its DSO handle: data, not functions); it drops -exported_symbols_list and
 # refuses -unexported_symbol, so they cannot be kept out (docs/fmi.md, "Platforms")
@@ -35,16 +41,29 @@ X86_HEADERS = re.compile(r'^# \d+ ".*/(immintrin|x86intrin|xmmintrin|emmintrin|p
 
 
 @pytest.fixture(scope="module")
-def unpacked(all_platforms_build, tmp_path_factory) -> Path:
-    root = tmp_path_factory.mktemp("all_platforms")
-    with zipfile.ZipFile(all_platforms_build.fmu) as zf:
-        zf.extractall(root)
-    return root
+def unpacked_fmu(request, tmp_path_factory):
+    """unpacked_fmu(fmi): the all-platforms FMU of FMI version `fmi` (all_platforms_build,
+    all_platforms_build_fmi3: built when first asked for), unpacked."""
+    memo: dict[int, Path] = {}
+
+    def _unpacked(fmi: int) -> Path:
+        if fmi not in memo:
+            built = request.getfixturevalue("all_platforms_build" if fmi == 2 else "all_platforms_build_fmi3")
+            memo[fmi] = tmp_path_factory.mktemp(f"all_platforms_fmi{fmi}")
+            with zipfile.ZipFile(built.fmu) as zf:
+                zf.extractall(memo[fmi])
+        return memo[fmi]
+    return _unpacked
 
 
-def _library(root: Path, platform: str) -> Path:
+@pytest.fixture(scope="module")
+def unpacked(unpacked_fmu) -> Path:
+    return unpacked_fmu(2)
+
+
+def _library(root: Path, platform: str, fmi: int = 2) -> Path:
     p = PLATFORMS[platform]
-    return root / "binaries" / p.fmi2_dir / f"paper_earth{p.extension}"
+    return root / "binaries" / (p.fmi2_dir if fmi == 2 else p.fmi3_dir) / f"paper_earth{p.extension}"
 
 
 def _macho_slices(path: Path) -> list:
@@ -89,47 +108,79 @@ def test_each_binary_is_built_for_its_folders_machine(unpacked):
     assert [s.header.cpu_type for s in _macho_slices(thin)] == [cpu.ARM64]
 
 
-def test_each_binary_exports_exactly_the_fmi2_functions(unpacked):
+@pytest.mark.parametrize("fmi", (2, 3))
+def test_each_binary_exports_exactly_the_fmi_functions(unpacked_fmu, fmi):
     """ELF: the dynamic symbols it defines; PE: the export table (named after the DLL); Mach-O:
-    the export trie of every slice (each slice the same). No resolver (an ELF IFUNC, a
-    `.resolver` symbol, a Mach-O stub-and-resolver export), no helper symbol."""
+    the export trie of every slice (each slice the same): exactly the functions of its FMI
+    version's header. No resolver (an ELF IFUNC, a `.resolver` symbol, a Mach-O
+    stub-and-resolver export), no helper symbol."""
+    unpacked, functions = unpacked_fmu(fmi), FUNCTIONS[fmi]
     for platform in ("x86_64-linux", "aarch64-linux"):
-        elf = lief.ELF.parse(str(_library(unpacked, platform)))
+        elf = lief.ELF.parse(str(_library(unpacked, platform, fmi)))
         exported = [s for s in elf.dynamic_symbols if s.exported]
-        assert {s.name for s in exported} == FMI2, platform
+        assert {s.name for s in exported} == functions, platform
         assert all(s.type == lief.ELF.Symbol.TYPE.FUNC for s in exported), platform
         assert not [s.name for s in elf.dynamic_symbols
                     if s.type == lief.ELF.Symbol.TYPE.GNU_IFUNC or "resolver" in s.name], platform
-    pe = lief.PE.parse(str(_library(unpacked, "x86_64-windows")))  # kept: its export table points into it
+    pe = lief.PE.parse(str(_library(unpacked, "x86_64-windows", fmi)))  # kept: its export table points into it
     export = pe.get_export()
     assert export.name == "paper_earth.dll"
-    assert sorted(e.name for e in export.entries) == sorted(FMI2) and not any(e.is_forwarded for e in export.entries)
-    slices = _macho_slices(_library(unpacked, "x86_64-darwin")) + _macho_slices(_library(unpacked, "aarch64-darwin"))
+    assert sorted(e.name for e in export.entries) == sorted(functions) and not any(e.is_forwarded for e in export.entries)
+    slices = [s for p in ("x86_64-darwin", "aarch64-darwin") for s in _macho_slices(_library(unpacked, p, fmi))]
     resolver = (lief.MachO.ExportInfo.FLAGS.STUB_AND_RESOLVER, lief.MachO.ExportInfo.FLAGS.STATIC_RESOLVER)
     for macho in slices:
         names = {s.name for s in macho.exported_symbols}
-        assert names == {f"_{f}" for f in FMI2} | MACHO_LINKER_SYMBOLS, macho.header.cpu_type
+        assert names == {f"_{f}" for f in functions} | MACHO_LINKER_SYMBOLS, macho.header.cpu_type
         assert not [s.name for s in macho.exported_symbols
                     if s.has_export_info and any(s.export_info.has(f) for f in resolver)]
 
 
-def test_each_binary_needs_the_c_library_only(unpacked):
+@pytest.mark.parametrize("fmi", (2, 3))
+def test_each_binary_needs_the_c_library_only(unpacked_fmu, fmi):
     """Linux: libc and libm (glibc 2.17 or later); Windows: KERNEL32 and the Universal C
     Runtime's api-ms-win-crt-* (no libgcc, no libwinpthread); macOS: libSystem, and its install
     name @rpath/<file>, not the path it was linked at."""
+    unpacked = unpacked_fmu(fmi)
     for platform in ("x86_64-linux", "aarch64-linux"):
-        elf = lief.ELF.parse(str(_library(unpacked, platform)))
+        elf = lief.ELF.parse(str(_library(unpacked, platform, fmi)))
         assert set(elf.libraries) <= {"libc.so.6", "libm.so.6"}, platform
-    pe = lief.PE.parse(str(_library(unpacked, "x86_64-windows")))  # kept: what it returns points into it
+    pe = lief.PE.parse(str(_library(unpacked, "x86_64-windows", fmi)))  # kept: what it returns points into it
     imports = [i.name for i in pe.imports]
     assert imports and all(n.lower() == "kernel32.dll" or re.fullmatch(r"api-ms-win-crt-[a-z]+-l1-1-0\.dll", n)
                            for n in imports), imports
-    slices = _macho_slices(_library(unpacked, "x86_64-darwin")) + _macho_slices(_library(unpacked, "aarch64-darwin"))
+    slices = [s for p in ("x86_64-darwin", "aarch64-darwin") for s in _macho_slices(_library(unpacked, p, fmi))]
     kind = lief.MachO.LoadCommand.TYPE
     for macho in slices:
         commands = list(macho.commands)
         dylibs = [(c.command, c.name) for c in commands if c.command in (kind.LOAD_DYLIB, kind.ID_DYLIB)]
         assert dylibs == [(kind.ID_DYLIB, "@rpath/paper_earth.dylib"), (kind.LOAD_DYLIB, "/usr/lib/libSystem.B.dylib")]
+
+
+def test_fmi3_folders_are_the_platform_tuples(all_platforms_build_fmi3, unpacked_fmu):
+    """The FMI 3.0 FMU: one binary per platform of `all` in binaries/<platform tuple> (FMI 3.0.2,
+    section 2.5.1.4.1), each built for its tuple's machine; both Mac binaries thin (the
+    universal darwin64 file is FMI 2's); gyrowheel info lists each tuple as its own folder;
+    fmpy's validation is clean."""
+    from fmpy.validation import validate_fmu
+
+    assert len(FMI3) == 75
+    unpacked = unpacked_fmu(3)
+    files = sorted(str(f.relative_to(unpacked)) for f in (unpacked / "binaries").rglob("*") if f.is_file())
+    assert files == sorted(f"binaries/{p}/paper_earth{PLATFORMS[p].extension}" for p in ALL)
+    assert lief.ELF.parse(str(_library(unpacked, "x86_64-linux", 3))).header.machine_type == lief.ELF.ARCH.X86_64
+    assert lief.ELF.parse(str(_library(unpacked, "aarch64-linux", 3))).header.machine_type == lief.ELF.ARCH.AARCH64
+    pe = lief.PE.parse(str(_library(unpacked, "x86_64-windows", 3)))
+    assert pe.header.machine == lief.PE.Header.MACHINE_TYPES.AMD64
+    assert pe.header.has_characteristic(lief.PE.Header.CHARACTERISTICS.DLL)
+    cpu = lief.MachO.Header.CPU_TYPE
+    for platform, machine in (("x86_64-darwin", cpu.X86_64), ("aarch64-darwin", cpu.ARM64)):
+        thin = _library(unpacked, platform, 3)
+        assert thin.read_bytes()[:4] == (platforms.MH_MAGIC_64).to_bytes(4, "little"), platform
+        assert [s.header.cpu_type for s in _macho_slices(thin)] == [machine], platform
+    info = gyrowheel.info(all_platforms_build_fmi3.fmu)
+    assert info.fmi_version == "3.0"
+    assert [str(p) for p in info.platforms] == [f"{p} (binaries/{p})" for p in sorted(ALL)]
+    assert validate_fmu(str(all_platforms_build_fmi3.fmu)) == []
 
 
 def test_the_cross_builds_ask_for_no_cpu_feature(tmp_path, monkeypatch):

@@ -2,7 +2,9 @@
 every platform of `all` (tests/conftest.py all_platforms_build), its x86_64-linux, aarch64-linux
 and x86_64-windows libraries each loaded by tests/platform_driver/fmu_driver.c built for the
 same platform, and run natively, under qemu-user (qemu-aarch64 with Debian's aarch64 C library)
-and under Wine.
+and under Wine.  The same for the FMI 3.0 FMU of the scene (all_platforms_build_fmi3, its
+platform-tuple folders) with tests/platform_driver/fmu3_driver.c, whose x86_64-linux run also
+equals the FMI 2.0 binary's.
 
 Two runs on each: the paper scenario (the scene's experiment, with the scene's solver and with
 solver taylor: the FMU carries the Taylor kernel) and a fall.  The states at every
@@ -42,16 +44,31 @@ EMULATED = ("aarch64-linux", "x86_64-windows")
 
 
 @pytest.fixture(scope="module")
-def fmu(all_platforms_build, tmp_path_factory):
-    """The unpacked FMU, its value references by name, its solver enumeration and experiment."""
-    root = tmp_path_factory.mktemp("fmu")
-    with zipfile.ZipFile(all_platforms_build.fmu) as z:
-        z.extractall(root)
-    md = read_model_description(str(all_platforms_build.fmu))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    solvers = {i.name: int(i.value) for t in md.typeDefinitions if t.name == "Solver" for i in t.items}
-    return dict(root=root, guid=md.guid, vr=vr, solvers=solvers, identifier=all_platforms_build.identifier,
-                experiment=load_scene(SCENES / "paper_earth.toml").experiment)
+def fmus(request, tmp_path_factory):
+    """fmus(fmi): the unpacked all-platforms FMU of FMI version `fmi` (2: all_platforms_build,
+    3: all_platforms_build_fmi3, built when first asked for), its value references by name, its
+    solver enumeration and experiment."""
+    memo: dict = {}
+
+    def _fmu(fmi: int) -> dict:
+        if fmi not in memo:
+            built = request.getfixturevalue("all_platforms_build" if fmi == 2 else "all_platforms_build_fmi3")
+            root = tmp_path_factory.mktemp(f"fmu{fmi}")
+            with zipfile.ZipFile(built.fmu) as z:
+                z.extractall(root)
+            md = read_model_description(str(built.fmu))
+            vr = {v.name: v.valueReference for v in md.modelVariables}
+            solvers = {i.name: int(i.value) for t in md.typeDefinitions if t.name == "Solver" for i in t.items}
+            memo[fmi] = dict(root=root, guid=md.guid, vr=vr, solvers=solvers, identifier=built.identifier, fmi=fmi,
+                             experiment=load_scene(SCENES / "paper_earth.toml").experiment)
+        return memo[fmi]
+    return _fmu
+
+
+@pytest.fixture(scope="module")
+def fmu(fmus):
+    """The FMI 2.0 FMU (fmus(2))."""
+    return fmus(2)
 
 
 @pytest.fixture(scope="module")
@@ -75,41 +92,47 @@ def wine_env(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def run(fmu, platform_drivers, request):
-    """run(platform, case, solver, cpu=None): fmu_driver on `platform`'s binary of the FMU (for
-    case 'paper' or 'fall', solver 'scene' or 'taylor'), memoised; cpu: qemu-x86_64's -cpu for
-    the x86_64-linux binary."""
+def run(fmus, request):
+    """run(platform, case, solver, cpu=None, fmi=2): the driver of FMI version `fmi`
+    (fmu_driver, fmu3_driver) on `platform`'s binary of that version's FMU (for case 'paper' or
+    'fall', solver 'scene' or 'taylor'), memoised; cpu: qemu-x86_64's -cpu for the x86_64-linux
+    binary.  Both drivers print the same states; FMI 2's resources are a file: URI, FMI 3's
+    a path ending in the separator (FMI 3.0.2, section 2.3.1), its solver an Int64 (e:)."""
     memo: dict = {}
-    ex = fmu["experiment"]
-    vr = fmu["vr"]
 
-    def _run(platform: str, case: str, solver: str, cpu: str | None = None):
-        key = (platform, case, solver, cpu)
+    def _run(platform: str, case: str, solver: str, cpu: str | None = None, fmi: int = 2):
+        key = (platform, case, solver, cpu, fmi)
         if key in memo:
             return memo[key]
+        fmu = fmus(fmi)
+        ex, vr = fmu["experiment"], fmu["vr"]
         p = PLATFORMS[platform]
-        library = fmu["root"] / "binaries" / p.fmi2_dir / f"{fmu['identifier']}{p.extension}"
+        library = fmu["root"] / "binaries" / (p.fmi2_dir if fmi == 2 else p.fmi3_dir) / \
+            f"{fmu['identifier']}{p.extension}"
         resources = fmu["root"] / "resources"
-        settings = [f"i:{vr['solver']}={fmu['solvers'][ex.solver if solver == 'scene' else solver]}"]
+        kind = "i" if fmi == 2 else "e"
+        settings = [f"{kind}:{vr['solver']}={fmu['solvers'][ex.solver if solver == 'scene' else solver]}"]
         if case == "fall":
             settings += [f"r:{vr[name]}={value!r}" for name, value in FALL.items()]
         tail = [repr(0.0), repr(ex.stop_time), repr(ex.output_interval), repr(ex.rel_tol),
                 ",".join(str(vr[s]) for s in STATES), *settings]
-        driver = platform_drivers[platform]
+        driver = request.getfixturevalue("platform_drivers" if fmi == 2 else "platform_drivers_fmi3")[platform]
         env = None
         if platform == "x86_64-linux":
             head = [require("qemu-x86_64", "qemu-user"), "-cpu", cpu] if cpu else []
-            command = [*head, str(driver), str(library), fmu["guid"], resources.as_uri(), *tail]
+            where = resources.as_uri() if fmi == 2 else f"{resources}/"
+            command = [*head, str(driver), str(library), fmu["guid"], where, *tail]
         elif platform == "aarch64-linux":
             qemu = require("qemu-aarch64", "qemu-user")
             require_aarch64_libc()
-            command = [qemu, "-L", str(AARCH64_ROOT), str(driver), str(library), fmu["guid"], resources.as_uri(),
-                       *tail]
+            where = resources.as_uri() if fmi == 2 else f"{resources}/"
+            command = [qemu, "-L", str(AARCH64_ROOT), str(driver), str(library), fmu["guid"], where, *tail]
         else:
             wine = request.getfixturevalue("wine_env")
             env = wine["env"]
-            command = [wine["wine"], windows_path(driver), windows_path(library), fmu["guid"],
-                       "file:///" + windows_path(resources).replace("\\", "/"), *tail]
+            where = "file:///" + windows_path(resources).replace("\\", "/") if fmi == 2 else \
+                windows_path(resources) + "\\"
+            command = [wine["wine"], windows_path(driver), windows_path(library), fmu["guid"], where, *tail]
         memo[key] = run_driver(command, env=env)
         return memo[key]
     return _run
@@ -194,3 +217,32 @@ def test_zig_binaries_run_the_portable_kernel(run):
     for case in ("paper", "fall"):
         windows, portable = run("x86_64-windows", case, "taylor"), run("x86_64-linux", case, "taylor", cpu="qemu64")
         assert windows.rows == portable.rows and windows.fall == portable.fall, case
+
+
+@pytest.mark.parametrize("case", ("paper", "fall"))
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_fmi3_reference_equals_fmi2(run, case, solver):
+    """The FMI 3.0 FMU's x86_64-linux binary natively gives the FMI 2.0 binary's states at every
+    communication point, bit for bit (the same core, solvers and compiler behind another
+    layer); the fall ends the run at FMI 2's fmi2LastSuccessfulTime, with terminateSimulation
+    and, as the driver allows it, earlyReturn (FMI 3.0.2, section 4.2.1)."""
+    ref, got = run("x86_64-linux", case, solver), run("x86_64-linux", case, solver, fmi=3)
+    assert got.rows == ref.rows and len(got.rows) > 80
+    assert (got.terminated, got.fall) == (ref.terminated, ref.fall)
+    assert got.early == (case == "fall")
+
+
+@pytest.mark.parametrize("platform", EMULATED)
+@pytest.mark.parametrize("case", ("paper", "fall"))
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_fmi3_platform_equals_reference(run, platform, case, solver):
+    """The FMI 3.0 FMU's aarch64-linux (qemu-user) and x86_64-windows (Wine) binaries, in their
+    platform-tuple folders: every state at every communication point equals its x86_64-linux
+    binary's to TOL; a fall ends the run (terminateSimulation, earlyReturn) at the reference's
+    time (to TOL, absolute).  Measured: as FMI 2's (aarch64's dopri5 1.5e-13 apart at most,
+    its taylor not at all)."""
+    ref, got = run("x86_64-linux", case, solver, fmi=3), run(platform, case, solver, fmi=3)
+    assert largest_difference(got, ref) <= TOL
+    assert (got.terminated, got.early) == (ref.terminated, ref.early)
+    if case == "fall":
+        assert got.terminated and abs(got.fall - ref.fall) <= TOL, (got.fall, ref.fall)

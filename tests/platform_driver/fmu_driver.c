@@ -1,8 +1,9 @@
 /*
  * fmu_driver.c -- a minimal FMI 2.0 Co-Simulation master in C99: loads the shared library of
- * an unpacked FMU (dlopen/dlsym on POSIX, LoadLibraryW/GetProcAddress on Windows), runs it as
- * an importer does and prints the values asked for at every communication point.  Built for
- * each platform the tests run an FMU's binary on (natively, under qemu-user, under Wine).
+ * an unpacked FMU, runs it as an importer does and prints the values asked for at every
+ * communication point.  Built for each platform the tests run an FMU's binary on (natively,
+ * under qemu-user, under Wine).  fmu3_driver.c is its FMI 3.0 counterpart; driver.h what
+ * they share.
  *
  *   fmu_driver LIBRARY GUID RESOURCES_URI START STOP STEP TOL VR[,VR...] [SETTING...]
  *
@@ -23,29 +24,18 @@
  * The FMU's log messages go to stderr.  Exit status: 0 run to its end (or to the FMU's
  * termination), 1 an FMI call failed, 2 bad arguments or a library that does not load.
  *
- *   fmu_driver --cpu   prints "avx2=0|1 fma=0|1": what __builtin_cpu_supports (the compiler's
- *                      runtime, as linked into this program) says of this CPU (x86 only)
+ *   fmu_driver --cpu   prints "avx2=0|1 fma=0|1" (driver.h, print_cpu)
  * Sources: FMI 2.0.4, sections 2.1.5 (instantiation), 4.2 (Co-Simulation: fmi2DoStep,
  * fmi2GetBooleanStatus(fmi2Terminated), fmi2GetRealStatus(fmi2LastSuccessfulTime)).
  */
 #include <stdarg.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
 
 #include "fmi2FunctionTypes.h"
 
-#ifdef _WIN32
-#define WIN32_LEAN_AND_MEAN
-#include <windows.h>
-typedef HMODULE library_t;
-#else
-#include <dlfcn.h>
-typedef void *library_t;
-#endif
-
-#define MAX_VALUES 64
-#define MAX_SETTINGS 64
+typedef fmi2ValueReference driver_vr;
+#define DRIVER_NAME "fmu_driver"
+#define DRIVER_WARNING fmi2Warning
+#include "driver.h"
 
 typedef struct {
     fmi2InstantiateTYPE *instantiate;
@@ -62,13 +52,6 @@ typedef struct {
     fmi2GetRealStatusTYPE *get_real_status;
 } fmi2_api;
 
-typedef struct {
-    char kind; /* 'r' or 'i' */
-    fmi2ValueReference vr;
-    double real;
-    long integer;
-} setting;
-
 static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
                    fmi2String category, fmi2String message, ...) {
     va_list args;
@@ -81,45 +64,8 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status
     fputc('\n', stderr);
 }
 
-static library_t open_library(const char *path) {
-#ifdef _WIN32
-    wchar_t wide[4096];
-    if (MultiByteToWideChar(CP_ACP, 0, path, -1, wide, (int)(sizeof wide / sizeof wide[0])) == 0) {
-        return NULL;
-    }
-    return LoadLibraryW(wide);
-#else
-    return dlopen(path, RTLD_NOW | RTLD_LOCAL);
-#endif
-}
-
-static void close_library(library_t lib) {
-#ifdef _WIN32
-    FreeLibrary(lib);
-#else
-    dlclose(lib);
-#endif
-}
-
-/* the function `name` of `lib` stored into *slot (a function pointer of any type); memcpy, as
- * ISO C has no conversion between object and function pointers */
-static int symbol(library_t lib, const char *name, void *slot, size_t size) {
-#ifdef _WIN32
-    FARPROC f = GetProcAddress(lib, name);
-#else
-    void *f = dlsym(lib, name);
-#endif
-    if (f == NULL || size != sizeof f) {
-        fprintf(stderr, "fmu_driver: the library lacks %s\n", name);
-        return 0;
-    }
-    memcpy(slot, &f, size);
-    return 1;
-}
-
-#define LOAD(field, name) ok = symbol(lib, name, &api->field, sizeof api->field) && ok
-
-static int load_api(library_t lib, fmi2_api *api) {
+static int load_api(library_t lib, void *functions) {
+    fmi2_api *api = functions;
     int ok = 1;
     LOAD(instantiate, "fmi2Instantiate");
     LOAD(free_instance, "fmi2FreeInstance");
@@ -136,92 +82,24 @@ static int load_api(library_t lib, fmi2_api *api) {
     return ok;
 }
 
-static int parse_double(const char *text, double *out) {
-    char *end;
-    *out = strtod(text, &end);
-    return end != text && *end == '\0';
-}
-
-static int parse_vr(const char *text, char stop, fmi2ValueReference *vr, const char **rest) {
-    char *end;
-    unsigned long v = strtoul(text, &end, 10);
-    if (end == text || *end != stop || v > 0xFFFFFFFFul) {
-        return 0;
-    }
-    *vr = (fmi2ValueReference)v;
-    *rest = end + 1;
-    return 1;
-}
-
-/* "VR,VR,..." -> vrs; the count, or -1 for bad text */
-static int parse_vrs(const char *text, fmi2ValueReference *vrs) {
-    int n = 0;
-    while (n < MAX_VALUES) {
-        const char *rest;
-        const char *comma = strchr(text, ',');
-        if (!parse_vr(text, comma ? ',' : '\0', &vrs[n], &rest)) {
-            return -1;
-        }
-        n++;
-        if (!comma) {
-            return n;
-        }
-        text = rest;
-    }
-    return -1;
-}
-
-static int parse_setting(const char *text, setting *s) {
-    const char *rest;
-    char *end;
-    if ((text[0] != 'r' && text[0] != 'i') || text[1] != ':') {
-        return 0;
-    }
-    s->kind = text[0];
-    if (!parse_vr(text + 2, '=', &s->vr, &rest)) {
-        return 0;
-    }
-    if (s->kind == 'r') {
-        return parse_double(rest, &s->real);
-    }
-    s->integer = strtol(rest, &end, 10);
-    return end != rest && *end == '\0';
-}
-
-static int print_values(const fmi2_api *api, fmi2Component c, double t,
-                        const fmi2ValueReference *vrs, int n) {
+static int print_values(const fmi2_api *api, fmi2Component c, double t, const arguments *a) {
     fmi2Real values[MAX_VALUES];
-    int i;
-    if (api->get_real(c, vrs, (size_t)n, values) > fmi2Warning) {
+    if (api->get_real(c, a->vrs, (size_t)a->n, values) > fmi2Warning) {
         fprintf(stderr, "fmu_driver: fmi2GetReal failed at t = %.17g\n", t);
         return 0;
     }
-    printf("%.17g", t);
-    for (i = 0; i < n; i++) {
-        printf(" %.17g", values[i]);
-    }
-    printf("\n");
+    print_row(t, values, a->n);
     return 1;
 }
 
-#define CALL(what, call)                                                                        \
-    do {                                                                                        \
-        if ((call) > fmi2Warning) {                                                             \
-            fprintf(stderr, "fmu_driver: %s failed\n", what);                                   \
-            return 1;                                                                           \
-        }                                                                                       \
-    } while (0)
-
 /* the run on an instantiated FMU: setup, settings, initialization, steps; 0 or 1 (exit status) */
-static int simulate(const fmi2_api *api, fmi2Component c, const double *times, double tol,
-                    const fmi2ValueReference *vrs, int n, const setting *settings, int n_settings) {
-    double start = times[0], stop = times[1], step = times[2];
-    long steps, k;
+static int simulate(const fmi2_api *api, fmi2Component c, const arguments *a) {
+    long steps = step_count(a), k;
     int i;
-    CALL("fmi2SetupExperiment", api->setup_experiment(c, tol > 0 ? fmi2True : fmi2False, tol,
-                                                        start, fmi2True, stop));
-    for (i = 0; i < n_settings; i++) {
-        const setting *s = &settings[i];
+    CALL("fmi2SetupExperiment", api->setup_experiment(c, a->tol > 0 ? fmi2True : fmi2False, a->tol,
+                                                        a->start, fmi2True, a->stop));
+    for (i = 0; i < a->n_settings; i++) {
+        const setting *s = &a->settings[i];
         if (s->kind == 'r') {
             CALL("fmi2SetReal", api->set_real(c, &s->vr, 1, &s->real));
         } else {
@@ -231,13 +109,11 @@ static int simulate(const fmi2_api *api, fmi2Component c, const double *times, d
     }
     CALL("fmi2EnterInitializationMode", api->enter_initialization(c));
     CALL("fmi2ExitInitializationMode", api->exit_initialization(c));
-    if (!print_values(api, c, start, vrs, n)) {
+    if (!print_values(api, c, a->start, a)) {
         return 1;
     }
-    steps = (long)((stop - start) / step + 0.5);
     for (k = 1; k <= steps; k++) {
-        double t = start + (double)(k - 1) * step;
-        double next = k == steps ? stop : start + (double)k * step;
+        double t = point(a, k - 1), next = point(a, k);
         fmi2Status status = api->do_step(c, t, next - t, fmi2True);
         if (status == fmi2Discard) {
             fmi2Boolean terminated = fmi2False;
@@ -245,7 +121,7 @@ static int simulate(const fmi2_api *api, fmi2Component c, const double *times, d
             CALL("fmi2GetBooleanStatus", api->get_boolean_status(c, fmi2Terminated, &terminated));
             CALL("fmi2GetRealStatus", api->get_real_status(c, fmi2LastSuccessfulTime, &last));
             printf("# discard terminated=%d time=%.17g\n", terminated ? 1 : 0, last);
-            if (!print_values(api, c, last, vrs, n)) {
+            if (!print_values(api, c, last, a)) {
                 return 1;
             }
             break;
@@ -254,7 +130,7 @@ static int simulate(const fmi2_api *api, fmi2Component c, const double *times, d
             fprintf(stderr, "fmu_driver: fmi2DoStep from t = %.17g returned %d\n", t, (int)status);
             return 1;
         }
-        if (!print_values(api, c, next, vrs, n)) {
+        if (!print_values(api, c, next, a)) {
             return 1;
         }
     }
@@ -262,23 +138,10 @@ static int simulate(const fmi2_api *api, fmi2Component c, const double *times, d
     return 0;
 }
 
-static int print_cpu(void) {
-#if (defined(__GNUC__) || defined(__clang__)) && (defined(__x86_64__) || defined(__i386__))
-    printf("avx2=%d fma=%d\n", __builtin_cpu_supports("avx2") != 0,
-           __builtin_cpu_supports("fma") != 0);
-    return 0;
-#else
-    fprintf(stderr, "fmu_driver: --cpu answers on x86 only\n");
-    return 2;
-#endif
-}
-
 int main(int argc, char **argv) {
-    fmi2ValueReference vrs[MAX_VALUES];
-    setting settings[MAX_SETTINGS];
-    double times[3], tol;
-    int n, n_settings = argc - 9, i, rc;
-    fmi2_api api;
+    arguments a;
+    int rc;
+    fmi2_api api = {0}; /* loaded by start */
     library_t lib;
     fmi2Component c;
     fmi2CallbackFunctions callbacks;
@@ -288,52 +151,18 @@ int main(int argc, char **argv) {
     callbacks.stepFinished = NULL;
     callbacks.componentEnvironment = NULL;
 
-    if (argc == 2 && strcmp(argv[1], "--cpu") == 0) {
-        return print_cpu();
+    rc = start(argc, argv, "i", &a, load_api, &api, &lib);
+    if (rc >= 0) {
+        return rc;
     }
-    if (argc < 9 || n_settings > MAX_SETTINGS) {
-        fprintf(stderr, "usage: fmu_driver LIBRARY GUID RESOURCES_URI START STOP STEP TOL "
-                        "VR[,VR...] [r:VR=VALUE|i:VR=VALUE ...]\n");
-        return 2;
-    }
-    for (i = 0; i < 3; i++) {
-        if (!parse_double(argv[4 + i], &times[i])) {
-            fprintf(stderr, "fmu_driver: not a number: %s\n", argv[4 + i]);
-            return 2;
-        }
-    }
-    if (!(times[2] > 0) || !(times[1] >= times[0]) || !parse_double(argv[7], &tol)) {
-        fprintf(stderr, "fmu_driver: need STEP > 0, STOP >= START and a number TOL\n");
-        return 2;
-    }
-    n = parse_vrs(argv[8], vrs);
-    if (n < 1) {
-        fprintf(stderr, "fmu_driver: bad value references (at most %d): %s\n", MAX_VALUES, argv[8]);
-        return 2;
-    }
-    for (i = 0; i < n_settings; i++) {
-        if (!parse_setting(argv[9 + i], &settings[i])) {
-            fprintf(stderr, "fmu_driver: bad setting (r:VR=VALUE or i:VR=VALUE): %s\n", argv[9 + i]);
-            return 2;
-        }
-    }
-    lib = open_library(argv[1]);
-    if (lib == NULL) {
-        fprintf(stderr, "fmu_driver: cannot load %s\n", argv[1]);
-        return 2;
-    }
-    if (!load_api(lib, &api)) {
-        close_library(lib);
-        return 2;
-    }
-    c = api.instantiate("driver", fmi2CoSimulation, argv[2], argv[3], &callbacks, fmi2False,
+    c = api.instantiate("driver", fmi2CoSimulation, a.token, a.resources, &callbacks, fmi2False,
                         fmi2False);
     if (c == NULL) {
         fprintf(stderr, "fmu_driver: fmi2Instantiate failed\n");
         close_library(lib);
         return 1;
     }
-    rc = simulate(&api, c, times, tol, vrs, n, settings, n_settings);
+    rc = simulate(&api, c, &a);
     api.free_instance(c);
     close_library(lib);
     fflush(stdout);

@@ -28,8 +28,12 @@ def _largest_difference(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def test_the_fmi3_loop_is_an_ssp_of_fmi3_fmus(earth_loop_fmi3, tmp_path):
-    """Both FMUs are FMI 3.0 (the .ssp refers to them as to FMI 2.0 ones: resources/<name>.fmu,
-    valid SSP 1.0), and the system reads back with the same feedthrough as the FMI 2.0 loop's."""
+    """Both FMUs are FMI 3.0 and pass fmpy's validation (the .ssp refers to them as to FMI 2.0
+    ones: resources/<name>.fmu, valid SSP 1.0), and the system reads back with the same
+    feedthrough as the FMI 2.0 loop's."""
+    from fmpy.validation import validate_fmu
+    for fmu in (earth_loop_fmi3.wheel_fmu, earth_loop_fmi3.controller_fmu):
+        assert validate_fmu(str(fmu)) == [], fmu
     with zipfile.ZipFile(earth_loop_fmi3.ssp) as zf:
         zf.extract("SystemStructure.ssd", tmp_path)
     xmlschema.XMLSchema10(SCHEMAS / "SystemStructureDescription.xsd").validate(tmp_path / "SystemStructure.ssd")

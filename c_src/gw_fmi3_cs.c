@@ -75,7 +75,8 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     if (F->event_pending)
         GW3_FAIL("%s: the step returned early at an event at t=%.17g that awaits its handling: "
                  "enter Event Mode first (fmi3EnterEventMode, fmi3UpdateDiscreteStates, "
-                 "fmi3EnterStepMode)", fn, I->t);
+                 "fmi3EnterStepMode); refused, so the instance is in the Error state now "
+                 "(fmi3Reset, or fmi3SetFMUState of a state taken before, continue)", fn, I->t);
     GW3_TRY(gw_front_step_check(I, fn, tc, h, &t_end));
     gw_front_counts_take(I, &c0);
     I->t = tc; /* the communication point, not the FMU's rounding of it */
@@ -112,7 +113,8 @@ fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
     GW3_FRAME(EnterStepMode);
     if (F->event_pending)
         GW3_FAIL("%s: the event at t=%.17g is not handled yet (call fmi3UpdateDiscreteStates "
-                 "first)", fn, I->t);
+                 "first); refused, so the instance is in the Error state now (fmi3Reset, or "
+                 "fmi3SetFMUState of a state taken before, continue)", fn, I->t);
     gw_fmi3_set_state(F, GW3_ST_STEP_MODE);
     GW3_FRAME_END();
 }

@@ -21,7 +21,7 @@ from gyrowheel.fmu_build.documentation import write_index_html
 from gyrowheel.fmu_build.model_description import write_model_description
 from gyrowheel.fmu_build.model_description3 import write_build_description, write_model_description3
 from gyrowheel.fmu_build.runtime import UNITY_SOURCES, runtime_sources
-from gyrowheel.errors import ArgumentError
+from gyrowheel.errors import ArgumentError, ArgumentTypeError
 from gyrowheel.output_files import check_output_file, replaced_atomically
 from gyrowheel.scratch import new_directory
 from gyrowheel.fmu_build.scene import Experiment, Scene, check_scene, fmi_problem
@@ -113,8 +113,12 @@ def check_output(output: str | Path, scene_file: str | Path | None = None) -> Pa
 
 
 def check_fmi(fmi) -> int:
-    """The FMI version `fmi` asks for: 2 or 3 (an int). Raises ArgumentError naming `fmi`,
+    """The FMI version `fmi` asks for: 2 or 3 (an int). Raises ArgumentTypeError naming `fmi`
+    for a value that is not an int (text, a float, a bool), ArgumentError for another int,
     e.g. `fmi: must be 2 or 3 (the FMI version), got 4`."""
+    if not isinstance(fmi, int) or isinstance(fmi, bool):
+        raise ArgumentTypeError(f"fmi: must be the integer 2 or 3 (the FMI version), got {fmi!r} "
+                                f"({type(fmi).__name__})", argument="fmi")
     problem = fmi_problem(fmi)
     if problem is not None:
         raise ArgumentError(f"fmi: {problem}", argument="fmi")
@@ -142,8 +146,8 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
     the scene's [build] fmi; None: the scene's (default 2); arrays: an FMI 3 FMU's array
     outputs (True) or none (False), overriding the scene's [build] arrays; None: the scene's.
     Returns the BuildResult. Raises SceneError (the scene, naming the field), ArgumentError
-    (output; platforms: an unknown platform, the valid ones listed; fmi: not 2 or 3), and what
-    build_spec_fmu raises.
+    (output; platforms: an unknown platform, the valid ones listed; fmi: not 2 or 3),
+    ArgumentTypeError (fmi not an int), and what build_spec_fmu raises.
     """
     scene = check_scene(scene)
     version = scene.fmi if fmi is None else check_fmi(fmi)

@@ -182,9 +182,13 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
         try:
             unpacked = str(fmu) if Path(fmu).is_dir() else str(extract(str(fmu), unzipdir=tmp, include=_read_by_a_run))
             _load_binary(fmu, unpacked, md)
+            # FMI 3: early return allowed, so that a fall inside a step ends the result at its
+            # lastSuccessfulTime (fmpy reads it only after an early return), as FMI 2's does
+            early = {"early_return_allowed": True} if md.fmiVersion.startswith("3") else {}
             return simulate_fmu(unpacked, fmi_type="CoSimulation", stop_time=stop_time,
                                 output_interval=output_interval, start_values=start_values or {}, output=recorded,
-                                relative_tolerance=solver_tolerance, logger=messages, debug_logging=False)
+                                relative_tolerance=solver_tolerance, logger=messages, debug_logging=False,
+                                **early)
         except FMICallException as exc:
             reason = "; ".join(messages.errors()) or str(exc)
             raise SimulationError(f"the FMU reported an error: {reason}") from None

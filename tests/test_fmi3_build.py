@@ -224,10 +224,14 @@ def test_fmi_in_a_scene_round_trips_and_a_bad_object_is_refused():
 def test_bad_fmi_argument_is_refused_before_anything_is_built(tmp_path):
     import gyrowheel
     out = tmp_path / "m.fmu"
-    for value in (4, "3", 3.0, True):
-        with pytest.raises(gyrowheel.ArgumentError) as exc:
+    with pytest.raises(gyrowheel.ArgumentError) as exc:
+        gyrowheel.build(SCENES / "paper_moon.toml", out, fmi=4)
+    assert exc.value.argument == "fmi" and str(exc.value) == "fmi: must be 2 or 3 (the FMI version), got 4"
+    for value in ("3", 3.0, True):  # the wrong type: ArgumentTypeError, as for every argument
+        with pytest.raises(gyrowheel.ArgumentTypeError) as exc:
             gyrowheel.build(SCENES / "paper_moon.toml", out, fmi=value)
-        assert exc.value.argument == "fmi" and str(exc.value).startswith("fmi: must be 2 or 3")
+        assert exc.value.argument == "fmi"
+        assert str(exc.value).startswith(f"fmi: must be the integer 2 or 3 (the FMI version), got {value!r}")
     assert not out.exists()
 
 
@@ -266,6 +270,17 @@ def test_info_and_simulate_read_fmi3(earth3, earth_build):
     two = gyrowheel.simulate(earth_build, stop_time=1.0, start_values={"beta_deg": 80})
     assert len(three) == len(two) and three.dtype.names == two.dtype.names
     for name in two.dtype.names:  # same model, same core: the same numbers
+        np.testing.assert_array_equal(three[name], two[name], err_msg=name)
+
+
+def test_simulate_ends_an_fmi3_fall_at_the_located_time(earth3, earth_build):
+    """The spinless wheel falls inside a communication step: the last row is at the located
+    time (0.4334798... s), the same row as the FMI 2 FMU's, not at the step's end."""
+    import gyrowheel
+    three = gyrowheel.simulate(earth3, stop_time=2.0, start_values={"gamma_dot": 0.0})
+    two = gyrowheel.simulate(earth_build, stop_time=2.0, start_values={"gamma_dot": 0.0})
+    assert 0.43 < two["time"][-1] < 0.44 and three["time"][-1] == two["time"][-1]
+    for name in two.dtype.names:
         np.testing.assert_array_equal(three[name], two[name], err_msg=name)
 
 

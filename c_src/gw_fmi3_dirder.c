@@ -4,10 +4,8 @@
  * exact partial derivatives from the model's generated Jacobians, the same knowns and unknowns
  * as fmi2GetDirectionalDerivative (gw_partials.c), in every state where FMI 3.0.2 allows the
  * calls (section 2.3: Initialization, Event, Continuous-Time, Step Mode, Terminated; and after
- * an error, as the FMI 2.0 layer).  Knowns and unknowns are scalar variables (an array
- * variable is refused, the reason logged; its elements are states or outputs, scalar
- * variables of their own): nSeed and nSensitivity must equal the numbers of knowns and
- * unknowns (section 2.2.12).  Time (value reference 0) is
+ * an error, as the FMI 2.0 layer).  Every variable is a scalar: nSeed and nSensitivity must
+ * equal the numbers of knowns and unknowns (section 2.2.12).  Time (value reference 0) is
  * neither a known nor an unknown, nor is an event indicator.
  */
 #ifndef GW_UNITY_BUILD
@@ -43,25 +41,7 @@ static int gw_fmi3_pd_provided(gw_fmu3 *F, const char *fn, const char *flag) {
     return 0;
 }
 
-/* 1 if no reference of refs is an array variable; else 0 with the reason logged: the partial
- * derivatives are those of the scalar variables (an array's elements are states or outputs,
- * each a variable of its own) */
-static int gw_fmi3_pd_scalars(gw_instance *I, const char *fn, const fmi3ValueReference refs[],
-                              size_t n, const char *what) {
-    size_t k;
-    if (I->m->n_arrays == 0 || !refs) return 1;
-    for (k = 0; k < n; k++) {
-        const gw_array *a = gw_fmi3_array_find(I->m, refs[k]);
-        if (!a) continue;
-        GW_LOG_ERR(I, "%s: %s[%lu] is the array variable %s (vr=%u): partial derivatives are "
-                   "provided for scalar variables (the states and outputs its elements are)",
-                   fn, what, (unsigned long)k, a->name, a->vr);
-        return 0;
-    }
-    return 1;
-}
-
-/* the sizes of the serialized seed and sensitivity (every known and unknown a scalar), then the
+/* the sizes of the serialized seed and sensitivity (every variable a scalar), then the
  * derivatives of the current mode */
 static gw_status gw_fmi3_pd(gw_fmu3 *F, const char *fn, int adjoint,
                             const fmi3ValueReference unknowns[], size_t nUnknowns,
@@ -75,9 +55,6 @@ static gw_status gw_fmi3_pd(gw_fmu3 *F, const char *fn, int adjoint,
     /* Initialization Mode has its own knowns (section 2.2.12: the InitialUnknowns and their
      * dependencies) when the model generated their derivatives */
     int init_mode = F->state == GW3_ST_INIT_MODE && I->f_dini.eval != NULL;
-    if (!gw_fmi3_pd_scalars(I, fn, unknowns, nUnknowns, "unknowns") ||
-        !gw_fmi3_pd_scalars(I, fn, knowns, nKnowns, "knowns"))
-        return GW_ERROR;
     if (nSeed != n_seed) {
         GW_LOG_ERR(I, "%s: nSeed = %lu, but there are %lu %s (scalars: one seed value each)", fn,
                    (unsigned long)nSeed, (unsigned long)n_seed, seed_of);

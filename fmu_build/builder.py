@@ -131,8 +131,7 @@ def _guid(*parts: str) -> str:
 
 
 def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = None,
-              taylor: bool = False, platforms=None, fmi: int | None = None,
-              arrays: bool | None = None) -> BuildResult:
+              taylor: bool = False, platforms=None, fmi: int | None = None) -> BuildResult:
     """Build the FMU of `scene` at `output`: the wheel's ModelSpec through build_spec_fmu.
 
     scene: a Scene, checked first by the scene file's rules (check_scene); output: the .fmu to
@@ -143,8 +142,7 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
     (fmu_build/platforms.py parse_platforms: "all", "host", a comma-separated string or a list
     of FMI 3.0 platform tuples), overriding the scene's [build] platforms; None: the scene's
     [build] platforms, and without one the host only; fmi: the FMI version, 2 or 3, overriding
-    the scene's [build] fmi; None: the scene's (default 2); arrays: an FMI 3 FMU's array
-    outputs (True) or none (False), overriding the scene's [build] arrays; None: the scene's.
+    the scene's [build] fmi; None: the scene's (default 2).
     Returns the BuildResult. Raises SceneError (the scene, naming the field), ArgumentError
     (output; platforms: an unknown platform, the valid ones listed; fmi: not 2 or 3),
     ArgumentTypeError (fmi not an int), and what build_spec_fmu raises.
@@ -154,14 +152,12 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
     output = check_output(output, scene.file)
     wanted = _wanted_platforms(scene.platforms if platforms is None else platforms)  # before the model
     return build_spec_fmu(_spec(scene), output, scene.experiment, build_dir=build_dir,
-                          keep=scene.outputs, source=scene.source, taylor=taylor, platforms=wanted, fmi=version,
-                          arrays=scene.arrays if arrays is None else arrays)
+                          keep=scene.outputs, source=scene.source, taylor=taylor, platforms=wanted, fmi=version)
 
 
 def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment | None = None,
                    build_dir: str | Path | None = None, keep: list[str] | None = None,
-                   source: str = "", taylor: bool = False, platforms=None, fmi: int = 2,
-                   arrays: bool = True) -> BuildResult:
+                   source: str = "", taylor: bool = False, platforms=None, fmi: int = 2) -> BuildResult:
     """Build the FMI 2.0 or 3.0 FMU of any ModelSpec (a wheel's, a controller's: model/system.py),
     Co-Simulation and Model Exchange, its C sources included.
 
@@ -174,8 +170,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     fmi: the FMI version, 2 (FMI 2.0.4: modelDescription.xml lists gw_fmu.c, binaries in
     linux64, win64, darwin64, ...) or 3 (FMI 3.0.2: the event indicators as variables,
     sources/buildDescription.xml lists gw_fmu3.c, binaries in platform-tuple folders); each
-    FMU carries its own version's layer and headers only (runtime_sources); arrays: an FMI 3
-    FMU has the array outputs x_state and contact_force (variables.build_table; FMI 2: none).
+    FMU carries its own version's layer and headers only (runtime_sources).
     Sources stay in build_dir if given (BuildResult.sources; None without build_dir).
     Raises ArgumentError for an output that is no .fmu name (check_output), an unknown
     platform (naming `platforms`) or an fmi other than 2 and 3 (naming `fmi`), ValueError for a bad table,
@@ -198,7 +193,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         shutil.rmtree(root)
     src = root / "sources"
     try:
-        table = build_table(spec, experiment, keep, fmi, arrays)
+        table = build_table(spec, experiment, keep, fmi)
         identifier = spec.name
         unity = UNITY_SOURCES[fmi]
         fns = generate_functions(spec, src, table)

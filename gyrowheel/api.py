@@ -161,8 +161,7 @@ def _assignments(values, argument: str) -> dict[str, object]:
 
 # -- the verbs ---------------------------------------------------------------------------------
 
-def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms=None, fmi=None,
-          arrays=None):
+def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms=None, fmi=None):
     """Build the FMI 2.0 or 3.0 FMU of a scene (Co-Simulation and Model Exchange, sources
     included).
 
@@ -183,9 +182,6 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms
     fmi: the FMI version, 2 (FMI 2.0.4) or 3 (FMI 3.0.2: the event indicators as variables,
     early return from fmi3DoStep at events, Event Mode in Co-Simulation: docs/fmi.md); None
     (default): the scene's [build] fmi, else 2.
-    arrays: an FMI 3 FMU's array outputs x_state (the continuous states) and contact_force
-    ([F_long, F_lat, F_n]) beside the scalars (True) or not (False: for importers that read
-    no arrays); None (default): the scene's [build] arrays, else True. FMI 2 FMUs have none.
     Returns a gyrowheel.BuildResult: fmu (the path), spec (the ModelSpec: variables, effects),
     sources (the C sources' directory, kept only with build_dir), identifier (the model
     identifier); it is os.PathLike, so it stands for its FMU in every other function.
@@ -207,10 +203,8 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms
     out = _output_file(builder.check_output(out, parsed.file), "output")  # (.fmu, not the scene: made after)
     build_dir = None if build_dir is None else _output_directory(build_dir, "build_dir")
     taylor = flag(taylor, "taylor")
-    arrays = None if arrays is None else flag(arrays, "arrays")
     try:
-        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=taylor, platforms=platforms, fmi=fmi,
-                                 arrays=arrays)
+        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=taylor, platforms=platforms, fmi=fmi)
     except MissingExtraError as exc:  # zig, for a platform not the host's: checked before the model is built
         verb = "gyrowheel.build(platforms=...)" if platforms is not None else "gyrowheel.build() ([build] platforms)"
         raise MissingExtraError(exc.extra, verb, exc.missing) from None

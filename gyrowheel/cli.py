@@ -101,7 +101,7 @@ def cmd_build(args) -> int:
 
     try:
         result = build(args.scene, args.output, build_dir=args.keep_build, taylor=args.taylor,
-                       platforms=args.platforms, fmi=args.fmi, arrays=args.arrays)
+                       platforms=args.platforms, fmi=args.fmi)
     except MissingExtraError as exc:  # zig, for a platform not the host's (exit 2)
         verb = "gyrowheel build --platforms" if args.platforms is not None else "gyrowheel build ([build] platforms)"
         raise MissingExtraError(exc.extra, verb, exc.missing) from None
@@ -238,9 +238,6 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("--fmi", type=int, choices=(2, 3),
                    help="the FMI version of the FMU: 2 (FMI 2.0) or 3 (FMI 3.0); default: the scene's "
                         "[build] fmi, else 2")
-    b.add_argument("--no-arrays", dest="arrays", action="store_const", const=False, default=None,
-                   help="FMI 3: leave out the array outputs x_state and contact_force (for importers "
-                        "that read no arrays); default: the scene's [build] arrays, else with them")
     b.set_defaults(func=cmd_build)
     s = sub.add_parser("simulate", help="simulate an FMU in Co-Simulation with fmpy")
     s.add_argument("fmu")

@@ -109,6 +109,10 @@ GW_INTERNAL gw_status gw_fmi3_copy_finite(gw_fmu3 *F, const char *fn, double *ds
 
 static inline int gw_fmi3_is_me(const gw_fmu3 *F) { return F->iface == GW3_IFACE_ME; }
 
+/* ---- gw_fmi3_variables.c ------------------------------------------------------------------ */
+/* the array variable of value reference vr (gw_model.h, gw_array), or NULL */
+GW_INTERNAL const gw_array *gw_fmi3_array_find(const gw_model *m, unsigned int vr);
+
 /* ---- the frame of every fmi3 function ------------------------------------------------------
  * GW3_FRAME(Name) opens the body of fmi3Name (as GW_FRAME of gw_fmi2.h): fn is "fmi3Name",
  * F, I the instance and its core, status the worst status so far.  It checks the interface

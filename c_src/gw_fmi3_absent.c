@@ -85,6 +85,9 @@ static fmi3Status gw_fmi3_clock_refs(gw_instance *I, const char *fn, const fmi3V
                    GW3_NO_CLOCKS);
     else if (vr[0] == 0)
         GW_LOG_ERR(I, "%s: value reference 0 (time) is not a Clock: %s", fn, GW3_NO_CLOCKS);
+    else if (gw_fmi3_array_find(I->m, vr[0]))
+        GW_LOG_ERR(I, "%s: value reference %u (%s) is not a Clock: %s", fn, vr[0],
+                   gw_fmi3_array_find(I->m, vr[0])->name, GW3_NO_CLOCKS);
     else
         GW_LOG_ERR(I, "%s: unknown value reference %u: %s", fn, vr[0], GW3_NO_CLOCKS);
     return fmi3Error;

@@ -6,13 +6,17 @@
  * answer nValueReferences == 0 with fmi3OK and any value reference with fmi3Error and what
  * the variable is.  What may be set when is the FMI 2.0 layer's rule (gw_front_settable):
  * FMI 3.0.2's tables (sections 3.2.1 and 4.2.1) allow the same.  FMI 3.0 passes nValues
- * beside the value references (array variables); here every variable is a scalar.
+ * beside the value references: the number of serialized values, one per scalar and n per
+ * array variable (section 2.2.7.2).  The array variables (GW_MODEL.arrays, section 2.4.7.2)
+ * are read-only Float64 outputs whose elements are states or outputs; a model without any
+ * takes the scalar path only.
  */
 #ifndef GW_UNITY_BUILD
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu3.c */
 #else
 
 #include <math.h>
+#include <string.h>
 
 #include "gw_fmi3.h"
 #include "gw_front.h"
@@ -56,6 +60,34 @@ static const char *gw_fmi3_type_name(int type) {
     }
 }
 
+GW_INTERNAL const gw_array *gw_fmi3_array_find(const gw_model *m, unsigned int vr) {
+    int lo = 0, hi = m->n_arrays - 1;
+    while (lo <= hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (m->arrays[mid].vr == vr) return &m->arrays[mid];
+        if (m->arrays[mid].vr < vr)
+            lo = mid + 1;
+        else
+            hi = mid - 1;
+    }
+    return NULL;
+}
+
+/* element k of array a as the scalar variable it stands for: a state (read as a scalar state
+ * is, x = init(s, p) while initialising) or an output */
+static gw_variable gw_fmi3_element(const gw_array *a, int k) {
+    gw_variable v;
+    memset(&v, 0, sizeof(v));
+    v.vr = a->vr;
+    v.name = a->name;
+    v.type = GW_REAL;
+    v.kind = a->source == GW_ARRAY_X ? GW_VAR_STATE : GW_VAR_OUTPUT;
+    v.index = a->index[k];
+    v.out_index = -1;
+    v.state_index = -1;
+    return v;
+}
+
 /* the variable vr if it is of base type `type` (-1: of a type this FMU has none of); else NULL
  * with the reason logged.  Time (vr 0) has no row: it answers *time = 1 and NULL. */
 static const gw_variable *gw_fmi3_lookup(gw_instance *I, const char *fn, fmi3ValueReference vr,
@@ -72,7 +104,12 @@ static const gw_variable *gw_fmi3_lookup(gw_instance *I, const char *fn, fmi3Val
     }
     v = gw_variable_find(I->m, vr);
     if (!v) {
-        GW_LOG_ERR(I, "%s: unknown value reference %u", fn, (unsigned)vr);
+        const gw_array *a = gw_fmi3_array_find(I->m, vr);
+        if (a)
+            GW_LOG_ERR(I, "%s: value reference %u (%s) is a Float64 array variable", fn,
+                       (unsigned)vr, a->name);
+        else
+            GW_LOG_ERR(I, "%s: unknown value reference %u", fn, (unsigned)vr);
         return NULL;
     }
     if ((int)v->type != type) {
@@ -83,12 +120,34 @@ static const gw_variable *gw_fmi3_lookup(gw_instance *I, const char *fn, fmi3Val
     return v;
 }
 
-/* the arrays of a call: present when there are values, one value per reference */
-static int gw_fmi3_arrays_ok(gw_instance *I, const char *fn, const void *vr, size_t nvr,
-                             const void *values, size_t nValues) {
-    if (nValues != nvr) {
+/* the number of values of the references vr of a getter or setter of base type `type`
+ * (section 2.2.7.1: the serialized variables concatenated): one per scalar, n per array (all
+ * Float64); a reference of another type or unknown counts one (refused with its own reason) */
+static size_t gw_fmi3_n_values(const gw_model *m, const fmi3ValueReference vr[], size_t nvr,
+                               int type) {
+    size_t k, n = nvr;
+    if (m->n_arrays == 0 || !vr || type != GW_REAL) return nvr;
+    for (k = 0; k < nvr; k++) {
+        const gw_array *a = gw_fmi3_array_find(m, vr[k]);
+        if (a) n += (size_t)a->n - 1;
+    }
+    return n;
+}
+
+/* the arrays of a call: present when there are values, nValues the sum of the sizes of the
+ * referenced variables (section 2.2.7.2) */
+static int gw_fmi3_arrays_ok(gw_instance *I, const char *fn, const fmi3ValueReference vr[],
+                             size_t nvr, const void *values, size_t nValues, int type) {
+    size_t want = gw_fmi3_n_values(I->m, vr, nvr, type);
+    if (nValues != want && I->m->n_arrays == 0) {
         GW_LOG_ERR(I, "%s: nValues = %lu for %lu value references (every variable of this FMU "
                    "is a scalar)", fn, (unsigned long)nValues, (unsigned long)nvr);
+        return 0;
+    }
+    if (nValues != want) {
+        GW_LOG_ERR(I, "%s: nValues = %lu, but the %lu value references have %lu values (the "
+                   "sum of the variables' sizes, FMI 3.0.2 section 2.2.7.2)", fn,
+                   (unsigned long)nValues, (unsigned long)nvr, (unsigned long)want);
         return 0;
     }
     if (nvr > 0 && (!vr || !values)) {
@@ -107,12 +166,19 @@ static fmi3Status gw_fmi3_get(gw_fmu3 *F, const char *fn, const fmi3ValueReferen
                               size_t nvr, void *values, size_t nValues, int type) {
     gw_instance *I = F->I;
     fmi3Status status = fmi3OK;
-    int need = 0, time;
-    size_t k;
-    if (!gw_fmi3_arrays_ok(I, fn, vr, nvr, values, nValues)) return fmi3Error;
+    int need = 0, time, i;
+    size_t k, j;
+    if (!gw_fmi3_arrays_ok(I, fn, vr, nvr, values, nValues, type)) return fmi3Error;
     /* every reference first: a bad one is fmi3Error whatever the values of the others */
     for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_fmi3_lookup(I, fn, vr[k], type, &time);
+        const gw_array *a = type == GW_REAL ? gw_fmi3_array_find(I->m, vr[k]) : NULL;
+        const gw_variable *v;
+        if (a) {
+            gw_variable e = gw_fmi3_element(a, 0);
+            need |= gw_front_needs(I, &e); /* every element is of the same source */
+            continue;
+        }
+        v = gw_fmi3_lookup(I, fn, vr[k], type, &time);
         if (!v && !time) return fmi3Error;
         need |= gw_front_needs(I, v);
     }
@@ -120,22 +186,38 @@ static fmi3Status gw_fmi3_get(gw_fmu3 *F, const char *fn, const fmi3ValueReferen
     if (need & GW_NEED_DERIVATIVES) GW3_TRY(gw_update_derivatives(I, fn));
     if (need & GW_NEED_INDICATORS) GW3_TRY(gw_front_indicators(I, fn));
     for (k = 0; k < nvr && type == GW_REAL; k++) {
-        const gw_variable *v = gw_variable_find(I->m, vr[k]);
+        const gw_array *a = gw_fmi3_array_find(I->m, vr[k]);
+        const gw_variable *v = a ? NULL : gw_variable_find(I->m, vr[k]);
         double d;
+        for (i = 0; a && i < a->n; i++) {
+            gw_variable e = gw_fmi3_element(a, i);
+            GW3_TRY(gw_front_get_finite(I, fn, &e, &d));
+        }
         if (v) GW3_TRY(gw_front_get_finite(I, fn, v, &d));
     }
-    for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_variable_find(I->m, vr[k]);
-        double d = v ? gw_value_get(I, v) : I->t;
+    for (k = 0, j = 0; k < nvr; k++, j++) {
+        const gw_array *a = type == GW_REAL ? gw_fmi3_array_find(I->m, vr[k]) : NULL;
+        const gw_variable *v;
+        double d;
+        if (a) { /* its elements, serialized in order (section 2.2.7.1) */
+            for (i = 0; i < a->n; i++) {
+                gw_variable e = gw_fmi3_element(a, i);
+                ((fmi3Float64 *)values)[j + (size_t)i] = gw_value_get(I, &e);
+            }
+            j += (size_t)a->n - 1;
+            continue;
+        }
+        v = gw_variable_find(I->m, vr[k]);
+        d = v ? gw_value_get(I, v) : I->t;
         switch (type) {
-        case GW_REAL: ((fmi3Float64 *)values)[k] = d; break;
+        case GW_REAL: ((fmi3Float64 *)values)[j] = d; break;
         case GW_INTEGER:
-            ((fmi3Int32 *)values)[k] = isfinite(d) ? (fmi3Int32)floor(d + 0.5) : 0;
+            ((fmi3Int32 *)values)[j] = isfinite(d) ? (fmi3Int32)floor(d + 0.5) : 0;
             break;
         case GW_ENUM:
-            ((fmi3Int64 *)values)[k] = isfinite(d) ? (fmi3Int64)floor(d + 0.5) : 0;
+            ((fmi3Int64 *)values)[j] = isfinite(d) ? (fmi3Int64)floor(d + 0.5) : 0;
             break;
-        default: ((fmi3Boolean *)values)[k] = d != 0.0; break;
+        default: ((fmi3Boolean *)values)[j] = d != 0.0; break;
         }
     }
 END:
@@ -181,10 +263,16 @@ static fmi3Status gw_fmi3_set(gw_fmu3 *F, const char *fn, const fmi3ValueReferen
     fmi3Status status = fmi3OK;
     int time;
     size_t k;
-    if (!gw_fmi3_arrays_ok(I, fn, vr, nvr, values, nValues)) return fmi3Error;
+    if (!gw_fmi3_arrays_ok(I, fn, vr, nvr, values, nValues, type)) return fmi3Error;
     for (k = 0; k < nvr; k++) {
-        const gw_variable *v = gw_fmi3_lookup(I, fn, vr[k], type, &time);
+        const gw_array *a = type == GW_REAL ? gw_fmi3_array_find(I->m, vr[k]) : NULL;
+        const gw_variable *v;
         double d;
+        if (a) { /* an output, as every array of this FMU */
+            GW_LOG_ERR(I, "%s: variable %s (vr=%u) is read-only", fn, a->name, a->vr);
+            return fmi3Error;
+        }
+        v = gw_fmi3_lookup(I, fn, vr[k], type, &time);
         if (time) {
             GW_LOG_ERR(I, "%s: value reference 0 (time) is the independent variable and "
                        "cannot be set%s", fn, gw_fmi3_is_me(F) ? " (use fmi3SetTime)" : "");

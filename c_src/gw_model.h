@@ -141,6 +141,18 @@ typedef struct {
     int state_index; /* GW_VAR_START / GW_VAR_STATE: the continuous state it is; otherwise -1 */
 } gw_variable;
 
+/* An FMI 3.0 array variable (FMI 3.0.2 section 2.4.7.2, <Dimension>): a read-only Float64
+ * output of n elements, element k being x[index[k]] (GW_ARRAY_X) or y[index[k]] (GW_ARRAY_Y).
+ * Arrays are no rows of `vars` (FMI 2.0 has none): only the FMI 3.0 layer reads them. */
+typedef enum { GW_ARRAY_X = 0, GW_ARRAY_Y = 1 } gw_array_source;
+typedef struct {
+    unsigned int vr;
+    const char *name;
+    int n;
+    gw_array_source source;
+    const int *index; /* n */
+} gw_array;
+
 typedef struct {
     const char *identifier; /* modelIdentifier */
     const char *token;      /* guid of modelDescription.xml */
@@ -169,6 +181,8 @@ typedef struct {
     gw_function ode_pre;
     int n_pre;
     gw_taylor_kernel taylor; /* zero: the model has no Taylor kernel */
+    int n_arrays;            /* FMI 3.0 only; 0 in an FMI 2.0 model */
+    const gw_array *arrays;  /* sorted by vr, each vr above every row of vars */
 } gw_model;
 
 #endif /* GW_MODEL_H */

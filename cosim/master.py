@@ -33,7 +33,7 @@ from gyrowheel.errors import GyrowheelError
 from gyrowheel.cosim.exchange import exchange, settle
 from gyrowheel.cosim.system import SystemDescription, SystemFileError, describe
 from gyrowheel.cosim.ssp import coerce_value
-from gyrowheel.cosim.units import Unit, kind_of, new_unit
+from gyrowheel.cosim.units import Unit, kind_of, new_unit, scalar_outputs
 
 NUMERIC = ("Real", "Integer", "Boolean")  # recorded as numbers; String and Binary outputs as NaN
 
@@ -88,8 +88,7 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
         raise ValueError(f"stop time {stop:.12g} is not a whole number (>= 1) of steps {step:g} from {t0:g}: "
                          f"stop at {near}, or choose a step that divides {stop - t0:.12g} s")
     levels = system.check()
-    columns = 1 + sum(sum(v.causality == "output" for v in read_model_description(str(c.fmu)).modelVariables)
-                      for c in system.components)
+    columns = 1 + sum(len(scalar_outputs(read_model_description(str(c.fmu)))) for c in system.components)
     # the result: every point in one float64 array, copied once at the end (data[:count].copy())
     check_memory((n_steps + 1) * columns, 16, f"stop_time {stop:g} s with step {step:g} s: "
                  f"{count_text(n_steps + 1)} communication points of {columns} columns",

@@ -129,6 +129,10 @@ class SystemDescription:
                                           f"is {got or 'not a variable'}")
             src = variables[k.start_element][k.start_connector]
             dst = variables[k.end_element][k.end_connector]
+            if src.dimensions:  # FMI 3.0 array output: its elements are scalar outputs of their own
+                raise SystemFileError(f"connection {describe(k)}: {k.start_element}.{k.start_connector} is an "
+                                      f"array variable (connections join scalar variables: connect the "
+                                      f"scalar outputs it is made of)")
             if kind_of(src.type) != kind_of(dst.type):
                 raise SystemFileError(f"connection {describe(k)}: joins a {src.type} to a {dst.type} "
                                       f"(a connection joins variables of one type)")

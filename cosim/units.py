@@ -6,6 +6,9 @@ FMI 2.0 says so with fmi2Discard and fmi2LastSuccessfulTime (FMI 2.0.4 section 4
 with fmi3DoStep's terminateSimulation and lastSuccessfulTime (FMI 3.0.2 section 4.2.1). Both
 kinds are instantiated without event mode or early return, so every step of every component
 ends at the same communication point unless the component stops the run.
+The master records and connects scalar variables: an FMI 3.0 array output (FMI 3.0.2 section
+2.4.7.2; the wheel's x_state and contact_force) repeats scalar outputs of the same FMU and is
+left out (scalar_outputs), as gyrowheel.simulate leaves it out.
 """
 from __future__ import annotations
 
@@ -33,6 +36,12 @@ def kind_of(fmi_type: str) -> str:
     return fmi_type
 
 
+def scalar_outputs(md) -> list[str]:
+    """The names of md's scalar outputs, in modelDescription order: an FMI 3.0 array variable
+    (one with <Dimension>s) is left out."""
+    return [v.name for v in md.modelVariables if v.causality == "output" and not v.dimensions]
+
+
 def integer_range(fmi_type: str) -> tuple[int, int]:
     """[low, high) of a whole-number type, outside which ctypes would wrap the value: FMI 3.0's
     by their bits; fmi2Integer and Enumerations 32 bits (an FMI 3.0 enumeration is an Int64, but
@@ -58,7 +67,7 @@ class Unit:
 
     def __post_init__(self):
         self.vars = {v.name: v for v in self.md.modelVariables}
-        self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
+        self.outputs = scalar_outputs(self.md)  # one value each: get() reads one
 
     def unpack(self, fmu) -> None:
         self.unzipdir = str(new_directory("unit"))

@@ -24,7 +24,7 @@ from gyrowheel.fmu_build.runtime import UNITY_SOURCES, runtime_sources
 from gyrowheel.errors import ArgumentError, ArgumentTypeError
 from gyrowheel.output_files import check_output_file, replaced_atomically
 from gyrowheel.scratch import new_directory
-from gyrowheel.fmu_build.scene import Experiment, Scene, check_scene, fmi_problem
+from gyrowheel.fmu_build.scene import Experiment, Scene, SceneError, check_scene, fmi_problem
 from gyrowheel.fmu_build.variables import build_table
 from gyrowheel.model.build import build_model
 from gyrowheel.model.spec import ModelSpec
@@ -125,13 +125,22 @@ def check_fmi(fmi) -> int:
     return int(fmi)
 
 
+def check_arrays(fmi: int, arrays) -> None:
+    """ArgumentError naming `arrays` for arrays=False with an FMI 2 FMU: it has no array outputs
+    to leave out (they are FMI 3's, variables.build_table)."""
+    if fmi == 2 and arrays is not None and not arrays:
+        raise ArgumentError("arrays: leaving out the array outputs is for FMI 3 FMUs; an FMI 2 FMU has none",
+                            argument="arrays")
+
+
 def _guid(*parts: str) -> str:
     digest = hashlib.sha256("\0".join(parts).encode()).digest()
     return "{" + str(uuid.UUID(bytes=digest[:16], version=5)) + "}"
 
 
 def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = None,
-              taylor: bool = False, platforms=None, fmi: int | None = None) -> BuildResult:
+              taylor: bool = False, platforms=None, fmi: int | None = None,
+              arrays: bool | None = None) -> BuildResult:
     """Build the FMU of `scene` at `output`: the wheel's ModelSpec through build_spec_fmu.
 
     scene: a Scene, checked first by the scene file's rules (check_scene); output: the .fmu to
@@ -142,22 +151,31 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
     (fmu_build/platforms.py parse_platforms: "all", "host", a comma-separated string or a list
     of FMI 3.0 platform tuples), overriding the scene's [build] platforms; None: the scene's
     [build] platforms, and without one the host only; fmi: the FMI version, 2 or 3, overriding
-    the scene's [build] fmi; None: the scene's (default 2).
-    Returns the BuildResult. Raises SceneError (the scene, naming the field), ArgumentError
-    (output; platforms: an unknown platform, the valid ones listed; fmi: not 2 or 3),
-    ArgumentTypeError (fmi not an int), and what build_spec_fmu raises.
+    the scene's [build] fmi; None: the scene's (default 2); arrays: an FMI 3 FMU's array
+    outputs (True) or none (False), overriding the scene's [build] arrays; None: the scene's.
+    Returns the BuildResult. Raises SceneError (the scene, naming the field; [build] arrays =
+    false for an FMI 2 FMU), ArgumentError (output; platforms: an unknown platform, the valid
+    ones listed; fmi: not 2 or 3; arrays False for an FMI 2 FMU), ArgumentTypeError (fmi not
+    an int), and what build_spec_fmu raises.
     """
     scene = check_scene(scene)
     version = scene.fmi if fmi is None else check_fmi(fmi)
+    check_arrays(version, arrays)
+    if version == 2 and arrays is None and not scene.arrays:
+        where = scene.file if scene.file is not None else f"scene {scene.name!r}"
+        raise SceneError(f"{where}: [build] arrays: false leaves out an FMI 3 FMU's array outputs; an "
+                         f"FMI 2 FMU has none: build FMI 3 ([build] fmi = 3) or remove the key")
     output = check_output(output, scene.file)
     wanted = _wanted_platforms(scene.platforms if platforms is None else platforms)  # before the model
     return build_spec_fmu(_spec(scene), output, scene.experiment, build_dir=build_dir,
-                          keep=scene.outputs, source=scene.source, taylor=taylor, platforms=wanted, fmi=version)
+                          keep=scene.outputs, source=scene.source, taylor=taylor, platforms=wanted, fmi=version,
+                          arrays=scene.arrays if arrays is None else arrays)
 
 
 def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment | None = None,
                    build_dir: str | Path | None = None, keep: list[str] | None = None,
-                   source: str = "", taylor: bool = False, platforms=None, fmi: int = 2) -> BuildResult:
+                   source: str = "", taylor: bool = False, platforms=None, fmi: int = 2,
+                   arrays: bool = True) -> BuildResult:
     """Build the FMI 2.0 or 3.0 FMU of any ModelSpec (a wheel's, a controller's: model/system.py),
     Co-Simulation and Model Exchange, its C sources included.
 
@@ -170,10 +188,12 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     fmi: the FMI version, 2 (FMI 2.0.4: modelDescription.xml lists gw_fmu.c, binaries in
     linux64, win64, darwin64, ...) or 3 (FMI 3.0.2: the event indicators as variables,
     sources/buildDescription.xml lists gw_fmu3.c, binaries in platform-tuple folders); each
-    FMU carries its own version's layer and headers only (runtime_sources).
+    FMU carries its own version's layer and headers only (runtime_sources); arrays: an FMI 3
+    FMU has the array outputs x_state and contact_force (variables.build_table; FMI 2: none).
     Sources stay in build_dir if given (BuildResult.sources; None without build_dir).
     Raises ArgumentError for an output that is no .fmu name (check_output), an unknown
-    platform (naming `platforms`) or an fmi other than 2 and 3 (naming `fmi`), ValueError for a bad table,
+    platform (naming `platforms`), an fmi other than 2 and 3 (naming `fmi`) or arrays False with
+    fmi 2 (naming `arrays`), ValueError for a bad table,
     gyrowheel.taylor.graph.TaylorUnsupportedError (a ValueError) for a kernel the ode's
     operations do not allow, CompileError if a C compiler fails (a cross build: naming the
     platform and the compiler's first error), MissingExtraError when a platform other than the
@@ -181,6 +201,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     """
     experiment = experiment or Experiment()
     fmi = check_fmi(fmi)
+    check_arrays(fmi, arrays)
     output = check_output(output)
     wanted = _wanted_platforms(platforms)
     tmp = None
@@ -193,7 +214,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         shutil.rmtree(root)
     src = root / "sources"
     try:
-        table = build_table(spec, experiment, keep, fmi)
+        table = build_table(spec, experiment, keep, fmi, arrays)
         identifier = spec.name
         unity = UNITY_SOURCES[fmi]
         fns = generate_functions(spec, src, table)

@@ -34,7 +34,8 @@ def write_index_html(spec: ModelSpec, exp: Experiment, table: list[Variable], id
         start = "" if v.start is None or v.initial == "calculated" else repr(v.start)
         rows.append(
             "<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in (
-                v.vr, v.name, v.causality, v.variability, v.initial or "", v.type,
+                v.vr, v.name, v.causality, v.variability, v.initial or "",
+                v.type + (f"[{len(v.elements)}]" if v.elements else ""),
                 v.quantity.unit if v.quantity.unit not in ("", "1") else "", start,
                 v.quantity.description)) + "</tr>")
     effects = ", ".join(spec.effects) or "none"

@@ -89,7 +89,9 @@ def write_model_description3(model_name: str, exp: Experiment, table: list[Varia
     ET.SubElement(mvs, "Float64", {"name": "time", "valueReference": str(TIME_VR), "causality": "independent",
                                    "variability": "continuous", "unit": "s", "description": "simulation time"})
     for v in table:
-        ET.SubElement(mvs, TYPES[v.type], _variable_attrs(v, reinit))
+        element = ET.SubElement(mvs, TYPES[v.type], _variable_attrs(v, reinit))
+        if v.elements:  # an array variable of one dimension (section 2.4.7.2)
+            ET.SubElement(element, "Dimension", {"start": str(len(v.elements))})
 
     ms = ET.SubElement(root, "ModelStructure")  # section 2.4.8, in the schema's order
     for v in table:

@@ -14,6 +14,9 @@ Scene objects they are read into (docs/scenes.md).
                   --platforms` overrides it)
                   fmi = 2 or 3: the FMI version of the FMU (optional; default 2; `gyrowheel
                   build --fmi` overrides it)
+                  arrays = true or false: an FMI 3 FMU's array outputs x_state and
+                  contact_force (optional; default true; `gyrowheel build --no-arrays` leaves
+                  them out; an FMI 2 FMU has none)
 
 One set of rules serves both ways in: parse_scene reads a file's tables through it, and
 check_scene puts a Scene made or changed in Python (dataclasses.replace, attribute assignment)
@@ -126,6 +129,9 @@ class Scene:
     fmi          the FMI version of the FMU ([build] fmi): 2 (the default: FMI 2.0.4) or 3
                  (FMI 3.0.2, Co-Simulation and Model Exchange from the same model); an `fmi`
                  argument of build_fmu / gyrowheel.build overrides it
+    arrays       ([build] arrays) an FMI 3 FMU has the array outputs x_state and contact_force
+                 (True, the default) or not (False: for importers that read no arrays); an
+                 `arrays` argument of build_fmu / gyrowheel.build overrides it
     source       the scene's TOML text, shipped in the FMU's documentation/index.html
                  ("Built from"); check_scene writes it anew when it no longer describes the
                  scene (a Scene changed in Python, or made there)
@@ -143,6 +149,7 @@ class Scene:
     outputs: list[str] | None = None
     platforms: str | list[str] | None = None
     fmi: int = 2
+    arrays: bool = True
     source: str = ""  # the TOML text, shipped in the FMU's documentation
     file: Path | None = field(default=None, compare=False)  # where load_scene read it from
 
@@ -352,11 +359,15 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
             raise r.fail("outputs", "keep", "must be a list of output names")
         scene.outputs = list(keep)
     build = r.table(data, "build")
-    r.unknown("build", build, {"platforms", "fmi"})
+    r.unknown("build", build, {"platforms", "fmi", "arrays"})
     if "platforms" in build:
         scene.platforms = _platforms(r, build["platforms"])
     if "fmi" in build:
         scene.fmi = _fmi(r, build["fmi"])
+    if "arrays" in build:
+        if not isinstance(build["arrays"], bool):
+            raise r.fail("build", "arrays", f"must be true or false, got {build['arrays']!r}")
+        scene.arrays = build["arrays"]
     return scene
 
 
@@ -433,7 +444,8 @@ def _tables(r: _Reader, scene: Scene) -> dict:
             "wheel": scene.wheel, "effects": scene.effects, "initial": scene.initial,
             "experiment": {f.name: getattr(scene.experiment, f.name) for f in dataclasses.fields(Experiment)},
             "outputs": {} if scene.outputs is None else {"keep": scene.outputs},
-            "build": {**({} if scene.platforms is None else {"platforms": scene.platforms}), "fmi": scene.fmi}}
+            "build": {**({} if scene.platforms is None else {"platforms": scene.platforms}), "fmi": scene.fmi,
+                      "arrays": scene.arrays}}
 
 
 def _content(scene: Scene) -> tuple:
@@ -519,7 +531,8 @@ def scene_toml(scene: Scene) -> str:
     if scene.outputs is not None:
         table("outputs", {"keep": scene.outputs})
     build = {**({} if scene.platforms is None else {"platforms": scene.platforms}),
-             **({} if scene.fmi == 2 else {"fmi": scene.fmi})}
+             **({} if scene.fmi == 2 else {"fmi": scene.fmi}),
+             **({} if scene.arrays else {"arrays": False})}
     if build:
         table("build", build)
     return "\n".join(lines) + "\n"

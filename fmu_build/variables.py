@@ -42,6 +42,8 @@ class Variable:
     initial_dependencies: tuple[int, ...] | None = None
     state_index: int = -1  # the continuous state this variable is (start or state kinds)
     derivative_of: int | None = None  # derivative kind: 1-based index of the state's variable
+    # array kind (FMI 3 only): where each element lives, ("x", state index) or ("y", output index)
+    elements: tuple[tuple[str, int], ...] = ()
 
     @property
     def name(self) -> str:
@@ -51,6 +53,9 @@ class Variable:
     def start(self):
         return self.quantity.start
 
+
+# FMI 3 array variable of the contact_forces effect: its outputs, in this order
+CONTACT_FORCE = ("F_long", "F_lat", "F_n")
 
 # the FMI 3.0 calls that take the place of the FMI 2.0 calls the settings' descriptions name
 FMI3_CALLS = {"fmi2SetupExperiment": "fmi3EnterInitializationMode", "fmi2DoStep": "fmi3DoStep"}
@@ -93,14 +98,17 @@ def _depends(expr: ca.SX, syms: ca.SX) -> list[bool]:
     return [bool(d) for d in ca.which_depends(expr, syms, 1, False)]
 
 
-def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None, fmi: int = 2) -> list[Variable]:
+def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None, fmi: int = 2,
+                arrays: bool = True) -> list[Variable]:
     """All variables, value references 1.., in the order of modelDescription.xml.
 
     spec: the model; exp: the solver settings' defaults; keep: the outputs to expose (None:
     all; the required ones always), ValueError naming an unknown one; fmi: 2 or 3, the FMI
     version of the FMU. FMI 3 appends, after the FMI 2 rows (whose value references it keeps),
     one local Float64 per event indicator, `<event>_indicator` (kind "indicator", index the
-    event's: FMI 3.0.2 section 2.4.8, <EventIndicator> names variables, not a count).
+    event's: FMI 3.0.2 section 2.4.8, <EventIndicator> names variables, not a count), then,
+    with `arrays`, the array outputs (kind "array", _arrays): the quantities that are vectors,
+    each element the value of a scalar variable of the FMU.
     Returns the rows, row i having value reference i + 1."""
     rows: list[Variable] = []
 
@@ -141,6 +149,8 @@ def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None,
                                   "fires when it goes from > 0 to <= 0"),
                 type="Real", causality="local", variability="continuous", initial="calculated",
                 kind="indicator", index=k)
+        if arrays:
+            _arrays(spec, rows, add)
     _structure(spec, rows)
     return rows
 
@@ -164,6 +174,23 @@ def _states(spec: ModelSpec, rows: list[Variable], add) -> None:
         add(quantity=Quantity(f"der({row.name})", _per_second(unit), f"time derivative of {row.name}"),
             type="Real", causality="local", variability="continuous", initial="calculated",
             kind="derivative", index=i, derivative_of=rows.index(row) + 1)
+
+
+def _arrays(spec: ModelSpec, rows: list[Variable], add) -> None:
+    """The FMI 3 array outputs (FMI 3.0.2 section 2.4.7.2, one <Dimension>): x_state, the
+    continuous state vector, and contact_force, [F_long, F_lat, F_n], when the FMU has the
+    contact_forces effect's outputs (each element a scalar variable of the FMU, rows: the
+    partial derivatives of an array are its elements')."""
+    add(quantity=Quantity("x_state", "", "continuous state vector [" + ", ".join(spec.x_names) + "]"),
+        type="Real", causality="output", variability="continuous", initial="calculated", kind="array",
+        index=-1, elements=tuple(("x", i) for i in range(spec.x.numel())))
+    names = {q.name: j for j, (q, _) in enumerate(spec.outputs)}
+    kept = {r.name for r in rows if r.causality == "output"}
+    if all(n in names and n in kept for n in CONTACT_FORCE):
+        add(quantity=Quantity("contact_force", "N", "contact force (ground on wheel) ["
+                              + ", ".join(CONTACT_FORCE) + "]: along the heading, across it, normal"),
+            type="Real", causality="output", variability="continuous", initial="calculated", kind="array",
+            index=-1, elements=tuple(("y", names[n]) for n in CONTACT_FORCE))
 
 
 def _unit_of_state(spec: ModelSpec, name: str) -> str:
@@ -195,7 +222,9 @@ def _structure(spec: ModelSpec, rows: list[Variable]) -> None:
     for row in rows:
         if row.causality != "output" and row.kind not in ("derivative", "state", "indicator"):
             continue
-        if row.kind in ("event", "indicator"):
+        if row.kind == "array":
+            expr = ca.vertcat(*[spec.x[i] if src == "x" else y[i] for src, i in row.elements])
+        elif row.kind in ("event", "indicator"):
             expr = spec.events[row.index].expr
         elif row.kind == "derivative":
             expr = spec.ode[row.index]

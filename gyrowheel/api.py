@@ -161,7 +161,8 @@ def _assignments(values, argument: str) -> dict[str, object]:
 
 # -- the verbs ---------------------------------------------------------------------------------
 
-def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms=None, fmi=None):
+def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms=None, fmi=None,
+          arrays=None):
     """Build the FMI 2.0 or 3.0 FMU of a scene (Co-Simulation and Model Exchange, sources
     included).
 
@@ -182,12 +183,17 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms
     fmi: the FMI version, 2 (FMI 2.0.4) or 3 (FMI 3.0.2: the event indicators as variables,
     early return from fmi3DoStep at events, Event Mode in Co-Simulation: docs/fmi.md); None
     (default): the scene's [build] fmi, else 2.
+    arrays: an FMI 3 FMU's array outputs x_state (the continuous states) and contact_force
+    ([F_long, F_lat, F_n]) beside the scalars (True) or not (False: for importers that read
+    no arrays); None (default): the scene's [build] arrays, else True. FMI 2 FMUs have none:
+    False with FMI 2 is refused (ArgumentError naming arrays; [build] arrays = false: SceneError).
     Returns a gyrowheel.BuildResult: fmu (the path), spec (the ModelSpec: variables, effects),
     sources (the C sources' directory, kept only with build_dir), identifier (the model
     identifier); it is os.PathLike, so it stands for its FMU in every other function.
     Raises SceneError (the file, table and key at fault; a file that is no scene, e.g. an FMU; a
     combination the model refuses), ArgumentError (output or build_dir that cannot be written,
-    named; platforms: an unknown platform, in one line listing the valid ones; fmi: not 2 or 3),
+    named; platforms: an unknown platform, in one line listing the valid ones; fmi: not 2 or 3;
+    arrays False with FMI 2),
     ArgumentTypeError (an argument of the wrong type), MissingExtraError (a platform other than
     the host's without gyrowheel[platforms]: its pip command), CompileError (a C compiler
     failed, with its output; a cross build names the platform and the compiler's first error;
@@ -203,8 +209,10 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms
     out = _output_file(builder.check_output(out, parsed.file), "output")  # (.fmu, not the scene: made after)
     build_dir = None if build_dir is None else _output_directory(build_dir, "build_dir")
     taylor = flag(taylor, "taylor")
+    arrays = None if arrays is None else flag(arrays, "arrays")
     try:
-        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=taylor, platforms=platforms, fmi=fmi)
+        return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=taylor, platforms=platforms, fmi=fmi,
+                                 arrays=arrays)
     except MissingExtraError as exc:  # zig, for a platform not the host's: checked before the model is built
         verb = "gyrowheel.build(platforms=...)" if platforms is not None else "gyrowheel.build() ([build] platforms)"
         raise MissingExtraError(exc.extra, verb, exc.missing) from None
@@ -274,8 +282,9 @@ def _fmu(fmu, argument: str = "fmu", **which):
 
 def _check_rows(md, stop_time: float | None, output_interval: float | None) -> None:
     """The memory rule (gyrowheel.arguments.check_memory) for fmpy's run of an FMU: one row of
-    every output per communication point, from the start time to stop_time, as simulate_fmu
-    picks the defaults (the DefaultExperiment, else a stop time of 1 s and 500 intervals)."""
+    every scalar output (what gyrowheel.simulate records) per communication point, from the
+    start time to stop_time, as simulate_fmu picks the defaults (the DefaultExperiment, else a
+    stop time of 1 s and 500 intervals)."""
     exp = md.defaultExperiment
     start = float(exp.startTime) if exp is not None and exp.startTime else 0.0
     stop = stop_time if stop_time is not None else (float(exp.stopTime) if exp is not None and exp.stopTime
@@ -285,7 +294,7 @@ def _check_rows(md, stop_time: float | None, output_interval: float | None) -> N
     if not (stop > start and interval > 0):
         return  # fmpy refuses these itself
     rows = math.floor((stop - start) / interval) + 2  # every point, the last landing on stop_time
-    columns = 1 + sum(v.causality == "output" for v in md.modelVariables)
+    columns = 1 + sum(v.causality == "output" and not v.dimensions for v in md.modelVariables)
     check_memory(rows * columns, arguments.FMPY_BYTES_PER_VALUE,
                  f"stop_time {stop:g} s with output_interval {interval:g} s: {count(rows)} communication points "
                  f"of {columns} columns", "choose a shorter stop_time or a longer output_interval",

@@ -37,7 +37,8 @@ EXIT_BAD_INPUT = 2
 EXIT_FAILURE = 1
 
 # API argument -> the flag that gives it, per verb (errors naming an argument name the flag)
-BUILD_FLAGS = {"output": "-o", "build_dir": "--keep-build", "platforms": "--platforms", "fmi": "--fmi"}
+BUILD_FLAGS = {"output": "-o", "build_dir": "--keep-build", "platforms": "--platforms", "fmi": "--fmi",
+               "arrays": "--no-arrays"}
 SIMULATE_FLAGS = {"stop_time": "--stop-time", "output_interval": "--output-interval", "start_values": "--set",
                   "output": "-o", "plot": "--plot"}
 SYSTEM_FLAGS = {"step": "--step", "stop_time": "--stop-time", "start_values": "--set", "output": "-o"}
@@ -101,7 +102,7 @@ def cmd_build(args) -> int:
 
     try:
         result = build(args.scene, args.output, build_dir=args.keep_build, taylor=args.taylor,
-                       platforms=args.platforms, fmi=args.fmi)
+                       platforms=args.platforms, fmi=args.fmi, arrays=args.arrays)
     except MissingExtraError as exc:  # zig, for a platform not the host's (exit 2)
         verb = "gyrowheel build --platforms" if args.platforms is not None else "gyrowheel build ([build] platforms)"
         raise MissingExtraError(exc.extra, verb, exc.missing) from None
@@ -238,6 +239,9 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("--fmi", type=int, choices=(2, 3),
                    help="the FMI version of the FMU: 2 (FMI 2.0) or 3 (FMI 3.0); default: the scene's "
                         "[build] fmi, else 2")
+    b.add_argument("--no-arrays", dest="arrays", action="store_const", const=False, default=None,
+                   help="FMI 3: leave out the array outputs x_state and contact_force (for importers "
+                        "that read no arrays; refused for an FMI 2 FMU); default: the scene's [build] arrays, else with them")
     b.set_defaults(func=cmd_build)
     s = sub.add_parser("simulate", help="simulate an FMU in Co-Simulation with fmpy")
     s.add_argument("fmu")

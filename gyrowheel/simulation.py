@@ -153,7 +153,7 @@ def _settable(v) -> bool:
 def run(fmu: str | Path, stop_time: float | None = None, output_interval: float | None = None,
         start_values: dict[str, object] | None = None, solver_tolerance: float | None = None,
         messages: Messages | None = None) -> np.ndarray:
-    """Simulate in Co-Simulation; returns fmpy's structured result array.
+    """Simulate in Co-Simulation; returns fmpy's structured result array of the scalar outputs.
 
     start_values are checked by name and type like `gyrowheel simulate --set` (strings or Python
     values: 1.5 for an Integer is refused, not truncated); stop_time, output_interval and
@@ -170,6 +170,10 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
     if output_interval is None:  # fmpy would pick its own; the scene's interval is what users expect
         exp = md.defaultExperiment
         output_interval = float(exp.stepSize) if exp is not None and exp.stepSize else None
+    # an FMI 3 FMU's array outputs (x_state, contact_force) repeat scalar outputs: the scalars are
+    # recorded, one column each, as from the FMI 2 FMU
+    scalars = [v.name for v in md.modelVariables if v.causality == "output" and not v.dimensions]
+    recorded = scalars if len(scalars) < sum(v.causality == "output" for v in md.modelVariables) else None
     cwd = os.getcwd()
     # fmpy unpacks into a directory it removes only when the run succeeds; unpacked here, it is
     # removed however the run ends (the FMU refusing, a binary that does not load, Ctrl-C)
@@ -182,7 +186,7 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
             # lastSuccessfulTime (fmpy reads it only after an early return), as FMI 2's does
             early = {"early_return_allowed": True} if md.fmiVersion.startswith("3") else {}
             return simulate_fmu(unpacked, fmi_type="CoSimulation", stop_time=stop_time,
-                                output_interval=output_interval, start_values=start_values or {},
+                                output_interval=output_interval, start_values=start_values or {}, output=recorded,
                                 relative_tolerance=solver_tolerance, logger=messages, debug_logging=False,
                                 **early)
         except FMICallException as exc:

@@ -12,6 +12,7 @@ import ctypes as C
 import re
 from pathlib import Path
 
+import numpy as np
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 
 from fmi_helpers import StateVector, unpack
@@ -92,12 +93,19 @@ class Instance3(StateVector):
             kind, cast = self.ACCESS[v.type]
             getattr(self.fmu3, f"set{kind}")([v.valueReference], [cast(value)])
 
+    def size(self, name: str) -> int:
+        """The number of values of a variable: 1 for a scalar, the product of an array's
+        dimensions (FMI 3.0.2 section 2.4.7.2)."""
+        return int(np.prod([int(d.start) for d in self.vars[name].dimensions]))
+
     def get(self, *names: str):
+        """A scalar's value, an array variable's values as a list (nValues its size)."""
         out = []
         for name in names:
             v = self.vars[name]
             kind, cast = self.ACCESS[v.type]
-            out.append(cast(getattr(self.fmu3, f"get{kind}")([v.valueReference])[0]))
+            values = [cast(x) for x in getattr(self.fmu3, f"get{kind}")([v.valueReference], nValues=self.size(name))]
+            out.append(values if v.dimensions else values[0])
         return out[0] if len(out) == 1 else out
 
     def init(self, start_time: float = 0.0, tolerance: float | None = None, stop_time: float | None = None,

@@ -604,7 +604,9 @@ def test_system_run_errors_name_the_argument(solo, tmp_path, system, kwargs, err
 
 @pytest.mark.parametrize("argv, verb, expected", [
     (["build", "s.toml", "-o", "x.fmu", "--taylor", "--platforms", "all"], "build",
-     (("s.toml", "x.fmu"), dict(build_dir=None, taylor=True, platforms="all", fmi=None))),
+     (("s.toml", "x.fmu"), dict(build_dir=None, taylor=True, platforms="all", fmi=None, arrays=None))),
+    (["build", "s.toml", "-o", "x.fmu", "--fmi", "3", "--no-arrays"], "build",
+     (("s.toml", "x.fmu"), dict(build_dir=None, taylor=False, platforms=None, fmi=3, arrays=False))),
     (["simulate", "m.fmu", "--stop-time", "2", "--set", "M=2", "-o", "o.csv"], "simulate",
      (("m.fmu",), dict(stop_time=2.0, output_interval=None, start_values=["M=2"], output="o.csv", plot=None))),
     (["info", "m.fmu"], "info", (("m.fmu",), {})),

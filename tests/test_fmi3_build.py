@@ -2,7 +2,8 @@
 
   test_every_example_scene_builds_as_fmi3_and_validates  fmpy.validate_fmu finds no problem;
                                         the FMI 2 rows keep their value references, then one
-                                        event indicator per event; the token is the C table's
+                                        event indicator per event, then the array outputs; the
+                                        token is the C table's
   test_fmi3_model_structure_*           ModelStructure by value reference, indicators listed
   test_fmi2_fmu_carries_no_fmi3_file / test_fmi3_fmu_carries_no_fmi2_file   sources/ per version
   test_build_description_*              sources/buildDescription.xml against fmpy's schema
@@ -67,11 +68,14 @@ def test_every_example_scene_builds_as_fmi3_and_validates(example_build, name):
     rows = variables[1:]
     assert [(v.tag, v.get("name"), int(v.get("valueReference")), v.get("causality")) for v in rows[:len(fmi2)]] == \
         [(FMI3_TYPES[r.type], r.name, r.vr, r.causality) for r in fmi2]
-    indicators = rows[len(fmi2):]
+    indicators, arrays = rows[len(fmi2):len(fmi2) + len(built.spec.events)], rows[len(fmi2) + len(built.spec.events):]
     assert [v.get("name") for v in indicators] == [f"{e.name}_indicator" for e in built.spec.events]
     assert all((v.tag, v.get("causality"), v.get("variability")) == ("Float64", "local", "continuous")
                for v in indicators)
-    assert [int(v.get("valueReference")) for v in indicators] == list(range(len(fmi2) + 1, len(rows) + 1))
+    assert [int(v.get("valueReference")) for v in indicators + arrays] == list(range(len(fmi2) + 1, len(rows) + 1))
+    # then the array outputs (tests/test_fmi3_arrays.py): the states, the contact force if any
+    assert [v.get("name") for v in arrays] == ["x_state"] + (["contact_force"] if "F_n" in
+                                                                 {q.name for q, _ in built.spec.outputs} else [])
     c_rows = re.findall(r'\{(\d+)u, "(\w+)", GW_REAL, GW_VAR_INDICATOR, (\d+),', (built.sources / "model_desc.c").read_text())
     assert [(int(vr), n, int(k)) for vr, n, k in c_rows] == \
         [(int(v.get("valueReference")), v.get("name"), k) for k, v in enumerate(indicators)]

@@ -33,10 +33,11 @@ def structure(inst) -> dict[str, list[tuple[int, list[int]]]]:
 
 
 def float_pairs(inst, *elements: str) -> list[tuple[int, int]]:
-    """The advertised (unknown, known) pairs of the elements whose unknown is a Float64."""
-    types = {v.valueReference: v.type for v in inst.md.modelVariables}
+    """The advertised (unknown, known) pairs of the elements whose unknown is a scalar Float64 (the
+    array outputs' partials are their elements': tests/test_fmi3_arrays.py)."""
+    scalar = {v.valueReference for v in inst.md.modelVariables if v.type == "Float64" and not v.dimensions}
     s = structure(inst)
-    return [(u, k) for e in elements for u, deps in s.get(e, []) for k in deps if types[u] == "Float64"]
+    return [(u, k) for e in elements for u, deps in s.get(e, []) for k in deps if u in scalar]
 
 
 def name_of(inst, vr: int) -> str:

@@ -22,10 +22,11 @@ LAST_SUCCESSFUL_TIME = 2  # fmi2StatusKind fmi2LastSuccessfulTime
 
 
 def outputs(inst) -> list[str]:
-    """The Float64 outputs and continuous states (FMI 2.0 and 3.0 FMUs name them alike)."""
+    """The scalar Float64 outputs and continuous states (FMI 2.0 and 3.0 FMUs name them alike; the
+    FMI 3 array outputs repeat them)."""
     states = {d.variable.derivative.name for d in inst.md.derivatives}
-    return [v.name for v in inst.md.modelVariables
-            if v.type in ("Real", "Float64") and (v.causality == "output" or v.name in states)]
+    return [v.name for v in inst.md.modelVariables if v.type in ("Real", "Float64") and not v.dimensions
+            and (v.causality == "output" or v.name in states)]
 
 
 def run_fmi2(fmu, dt: float, stop: float, **start):

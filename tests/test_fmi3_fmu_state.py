@@ -20,7 +20,8 @@ PENDING = 0x20  # the FMI 3 word's bit: an event pending for Event Mode (c_src/g
 
 
 def outputs(inst) -> list[str]:
-    return [v.name for v in inst.md.modelVariables if v.causality == "output"]
+    """The scalar outputs (the array outputs repeat them: tests/test_fmi3_arrays.py)."""
+    return [v.name for v in inst.md.modelVariables if v.causality == "output" and not v.dimensions]
 
 
 def continue_cs(f, t: float, until: float, dt: float = 0.1) -> np.ndarray:

@@ -81,6 +81,25 @@ def test_an_fmi3_component_ends_the_run_at_its_last_successful_time(earth_fmu, e
     assert _largest_difference(ends[0], ends[1]) == 0.0
 
 
+def test_an_fmi3_array_output_is_recorded_by_its_scalars_and_is_no_connector(earth_loop_fmi3):
+    """The FMI 3.0 wheel's array outputs (x_state, contact_force) repeat its scalar outputs: the
+    master records the scalars (one column each, the FMI 2.0 loop's columns: test above), and a
+    connection from an array is refused naming it."""
+    from gyrowheel.cosim.system import Connection
+    from gyrowheel.cosim.units import scalar_outputs
+    wheel, controller = earth_loop_fmi3.wheel_fmu, earth_loop_fmi3.controller_fmu
+    md = read_model_description(str(wheel))
+    arrays = {v.name for v in md.modelVariables if v.dimensions}
+    assert "x_state" in arrays and not arrays & set(scalar_outputs(md))
+    assert len(scalar_outputs(md)) == sum(v.causality == "output" for v in md.modelVariables) - len(arrays)
+    target = next(v.name for v in read_model_description(str(controller)).modelVariables
+                  if v.causality == "input" and v.type == "Float64")
+    system = SystemDescription("arrays", [Component("wheel", wheel), Component("controller", controller)],
+                               [Connection("wheel", "x_state", "controller", target)])
+    with pytest.raises(SystemFileError, match=r"wheel\.x_state is an array variable \(connections join scalar "):
+        system.check()
+
+
 def test_an_fmi3_component_failing_names_its_logged_reason(earth_loop_fmi3):
     """A refused value ends the run with the FMU's own message, through the FMI 3.0 log callback."""
     system = closed_loop_system("loop", earth_loop_fmi3.wheel_fmu, earth_loop_fmi3.controller_fmu)

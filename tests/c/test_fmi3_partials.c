@@ -6,12 +6,19 @@
  * analytic Jacobian; adjoints agree with directional derivatives (unit seeds exactly,
  * v^T (J w) == (v^T J) w to 1e-15); refusals (sizes, value references, time, states) are
  * logged; every function of what the FMU does not have (clocks, configuration mode, ...)
- * returns fmi3Error with its reason and leaves the instance in the Error state.
+ * returns fmi3Error with its reason and leaves the instance in the Error state.  Built with
+ * -DTOY_ME_ARRAYS: array variables among the unknowns and knowns give their elements' scalar
+ * results bit for bit.
  */
 #include "harness.h"
 #include "me_importer.h"
 
 #include "fmi3Functions.h"
+
+#ifndef TOY_ME_ARRAYS
+#error "build with -DTOY_ME_ARRAYS (toy_me.c's array variables xs and ef)"
+#endif
+enum { VR_XS = 70, VR_EF = 71 };
 
 /* FMI 3.0's logger into the harness's log (one line per message, tagged "fmi3") */
 static void h3_logger(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category,
@@ -114,6 +121,35 @@ static void check_adjoint_identity(fmi3Instance c3) {
     fprintf(stderr, "adjoint identity v^T (J w) - (v^T J) w: worst relative %.3g\n", worst);
 }
 
+/* Arrays among the unknowns ([ef, w, xs] = [energy, force, w, pos, vel, w]) and knowns
+ * ([f, xs] = [f, pos, vel, w]): both functions give the scalars' results bit for bit, seeds and
+ * sensitivities element by element (FMI 3.0.2 section 2.2.12); v^T (J w) == (v^T J) w; wrong
+ * sizes and an output array as a known refused.  Leaves c3 in the Error state. */
+static void check_arrays(fmi3Instance c3) {
+    const fmi3ValueReference ua[3] = {VR_EF, VR_W, VR_XS}, ka[2] = {VR_F, VR_XS};
+    const fmi3ValueReference us[6] = {VR_ENERGY, VR_FORCE, VR_W, VR_POS, VR_VEL, VR_W};
+    const fmi3ValueReference ks[4] = {VR_F, VR_POS, VR_VEL, VR_W};
+    double v[6], w[4], ja[6], js[6], va[4], vs[4], lhs = 0.0, rhs = 0.0, scale = 0.0;
+    int i;
+    for (i = 0; i < 6; i++) v[i] = sin(1.3 + 0.7 * i);
+    for (i = 0; i < 4; i++) w[i] = cos(0.4 - 1.9 * i);
+    OK3(fmi3GetDirectionalDerivative(c3, ua, 3, ka, 2, w, 4, ja, 6));
+    OK3(fmi3GetDirectionalDerivative(c3, us, 6, ks, 4, w, 4, js, 6));
+    CHECK(memcmp(ja, js, sizeof(ja)) == 0);
+    OK3(fmi3GetAdjointDerivative(c3, ua, 3, ka, 2, v, 6, va, 4));
+    OK3(fmi3GetAdjointDerivative(c3, us, 6, ks, 4, v, 6, vs, 4));
+    CHECK(memcmp(va, vs, sizeof(va)) == 0);
+    for (i = 0; i < 6; i++) lhs += v[i] * ja[i], scale += fabs(v[i] * ja[i]);
+    for (i = 0; i < 4; i++) rhs += va[i] * w[i], scale += fabs(va[i] * w[i]);
+    CHECK(scale > 0.0 && fabs(lhs - rhs) / scale <= 1e-15);
+    EXPECT_ERROR3(fmi3GetDirectionalDerivative(c3, ua, 3, ka, 2, w, 4, ja, 3),
+                  "fmi3GetDirectionalDerivative: nSensitivity = 3, but the unknowns have 6 values");
+    EXPECT_ERROR3(fmi3GetAdjointDerivative(c3, ua, 3, ka, 2, v, 3, va, 4),
+                  "fmi3GetAdjointDerivative: nSeed = 3, but the unknowns have 6 values");
+    EXPECT_ERROR3(fmi3GetDirectionalDerivative(c3, &ua[2], 1, &ua[0], 1, w, 2, ja, 3),
+                  "fmi3GetDirectionalDerivative: known energy (vr=20) is not");
+}
+
 /* refusals: each fmi3Error with its reason; the instance is then in Error state (where the
  * derivatives are still answered, as in FMI 2), so each starts from a fresh initialisation */
 static void check_refusals(void) {
@@ -134,13 +170,13 @@ static void check_refusals(void) {
         fmi3_initialise(c3);                                                                 \
     } while (0)
     REFUSED(fmi3GetDirectionalDerivative(c3, UNK, NU, KNOWN, NK, seed, NK - 1, out, NU),
-            "fmi3GetDirectionalDerivative: nSeed = 3, but there are 4 knowns");
+            "fmi3GetDirectionalDerivative: nSeed = 3, but the knowns have 4 values");
     REFUSED(fmi3GetDirectionalDerivative(c3, UNK, NU, KNOWN, NK, seed, NK, out, NU + 1),
-            "fmi3GetDirectionalDerivative: nSensitivity = 10, but there are 9 unknowns");
+            "fmi3GetDirectionalDerivative: nSensitivity = 10, but the unknowns have 9 values");
     REFUSED(fmi3GetAdjointDerivative(c3, UNK, NU, KNOWN, NK, seed, NK, out, NK),
-            "fmi3GetAdjointDerivative: nSeed = 4, but there are 9 unknowns");
+            "fmi3GetAdjointDerivative: nSeed = 4, but the unknowns have 9 values");
     REFUSED(fmi3GetAdjointDerivative(c3, UNK, NU, KNOWN, NK, seed, NU, out, NU),
-            "fmi3GetAdjointDerivative: nSensitivity = 9, but there are 4 knowns");
+            "fmi3GetAdjointDerivative: nSensitivity = 9, but the knowns have 4 values");
     REFUSED(fmi3GetDirectionalDerivative(c3, UNK, 1, &time_vr, 1, seed, 1, out, 1),
             "fmi3GetDirectionalDerivative: known time (vr=0) is not a continuous state or a "
             "Float64 input");
@@ -271,6 +307,7 @@ int main(void) {
     OK3(fmi3Terminate(c3));
     CHECK_STATUS(fmi2Terminate(c2), fmi2OK);
     check_against_fmi2(c2, c3, x0, 0.0);
+    check_arrays(c3);
     fmi3FreeInstance(c3);
     fmi2FreeInstance(c2);
     /* Co-Simulation in Step Mode (eventModeUsed false) */

@@ -167,6 +167,20 @@ static const char *const event_names[] = {"hit", "slow"};
 static const int event_actions[] = {GW_EVENT_TERMINATE, GW_EVENT_WARN};
 static const char *const check_messages[] = {"k must be > 0"};
 
+/* With -DTOY_ME_ARRAYS, FMI 3.0 array variables (gw_model.h, gw_array): xs the states (pos,
+ * vel: start values; w: a state), ef = [energy, force] (outputs y[2], y[3]) */
+#ifdef TOY_ME_ARRAYS
+static const int toy_xs_index[] = {0, 1, 2};
+static const int toy_ef_index[] = {2, 3};
+static const gw_array toy_arrays[] = {
+    {70, "xs", 3, GW_ARRAY_X, toy_xs_index},
+    {71, "ef", 2, GW_ARRAY_Y, toy_ef_index},
+};
+#define TOY_ME_ARRAYS_SLOT .n_arrays = 2, .arrays = toy_arrays,
+#else
+#define TOY_ME_ARRAYS_SLOT
+#endif
+
 static const gw_model GW_MODEL = {
     .identifier = "toy_me",
     .token = "{70y0-me00-0000-0000-000000000004}",
@@ -196,4 +210,5 @@ static const gw_model GW_MODEL = {
     .n_pre = 0,
     .taylor = {.jet = NULL, .cst = NULL, .n_var = 0, .n_cst = 0,
                .why_absent = "a toy model without a Taylor kernel"},
+    TOY_ME_ARRAYS_SLOT
 };

@@ -99,7 +99,7 @@ platform-tools:
 # (pytest-xdist 3.8's scheduler; one process would have died without any report).
 TEST_WORKERS ?= logical
 test: $(STAMP) browser c-tools tbb platform-tools
-	$(PY) -m pytest -q -n $(TEST_WORKERS) --maxprocesses 4 --dist loadfile --max-worker-restart 0
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --maxprocesses 4 --dist loadfile --no-loadscope-reorder --max-worker-restart 0 --durations 20
 
 bench: $(STAMP)
 	$(PY) -m pip install --quiet -e ".[bench]"

@@ -36,7 +36,7 @@ Closed forms (the paper wheel: M = 2 kg, R = 0.17 m, k_diam = 0.25, k_axial = 0.
 
 Convergence (numbers of this file's runs; the longer study: benchmarks/soft_contact_convergence.py):
 
-  sliding launch, backspin v0 = 2 m/s, w0 = -5 rad/s (t* = 0.276786 s), kappa = 1e5 /s^2
+  sliding launch, backspin v0 = 2 m/s, w0 = -5 rad/s (t* = 0.276686 s), kappa = 1e5 /s^2
     eps (m/s)   t_roll - t* (s)   v_roll - v* (m/s)
     1e-3        -5.17e-5          2.86e-4
     1e-4        -5.17e-6          2.86e-5
@@ -45,6 +45,7 @@ Convergence (numbers of this file's runs; the longer study: benchmarks/soft_cont
     kappa 1e4, eps 1e-3: 2.0e-5;  1e5, 1e-4: 2.1e-7;  1e6, 1e-5: 2.1e-9
   drop from 0.2 m, e = 0.5: first apex / (e^2 h) - 1, rest time - t0 (1 + e) / (1 - e) (s)
     kappa 1e4: -1.56e-1, -1.8e-2;  1e5: -4.84e-2, -1.4e-2;  1e6: -1.52e-2, -2.2e-3
+    first apex extrapolated (Richardson, kappa^-1/2) from 1e5 and 1e6: 1.3e-4
 """
 from __future__ import annotations
 
@@ -56,7 +57,7 @@ from scipy.integrate import solve_ivp
 
 from reference.soft_contact import (FLIGHT, Ground, SoftWheel, Wheel, damping_for_restitution, initial_state,
                                     lmn, restitution_of_damping)
-from reference.soft_contact_scenarios import drop, flight, incline, leaning_drop, sliding_launch
+from reference.soft_contact_scenarios import drop, extrapolate, flight, incline, leaning_drop, sliding_launch
 
 WHEEL = Wheel()  # the paper's wheel
 G, MU = 9.81, 0.3
@@ -85,6 +86,19 @@ def test_isolated_impact_rebounds_with_the_restitution(stiffness):
     (_, touch, y_in), (_, lift, y_out) = run.switches[:2]
     assert (touch, lift) == ("touchdown", "lift_off")
     assert y_out[5] / -y_in[5] == pytest.approx(0.5, abs=1e-8)
+
+
+def test_leaning_frictionless_impact_converges_to_the_restitution():
+    """A leaning wheel's contact point (effective mass below M) rebounds at e v_in as kappa grows
+    (the wheel turns during the contact: an error ~ kappa^-1/2): e - 0.5 = 0.103, 0.0134 at
+    kappa = 1e4, 1e6 /s^2 (0.0014 at 1e8)."""
+    errors = []
+    for stiffness in (1e4, 1e6):
+        model = SoftWheel(WHEEL, Ground(stiffness=stiffness, restitution=0.5, mu_k=0.0, g=0.0))
+        run = model.simulate(initial_state(WHEEL, beta=1.0, height=1e-3, vz=-2.0), 0.1)
+        (_, _, y_in), (_, _, y_out) = run.switches[:2]
+        errors.append(abs(model._push(y_out)[2] / -model._push(y_in)[2] - 0.5))
+    assert errors[1] < errors[0] / 5 and errors[1] < 0.015
 
 
 def test_start_values_come_back_in_the_project_conventions():
@@ -185,12 +199,14 @@ def test_flight_is_a_parabola_with_torque_free_precession():
 
 def test_drop_bounces_converge_to_the_restitution_series():
     """Apex heights e^(2k) h and the rest time t0 (1 + e)/(1 - e): the errors fall with the
-    stiffness as kappa^(-1/2) (gravity acts during a contact of ~ pi / sqrt(kappa))."""
+    stiffness as kappa^(-1/2) (gravity acts during a contact of ~ pi / sqrt(kappa)), and
+    Richardson's extrapolation in kappa^(-1/2) takes the first apex to 2e-4."""
     h, e = 0.2, 0.5
     t_rest = math.sqrt(2 * h / G) * (1 + e) / (1 - e)
-    first, second, rest = [], [], []
+    first, second, rest, apex1 = [], [], [], []
     for stiffness in (1e4, 1e5, 1e6):
         r = drop(h, e, WHEEL, stiffness=stiffness, g=G)
+        apex1.append(r["apex"][0])
         apex = np.array(r["apex"][:2])
         first.append(abs(apex[0] / (e ** 2 * h) - 1))
         second.append(abs(apex[1] / (e ** 4 * h) - 1))
@@ -199,6 +215,7 @@ def test_drop_bounces_converge_to_the_restitution_series():
     for errors in (first, second):
         assert errors[1] < errors[0] / 2.8 and errors[2] < errors[1] / 2.8  # sqrt(10) = 3.16
     assert first[-1] < 0.02 and second[-1] < 0.05
+    assert extrapolate(apex1[1], apex1[2]) == pytest.approx(e ** 2 * h, rel=2e-4)
     assert rest[-1] < rest[0] / 5 and rest[-1] < 0.005 * t_rest
 
 

@@ -23,15 +23,17 @@ g_vec = g (sin th cos psi, sin th sin psi, -cos th) (th = slope_angle, psi = slo
 the project's `slope`). The rim's lowest point is C = A + R l, l = -(k - (k.n) n) / sin(beta);
 its height h = A_z - R sin(beta); the penetration d = -h.
 
-Normal law. A linear spring-damper per unit mass, F_n = M (kappa d + c d_dot), kappa the stiffness
-in N/m per kg (1/s^2), c = 2 zeta sqrt(kappa). It acts while the wheel penetrates and the law
-pushes: contact starts when min(d, kappa d + c d_dot) turns positive and ends when
-kappa d + c d_dot falls to 0 (the law never pulls). For a contact whose effective mass is M (an
-upright wheel hitting the plane with its rim, no gravity during the impact) the rebound speed is
-e v_in with e(zeta) in closed form (`restitution_of_damping`): the law's restitution is exact,
-independent of the impact speed, and the damping is calibrated from the e asked for. Gravity
-during the contact (duration ~ pi / sqrt(kappa)) and the static sag g / kappa are the errors that
-vanish as kappa grows.
+Normal law. A linear spring-damper, F_n = M (kappa d + c_eff d_dot), kappa the stiffness in N/m
+per kg (1/s^2), c_eff = 2 zeta sqrt(kappa m_eff / M) with m_eff the contact point's effective
+normal mass (M for an upright wheel). It acts while the wheel penetrates and the law pushes:
+contact starts when min(d, kappa d + c_eff d_dot) turns positive and ends when that force falls
+to 0 (the law never pulls). The contact point's normal motion is then the oscillator
+d'' = -(M / m_eff)(kappa d + c_eff d_dot), of damping ratio zeta whatever m_eff, and its rebound
+speed is e v_in with e(zeta) in closed form (`restitution_of_damping`): for a frictionless
+impact without gravity the law's restitution is exact, independent of the impact speed, and the
+damping is calibrated from the e asked for. Gravity during the contact (duration
+~ pi / sqrt(kappa)), the turn of the wheel while it lasts and the static sag g / kappa are the
+errors that vanish as kappa grows.
 
 Friction. F_t = -mu(|v_t|) F_n v_t / sqrt(|v_t|^2 + eps^2) with v_t the velocity of the rim's
 material point at C, in the plane; mu(s) = mu_k + (mu_s - mu_k) exp(-(s / v_s)^2) (v_s = 10 eps;
@@ -231,12 +233,22 @@ class SoftWheel:
         v_cp = y[3:6] + _cross(w, arm)
         return rot, w, arm, v_cp, -(y[2] + arm[2]), -v_cp[2]
 
+    def _push(self, y) -> tuple[float, float, float]:
+        """(kappa d + c_eff d_dot, d, d_dot): the normal law's force per unit mass. The damping is
+        scaled to the contact point's effective normal mass m_eff (1/m_eff = 1/M + u.I^-1 u,
+        u = (C - A) x k), c_eff = c sqrt(m_eff / M), so that the damping ratio, hence e, is the
+        one asked for in any frictionless impact, not only the upright one (m_eff = M)."""
+        rot, _, arm, _, d, dd = self._kinematics(y)
+        u_b = rot.T @ _cross(arm, (0.0, 0.0, 1.0))
+        m_ratio = 1.0 / (1.0 + self.wheel.M * float(u_b @ (u_b / self.inertia)))
+        return self.kappa * d + self.c * math.sqrt(m_ratio) * dd, d, dd
+
     def _forces(self, y, mode):
         """Contact force (3,) on the wheel, the arm C - A, the contact point's velocity and d, d_dot."""
         rot, w, arm, v_cp, d, dd = self._kinematics(y)
         force = np.zeros(3)
         if mode == CONTACT:
-            fn = self.wheel.M * (self.kappa * d + self.c * dd)
+            fn = self.wheel.M * self._push(y)[0]
             vt = np.array([v_cp[0], v_cp[1]])
             speed = math.hypot(vt[0], vt[1])
             eps, mu_k = self.ground.eps, self.ground.mu_k
@@ -282,8 +294,7 @@ class SoftWheel:
         """Segment events: the law's switch (terminal), the slip speed falling to eps (stick) and
         rising through it (slip), then `extra`."""
         def law(t, y, *_):
-            _, _, _, _, d, dd = self._kinematics(y)
-            push = self.kappa * d + self.c * dd
+            push, d, _ = self._push(y)
             return min(d, push) if mode == FLIGHT else push
         law.terminal, law.direction = True, (1.0 if mode == FLIGHT else -1.0)
         events = [law]
@@ -306,8 +317,8 @@ class SoftWheel:
         when penetrating with the law pushing). `extra_events`: (name, function(t, y), direction)
         located without a restart in every segment. Returns a `Run`."""
         y = np.array(y0, dtype=float)
-        _, _, _, _, d, dd = self._kinematics(y)
-        mode = CONTACT if min(d, self.kappa * d + self.c * dd) > 0 else FLIGHT
+        push, d, _ = self._push(y)
+        mode = CONTACT if min(d, push) > 0 else FLIGHT
         names = ["stick", "slip"] + [e[0] for e in extra_events]
         extra = [(fun, direction) for _, fun, direction in extra_events]
         run = Run(self)

@@ -13,6 +13,7 @@ forward rolling is gamma_dot > 0 with v = R gamma_dot, slip = the rim point's ve
 - `flight(...)`: a spinning, leaning wheel thrown up; no contact.
 - `drop(h)`: upright, lowest rim point h above the ground, at rest.
 - `leaning_drop(h, beta0, gamma_dot0)`: a leaning, spinning wheel dropped; its impacts.
+- `extrapolate(coarse, fine)`: Richardson's extrapolation in the stiffness (drops).
 """
 from __future__ import annotations
 
@@ -104,6 +105,14 @@ def flight(beta0: float = 1.2, gamma_dot0: float = 30.0, alpha_dot0: float = 2.0
     phase = np.unwrap(np.arctan2(n @ e2, n @ e1))
     return dict(t=t, r=ys[:, 0:3], v=ys[:, 3:6], L=L, n=n, w_n=ys[:, 12],
                 precession=float(np.polyfit(t, phase, 1)[0]), cone=float(math.acos(n[0] @ u)), run=run)
+
+
+def extrapolate(coarse: float, fine: float, factor: float = 10.0, rate: float = 0.5) -> float:
+    """Richardson's extrapolation to kappa -> infinity of a quantity whose error falls as
+    kappa^-rate, from its values at kappa (coarse) and factor kappa (fine): the drops' apex
+    heights and rebound ratios (rate 1/2: gravity acts during a contact of ~ pi / sqrt(kappa))."""
+    q = factor ** rate
+    return (q * fine - coarse) / (q - 1)
 
 
 def _apex_event(t, y):

@@ -184,8 +184,8 @@ def test_static_friction_holds_the_wheel_between_the_kinetic_and_static_limits()
 
 
 def test_flight_is_a_parabola_with_torque_free_precession():
-    """Centre on r0 + v0 t + g t^2/2 to 1e-10; L and w.n constant; the axle turns about L at
-    |L| / I_diam (a cone of 0.26 rad)."""
+    """Centre on r0 + v0 t + g t^2/2 to 1e-10; L, w.n and the energy constant; the axle turns
+    about L at |L| / I_diam (a cone of 0.26 rad)."""
     r = flight(beta0=1.2, gamma_dot0=10.0, alpha_dot0=4.0, beta_dot0=3.0, wheel=WHEEL, g=G)
     t = r["t"][:, None]
     np.testing.assert_allclose(r["r"], r["r"][0] + r["v"][0] * t + 0.5 * np.array([0, 0, -G]) * t ** 2,
@@ -195,6 +195,9 @@ def test_flight_is_a_parabola_with_torque_free_precession():
     i_diam = WHEEL.k_diam * WHEEL.M * WHEEL.R ** 2
     assert r["cone"] > 0.2
     assert r["precession"] == pytest.approx(np.linalg.norm(r["L"][0]) / i_diam, rel=1e-9)
+    series = r["run"].series(r["t"])
+    np.testing.assert_allclose(series["energy"], series["energy"][0], rtol=1e-10)
+    assert (series["F_n"] == 0).all() and (series["height"] > 0.5).all()
 
 
 def test_drop_bounces_converge_to_the_restitution_series():

@@ -40,7 +40,7 @@ material point at C, in the plane; mu(s) = mu_k + (mu_s - mu_k) exp(-(s / v_s)^2
 mu_s = mu_k by default: plain regularised Coulomb). |F_t| < mu F_n always.
 
 Energy. E = T - M g_vec.r, plus the spring's store M kappa d^2 / 2 in contact, and an accumulator W
-of what is dissipated (damper, friction; at lift off the store that the law, no longer pushing
+of what is dissipated (damper, friction; at lift off the store that the law, which stops pushing
 at d > 0, leaves behind): E + W is constant to the solver's tolerance. A second accumulator J holds the
 impulse of the contact force (N s, world), so an impact's impulse is J(lift off) - J(touchdown).
 
@@ -382,5 +382,12 @@ class Run:
     def out(self, t: float) -> dict[str, float]:
         return self.model.outputs(*self.at(t))
 
+    def series(self, times) -> dict[str, np.ndarray]:
+        """`out` at each of `times` (N,): {name: (N,)}, the names of `SoftWheel.outputs`."""
+        rows = [self.out(float(t)) for t in times]
+        return {k: np.array([row[k] for row in rows]) for k in rows[0]}
+
     def named(self, name: str) -> list[tuple[float, np.ndarray]]:
+        """[(t, state)] of the switches (touchdown, re-engage, lift_off) or events (stick, slip,
+        the extra events' names) of that name, in time order."""
         return [(t, y) for t, n, y in self.switches + self.events if n == name]

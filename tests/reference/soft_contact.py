@@ -258,6 +258,7 @@ class SoftWheel:
         return rot, w, arm, v_cp, d, dd, force
 
     def rhs(self, t, y, mode):
+        """dy/dt (17,) of the state y (17,) in mode FLIGHT (no contact force) or CONTACT."""
         rot, w, arm, v_cp, d, dd, force = self._forces(y, mode)
         M, I, wb, q = self.wheel.M, self.inertia, y[10:13], y[6:10]
         tau_b = rot.T @ _cross(arm, force)

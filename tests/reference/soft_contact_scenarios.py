@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from .soft_contact import CONTACT, FLIGHT, Ground, SoftWheel, Wheel, initial_state
+from .soft_contact import CONTACT, FLIGHT, Ground, SoftWheel, Wheel, initial_state, quat_matrix
 
 TOL = dict(rtol=1e-8, atol=1e-10)
 
@@ -94,7 +94,6 @@ def flight(beta0: float = 1.2, gamma_dot0: float = 30.0, alpha_dot0: float = 2.0
         raise RuntimeError(f"the wheel touched the ground at t = {run.switches[0][0]}")
     t = np.linspace(0.0, t_end, samples)
     ys = np.array([run.at(ti)[0] for ti in t])
-    from .soft_contact import quat_matrix
     rots = [quat_matrix(y[6:10]) for y in ys]
     L = np.array([rot @ (model.inertia * y[10:13]) for rot, y in zip(rots, ys)])
     n = np.array([rot[:, 2] for rot in rots])

@@ -1,0 +1,73 @@
+"""The wheel in flight: a free rigid body of revolution under gravity, derived by CasADi.
+
+The flight mode of the contact modes: no contact, six degrees of freedom. Coordinates
+q = (x, y, z, alpha, beta, gamma): the centre, and the paper's Euler angles (heading alpha, lean
+beta with pi/2 upright, spin gamma; docs/model.md). The kinetic energy is the rolling wheel's
+(eq. 22, general inertia) with the centre's height z free instead of R sin(beta):
+
+    T = M |r_dot|^2 / 2 + omega_lmn^T diag(I_diam, I_diam, I_axial) omega_lmn / 2,   V = M g z,
+
+and the equations of motion come from the same Lagrangian machinery as the rolling and sliding
+modes (model/lagrangian.py, ConstrainedSystem with no constraint rows: the null space is the
+identity). The lowest point of the rim lies R sin(beta) below the centre (the rim's circle tilted
+by beta), so the height above the ground is h = z - R sin(beta): touchdown is h reaching 0 moving
+down. The Euler angles are singular where the axle is vertical (sin(beta) = 0), as in rolling
+(docs/model.md): a wheel turning flat in the air ends the description there.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from gyrowheel.model.kinematics import frame_chain
+from gyrowheel.model.lagrangian import ConstrainedSystem
+
+COORDINATES = ("x", "y", "z", "alpha", "beta", "gamma")
+
+
+@dataclass
+class FlightEquations:
+    """Symbols and expressions of the free wheel (shapes: q, qd, qdd (6,); the rest 3-vectors or
+    scalars). p = (M, R, k_diam, k_axial, g): kg, m, 1, 1, m/s^2."""
+
+    q: ca.SX
+    qd: ca.SX
+    p: ca.SX
+    qdd: ca.SX  # accelerations (m/s^2, rad/s^2), expressions of (q, qd, p)
+    energy: ca.SX  # T + V, J
+    momentum: ca.SX  # angular momentum about the centre, ground frame, kg m^2/s
+    axle: ca.SX  # n, the unit axle vector, ground frame
+    omega: ca.SX  # angular velocity, ground frame, rad/s
+    height: ca.SX  # of the rim's lowest point above the ground, m
+
+    def function(self) -> ca.Function:
+        """f(q, qd, p) -> (qdd, energy, momentum, axle, omega, height)."""
+        return ca.Function("flight", [self.q, self.qd, self.p],
+                           [self.qdd, self.energy, self.momentum, self.axle, self.omega, self.height],
+                           ["q", "qd", "p"], ["qdd", "energy", "L", "n", "omega", "height"])
+
+
+def flight_equations() -> FlightEquations:
+    """The free wheel's equations of motion (module docstring); derived, never typed in."""
+    q = ca.SX.sym("q", 6)
+    qd = ca.SX.sym("qd", 6)
+    qdd = ca.SX.sym("qdd", 6)
+    M, R, k_diam, k_axial, g = (ca.SX.sym(n) for n in ("M", "R", "k_diam", "k_axial", "g"))
+    alpha, beta, gamma = q[3], q[4], q[5]
+    chain = frame_chain(alpha, beta)
+    lmn = chain.matrix()
+    _, omega_frame_lmn = chain.angular_velocity(q, qd)
+    omega_lmn = omega_frame_lmn + ca.vertcat(0, 0, qd[5])  # the spin about n relative to the frame
+    inertia = ca.diag(ca.vertcat(k_diam, k_diam, k_axial)) * M * R ** 2
+    r_dot = qd[0:3]
+    T = 0.5 * M * ca.dot(r_dot, r_dot) + 0.5 * ca.mtimes([omega_lmn.T, inertia, omega_lmn])
+    V = M * g * q[2]
+    system = ConstrainedSystem(q=q, qd=qd, qdd=qdd, n_free=6, T=T, V=V, A=ca.SX(0, 6),
+                               parameters=["M", "R", "k_diam", "k_axial", "g"])
+    v_dot = ca.SX.sym("v_dot", 6)
+    _, qdd_sol, _, _ = system.reduced(ca.SX.eye(6), qd, v_dot, ca.SX(0, 1), ca.SX(0, 1))
+    return FlightEquations(
+        q=q, qd=qd, p=ca.vertcat(M, R, k_diam, k_axial, g), qdd=qdd_sol, energy=T + V,
+        momentum=ca.mtimes(lmn, ca.mtimes(inertia, omega_lmn)), axle=lmn[:, 2],
+        omega=ca.mtimes(lmn, omega_lmn), height=q[2] - R * ca.sin(beta))

@@ -40,8 +40,9 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     }
     GW_FRAME_CHECK_STATE();
     /* Initialization Mode has its own knowns (FMI 2.0.4 section 2.2.8) when the model
-     * generated their derivatives; a model without `dini` keeps the states as knowns there */
-    init_mode = F->state == GW_ST_INIT_MODE && I->f_dini.eval != NULL;
+     * generated their derivatives; a model without `dini` keeps the states as knowns there.
+     * So has the Error state of an instance that never ended its initialisation (in_setup) */
+    init_mode = I->in_setup && I->f_dini.eval != NULL;
     GW_TRY(gw_partials(I, fn, init_mode, 0, &gw_fmi2_pd_words, vUnknown_ref, nUnknown,
                        vKnown_ref, nKnown, dvKnown, dvUnknown));
     GW_FRAME_END();

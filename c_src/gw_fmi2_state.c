@@ -100,6 +100,7 @@ static void gw_fmi2_apply_state(gw_fmu *F, const unsigned char *buf) {
     gw_fmi2_set_state(F, front[0]);
     F->last_dostep_status = (fmi2Status)(front[1] & GW_FRONT_STATUS_MASK);
     F->initialized = (front[1] & GW_FRONT_INITIALIZED) != 0;
+    I->in_setup = !F->initialized; /* also in Error, which may come before or after it */
     gw_state_apply(I, buf);
 }
 

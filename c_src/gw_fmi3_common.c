@@ -61,7 +61,10 @@ GW_INTERNAL const char *gw_fmi3_state_name(int state) {
 
 GW_INTERNAL void gw_fmi3_set_state(gw_fmu3 *F, int state) {
     F->state = state;
-    F->I->in_setup = (state & GW3_ST_BEFORE_INIT_END) != 0;
+    /* the core evaluates the start values until the initialisation has ended; an error leaves
+       that as it was (an instance refused a call before initialising still has only its start
+       values: its getters and partials answer from them) */
+    if (state != GW3_ST_ERROR && state != GW3_ST_FATAL) F->I->in_setup = (state & GW3_ST_BEFORE_INIT_END) != 0;
 }
 
 /* the Error state, unless the instance is already beyond repair */

@@ -126,7 +126,9 @@ static gw_status gw_fmi3_pd(gw_fmu3 *F, const char *fn, int adjoint,
     const char *sens_of = adjoint ? "knowns" : "unknowns";
     /* Initialization Mode has its own knowns (section 2.2.12: the InitialUnknowns and their
      * dependencies) when the model generated their derivatives */
-    int init_mode = F->state == GW3_ST_INIT_MODE && I->f_dini.eval != NULL;
+    /* Initialization Mode's knowns, also in the Error state of an instance that never ended
+     * its initialisation (in_setup: its values are still the start values) */
+    int init_mode = I->in_setup && I->f_dini.eval != NULL;
     const fmi3ValueReference *unk = NULL, *kno = NULL;
     fmi3ValueReference *unk_owned, *kno_owned = NULL;
     size_t n_unk = 0, n_kno = 0, n_seed, n_sens;

@@ -121,6 +121,7 @@ static void gw_fmi3_apply_state(gw_fmu3 *F, const unsigned char *buf) {
     gw_fmi3_set_state(F, front[0]);
     F->initialized = (front[1] & GW3_FRONT_INITIALIZED) != 0;
     F->event_pending = (front[1] & GW3_FRONT_EVENT_PENDING) != 0;
+    I->in_setup = !F->initialized; /* also in Error, which may come before or after it */
     gw_state_apply(I, buf);
 }
 

@@ -138,16 +138,25 @@ static size_t gw_fmi3_n_values(const gw_model *m, const fmi3ValueReference vr[],
  * referenced variables (section 2.2.7.2) */
 static int gw_fmi3_arrays_ok(gw_instance *I, const char *fn, const fmi3ValueReference vr[],
                              size_t nvr, const void *values, size_t nValues, int type) {
-    size_t want = gw_fmi3_n_values(I->m, vr, nvr, type);
+    size_t want = gw_fmi3_n_values(I->m, vr, nvr, type), k;
+    /* an array of another getter's type: named as such, before its size is counted wrongly */
+    for (k = 0; type != GW_REAL && vr && k < nvr; k++) {
+        const gw_array *a = gw_fmi3_array_find(I->m, vr[k]);
+        if (a) {
+            GW_LOG_ERR(I, "%s: value reference %u (%s) is a Float64 array variable", fn,
+                       (unsigned)vr[k], a->name);
+            return 0;
+        }
+    }
     if (nValues != want && I->m->n_arrays == 0) {
         GW_LOG_ERR(I, "%s: nValues = %lu for %lu value references (every variable of this FMU "
                    "is a scalar)", fn, (unsigned long)nValues, (unsigned long)nvr);
         return 0;
     }
     if (nValues != want) {
-        GW_LOG_ERR(I, "%s: nValues = %lu, but the %lu value references have %lu values (the "
-                   "sum of the variables' sizes, FMI 3.0.2 section 2.2.7.2)", fn,
-                   (unsigned long)nValues, (unsigned long)nvr, (unsigned long)want);
+        GW_LOG_ERR(I, "%s: nValues = %lu, but the referenced variables' sizes sum to %lu "
+                   "(%lu value references; FMI 3.0.2 section 2.2.7.2)", fn,
+                   (unsigned long)nValues, (unsigned long)want, (unsigned long)nvr);
         return 0;
     }
     if (nvr > 0 && (!vr || !values)) {

@@ -163,8 +163,10 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
     check_arrays(version, arrays)
     if version == 2 and arrays is None and not scene.arrays:
         where = scene.file if scene.file is not None else f"scene {scene.name!r}"
+        fix = ("fmi 2 was asked for (the --fmi option, the fmi argument) over the scene's [build] fmi = 3: "
+               "ask for FMI 3" if scene.fmi == 3 else "build FMI 3 ([build] fmi = 3)")
         raise SceneError(f"{where}: [build] arrays: false leaves out an FMI 3 FMU's array outputs; an "
-                         f"FMI 2 FMU has none: build FMI 3 ([build] fmi = 3) or remove the key")
+                         f"FMI 2 FMU has none: {fix} or remove the key")
     output = check_output(output, scene.file)
     wanted = _wanted_platforms(scene.platforms if platforms is None else platforms)  # before the model
     return build_spec_fmu(_spec(scene), output, scene.experiment, build_dir=build_dir,

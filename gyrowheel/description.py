@@ -121,7 +121,8 @@ class VariableInfo:
     start is typed by `type`: float (Real, Float32, Float64), int (Integer, Int8 ... UInt64,
     Enumeration), bool (Boolean), str (String); None when the variable has none (a calculated
     output, FMI 3.0's independent variable time). unit: the variable's own or its declared
-    type's. items: an Enumeration's items, {name: value}; empty otherwise.
+    type's. items: an Enumeration's items, {name: value}; empty otherwise. dimensions: an
+    array variable's sizes, shown by `gyrowheel info` after its name (x_state[10]).
     """
 
     name: str
@@ -135,6 +136,7 @@ class VariableInfo:
     value_reference: int
     declared_type: str | None = None
     items: dict[str, int] | None = None
+    dimensions: tuple[int, ...] = ()  # an FMI 3.0 array's sizes (section 2.4.7.2); () for a scalar
 
 
 @dataclass(frozen=True)
@@ -243,7 +245,7 @@ class FmuInfo:
                   + (", with the Taylor kernel (solver taylor, the ensemble path)" if self.taylor else "")]
         # the variable table: every column as wide as its longest entry, two spaces apart
         rows = [("name", "causality", "variability", "start", "unit", "description")]
-        rows += [(v.name, v.causality, v.variability, _start_text(v), v.unit or "", v.description or "")
+        rows += [(v.name + "".join(f"[{n}]" for n in v.dimensions), v.causality, v.variability, _start_text(v), v.unit or "", v.description or "")
                  for v in self.variables]
         width = [max(len(r[i]) for r in rows) for i in range(5)]
         for r in rows:
@@ -325,7 +327,7 @@ def read_info(fmu: str | Path) -> FmuInfo:
             name=v.name, type=v.type, causality=v.causality, variability=v.variability, initial=v.initial,
             start=_typed(v.start, v.type), unit=v.unit or (v.declaredType.unit if v.declaredType else None),
             description=v.description, value_reference=int(v.valueReference), declared_type=declared,
-            items=items))
+            items=items, dimensions=tuple(int(d.start) for d in (v.dimensions or ()))))
     solver = next((v for v in variables if v.name == "solver" and v.items), None)
     exp = md.defaultExperiment
     platforms = platform_infos(names)

@@ -23,6 +23,7 @@ contact_force, [F_long, F_lat, F_n], beside the scalar variables they are made o
                                   false and --no-arrays reach the builder as False
   test_fmi2_build_refuses_leaving_out_arrays   arrays=False, --no-arrays, [build] arrays = false
                                   with FMI 2: refused in one line naming the argument or the key
+  test_info_shows_the_array_sizes   gyrowheel info: x_state[n], contact_force[3]
 """
 from __future__ import annotations
 
@@ -167,7 +168,8 @@ def test_array_misuse_refused(fmu3):
     assert get(arrays, n) == OK
     for wrong in (2, n - 1, n + 1):  # one value per reference; one short; one too many
         assert get(arrays, wrong) == ERROR
-        assert f"fmi3GetFloat64: nValues = {wrong}, but the 2 value references have {n} values" in inst.log_text()
+        assert f"fmi3GetFloat64: nValues = {wrong}, but the referenced variables' sizes sum to {n} (2 value references" \
+            in inst.log_text()
         inst.instantiate()
         inst.init()
     assert get([x_vr, 0], nx + 1) == OK and buf[nx] == 0.0  # an array, then time
@@ -181,6 +183,12 @@ def test_array_misuse_refused(fmu3):
     ints = (C.c_int64 * nx)()
     assert inst.raw("fmi3GetInt64", (C.c_uint32 * 1)(x_vr), 1, ints, 1) == ERROR
     assert f"fmi3GetInt64: value reference {x_vr} (x_state) is a Float64 array variable" in inst.log_text()
+    inst.instantiate()
+    inst.init()
+    inst.messages.clear()  # the type named first, whatever nValues (the array's size here)
+    flags = (C.c_bool * nx)()
+    assert inst.raw("fmi3GetBoolean", (C.c_uint32 * 1)(x_vr), 1, flags, nx) == ERROR
+    assert f"fmi3GetBoolean: value reference {x_vr} (x_state) is a Float64 array variable" in inst.log_text()
     inst.instantiate()
     inst.init()
     inst.messages.clear()
@@ -329,9 +337,27 @@ def test_fmi2_build_refuses_leaving_out_arrays(tmp_path, capsys):
     with pytest.raises(SceneError, match=rf"^{re.escape(str(keyed))}: \[build\] arrays: false leaves out an FMI 3 "
                                          rf"FMU's array outputs; an FMI 2 FMU has none: [^\n]*$"):
         api.build(keyed, tmp_path / "k.fmu")
-    with pytest.raises(SceneError, match=r"\[build\] arrays"):
+    with pytest.raises(SceneError, match=r"\[build\] arrays.*: build FMI 3 \(\[build\] fmi = 3\) or remove the key$"):
         api.build(keyed, tmp_path / "k.fmu", fmi=2)
+    fmi3_keyed = tmp_path / "fmi3_keyed.toml"  # the scene asks for FMI 3, the call overrides it
+    fmi3_keyed.write_text(scene.read_text() + "\n[build]\nfmi = 3\narrays = false\n")
+    with pytest.raises(SceneError, match=r"fmi 2 was asked for \(the --fmi option, the fmi argument\) over the "
+                                         r"scene's \[build\] fmi = 3: ask for FMI 3 or remove the key$"):
+        api.build(fmi3_keyed, tmp_path / "k.fmu", fmi=2)
     assert main(["build", str(scene), "--fmi", "2", "--no-arrays", "-o", str(tmp_path / "c.fmu")]) == 2
     assert capsys.readouterr().err == ("gyrowheel: error: --no-arrays: leaving out the array outputs is for FMI 3 "
                                        "FMUs; an FMI 2 FMU has none\n")
     assert not any(tmp_path.glob("*.fmu"))
+
+
+def test_info_shows_the_array_sizes(fmu3, capsys):
+    """gyrowheel.info gives an array's dimensions; `gyrowheel info` prints them after its name."""
+    import gyrowheel
+    from gyrowheel.cli import main
+
+    info = {v.name: v for v in gyrowheel.info(fmu3.fmu).variables}
+    assert info["x_state"].dimensions == (fmu3.spec.x.numel(),) and info["contact_force"].dimensions == (3,)
+    assert info["beta"].dimensions == ()
+    assert main(["info", str(fmu3.fmu)]) == 0
+    out = capsys.readouterr().out
+    assert f"x_state[{fmu3.spec.x.numel()}] " in out and "contact_force[3] " in out

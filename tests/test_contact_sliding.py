@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -173,3 +174,185 @@ def test_leaning_wheel_on_low_friction_slips_and_resticks(fmu):
 def test_scene_refuses_what_sliding_cannot_honour(text, message):
     with pytest.raises(SceneError, match=re.escape(message)):
         parse_scene(WHEEL + text, "s.toml")
+
+
+# GUIDs of example scenes' FMUs as built before the sliding mode existed: the GUID hashes the
+# generated C (gw_funcs.c), the variable table, the experiment and the name, so an equal GUID is
+# the same generated model, variables and value references. Change these only with a change meant
+# for rolling scenes (and say so in its commit).
+ROLLING_GUIDS = {"paper_earth": "{0f3a0dfe-de90-52ce-813d-643693770e33}",  # base wheel
+                 "slope_hold": "{a254324f-6090-5a05-bc97-a2475aa9a153}"}  # contact_forces + a stiction law
+
+
+@pytest.mark.parametrize("name", sorted(ROLLING_GUIDS))
+def test_rolling_scenes_generate_what_they_did(name, tmp_path, monkeypatch):
+    """A scene that does not ask for sliding gets the same generated C and variables (no compile:
+    the binaries do not enter the GUID)."""
+    from fmpy import read_model_description
+
+    from gyrowheel.fmu_build import builder, load_scene
+    monkeypatch.setattr(builder, "write_binaries", lambda *args, **kwargs: None)
+    scene = load_scene(Path(__file__).parent.parent / "examples" / "scenes" / f"{name}.toml")
+    fmu = build_fmu(scene, tmp_path / f"{name}.fmu", build_dir=tmp_path / "build").fmu
+    assert read_model_description(str(fmu)).guid == ROLLING_GUIDS[name]
+
+
+def test_sliding_adds_exactly_its_variables(fmu):
+    """on_slip = "slide" adds mu_k, the slip start values (outputs), contact_mode, the flag of its event
+    and four local states; the slip check's flag `slipping` is gone (the switch replaces it)."""
+    from fmpy import read_model_description
+    variables = {v.name: v for v in read_model_description(fmu).modelVariables}
+    for name in ("mu_k", "contact_mode", "slip_long", "slip_lat", "contact_switched", "x_dot", "y_dot",
+                 "contact_state", "slip_dir_x", "slip_dir_y"):
+        assert name in variables, name
+    assert "slipping" not in variables
+    assert variables["slip_long"].causality == "output" and variables["slip_long"].initial == "exact"
+    assert variables["contact_state"].causality == "local"
+
+
+def _sliding_newton_euler(q, w, v, mu_k, g, M_, R_, kd, ka):
+    """Centre acceleration (3), angular acceleration (3) and F_n of a rigid axisymmetric wheel sliding
+    on the plane z = 0, by Newton-Euler, written here from vectors (not the model's code).
+
+    q = (alpha, beta), w = (alpha_dot, beta_dot, gamma_dot), v = (vx, vy) the centre's horizontal
+    velocity. Axle n = Rz(alpha) Rx(pi/2 - beta) j = (-sin a sin b, cos a sin b, cos b); angular
+    velocity alpha_dot k - beta_dot (cos a, sin a, 0) + gamma_dot n; the contact point C = A + R l,
+    l = -(k - cos(b) n) / sin(b). Unknowns a_A, omega_dot, F_n from M a_A = F + M g_vec,
+    I omega_dot + omega x I omega = (C - A) x F, F = F_n (k - mu_k e) (e the slip direction), and
+    the contact staying on the ground, z_A = R sqrt(1 - n_z^2) differentiated twice."""
+    a, b = q
+    ad, bd, gd = w
+    k = np.array([0.0, 0.0, 1.0])
+    n = np.array([-math.sin(a) * math.sin(b), math.cos(a) * math.sin(b), math.cos(b)])
+    om = ad * k - bd * np.array([math.cos(a), math.sin(a), 0.0]) + gd * n
+    lv = -(k - math.cos(b) * n) / math.sin(b)
+    vA = np.array([v[0], v[1], R_ * math.cos(b) * bd])
+    slip = (vA + np.cross(om, R_ * lv))[:2]
+    e = np.array([*slip / np.linalg.norm(slip), 0.0])
+    I_w = kd * M_ * R_**2 * (np.eye(3) - np.outer(n, n)) + ka * M_ * R_**2 * np.outer(n, n)
+    nd = np.cross(om, n)
+    s = math.sqrt(1 - n[2]**2)
+    # unknowns u = (a_A (3), omega_dot (3), F_n); A u = rhs
+    A, rhs = np.zeros((7, 7)), np.zeros(7)
+    A[0:3, 0:3] = M_ * np.eye(3)
+    A[0:3, 6] = -(k - mu_k * e)
+    rhs[0:3] = M_ * np.array([0.0, 0.0, -g])
+    r = R_ * lv
+    A[3:6, 3:6] = I_w
+    A[3:6, 6] = -np.cross(r, k - mu_k * e)
+    rhs[3:6] = -np.cross(om, I_w @ om)
+    # z_A'' = -R [(nz'^2 + nz nz'') / s + nz^2 nz'^2 / s^3], nz'' = (omega_dot x n)_z + (omega x n')_z
+    nz, nzd = n[2], nd[2]
+    coeff = -R_ * nz / s  # of nz''
+    A[6, 2] = 1.0
+    A[6, 3:6] = -coeff * np.cross(n, k)  # (omega_dot x n)_z = omega_dot . (n x k)
+    rhs[6] = coeff * np.cross(om, nd)[2] - R_ * (nzd**2 / s + nz**2 * nzd**2 / s**3)
+    u = np.linalg.solve(A, rhs)
+    return u[0:3], u[3:6], u[6], slip, n, om, nd
+
+
+def test_sliding_equations_match_newton_euler():
+    """The sliding mode's accelerations and F_n (derived by CasADi from the Lagrangian) equal an
+    independent Newton-Euler solution at random leaning, spinning, slipping states, to 1e-10."""
+    import casadi as ca
+
+    from gyrowheel.model.build import build_model
+    rng = np.random.default_rng(7)
+    mu_k, g = 0.35, 9.81
+    spec = build_model({"M": M, "R": R, "k_diam": 0.25, "k_axial": KA}, {},
+                       {"gravity": {"g": g}, "contact_forces": {"on_slip": "slide", "mu": 0.5, "mu_k": mu_k}})
+    f = ca.Function("f", [spec.x, spec.p], [spec.ode])
+    y = ca.Function("y", [spec.x, spec.p], [ca.vertcat(*[e for _, e in spec.outputs])])
+    names = [q.name for q, _ in spec.outputs]
+    p = [q.start for q in spec.parameters]
+    idx = {n: i for i, n in enumerate(spec.x_names)}
+    for _ in range(5):
+        a, b = rng.uniform(-3, 3), rng.uniform(0.4, 2.7)
+        w = rng.uniform(-4, 4, 3)
+        v = rng.uniform(-1.5, 1.5, 2)
+        aA, wd, Fn, slip, n, om, nd = _sliding_newton_euler((a, b), w, v, mu_k, g, M, R, 0.25, KA)
+        x = np.zeros(len(spec.x_names))
+        x[idx["alpha"]], x[idx["beta"]] = a, b
+        x[idx["alpha_dot"]], x[idx["beta_dot"]], x[idx["gamma_dot"]] = w
+        x[idx["x_dot"]], x[idx["y_dot"]] = v
+        x[idx["contact_state"]] = 1
+        x[idx["slip_dir_x"]], x[idx["slip_dir_y"]] = slip / np.linalg.norm(slip)
+        xd = np.array(f(x, p)).ravel()
+        out = dict(zip(names, np.array(y(x, p)).ravel()))
+        add, bdd, gdd = xd[idx["alpha_dot"]], xd[idx["beta_dot"]], xd[idx["gamma_dot"]]
+        ea = np.array([math.cos(a), math.sin(a), 0.0])
+        ea_dot = w[0] * np.array([-math.sin(a), math.cos(a), 0.0])
+        wd_model = add * np.array([0, 0, 1.0]) - bdd * ea - w[1] * ea_dot + gdd * n + w[2] * nd
+        scale = 1 + np.abs(aA).max() + np.abs(wd).max()
+        assert np.max(np.abs(xd[[idx["x_dot"], idx["y_dot"]]] - aA[:2])) < 1e-10 * scale
+        assert np.max(np.abs(wd_model - wd)) < 1e-10 * scale
+        assert out["F_n"] == pytest.approx(Fn, rel=1e-10)
+        heading = np.array([math.cos(a), math.sin(a)])
+        assert out["slip_long"] == pytest.approx(slip @ heading, rel=1e-10, abs=1e-12)
+
+
+@pytest.mark.parametrize("extra", [{}, {"rolling_resistance": {"c_rr": 0.02}}, {"spin_friction": {"c_pivot": 0.003}},
+                                   {"air_drag": {"c_lin": 0.5}}, {"gyrover": {}}],
+                         ids=["wheel", "rolling_resistance", "spin_friction", "air_drag", "gyrover"])
+def test_every_effect_keeps_the_energy_balance_while_sliding(extra):
+    """d/dt (energy + dissipated_energy - actuator_work) = 0 while sliding, with each effect acting
+    (the power of every force counted once, the friction's included): the time derivative along the
+    ode, exact by CasADi's chain rule, at random sliding states, to 1e-9 of the power scale."""
+    import casadi as ca
+
+    from gyrowheel.model.build import build_model
+    effects = {"gravity": {}, **extra, "contact_forces": {"on_slip": "slide", "mu": 0.5, "mu_k": 0.4},
+               "energy": {}}
+    spec = build_model({}, {}, effects)
+    names = [q.name for q, _ in spec.outputs]
+    out = {n: e for n, e in zip(names, (e for _, e in spec.outputs))}
+    total = out["energy"] + spec.x[spec.x_names.index("dissipated_energy")]
+    if "actuator_work" in spec.x_names:
+        total = total - spec.x[spec.x_names.index("actuator_work")]
+    rate = ca.Function("rate", [spec.x, spec.u, spec.p], [ca.mtimes(ca.jacobian(total, spec.x), spec.ode),
+                                                          out["dissipated_power"]])
+    p = [q.start for q in spec.parameters]
+    rng = np.random.default_rng(3)
+    idx = {n: i for i, n in enumerate(spec.x_names)}
+    for _ in range(4):
+        x = rng.uniform(-1, 1, len(spec.x_names))
+        x[idx["beta"]] = rng.uniform(0.6, 2.5)
+        x[idx["contact_state"]] = 1
+        d = rng.normal(size=2)
+        x[idx["slip_dir_x"]], x[idx["slip_dir_y"]] = d / np.linalg.norm(d)
+        rates = {"rolling_mode": x[idx["gamma_dot"]],  # each law sliding the way its rate goes
+                 "pivot_mode": x[idx["alpha_dot"]] + x[idx["gamma_dot"]] * math.cos(x[idx["beta"]])}
+        for law, r in rates.items():
+            if law in idx:
+                x[idx[law]] = math.copysign(1.0, r)
+        u = rng.uniform(-0.05, 0.05, spec.u.numel())
+        dE, P = (float(v) for v in rate(x, u, p))
+        assert P > 0
+        assert abs(dE) < 1e-9 * (1 + P)
+
+
+@pytest.mark.parametrize("initial, extra", [
+    ({"beta": math.pi / 2, "gamma_dot": 0.0}, {"slope": {"slope_angle": 0.7}}),  # too steep: slides at once
+    ({"beta": math.radians(80), "gamma_dot": 8.0}, {}),  # leaning on ice
+    ({"beta": math.radians(70), "gamma_dot": 12.0, "alpha_dot": 1.0}, {})])
+def test_indicator_is_not_negative_after_any_update(initial, extra):
+    """As a stiction law's: the update of contact_slip leaves its indicator >= 0, so it fires again
+    only after a new crossing. Rolling -> sliding gives d . v_slip = 0; firing again there (the slip
+    still 0, the friction needed still beyond mu F_n) keeps sliding at 0; a slide that stops where
+    rolling holds gives the rolling indicator > 0."""
+    from gyrowheel.model.build import build_model
+    spec = build_model({}, initial, {"gravity": {}, **extra, "contact_forces": {"on_slip": "slide", "mu": 0.1},
+                                     "energy": {}})
+    f = spec.functions()
+    p, s = [q.start for q in spec.parameters], [q.start for q in spec.starts]
+    k, mode = len(spec.events) - 1, spec.x_names.index("contact_state")
+    assert spec.events[k].name == "contact_slip"
+    x = np.array(f["init"](s, p)).ravel()
+    assert x[mode] == 0 and float(f["evt"](0, x, [], p)[k]) < 0
+    for expected in (1, 1):
+        x = np.array(f["upd"](0, x, [], p, k)).ravel()
+        assert x[mode] == expected and float(f["evt"](0, x, [], p)[k]) >= 0
+    if not extra:  # a level wheel, mu raised: the stop rule finds rolling holds
+        p[[q.name for q in spec.parameters].index("mu")] = 10.0
+        x = np.array(f["upd"](0, x, [], p, k)).ravel()
+        assert x[mode] == 0 and float(f["evt"](0, x, [], p)[k]) > 0

@@ -356,3 +356,57 @@ def test_indicator_is_not_negative_after_any_update(initial, extra):
         p[[q.name for q in spec.parameters].index("mu")] = 10.0
         x = np.array(f["upd"](0, x, [], p, k)).ravel()
         assert x[mode] == 0 and float(f["evt"](0, x, [], p)[k]) > 0
+
+
+@pytest.mark.parametrize("solver", ["dop853", "rosenbrock"])
+def test_other_solvers_locate_the_switch(fmu, solver):
+    """The FMU's other adaptive solvers locate the backspin case's switch as DOPRI5 does."""
+    v0, w0, mu_k = 2.0, -5.0, 0.25
+    s0 = v0 - R * w0
+    r, events = run(fmu, 0.6, beta=math.pi / 2, gamma_dot=w0, slip_long=s0, mu_k=mu_k,
+                    solver={"dop853": 5, "rosenbrock": 4}[solver])
+    assert [name for name, _ in events] == ["contact_slip"]
+    assert events[0][1] == pytest.approx(abs(s0) / slip_rate(mu_k), abs=1e-9)
+    assert r["vx"][-1] == pytest.approx((v0 + KA * R * w0) / (1 + KA), rel=1e-9)
+
+
+def test_model_exchange_switches_at_the_importers_event(fmu):
+    """Model Exchange: fmpy's CVode locates the crossing of contact_slip's indicator and
+    fmi2NewDiscreteStates switches the mode; the rolling speed after it is the analytic one."""
+    v0, w0, mu_k = 2.0, -5.0, 0.25
+    s0 = v0 - R * w0
+    r = simulate_fmu(fmu, stop_time=0.6, output_interval=0.01, fmi_type="ModelExchange", solver="CVode",
+                     relative_tolerance=1e-10, output=OUT,
+                     start_values={"beta": math.pi / 2, "gamma_dot": w0, "slip_long": s0, "mu_k": mu_k})
+    t_star = abs(s0) / slip_rate(mu_k)
+    assert np.all(r["contact_mode"][r["time"] < t_star - 1e-3] == 1)
+    assert np.all(r["contact_mode"][r["time"] > t_star + 1e-3] == 0)
+    assert r["vx"][-1] == pytest.approx((v0 + KA * R * w0) / (1 + KA), rel=1e-6)
+
+
+def test_rolling_resistance_breaks_away_and_acts_while_sliding(tmp_path):
+    """A wheel launched sliding without spin, with rolling resistance (its stiction law stuck at
+    gamma_dot = 0): the friction torque mu_k F_n R exceeds the holding limit c_rr R F_n, so the law
+    breaks away at the start (its holding torque taken in the sliding mode), and then
+    k M R^2 gamma_ddot = (mu_k - c_rr) M g R while M v_dot = -mu_k M g: the slip s = v - R gamma_dot
+    reaches 0 at t* = s0 / (g (mu_k + (mu_k - c_rr) / k)); rolling, the wheel then decelerates at
+    c_rr g / (1 + k)."""
+    c_rr, mu_k, v0 = 0.05, 0.25, 2.0
+    scene = parse_scene('[model]\nname = "slide_rr"\n' + WHEEL + SLIDE.replace(
+        "[effects.contact_forces]", f"[effects.rolling_resistance]\nc_rr = {c_rr}\n[effects.contact_forces]"),
+        "slide_rr.toml")
+    fmu = str(build_fmu(scene, tmp_path / "slide_rr.fmu", build_dir=tmp_path / "build").fmu)
+    t_star = v0 / (G * (mu_k + (mu_k - c_rr) / KA))
+    r, events = run(fmu, 0.6, beta=math.pi / 2, gamma_dot=0.0, slip_long=v0, mu_k=mu_k)
+    assert events[0] == ("rolling_stiction", 0.0)
+    assert [name for name, _ in events[1:]] == ["contact_slip"] and events[1][1] == pytest.approx(t_star, abs=1e-9)
+    t = r["time"]
+    before, after = t < t_star, t > t_star
+    assert np.max(np.abs(r["vx"][before] - (v0 - mu_k * G * t[before]))) < 1e-9 * v0
+    spin = (mu_k - c_rr) * G / (KA * R)
+    assert np.max(np.abs(r["gamma_dot"][before] - spin * t[before])) < 1e-9 * spin * t_star
+    v_star = v0 - mu_k * G * t_star
+    expected = v_star - c_rr * G / (1 + KA) * (t[after] - t_star)
+    assert np.max(np.abs(r["vx"][after] - expected)) < 1e-9 * v0
+    total = r["energy"] + r["dissipated_energy"]
+    assert np.max(np.abs(total - total[0])) < 1e-10 * total[0]

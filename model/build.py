@@ -339,13 +339,14 @@ class _Assembler:
             init = contact_modes.contact_init(ctx, x, init, bind_r, s_by_name)
 
         by_name = {qq.name: qq for qq in starts}
+        velocity_source = "from the rolling constraint" + (" while rolling, free while sliding" if sl else "")
         outputs = [(by_name[n], self.q[i]) for i, n in enumerate(COORDINATES)]
         outputs += [(by_name[n], bind(self.qd[2 + i])) for i, n in enumerate(SPEEDS)]
         kin = ctx.kin
         outputs += [
             (Quantity("z", "m", "centre height R sin(beta)"), kin.centre[2]),
-            (Quantity("vx", "m/s", "centre velocity x, from the rolling constraint"), bind(kin.centre_velocity[0])),
-            (Quantity("vy", "m/s", "centre velocity y, from the rolling constraint"), bind(kin.centre_velocity[1])),
+            (Quantity("vx", "m/s", f"centre velocity x, {velocity_source}"), bind(kin.centre_velocity[0])),
+            (Quantity("vy", "m/s", f"centre velocity y, {velocity_source}"), bind(kin.centre_velocity[1])),
             (Quantity("energy", "J", "total mechanical energy T + V"), bind(T + V)),
         ]
         for c in self.free[5:]:
@@ -395,7 +396,7 @@ class _Assembler:
             inputs=[qq for qq, _ in ctx.inputs], p=p, parameters=ctx.parameters,
             init=init, ode=ode, outputs=outputs, events=events, checks=ctx.checks, nominal=nominal,
             effects=effect_names, force_kinds=sorted({f.kind for f in ctx.forces}), formulation=self.formulation,
-            about=WHEEL_ABOUT.format(self.formulation))
+            about=WHEEL_ABOUT.format(self.formulation) + (contact_modes.ABOUT if sl else ""))
 
     def binder(self, qd_all, qdd_all, T, V, P_diss, P_act, x_sol, n_unknowns: int, uses_Fn: bool):
         """bind(expr): placeholders (rates, accelerations, late T, V, powers, driven values, F_n, holding

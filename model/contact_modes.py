@@ -55,6 +55,10 @@ from gyrowheel.model.lagrangian import ConstrainedSystem
 from gyrowheel.model.spec import Event, Quantity
 
 ROLLING, SLIDING, FLIGHT = 0, 1, 2
+ABOUT = (" With on_slip = \"slide\" the wheel also slides: past the friction limit mu F_n the centre's horizontal "
+         "velocity is free and Coulomb friction mu_k F_n opposes the contact point's slip (outputs contact_mode, "
+         "slip_long, slip_lat); it rolls again when the slip has died out and the friction needed is within "
+         "mu F_n. Both switches are located state events (contact_slip).")
 SLIP_ZERO = 1e-6  # |v_slip| / v_scale below which a slip that reached 0 along d counts as stopped
 SLIP_SEED = 1e-8  # weight of d in the friction direction (v_slip + SLIP_SEED v_scale d)
 
@@ -100,9 +104,14 @@ def _unit(v: ca.SX) -> ca.SX:
 
 
 def declare_sliding(ctx: WheelContext, mu: ca.SX, mu_k: ca.SX) -> SlidingContact:
-    """Add the sliding mode's states, start values and friction force to ctx (Coulomb friction
-    -mu_k F_n e at the contact point, e the friction direction of the module docstring, a force on
-    the slip velocity: its generalised force J^T F, its power -mu_k F_n e . v_slip dissipated)."""
+    """Add the sliding mode to ctx and return it (also as ctx.sliding).
+
+    mu, mu_k: the parameter symbols of the static and kinetic coefficients (1). Adds five local
+    states (x_dot, y_dot in m/s, contact_state, slip_dir_x, slip_dir_y), the start values slip_long,
+    slip_lat (m/s, ctx.extra_starts) and the Coulomb friction -mu_k F_n e (N, 2 components in the
+    ground plane) on the slip velocity, a force of the sliding mode only: its generalised force
+    J^T F (J = d v_slip / d q_dot), its power -mu_k F_n e . v_slip dissipated. e: the module
+    docstring. Source: Coulomb's law at a point contact; docs/effects.md, "Sliding"."""
     def local(name, unit, text, nominal=1.0):
         st = State(Quantity(name, unit, text), ca.SX.sym(name), ca.SX(0), output=False,
                    nominal=nominal, start_expr=ca.SX(0))  # init: set by contact_init
@@ -149,10 +158,16 @@ def merged(mode: ca.SX, bind_r: Callable, bind_s: Callable) -> Callable:
 
 def sliding_equations(asm, T: ca.SX, V: ca.SX, Fc: ca.SX, conditions, S: ca.SX, v: ca.SX,
                       qd_driven: ca.SX, qdd_driven: ca.SX):
-    """The sliding mode's equations from the same T, V and forces: returns (bind_s, ode_mech_s,
-    tau_driven_s). S: the rolling null space (nf x nf - 2, in the state's speeds v); the sliding
-    speeds are (vx, vy, v) with S_s = diag(I_2, S[2:, :]); F_n is an extra unknown (the friction is
-    linear in it)."""
+    """The sliding mode's equations from the same T, V and forces (ConstrainedSystem.reduced).
+
+    asm: the _Assembler of model/build.py (coordinates, forces, binder); T, V: the energies; Fc: the
+    contact force (3, N) in placeholders; conditions: the stiction laws' rows; S: the rolling null
+    space (nf x nf - 2, in the state's speeds v); qd_driven, qdd_driven: the driven rates. The
+    sliding speeds are (vx, vy, v), q_dot = S_s (vx, vy, v) with S_s = diag(I_2, S[2:, :]); F_n is an
+    extra unknown, solved with the accelerations (the friction is linear in it).
+    Returns (bind_s, ode_mech_s, tau_driven_s): the sliding mode's binding of the placeholders to
+    expressions of the state, the derivatives of the coordinates and of v (2 nf - 2 rows, the rolling
+    state's mechanical rows), and the torques of the driven coordinates' motors."""
     ctx, sl = asm.ctx, asm.ctx.sliding
     nf = len(asm.free)
     S_s = ca.SX.zeros(nf, nf)
@@ -177,7 +192,13 @@ def _rows(x: ca.SX, states: list[State]) -> list[int]:
 
 def contact_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable, Fc: ca.SX, T: ca.SX,
                   speed_rows: list[int]) -> Event:
-    """The event contact_slip (module docstring): indicator and update, expressions of (t, x, u, p)."""
+    """The event contact_slip (module docstring): indicator and update, expressions of (t, x, u, p).
+
+    x: the state (nx); bind_r, bind_s: each mode's binding; Fc: the contact force (3, N) in
+    placeholders; T: the kinetic energy in placeholders (for the stop impulse's mass matrix and its
+    loss); speed_rows: the rows of x holding the rolling speeds v. The stop impulse is Newton's
+    plastic tangential impact at the contact point, dv = -M^-1 J^T (J M^-1 J^T)^-1 v_slip (M the
+    sliding speeds' mass matrix, J = d v_slip / d speeds)."""
     sl = ctx.sliding
     r_vx, r_vy, r_mode, r_dx, r_dy = _rows(x, sl.states)
     mode, d = sl.mode.sym, sl.direction
@@ -229,8 +250,9 @@ def contact_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callabl
 
 
 def contact_init(ctx: WheelContext, x: ca.SX, init: ca.SX, bind_r: Callable, s_by_name: dict) -> ca.SX:
-    """init with the contact states: the centre velocity the rolling one plus the start slip (turned
-    from heading to ground axes), sliding iff the start slip is non-zero, d along it."""
+    """init (nx, expressions of the start values s and parameters) with the contact states filled in:
+    the centre velocity the rolling one plus the start slip (slip_long, slip_lat turned from heading
+    to ground axes, m/s), sliding iff that slip is non-zero, d along it."""
     sl = ctx.sliding
     r_vx, r_vy, r_mode, r_dx, r_dy = _rows(x, sl.states)
     init = ca.SX(init)
@@ -246,7 +268,8 @@ def contact_init(ctx: WheelContext, x: ca.SX, init: ca.SX, bind_r: Callable, s_b
 
 
 def contact_outputs(ctx: WheelContext, bind_s: Callable, by_name: dict) -> list[tuple[Quantity, ca.SX]]:
-    """contact_mode and the slip velocity along / across the heading (0 while rolling)."""
+    """The outputs contact_mode (1: 0 rolling, 1 sliding) and the slip velocity along / across the
+    heading (m/s, 0 while rolling), slip_long and slip_lat being the start values' variables."""
     sl = ctx.sliding
     mode = sl.mode.sym
     v = bind_s(slip_velocity(ctx))

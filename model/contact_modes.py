@@ -26,21 +26,26 @@ as a crossing of the other mode's indicator in the same instant. The update:
   velocity is set from the rolling constraint (velocities continuous, v_slip = 0), d = -F_t / |F_t|,
   the direction the contact point starts to slip in (the friction needed exceeds the friction
   available, so the slip grows along K d, d . K d > 0 for the contact's inverse inertia K);
-- sliding, d . v_slip reached 0: when |v_slip| <= SLIP_ZERO v_scale (v_scale = sqrt(g R) + |v_centre|),
-  the residual slip is removed by a tangential impulse at the contact (the plastic limit of the
-  sliding friction: dv = -M^-1 J^T (J M^-1 J^T)^-1 v_slip, energy lost 1/2 v_slip . (J M^-1 J^T)^-1 v_slip,
-  second order in the residual, added to dissipated_energy); then the wheel rolls if the friction
-  the rolling constraint needs there is within mu F_n (1 + BREAKAWAY), else it slides on with
-  d = -F_t / |F_t|. When |v_slip| is larger (the slip has turned by 90 degrees from d), d is
-  reseeded to v_slip / |v_slip| and the wheel slides on (indicator |v_slip| > 0 after).
+- sliding, d . v_slip reached 0: the wheel rolls if |v_slip| <= SLIP_ZERO v_scale
+  (v_scale = sqrt(g R) + |v_centre|) and the friction the rolling constraint needs is within
+  mu F_n (1 + BREAKAWAY) once the residual slip is removed by a tangential impulse at the contact
+  (the plastic limit of the sliding friction: dv = -M^-1 J^T (J M^-1 J^T)^-1 v_slip, energy lost
+  1/2 v_slip . (J M^-1 J^T)^-1 v_slip, second order in the residual, added to dissipated_energy).
+  Otherwise it slides on, the state unchanged but d reseeded along the slip, v_slip / |v_slip| (at
+  v_slip exactly 0: -F_t / |F_t|): the slip has turned by 90 degrees from d, or it dies out where
+  rolling cannot hold; the indicator is |v_slip| >= 0 after. (Projecting to v_slip = 0 and restarting
+  along -F_t there made a wheel whose friction need hovers at the limit with mu_k = mu stop and
+  restart every 4e-8 s: -F_t is the slip's direction only in the limit, and the friction keeps the
+  seeded direction while |v_slip| < SLIP_SEED v_scale.)
 Friction direction while sliding: e = (v_slip + SLIP_SEED v_scale d) / |...|: v_slip / |v_slip| to
 SLIP_SEED v_scale / |v_slip| (exactly when v_slip is along d, as in every straight slide), and d at
 v_slip = 0, where the slip starts.
 
 Chattering: a switch back to rolling needs the slip velocity to reach 0 along d after it has been
 seen > 0 (the runtime fires only on > 0 -> <= 0), and rolling needs the friction to reach the limit
-from strictly inside it, so every stick and every slip lasts a finite time; each event fires at most
-once per instant (the runtime's guard); the step budget bounds every call.
+from strictly inside it, so every stick and every slip lasts a finite time; a slip that dies out
+where rolling cannot hold goes on along its own direction instead of being restarted from 0 (above);
+each event fires at most once per instant (the runtime's guard); the step budget bounds every call.
 """
 from __future__ import annotations
 
@@ -229,21 +234,17 @@ def contact_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callabl
     x_p[r_mode] = ROLLING
     vc_p = ca.substitute(vc_r, x, x_p)  # exactly the rolling constraint's velocity
     x_p[r_vx], x_p[r_vy] = vc_p[0], vc_p[1]
-    holds = ca.substitute(g_roll, x, x_p) > 0
-    onset_p = ca.substitute(onset, x, x_p)
-    x_stop = ca.SX(x_p)
-    x_stop[r_mode] = ca.if_else(holds, ROLLING, SLIDING)
-    x_stop[r_dx] = ca.if_else(holds, d[0], onset_p[0])
-    x_stop[r_dy] = ca.if_else(holds, d[1], onset_p[1])
-    x_turn = ca.SX(x)
-    turned = _unit(v_slip)
-    x_turn[r_dx], x_turn[r_dy] = turned[0], turned[1]
-    stopped = norm(v_slip) <= SLIP_ZERO * bind_s(velocity_scale(ctx))
-    x_s = ca.if_else(stopped, x_stop, x_turn)
+    holds = ca.logic_and(ca.substitute(g_roll, x, x_p) > 0,
+                         norm(v_slip) <= SLIP_ZERO * bind_s(velocity_scale(ctx)))
+    # sliding on: d along the slip itself (no projection), or, at a slip of exactly 0, where it starts
+    x_on = ca.SX(x)
+    turned = ca.if_else(ca.dot(v_slip, v_slip) > 0, _unit(v_slip), ca.substitute(onset, x, x_p))
+    x_on[r_dx], x_on[r_dy] = turned[0], turned[1]
+    x_s = ca.if_else(holds, x_p, x_on)
     lost = [j for j, st in enumerate(ctx.states) if st.quantity.name == "dissipated_energy"]
     if lost:
         row = x.numel() - len(ctx.states) + lost[0]
-        x_s[row] = x[row] + ca.if_else(stopped, T_s - ca.substitute(T_s, x, x_stop), 0)
+        x_s[row] = x[row] + ca.if_else(holds, T_s - ca.substitute(T_s, x, x_p), 0)
     update = ca.if_else(mode < 0.5, x_r, ca.if_else(mode < 1.5, x_s, x))
     flag = Quantity("contact_switched", "", "true once the contact has switched mode (rolling <-> sliding)")
     return Event("contact_slip", indicator, "update", flag, update)

@@ -226,6 +226,9 @@ def _wheel(r: _Reader, data: dict) -> dict[str, float]:
 
 def _initial(r: _Reader, data: dict, effects: dict[str, dict]) -> dict[str, float]:
     for key in ("x_dot", "y_dot", "vx", "vy"):
+        if key in data and effects.get("contact_forces", {}).get("on_slip") == "slide":
+            raise r.fail("initial", key, "is not a start value: the centre velocity is the rolling one "
+                         "(from alpha_dot, beta_dot, gamma_dot) plus the start slip slip_long, slip_lat")
         if key in data:
             raise r.fail("initial", key, "is not free: rolling without slip fixes the centre "
                          "velocity from alpha_dot, beta_dot, gamma_dot")

@@ -176,6 +176,9 @@ def test_leaning_wheel_on_low_friction_slips_and_resticks(fmu, start, most):
     ('[effects.contact_forces]\n[initial]\nslip_long = 1.0\n', 'slip_long: is a start value of the sliding mode'),
     ('[model]\nformulation = "multipliers"\n[effects.contact_forces]\non_slip = "slide"\n',
      'on_slip: "slide" needs formulation = "reduced"'),
+    ('[effects.contact_forces]\non_slip = "slide"\n[initial]\nvx = 1.0\n',
+     "vx: is not a start value: the centre velocity is the rolling one (from alpha_dot, beta_dot, gamma_dot) "
+     "plus the start slip slip_long, slip_lat"),
 ])
 def test_scene_refuses_what_sliding_cannot_honour(text, message):
     with pytest.raises(SceneError, match=re.escape(message)):

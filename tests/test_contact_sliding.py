@@ -419,3 +419,31 @@ def test_rolling_resistance_breaks_away_and_acts_while_sliding(tmp_path):
     assert np.max(np.abs(r["vx"][after] - expected)) < 1e-9 * v0
     total = r["energy"] + r["dissipated_energy"]
     assert np.max(np.abs(total - total[0])) < 1e-10 * total[0]
+
+
+def test_leaning_slide_switches_as_scipy_locates_them(fmu):
+    """The leaning wheel on ice (80 deg, gamma_dot0 = 8 rad/s, mu = 0.1, mu_k = 0.08): the FMU's
+    switches (its DOPRI5 and its event location, in C) against scipy's DOP853 with its own event
+    location on the same model (studies/scipy_reference.py, rtol 1e-12): every switch within 1e-9 s,
+    the state at 3 s within 1e-7."""
+    from gyrowheel.fmu_build.builder import model_spec
+    from gyrowheel.studies.scipy_reference import solve_hybrid
+    start = {"beta": math.radians(80), "gamma_dot": 8.0}
+    scene = parse_scene('[model]\nname = "ice"\n' + WHEEL + SLIDE.replace("mu = 0.3", "mu = 0.1\nmu_k = 0.08")
+                        + "[initial]\nbeta_deg = 80\ngamma_dot = 8.0\n", "ice.toml")
+    spec = model_spec(scene)
+    f = spec.functions()
+    p, s = [q.start for q in spec.parameters], [q.start for q in spec.starts]
+    k = [e.name for e in spec.events].index("contact_slip")
+    x0 = np.array(f["init"](s, p)).ravel()
+    assert float(f["evt"](0, x0, [], p)[k]) < 0  # it slides from the start: the initial event
+    x0 = np.array(f["upd"](0, x0, [], p, k)).ravel()
+    _, x_end, switches = solve_hybrid(spec, x0, p, 3.0)
+    r, events = run(fmu, 3.0, mu=0.1, mu_k=0.08, **start)
+    assert events[0] == ("contact_slip", 0.0)
+    assert [name for name, _ in events[1:]] == [name for _, name in switches] == ["contact_slip"] * 3
+    assert np.max(np.abs(np.array([t for _, t in events[1:]]) - [t for t, _ in switches])) < 1e-9
+    for name in ("x", "vx", "beta", "gamma_dot"):
+        expected = x_end[spec.x_names.index(name)] if name in spec.x_names else \
+            x_end[spec.x_names.index("x_dot")]
+        assert r[name][-1] == pytest.approx(expected, rel=1e-7, abs=1e-9), name

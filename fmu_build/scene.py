@@ -37,7 +37,8 @@ from pathlib import Path
 
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build.platforms import parse_platforms
-from gyrowheel.model.build import BETA_MIN_DEFAULT, FORMULATIONS, start_values, touchdown_lean, wheel_parameters
+from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, SLIDE_NEEDS_REDUCED, start_values, touchdown_lean,
+                                   wheel_parameters)
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 
 SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
@@ -232,6 +233,9 @@ def _wheel(r: _Reader, data: dict) -> dict[str, float]:
 
 def _initial(r: _Reader, data: dict, effects: dict[str, dict]) -> dict[str, float]:
     for key in ("x_dot", "y_dot", "vx", "vy"):
+        if key in data and effects.get("contact_forces", {}).get("on_slip") == "slide":
+            raise r.fail("initial", key, "is not a start value: the centre velocity is the rolling one "
+                         "(from alpha_dot, beta_dot, gamma_dot) plus the start slip slip_long, slip_lat")
         if key in data:
             raise r.fail("initial", key, "is not free: rolling without slip fixes the centre "
                          "velocity from alpha_dot, beta_dot, gamma_dot")
@@ -288,6 +292,17 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
     if conflict:
         raise r.fail("effects.contact_forces", "on_lift_off", conflict)
     return effects
+
+
+def _sliding(r: _Reader, scene: Scene) -> None:
+    """The sliding mode's start values need on_slip = "slide", which needs the reduced formulation."""
+    slide = scene.effects.get("contact_forces", {}).get("on_slip") == "slide"
+    for key in ("slip_long", "slip_lat"):
+        if key in scene.initial and not slide:
+            raise r.fail("initial", key, 'is a start value of the sliding mode: it needs [effects.contact_forces] '
+                         'on_slip = "slide"')
+    if slide and scene.formulation != "reduced":
+        raise r.fail("effects.contact_forces", "on_slip", SLIDE_NEEDS_REDUCED)
 
 
 # valid ranges of the FMU's settings (c_src/gw_core.h GW_REL_TOL_MIN ...); abs_tol may also be
@@ -350,6 +365,7 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
     if "effects" in data:
         scene.effects = _effects(r, r.table(data, "effects"))
     scene.initial = _initial(r, r.table(data, "initial"), scene.effects)
+    _sliding(r, scene)
     scene.experiment = _experiment(r, r.table(data, "experiment"))
     outputs = r.table(data, "outputs")
     r.unknown("outputs", outputs, {"keep"})

@@ -14,6 +14,7 @@ import math
 
 import casadi as ca
 
+from gyrowheel.model import contact_modes
 from gyrowheel.model.context import Body, WheelContext
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 from gyrowheel.model.kinematics import WheelKinematics, norm
@@ -46,6 +47,8 @@ WHEEL_ABOUT = (
 # stays below a quarter of the default rel_tol (2.4e-9 < 1e-8 / 4); the centre is then 1e-3 R
 # above the ground, less than the width of the rim of any real wheel.
 BETA_MIN_DEFAULT = 1e-3
+SLIDE_NEEDS_REDUCED = ('"slide" needs formulation = "reduced" (the sliding mode is derived in the '
+                       'null-space form only)')
 
 
 def touchdown_lean(k_diam: float, k_axial: float) -> float:
@@ -164,6 +167,8 @@ def build_model(wheel: dict[str, float] | None = None,
     conflict = lift_off_conflict(effects)
     if conflict:
         raise ValueError(f"contact_forces on_lift_off: {conflict}")
+    if effects.get("contact_forces", {}).get("on_slip") == "slide" and formulation != "reduced":
+        raise ValueError(f"contact_forces on_slip: {SLIDE_NEEDS_REDUCED}")
     ctx = base_context(wheel or {})
     for effect_name, effect_cls in CATALOGUE.items():
         if effect_name in effects:
@@ -193,18 +198,22 @@ class _Assembler:
                 V = V - body.mass * ca.dot(ctx.gravity, body.position)
         return T, V
 
-    def generalised_forces(self):
-        if not self.ctx.forces:
+    def forces(self, mode: int = contact_modes.ROLLING):
+        """The forces acting in the contact mode `mode` (every force but another mode's own)."""
+        return [f for f in self.ctx.forces if f.mode is None or f.mode == mode]
+
+    def generalised_forces(self, mode: int = contact_modes.ROLLING):
+        if not self.forces(mode):
             return None
         Q = ca.SX.zeros(self.q.numel())
-        for f in self.ctx.forces:
+        for f in self.forces(mode):
             J = ca.jacobian(f.velocity, self.qd)
             Q = Q + ca.mtimes(J.T, f.value)
         return Q
 
-    def powers(self):
+    def powers(self, mode: int = contact_modes.ROLLING):
         diss, act = ca.SX(0), ca.SX(0)
-        for f in self.ctx.forces:
+        for f in self.forces(mode):
             p = ca.dot(ca.vec(f.value), ca.vec(f.velocity))
             if f.kind == "dissipative":
                 diss = diss - p
@@ -220,7 +229,7 @@ class _Assembler:
             F = F + body.mass * ctx.acceleration(body.position)
             if ctx.gravity is not None:
                 F = F - body.mass * ctx.gravity
-        for f in ctx.forces:
+        for f in self.forces():
             if f.point:
                 F = F - f.value
         return F
@@ -248,6 +257,7 @@ class _Assembler:
         starts = _with_values(start_values(), {})
         extra_starts = [c.start for c in self.free[5:]] + [c.rate_start for c in self.free[5:]]
         state_starts = [st.quantity for st in ctx.states if st.start_expr is None]
+        state_starts += [qq for qq, _ in ctx.extra_starts]
         starts = _with_values(starts + extra_starts + state_starts, self.initial)
         s = ca.SX.sym("s", len(starts))
         s_by_name = {qq.name: s[i] for i, qq in enumerate(starts)}
@@ -305,50 +315,38 @@ class _Assembler:
         P_diss, P_act = self.powers()
         tau_driven = system.driven_forces()
         P_act = P_act + ca.dot(tau_driven, qd_driven) if self.driven else P_act
-        placeholders = ca.vertcat(self.qd, self.qdd, self.late["T"], self.late["V"], self.late["P_diss"],
-                                  self.late["P_act"])
-        values = ca.vertcat(qd_all, qdd_all, T, V, P_diss, P_act)
-        for c in self.driven:
-            if c.value is not None:
-                placeholders = ca.vertcat(placeholders, c.q)
-                values = ca.vertcat(values, c.value)
-            elif ca.depends_on(T, c.q) or ca.depends_on(V, c.q):
-                raise ValueError(f"driven coordinate {c.name} has no value state but the energies depend on it")
-        if ctx.uses_Fn:
-            placeholders = ca.vertcat(placeholders, ctx.Fn)
-            values = ca.vertcat(values, x_sol[0])
-        for i, law in enumerate(ctx.stick_slip):
-            placeholders = ca.vertcat(placeholders, law.hold)
-            values = ca.vertcat(values, x_sol[len(unknowns) + i])
-
-        keep = [i for i in range(placeholders.numel()) if not ca.is_equal(placeholders[i], values[i])]
-        placeholders, values = placeholders[keep], values[keep]  # drop identities (independent speeds)
-
-        def bind(expr):
-            """Placeholders -> state expressions (repeated: the values contain placeholders too)."""
-            expr = ca.SX(expr)
-            for _ in range(6):
-                if not ca.depends_on(ca.vec(expr), placeholders):
-                    return expr
-                expr = ca.substitute(expr, placeholders, values)
-            raise RuntimeError("placeholders could not be bound (a cycle between late quantities)")
-
+        bind = self.binder(qd_all, qdd_all, T, V, P_diss, P_act, x_sol, len(unknowns), ctx.uses_Fn)
+        sl = ctx.sliding
+        if sl is None:
+            ctx.late_values = {"Fc": bind(Fc)}
+            ode_mech = bind(ode_mech)
+        else:  # one state for both modes: ode, outputs and events per mode (model/contact_modes.py)
+            bind_r = bind
+            bind_s, ode_mech_s, tau_s = contact_modes.sliding_equations(self, T, V, Fc, conditions, S, v,
+                                                                          qd_driven, qdd_driven)
+            bind = contact_modes.merged(sl.mode.sym, bind_r, bind_s)
+            ode_mech = ca.if_else(sl.mode.sym < 0.5, bind_r(ode_mech), bind_s(ode_mech_s))
+            tau_driven = ca.if_else(sl.mode.sym < 0.5, bind_r(tau_driven), bind_s(tau_s)) if self.driven \
+                else tau_driven
+            ctx.late_values = {"Fc": Fc}  # bound per mode by bind
         self.bind = bind
-        ctx.late_values = {"Fc": bind(Fc)}
         derivs = [bind(st.derivative) for st in ctx.states]
-        ode = ca.vertcat(bind(ode_mech), *derivs)
+        ode = ca.vertcat(ode_mech, *derivs)
         for row, stuck in stuck_rate_rows(ctx.stick_slip, x, bind).items():
             ode[row] = (1 - stuck) * ode[row]  # a stuck rate that is a state stays exactly 0
         init = self._started(init, x, bind)
+        if sl is not None:
+            init = contact_modes.contact_init(ctx, x, init, bind_r, s_by_name)
 
         by_name = {qq.name: qq for qq in starts}
+        velocity_source = "from the rolling constraint" + (" while rolling, free while sliding" if sl else "")
         outputs = [(by_name[n], self.q[i]) for i, n in enumerate(COORDINATES)]
         outputs += [(by_name[n], bind(self.qd[2 + i])) for i, n in enumerate(SPEEDS)]
         kin = ctx.kin
         outputs += [
             (Quantity("z", "m", "centre height R sin(beta)"), kin.centre[2]),
-            (Quantity("vx", "m/s", "centre velocity x, from the rolling constraint"), bind(kin.centre_velocity[0])),
-            (Quantity("vy", "m/s", "centre velocity y, from the rolling constraint"), bind(kin.centre_velocity[1])),
+            (Quantity("vx", "m/s", f"centre velocity x, {velocity_source}"), bind(kin.centre_velocity[0])),
+            (Quantity("vy", "m/s", f"centre velocity y, {velocity_source}"), bind(kin.centre_velocity[1])),
             (Quantity("energy", "J", "total mechanical energy T + V"), bind(T + V)),
         ]
         for c in self.free[5:]:
@@ -359,10 +357,14 @@ class _Assembler:
                      bind(tau_driven[i])) for i, c in enumerate(self.driven)]
         outputs += [(qq, bind(self._late(e))) for qq, e in ctx.outputs]
         outputs += [(qq, bind(e)) for qq, e in extra_outputs]  # lambda holds driven placeholders
+        if sl is not None:
+            outputs += contact_modes.contact_outputs(ctx, bind_s, by_name)
 
         fallen = Quantity("fallen", "", "true once the wheel has fallen flat (beta <= beta_min or >= pi - beta_min)")
         events = [Event("fall", ca.sin(self.q[3]) - ca.sin(P["beta_min"]), "terminate", fallen)]
         events += [Event(n, bind(self._late(e)), a, f) for n, e, a, f in ctx.events]
+        if sl is not None:
+            events.append(contact_modes.contact_event(ctx, x, bind_r, bind_s, Fc, T, speed_rows))
         n_mech = x.numel() - len(ctx.states)
         for law in ctx.stick_slip:
             mode_row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)
@@ -394,7 +396,41 @@ class _Assembler:
             inputs=[qq for qq, _ in ctx.inputs], p=p, parameters=ctx.parameters,
             init=init, ode=ode, outputs=outputs, events=events, checks=ctx.checks, nominal=nominal,
             effects=effect_names, force_kinds=sorted({f.kind for f in ctx.forces}), formulation=self.formulation,
-            about=WHEEL_ABOUT.format(self.formulation))
+            about=WHEEL_ABOUT.format(self.formulation) + (contact_modes.ABOUT if sl else ""))
+
+    def binder(self, qd_all, qdd_all, T, V, P_diss, P_act, x_sol, n_unknowns: int, uses_Fn: bool):
+        """bind(expr): placeholders (rates, accelerations, late T, V, powers, driven values, F_n, holding
+        forces) -> expressions of the state, for one mode's solution (x_sol: its extra unknowns,
+        n_unknowns of them before the holding forces)."""
+        ctx = self.ctx
+        placeholders = ca.vertcat(self.qd, self.qdd, self.late["T"], self.late["V"], self.late["P_diss"],
+                                  self.late["P_act"])
+        values = ca.vertcat(qd_all, qdd_all, T, V, P_diss, P_act)
+        for c in self.driven:
+            if c.value is not None:
+                placeholders = ca.vertcat(placeholders, c.q)
+                values = ca.vertcat(values, c.value)
+            elif ca.depends_on(T, c.q) or ca.depends_on(V, c.q):
+                raise ValueError(f"driven coordinate {c.name} has no value state but the energies depend on it")
+        if uses_Fn:
+            placeholders = ca.vertcat(placeholders, ctx.Fn)
+            values = ca.vertcat(values, x_sol[0])
+        for i, law in enumerate(ctx.stick_slip):
+            placeholders = ca.vertcat(placeholders, law.hold)
+            values = ca.vertcat(values, x_sol[n_unknowns + i])
+
+        keep = [i for i in range(placeholders.numel()) if not ca.is_equal(placeholders[i], values[i])]
+        placeholders, values = placeholders[keep], values[keep]  # drop identities (independent speeds)
+
+        def bind(expr):
+            """Placeholders -> state expressions (repeated: the values contain placeholders too)."""
+            expr = ca.SX(expr)
+            for _ in range(6):
+                if not ca.depends_on(ca.vec(expr), placeholders):
+                    return expr
+                expr = ca.substitute(expr, placeholders, values)
+            raise RuntimeError("placeholders could not be bound (a cycle between late quantities)")
+        return bind
 
     def _started(self, init: ca.SX, x: ca.SX, bind) -> ca.SX:
         """init with the states that start from an expression (stiction modes) filled in."""

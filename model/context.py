@@ -62,6 +62,7 @@ class Force:
     velocity: ca.SX
     kind: str = "dissipative"
     point: bool = False
+    mode: int | None = None  # None: in every contact mode; else only in that one (model/contact_modes.py)
 
 
 # Breakaway margin of the stiction laws: a stuck mode holds while the holding force needed stays
@@ -155,6 +156,8 @@ class WheelContext:
     Fc: ca.SX = field(default_factory=lambda: ca.SX.sym("Fc", 3))  # contact force, bound late
     late: dict = field(default_factory=lambda: {n: ca.SX.sym(n + "_late") for n in ("T", "V", "P_diss", "P_act")})
     late_values: dict = field(default_factory=dict)
+    sliding: object = None  # gyrowheel.model.contact_modes.SlidingContact when the wheel may slide
+    extra_starts: list[tuple[Quantity, ca.SX]] = field(default_factory=list)  # start values used by init only
 
     def coordinate(self, name: str, free: bool = True, rate=None, accel=None, value=None,
                    start: Quantity | None = None, rate_start: Quantity | None = None) -> Coordinate:

@@ -9,17 +9,22 @@ Events: lift-off (F_n reaches 0) and slip (|F_t| reaches mu F_n), each "terminat
 "warn" or "ignore" (no event, no flag); rolling without slip and point contact stop being
 valid there. A load-proportional law cannot go on past lift-off: with one, on_lift_off must be
 "terminate" (gyrowheel.model.effects.lift_off_conflict; the scene reader refuses the others).
+on_slip = "slide": the wheel slides past the slip instead (model/contact_modes.py): a second contact
+mode with Coulomb friction mu_k F_n at the contact, the switches located state events; start values
+slip_long, slip_lat; outputs contact_mode, slip_long, slip_lat.
 """
 from __future__ import annotations
 
 import casadi as ca
 
+from gyrowheel.model.contact_modes import declare_sliding
 from gyrowheel.model.context import WheelContext
 from gyrowheel.model.effects.base import Effect
 from gyrowheel.model.kinematics import norm
 from gyrowheel.model.spec import Quantity
 
 ACTIONS = ("terminate", "warn", "ignore")
+SLIP_ACTIONS = ("warn", "terminate", "ignore", "slide")
 
 
 class ContactForces(Effect):
@@ -28,16 +33,41 @@ class ContactForces(Effect):
 
     @classmethod
     def parameters(cls) -> list[Quantity]:
-        return [Quantity("mu", "1", "friction coefficient for the slip check", 0.8, minimum=0.0)]
+        return [Quantity("mu", "1", "friction coefficient for the slip check", 0.8, minimum=0.0),
+                Quantity("mu_k", "1", "kinetic friction coefficient while sliding (on_slip = \"slide\"; "
+                         "start value: the scene's mu when not given; <= mu)", 0.8, minimum=0.0)]
+
+    @classmethod
+    def starts(cls) -> list[Quantity]:
+        return [Quantity("slip_long", "m/s", "slip velocity of the contact point along the heading", 0.0),
+                Quantity("slip_lat", "m/s", "slip velocity of the contact point across the heading (left)", 0.0)]
 
     @classmethod
     def choices(cls) -> dict[str, tuple[str, ...]]:
-        return {"on_lift_off": ACTIONS, "on_slip": ("warn", "terminate", "ignore")}
+        return {"on_lift_off": ACTIONS, "on_slip": SLIP_ACTIONS}
+
+    @classmethod
+    def option_conflict(cls, options: dict) -> tuple[str, str] | None:
+        """mu_k belongs to the sliding mode and may not exceed mu."""
+        slide = options.get("on_slip") == "slide"
+        if "mu_k" in options and not slide:
+            return "mu_k", 'is the kinetic friction of on_slip = "slide"; remove it or set on_slip = "slide"'
+        if slide and options.get("on_lift_off", ACTIONS[0]) != "terminate":
+            return "on_lift_off", ('must be "terminate" with on_slip = "slide": sliding friction, proportional '
+                                   'to the normal force, would push once F_n < 0')
+        mu = options.get("mu", cls.parameters()[0].start)
+        if slide and options.get("mu_k", mu) > mu:
+            return "mu_k", f"must be <= mu (kinetic friction does not exceed static), got {options['mu_k']!r} > {mu!r}"
+        return None
 
     def apply(self, ctx: WheelContext) -> None:
         slip = self.choice("on_slip")
         if slip == "ignore":  # mu is used by the slip check only
             self.options["_no_mu"] = True
+        if slip != "slide":
+            self.options["_no_mu_k"] = True
+        elif "mu_k" not in self.options:  # mu_k defaults to the scene's mu
+            self.options["mu_k"] = self.options.get("mu", self.parameters()[0].start)
         p = self.declare(ctx)
         F = ctx.Fc
         a = ctx.q[2]
@@ -54,6 +84,9 @@ class ContactForces(Effect):
         if lift != "ignore":
             ctx.events.append(("lift_off", F_n, lift,
                                Quantity("lifted_off", "", "true once the normal force has reached zero")))
-        if slip != "ignore":
+        if slip == "slide":
+            ctx.check_true(p["mu_k"] <= p["mu"], "mu_k must be <= mu (kinetic friction does not exceed static)")
+            declare_sliding(ctx, p["mu"], p["mu_k"])
+        elif slip != "ignore":
             ctx.events.append(("slip", p["mu"] * F_n - F_t, slip,
                                Quantity("slipping", "", "true once the friction needed has exceeded mu")))

@@ -198,9 +198,11 @@ def test_both_workers_run_batches(earth_fmu, scheduler, tmp_path):
     """The FMU's bytes are one task's result that every batch depends on; a batch prefers a worker
     holding its inputs, so unless they are replicated every batch runs on the worker that has
     them and the second sits idle (1 -> 2 workers give 1.0-1.6x). Each worker's process id, as a
-    user metric, must appear in the table."""
+    user metric, must appear in the table. The metric takes 50 ms a trajectory, so that each batch
+    lasts long enough for the scheduler to place the next on the idle worker also on a loaded machine
+    (2 s runs of 5 ms each let one worker finish all 20 batches while the other had none)."""
     metric = tmp_path / "pid.py"
-    metric.write_text("import os\ndef pid(traj):\n    return float(os.getpid())\n")
+    metric.write_text("import os\nimport time\n\n\ndef pid(traj):\n    time.sleep(0.05)\n    return float(os.getpid())\n")
     out = tmp_path / "pids.csv"
     done = subprocess.run([sys.executable, "-m", "gyrowheel", "sweep", str(earth_fmu), "--grid", "beta_deg=60:89:40",
                            "--stop-time", "2", "--scheduler", scheduler, "--batch-size", "2",

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ctypes
 import itertools
+import re
 import shutil
 import weakref
 from ctypes import byref
@@ -184,3 +185,19 @@ class Model(StateVector, _Instance):
         z = np.zeros(self.nz)
         self.fmu2.getEventIndicators(self._ptr(z), self.nz)
         return z
+
+
+def simulate_logged(fmu: str | Path, stop: float, dt: float, output: list[str], start: dict):
+    """fmpy's simulate_fmu (Co-Simulation) with the FMU's debug log parsed for its events:
+    (result, [(event name, t)]), in the order the runtime reported them."""
+    from fmpy import simulate_fmu
+    logs: list[str] = []
+
+    def logger(*args):
+        text = args[-1]
+        logs.append(text.decode() if isinstance(text, bytes) else str(text))
+    r = simulate_fmu(str(fmu), stop_time=stop, output_interval=dt, start_values=start, debug_logging=True,
+                     logger=logger, output=output)
+    events = [(m.group(1), float(m.group(2))) for line in logs
+              for m in [re.search(r"event (\w+) at t=(\S+?):? ", line + " ")] if m]
+    return r, events

@@ -375,6 +375,9 @@ class _Assembler:
             outputs += contact_flight.flight_outputs(ctx, flight, by_name)
             # z and the energy: the free body's in flight (z = R sin(beta) and its T, V are the contact's)
             flying = sl.mode.sym > 1.5
+            for qq, _ in outputs:
+                if qq.name == "contact_mode":
+                    qq.description = "contact mode: 0 rolling, 1 sliding, 2 flight"
             outputs = [(qq, ca.if_else(flying, fl.z.sym, e) if qq.name == "z" else
                         ca.if_else(flying, flight.T + flight.V, e) if qq.name == "energy" else e)
                        for qq, e in outputs]

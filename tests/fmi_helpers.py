@@ -201,3 +201,19 @@ def simulate_logged(fmu: str | Path, stop: float, dt: float, output: list[str], 
     events = [(m.group(1), float(m.group(2))) for line in logs
               for m in [re.search(r"event (\w+) at t=(\S+?):? ", line + " ")] if m]
     return r, events
+
+
+def replayed(slave: "Slave", t0: float, dt: float, steps: int, names: tuple[str, ...]):
+    """Save the FMU state at t0, step on `steps` times by dt reading `names`, restore the state and
+    step again: (first run, second run), lists of the values after each step."""
+    state = slave.slave.getFMUState()
+    runs = []
+    for _ in range(2):
+        slave.slave.setFMUState(state)
+        out = []
+        for k in range(steps):
+            slave.slave.doStep(t0 + dt * k, dt)
+            out.append(slave.get(*names))
+        runs.append(out)
+    slave.slave.freeFMUState(state)
+    return runs[0], runs[1]

@@ -16,7 +16,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from gyrowheel.fmu_build import build_fmu, load_scene, parse_scene
-from fmi_helpers import Slave, simulate_logged
+from fmi_helpers import Slave, replayed, simulate_logged
 from gyrowheel.fmu_build.scene import SceneError
 from paper_wheel import G, KA, KD, M, R
 from paper_wheel import PAPER_WHEEL_TOML as WHEEL
@@ -118,6 +118,43 @@ def test_upright_drop_bounces_to_rest_at_the_series_time(fmu, h, e):
     assert np.max(np.abs(balance - balance[0])) < 1e-10 * M * G * R
 
 
+@pytest.mark.parametrize("solver", ["dop853", "rosenbrock"])
+def test_other_solvers_bounce_the_drop_to_rest_at_the_series_time(fmu, solver):
+    n, rest, _, _ = drop_series(0.1, 0.5)
+    r, events = run(fmu, rest + 0.05, height=0.1, restitution=0.5, solver={"dop853": 5, "rosenbrock": 4}[solver])
+    times = [t for name, t in events if name == "contact_flight"]
+    assert len(times) == n + 1
+    assert times[-1] == pytest.approx(rest, abs=1e-9)
+    assert r["contact_mode"][-1] == 0
+
+
+def test_model_exchange_bounces_the_drop_to_rest(fmu):
+    """Model Exchange: fmpy's CVode locates each touchdown, fmi2NewDiscreteStates applies the impact."""
+    n, rest, _, _ = drop_series(0.1, 0.5)
+    me = simulate_fmu(fmu, stop_time=rest + 0.05, output_interval=1e-3, fmi_type="ModelExchange", record_events=True,
+                      solver="CVode", relative_tolerance=1e-10, output=OUT,
+                      start_values={**TIGHT, "height": 0.1, "restitution": 0.5})
+    t, mode, vz = me["time"], me["contact_mode"], me["vz"]
+    jumps = [k for k in range(len(t) - 1) if t[k] == t[k + 1] and vz[k + 1] != vz[k]]
+    assert len(jumps) == n + 1
+    assert t[jumps[-1]] == pytest.approx(rest, abs=1e-6)
+    assert mode[-1] == 0
+
+
+def test_fmu_state_keeps_the_flight(fmu):
+    """An FMU state saved in flight between bounces and restored reproduces the run, the later
+    impacts and the rest included."""
+    s = Slave(fmu, logging_on=False)
+    s.init(**TIGHT, height=0.1, restitution=0.5)
+    s.slave.doStep(0.0, 0.2)
+    assert s.get("contact_mode") == 2.0
+    first, second = replayed(s, 0.2, 0.03, 10, ("contact_mode", "vz", "height", "impact_impulse",
+                                                 "dissipated_energy"))
+    assert first[-1][0] == 0.0
+    assert second == first
+    s.free()
+
+
 def test_leaning_spinning_drop_never_gains_energy_and_stays_in_the_cone(fmu):
     """Between impacts energy + dissipated is constant; at each impact dissipated_energy does not
     fall (no energy created); a bouncing impact's impulse, from the centre's velocity change between
@@ -211,7 +248,7 @@ def test_scene_refuses_what_flight_cannot_honour(text, message):
 
 
 def test_fmu_refuses_a_restitution_above_one_and_vz_on_the_ground(fmu):
-    from fmi_helpers import Slave, simulate_logged
+    from fmi_helpers import Slave, replayed, simulate_logged
     for start, text in (({"restitution": 1.5}, "restitution must lie in 0..1"),
                         ({"height": 0.0, "vz": 1.0}, "vz must be 0 unless height > 0")):
         s = Slave(fmu)

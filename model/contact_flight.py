@@ -27,6 +27,9 @@ The update:
   slip, or -F_t where it is 0) if F_n > 0 in sliding, else flight (the constraint would pull).
   z, z_dot are set from the constraint; the impact's energy loss -dT (>= 0) is added to
   dissipated_energy; impact_impulse = P_n.
+Stiction laws (rolling_resistance, spin_friction: limits c F_n) do nothing in flight (F_n = 0, their
+holding forces 0); the lift-off leaves them sliding with their rate's sign (a stuck law would
+freeze its rate, stiction.stuck_rate_rows), the touchdown sets m = sign(rate) as at the start.
 After every update the indicator of the new mode is >= 0 (F_n > 0 is tested before a contact mode
 is chosen; h = 0 after a lift-off or a bounce, and the bounce's u_n > 0).
 Rolling reaches F_n = 0 with the friction it needs, |F_t|, still finite in general, so the friction
@@ -126,9 +129,11 @@ class Flight:
         """Placeholders -> the flight mode's expressions: rates, accelerations, T, V, no power,
         F_n = 0 (the contact force is 0 in flight)."""
         ctx = self.ctx
+        holds = [law.hold for law in ctx.stick_slip]  # the stiction laws' holding forces: 0 (their limit is)
         ph = ca.vertcat(ctx.qd[0:2], ctx.qdd, ctx.late["T"], ctx.late["V"], ctx.late["P_diss"],
-                        ctx.late["P_act"], ctx.Fn, ctx.Fc)
-        val = ca.vertcat(self.wf[0:2], 0, 0, self.qdd[3:6], self.T, self.V, 0, 0, 0, ca.SX.zeros(3))
+                        ctx.late["P_act"], ctx.Fn, ctx.Fc, *holds)
+        val = ca.vertcat(self.wf[0:2], 0, 0, self.qdd[3:6], self.T, self.V, 0, 0, 0, ca.SX.zeros(3),
+                         ca.SX.zeros(len(holds)))
         expr = ca.SX(expr)
         for _ in range(4):
             if not ca.depends_on(ca.vec(expr), ph):
@@ -210,6 +215,16 @@ def flight_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable
     slides = ca.substitute(Fn_s, x, x_slide) > 0
     bounces = res.u_plus[2] > 0
     x_t = ca.if_else(bounces, x_b, ca.if_else(rolls, x_roll, ca.if_else(slides, x_slide, x_b)))
+    # stiction laws (rolling_resistance, spin_friction; limits c F_n): sliding with the rate's sign
+    # in flight, where the limit is 0 (a stuck law would freeze its rate: stiction.stuck_rate_rows);
+    # on landing m = sign(r), as at the start, 0 (stuck) for a rate of exactly 0
+    n_mech = x.numel() - len(ctx.states)
+    for law in ctx.stick_slip:
+        row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)
+        r_l = ca.substitute(flight.bind(law.rate), x, x_l)
+        x_l[row] = ca.if_else(r_l >= 0, 1, -1)
+        r_t = ca.substitute(flight.bind(law.rate), x, x_t)
+        x_t[row] = ca.if_else(x_t[r_mode] > 1.5, ca.if_else(r_t >= 0, 1, -1), ca.sign(r_t))
     update = ca.if_else(mode < 1.5, x_l, x_t)
     flag = Quantity("contact_flown", "", "true once the wheel has left the ground or landed")
     return Event("contact_flight", indicator, "update", flag, update)

@@ -233,6 +233,51 @@ def test_upright_drop_agrees_with_the_soft_contact_reference(fmu):
     assert abs(touch[0] - fine["touchdowns"][0]) < 1e-3
 
 
+LOADS = """
+[effects.rolling_resistance]
+c_rr = 0.02
+[effects.spin_friction]
+c_pivot = 0.001
+[effects.contact_forces]
+on_slip = "slide"
+on_lift_off = "fly"
+mu = 0.3
+[effects.energy]
+"""
+
+
+@pytest.fixture(scope="module")
+def loaded(tmp_path_factory):
+    root = tmp_path_factory.mktemp("flight_loads")
+    scene = parse_scene('[model]\nname = "flight_loads"\n' + WHEEL + LOADS, "flight_loads.toml")
+    return str(build_fmu(scene, root / "flight_loads.fmu", build_dir=root / "build").fmu)
+
+
+@pytest.mark.parametrize("start", [
+    dict(height=0.05, beta=1.1, gamma_dot=15.0, alpha_dot=1.0, slip_long=0.3, restitution=0.5),
+    dict(beta=1.0, beta_dot=6.0, gamma_dot=20.0),
+    dict(height=0.1, beta=math.pi / 2, gamma_dot=0.0, restitution=0.5)], ids=["leaning_drop", "lift_off", "drop"])
+def test_load_proportional_laws_vanish_in_flight(loaded, start):
+    """rolling_resistance and spin_friction (stiction) act through F_n: in flight F_n = 0, so they do
+    nothing (dissipated_energy constant there); the balance holds through every switch, and an
+    upright drop lands at rest with both laws stuck."""
+    r, events = simulate_logged(loaded, 0.6, 1e-3, OUT, {**TIGHT, **start})
+    assert any(name == "contact_flight" for name, _ in events)
+    balance = r["energy"] + r["dissipated_energy"]
+    assert np.max(np.abs(balance - balance[0])) < 1e-10 * M * G * R
+    fly = r["contact_mode"] == 2
+    t = r["time"]
+    hit = np.zeros(len(t) - 1, bool)  # an event (an impact's loss) between two samples
+    for _, te in events:
+        hit |= (t[:-1] < te) & (te <= t[1:])
+    runs = np.nonzero(fly[1:] & fly[:-1] & ~hit)[0]
+    assert len(runs) > 10
+    assert np.all(r["F_n"][fly] == 0)
+    assert np.all(r["dissipated_energy"][runs + 1] == r["dissipated_energy"][runs])
+    if "height" in start and start["beta"] == math.pi / 2:
+        assert r["contact_mode"][-1] == 0 and r["gamma_dot"][-1] == 0
+
+
 @pytest.mark.parametrize("text, message", [
     ('[effects.contact_forces]\non_lift_off = "fly"\n', 'on_lift_off: "fly" needs on_slip = "slide"'),
     ('[effects.contact_forces]\non_slip = "slide"\nrestitution = 0.5\n', "restitution: is the touchdown's"),

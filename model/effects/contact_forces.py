@@ -8,7 +8,7 @@ lateral F_lat (in the ground plane, to the left of the heading), and the frictio
 Events: lift-off (F_n reaches 0) and slip (|F_t| reaches mu F_n), each "terminate",
 "warn" or "ignore" (no event, no flag); rolling without slip and point contact stop being
 valid there. A load-proportional law cannot go on past lift-off: with one, on_lift_off must be
-"terminate" (gyrowheel.model.effects.lift_off_conflict; the scene reader refuses the others).
+"terminate" or "fly" (gyrowheel.model.effects.lift_off_conflict; the scene reader refuses the others).
 on_slip = "slide": the wheel slides past the slip instead (model/contact_modes.py): a second contact
 mode with Coulomb friction mu_k F_n at the contact, the switches located state events; start values
 slip_long, slip_lat; outputs contact_mode, slip_long, slip_lat.

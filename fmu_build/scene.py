@@ -295,12 +295,18 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
 
 
 def _sliding(r: _Reader, scene: Scene) -> None:
-    """The sliding mode's start values need on_slip = "slide", which needs the reduced formulation."""
+    """The sliding (flight) mode's start values need on_slip = "slide" (on_lift_off = "fly"); sliding
+    needs the reduced formulation."""
     slide = scene.effects.get("contact_forces", {}).get("on_slip") == "slide"
     for key in ("slip_long", "slip_lat"):
         if key in scene.initial and not slide:
             raise r.fail("initial", key, 'is a start value of the sliding mode: it needs [effects.contact_forces] '
                          'on_slip = "slide"')
+    fly = scene.effects.get("contact_forces", {}).get("on_lift_off") == "fly"
+    for key in ("height", "vz"):
+        if key in scene.initial and not fly:
+            raise r.fail("initial", key, 'is a start value of the flight mode: it needs [effects.contact_forces] '
+                         'on_lift_off = "fly"')
     if slide and scene.formulation != "reduced":
         raise r.fail("effects.contact_forces", "on_slip", SLIDE_NEEDS_REDUCED)
 

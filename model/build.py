@@ -14,7 +14,7 @@ import math
 
 import casadi as ca
 
-from gyrowheel.model import contact_modes
+from gyrowheel.model import contact_flight, contact_modes
 from gyrowheel.model.context import Body, WheelContext
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 from gyrowheel.model.kinematics import WheelKinematics, norm
@@ -49,6 +49,8 @@ WHEEL_ABOUT = (
 BETA_MIN_DEFAULT = 1e-3
 SLIDE_NEEDS_REDUCED = ('"slide" needs formulation = "reduced" (the sliding mode is derived in the '
                        'null-space form only)')
+
+FLY_NEEDS_ANGLE_RATES = '"fly" needs speeds = "angle_rates" (the flight mode is derived in the angle rates)'
 
 
 def touchdown_lean(k_diam: float, k_axial: float) -> float:
@@ -169,6 +171,8 @@ def build_model(wheel: dict[str, float] | None = None,
         raise ValueError(f"contact_forces on_lift_off: {conflict}")
     if effects.get("contact_forces", {}).get("on_slip") == "slide" and formulation != "reduced":
         raise ValueError(f"contact_forces on_slip: {SLIDE_NEEDS_REDUCED}")
+    if effects.get("contact_forces", {}).get("on_lift_off") == "fly" and speeds != "angle_rates":
+        raise ValueError(f"contact_forces on_lift_off: {FLY_NEEDS_ANGLE_RATES}")
     ctx = base_context(wheel or {})
     for effect_name, effect_cls in CATALOGUE.items():
         if effect_name in effects:
@@ -316,7 +320,7 @@ class _Assembler:
         tau_driven = system.driven_forces()
         P_act = P_act + ca.dot(tau_driven, qd_driven) if self.driven else P_act
         bind = self.binder(qd_all, qdd_all, T, V, P_diss, P_act, x_sol, len(unknowns), ctx.uses_Fn)
-        sl = ctx.sliding
+        sl, fl = ctx.sliding, ctx.flight
         if sl is None:
             ctx.late_values = {"Fc": bind(Fc)}
             ode_mech = bind(ode_mech)
@@ -329,14 +333,22 @@ class _Assembler:
             tau_driven = ca.if_else(sl.mode.sym < 0.5, bind_r(tau_driven), bind_s(tau_s)) if self.driven \
                 else tau_driven
             ctx.late_values = {"Fc": Fc}  # bound per mode by bind
+        if fl is not None:  # a third mode, flight (model/contact_flight.py): no contact force there
+            flight = contact_flight.Flight(ctx, x)
+            bind = contact_modes.merged(sl.mode.sym, bind, flight.bind, 1.5)  # flight above 1.5
+            ctx.late_values = {"Fc": ca.if_else(sl.mode.sym < 1.5, Fc, ca.SX.zeros(3))}
         self.bind = bind
         derivs = [bind(st.derivative) for st in ctx.states]
         ode = ca.vertcat(ode_mech, *derivs)
+        if fl is not None:
+            ode = ca.if_else(sl.mode.sym < 1.5, ode, flight.ode(x.numel() - len(ctx.states)))
         for row, stuck in stuck_rate_rows(ctx.stick_slip, x, bind).items():
             ode[row] = (1 - stuck) * ode[row]  # a stuck rate that is a state stays exactly 0
         init = self._started(init, x, bind)
         if sl is not None:
             init = contact_modes.contact_init(ctx, x, init, bind_r, s_by_name)
+        if fl is not None:
+            init = contact_flight.flight_init(ctx, x, init, s_by_name)
 
         by_name = {qq.name: qq for qq in starts}
         velocity_source = "from the rolling constraint" + (" while rolling, free while sliding" if sl else "")
@@ -359,12 +371,24 @@ class _Assembler:
         outputs += [(qq, bind(e)) for qq, e in extra_outputs]  # lambda holds driven placeholders
         if sl is not None:
             outputs += contact_modes.contact_outputs(ctx, bind_s, by_name)
+        if fl is not None:
+            outputs += contact_flight.flight_outputs(ctx, flight, by_name)
+            # z and the energy: the free body's in flight (z = R sin(beta) and its T, V are the contact's)
+            flying = sl.mode.sym > 1.5
+            for qq, _ in outputs:
+                if qq.name == "contact_mode":
+                    qq.description = "contact mode: 0 rolling, 1 sliding, 2 flight"
+            outputs = [(qq, ca.if_else(flying, fl.z.sym, e) if qq.name == "z" else
+                        ca.if_else(flying, flight.T + flight.V, e) if qq.name == "energy" else e)
+                       for qq, e in outputs]
 
         fallen = Quantity("fallen", "", "true once the wheel has fallen flat (beta <= beta_min or >= pi - beta_min)")
         events = [Event("fall", ca.sin(self.q[3]) - ca.sin(P["beta_min"]), "terminate", fallen)]
         events += [Event(n, bind(self._late(e)), a, f) for n, e, a, f in ctx.events]
         if sl is not None:
             events.append(contact_modes.contact_event(ctx, x, bind_r, bind_s, Fc, T, speed_rows))
+        if fl is not None:
+            events.append(contact_flight.flight_event(ctx, x, bind_r, bind_s, flight, Fc))
         n_mech = x.numel() - len(ctx.states)
         for law in ctx.stick_slip:
             mode_row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)
@@ -372,7 +396,7 @@ class _Assembler:
                                 "sliding again or turned back)")
             events.append(Event(f"{law.name}_stiction", bind(law.indicator()), "update", switched,
                                 law_update(law, x, bind, mode_row, speed_rows, speeds_now, to_state)))
-        if ctx.uses_Fn and not any(ev.name == "lift_off" for ev in events):
+        if ctx.uses_Fn and fl is None and not any(ev.name == "lift_off" for ev in events):
             # load-proportional laws (rolling resistance, pivot friction) would push, not resist,
             # with F_n < 0: the model ends there, so stop and say so (lift_off_conflict refuses any
             # other on_lift_off policy for these laws)
@@ -384,6 +408,11 @@ class _Assembler:
         ctx.check(math.pi - beta0, "beta (initial lean) must be < pi")
         ctx.check(ca.sin(beta0) - ca.sin(P["beta_min"]),
                   "initial lean beta must lie between beta_min and pi - beta_min (the wheel is already flat)")
+        if fl is not None:  # the flight start values' checks (contact_flight.declare_flight) in s
+            syms = ca.vertcat(*[sym for _, sym in ctx.extra_starts])
+            vals = ca.vertcat(*[s_by_name[qq.name] for qq, _ in ctx.extra_starts])
+            for ch in ctx.checks:
+                ch.expr = ca.substitute(ch.expr, syms, vals)
         p = ca.vertcat(*[P[qq.name] for qq in ctx.parameters])
         # absolute tolerances scale with the wheel: positions with R, rates with sqrt(g/R),
         # energies with M g R (angles and effect states of order 1 keep 1)
@@ -396,7 +425,8 @@ class _Assembler:
             inputs=[qq for qq, _ in ctx.inputs], p=p, parameters=ctx.parameters,
             init=init, ode=ode, outputs=outputs, events=events, checks=ctx.checks, nominal=nominal,
             effects=effect_names, force_kinds=sorted({f.kind for f in ctx.forces}), formulation=self.formulation,
-            about=WHEEL_ABOUT.format(self.formulation) + (contact_modes.ABOUT if sl else ""))
+            about=WHEEL_ABOUT.format(self.formulation) + (contact_modes.ABOUT if sl else "")
+            + (contact_flight.ABOUT if fl else ""))
 
     def binder(self, qd_all, qdd_all, T, V, P_diss, P_act, x_sol, n_unknowns: int, uses_Fn: bool):
         """bind(expr): placeholders (rates, accelerations, late T, V, powers, driven values, F_n, holding

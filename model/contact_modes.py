@@ -103,7 +103,7 @@ def velocity_scale(ctx: WheelContext) -> ca.SX:
     return ctx.par["R"] * ctx.natural_rate() + norm(ctx.kin.centre_velocity)
 
 
-def _unit(v: ca.SX) -> ca.SX:
+def unit_vector(v: ca.SX) -> ca.SX:
     """v / |v|, 0 at v = 0 (no NaN)."""
     return v / ca.sqrt(ca.dot(v, v) + 1e-300)
 
@@ -142,21 +142,22 @@ def declare_sliding(ctx: WheelContext, mu: ca.SX, mu_k: ca.SX) -> SlidingContact
     ctx.extra_starts += list(zip(starts, syms))
     sl = SlidingContact(mu, mu_k, vx, vy, mode, dx, dy, syms[0], syms[1])
     v_slip = slip_velocity(ctx)
-    e = _unit(v_slip + SLIP_SEED * velocity_scale(ctx) * sl.direction)
+    e = unit_vector(v_slip + SLIP_SEED * velocity_scale(ctx) * sl.direction)
     ctx.forces.append(Force(-mu_k * ctx.Fn * e, v_slip, "dissipative", False, SLIDING))
     ctx.sliding = sl
     return sl
 
 
-def merged(mode: ca.SX, bind_r: Callable, bind_s: Callable) -> Callable:
-    """bind for both modes: each element the rolling binding while mode < 0.5, else the sliding
-    one (one expression where both agree)."""
+def merged(mode: ca.SX, bind_r: Callable, bind_s: Callable, split: float = 0.5) -> Callable:
+    """bind for both modes: each element bind_r's while mode < split, else bind_s's (one expression
+    where both agree). split 0.5: rolling below, sliding above; model/contact_flight.py merges the
+    contact modes with flight at 1.5."""
     def bind(expr):
         a, b = bind_r(expr), bind_s(expr)
         out = ca.SX(a)
         for i in range(a.numel()):
             if not ca.is_equal(a[i], b[i], 8):
-                out[i] = ca.if_else(mode < 0.5, a[i], b[i])
+                out[i] = ca.if_else(mode < split, a[i], b[i])
         return out
     return bind
 
@@ -191,7 +192,8 @@ def sliding_equations(asm, T: ca.SX, V: ca.SX, Fc: ca.SX, conditions, S: ca.SX, 
     return bind_s, ca.vertcat(qd_all[:nf], v_dot[2:]), tau
 
 
-def _rows(x: ca.SX, states: list[State]) -> list[int]:
+def state_rows(x: ca.SX, states: list[State]) -> list[int]:
+    """The rows of x holding the given states' symbols."""
     return [next(j for j in range(x.numel()) if ca.is_equal(x[j], st.sym)) for st in states]
 
 
@@ -205,7 +207,7 @@ def contact_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callabl
     plastic tangential impact at the contact point, dv = -M^-1 J^T (J M^-1 J^T)^-1 v_slip (M the
     sliding speeds' mass matrix, J = d v_slip / d speeds)."""
     sl = ctx.sliding
-    r_vx, r_vy, r_mode, r_dx, r_dy = _rows(x, sl.states)
+    r_vx, r_vy, r_mode, r_dx, r_dy = state_rows(x, sl.states)
     mode, d = sl.mode.sym, sl.direction
     Fc_r = bind_r(Fc)
     F_t = Fc_r[0:2]
@@ -217,7 +219,7 @@ def contact_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callabl
     vc_r = bind_r(ctx.qd[0:2])
     x_r = ca.SX(x)
     x_r[r_vx], x_r[r_vy], x_r[r_mode] = vc_r[0], vc_r[1], SLIDING
-    onset = -_unit(F_t)
+    onset = -unit_vector(F_t)
     x_r[r_dx], x_r[r_dy] = onset[0], onset[1]
 
     # sliding, d . v_slip = 0: the impulse that stops the residual slip, in the sliding speeds
@@ -238,7 +240,7 @@ def contact_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callabl
                          norm(v_slip) <= SLIP_ZERO * bind_s(velocity_scale(ctx)))
     # sliding on: d along the slip itself (no projection), or, at a slip of exactly 0, where it starts
     x_on = ca.SX(x)
-    turned = ca.if_else(ca.dot(v_slip, v_slip) > 0, _unit(v_slip), ca.substitute(onset, x, x_p))
+    turned = ca.if_else(ca.dot(v_slip, v_slip) > 0, unit_vector(v_slip), ca.substitute(onset, x, x_p))
     x_on[r_dx], x_on[r_dy] = turned[0], turned[1]
     x_s = ca.if_else(holds, x_p, x_on)
     lost = [j for j, st in enumerate(ctx.states) if st.quantity.name == "dissipated_energy"]
@@ -255,7 +257,7 @@ def contact_init(ctx: WheelContext, x: ca.SX, init: ca.SX, bind_r: Callable, s_b
     the centre velocity the rolling one plus the start slip (slip_long, slip_lat turned from heading
     to ground axes, m/s), sliding iff that slip is non-zero, d along it."""
     sl = ctx.sliding
-    r_vx, r_vy, r_mode, r_dx, r_dy = _rows(x, sl.states)
+    r_vx, r_vy, r_mode, r_dx, r_dy = state_rows(x, sl.states)
     init = ca.SX(init)
     vc = ca.substitute(bind_r(ctx.qd[0:2]), x, init)
     s_long, s_lat = s_by_name["slip_long"], s_by_name["slip_lat"]
@@ -263,7 +265,7 @@ def contact_init(ctx: WheelContext, x: ca.SX, init: ca.SX, bind_r: Callable, s_b
     slip = ca.vertcat(s_long * ca.cos(a) - s_lat * ca.sin(a), s_long * ca.sin(a) + s_lat * ca.cos(a))
     init[r_vx], init[r_vy] = vc[0] + slip[0], vc[1] + slip[1]
     init[r_mode] = ca.if_else(ca.dot(slip, slip) > 0, SLIDING, ROLLING)
-    d = _unit(slip)
+    d = unit_vector(slip)
     init[r_dx], init[r_dy] = d[0], d[1]
     return init
 

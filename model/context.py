@@ -157,6 +157,7 @@ class WheelContext:
     late: dict = field(default_factory=lambda: {n: ca.SX.sym(n + "_late") for n in ("T", "V", "P_diss", "P_act")})
     late_values: dict = field(default_factory=dict)
     sliding: object = None  # gyrowheel.model.contact_modes.SlidingContact when the wheel may slide
+    flight: object = None  # gyrowheel.model.contact_flight.FlightContact when the wheel may fly
     extra_starts: list[tuple[Quantity, ca.SX]] = field(default_factory=list)  # start values used by init only
 
     def coordinate(self, name: str, free: bool = True, rate=None, accel=None, value=None,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ctypes
 import itertools
+import re
 import shutil
 import weakref
 from ctypes import byref
@@ -184,3 +185,35 @@ class Model(StateVector, _Instance):
         z = np.zeros(self.nz)
         self.fmu2.getEventIndicators(self._ptr(z), self.nz)
         return z
+
+
+def simulate_logged(fmu: str | Path, stop: float, dt: float, output: list[str], start: dict):
+    """fmpy's simulate_fmu (Co-Simulation) with the FMU's debug log parsed for its events:
+    (result, [(event name, t)]), in the order the runtime reported them."""
+    from fmpy import simulate_fmu
+    logs: list[str] = []
+
+    def logger(*args):
+        text = args[-1]
+        logs.append(text.decode() if isinstance(text, bytes) else str(text))
+    r = simulate_fmu(str(fmu), stop_time=stop, output_interval=dt, start_values=start, debug_logging=True,
+                     logger=logger, output=output)
+    events = [(m.group(1), float(m.group(2))) for line in logs
+              for m in [re.search(r"event (\w+) at t=(\S+?):? ", line + " ")] if m]
+    return r, events
+
+
+def replayed(slave: "Slave", t0: float, dt: float, steps: int, names: tuple[str, ...]):
+    """Save the FMU state at t0, step on `steps` times by dt reading `names`, restore the state and
+    step again: (first run, second run), lists of the values after each step."""
+    state = slave.slave.getFMUState()
+    runs = []
+    for _ in range(2):
+        slave.slave.setFMUState(state)
+        out = []
+        for k in range(steps):
+            slave.slave.doStep(t0 + dt * k, dt)
+            out.append(slave.get(*names))
+        runs.append(out)
+    slave.slave.freeFMUState(state)
+    return runs[0], runs[1]

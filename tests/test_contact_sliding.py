@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from fmi_helpers import Slave
+from fmi_helpers import Slave, simulate_logged
 from gyrowheel.fmu_build import build_fmu, parse_scene
 from gyrowheel.fmu_build.scene import SceneError
 from paper_wheel import G, KA, M, R
@@ -46,16 +46,7 @@ def fmu(tmp_path_factory):
 
 def run(fmu, stop, dt=0.01, **start):
     """simulate_fmu with the FMU's event messages: (result, [(event name, t)])."""
-    logs: list[str] = []
-
-    def logger(*args):
-        text = args[-1]
-        logs.append(text.decode() if isinstance(text, bytes) else str(text))
-    r = simulate_fmu(fmu, stop_time=stop, output_interval=dt, start_values={**TIGHT, **start},
-                     debug_logging=True, logger=logger, output=OUT)
-    events = [(m.group(1), float(m.group(2))) for line in logs
-              for m in [re.search(r"event (\w+) at t=(\S+?):? ", line + " ")] if m]
-    return r, events
+    return simulate_logged(fmu, stop, dt, OUT, {**TIGHT, **start})
 
 
 def slip_rate(mu_k: float) -> float:

@@ -8,22 +8,26 @@ lateral F_lat (in the ground plane, to the left of the heading), and the frictio
 Events: lift-off (F_n reaches 0) and slip (|F_t| reaches mu F_n), each "terminate",
 "warn" or "ignore" (no event, no flag); rolling without slip and point contact stop being
 valid there. A load-proportional law cannot go on past lift-off: with one, on_lift_off must be
-"terminate" (gyrowheel.model.effects.lift_off_conflict; the scene reader refuses the others).
+"terminate" or "fly" (gyrowheel.model.effects.lift_off_conflict; the scene reader refuses the others).
 on_slip = "slide": the wheel slides past the slip instead (model/contact_modes.py): a second contact
 mode with Coulomb friction mu_k F_n at the contact, the switches located state events; start values
 slip_long, slip_lat; outputs contact_mode, slip_long, slip_lat.
+on_lift_off = "fly" (with on_slip = "slide" only: a landing wheel may slide): the wheel leaves the
+ground where F_n reaches 0 and lands with an impact (model/contact_flight.py); parameter
+restitution, start values height, vz; outputs height, vz, impact_impulse.
 """
 from __future__ import annotations
 
 import casadi as ca
 
+from gyrowheel.model.contact_flight import declare_flight
 from gyrowheel.model.contact_modes import declare_sliding
 from gyrowheel.model.context import WheelContext
 from gyrowheel.model.effects.base import Effect
 from gyrowheel.model.kinematics import norm
 from gyrowheel.model.spec import Quantity
 
-ACTIONS = ("terminate", "warn", "ignore")
+ACTIONS = ("terminate", "warn", "ignore", "fly")
 SLIP_ACTIONS = ("warn", "terminate", "ignore", "slide")
 
 
@@ -35,12 +39,18 @@ class ContactForces(Effect):
     def parameters(cls) -> list[Quantity]:
         return [Quantity("mu", "1", "friction coefficient for the slip check", 0.8, minimum=0.0),
                 Quantity("mu_k", "1", "kinetic friction coefficient while sliding (on_slip = \"slide\"; "
-                         "start value: the scene's mu when not given; <= mu)", 0.8, minimum=0.0)]
+                         "start value: the scene's mu when not given; <= mu)", 0.8, minimum=0.0),
+                Quantity("restitution", "1", "Newton's coefficient of restitution at touchdown (on_lift_off = "
+                         "\"fly\"): normal rebound speed / impact speed", 0.0, minimum=0.0, maximum=1.0)]
 
     @classmethod
     def starts(cls) -> list[Quantity]:
         return [Quantity("slip_long", "m/s", "slip velocity of the contact point along the heading", 0.0),
-                Quantity("slip_lat", "m/s", "slip velocity of the contact point across the heading (left)", 0.0)]
+                Quantity("slip_lat", "m/s", "slip velocity of the contact point across the heading (left)", 0.0),
+                Quantity("height", "m", "height of the lowest rim point above the ground (on_lift_off = \"fly\"; "
+                         "> 0 starts the wheel in flight)", 0.0),
+                Quantity("vz", "m/s", "vertical velocity of the centre at the start (on_lift_off = \"fly\", "
+                         "in flight only: height > 0)", 0.0)]
 
     @classmethod
     def choices(cls) -> dict[str, tuple[str, ...]]:
@@ -52,9 +62,14 @@ class ContactForces(Effect):
         slide = options.get("on_slip") == "slide"
         if "mu_k" in options and not slide:
             return "mu_k", 'is the kinetic friction of on_slip = "slide"; remove it or set on_slip = "slide"'
-        if slide and options.get("on_lift_off", ACTIONS[0]) != "terminate":
-            return "on_lift_off", ('must be "terminate" with on_slip = "slide": sliding friction, proportional '
-                                   'to the normal force, would push once F_n < 0')
+        fly = options.get("on_lift_off") == "fly"
+        if fly and not slide:
+            return "on_lift_off", '"fly" needs on_slip = "slide" (a wheel that lands may slide)'
+        if "restitution" in options and not fly:
+            return "restitution", 'is the touchdown\'s restitution of on_lift_off = "fly"; remove it or set it'
+        if slide and options.get("on_lift_off", ACTIONS[0]) not in ("terminate", "fly"):
+            return "on_lift_off", ('must be "terminate" or "fly" with on_slip = "slide": sliding friction, '
+                                   'proportional to the normal force, would push once F_n < 0')
         mu = options.get("mu", cls.parameters()[0].start)
         if slide and options.get("mu_k", mu) > mu:
             return "mu_k", f"must be <= mu (kinetic friction does not exceed static), got {options['mu_k']!r} > {mu!r}"
@@ -68,6 +83,9 @@ class ContactForces(Effect):
             self.options["_no_mu_k"] = True
         elif "mu_k" not in self.options:  # mu_k defaults to the scene's mu
             self.options["mu_k"] = self.options.get("mu", self.parameters()[0].start)
+        lift = self.choice("on_lift_off")
+        if lift != "fly":
+            self.options["_no_restitution"] = True
         p = self.declare(ctx)
         F = ctx.Fc
         a = ctx.q[2]
@@ -80,13 +98,14 @@ class ContactForces(Effect):
         ctx.output(Quantity("F_lat", "N", "contact force across the heading (to the left)"), F_lat)
         ctx.output(Quantity("friction_use", "1", "|F_t| / F_n, the friction coefficient needed (-1: F_n <= 0)"),
                    ca.if_else(F_n > 0, F_t / F_n, -1))
-        lift = self.choice("on_lift_off")
-        if lift != "ignore":
+        if lift not in ("ignore", "fly"):
             ctx.events.append(("lift_off", F_n, lift,
                                Quantity("lifted_off", "", "true once the normal force has reached zero")))
         if slip == "slide":
             ctx.check_true(p["mu_k"] <= p["mu"], "mu_k must be <= mu (kinetic friction does not exceed static)")
             declare_sliding(ctx, p["mu"], p["mu_k"])
+            if lift == "fly":
+                declare_flight(ctx, p["restitution"])
         elif slip != "ignore":
             ctx.events.append(("slip", p["mu"] * F_n - F_t, slip,
                                Quantity("slipping", "", "true once the friction needed has exceeded mu")))

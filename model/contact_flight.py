@@ -1,0 +1,255 @@
+"""Flight: the wheel leaves the ground where F_n reaches 0 and lands with an impact (mode 2 of
+model/contact_modes.py; docs/effects.md, "Flight").
+
+In flight the wheel is a free rigid body under gravity, coordinates (x, y, z, alpha, beta, gamma)
+and speeds (x_dot, y_dot, z_dot, alpha_dot, beta_dot, gamma_dot), its equations those of
+model/flight.py (the same Lagrangian with the centre's height free). The hybrid state gains three
+local states: `z_centre`, `z_dot` (the centre's height and vertical velocity; in rolling and sliding
+their derivatives are those of z = R sin(beta), so they follow the holonomic contact, and every
+entry to a contact mode sets them from it exactly) and `last_impulse` (N s, the normal impulse of
+the last touchdown, zero derivative).
+
+One event, `contact_flight` (action "update"), switches both ways; its indicator is
+    rolling, sliding:  F_n of the mode        (lift-off where it reaches 0)
+    flight:            h + sqrt(R/g) max(u_n, 0)  (touchdown where h = z - R sin(beta) reaches 0
+                                                  moving down: u_n = dh/dt the contact point's
+                                                  vertical velocity; positive while it rises)
+The update:
+- lift-off: velocities continuous (x_dot, y_dot the mode's centre velocity, z_dot = R cos(beta)
+  beta_dot), z = R sin(beta); the flight indicator is then h = 0 (>= 0), rising (the free body's
+  contact point accelerates away from the ground once the constraint would have to pull);
+- touchdown: the impulse of model/impact.py on the Delassus matrix W = J M^-1 J^T (M the flight
+  speeds' mass matrix, the Hessian of T; J = d u / d w, u the contact point's velocity, rows x, y,
+  z) with mu the static coefficient, e = restitution and v_rest = V_REST sqrt(g R): a slower
+  rebound becomes a persistent contact, which ends a bouncing wheel's series of impacts. After it:
+  flight again if the contact point leaves (u_n+ > 0); else rolling if it stopped tangentially
+  and rolling holds there (the contact_slip indicator > 0 and F_n > 0), else sliding (d along the
+  slip, or -F_t where it is 0) if F_n > 0 in sliding, else flight (the constraint would pull).
+  z, z_dot are set from the constraint; the impact's energy loss -dT (>= 0) is added to
+  dissipated_energy; impact_impulse = P_n.
+Stiction laws (rolling_resistance, spin_friction: limits c F_n) do nothing in flight (F_n = 0, their
+holding forces 0); the lift-off leaves them sliding with their rate's sign (a stuck law would
+freeze its rate, stiction.stuck_rate_rows), the touchdown sets m = sign(rate) as at the start.
+After every update the indicator of the new mode is >= 0 (F_n > 0 is tested before a contact mode
+is chosen; h = 0 after a lift-off or a bounce, and the bounce's u_n > 0).
+Rolling reaches F_n = 0 with the friction it needs, |F_t|, still finite in general, so the friction
+limit mu F_n is met first: a wheel leaves the ground from sliding (rolling -> sliding -> flight,
+each switch located); rolling -> flight directly only where F_t vanishes with F_n.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import casadi as ca
+
+from gyrowheel.model.contact_modes import state_rows, unit_vector
+from gyrowheel.model.context import BREAKAWAY, State, WheelContext
+from gyrowheel.model.flight import flight_equations
+from gyrowheel.model.impact import generalised_impact
+from gyrowheel.model.kinematics import norm
+from gyrowheel.model.spec import Event, Quantity
+
+ROLLING, SLIDING, FLIGHT = 0, 1, 2
+V_REST = 1e-3  # rebound speeds below V_REST sqrt(g R) end in a persistent contact
+ABOUT = (" With on_lift_off = \"fly\" the wheel leaves the ground where the normal force reaches 0 and flies "
+         "as a free rigid body under gravity; at touchdown an impact (Newton's restitution, Coulomb's limit, "
+         "never creating energy) lands it rolling or sliding or bounces it (event contact_flight; outputs "
+         "height, vz, impact_impulse; contact_mode 2 in flight).")
+
+
+@dataclass
+class FlightContact:
+    """What contact_forces declares for on_lift_off = "fly": the restitution parameter, the local
+    states z_centre (m), z_dot (m/s), impact_impulse (N s) and the start values' symbols."""
+
+    e: ca.SX
+    z: State
+    vz: State
+    impulse: State
+    height0: ca.SX
+    vz0: ca.SX
+
+    @property
+    def states(self) -> list[State]:
+        return [self.z, self.vz, self.impulse]
+
+
+def declare_flight(ctx: WheelContext, restitution: ca.SX) -> FlightContact:
+    """Add the flight mode's states and start values to ctx (after declare_sliding); return it
+    (also as ctx.flight). restitution: the parameter symbol (1, 0..1)."""
+    kin, R = ctx.kin, ctx.par["R"]
+    rate = ctx.natural_rate()
+
+    def local(name, unit, text, nominal):
+        st = State(Quantity(name, unit, text), ca.SX.sym(name), ca.SX(0), output=False,
+                   nominal=nominal, start_expr=ca.SX(0))  # init: set by flight_init
+        ctx.states.append(st)
+        return st
+
+    z = local("z_centre", "m", "centre height (free in flight, R sin(beta) in contact)", R)
+    vz = local("z_dot", "m/s", "centre vertical velocity (free in flight, from the contact in contact)", R * rate)
+    imp = local("last_impulse", "N.s", "normal impulse of the last touchdown", ctx.par["M"] * R * rate)
+    z.derivative = kin.centre_velocity[2]  # d/dt R sin(beta): follows the contact
+    vz.derivative = ctx.acceleration(kin.centre)[2]
+    starts = [Quantity("height", "m", "height of the lowest rim point above the ground; > 0 at the start: "
+                       "the wheel starts in flight", 0.0),
+              Quantity("vz", "m/s", "vertical velocity of the centre (a start value in flight only)", 0.0)]
+    syms = [ca.SX.sym(q.name + "_0") for q in starts]
+    ctx.extra_starts += list(zip(starts, syms))
+    ctx.check_true(ca.logic_and(restitution >= 0, restitution <= 1), "restitution must lie in 0..1")
+    ctx.check_true(syms[0] >= 0, "height must be >= 0 (the lowest rim point cannot start below the ground)")
+    ctx.check_true(ca.logic_or(syms[0] > 0, syms[1] == 0),
+                   "vz must be 0 unless height > 0 (in contact the centre's vertical velocity follows the lean rate)")
+    fl = FlightContact(restitution, z, vz, imp, syms[0], syms[1])
+    ctx.flight = fl
+    return fl
+
+
+class Flight:
+    """The flight mode's equations in the hybrid state x (nx): speeds, binder, ode rows."""
+
+    def __init__(self, ctx: WheelContext, x: ca.SX):
+        sl, fl, P = ctx.sliding, ctx.flight, ctx.par
+        self.ctx, self.x = ctx, x
+        q = ctx.q  # x, y, alpha, beta, gamma (state symbols)
+        rates = ctx.qd[2:5]  # alpha_dot, beta_dot, gamma_dot: state symbols (angle-rate speeds)
+        self.qf = ca.vertcat(q[0], q[1], fl.z.sym, q[2], q[3], q[4])
+        self.wf = ca.vertcat(sl.vx.sym, sl.vy.sym, fl.vz.sym, rates)
+        self.g = ctx.gravity_magnitude()
+        eq = flight_equations()
+        pf = ca.vertcat(P["M"], P["R"], P["k_diam"], P["k_axial"], self.g)
+        qdd, energy, *_ = eq.function()(self.qf, self.wf, pf)
+        self.qdd = qdd
+        self.V = P["M"] * self.g * fl.z.sym
+        self.T = energy - self.V
+        self.height = fl.z.sym - P["R"] * ca.sin(q[3])
+
+    def bind(self, expr: ca.SX) -> ca.SX:
+        """Placeholders -> the flight mode's expressions: rates, accelerations, T, V, no power,
+        F_n = 0 (the contact force is 0 in flight)."""
+        ctx = self.ctx
+        holds = [law.hold for law in ctx.stick_slip]  # the stiction laws' holding forces: 0 (their limit is)
+        ph = ca.vertcat(ctx.qd[0:2], ctx.qdd, ctx.late["T"], ctx.late["V"], ctx.late["P_diss"],
+                        ctx.late["P_act"], ctx.Fn, ctx.Fc, *holds)
+        val = ca.vertcat(self.wf[0:2], 0, 0, self.qdd[3:6], self.T, self.V, 0, 0, 0, ca.SX.zeros(3),
+                         ca.SX.zeros(len(holds)))
+        expr = ca.SX(expr)
+        for _ in range(4):
+            if not ca.depends_on(ca.vec(expr), ph):
+                break
+            expr = ca.substitute(expr, ph, val)
+        return expr
+
+    def ode(self, n_mech: int) -> ca.SX:
+        """x_dot in flight (nx): the coordinates' rates, the angle accelerations (model/flight.py),
+        x_dot, y_dot constant, z_centre' = z_dot, z_dot' = -g, every other state constant."""
+        ctx, fl = self.ctx, self.ctx.flight
+        out = ca.SX.zeros(self.x.numel())
+        out[0:5] = ca.vertcat(self.wf[0:2], self.wf[3:6])
+        out[5:8] = self.qdd[3:6]
+        rows = {id(st): n_mech + i for i, st in enumerate(ctx.states)}
+        out[rows[id(fl.z)]] = fl.vz.sym
+        out[rows[id(fl.vz)]] = self.qdd[2]
+        return out
+
+
+def flight_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable, flight: Flight,
+                 Fc: ca.SX) -> Event:
+    """The event contact_flight (module docstring): indicator and update, expressions of (t, x, u, p).
+
+    x: the hybrid state (nx); bind_r, bind_s: the rolling and sliding bindings; flight: the flight
+    mode's equations; Fc: the contact force (3, N) in placeholders."""
+    sl, fl, P = ctx.sliding, ctx.flight, ctx.par
+    r_vx, r_vy, r_mode, r_dx, r_dy = state_rows(x, sl.states)
+    r_z, r_vz, r_imp = state_rows(x, fl.states)
+    mode = sl.mode.sym
+    R, beta = P["R"], ctx.q[3]
+    Fn_r, Fn_s = bind_r(Fc)[2], bind_s(Fc)[2]
+    # flight: h + tau max(u_n, 0) (u_n = dh/dt, the contact point's vertical velocity; tau = sqrt(R/g)):
+    # h itself where the wheel comes down, positive once it rises (after a bounce, and at once after
+    # a lift-off, where h = 0 and u_n = 0 to rounding), so only a descent reaches 0
+    omega = ctx.kin.omega  # in alpha, beta and the angle rates (state symbols)
+    u = flight.wf[0:3] + ca.cross(omega, R * ctx.kin.l)  # the contact point's velocity (eq. 14)
+    tau = 1 / ctx.natural_rate()
+    indicator = ca.if_else(mode < 0.5, Fn_r, ca.if_else(mode < 1.5, Fn_s,
+                                                        flight.height + tau * ca.fmax(u[2], 0)))
+    z_c, vz_c = R * ca.sin(beta), R * ca.cos(beta) * ctx.qd[3]  # the contact's z, z_dot (beta_dot a state)
+
+    # lift-off: velocities continuous, z on the constraint
+    x_l = ca.SX(x)
+    vc_r = bind_r(ctx.qd[0:2])
+    x_l[r_vx] = ca.if_else(mode < 0.5, vc_r[0], x[r_vx])
+    x_l[r_vy] = ca.if_else(mode < 0.5, vc_r[1], x[r_vy])
+    x_l[r_z], x_l[r_vz], x_l[r_mode] = z_c, vz_c, FLIGHT
+
+    # touchdown: the impact in the flight speeds w
+    rows_w = [r_vx, r_vy, r_vz, 5, 6, 7]  # (x_dot, y_dot, z_dot, alpha_dot, beta_dot, gamma_dot)
+    w = flight.wf
+    M_w = ca.hessian(flight.T, w)[0]
+    J = ca.jacobian(u, w)
+    v_rest = V_REST * R * ctx.natural_rate()
+    w_plus, res = generalised_impact(M_w, J, w, fl.e, sl.mu, v_rest)
+    x_b = ca.SX(x)  # the state just after the impulse, still flying
+    x_b[rows_w] = w_plus
+    x_b[r_imp] = res.P[2]
+    lost = [j for j, st in enumerate(ctx.states) if st.quantity.name == "dissipated_energy"]
+    if lost:
+        row = x.numel() - len(ctx.states) + lost[0]
+        x_b[row] = x[row] - res.dT
+    on = ca.SX(x_b)  # on the constraint
+    on[r_z], on[r_vz] = z_c, ca.substitute(vz_c, x, x_b)
+    x_roll = ca.SX(on)
+    x_roll[r_mode] = ROLLING
+    vc = ca.substitute(vc_r, x, x_roll)
+    x_roll[r_vx], x_roll[r_vy] = vc[0], vc[1]
+    F_t = bind_r(Fc)[0:2]
+    g_roll = sl.mu * Fn_r * (1 + BREAKAWAY) - norm(F_t)
+    rolls = ca.logic_and(res.sticking, ca.logic_and(ca.substitute(g_roll, x, x_roll) > 0,
+                                                      ca.substitute(Fn_r, x, x_roll) > 0))
+    x_slide = ca.SX(on)
+    x_slide[r_mode] = SLIDING
+    v_slip = ca.substitute(u[0:2], x, x_b)
+    d = ca.if_else(ca.dot(v_slip, v_slip) > 0, unit_vector(v_slip), ca.substitute(-unit_vector(F_t), x, x_roll))
+    x_slide[r_dx], x_slide[r_dy] = d[0], d[1]
+    slides = ca.substitute(Fn_s, x, x_slide) > 0
+    bounces = res.u_plus[2] > 0
+    x_t = ca.if_else(bounces, x_b, ca.if_else(rolls, x_roll, ca.if_else(slides, x_slide, x_b)))
+    # stiction laws (rolling_resistance, spin_friction; limits c F_n): sliding with the rate's sign
+    # in flight, where the limit is 0 (a stuck law would freeze its rate: stiction.stuck_rate_rows);
+    # on landing m = sign(r), as at the start, 0 (stuck) for a rate of exactly 0
+    n_mech = x.numel() - len(ctx.states)
+    for law in ctx.stick_slip:
+        row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)
+        r_l = ca.substitute(flight.bind(law.rate), x, x_l)
+        x_l[row] = ca.if_else(r_l >= 0, 1, -1)
+        r_t = ca.substitute(flight.bind(law.rate), x, x_t)
+        x_t[row] = ca.if_else(x_t[r_mode] > 1.5, ca.if_else(r_t >= 0, 1, -1), ca.sign(r_t))
+    update = ca.if_else(mode < 1.5, x_l, x_t)
+    flag = Quantity("contact_flown", "", "true once the wheel has left the ground or landed")
+    return Event("contact_flight", indicator, "update", flag, update)
+
+
+def flight_init(ctx: WheelContext, x: ca.SX, init: ca.SX, s_by_name: dict) -> ca.SX:
+    """init (nx) with z_centre, z_dot filled in: on the contact (z = R sin(beta), z_dot = R cos(beta)
+    beta_dot) at height 0, else z = R sin(beta) + height, z_dot = vz and the mode flight."""
+    sl, fl, R = ctx.sliding, ctx.flight, ctx.par["R"]
+    r_mode = state_rows(x, [sl.mode])[0]
+    r_z, r_vz, _ = state_rows(x, fl.states)
+    init = ca.SX(init)
+    beta, beta_dot = init[3], init[6]
+    height, vz = s_by_name["height"], s_by_name["vz"]
+    flying = height > 0
+    init[r_z] = R * ca.sin(beta) + height
+    init[r_vz] = ca.if_else(flying, vz, R * ca.cos(beta) * beta_dot)
+    init[r_mode] = ca.if_else(flying, FLIGHT, init[r_mode])
+    return init
+
+
+def flight_outputs(ctx: WheelContext, flight: Flight, by_name: dict) -> list[tuple[Quantity, ca.SX]]:
+    """height (m, 0 in contact), vz (m/s; R cos(beta) beta_dot in contact, exactly) and impact_impulse (N s), height and vz being the start
+    values' variables."""
+    fl, mode = ctx.flight, ctx.sliding.mode.sym
+    return [(by_name["height"], ca.if_else(mode > 1.5, flight.height, 0)),
+            (by_name["vz"], ca.if_else(mode > 1.5, fl.vz.sym, ctx.par["R"] * ca.cos(ctx.q[3]) * ctx.qd[3])),
+            (Quantity("impact_impulse", "N.s", "normal impulse of the last touchdown (0 before any)"), fl.impulse.sym)]

@@ -88,6 +88,13 @@ static gw_variable gw_fmi3_element(const gw_array *a, int k) {
     return v;
 }
 
+/* the refusal of an array variable's reference where only a scalar of another type fits */
+static void gw_fmi3_refuse_array(gw_instance *I, const char *fn, fmi3ValueReference vr,
+                                 const gw_array *a) {
+    GW_LOG_ERR(I, "%s: value reference %u (%s) is a Float64 array variable", fn, (unsigned)vr,
+               a->name);
+}
+
 /* the variable vr if it is of base type `type` (-1: of a type this FMU has none of); else NULL
  * with the reason logged.  Time (vr 0) has no row: it answers *time = 1 and NULL. */
 static const gw_variable *gw_fmi3_lookup(gw_instance *I, const char *fn, fmi3ValueReference vr,
@@ -106,8 +113,7 @@ static const gw_variable *gw_fmi3_lookup(gw_instance *I, const char *fn, fmi3Val
     if (!v) {
         const gw_array *a = gw_fmi3_array_find(I->m, vr);
         if (a)
-            GW_LOG_ERR(I, "%s: value reference %u (%s) is a Float64 array variable", fn,
-                       (unsigned)vr, a->name);
+            gw_fmi3_refuse_array(I, fn, vr, a);
         else
             GW_LOG_ERR(I, "%s: unknown value reference %u", fn, (unsigned)vr);
         return NULL;
@@ -143,8 +149,7 @@ static int gw_fmi3_arrays_ok(gw_instance *I, const char *fn, const fmi3ValueRefe
     for (k = 0; type != GW_REAL && vr && k < nvr; k++) {
         const gw_array *a = gw_fmi3_array_find(I->m, vr[k]);
         if (a) {
-            GW_LOG_ERR(I, "%s: value reference %u (%s) is a Float64 array variable", fn,
-                       (unsigned)vr[k], a->name);
+            gw_fmi3_refuse_array(I, fn, vr[k], a);
             return 0;
         }
     }

@@ -17,6 +17,7 @@ from pathlib import Path
 import fmpy
 
 from gyrowheel.errors import GyrowheelError
+from gyrowheel.fmu_build import build_cache
 from gyrowheel.fmu_build.runtime import UNITY_SOURCES
 from gyrowheel.scratch import temporary_directory
 
@@ -53,9 +54,13 @@ def _run(cmd: list[str]) -> None:
     """Run the compiler; its own temporary files (gcc's cc*.s) go into a directory of ours
     (gyrowheel.scratch), so a build killed while compiling leaves none past the next verb."""
     with temporary_directory("cc") as tmp:
-        proc = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "TMPDIR": str(tmp)})
+        proc = subprocess.run(cmd, capture_output=True, text=True, env=_env(tmp))
     if proc.returncode != 0:
         raise CompileError(f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
+
+
+def _env(tmp) -> dict:
+    return {**os.environ, "TMPDIR": str(tmp)}
 
 
 def optimisation_for(source_dir: Path) -> list[str]:
@@ -69,10 +74,24 @@ def compile_shared(source: Path, include_dirs: list[Path], output: Path,
     """Compile the unity source (gw_fmu.c, or gw_fmu3.c for FMI 3) into the shared library `output`.
 
     Raises CompileError with the compiler's output. The optimisation level is optimisation_for()
-    the source's directory (the unity build includes the generated C beside it)."""
+    the source's directory (the unity build includes the generated C beside it).  With
+    GYROWHEEL_BUILD_CACHE set, a library built before from the same preprocessed source, flags
+    and compiler is copied from that cache instead (gyrowheel.fmu_build.build_cache)."""
     cc = compiler()
     output.parent.mkdir(parents=True, exist_ok=True)
+    flags = [*STANDARD, "-shared", "-fPIC", *optimisation_for(source.parent), *WARNINGS, *(extra_flags or [])]
     includes = [f"-I{d}" for d in include_dirs]
-    _run([cc, *STANDARD, "-shared", "-fPIC", *optimisation_for(source.parent), *WARNINGS, *(extra_flags or []), *includes,
-          str(source), "-o", str(output), "-lm", "-static-libgcc"])
+    libraries = ["-lm", "-static-libgcc"]
+    compile_ = lambda: _run([cc, *flags, *includes, str(source), "-o", str(output), *libraries])  # noqa: E731
+    directory = build_cache.cache_dir()
+    if directory is None:
+        compile_()
+        return output
+    try:
+        with temporary_directory("cc") as tmp:
+            key = build_cache.build_key(cc, [*flags, *libraries], include_dirs, source, _env(tmp))
+    except subprocess.CalledProcessError:
+        compile_()  # the compiler's own message, from the compile
+        return output
+    build_cache.cached_build(directory, key, output, compile_)
     return output

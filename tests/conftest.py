@@ -119,6 +119,19 @@ def _run_dir(tmp_path_factory) -> Path:
     return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _build_cache(tmp_path_factory):
+    """compile_shared's cache (gyrowheel.fmu_build.build_cache) in a directory of this test run,
+    shared by its workers: tests that compile the same source with the same flags and compiler
+    (the same FMU built in several modules' directories, an Ensemble's library in each test's
+    cache) run the compiler once.  Set for the whole run, so the command-line runs the tests
+    start use it too; nothing is reused from an earlier run."""
+    from gyrowheel.fmu_build.build_cache import ENV
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv(ENV, str(_run_dir(tmp_path_factory) / "build_cache"))
+        yield
+
+
 def shared_build(tmp_path_factory, key: str, make):
     """make(directory) run once per test run, whichever worker asks first; its result (pickled)
     for every worker.  The others wait on a lock file (fcntl.flock) meanwhile, so a build is

@@ -1,0 +1,131 @@
+"""A content-addressed cache of the shared libraries compile_shared builds (opt-in).
+
+With the environment variable GYROWHEEL_BUILD_CACHE set to a directory, compile_shared looks a
+build up there before it runs the compiler, and stores what the compiler built.  Unset or empty:
+no cache, every build compiles (the default).  The test suite sets it to a directory of its run
+(tests/conftest.py), so tests that build the same FMU share one compile.
+
+The key (sha256, hex) covers everything the library's bytes depend on:
+  - the compiler: its resolved path and what `cc --version` prints;
+  - the command: every argument but the source's and the output's path and the -I directories;
+  - the source as the compiler sees it: `cc -E` with the same flags (every header included,
+    every macro expanded), with the directories of its line markers dropped (a build in another
+    directory of the same files hits; a file's name, line numbers and system-header flags stay).
+An entry is one file, <key>.so.entry: the sha256 of the library (64 hex digits, a newline),
+then the library.  It is written to a temporary file and renamed (os.replace), so a reader
+never sees half an entry; an entry whose digest does not match its bytes (a damaged disk, a
+copy cut short) is not used: the library is built again and the entry rewritten.  Builds of one
+key wait for each other (an advisory lock, fcntl.flock, where the platform has it), so two
+processes asking at once compile once.
+"""
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import re
+import subprocess
+from collections.abc import Callable
+from contextlib import contextmanager
+from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: builds of one key may run at once (each result is still whole)
+    fcntl = None
+
+ENV = "GYROWHEEL_BUILD_CACHE"
+SUFFIX = ".so.entry"
+_LINE_MARKER = re.compile(rb'^(#\s*\d+\s+)"((?:[^"\\]|\\.)*)"', re.MULTILINE)
+
+
+def cache_dir() -> Path | None:
+    """The directory GYROWHEEL_BUILD_CACHE names (made when missing), or None when it is unset."""
+    value = os.environ.get(ENV, "")
+    if not value:
+        return None
+    path = Path(value)
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+@functools.lru_cache(maxsize=16)
+def _compiler_identity(path: str, size: int, mtime_ns: int) -> bytes:
+    proc = subprocess.run([path, "--version"], capture_output=True)
+    return path.encode() + b"\0" + proc.stdout + proc.stderr
+
+
+def compiler_identity(cc: str) -> bytes:
+    """The compiler's resolved path and its `--version` output (kept per binary and its mtime)."""
+    import shutil
+    found = shutil.which(cc) or cc
+    real = os.path.realpath(found)
+    st = os.stat(real)
+    return _compiler_identity(real, st.st_size, st.st_mtime_ns)
+
+
+def _strip_directories(preprocessed: bytes) -> bytes:
+    """Line markers `# 12 "/build/dir/gw_fmu.c" 1` keep the file name only."""
+    return _LINE_MARKER.sub(lambda m: m.group(1) + b'"' + m.group(2).rsplit(b"/", 1)[-1] + b'"', preprocessed)
+
+
+def build_key(cc: str, flags: list[str], include_dirs: list[Path], source: Path, env: dict) -> str:
+    """The cache key of `cc flags -I<include_dirs> source -o <anything>` (see the module's doc).
+
+    flags: every argument but the source, the output (-o and its path) and the -I directories.
+    Raises subprocess.CalledProcessError when the preprocessor fails (the caller compiles and
+    reports the compiler's own message)."""
+    includes = [f"-I{d}" for d in include_dirs]
+    pre = subprocess.run([cc, "-E", *flags, *includes, str(source)], capture_output=True, env=env,
+                         check=True).stdout
+    digest = hashlib.sha256()
+    for part in (compiler_identity(cc), "\0".join(flags).encode(), _strip_directories(pre)):
+        digest.update(len(part).to_bytes(8, "little"))
+        digest.update(part)
+    return digest.hexdigest()
+
+
+def _read_entry(entry: Path) -> bytes | None:
+    """The library an entry holds, or None when it is missing or its digest does not match."""
+    try:
+        data = entry.read_bytes()
+    except FileNotFoundError:
+        return None
+    head, sep, library = data.partition(b"\n")
+    if not sep or hashlib.sha256(library).hexdigest().encode() != head:
+        return None
+    return library
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    part = path.with_name(f"{path.name}.{os.getpid()}.{id(data)}.part")
+    try:
+        part.write_bytes(data)
+        os.replace(part, path)
+    finally:
+        part.unlink(missing_ok=True)
+
+
+@contextmanager
+def _locked(lock_path: Path):
+    if fcntl is None:
+        yield
+        return
+    with open(lock_path, "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        yield
+
+
+def cached_build(directory: Path, key: str, output: Path, build: Callable[[], None]) -> bool:
+    """Write the library of `key` to `output`: from the cache directory when a sound entry is
+    there, else by build() (which writes `output`), then stored.  True on a hit."""
+    entry = directory / f"{key}{SUFFIX}"
+    with _locked(directory / f"{key}.lock"):
+        library = _read_entry(entry)
+        if library is not None:
+            _write_atomic(output, library)
+            return True
+        build()
+        library = output.read_bytes()
+        _write_atomic(entry, hashlib.sha256(library).hexdigest().encode() + b"\n" + library)
+        return False

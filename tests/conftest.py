@@ -90,13 +90,14 @@ def casadi_wheel() -> type[CasadiWheel]:
 
 
 # The most expensive test files (builds of all platforms, of the closed loops, of every example
-# scene as FMI 3.0; the sanitizer and emulator runs), most expensive first: started first, so
+# scene as FMI 3.0, of the contact scenes; the sanitizer and emulator runs), most expensive first: started first, so
 # that a parallel run does not end with one of them on one worker while the other idles (longest
 # processing time first).  `make test` runs pytest-xdist with --no-loadscope-reorder so that this
 # order, not the number of tests per file, decides; the other files follow, largest first.
 EXPENSIVE_FIRST = (
     "test_platforms_run.py", "test_system_files.py", "test_ensemble_lane_steps.py", "test_system_fmi3.py",
     "test_fmi3_build.py", "test_only_what_is_called_for.py", "test_export_c_cross.py", "test_fmi3_agreement.py",
+    "test_contact_flight.py", "test_contact_sliding.py",
     "test_ensemble_runs.py", "test_wheel_install.py", "test_fmu_sources.py", "test_export_c_sanitizers.py",
     "test_export_c.py", "test_c_fmi3.py", "test_c_fmi3_me.py", "test_c_fmi3_partials.py",
 )

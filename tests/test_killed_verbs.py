@@ -21,12 +21,16 @@ from pathlib import Path
 import pytest
 
 from conftest import SCENES
+from gyrowheel.fmu_build.build_cache import ENV as BUILD_CACHE
 
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="os.kill(pid, 0) answers whether a process exists")
 
 
 def _start(tmpdir: Path, cwd: Path, *argv) -> subprocess.Popen:
+    """The verb, without the run's build cache (GYROWHEEL_BUILD_CACHE): a build must still be
+    compiling when it is killed, not copying a library built by an earlier test."""
     env = {**os.environ, "TMPDIR": str(tmpdir)}
+    env.pop(BUILD_CACHE, None)
     return subprocess.Popen([sys.executable, "-m", "gyrowheel", *map(str, argv)], cwd=cwd, env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 

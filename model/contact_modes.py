@@ -22,7 +22,7 @@ One event, `contact_slip` (action "update"), switches both ways; its indicator i
 (d the stored direction). The sliding indicator's second term (excess_slip) is the slip the friction
 demand's excess over the limit would build in one natural time sqrt(R / g), capped at half the
 friction direction's seed; it is 0 wherever rolling can hold, so a slip that dies out there is
-located at d . v_slip = 0 exactly as without it.
+located at d . v_slip = 0.
 One indicator for both switches, as a stiction law's (model/stiction.py): after each update the
 indicator of the new mode is >= 0 (to rounding) while the fired one was <= 0, so no switch is seen
 as a crossing of the other mode's indicator in the same instant. The update:
@@ -53,10 +53,12 @@ each event fires at most once per instant (the runtime's guard); the step budget
 While rolling cannot hold, the sliding indicator is d . v_slip plus the excess term, so a slip may
 only end where the friction demand is within the limit: at a slip onset with mu_k = mu the excess
 starts at 0 and the slip grows like (t - t_slip)^2, staying for ~1e-7 s at the round-off of
-v_slip (1e-15 m/s, a difference of rim and centre speeds); d . v_slip alone crossed 0 there at
-random, and each failed hold reseeded d along that noise (Euler's disk on mu = 0.3: a switch every
-1e-8 to 1e-7 s at t = 3.5189 s, until the step budget ran out). With the excess term the indicator
-grows from the onset at the excess's own rate and no crossing is seen.
+v_slip (1e-15 m/s, a difference of rim and centre speeds); d . v_slip alone would cross 0 there at
+random, each failed hold reseeding d along that noise (Euler's disk on mu = 0.3 with dopri5: a
+switch every 1e-8 to 1e-7 s from t = 3.5189 s until the runtime's guard of 1000 events in one
+step). The excess term grows from the onset at the excess's own rate, above that noise within
+~1e-13 s. What follows such an onset is stiff for explicit solvers (Coulomb's direction turns at
+~mu_k F_n |K| / (|v_slip| + SLIP_SEED v_scale)): docs/effects.md, "Sliding".
 """
 from __future__ import annotations
 

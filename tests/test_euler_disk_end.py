@@ -19,7 +19,6 @@ from fmpy.fmi2 import fmi2LastSuccessfulTime
 from scipy.interpolate import CubicSpline
 
 from fmi_helpers import Slave
-from gyrowheel.fmu_build import build_fmu, load_scene
 
 SCENE = Path(__file__).parent.parent / "examples" / "scenes" / "euler_disk_end.toml"
 OUT = ("beta", "contact_mode", "F_n", "F_long", "F_lat", "slip_long", "slip_lat", "friction_use", "energy",
@@ -29,9 +28,9 @@ DT = 1e-3
 
 
 @pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
-    root = tmp_path_factory.mktemp("euler_end")
-    return str(build_fmu(load_scene(SCENE), root / "euler_disk_end.fmu", build_dir=root / "build").fmu)
+def fmu(example_build):
+    """The scene's FMU, the test run's shared build (conftest.example_build)."""
+    return str(example_build(SCENE.stem).fmu)
 
 
 def run(fmu, **start):

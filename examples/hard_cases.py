@@ -1,6 +1,6 @@
 """Hard cases: where the wheel's equations get hard, and what the FMU does there.
 
-Prints one table (case, solver, result, error, time) for ten families of hard cases,
+Prints one table (case, solver, result, error, time) for eleven families of hard cases,
 including the long runs the test suite leaves out (10^4 s of rolling,
 1000 s of steady precession). docs/hard_cases.md shows a run and says which solver to use where.
 
@@ -287,8 +287,46 @@ def main() -> int:
         paper.slave.freeInstance()
         paper = Fmu(paper_built.fmu)
 
+    # 11. Euler's disk to its end: rolling, stick and slip (mu = mu_k = 0.3), flight where F_n reaches 0
+    end = Fmu(build_fmu(load_scene(HERE / "scenes" / "euler_disk_end.toml"), tmp / "disk_end.fmu").fmu)
+    # dopri5 at mu_k = mu: the stiff slip onset; 10 ms steps, each ended by the step budget at rel_tol 1e-9
+    for solver, extra, h in (("rosenbrock", {}, 1e-3), ("dopri5", {}, 1e-2),
+                             ("dopri5", {"rel_tol": 1e-12, "abs_tol": 1e-14}, 1e-2), ("dopri5", {"mu_k": 0.25}, 1e-3)):
+        t, fell, sec, seen = disk_to_its_end(end, solver, h, **extra)
+        label = "11 Euler's disk end, " + (f"mu_k {extra['mu_k']:g}" if "mu_k" in extra else
+                                           f"rel_tol {extra.get('rel_tol', 1e-9):g}")
+        how = "fell" if fell else "fmi2Error"
+        row(label, solver, f"{how} at t = {t:.6f} s, slip {seen['slip']:.3f} s, {seen['changes']} changes",
+            f"E {seen['balance']:.1e}, F_n >= {seen['Fn']:.2f} Mg", sec)
+
     print(f"\n{len(rows)} rows", file=sys.stderr)
     return 0
+
+
+def disk_to_its_end(fmu: Fmu, solver: str, h: float, **values):
+    """examples/scenes/euler_disk_end.toml in steps of h (s) to the fall or a refusal: (end time,
+    fell at beta_min, seconds, {slip: first time sliding on the grid (s), changes: contact mode
+    changes on the grid, balance: max |energy + dissipated_energy - start| / start energy, Fn: the
+    least F_n / (M g)})."""
+    fmu.start(solver=solver, **values)
+    names = ("beta", "contact_mode", "F_n", "energy", "dissipated_energy")
+    rows, t, t0 = [fmu.get(*names)], 0.0, time.perf_counter()
+    try:
+        while t < 12.0 - 1e-12:
+            fmu.slave.doStep(t, h)
+            t += h
+            rows.append(fmu.get(*names))
+    except FMICallException:
+        t = fmu.slave.getRealStatus(fmi2LastSuccessfulTime)
+    sec = time.perf_counter() - t0
+    a = np.array(rows)
+    mode, total = a[:, 1], a[:, 3] + a[:, 4]
+    sliding = np.flatnonzero(mode > 0.5)
+    return t, a[-1, 0] < 0.01, sec, {
+        "slip": h * sliding[0] if len(sliding) else math.nan,
+        "changes": int(np.sum(mode[1:] != mode[:-1])),
+        "balance": float(np.max(np.abs(total - total[0])) / a[0, 3]),
+        "Fn": float(np.min(a[:, 2]) / (0.45 * 9.81))}
 
 
 if __name__ == "__main__":

@@ -16,9 +16,13 @@ zero derivative) and `slip_dir_x`, `slip_dir_y` (a unit vector d in the ground p
 only by the switch). ode = the mode's equations (if_else on the mode).
 
 One event, `contact_slip` (action "update"), switches both ways; its indicator is
-    rolling:  mu F_n (1 + BREAKAWAY) - |F_t|     (F_t the friction the rolling constraint needs)
-    sliding:  d . v_slip                          (d the stored direction)
+    rolling:  g_roll = mu F_n (1 + BREAKAWAY) - |F_t|   (F_t the friction the rolling constraint needs)
+    sliding:  d . v_slip + min(max(-g_roll, 0) / (M sqrt(g / R)), SLIP_SEED v_scale / 2)
     flight:   1
+(d the stored direction). The sliding indicator's second term (excess_slip) is the slip the friction
+demand's excess over the limit would build in one natural time sqrt(R / g), capped at half the
+friction direction's seed; it is 0 wherever rolling can hold, so a slip that dies out there is
+located at d . v_slip = 0.
 One indicator for both switches, as a stiction law's (model/stiction.py): after each update the
 indicator of the new mode is >= 0 (to rounding) while the fired one was <= 0, so no switch is seen
 as a crossing of the other mode's indicator in the same instant. The update:
@@ -46,6 +50,15 @@ seen > 0 (the runtime fires only on > 0 -> <= 0), and rolling needs the friction
 from strictly inside it, so every stick and every slip lasts a finite time; a slip that dies out
 where rolling cannot hold goes on along its own direction instead of being restarted from 0 (above);
 each event fires at most once per instant (the runtime's guard); the step budget bounds every call.
+While rolling cannot hold, the sliding indicator is d . v_slip plus the excess term, so a slip may
+only end where the friction demand is within the limit: at a slip onset with mu_k = mu the excess
+starts at 0 and the slip grows like (t - t_slip)^2, staying for ~1e-7 s at the round-off of
+v_slip (1e-15 m/s, a difference of rim and centre speeds); d . v_slip alone would cross 0 there at
+random, each failed hold reseeding d along that noise (Euler's disk on mu = 0.3 with dopri5: a
+switch every 1e-8 to 1e-7 s from t = 3.5189 s until the runtime's guard of 1000 events in one
+step). The excess term grows from the onset at the excess's own rate, above that noise within
+~1e-13 s. What follows such an onset is stiff for explicit solvers (Coulomb's direction turns at
+~mu_k F_n |K| / (|v_slip| + SLIP_SEED v_scale)): docs/effects.md, "Sliding".
 """
 from __future__ import annotations
 
@@ -106,6 +119,17 @@ def velocity_scale(ctx: WheelContext) -> ca.SX:
 def unit_vector(v: ca.SX) -> ca.SX:
     """v / |v|, 0 at v = 0 (no NaN)."""
     return v / ca.sqrt(ca.dot(v, v) + 1e-300)
+
+
+def excess_slip(ctx: WheelContext, g_roll: ca.SX, v_scale: ca.SX) -> ca.SX:
+    """min(max(-g_roll, 0) / (M sqrt(g / R)), SLIP_SEED v_scale / 2) (m/s): the slip velocity the
+    friction demand's excess over the limit (g_roll = mu F_n (1 + BREAKAWAY) - |F_t|, N, the rolling
+    indicator) builds in one natural time sqrt(R / g), capped at half the friction direction's seed
+    (v_scale in m/s, velocity_scale); 0 where rolling holds. Added to the sliding indicator
+    d . v_slip, it keeps that indicator away from 0 while rolling cannot hold, and the cap keeps the
+    indicator's zero short of the direction's singular point v_slip = -SLIP_SEED v_scale d (module
+    docstring, "Chattering")."""
+    return ca.fmin(ca.fmax(-g_roll, 0) / (ctx.par["M"] * ctx.natural_rate()), 0.5 * SLIP_SEED * v_scale)
 
 
 def declare_sliding(ctx: WheelContext, mu: ca.SX, mu_k: ca.SX) -> SlidingContact:
@@ -213,7 +237,9 @@ def contact_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callabl
     F_t = Fc_r[0:2]
     g_roll = sl.mu * Fc_r[2] * (1 + BREAKAWAY) - norm(F_t)
     v_slip = bind_s(slip_velocity(ctx))
-    indicator = ca.if_else(mode < 0.5, g_roll, ca.if_else(mode < 1.5, ca.dot(d, v_slip), 1))
+    v_scale = bind_s(velocity_scale(ctx))
+    g_slide = ca.dot(d, v_slip) + excess_slip(ctx, g_roll, v_scale)
+    indicator = ca.if_else(mode < 0.5, g_roll, ca.if_else(mode < 1.5, g_slide, 1))
 
     # rolling -> sliding: velocities continuous, slip along -F_t
     vc_r = bind_r(ctx.qd[0:2])
@@ -237,7 +263,7 @@ def contact_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callabl
     vc_p = ca.substitute(vc_r, x, x_p)  # exactly the rolling constraint's velocity
     x_p[r_vx], x_p[r_vy] = vc_p[0], vc_p[1]
     holds = ca.logic_and(ca.substitute(g_roll, x, x_p) > 0,
-                         norm(v_slip) <= SLIP_ZERO * bind_s(velocity_scale(ctx)))
+                         norm(v_slip) <= SLIP_ZERO * v_scale)
     # sliding on: d along the slip itself (no projection), or, at a slip of exactly 0, where it starts
     x_on = ca.SX(x)
     turned = ca.if_else(ca.dot(v_slip, v_slip) > 0, unit_vector(v_slip), ca.substitute(onset, x, x_p))

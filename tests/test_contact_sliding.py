@@ -143,7 +143,7 @@ def test_fmu_state_keeps_the_mode(fmu):
 
 @pytest.mark.parametrize("start, most", [
     ({"beta": math.radians(80), "gamma_dot": 8.0, "mu": 0.1, "mu_k": 0.08}, 50),
-    # mu_k = mu: the friction needed hovers at the limit, stick and slip alternate (73 events)
+    # mu_k = mu: the friction needed hovers at the limit, stick and slip alternate (35 events)
     ({"beta": math.radians(75), "gamma_dot": 10.0, "alpha_dot": 1.5, "mu": 0.2, "mu_k": 0.2}, 200)],
     ids=["ice", "at_the_limit"])
 def test_leaning_wheel_on_low_friction_slips_and_resticks(fmu, start, most):

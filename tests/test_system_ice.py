@@ -78,7 +78,7 @@ def test_too_hard_a_brake_is_lost_on_dry_ground_and_falls_on_ice(ice_fmu, earth_
 def test_brake_and_turn_refuses_what_it_cannot_fly():
     m = brake_and_turn()
     assert len(m.points) == 11 and m.points[2] == (5.0, 0.0, 1.2)
-    _, rate, speed = m.evaluate(np.array([4.5, 10.0, 14.0]))
+    _, rate, speed = m.evaluate(np.array([4.5, 8.5, 13.0]))
     assert speed[0] == pytest.approx(1.35) and rate[1] == 0.5 and rate[2] == -0.5
     with pytest.raises(ValueError, match="brake must be > 0 s"):
         brake_and_turn(brake=0.0)

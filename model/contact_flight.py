@@ -45,7 +45,7 @@ import casadi as ca
 
 from gyrowheel.model.contact_modes import state_rows, unit_vector
 from gyrowheel.model.context import BREAKAWAY, State, WheelContext
-from gyrowheel.model.flight import flight_equations
+from gyrowheel.model.flight import free_body
 from gyrowheel.model.impact import generalised_impact
 from gyrowheel.model.kinematics import norm
 from gyrowheel.model.spec import Event, Quantity
@@ -116,23 +116,24 @@ class Flight:
         rates = ctx.qd[2:5]  # alpha_dot, beta_dot, gamma_dot: state symbols (angle-rate speeds)
         self.qf = ca.vertcat(q[0], q[1], fl.z.sym, q[2], q[3], q[4])
         self.wf = ca.vertcat(sl.vx.sym, sl.vy.sym, fl.vz.sym, rates)
-        self.g = ctx.gravity_magnitude()
-        eq = flight_equations()
-        pf = ca.vertcat(P["M"], P["R"], P["k_diam"], P["k_axial"], self.g)
-        qdd, energy, *_ = eq.function()(self.qf, self.wf, pf)
-        self.qdd = qdd
-        self.V = P["M"] * self.g * fl.z.sym
-        self.T = energy - self.V
+        gravity = ctx.gravity if ctx.gravity is not None else ca.SX.zeros(3)  # tilted on a slope
+        qp, wp = ca.SX.sym("q_free", 6), ca.SX.sym("w_free", 6)
+        body = free_body(qp, wp, P["M"], P["R"], P["k_diam"], P["k_axial"], gravity, ctx.free_laws,
+                         parameters=list(P))
+        ph, val = ca.vertcat(qp, wp), ca.vertcat(self.qf, self.wf)
+        self.qdd, self.T, self.V, self.P_diss = (ca.substitute(e, ph, val) for e in (body.qdd, body.T, body.V,
+                                                                                        body.P_diss))
         self.height = fl.z.sym - P["R"] * ca.sin(q[3])
 
     def bind(self, expr: ca.SX) -> ca.SX:
-        """Placeholders -> the flight mode's expressions: rates, accelerations, T, V, no power,
-        F_n = 0 (the contact force is 0 in flight)."""
+        """Placeholders -> the flight mode's expressions: rates, accelerations, T, V, the power the
+        free body's laws dissipate (air drag), no actuator power, F_n = 0 (the contact force is 0
+        in flight)."""
         ctx = self.ctx
         holds = [law.hold for law in ctx.stick_slip]  # the stiction laws' holding forces: 0 (their limit is)
         ph = ca.vertcat(ctx.qd[0:2], ctx.qdd, ctx.late["T"], ctx.late["V"], ctx.late["P_diss"],
                         ctx.late["P_act"], ctx.Fn, ctx.Fc, *holds)
-        val = ca.vertcat(self.wf[0:2], 0, 0, self.qdd[3:6], self.T, self.V, 0, 0, 0, ca.SX.zeros(3),
+        val = ca.vertcat(self.wf[0:2], 0, 0, self.qdd[3:6], self.T, self.V, self.P_diss, 0, 0, ca.SX.zeros(3),
                          ca.SX.zeros(len(holds)))
         expr = ca.SX(expr)
         for _ in range(4):
@@ -142,15 +143,21 @@ class Flight:
         return expr
 
     def ode(self, n_mech: int) -> ca.SX:
-        """x_dot in flight (nx): the coordinates' rates, the angle accelerations (model/flight.py),
-        x_dot, y_dot constant, z_centre' = z_dot, z_dot' = -g, every other state constant."""
+        """x_dot in flight (nx): the coordinates' rates, the free body's accelerations
+        (model/flight.py free_body: gravity, tilted on a slope, and air drag), z_centre' = z_dot,
+        dissipated_energy' = the drag's loss, every other state constant."""
         ctx, fl = self.ctx, self.ctx.flight
         out = ca.SX.zeros(self.x.numel())
         out[0:5] = ca.vertcat(self.wf[0:2], self.wf[3:6])
         out[5:8] = self.qdd[3:6]
+        r_vx, r_vy = state_rows(self.x, self.ctx.sliding.states)[0:2]  # x_dot, y_dot: a slope, drag
+        out[r_vx], out[r_vy] = self.qdd[0], self.qdd[1]
         rows = {id(st): n_mech + i for i, st in enumerate(ctx.states)}
         out[rows[id(fl.z)]] = fl.vz.sym
         out[rows[id(fl.vz)]] = self.qdd[2]
+        for st in ctx.states:  # what the free body's laws (air drag) dissipate
+            if st.quantity.name == "dissipated_energy":
+                out[rows[id(st)]] = self.P_diss
         return out
 
 

@@ -65,15 +65,27 @@ class FreeBody:
     height: ca.SX  # of the rim's lowest point above the plane z = 0, m
 
 
-def free_body(q: ca.SX, qd: ca.SX, M, R, k_diam, k_axial, gravity: ca.SX, laws=(), parameters=()) -> FreeBody:
+@dataclass
+class FreeEnergies:
+    """The free wheel's energies and forces in given placeholders (see free_energies)."""
+
+    T: ca.SX  # kinetic energy, J
+    V: ca.SX  # potential energy, J
+    Q: ca.SX  # generalised forces of the laws on (q, qd) (6,)
+    power: ca.SX  # their power, W (negative for drag)
+    momentum: ca.SX  # angular momentum about the centre, ground frame (3,)
+    axle: ca.SX  # n (3,)
+    omega: ca.SX  # angular velocity, ground frame (3,)
+    height: ca.SX  # of the rim's lowest point above the plane z = 0, m
+
+
+def free_energies(q: ca.SX, qd: ca.SX, M, R, k_diam, k_axial, gravity: ca.SX, laws=()) -> FreeEnergies:
     """The free wheel in the placeholders q = (x, y, z, alpha, beta, gamma), qd (6,): T as in the
     module docstring, V = -M gravity . (x, y, z) (gravity: the ground-frame vector (3,), m/s^2;
     (0, 0, -g) on level ground, tilted on a slope: the frame's z stays normal to the ground plane),
     and the generalised forces of `laws`: each a callable (v_centre (3,), omega (3,), n (3,)) ->
     [(value, velocity)], a force on the centre's velocity or a torque on an angular rate (both in
-    the ground frame), Q = sum (d velocity / d qd)^T value, power sum value . velocity (counted as
-    dissipated: -power). Equations from ConstrainedSystem without constraint rows."""
-    qdd = ca.SX.sym("qdd", 6)
+    the ground frame), Q = sum (d velocity / d qd)^T value, power sum value . velocity."""
     alpha, beta = q[3], q[4]
     chain = frame_chain(alpha, beta)
     lmn = chain.matrix()
@@ -84,17 +96,27 @@ def free_body(q: ca.SX, qd: ca.SX, M, R, k_diam, k_axial, gravity: ca.SX, laws=(
     T = 0.5 * M * ca.dot(r_dot, r_dot) + 0.5 * ca.mtimes([omega_lmn.T, inertia, omega_lmn])
     V = -M * ca.dot(gravity, q[0:3])
     omega, n = ca.mtimes(lmn, omega_lmn), lmn[:, 2]
-    Q, power = ca.SX.zeros(6), ca.SX(0)
+    Q, power = ca.SX.zeros(qd.numel()), ca.SX(0)
     for law in laws:
         for value, velocity in law(r_dot, omega, n):
             Q = Q + ca.mtimes(ca.jacobian(velocity, qd).T, value)
             power = power + ca.dot(ca.vec(value), ca.vec(velocity))
-    system = ConstrainedSystem(q=q, qd=qd, qdd=qdd, n_free=6, T=T, V=V, A=ca.SX(0, 6),
-                               Q_nc=Q if laws else None, parameters=list(parameters))
+    return FreeEnergies(T=T, V=V, Q=Q, power=power, momentum=ca.mtimes(lmn, ca.mtimes(inertia, omega_lmn)),
+                        axle=n, omega=omega, height=q[2] - R * ca.sin(beta))
+
+
+def free_body(q: ca.SX, qd: ca.SX, M, R, k_diam, k_axial, gravity: ca.SX, laws=(), parameters=()) -> FreeBody:
+    """The free wheel's dynamics in the placeholders q, qd (6,): free_energies' T, V and laws,
+    equations from ConstrainedSystem without constraint rows; the laws' power counted as
+    dissipated (P_diss = -power)."""
+    e = free_energies(q, qd, M, R, k_diam, k_axial, gravity, laws)
+    qdd = ca.SX.sym("qdd", 6)
+    system = ConstrainedSystem(q=q, qd=qd, qdd=qdd, n_free=6, T=e.T, V=e.V, A=ca.SX(0, 6),
+                               Q_nc=e.Q if laws else None, parameters=list(parameters))
     v_dot = ca.SX.sym("v_dot", 6)
     _, qdd_sol, _, _ = system.reduced(ca.SX.eye(6), qd, v_dot, ca.SX(0, 1), ca.SX(0, 1))
-    return FreeBody(qdd=qdd_sol, T=T, V=V, P_diss=-power, momentum=ca.mtimes(lmn, ca.mtimes(inertia, omega_lmn)),
-                    axle=n, omega=omega, height=q[2] - R * ca.sin(beta))
+    return FreeBody(qdd=qdd_sol, T=e.T, V=e.V, P_diss=-e.power, momentum=e.momentum, axle=e.axle, omega=e.omega,
+                    height=e.height)
 
 
 def flight_equations() -> FlightEquations:

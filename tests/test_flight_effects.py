@@ -1,5 +1,6 @@
-"""Flight with slope and air drag (docs/effects.md, "Flight"): the free wheel under tilted gravity
-and the drag law, against closed forms and an independent integration.
+"""Flight with slope, air drag and the Gyrover (docs/effects.md, "Flight"): the free wheel under
+tilted gravity, the drag law and the Gyrover's internal bodies and motors, against closed forms, an
+independent integration and the conservation laws.
 
 - Slope: the frame stays attached to the ground plane, so gravity is tilted and the height is
   measured normal to the plane; an upright spinning wheel thrown off the slope follows the tilted
@@ -10,6 +11,9 @@ and the drag law, against closed forms and an independent integration.
 - Air drag, quadratic (cd_area): scipy's DOP853 on M v' = M g - rho cd_area |v| v / 2 (a point
   mass, written here).
 - energy + dissipated_energy constant through flight, drag and touchdown on a slope.
+- Gyrover: internal torques only, so the centre of mass flies the parabola and the angular momentum
+  about it (wheel, assembly mass, flywheel; written here from the effect's geometry) is constant;
+  energy + dissipated - actuator_work constant in flight and through a landing.
 """
 from __future__ import annotations
 
@@ -132,8 +136,85 @@ def test_energy_balance_through_a_tumbling_flight_and_landing_on_a_slope(fmu):
     assert np.all(np.diff(r["dissipated_energy"]) >= 0)
 
 
-def test_fly_is_refused_with_gyrover_naming_the_reason():
-    text = '[effects.gyrover]\n[effects.contact_forces]\non_slip = "slide"\non_lift_off = "fly"\n'
-    with pytest.raises(SceneError, match=re.escape('on_lift_off: "fly" is not possible with gyrover: the flight '
-                                                   "mode is the free wheel alone")):
-        parse_scene(WHEEL + text, "s.toml")
+GYROVER = """
+[effects.gyrover]
+flywheel_rate = 400.0
+[effects.contact_forces]
+on_slip = "slide"
+on_lift_off = "fly"
+mu = 0.3
+[effects.energy]
+"""
+GYRO_OUT = ["x", "y", "z", "vx", "vy", "vz", "alpha", "beta", "alpha_dot", "beta_dot", "gamma_dot", "theta_p",
+            "theta_p_dot", "tilt", "tilt_rate", "contact_mode", "energy", "dissipated_energy", "actuator_work",
+            "height"]
+M_FLY, L_PEND, I_FA, I_FD, W_FLY = 0.4, 0.03, 5e-4, 2.5e-4, 400.0  # the gyrover effect's defaults, flywheel_rate
+
+
+@pytest.fixture(scope="module")
+def gyrover_fmu(tmp_path_factory):
+    root = tmp_path_factory.mktemp("flight_gyrover")
+    scene = parse_scene('[model]\nname = "flight_gyrover"\n' + WHEEL + GYROVER, "flight_gyrover.toml")
+    return str(build_fmu(scene, root / "flight_gyrover.fmu").fmu)
+
+
+def total_momentum(r):
+    """Linear momentum / total mass (the centre of mass's velocity) and the angular momentum about
+    the centre of mass (N m s, ground frame) of wheel and Gyrover assembly, from the outputs, written
+    here from the effect's geometry: frame m = -(cos a, sin a, 0), n the axle, l = m x n (towards the
+    contact); link l_p = cos(th) l + sin(th) m, tilt axis m_p = -sin(th) l + cos(th) m, flywheel
+    axis a = cos(tilt) n + sin(tilt) l_p; the assembly's mass at L_pend l_p from the centre, turning
+    with the frame plus the swing, the flywheel with its spin about a on top."""
+    a, b, th, tl = r["alpha"], r["beta"], r["theta_p"], r["tilt"]
+    k = np.array([0, 0, 1.0])
+    m = np.stack([-np.cos(a), -np.sin(a), np.zeros_like(a)], axis=-1)
+    n = np.stack([-np.sin(a) * np.sin(b), np.cos(a) * np.sin(b), np.cos(b)], axis=-1)
+    lv = np.cross(m, n)
+    lp = np.cos(th)[:, None] * lv + np.sin(th)[:, None] * m
+    mp = -np.sin(th)[:, None] * lv + np.cos(th)[:, None] * m
+    ax = np.cos(tl)[:, None] * n + np.sin(tl)[:, None] * lp
+    w_frame = r["alpha_dot"][:, None] * k + r["beta_dot"][:, None] * m
+    w_wheel = w_frame + r["gamma_dot"][:, None] * n
+    w_link = w_frame + r["theta_p_dot"][:, None] * n
+    w_fly = w_link + r["tilt_rate"][:, None] * mp + W_FLY * ax
+    rc = np.stack([r["x"], r["y"], r["z"]], axis=1)
+    vc = np.stack([r["vx"], r["vy"], r["vz"]], axis=1)
+    rf, vf = rc + L_PEND * lp, vc + L_PEND * np.cross(w_link, lp)
+    m_tot = M + M_FLY
+    r_cm, v_cm = (M * rc + M_FLY * rf) / m_tot, (M * vc + M_FLY * vf) / m_tot
+    I_d, I_a = 0.25 * M * R ** 2, KA * M * R ** 2
+
+    def spin(w, axis, i_d, i_a):
+        return i_d * w + (i_a - i_d) * np.sum(w * axis, axis=1)[:, None] * axis
+    L = (spin(w_wheel, n, I_d, I_a) + M * np.cross(rc - r_cm, vc - v_cm)
+         + spin(w_fly, ax, I_FD, I_FA) + M_FLY * np.cross(rf - r_cm, vf - v_cm))
+    return v_cm, L
+
+
+def test_gyrover_in_flight_keeps_its_momenta_and_energy_balance(gyrover_fmu):
+    """Thrown with the assembly swinging, the flywheel tilting under its servo and the drive on:
+    internal torques only, so the centre of mass flies the parabola and the angular momentum about
+    it stays constant; energy + dissipated - actuator work constant."""
+    start = dict(height=0.5, vz=1.0, beta=1.3, gamma_dot=15.0, alpha_dot=1.0, beta_dot=0.5, theta_p=0.3,
+                 theta_p_dot=2.0, tilt=0.2, tilt_rate=1.0, tilt_cmd=0.6, drive_torque=0.02)
+    r, events = simulate_logged(gyrover_fmu, 0.3, 0.001, GYRO_OUT, {**TIGHT, **start})
+    assert not events and np.all(r["contact_mode"] == 2)
+    t = r["time"]
+    v_cm, L = total_momentum(r)
+    assert np.abs(v_cm - v_cm[0] - np.outer(t, [0, 0, -G])).max() < 1e-9
+    size = np.linalg.norm(L[0])
+    assert np.abs(L - L[0]).max() < 1e-10 * size
+    assert np.ptp(r["tilt"]) > 0.1 and np.ptp(r["theta_p"]) > 0.1  # the internal motion is there
+    assert np.abs(np.ptp(r["actuator_work"])) > 1e-3  # and the motors work
+    balance = r["energy"] + r["dissipated_energy"] - r["actuator_work"]
+    assert np.abs(balance - balance[0]).max() < 1e-10 * M * G * R
+
+
+def test_gyrover_thrown_lands_and_rolls_on(gyrover_fmu):
+    start = dict(height=0.05, vz=0.5, beta=1.4, gamma_dot=15.0, theta_p=0.2, tilt_cmd=0.3)
+    r, events = simulate_logged(gyrover_fmu, 0.6, 0.001, GYRO_OUT, {**TIGHT, **start})
+    assert any(name == "contact_flight" for name, _ in events)
+    assert r["contact_mode"][0] == 2 and r["contact_mode"][-1] < 2
+    assert all(np.isfinite(r[n]).all() for n in GYRO_OUT)
+    balance = r["energy"] + r["dissipated_energy"] - r["actuator_work"]
+    assert np.abs(balance - balance[0]).max() < 1e-9 * M * G * R

@@ -249,7 +249,9 @@ def flight_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable
     d = ca.if_else(ca.dot(v_slip, v_slip) > 0, unit_vector(v_slip), ca.substitute(-unit_vector(F_t), x, x_roll))
     x_slide[r_dx], x_slide[r_dy] = d[0], d[1]
     slides = ca.substitute(Fn_s, x, x_slide) > 0
-    bounces = res.u_plus[2] > 0
+    # a persistent contact (rebound below v_rest: target u_n+ = 0) never bounces, whatever the
+    # rounding of u_n+ (a rounded +1e-17 would fly on at h = 0 and sink before the next touchdown)
+    bounces = ca.logic_and(res.u_plus[2] > 0, ca.logic_not(res.persistent))
     x_t = ca.if_else(bounces, x_b, ca.if_else(rolls, x_roll, ca.if_else(slides, x_slide, x_b)))
     # stiction laws (rolling_resistance, spin_friction; limits c F_n): sliding with the rate's sign
     # in flight, where the limit is 0 (a stuck law would freeze its rate: stiction.stuck_rate_rows);

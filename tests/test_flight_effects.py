@@ -218,3 +218,20 @@ def test_gyrover_thrown_lands_and_rolls_on(gyrover_fmu):
     assert all(np.isfinite(r[n]).all() for n in GYRO_OUT)
     balance = r["energy"] + r["dissipated_energy"] - r["actuator_work"]
     assert np.abs(balance - balance[0]).max() < 1e-9 * M * G * R
+
+
+def test_gyrover_lifts_off_flies_and_lands(gyrover_fmu):
+    """A fast lean rate throws the Gyrover off the ground (rolling -> sliding -> flight, each
+    located), the flight keeps the momenta of the state it left with, the landing ends it."""
+    r, events = simulate_logged(gyrover_fmu, 0.5, 0.001, GYRO_OUT,
+                                {**TIGHT, "beta": 1.0, "beta_dot": 6.0, "gamma_dot": 20.0})
+    names = [name for name, _ in events]
+    assert names[:3] == ["contact_slip", "contact_flight", "contact_flight"]  # slides, flies, lands
+    fly = r["contact_mode"] == 2
+    assert fly.sum() > 50 and r["contact_mode"][-1] < 2
+    v_cm, L = total_momentum(r)
+    t = r["time"][fly]
+    assert np.abs(L[fly] - L[fly][0]).max() < 1e-10 * np.linalg.norm(L[fly][0])
+    assert np.abs(v_cm[fly] - v_cm[fly][0] - np.outer(t - t[0], [0, 0, -G])).max() < 1e-9
+    balance = r["energy"] + r["dissipated_energy"] - r["actuator_work"]
+    assert np.abs(balance - balance[0]).max() < 1e-10 * M * G * R

@@ -117,15 +117,17 @@ def main() -> int:
                 continue
             runs[label] = data
             lean = np.degrees(data["wheel.beta"] - math.pi / 2)
+            actuators = (f"tilt_cmd peak {np.degrees(np.abs(data['controller.tilt_cmd'])).max():.1f} deg, "
+                         f"drive peak {np.abs(data['controller.drive_torque']).max():.4f} N m")
             if mu is None:
                 state = f"LOST at {data['time'][-1]:.2f} s ({stopped})" if stopped else f"up {data['time'][-1]:.0f} s"
-                print(f"{label}: {state}; lean {lean.min():+.2f}..{lean.max():+.2f} deg")
+                print(f"{label}: {state}; lean {lean.min():+.2f}..{lean.max():+.2f} deg; {actuators}")
                 summary[name][label] = {"up_s": float(data["time"][-1]), "stopped_by": stopped,
                                         "lean_min": float(lean.min()), "lean_max": float(lean.max())}
                 continue
             rep = contact_report(data, stopped, MU_K_RATIO * mu)
             summary[name][label] = asdict(rep)
-            print(f"{label}: {rep.line()}; |F_t| = mu_k F_n to {rep.friction_law_error:.1e}, "
+            print(f"{label}: {rep.line()}; {actuators}; |F_t| = mu_k F_n to {rep.friction_law_error:.1e}, "
                   f"energy balance {rep.energy_drift:.1e}")
             if k == 0:
                 write_csv(str(out / f"ice_{mu:g}.csv"), data)

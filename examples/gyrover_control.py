@@ -39,6 +39,7 @@ ROOT = Path(__file__).resolve().parent.parent
 from gyrowheel.controller.closed_loop import build_closed_loop, schedule_for  # noqa: E402
 from gyrowheel.controller.design import closed_loop_matrix, controllable_basis, plant_model, sampled_spectral_radius  # noqa: E402
 from gyrowheel.controller.mission import COURSES, standard  # noqa: E402
+from gyrowheel.controller.surface import mission_starts  # noqa: E402
 from gyrowheel.cosim.master import MasterError, run  # noqa: E402
 from gyrowheel.fmu_build import load_scene  # noqa: E402
 from gyrowheel.fmu_build.builder import model_spec  # noqa: E402
@@ -168,11 +169,6 @@ def linear_check(cl, out: Path, name: str) -> str:
     plt.close(fig)
     return (f"largest difference over 3 s, relative to the 0.5 deg start: lean {worst['beta']:.3f}, "
             f"heading {worst['alpha']:.3f}")
-
-
-def mission_starts(mission) -> dict:
-    return {k: v for i, (t, r, s) in enumerate(mission.points)
-            for k, v in ((f"mission_t_{i}", t), (f"mission_rate_{i}", r), (f"mission_speed_{i}", s))}
 
 
 def fly(cl, step: float, **start) -> tuple[object, dict]:

@@ -336,6 +336,8 @@ class _Assembler:
         if fl is not None:  # a third mode, flight (model/contact_flight.py): no contact force there
             flight = contact_flight.Flight(ctx, x)
             bind = contact_modes.merged(sl.mode.sym, bind, flight.bind, 1.5)  # flight above 1.5
+            if self.driven:  # the motors' torques of the free system in flight
+                tau_driven = ca.if_else(sl.mode.sym < 1.5, tau_driven, flight.tau_driven)
             ctx.late_values = {"Fc": ca.if_else(sl.mode.sym < 1.5, Fc, ca.SX.zeros(3))}
         self.bind = bind
         derivs = [bind(st.derivative) for st in ctx.states]

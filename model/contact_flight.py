@@ -1,9 +1,11 @@
 """Flight: the wheel leaves the ground where F_n reaches 0 and lands with an impact (mode 2 of
 model/contact_modes.py; docs/effects.md, "Flight").
 
-In flight the wheel is a free rigid body under gravity, coordinates (x, y, z, alpha, beta, gamma)
-and speeds (x_dot, y_dot, z_dot, alpha_dot, beta_dot, gamma_dot), its equations those of
-model/flight.py (the same Lagrangian with the centre's height free). The hybrid state gains three
+In flight the wheel is a free rigid body under gravity (tilted on a slope) and air drag, carrying
+the effects' bodies and motors (the Gyrover's assembly), coordinates (x, y, z, alpha, beta, gamma)
+and the effects' own, speeds (x_dot, y_dot, z_dot, alpha_dot, beta_dot, gamma_dot, the effects'
+free rates), its equations those of model/flight_system.py (the same Lagrangian with the centre's
+height free). The hybrid state gains three
 local states: `z_centre`, `z_dot` (the centre's height and vertical velocity; in rolling and sliding
 their derivatives are those of z = R sin(beta), so they follow the holonomic contact, and every
 entry to a contact mode sets them from it exactly) and `last_impulse` (N s, the normal impulse of
@@ -26,7 +28,8 @@ The update:
   and rolling holds there (the contact_slip indicator > 0 and F_n > 0), else sliding (d along the
   slip, or -F_t where it is 0) if F_n > 0 in sliding, else flight (the constraint would pull).
   z, z_dot are set from the constraint; the impact's energy loss -dT (>= 0) is added to
-  dissipated_energy; impact_impulse = P_n.
+  dissipated_energy, the driven coordinates' motors' impulsive work T(w+) - T(w-) - dT to
+  actuator_work; impact_impulse = P_n.
 Stiction laws (rolling_resistance, spin_friction: limits c F_n) do nothing in flight (F_n = 0, their
 holding forces 0); the lift-off leaves them sliding with their rate's sign (a stuck law would
 freeze its rate, stiction.stuck_rate_rows), the touchdown sets m = sign(rate) as at the start.
@@ -45,7 +48,7 @@ import casadi as ca
 
 from gyrowheel.model.contact_modes import state_rows, unit_vector
 from gyrowheel.model.context import BREAKAWAY, State, WheelContext
-from gyrowheel.model.flight import flight_equations
+from gyrowheel.model.flight_system import free_system
 from gyrowheel.model.impact import generalised_impact
 from gyrowheel.model.kinematics import norm
 from gyrowheel.model.spec import Event, Quantity
@@ -107,32 +110,51 @@ def declare_flight(ctx: WheelContext, restitution: ca.SX) -> FlightContact:
 
 
 class Flight:
-    """The flight mode's equations in the hybrid state x (nx): speeds, binder, ode rows."""
+    """The flight mode's equations in the hybrid state x (nx): speeds, binder, ode rows
+    (model/flight_system.py: the free wheel and every body, coordinate and actuator of the effects)."""
 
     def __init__(self, ctx: WheelContext, x: ca.SX):
         sl, fl, P = ctx.sliding, ctx.flight, ctx.par
         self.ctx, self.x = ctx, x
-        q = ctx.q  # x, y, alpha, beta, gamma (state symbols)
-        rates = ctx.qd[2:5]  # alpha_dot, beta_dot, gamma_dot: state symbols (angle-rate speeds)
-        self.qf = ca.vertcat(q[0], q[1], fl.z.sym, q[2], q[3], q[4])
-        self.wf = ca.vertcat(sl.vx.sym, sl.vy.sym, fl.vz.sym, rates)
-        self.g = ctx.gravity_magnitude()
-        eq = flight_equations()
-        pf = ca.vertcat(P["M"], P["R"], P["k_diam"], P["k_axial"], self.g)
-        qdd, energy, *_ = eq.function()(self.qf, self.wf, pf)
-        self.qdd = qdd
-        self.V = P["M"] * self.g * fl.z.sym
-        self.T = energy - self.V
-        self.height = fl.z.sym - P["R"] * ca.sin(q[3])
+        fs = free_system(ctx)
+        c = ctx.coords
+        self.free = [k for k in c if k.free]  # x, y, the angles, the effects' free coordinates
+        self.driven = [k for k in c if not k.free]
+        # placeholders -> the hybrid state's symbols (coordinates and independent speeds are states)
+        ph = [c[0].qd, c[1].qd, fs.z, fs.z_dot] + [k.q for k in self.driven if k.value is not None]
+        val = [sl.vx.sym, sl.vy.sym, fl.z.sym, fl.vz.sym] + [k.value for k in self.driven if k.value is not None]
+        ph, val = ca.vertcat(*ph), ca.vertcat(*val)
+
+        def to_state(e):
+            return ca.substitute(ca.SX(e), ph, val)
+        self.nf = fs.n_free  # x, y, z, the angles, the effects' free coordinates
+        self.qf = to_state(fs.q[:self.nf])
+        self.wf = to_state(fs.qd[:self.nf])  # x_dot, y_dot, z_dot, the angle rates, the effects' free rates
+        self.qdd, self.T, self.V, self.P_diss, self.P_act, self.tau_driven = (
+            to_state(e) for e in (fs.qdd, fs.T, fs.V, fs.P_diss, fs.P_act, fs.tau_driven))
+        self.height = fl.z.sym - P["R"] * ca.sin(c[3].q)
+
+    def speed_rows(self) -> list[int]:
+        """Rows of x holding the flight speeds wf (x_dot, y_dot, z_dot and the independent speeds)."""
+        sl, fl = self.ctx.sliding, self.ctx.flight
+        r_vx, r_vy = state_rows(self.x, sl.states)[0:2]
+        r_vz = state_rows(self.x, [fl.vz])[0]
+        rest = [next(j for j in range(self.x.numel()) if ca.is_equal(self.x[j], self.wf[i]))
+                for i in range(3, self.nf)]
+        return [r_vx, r_vy, r_vz] + rest
 
     def bind(self, expr: ca.SX) -> ca.SX:
-        """Placeholders -> the flight mode's expressions: rates, accelerations, T, V, no power,
-        F_n = 0 (the contact force is 0 in flight)."""
+        """Placeholders -> the flight mode's expressions: rates (the driven ones prescribed),
+        accelerations, driven values, T, V, the power the free body's laws dissipate (air drag),
+        the actuators' power, F_n = 0 (the contact force is 0 in flight)."""
         ctx = self.ctx
         holds = [law.hold for law in ctx.stick_slip]  # the stiction laws' holding forces: 0 (their limit is)
-        ph = ca.vertcat(ctx.qd[0:2], ctx.qdd, ctx.late["T"], ctx.late["V"], ctx.late["P_diss"],
-                        ctx.late["P_act"], ctx.Fn, ctx.Fc, *holds)
-        val = ca.vertcat(self.wf[0:2], 0, 0, self.qdd[3:6], self.T, self.V, 0, 0, 0, ca.SX.zeros(3),
+        c = ctx.coords
+        driven_q = [k for k in self.driven if k.value is not None]
+        ph = ca.vertcat(c[0].qd, c[1].qd, *[k.qd for k in self.driven], ctx.all_qdd(), *[k.q for k in driven_q],
+                        ctx.late["T"], ctx.late["V"], ctx.late["P_diss"], ctx.late["P_act"], ctx.Fn, ctx.Fc, *holds)
+        val = ca.vertcat(self.wf[0:2], *[k.rate for k in self.driven], self.qdd[0:2], self.qdd[3:],
+                         *[k.value for k in driven_q], self.T, self.V, self.P_diss, self.P_act, 0, ca.SX.zeros(3),
                          ca.SX.zeros(len(holds)))
         expr = ca.SX(expr)
         for _ in range(4):
@@ -142,13 +164,22 @@ class Flight:
         return expr
 
     def ode(self, n_mech: int) -> ca.SX:
-        """x_dot in flight (nx): the coordinates' rates, the angle accelerations (model/flight.py),
-        x_dot, y_dot constant, z_centre' = z_dot, z_dot' = -g, every other state constant."""
+        """x_dot in flight (nx): the coordinates' rates, the free system's accelerations
+        (model/flight_system.py: gravity, tilted on a slope, air drag, the Gyrover's assembly and
+        motors), z_centre' = z_dot, every other state its own equation in flight (dissipated_energy:
+        the drag's loss; actuator_work: the motors' power; the tilt servo; the contact's modes and
+        directions constant)."""
         ctx, fl = self.ctx, self.ctx.flight
+        nq = len(self.free)  # x, y and the angle coordinates (no z: its rows are local states)
         out = ca.SX.zeros(self.x.numel())
-        out[0:5] = ca.vertcat(self.wf[0:2], self.wf[3:6])
-        out[5:8] = self.qdd[3:6]
+        out[0:nq] = ca.vertcat(self.wf[0:2], self.wf[3:])
+        out[nq:n_mech] = self.qdd[3:self.nf]
         rows = {id(st): n_mech + i for i, st in enumerate(ctx.states)}
+        for st in ctx.states:
+            if st.derivative is not None:
+                out[rows[id(st)]] = self.bind(st.derivative)
+        r_vx, r_vy = state_rows(self.x, ctx.sliding.states)[0:2]  # x_dot, y_dot: a slope, drag
+        out[r_vx], out[r_vy] = self.qdd[0], self.qdd[1]
         out[rows[id(fl.z)]] = fl.vz.sym
         out[rows[id(fl.vz)]] = self.qdd[2]
         return out
@@ -184,7 +215,7 @@ def flight_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable
     x_l[r_z], x_l[r_vz], x_l[r_mode] = z_c, vz_c, FLIGHT
 
     # touchdown: the impact in the flight speeds w
-    rows_w = [r_vx, r_vy, r_vz, 5, 6, 7]  # (x_dot, y_dot, z_dot, alpha_dot, beta_dot, gamma_dot)
+    rows_w = flight.speed_rows()  # (x_dot, y_dot, z_dot, alpha_dot, beta_dot, gamma_dot, the effects' free rates)
     w = flight.wf
     M_w = ca.hessian(flight.T, w)[0]
     J = ca.jacobian(u, w)
@@ -197,6 +228,11 @@ def flight_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable
     if lost:
         row = x.numel() - len(ctx.states) + lost[0]
         x_b[row] = x[row] - res.dT
+    work = [j for j, st in enumerate(ctx.states) if st.quantity.name == "actuator_work"]
+    if work:  # driven coordinates (the Gyrover's flywheel, tilt) keep their rates through the impact:
+        # their motors' impulsive torques work on them, T(w+) - T(w-) - dT (dT the contact's loss)
+        row = x.numel() - len(ctx.states) + work[0]
+        x_b[row] = x[row] + ca.substitute(flight.T, x, x_b) - flight.T - res.dT
     on = ca.SX(x_b)  # on the constraint
     on[r_z], on[r_vz] = z_c, ca.substitute(vz_c, x, x_b)
     x_roll = ca.SX(on)
@@ -213,7 +249,9 @@ def flight_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable
     d = ca.if_else(ca.dot(v_slip, v_slip) > 0, unit_vector(v_slip), ca.substitute(-unit_vector(F_t), x, x_roll))
     x_slide[r_dx], x_slide[r_dy] = d[0], d[1]
     slides = ca.substitute(Fn_s, x, x_slide) > 0
-    bounces = res.u_plus[2] > 0
+    # a persistent contact (rebound below v_rest: target u_n+ = 0) never bounces, whatever the
+    # rounding of u_n+ (a rounded +1e-17 would fly on at h = 0 and sink before the next touchdown)
+    bounces = ca.logic_and(res.u_plus[2] > 0, ca.logic_not(res.persistent))
     x_t = ca.if_else(bounces, x_b, ca.if_else(rolls, x_roll, ca.if_else(slides, x_slide, x_b)))
     # stiction laws (rolling_resistance, spin_friction; limits c F_n): sliding with the rate's sign
     # in flight, where the limit is 0 (a stuck law would freeze its rate: stiction.stuck_rate_rows);

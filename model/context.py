@@ -159,6 +159,9 @@ class WheelContext:
     sliding: object = None  # gyrowheel.model.contact_modes.SlidingContact when the wheel may slide
     flight: object = None  # gyrowheel.model.contact_flight.FlightContact when the wheel may fly
     extra_starts: list[tuple[Quantity, ca.SX]] = field(default_factory=list)  # start values used by init only
+    # laws of the surroundings that act on the wheel as a free body too (flight, model/flight.py
+    # free_body): callables (v_centre (3,), omega (3,), n (3,)) -> [(value, velocity)]
+    free_laws: list = field(default_factory=list)
 
     def coordinate(self, name: str, free: bool = True, rate=None, accel=None, value=None,
                    start: Quantity | None = None, rate_start: Quantity | None = None) -> Coordinate:

@@ -283,8 +283,6 @@ def test_load_proportional_laws_vanish_in_flight(loaded, start):
     ('[effects.contact_forces]\non_slip = "slide"\nrestitution = 0.5\n', "restitution: is the touchdown's"),
     ('[effects.contact_forces]\non_slip = "slide"\non_lift_off = "fly"\nrestitution = 1.5\n',
      "restitution: must be <= 1"),
-    ('[effects.air_drag]\n[effects.contact_forces]\non_slip = "slide"\non_lift_off = "fly"\n',
-     'on_lift_off: "fly" is not possible with air_drag'),
     ('[effects.contact_forces]\non_slip = "slide"\n[initial]\nheight = 0.1\n', "height: is a start value of the flight"),
 ])
 def test_scene_refuses_what_flight_cannot_honour(text, message):

@@ -34,6 +34,7 @@ STATE = ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot
 RATES = ("alpha_dot", "beta_dot", "gamma_dot")
 W_UP = math.sqrt(G / R)  # the upright wheel's lean rate where F_n = M (g - R beta_dot^2) = 0
 T_STAR = 0.05  # the time the constructed rolling path passes the upright zero-force state
+MU_10 = {"mu": 10.0, "mu_k": 10.0}  # the hybrid's friction for a landing lift-off (mu_k <= mu)
 
 
 @pytest.fixture(scope="module")
@@ -147,13 +148,17 @@ def test_the_constructed_rolling_path_reaches_f_n_zero_at_t_star(approach):
 
 
 def test_hybrid_slides_where_the_friction_demand_reaches_mu_then_flies_and_lands(fmus, approach):
-    start, rolling, rolling_events = approach
-    # the rolling-only model's slip check (mu F_n - |F_t|, a warning there) fires before t*: the
-    # friction the rolling wheel needs exceeds mu F_n however large mu is
+    """mu = 10: the slip where the rolling-only model's friction demand reaches mu F_n (its slip
+    warning), then lift-off from sliding before t*, a flight, a touchdown that lands the wheel on
+    the ground (sliding, then rolling), and the same again each time the wheel swings through the
+    vertical (every 0.116 s); energy + dissipated_energy constant throughout."""
+    start = approach[0]
+    rolling, rolling_events = simulate_logged(fmus["rolling"], 0.07, 1e-4, list(STATE),
+                                              {**TIGHT, **start, "mu": 10.0})
     slip = [t for name, t in rolling_events if name == "slip"]
     assert slip and slip[0] < T_STAR
-    out = list(STATE) + ["contact_mode", "F_n", "vz", "height", "energy", "dissipated_energy"]
-    r, events = simulate_logged(fmus["hybrid"], 0.3, 1e-4, out, {**TIGHT, **start})
+    out = list(STATE) + ["contact_mode", "height", "energy", "dissipated_energy"]
+    r, events = simulate_logged(fmus["hybrid"], 0.25, 1e-4, out, {**TIGHT, **start, **MU_10})
     names = [name for name, _ in events]
     assert names[:2] == ["contact_slip", "contact_flight"]
     assert events[0][1] == pytest.approx(slip[0], abs=1e-9)  # rolling until the same instant
@@ -165,12 +170,27 @@ def test_hybrid_slides_where_the_friction_demand_reaches_mu_then_flies_and_lands
     for name in ("beta", "alpha_dot", "gamma_dot"):
         assert np.max(np.abs(r[name][:n] - rolling[name][:n])) < 1e-9, name
     assert np.all(r["contact_mode"][:n] == 0)
-    assert np.any(r["contact_mode"][t > t_lift] == 2)
-    landed = [tt for name, tt in events[2:] if name == "contact_flight"]  # touchdown, in flight
-    assert landed and np.all(r["contact_mode"][t > landed[-1] + 1e-3] < 2)
+    flight = [tt for name, tt in events if name == "contact_flight"]  # lift-off, touchdown, ...
+    assert len(flight) >= 4
+    for up, down in zip(flight[0::2], flight[1::2]):
+        assert np.all(r["contact_mode"][(t > up) & (t < down)] == 2)
+    assert np.all(r["contact_mode"][(t > flight[1] + 1e-3) & (t < flight[2])] < 2)
+    assert np.all(r["height"] >= -1e-12 * R)
     balance = r["energy"] + r["dissipated_energy"]
-    assert np.max(np.abs(balance - balance[0])) < 1e-9 * M * G * R  # through the flight and the touchdowns
+    assert np.max(np.abs(balance - balance[0])) < 1e-9 * M * G * R  # through the flights and touchdowns
     assert np.all(np.diff(r["dissipated_energy"]) >= -1e-12 * M * G * R)
+
+
+@pytest.mark.xfail(strict=True, reason="model/contact_flight.py: a grazing touchdown (impact speed "
+                   "~1e-10 m/s, F_n <= 0 in both contact modes) keeps the flight with the indicator "
+                   "already <= 0, and the wheel sinks through the ground")
+def test_grazing_touchdown_keeps_the_wheel_above_the_ground(fmus, approach):
+    """mu = 100: the slip 1e-4 s before t*, the lift-off from sliding 6.5e-5 s later, a touchdown
+    at a grazing speed; the wheel must not go below the ground after it."""
+    start = approach[0]
+    r, events = simulate_logged(fmus["hybrid"], 0.1, 1e-4, ["height", "contact_mode"], {**TIGHT, **start})
+    assert [name for name, _ in events][:3] == ["contact_slip", "contact_flight", "contact_flight"]
+    assert np.all(r["height"] >= -1e-12 * R)
 
 
 def test_lift_off_after_the_slip_keeps_the_velocities(fmus, approach):
@@ -180,7 +200,7 @@ def test_lift_off_after_the_slip_keeps_the_velocities(fmus, approach):
     me = simulate_fmu(fmus["hybrid"], stop_time=T_STAR, output_interval=1e-3, fmi_type="ModelExchange",
                       record_events=True, solver="CVode", relative_tolerance=1e-10,
                       output=["contact_mode", "F_n", "height", "vx", "vy", "vz", "alpha_dot", "beta_dot",
-                              "gamma_dot"], start_values={**TIGHT, **start})
+                              "gamma_dot"], start_values={**TIGHT, **start, **MU_10})
     tm, mode = me["time"], me["contact_mode"]
     i = next(k for k in range(len(tm) - 1) if tm[k] == tm[k + 1] and mode[k] == 1 and mode[k + 1] == 2)
     assert abs(me["F_n"][i]) < 1e-6 * M * G and me["F_n"][i + 1] == 0 and me["height"][i + 1] == 0

@@ -45,6 +45,8 @@ def test_contact_mode_is_an_enumeration_that_validates(example_build, fmi):
     assert v.declaredType.name == "ContactMode"
     assert {i.name: int(i.value) for i in v.declaredType.items} == ITEMS
     assert gyrowheel.info(fmu).variable("contact_mode").items == ITEMS
+    line = next(row for row in str(gyrowheel.info(fmu)).splitlines() if row.startswith("contact_mode "))
+    assert line.split()[1:3] == ["output", "discrete"]  # the table of `gyrowheel info`
 
 
 def test_a_sliding_only_scene_lists_no_flight(example_build):
@@ -166,14 +168,16 @@ def test_fmi2_state_keeps_the_mode(example_build):
 
 
 def test_fmi3_state_keeps_the_mode(example_build):
+    """As in FMI 2, the state also restored from its serialized bytes."""
     s = Slave3(str(example_build("drop_bounce", fmi=3).fmu), logging_on=False)
     s.init(**TIGHT)
     s.slave.doStep(0.0, 0.2)
     assert s.get("contact_mode") == ITEMS["flight"]
     state = s.fmu3.getFMUState()
+    copy = s.fmu3.deserializeFMUState(s.fmu3.serializeFMUState(state))  # through its bytes
     runs = []
-    for _ in range(2):
-        s.fmu3.setFMUState(state)
+    for restored in (state, copy):
+        s.fmu3.setFMUState(restored)
         assert s.get("contact_mode") == ITEMS["flight"]
         out = []
         for k in range(10):
@@ -182,4 +186,5 @@ def test_fmi3_state_keeps_the_mode(example_build):
         runs.append(out)
     assert runs[0][-1][0] == ITEMS["rolling"] and runs[1] == runs[0]
     s.fmu3.freeFMUState(state)
+    s.fmu3.freeFMUState(copy)
     s.free()

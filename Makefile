@@ -2,7 +2,8 @@
 #   make demo   builds the paper FMUs, runs earth/Mars/moon, writes CSV, a figure and the earth
 #               run's animation (GIF and interactive HTML) to results/; the Gyrover closed
 #               loop (earth, moon: turn and figure eight) with its plots and animations to
-#               results/system/
+#               results/system/; the contact modes (ice_slide sliding, drop_bounce bouncing to rest): CSV
+#               and a figure of height, slip and contact_mode to results/contact/
 #   make test   installs what the tests need (Debian's chromium too, as root) and runs them all;
 #               one builds the wheel and installs it into a fresh environment (pip, from PyPI)
 #   make bench  the work-precision benchmark (results/bench/*.png, work_precision.md)
@@ -36,6 +37,7 @@ venv: $(STAMP)
 demo: $(STAMP)
 	$(PY) examples/paper_demo.py --out results
 	$(PY) examples/gyrover_control.py --out results/system
+	$(PY) examples/contact_demo.py --out results/contact
 	$(PY) -m gyrowheel animate results/system/closed_loop_earth_wheel.csv --fmu results/system/earth/gyrover_earth.fmu \
 	    -o results/system/closed_loop_earth.gif --fps 10 --speed 4 --size 480x360 --trail 30
 	$(PY) -m gyrowheel animate results/system/closed_loop_moon_wheel.csv --fmu results/system/moon/gyrover_moon.fmu \

@@ -115,8 +115,11 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
                           fmi2Integer value[]) {
     size_t k;
     GW_FRAME(GetInteger);
+    gw_fmi2_allow_discard(F);
     GW_CHECK_ARRAYS(vr, nvr, value);
     if (gw_fmi2_needs(I, vr, nvr) & GW_NEED_OUTPUTS) GW_TRY(gw_update_outputs(I, fn));
+    /* as fmi2GetReal: every reference and value checked before anything is written (an
+     * Enumeration output, e.g. a contact mode, is computed from the state) */
     for (k = 0; k < nvr; k++) {
         const gw_variable *v = gw_fmi2_lookup(I, fn, vr[k], GW_INTEGER);
         double d;
@@ -124,9 +127,10 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
             status = fmi2Error;
             goto END;
         }
-        d = gw_value_get(I, v);
-        value[k] = isfinite(d) ? (fmi2Integer)floor(d + 0.5) : 0;
+        GW_TRY(gw_front_get_finite(I, fn, v, &d));
     }
+    for (k = 0; k < nvr; k++)
+        value[k] = (fmi2Integer)floor(gw_value_get(I, gw_variable_find(I->m, vr[k])) + 0.5);
     GW_FRAME_END();
 }
 

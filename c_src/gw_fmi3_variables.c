@@ -199,7 +199,7 @@ static fmi3Status gw_fmi3_get(gw_fmu3 *F, const char *fn, const fmi3ValueReferen
     if (need & GW_NEED_OUTPUTS) GW3_TRY(gw_update_outputs(I, fn));
     if (need & GW_NEED_DERIVATIVES) GW3_TRY(gw_update_derivatives(I, fn));
     if (need & GW_NEED_INDICATORS) GW3_TRY(gw_front_indicators(I, fn));
-    for (k = 0; k < nvr && type == GW_REAL; k++) {
+    for (k = 0; k < nvr && type != GW_BOOLEAN; k++) { /* a Boolean is an event flag: 0 or 1 */
         const gw_array *a = gw_fmi3_array_find(I->m, vr[k]);
         const gw_variable *v = a ? NULL : gw_variable_find(I->m, vr[k]);
         double d;
@@ -225,12 +225,8 @@ static fmi3Status gw_fmi3_get(gw_fmu3 *F, const char *fn, const fmi3ValueReferen
         d = v ? gw_value_get(I, v) : I->t;
         switch (type) {
         case GW_REAL: ((fmi3Float64 *)values)[j] = d; break;
-        case GW_INTEGER:
-            ((fmi3Int32 *)values)[j] = isfinite(d) ? (fmi3Int32)floor(d + 0.5) : 0;
-            break;
-        case GW_ENUM:
-            ((fmi3Int64 *)values)[j] = isfinite(d) ? (fmi3Int64)floor(d + 0.5) : 0;
-            break;
+        case GW_INTEGER: ((fmi3Int32 *)values)[j] = (fmi3Int32)floor(d + 0.5); break;
+        case GW_ENUM: ((fmi3Int64 *)values)[j] = (fmi3Int64)floor(d + 0.5); break;
         default: ((fmi3Boolean *)values)[j] = d != 0.0; break;
         }
     }
@@ -249,6 +245,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, fmi3Int32 values[], size_t nValues) {
     GW3_FRAME(GetInt32);
+    gw_fmi3_allow_discard(F);
     status = gw_fmi3_get(F, fn, valueReferences, nValueReferences, values, nValues, GW_INTEGER);
     GW3_FRAME_END();
 }
@@ -256,6 +253,7 @@ fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueRef
 fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, fmi3Int64 values[], size_t nValues) {
     GW3_FRAME(GetInt64);
+    gw_fmi3_allow_discard(F);
     status = gw_fmi3_get(F, fn, valueReferences, nValueReferences, values, nValues, GW_ENUM);
     GW3_FRAME_END();
 }

@@ -5,7 +5,7 @@ import xml.etree.ElementTree as ET
 from datetime import datetime, timezone
 
 from gyrowheel.fmu_build.scene import SOLVERS, Experiment
-from gyrowheel.fmu_build.variables import Variable
+from gyrowheel.fmu_build.variables import Variable, enumeration_types
 
 LOG_CATEGORIES = {  # must match c_src/gw_log.c
     "logEvents": "events: fall, warnings at located event times",
@@ -98,10 +98,10 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
     write_units(root, {u for v in table if (u := _unit_of(v))})
 
     types = ET.SubElement(root, "TypeDefinitions")
-    solver_type = ET.SubElement(types, "SimpleType", {"name": "Solver"})
-    enum = ET.SubElement(solver_type, "Enumeration")
-    for name, value in solver_items(taylor):
-        ET.SubElement(enum, "Item", {"name": name, "value": str(value)})
+    for type_name, items in enumerations(table, taylor).items():
+        enum = ET.SubElement(ET.SubElement(types, "SimpleType", {"name": type_name}), "Enumeration")
+        for name, value in items:
+            ET.SubElement(enum, "Item", {"name": name, "value": str(value)})
 
     write_log_categories_and_experiment(root, exp, LOG_CATEGORIES)
 
@@ -159,6 +159,12 @@ def variable_attrs(v: Variable) -> dict[str, str]:
 def solver_items(taylor: bool) -> list[tuple[str, int]]:
     """The Solver enumeration's items (name, value): every solver, taylor only with the kernel."""
     return [(name, value) for name, value in SOLVERS.items() if name != "taylor" or taylor]
+
+
+def enumerations(table: list[Variable], taylor: bool) -> dict[str, list[tuple[str, int]]]:
+    """Every Enumeration type of the FMU, {name: [(item, value)]}: Solver (solver_items) and
+    those of the Enumeration outputs (variables.enumeration_types, e.g. ContactMode)."""
+    return {"Solver": solver_items(taylor), **enumeration_types(table)}
 
 
 def start_text(v: Variable) -> str | None:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from datetime import datetime, timezone
 
-from gyrowheel.fmu_build.model_description import (LOG_CATEGORIES, _unit_of, solver_items, start_text, variable_attrs,
+from gyrowheel.fmu_build.model_description import (LOG_CATEGORIES, _unit_of, enumerations, start_text, variable_attrs,
                                                    write_log_categories_and_experiment, write_units)
 from gyrowheel.fmu_build.scene import Experiment
 from gyrowheel.fmu_build.variables import Variable
@@ -80,9 +80,10 @@ def write_model_description3(model_name: str, exp: Experiment, table: list[Varia
     write_units(root, {"s"} | {u for v in table if (u := _unit_of(v))})
 
     types = ET.SubElement(root, "TypeDefinitions")
-    solver = ET.SubElement(types, "EnumerationType", {"name": "Solver"})
-    for name, value in solver_items(taylor):
-        ET.SubElement(solver, "Item", {"name": name, "value": str(value)})
+    for type_name, items in enumerations(table, taylor).items():
+        enum = ET.SubElement(types, "EnumerationType", {"name": type_name})
+        for name, value in items:
+            ET.SubElement(enum, "Item", {"name": name, "value": str(value)})
     write_log_categories_and_experiment(root, exp, _log_categories())
 
     mvs = ET.SubElement(root, "ModelVariables")

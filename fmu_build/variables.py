@@ -91,6 +91,27 @@ def _solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
     ]
 
 
+def enumeration_type_name(name: str) -> str:
+    """The declared type of an Enumeration output: its name in CamelCase (contact_mode ->
+    ContactMode)."""
+    return "".join(part.capitalize() for part in name.split("_"))
+
+
+def enumeration_types(table: list[Variable]) -> dict[str, list[tuple[str, int]]]:
+    """The Enumeration types the outputs of `table` declare, {type name: [(item, value)]},
+    values 0, 1, ... in the order of Quantity.items; the solver setting's Solver is not among
+    them (model_description.solver_items). Raises ValueError if two outputs declare one type
+    with different items."""
+    types: dict[str, list[tuple[str, int]]] = {}
+    for v in table:
+        if v.kind != "output" or not v.quantity.items:
+            continue
+        items = [(item, value) for value, item in enumerate(v.quantity.items)]
+        if types.setdefault(v.declared_type, items) != items:
+            raise ValueError(f"output {v.name}: Enumeration type {v.declared_type} declared with other items")
+    return types
+
+
 def _depends(expr: ca.SX, syms: ca.SX) -> list[bool]:
     """Which elements of syms the expression depends on (structurally)."""
     if syms.numel() == 0:
@@ -133,7 +154,10 @@ def build_table(spec: ModelSpec, exp: Experiment, keep: list[str] | None = None,
     for j, (q, _) in enumerate(spec.outputs):
         if keep is not None and q.name not in keep and q.name not in REQUIRED_OUTPUTS:
             continue
-        if q.name in start_names:
+        if q.items:  # a mode: changes only at events (FMI 2.0.4 section 2.2.7, variability discrete)
+            add(quantity=q, type="Enumeration", causality="output", variability="discrete",
+                initial="calculated", kind="output", index=j, declared_type=enumeration_type_name(q.name))
+        elif q.name in start_names:
             add(quantity=q, type="Real", causality="output", variability="continuous", initial="exact",
                 kind="start", index=start_names[q.name], out_index=j)
         else:

@@ -380,6 +380,7 @@ class _Assembler:
             for qq, _ in outputs:
                 if qq.name == "contact_mode":
                     qq.description = "contact mode: 0 rolling, 1 sliding, 2 flight"
+                    qq.items = contact_modes.MODE_NAMES
             outputs = [(qq, ca.if_else(flying, fl.z.sym, e) if qq.name == "z" else
                         ca.if_else(flying, flight.T + flight.V, e) if qq.name == "energy" else e)
                        for qq, e in outputs]

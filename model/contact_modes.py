@@ -73,6 +73,7 @@ from gyrowheel.model.lagrangian import ConstrainedSystem
 from gyrowheel.model.spec import Event, Quantity
 
 ROLLING, SLIDING, FLIGHT = 0, 1, 2
+MODE_NAMES = ("rolling", "sliding", "flight")  # the Enumeration contact_mode's items, by value
 ABOUT = (" With on_slip = \"slide\" the wheel also slides: past the friction limit mu F_n the centre's horizontal "
          "velocity is free and Coulomb friction mu_k F_n opposes the contact point's slip (outputs contact_mode, "
          "slip_long, slip_lat); it rolls again when the slip has died out and the friction needed is within "
@@ -297,7 +298,7 @@ def contact_init(ctx: WheelContext, x: ca.SX, init: ca.SX, bind_r: Callable, s_b
 
 
 def contact_outputs(ctx: WheelContext, bind_s: Callable, by_name: dict) -> list[tuple[Quantity, ca.SX]]:
-    """The outputs contact_mode (1: 0 rolling, 1 sliding) and the slip velocity along / across the
+    """The outputs contact_mode (an Enumeration: 0 rolling, 1 sliding) and the slip velocity along / across the
     heading (m/s, 0 while rolling), slip_long and slip_lat being the start values' variables."""
     sl = ctx.sliding
     mode = sl.mode.sym
@@ -306,6 +307,6 @@ def contact_outputs(ctx: WheelContext, bind_s: Callable, by_name: dict) -> list[
     along = v[0] * ca.cos(a) + v[1] * ca.sin(a)
     across = -v[0] * ca.sin(a) + v[1] * ca.cos(a)
     sliding = ca.logic_and(mode > 0.5, mode < 1.5)
-    return [(Quantity("contact_mode", "1", "contact mode: 0 rolling, 1 sliding"), mode),
+    return [(Quantity("contact_mode", "", "contact mode: 0 rolling, 1 sliding", items=MODE_NAMES[:2]), mode),
             (by_name["slip_long"], ca.if_else(sliding, along, 0)),
             (by_name["slip_lat"], ca.if_else(sliding, across, 0))]

@@ -25,6 +25,9 @@ class Quantity:
     display_unit: str | None = None
     minimum: float | None = None  # inclusive limits a scene value is checked against
     maximum: float | None = None
+    # an output that takes whole values 0, 1, ... naming states: the names, in value order (an
+    # FMI Enumeration, type `<Name>` of the CamelCase name: fmu_build/variables.py); empty: a real
+    items: tuple[str, ...] = ()
 
 
 @dataclass

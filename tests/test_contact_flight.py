@@ -312,7 +312,7 @@ def test_flight_adds_its_variables(fmu):
 # variable table, the experiment and the name): flight adds nothing to them. Change these only with
 # a change meant for those scenes (ice_slide: the rolling and sliding modes, model/contact_modes.py).
 GROUND_GUIDS = {"paper_earth": "{0f3a0dfe-de90-52ce-813d-643693770e33}",  # rolling, base wheel
-                "ice_slide": "{51eae62f-5076-5fb2-a04f-97fa9e07d7e4}"}  # rolling and sliding
+                "ice_slide": "{3d5332c8-fc40-5b5c-810d-fea2df90a4e0}"}  # rolling and sliding
 
 
 @pytest.mark.parametrize("name", sorted(GROUND_GUIDS))

@@ -181,9 +181,6 @@ def test_hybrid_slides_where_the_friction_demand_reaches_mu_then_flies_and_lands
     assert np.all(np.diff(r["dissipated_energy"]) >= -1e-12 * M * G * R)
 
 
-@pytest.mark.xfail(strict=True, reason="model/contact_flight.py: a grazing touchdown (impact speed "
-                   "~1e-10 m/s, F_n <= 0 in both contact modes) keeps the flight with the indicator "
-                   "already <= 0, and the wheel sinks through the ground")
 def test_grazing_touchdown_keeps_the_wheel_above_the_ground(fmus, approach):
     """mu = 100: the slip 1e-4 s before t*, the lift-off from sliding 6.5e-5 s later, a touchdown
     at a grazing speed; the wheel must not go below the ground after it."""

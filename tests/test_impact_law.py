@@ -121,7 +121,8 @@ def test_kinematic_restitution_with_friction_can_create_energy_and_the_law_does_
         P_s = np.linalg.solve(W, target - u)
         if np.hypot(P_s[0], P_s[1]) <= mu * P_s[2] and P_s @ u + 0.5 * P_s @ W @ P_s > 1e-9:
             P, up, dT, st, pe = law(W, u, e, mu, 0.0)
-            assert dT <= 1e-15
+            T_minus = 0.5 * u @ np.linalg.solve(W, u)  # the contact's kinetic energy scale
+            assert dT <= 1e-14 * T_minus  # no gain beyond rounding
             return
     pytest.fail("no energy-creating kinematic impact among the samples")
 

@@ -15,18 +15,15 @@ import math
 import numpy as np
 import pytest
 
-from conftest import SCENES, shared_build
 from gyrowheel.controller.surface import brake_and_turn, contact_report, mission_starts, surface_system
 from gyrowheel.cosim.master import run
-from gyrowheel.fmu_build import build_fmu, load_scene
 
 STEP = 0.01
 
 
 @pytest.fixture(scope="module")
-def ice_fmu(tmp_path_factory):
-    return shared_build(tmp_path_factory, "gyrover_ice", lambda out: build_fmu(
-        load_scene(SCENES / "gyrover_ice.toml"), out / "gyrover_ice.fmu").fmu)
+def ice_fmu(example_build):
+    return example_build("gyrover_ice").fmu  # the run's one build of the example scene
 
 
 def fly(wheel_fmu, controller_fmu, mission, **wheel):

@@ -160,7 +160,7 @@ class WheelContext:
     flight: object = None  # gyrowheel.model.contact_flight.FlightContact when the wheel may fly
     extra_starts: list[tuple[Quantity, ca.SX]] = field(default_factory=list)  # start values used by init only
     # laws of the surroundings that act on the wheel as a free body too (flight, model/flight.py
-    # free_body): callables (v_centre (3,), omega (3,), n (3,)) -> [(value, velocity)]
+    # free_energies): callables (v_centre (3,), omega (3,), n (3,)) -> [(value, velocity)]
     free_laws: list = field(default_factory=list)
 
     def coordinate(self, name: str, free: bool = True, rate=None, accel=None, value=None,

@@ -12,7 +12,7 @@ frame staying attached to the ground plane, so the height above the plane is sti
 and the equations of motion come from the same Lagrangian machinery as the rolling and sliding
 modes (model/lagrangian.py, ConstrainedSystem with no constraint rows: the null space is the
 identity), with the generalised forces of the surroundings' laws that act on a free body (air
-drag: free_body's laws). The lowest point of the rim lies R sin(beta) below the centre (the rim's circle tilted
+drag: free_energies' laws). The lowest point of the rim lies R sin(beta) below the centre (the rim's circle tilted
 by beta), so the height above the ground is h = z - R sin(beta): touchdown is h reaching 0 moving
 down. The Euler angles are singular where the axle is vertical (sin(beta) = 0), as in rolling
 (docs/model.md): a wheel turning flat in the air ends the description there.
@@ -49,20 +49,6 @@ class FlightEquations:
         return ca.Function("flight", [self.q, self.qd, self.p],
                            [self.qdd, self.energy, self.momentum, self.axle, self.omega, self.height],
                            ["q", "qd", "p"], ["qdd", "energy", "L", "n", "omega", "height"])
-
-
-@dataclass
-class FreeBody:
-    """The free wheel's dynamics in given placeholders q, qd (6,) (see free_body)."""
-
-    qdd: ca.SX  # accelerations (6,)
-    T: ca.SX  # kinetic energy, J
-    V: ca.SX  # potential energy, J
-    P_diss: ca.SX  # power the surroundings' laws take out (>= 0 for drag), W
-    momentum: ca.SX  # angular momentum about the centre, ground frame (3,)
-    axle: ca.SX  # n (3,)
-    omega: ca.SX  # angular velocity, ground frame (3,)
-    height: ca.SX  # of the rim's lowest point above the plane z = 0, m
 
 
 @dataclass
@@ -105,28 +91,16 @@ def free_energies(q: ca.SX, qd: ca.SX, M, R, k_diam, k_axial, gravity: ca.SX, la
                         axle=n, omega=omega, height=q[2] - R * ca.sin(beta))
 
 
-def free_body(q: ca.SX, qd: ca.SX, M, R, k_diam, k_axial, gravity: ca.SX, laws=(), parameters=()) -> FreeBody:
-    """The free wheel's dynamics in the placeholders q, qd (6,): free_energies' T, V and laws,
-    equations from ConstrainedSystem without constraint rows; the laws' power counted as
-    dissipated (P_diss = -power)."""
-    e = free_energies(q, qd, M, R, k_diam, k_axial, gravity, laws)
-    qdd = ca.SX.sym("qdd", 6)
-    system = ConstrainedSystem(q=q, qd=qd, qdd=qdd, n_free=6, T=e.T, V=e.V, A=ca.SX(0, 6),
-                               Q_nc=e.Q if laws else None, parameters=list(parameters))
-    v_dot = ca.SX.sym("v_dot", 6)
-    _, qdd_sol, _, _ = system.reduced(ca.SX.eye(6), qd, v_dot, ca.SX(0, 1), ca.SX(0, 1))
-    return FreeBody(qdd=qdd_sol, T=e.T, V=e.V, P_diss=-e.power, momentum=e.momentum, axle=e.axle, omega=e.omega,
-                    height=e.height)
-
-
 def flight_equations() -> FlightEquations:
     """The free wheel's equations of motion under vertical gravity (module docstring); derived,
     never typed in."""
     q = ca.SX.sym("q", 6)
     qd = ca.SX.sym("qd", 6)
     M, R, k_diam, k_axial, g = (ca.SX.sym(n) for n in ("M", "R", "k_diam", "k_axial", "g"))
-    body = free_body(q, qd, M, R, k_diam, k_axial, ca.vertcat(0, 0, -g),
-                     parameters=["M", "R", "k_diam", "k_axial", "g"])
+    e = free_energies(q, qd, M, R, k_diam, k_axial, ca.vertcat(0, 0, -g))
+    system = ConstrainedSystem(q=q, qd=qd, qdd=ca.SX.sym("qdd", 6), n_free=6, T=e.T, V=e.V, A=ca.SX(0, 6),
+                               parameters=["M", "R", "k_diam", "k_axial", "g"])  # no constraint rows
+    _, qdd, _, _ = system.reduced(ca.SX.eye(6), qd, ca.SX.sym("v_dot", 6), ca.SX(0, 1), ca.SX(0, 1))
     return FlightEquations(
-        q=q, qd=qd, p=ca.vertcat(M, R, k_diam, k_axial, g), qdd=body.qdd, energy=body.T + body.V,
-        momentum=body.momentum, axle=body.axle, omega=body.omega, height=body.height)
+        q=q, qd=qd, p=ca.vertcat(M, R, k_diam, k_axial, g), qdd=qdd, energy=e.T + e.V,
+        momentum=e.momentum, axle=e.axle, omega=e.omega, height=e.height)

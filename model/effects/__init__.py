@@ -22,30 +22,19 @@ CATALOGUE: dict[str, type[Effect]] = {e.name: e for e in (
     Gravity, Slope, Gyrover, RollingResistance, SpinFriction, AirDrag, ContactForces, Energy)}
 
 
-
-FLY_EFFECTS = ("gravity", "slope", "gyrover", "air_drag", "rolling_resistance", "spin_friction", "contact_forces",
-               "energy")  # "fly" honours these (every effect of CATALOGUE)
-
-
 def lift_off_conflict(effects: dict[str, dict]) -> str | None:
     """Why contact_forces' on_lift_off cannot be honoured with these effects, or None.
 
     A law proportional to the normal load (rolling resistance, pivot friction) would push
     instead of resisting once F_n < 0, so it cannot go on past lift-off: a scene with such a
     law must stop there (on_lift_off = "terminate", also the default without contact_forces) or
-    leave the ground ("fly": in flight F_n = 0 and the law does nothing). "fly" takes the effects
-    of FLY_EFFECTS: gravity (tilted by slope), air drag and the Gyrover's assembly act on the free
-    system (model/flight_system.py), the load-proportional laws vanish with F_n = 0.
+    leave the ground ("fly": in flight F_n = 0 and the law does nothing). "fly" takes every effect:
+    gravity (tilted by slope), air drag and the Gyrover's assembly act on the free system
+    (model/flight_system.py; docs/effects.md, "Flight"), the load-proportional laws vanish with F_n = 0.
     """
     policy = effects.get("contact_forces", {}).get("on_lift_off", ContactForces.choices()["on_lift_off"][0])
-    if policy == "fly":  # docs/effects.md, "Flight"
-        others = [name for name in effects if name not in FLY_EFFECTS]
-        if others:
-            return (f"\"fly\" is not possible with {' and '.join(others)}: the flight mode knows "
-                    f"{', '.join(FLY_EFFECTS)}; leave {' and '.join(others)} out or use \"terminate\"")
-        return None
     laws = [name for name, cls in CATALOGUE.items() if name in effects and cls.uses_normal_load]
-    if policy == "terminate" or not laws:
+    if policy in ("terminate", "fly") or not laws:
         return None
     return (f"{policy!r} is not possible with {' and '.join(laws)}: a law proportional to the normal "
             f"force would push instead of resisting once F_n < 0, so the run must stop at lift-off; "

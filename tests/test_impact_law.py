@@ -1,29 +1,41 @@
 """The touchdown impact law (model/impact.py) against results it did not produce.
 
-- An upright drop (W diagonal, contact point moving straight down): Newton's restitution exactly,
-  no tangential impulse; below v_rest the contact persists (u_n+ = 0).
-- 2000 random impacts (random SPD W from a random rigid body and contact Jacobian, random approach
-  velocities, mu in 0..1.5, e in 0..1): the kinetic energy never rises (dT <= 1e-12 of the
-  approach energy), the impulse stays in the friction cone and pushes (P_n >= 0), the contact point
-  no longer approaches the ground, and whenever the law kept its target the normal velocity is
-  -e u_n- (or 0) and, sticking, the tangential one 0.  Measured: largest dT / T- 7.3e-16, 958
-  sticking, 10 of 2000 impacts scaled by the energy guard.
-- Sliding impulses are the nearest boundary points in W's metric: equal to scipy's SLSQP solution
-  of the same convex problem (written here from the problem's statement) to 1e-6 (measured 6.9e-8).
-- A kinematic restitution with friction that would create energy exists among the samples (so the
-  energy guard is exercised), and the law's answer there does not.
+- An upright drop (no coupling, W_tn = 0): without slip Newton's restitution exactly, no tangential
+  impulse, and below v_rest a persistent contact; with slip along a principal axis of W_tt the
+  closed form of a straight slip that stops at P_n = |v| / (mu W_tt,ii) (before, during or after
+  compression, or never).
+- Random impacts (random SPD W of a random rigid body and contact point, random approach, mu in
+  0..1.5, e in 0..1) against scipy's solve_ivp (DOP853, rtol 1e-13) of the same impulse ODE written
+  here from its statement: du/dP_n = W (-mu v/|v|, 1) while sliding; at v = 0 sticking if
+  |W_tt^-1 W_tn| <= mu, else sliding on along the direction s with W_tn - mu W_tt s parallel to s
+  (found here by scanning the angle); compression ends at u_n = 0, restitution where the normal
+  work int u_n dP_n has given back e^2 of compression's. Measured: the largest difference in u+
+  0.4e-10 of |u-| (bound 1e-10) over 300 impacts.
+- 3000 random impacts: the kinetic energy never rises (dT <= 1e-12 of the approach energy; measured
+  largest dT / T- -1.8e-9, i.e. always a loss), the impulse pushes and stays in the friction cone,
+  the contact point no longer approaches the ground, sticking means u_t+ = 0.
+- The compliant limit: a Kelvin-Voigt contact (spring and damper along the normal, the damping
+  ratio of restitution e for the frictionless effective mass, as tests/reference/soft_contact.py)
+  with Coulomb friction, integrated in time here (its result does not depend on the stiffness, W
+  being constant): for e = 1 (a spring: all compression work given back) it equals the energetic
+  law to 1e-9; for e < 1 the energetic law is nearer to it than Newton's (u_n+ = -e u_n-) or
+  Poisson's (P_n = (1 + e) P_c) in the median and the worst case over the samples.
 - In generalised coordinates (a free rigid disc, its mass matrix and contact Jacobian written here
   from the rigid-body equations): J v+ equals the contact space's u+, and the kinetic energy computed
   from v+ changes by dT.
 """
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 import numpy as np
 import pytest
-from scipy.optimize import minimize
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 from gyrowheel.model.impact import generalised_impact, impact
+from reference.soft_contact import damping_for_restitution
 
 _W, _u = ca.SX.sym("W", 3, 3), ca.SX.sym("u", 3)
 _e, _mu, _vr = ca.SX.sym("e"), ca.SX.sym("mu"), ca.SX.sym("v_rest")
@@ -50,81 +62,238 @@ def random_case(rng):
     return 0.5 * (W + W.T), u
 
 
+def jams(W, mu):
+    return W[2, 2] <= mu * math.hypot(W[0, 2], W[1, 2])
+
+
+# ---- the impulse ODE, integrated by scipy ---------------------------------------------------------
+
+def _slip_rate(W, mu, s):
+    """du_t/dP_n while sliding in direction s: W_tn - mu W_tt s."""
+    return W[:2, 2] - mu * W[:2, :2] @ s
+
+
+def _growing_direction(W, mu):
+    """The unit s with W_tn - mu W_tt s = lam s, lam > 0: scanned over the angle, then brentq."""
+    def cross(a):
+        s = np.array([math.cos(a), math.sin(a)])
+        d = _slip_rate(W, mu, s)
+        return s[0] * d[1] - s[1] * d[0]
+    grid = np.linspace(0, 2 * math.pi, 3601)
+    found = []
+    for a, b in zip(grid[:-1], grid[1:]):
+        if cross(a) * cross(b) <= 0:
+            a = brentq(cross, a, b, xtol=1e-15, rtol=4e-16)
+            s = np.array([math.cos(a), math.sin(a)])
+            if s @ _slip_rate(W, mu, s) > 0:
+                found.append(s)
+    assert found, "no growing slip direction"
+    return found[0]
+
+
+def integrate(W, u0, e, mu, rule="energetic"):
+    """(u+ (3,), P_n, ended sticking): the impulse ODE integrated in P_n by scipy (module docstring).
+    rule: "energetic" (Stronge), "newton" (u_n+ = -e u_n-) or "poisson" (P_n = (1 + e) P_c)."""
+    state = {"P_c": None, "E_c": None}
+
+    def rhs(p, y):  # y = (u (3), E_n)
+        v = y[:2]
+        dP = np.append(-mu * v / math.hypot(*v), 1.0)
+        return np.append(W @ dP, y[2])
+
+    def ended(p, y):
+        if state["P_c"] is None:
+            return y[2]
+        if rule == "newton":
+            return y[2] + e * u0[2]
+        if rule == "poisson":
+            return p - (1 + e) * state["P_c"]
+        return y[3] - (1 - e * e) * state["E_c"]
+    ended.terminal, ended.direction = True, 1
+    scale = np.abs(u0).max()
+
+    def stuck(p, y):
+        return math.hypot(y[0], y[1]) - 1e-10 * scale
+    stuck.terminal, stuck.direction = True, -1
+
+    y, p = np.append(u0, 0.0), 0.0
+    while math.hypot(y[0], y[1]) > 0:
+        sol = solve_ivp(rhs, (p, p + 1e6), y, method="DOP853", rtol=1e-13, atol=1e-16 * scale,
+                        events=[stuck, ended])
+        y, p = sol.y[:, -1], sol.t[-1]
+        if len(sol.t_events[0]):  # the last 1e-10 of the slip on its (converged) direction
+            d = rhs(p, y)
+            r = math.hypot(y[0], y[1])
+            dp = -r / ((y[:2] @ d[:2]) / r)
+            y, p = y + d * dp, p + dp
+            y[:2] = 0.0
+            break
+        if state["P_c"] is None:
+            state["P_c"], state["E_c"] = p, y[3]
+            continue
+        return y[:3], p, False
+    # after the slip stopped: constant du/dP_n
+    A, bt = W[:2, :2], W[:2, 2]
+    holds = np.linalg.norm(np.linalg.solve(A, bt)) <= mu
+    Pt_rate = -np.linalg.solve(A, bt) if holds else -mu * _growing_direction(W, mu)
+    d = W @ np.append(Pt_rate, 1.0)
+
+    def advance(y, p, dp):
+        return np.append(y[:3] + d * dp, y[3] + y[2] * dp + 0.5 * d[2] * dp * dp), p + dp
+    if state["P_c"] is None:
+        y, p = advance(y, p, -y[2] / d[2])
+        state["P_c"], state["E_c"] = p, y[3]
+    if rule == "newton":
+        dp = (-e * u0[2] - y[2]) / d[2]
+    elif rule == "poisson":
+        dp = (1 + e) * state["P_c"] - p
+    else:
+        room = (1 - e * e) * state["E_c"] - y[3]
+        dp = (-y[2] + math.sqrt(y[2] ** 2 + 2 * d[2] * room)) / d[2]
+    y, p = advance(y, p, dp)
+    return y[:3], p, holds
+
+
+# ---- tests ----------------------------------------------------------------------------------------
+
+W_UPRIGHT = np.diag([1 / 2.0 + 0.17 ** 2 / 0.0289, 1 / 2.0 + 0.17 ** 2 / 0.0578, 0.5])
+
+
 def test_upright_drop_is_newtons_restitution():
-    W = np.diag([1 / 2.0 + 0.17 ** 2 / 0.0289, 1 / 2.0 + 0.17 ** 2 / 0.0578, 0.5])
+    W = W_UPRIGHT
     for e in (0.0, 0.3, 0.8, 1.0):
         P, up, dT, st, pe = law(W, [0, 0, -2.0], e, 0.5, 1e-3)
         assert np.allclose(P[:2], 0, atol=1e-15)
         assert up[2] == pytest.approx(2.0 * e, rel=1e-14, abs=1e-15)
         assert dT == pytest.approx(-0.5 * (1 - e * e) * 4.0 / 0.5, rel=1e-13, abs=1e-13)
+        assert st
     P, up, dT, st, pe = law(W, [0, 0, -1e-4], 0.5, 0.5, 1e-3)
-    assert pe and up[2] == pytest.approx(0, abs=1e-18)
+    assert pe and up[2] == 0.0
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+@pytest.mark.parametrize("slip, e, mu", [(0.3, 0.5, 0.4), (2.0, 0.5, 0.4), (5.0, 0.8, 0.3),
+                                         (40.0, 0.5, 0.2), (-1.0, 0.0, 0.6)])
+def test_upright_slip_along_an_axis_is_the_closed_form(axis, slip, e, mu):
+    """Slip v along a principal axis of a diagonal W: du_t/dP_n = -mu W_ii sign(v) until the slip
+    stops at P_s = |v| / (mu W_ii); u_n = u_n- + W_nn P_n, so every restitution rule gives
+    P_n = (1 + e) |u_n-| / W_nn and u_n+ = e |u_n-|."""
+    W, un = W_UPRIGHT, -1.5
+    u = np.zeros(3)
+    u[axis], u[2] = slip, un
+    P, up, dT, st, pe = law(W, u, e, mu, 0.0)
+    Pn = (1 + e) * -un / W[2, 2]
+    P_stop = abs(slip) / (mu * W[axis, axis])
+    Pt = -math.copysign(mu * min(Pn, P_stop), slip)
+    expected_P = np.zeros(3)
+    expected_P[axis], expected_P[2] = Pt, Pn
+    assert np.allclose(P, expected_P, rtol=1e-10, atol=1e-10 * Pn)  # the integration's accuracy
+    assert up[axis] == pytest.approx(slip + W[axis, axis] * Pt, abs=1e-10 * abs(slip))
+    assert up[2] == pytest.approx(e * -un, rel=1e-10, abs=1e-14)
+    assert st == (P_stop < Pn)
+
+
+def test_integrated_law_equals_scipys_integration_of_the_impulse_ode():
+    rng = np.random.default_rng(20261203)
+    worst, checked, stuck = 0.0, 0, 0
+    while checked < 300:
+        W, u = random_case(rng)
+        e, mu = rng.uniform(0, 1), rng.uniform(0, 1.5)
+        if jams(W, mu):
+            continue
+        P, up, dT, st, pe = law(W, u, e, mu, 0.0)
+        ref, Pn, holds = integrate(W, u, e, mu)
+        err = np.abs(up - ref).max() / np.abs(u).max()
+        assert err <= 1e-10, (checked, err, up, ref)
+        assert P[2] == pytest.approx(Pn, rel=1e-9)
+        worst, checked, stuck = max(worst, err), checked + 1, stuck + st
+    assert 30 < stuck < 270, stuck  # both ends, sticking and sliding, are sampled
+    print(f"largest |u+ - scipy| / |u-|: {worst:.2e}")
 
 
 def test_random_impacts_never_create_energy_and_keep_the_cone():
     rng = np.random.default_rng(20261202)
-    guarded = 0
-    for _ in range(2000):
+    worst, sticking = -np.inf, 0
+    for _ in range(3000):
         W, u = random_case(rng)
         e, mu = rng.uniform(0, 1), rng.uniform(0, 1.5)
         P, up, dT, st, pe = law(W, u, e, mu, 1e-3)
         T0 = 0.5 * u @ np.linalg.solve(W, u)  # the approach energy in contact space
         assert dT <= 1e-12 * T0
-        assert P[2] >= -1e-15
-        assert np.hypot(P[0], P[1]) <= mu * P[2] * (1 + 1e-12) + 1e-15
-        assert up[2] >= -1e-12 * abs(u[2])
-        kept = abs(up[2] - (0.0 if pe else -e * u[2])) <= 1e-12 * abs(u[2])
-        guarded += not kept
+        worst = max(worst, dT / T0)
+        assert P[2] >= 0
+        assert np.hypot(P[0], P[1]) <= mu * P[2] * (1 + 1e-10) + 1e-15
+        assert up[2] >= 0
+        assert np.allclose(u + W @ P, up, atol=1e-12 * np.abs(u).max())
         if st:
-            assert np.allclose(up[:2], 0, atol=1e-12 * np.abs(u).max())
-    assert 0 < guarded < 400, guarded  # the energy guard acts, and only in the minority of cases
+            assert up[0] == 0.0 and up[1] == 0.0
+        sticking += st
+    assert 300 < sticking < 2700, sticking
+    print(f"largest dT / T-: {worst:.2e}")
 
 
-def _nearest_on_cone(W, u, e, mu):
-    """min (P - P_s)' W (P - P_s) s.t. (u + W P)_n = -e u_n, mu P_n >= |P_t| (scipy SLSQP)."""
-    target = np.array([0, 0, -e * u[2]])
-    P_s = np.linalg.solve(W, target - u)
-    cons = [{"type": "eq", "fun": lambda P: (u + W @ P)[2] - target[2]},
-            {"type": "ineq", "fun": lambda P: mu * P[2] - np.sqrt(P[0] ** 2 + P[1] ** 2 + 1e-30)}]
-    x0 = np.array([0, 0, (target[2] - u[2]) / W[2, 2]])
-    res = minimize(lambda P: 0.5 * (P - P_s) @ W @ (P - P_s), x0, constraints=cons, method="SLSQP",
-                   options={"ftol": 1e-14, "maxiter": 500})
-    # SLSQP may stop with "Positive directional derivative" once at its precision: check the
-    # constraints instead of its flag
-    assert abs(cons[0]["fun"](res.x)) <= 1e-8 and cons[1]["fun"](res.x) >= -1e-8, res.message
-    return res.x
+def kelvin_voigt(W, u0, e, mu):
+    """u+ (3,) of a compliant contact: normal force F = d + 2 zeta sqrt(m) d' (stiffness 1, m =
+    1 / W_nn the frictionless effective mass, zeta the damping ratio of restitution e, d' = -u_n)
+    until F returns to 0; tangential force -mu F v/|v| sliding; at v = 0 sticking if
+    |W_tt^-1 W_tn| <= mu (the force that keeps v = 0), else sliding on along the growing direction.
+    Integrated in time by scipy; W constant (so the stiffness only scales the time)."""
+    zeta = damping_for_restitution(e) if e < 1 else 0.0
+    c = 2 * zeta * math.sqrt(1 / W[2, 2])
+    A, bt = W[:2, :2], W[:2, 2]
+    scale = np.abs(u0).max()
+
+    def force(y):
+        return y[3] - c * y[2]
+
+    def rhs(t, y, rate):  # y = (u (3), d)
+        v = y[:2]
+        Pt = -mu * v / math.hypot(*v) if rate is None else rate
+        return np.append(W @ np.append(Pt, 1.0) * force(y), -y[2])
+
+    def released(t, y, rate):
+        return force(y) if t > 0 else 1.0
+    released.terminal, released.direction = True, -1
+
+    def stuck(t, y, rate):
+        return math.hypot(y[0], y[1]) - 1e-10 * scale
+    stuck.terminal, stuck.direction = True, -1
+    y, t = np.append(u0, 0.0), 0.0
+    sol = solve_ivp(rhs, (0, 1e3), y, method="DOP853", rtol=1e-12, atol=1e-15 * scale,
+                    events=[stuck, released], args=(None,))
+    y, t = sol.y[:, -1], sol.t[-1]
+    if len(sol.t_events[1]):
+        return y[:3]
+    holds = np.linalg.norm(np.linalg.solve(A, bt)) <= mu
+    rate = -np.linalg.solve(A, bt) if holds else -mu * _growing_direction(W, mu)
+    y[:2] = 0.0
+    sol = solve_ivp(rhs, (t, t + 1e3), y, method="DOP853", rtol=1e-12, atol=1e-15 * scale,
+                    events=[released], args=(rate,))
+    return sol.y[:3, -1]
 
 
-def test_sliding_impulse_is_the_nearest_point_of_the_cone():
-    rng = np.random.default_rng(7)
-    checked = 0
-    while checked < 40:
+def test_the_energetic_rule_is_the_kelvin_voigt_limits():
+    rng = np.random.default_rng(5)
+    errors = {"energetic": [], "newton": [], "poisson": []}
+    elastic = 0
+    while len(errors["newton"]) < 40:
         W, u = random_case(rng)
-        e, mu = rng.uniform(0, 1), rng.uniform(0.05, 0.6)
-        P, up, dT, st, pe = law(W, u, e, mu, 0.0)
-        kept = abs(up[2] + e * u[2]) <= 1e-12 * abs(u[2])
-        if st or not kept or W[2, 2] <= mu * np.hypot(W[2, 0], W[2, 1]):
+        mu = rng.uniform(0.1, 1.2)
+        e = 1.0 if elastic < 10 else rng.uniform(0.2, 0.9)
+        if jams(W, mu):
             continue
-        ref = _nearest_on_cone(W, u, e, mu)
-        assert np.allclose(P, ref, rtol=1e-6, atol=1e-6 * np.abs(ref).max()), (P, ref)
-        checked += 1
-
-
-def test_kinematic_restitution_with_friction_can_create_energy_and_the_law_does_not():
-    """The naive law (normal target, then the nearest cone point, no energy guard) gains energy
-    in some samples; the law's own dT stays <= 0 there."""
-    rng = np.random.default_rng(3)
-    for _ in range(5000):
-        W, u = random_case(rng)
-        e, mu = rng.uniform(0.8, 1.0), rng.uniform(0.5, 1.5)
-        target = np.array([0, 0, -e * u[2]])
-        P_s = np.linalg.solve(W, target - u)
-        if np.hypot(P_s[0], P_s[1]) <= mu * P_s[2] and P_s @ u + 0.5 * P_s @ W @ P_s > 1e-9:
-            P, up, dT, st, pe = law(W, u, e, mu, 0.0)
-            T_minus = 0.5 * u @ np.linalg.solve(W, u)  # the contact's kinetic energy scale
-            assert dT <= 1e-14 * T_minus  # no gain beyond rounding
-            return
-    pytest.fail("no energy-creating kinematic impact among the samples")
+        soft = kelvin_voigt(W, u, e, mu)
+        if e == 1.0:
+            assert np.abs(law(W, u, e, mu)[1] - soft).max() <= 1e-9 * np.abs(u).max()
+            elastic += 1
+            continue
+        for rule in errors:
+            errors[rule].append(np.abs(integrate(W, u, e, mu, rule)[0] - soft).max() / np.abs(u).max())
+    med = {rule: np.median(v) for rule, v in errors.items()}
+    top = {rule: np.max(v) for rule, v in errors.items()}
+    print("median", med, "largest", top)
+    assert med["energetic"] < min(med["newton"], med["poisson"])
+    assert top["energetic"] < min(top["newton"], top["poisson"])
 
 
 def test_generalised_impact_of_a_free_disc():

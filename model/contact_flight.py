@@ -20,9 +20,11 @@ The update:
 - lift-off: velocities continuous (x_dot, y_dot the mode's centre velocity, z_dot = R cos(beta)
   beta_dot), z = R sin(beta); the flight indicator is then h = 0 (>= 0), rising (the free body's
   contact point accelerates away from the ground once the constraint would have to pull);
-- touchdown: the impulse of model/impact.py on the Delassus matrix W = J M^-1 J^T (M the flight
-  speeds' mass matrix, the Hessian of T; J = d u / d w, u the contact point's velocity, rows x, y,
-  z) with mu the static coefficient, e = restitution and v_rest = V_REST sqrt(g R): a slower
+- touchdown: the impulse of model/impact.py (Coulomb friction integrated over the impulse, the
+  normal impulse of a Kelvin-Voigt contact in its rigid limit) on the Delassus matrix W = J M^-1 J^T
+  (M the flight speeds' mass matrix, the Hessian of T; J = d u / d w, u the contact point's
+  velocity, rows x, y, z) with mu the static coefficient, e = restitution (a frictionless
+  touchdown's) and v_rest = V_REST sqrt(g R): a slower
   rebound becomes a persistent contact, which ends a bouncing wheel's series of impacts. After it:
   flight again if the contact point leaves (u_n+ > 0); else rolling if it stopped tangentially
   and rolling holds there (the contact_slip indicator > 0 and F_n > 0), else sliding (d along the
@@ -56,8 +58,8 @@ from gyrowheel.model.spec import Event, Quantity
 ROLLING, SLIDING, FLIGHT = 0, 1, 2
 V_REST = 1e-3  # rebound speeds below V_REST sqrt(g R) end in a persistent contact
 ABOUT = (" With on_lift_off = \"fly\" the wheel leaves the ground where the normal force reaches 0 and flies "
-         "as a free rigid body under gravity; at touchdown an impact (Newton's restitution, Coulomb's limit, "
-         "never creating energy) lands it rolling or sliding or bounces it (event contact_flight; outputs "
+         "as a free rigid body under gravity; at touchdown an impact (a spring-damper contact's "
+         "rigid limit with Coulomb friction, never creating energy) lands it rolling or sliding or bounces it (event contact_flight; outputs "
          "height, vz, impact_impulse; contact_mode 2 in flight).")
 
 

@@ -83,7 +83,7 @@ def _growing_direction(W, mu):
     found = []
     for a, b in zip(grid[:-1], grid[1:]):
         if cross(a) * cross(b) <= 0:
-            a = brentq(cross, a, b, xtol=1e-15, rtol=4e-16)
+            a = brentq(cross, a, b, xtol=1e-15, rtol=1e-15)
             s = np.array([math.cos(a), math.sin(a)])
             if s @ _slip_rate(W, mu, s) > 0:
                 found.append(s)
@@ -193,22 +193,41 @@ def test_upright_slip_along_an_axis_is_the_closed_form(axis, slip, e, mu):
     assert st == (P_stop < Pn)
 
 
-def test_integrated_law_equals_scipys_integration_of_the_impulse_ode():
+def test_elastic_impacts_equal_scipys_integration_of_the_impulse_ode():
+    """e = 1: the spring gives back all compression's work, the energetic rule (written here)."""
     rng = np.random.default_rng(20261203)
     worst, checked, stuck = 0.0, 0, 0
-    while checked < 300:
+    while checked < 100:
         W, u = random_case(rng)
-        e, mu = rng.uniform(0, 1), rng.uniform(0, 1.5)
+        mu = rng.uniform(0, 1.5)
         if jams(W, mu):
             continue
-        P, up, dT, st, pe = law(W, u, e, mu, 0.0)
-        ref, Pn, holds = integrate(W, u, e, mu)
+        P, up, dT, st, pe = law(W, u, 1.0, mu, 0.0)
+        ref, Pn, holds = integrate(W, u, 1.0, mu)
         err = np.abs(up - ref).max() / np.abs(u).max()
         assert err <= 1e-10, (checked, err, up, ref)
         assert P[2] == pytest.approx(Pn, rel=1e-9)
         worst, checked, stuck = max(worst, err), checked + 1, stuck + st
-    assert 30 < stuck < 270, stuck  # both ends, sticking and sliding, are sampled
+    assert 10 < stuck < 90, stuck  # both ends, sticking and sliding, are sampled
     print(f"largest |u+ - scipy| / |u-|: {worst:.2e}")
+
+
+def test_impacts_equal_the_kelvin_voigt_contacts_limit():
+    """e in 0.001..1: the law against the compliant contact integrated in time (`kelvin_voigt`)."""
+    rng = np.random.default_rng(20261204)
+    worst, checked, stuck = 0.0, 0, 0
+    while checked < 300:
+        W, u = random_case(rng)
+        e, mu = rng.uniform(0.001, 1), rng.uniform(0, 1.5)
+        if jams(W, mu):
+            continue
+        P, up, dT, st, pe = law(W, u, e, mu, 0.0)
+        soft = kelvin_voigt(W, u, e, mu)
+        err = np.abs(up - soft).max() / np.abs(u).max()
+        assert err <= 1e-10, (checked, err, up, soft)
+        worst, checked, stuck = max(worst, err), checked + 1, stuck + st
+    assert 30 < stuck < 270, stuck
+    print(f"largest |u+ - Kelvin-Voigt| / |u-|: {worst:.2e}")
 
 
 def test_random_impacts_never_create_energy_and_keep_the_cone():
@@ -272,28 +291,23 @@ def kelvin_voigt(W, u0, e, mu):
     return sol.y[:3, -1]
 
 
-def test_the_energetic_rule_is_the_kelvin_voigt_limits():
+def test_no_fixed_restitution_rule_is_the_kelvin_voigt_contacts_limit():
+    """With friction the contact's effective stiffness du_n/dP_n (and so its damping ratio) changes
+    with the slip, and none of Newton's (u_n+ = -e u_n-), Poisson's (P_n = (1 + e) P_c) or
+    Stronge's energetic rule gives the compliant contact's rebound."""
     rng = np.random.default_rng(5)
     errors = {"energetic": [], "newton": [], "poisson": []}
-    elastic = 0
-    while len(errors["newton"]) < 40:
+    while len(errors["newton"]) < 30:
         W, u = random_case(rng)
-        mu = rng.uniform(0.1, 1.2)
-        e = 1.0 if elastic < 10 else rng.uniform(0.2, 0.9)
+        e, mu = rng.uniform(0.2, 0.9), rng.uniform(0.1, 1.2)
         if jams(W, mu):
             continue
         soft = kelvin_voigt(W, u, e, mu)
-        if e == 1.0:
-            assert np.abs(law(W, u, e, mu)[1] - soft).max() <= 1e-9 * np.abs(u).max()
-            elastic += 1
-            continue
         for rule in errors:
             errors[rule].append(np.abs(integrate(W, u, e, mu, rule)[0] - soft).max() / np.abs(u).max())
-    med = {rule: np.median(v) for rule, v in errors.items()}
-    top = {rule: np.max(v) for rule, v in errors.items()}
-    print("median", med, "largest", top)
-    assert med["energetic"] < min(med["newton"], med["poisson"])
-    assert top["energetic"] < min(top["newton"], top["poisson"])
+    top = {rule: float(np.max(v)) for rule, v in errors.items()}
+    print("largest |u+ - Kelvin-Voigt| / |u-| by rule:", top)
+    assert min(top.values()) > 1e-2
 
 
 def test_generalised_impact_of_a_free_disc():

@@ -40,8 +40,9 @@ class ContactForces(Effect):
         return [Quantity("mu", "1", "friction coefficient for the slip check", 0.8, minimum=0.0),
                 Quantity("mu_k", "1", "kinetic friction coefficient while sliding (on_slip = \"slide\"; "
                          "start value: the scene's mu when not given; <= mu)", 0.8, minimum=0.0),
-                Quantity("restitution", "1", "Newton's coefficient of restitution at touchdown (on_lift_off = "
-                         "\"fly\"): normal rebound speed / impact speed", 0.0, minimum=0.0, maximum=1.0)]
+                Quantity("restitution", "1", "coefficient of restitution at touchdown (on_lift_off = \"fly\"): "
+                         "normal rebound speed / impact speed of a frictionless touchdown (the damping of the "
+                         "touchdown's spring-damper contact, in its rigid limit)", 0.0, minimum=0.0, maximum=1.0)]
 
     @classmethod
     def starts(cls) -> list[Quantity]:

@@ -45,8 +45,8 @@ import casadi as ca
 
 from gyrowheel.model.impulse_ode import damping_ratio, grid_function
 
-RESLIP_ITERATIONS = 12
-OSCILLATOR_NEWTON = 8  # Newton steps of the time at which u_n reaches a value (_Oscillator.reaching)  # Newton steps of the secular equation of the re-slip direction
+RESLIP_ITERATIONS = 12  # Newton steps of the secular equation of the re-slip direction
+OSCILLATOR_NEWTON = 8  # Newton steps of the time at which u_n reaches a value (_Oscillator.reaching)
 
 
 @dataclass

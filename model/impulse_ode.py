@@ -41,7 +41,7 @@ from importlib import resources
 import casadi as ca
 
 STEPS = 192
-TURN = 0.5  # a step turns the slip's direction by at most about this (rad): h <= TURN / (G L)
+TURN = 0.5  # a step turns the slip's direction by at most about this (rad)
 SWING = 0.1  # a step advances the normal oscillation by at most this phase (rad)
 NEWTON = 6  # Newton iterations locating an event inside a step
 STAGES = 12
@@ -133,7 +133,8 @@ def _advance_function() -> ca.Function:
     mu |A|_F and the sum of the local rates of the slip's direction and size (how fast the direction
     turns per unit G chi), and w = sqrt(m du_n/dP_n) max(1, 2 zeta sqrt(m du_n/dP_n)) (the normal oscillation's
     frequency and damping rate per unit time-like sigma, dsigma = |v| dchi)."""
-    y, W, mu, zeta, L = ca.SX.sym("y", 5), ca.SX.sym("W", 3, 3), ca.SX.sym("mu"), ca.SX.sym("zeta"), ca.SX.sym("L")
+    y, W, mu = ca.SX.sym("y", 5), ca.SX.sym("W", 3, 3), ca.SX.sym("mu")
+    zeta, L = ca.SX.sym("zeta"), ca.SX.sym("L")
     r = ca.sqrt(ca.dot(y[0:2], y[0:2]))
     s = y[0:2] / ca.if_else(r > 0, r, 1)
     n = ca.vertcat(-s[1], s[0])
@@ -141,7 +142,8 @@ def _advance_function() -> ca.Function:
     R = W[0:2, 2] - mu * ca.mtimes(A, s)
     f, g = ca.dot(s, R), ca.dot(n, R)
     # the direction's local rates: f = d ln|v|, g = dtheta, and their derivatives in theta
-    local = ca.fabs(f) + ca.fabs(g) + ca.fabs(f + mu * ca.dot(n, ca.mtimes(A, n))) + ca.fabs(g - mu * ca.dot(s, ca.mtimes(A, n)))
+    dg, df = f + mu * ca.dot(n, ca.mtimes(A, n)), g - mu * ca.dot(s, ca.mtimes(A, n))  # -dg/dtheta, df/dtheta
+    local = ca.fabs(f) + ca.fabs(g) + ca.fabs(dg) + ca.fabs(df)
     rate = ca.fmin(L, local)
     G = y[4] - 2 * zeta * y[2] / W[2, 2]
     k_n = W[2, 2] - mu * ca.dot(W[0:2, 2], y[0:2]) / ca.if_else(r > 0, r, 1)
@@ -180,7 +182,8 @@ def grid_function() -> ca.Function:
     Y_lo = ca.horzcat(y0, Y[:, 0:STEPS - 1])
     found, ys = [], []
     for row in (2, END):
-        carry = _scan(row).mapaccum(f"gw_impulse_scans{row}", STEPS)(ca.DM.zeros(8), Y_lo, Y, H, rep(zeta), rep(W))[:, -1]
+        scans = _scan(row).mapaccum(f"gw_impulse_scans{row}", STEPS)
+        carry = scans(ca.DM.zeros(8), Y_lo, Y, H, rep(zeta), rep(W))[:, -1]
         found.append(carry[0])
         ys.append(_locate_function(row)(carry[1:6], carry[6], carry[7], W, mu, zeta)[0])
     return ca.Function("gw_impulse_grid", [y0, W, mu, zeta], [Y[:, -1], found[0], ys[0], found[1], ys[1]],

@@ -35,7 +35,7 @@ The law (Darboux-Keller: the impact resolved in the normal impulse P_n, W consta
 The end mode: rolling if the impact ended sticking (1), sliding otherwise.
 Measured (.venv/bin/python -m pytest -q tests/test_impact_law.py -s): against scipy's integration
 of the same contact in time 6e-11 of |u-| at most over 300 random impacts, of the impulse ODE for
-e = 1 9e-11 over 100; 3000 random impacts never gain energy (dT / T- <= -3e-4).
+e = 1 3e-11 over 100; 3000 random impacts never gain energy (dT / T- <= -3e-4).
 """
 from __future__ import annotations
 

@@ -40,9 +40,9 @@ from importlib import resources
 
 import casadi as ca
 
-STEPS = 192
-TURN = 0.5  # a step turns the slip's direction by at most about this (rad)
-SWING = 0.1  # a step advances the normal oscillation by at most this phase (rad)
+STEPS = 240
+TURN = 0.4  # a step turns the slip's direction by at most about this (rad)
+SWING = 0.08  # a step advances the normal oscillation by at most this phase (rad)
 NEWTON = 6  # Newton iterations locating an event inside a step
 STAGES = 12
 END = 5  # the `_quantity` row of -G (rising to 0 at the end of the contact)

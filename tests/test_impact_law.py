@@ -17,7 +17,7 @@ Measured numbers below: `.venv/bin/python -m pytest -q tests/test_impact_law.py 
   6e-11 of |u-| (bound 1e-10).
 - e = 1 (a spring: all compression's work given back): the impulse ODE du/dP_n = W (-mu v/|v|, 1)
   integrated in P_n by solve_ivp (rtol 1e-13) with compression ending at u_n = 0 and restitution
-  where int u_n dP_n returns to 0 (Stronge's energetic rule): 100 impacts, 9e-11 at most.
+  where int u_n dP_n returns to 0 (Stronge's energetic rule): 100 impacts, 3e-11 at most.
 - No fixed restitution rule is that limit: Newton's (u_n+ = -e u_n-), Poisson's (P_n = (1 + e) P_c)
   and the energetic rule differ from it by 12 %, 5 % and 6 % of |u-| at worst over 30 impacts.
 - 3000 random impacts: the kinetic energy never rises (dT <= 1e-12 of the approach energy; the

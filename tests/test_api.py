@@ -218,8 +218,8 @@ def test_simulate_reports_the_fall(moon):
     (str(SCENES / "paper_moon.toml"), {}, "FmuError", "paper_moon.toml: a scene, not an FMU; build its FMU first", "fmu"),
     ("{tmp}", {}, "FmuError", "{tmp}: is a directory, not an FMU file", "fmu"),
     ("{text}", {}, "FmuError", "{text}: not a readable FMU", "fmu"),
-    ("{moon}", dict(start_values={"M": -2.0}, stop_time=0.1), "SimulationError",
-     "the FMU reported an error: fmi2ExitInitializationMode: M (mass) must be > 0", None),
+    ("{moon}", dict(start_values={"M": -2.0}, stop_time=0.1), "ArgumentError",
+     "start_values: the FMU refused the start values: M (mass) must be > 0", "start_values"),
 ])
 def test_simulate_errors_name_the_argument(moon, tmp_path, fmu, kwargs, error, message, argument):
     (tmp_path / "text.fmu").write_text("not a zip")

@@ -310,7 +310,7 @@ def test_info_text_and_json(moon, capsys):
     """`gyrowheel info` prints str(info): model, description, guid, experiment, interfaces,
     effects, solvers, platforms, sources, then the variable table, every column as wide as its
     longest entry (a long name or start value never runs into the next column), an Enumeration's
-    start by its item's name; `--json` prints info.as_dict()."""
+    start by its item's name, then each Enumeration's items; `--json` prints info.as_dict()."""
     from fmpy import read_model_description
     info = gyrowheel.info(moon)
     md = read_model_description(str(moon.fmu))
@@ -323,7 +323,8 @@ def test_info_text_and_json(moon, capsys):
             f"generated    {md.generationDateAndTime}", "effects      gravity",
             "solvers      euler, rk4, dopri5, rosenbrock, dop853", "platforms    x86_64-linux (binaries/linux64)", "sources      yes"]
     assert lines[:len(head)] == head
-    table = lines[len(head):]
+    table = lines[len(head):-1]
+    assert lines[-1] == "items of solver (Solver): euler = 1, rk4 = 2, dopri5 = 3, rosenbrock = 4, dop853 = 5"
     assert len(table) == 1 + len(md.modelVariables)
     header = table[0].split()
     assert header == ["name", "causality", "variability", "start", "unit", "description"]

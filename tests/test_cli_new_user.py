@@ -323,6 +323,7 @@ def test_info_names_the_solver_and_keeps_its_columns(files, tmp_path):
     assert r.returncode == 0, r.stderr
     lines = r.stdout.splitlines()
     rows = lines[next(i for i, line in enumerate(lines) if line.startswith("name ")):]
+    rows = [row for row in rows if not row.startswith("items of ")]  # the Enumerations' items, after the table
     causality = rows[0].index("causality")
     assert all(row[causality - 2:causality] == "  " and row[causality] != " " for row in rows[1:])
     assert re.match(r"solver +parameter +fixed +dopri5 \(3\) ", next(row for row in rows if row.startswith("solver ")))

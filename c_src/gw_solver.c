@@ -37,7 +37,8 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
  *     than the run has left, refuse the call with the estimate.  Without it a run of many short
  *     communication steps costs up to the budget per step: a stiff onset that the explicit
  *     solvers resolve with ~1e-9 s steps took hours to run out (examples/scenes/euler_disk_end.toml,
- *     DOPRI5, 1 ms steps: ~6e5 internal steps per communication step, none refused).
+ *     DOPRI5, 1 ms steps: ~4.6e5 internal steps per communication step, none refused;
+ *     benchmarks/run_budget.py).
  * Refusing is GW_INT_ERROR: gw_advance restores the state at the start of the call. */
 GW_INTERNAL void gw_budget_message(gw_instance *I, const char *what, double remaining, double h) {
     const char *hint = I->solver == GW_SOLVER_ROSENBROCK || I->solver == GW_SOLVER_EULER ||

@@ -126,10 +126,10 @@ def _steps(log: str) -> int:
 
 def test_run_budget_stops_a_stiff_onset_in_bounded_work(example_build):
     """euler_disk_end with DOPRI5, 1 ms communication steps, budget 1e5: the slip onset at 3.519 s
-    takes DOPRI5's stability-bound steps of ~1.5e-9 s (~6e5 per communication step, within a
-    per-call budget of 1e6, 8.5 s to go: 5e9 steps); the run's budget refuses the rest once the
-    run has taken one budget, so the whole run takes at most two budgets of steps, and the state
-    stays at the last step's start."""
+    takes DOPRI5's stability-bound steps of ~2e-9 s (~4.6e5 per communication step, within a
+    per-call budget of 1e6, 8.5 s to go: 4e9 steps, benchmarks/run_budget.py); the run's budget
+    refuses the rest once the run has taken one budget, so the whole run takes at most two
+    budgets of steps; the wheel is sliding there (the onset was reached)."""
     budget = 100_000
     s = Slave(example_build("euler_disk_end").fmu)
     try:

@@ -155,7 +155,8 @@ def base_context(wheel: dict[str, float]) -> WheelContext:
     ctx.check(R, "R (radius) must be > 0")
     ctx.check(P["k_diam"], "k_diam must be > 0")
     ctx.check(P["k_axial"], "k_axial must be > 0")
-    ctx.check_true(P["k_axial"] <= 2 * P["k_diam"],
+    # each refusal once: the combined check only where k_diam itself passes its own
+    ctx.check_true(ca.logic_or(P["k_diam"] <= 0, P["k_axial"] <= 2 * P["k_diam"]),
                    "k_axial must be <= 2 k_diam (I_axial <= 2 I_diam for any rigid body)")
     ctx.check_true(P["k_axial"] <= 1,
                    "k_axial must be <= 1 (a ring, all mass at radius R, is the limit)")
@@ -438,7 +439,8 @@ class _Assembler:
         beta0 = s_by_name["beta"]
         ctx.check(beta0, "beta (initial lean) must be > 0")
         ctx.check(math.pi - beta0, "beta (initial lean) must be < pi")
-        ctx.check(ca.sin(beta0) - ca.sin(P["beta_min"]),
+        # only where beta0 lies in (0, pi), so a lean outside is refused once, by the checks above
+        ctx.check(ca.if_else(ca.logic_and(beta0 > 0, beta0 < math.pi), ca.sin(beta0) - ca.sin(P["beta_min"]), 1),
                   "initial lean beta must lie between beta_min and pi - beta_min (the wheel is already flat)")
         if fl is not None:  # the flight start values' checks (contact_flight.declare_flight) in s
             syms = ca.vertcat(*[sym for _, sym in ctx.extra_starts])

@@ -51,6 +51,11 @@ def test_set_out_of_range_is_one_line_naming_the_field_exit_2(drop, tmp_path):
                                  "follows the lean rate)"),
     ({"M": -1.0}, "M (mass) must be > 0"),
     ({"k_axial": 0.9}, "k_axial must be <= 2 k_diam (I_axial <= 2 I_diam for any rigid body)"),
+    # one value, one reason: the combined checks hold back where a value fails its own range
+    ({"k_diam": -1.0}, "k_diam must be > 0"),
+    ({"beta": -1.0}, "beta (initial lean) must be > 0"),
+    ({"beta": 4.0}, "beta (initial lean) must be < pi"),
+    ({"mu": -1.0}, "mu must be >= 0"),
 ])
 def test_start_values_the_fmu_refuses_are_bad_input(drop, start, reason):
     with pytest.raises(gyrowheel.ArgumentError) as exc:

@@ -100,7 +100,9 @@ class ContactForces(Effect):
             ctx.events.append(("lift_off", F_n, lift,
                                Quantity("lifted_off", "", "true once the normal force has reached zero")))
         if slip == "slide":
-            ctx.check_true(p["mu_k"] <= p["mu"], "mu_k must be <= mu (kinetic friction does not exceed static)")
+            # only where mu passes its own range: each refusal once
+            ctx.check_true(ca.logic_or(p["mu"] < 0, p["mu_k"] <= p["mu"]),
+                           "mu_k must be <= mu (kinetic friction does not exceed static)")
             declare_sliding(ctx, p["mu"], p["mu_k"])
             if lift == "fly":
                 declare_flight(ctx, p["restitution"])

@@ -110,6 +110,21 @@ def test_fixed_step_solvers_warn_for_the_contact_modes(drop, solver):
         gyrowheel.simulate(drop, stop_time=0.01, start_values={"solver": solver})
 
 
+def test_the_warning_is_deserved_euler_never_rests_the_drop(drop):
+    """The upright drop (h = 0.1 m, e = 0.5) at the default max_step 0.01 s, 3 s: DOPRI5 rests it
+    after 11 switches at the series' time and keeps energy + dissipated_energy; euler bounces on
+    to the end (hundreds of switches, still flying) and creates energy (more than 0.1 J of
+    M g h = 1.96 J)."""
+    out = ["contact_mode", "energy", "dissipated_energy"]
+    runs = {s: simulate_logged(drop, 3.0, 0.001, out, {"solver": code}) for s, code in (("euler", 1), ("dopri5", 3))}
+    balance = {s: r["energy"] + r["dissipated_energy"] for s, (r, _) in runs.items()}
+    switches = {s: sum(name == "contact_flight" for name, _ in events) for s, (_, events) in runs.items()}
+    assert switches["dopri5"] == 11 and runs["dopri5"][0]["contact_mode"][-1] == 0
+    assert abs(balance["dopri5"][-1] - balance["dopri5"][0]) < 1e-12
+    assert switches["euler"] > 100 and runs["euler"][0]["contact_mode"][-1] == 2
+    assert balance["euler"][-1] - balance["euler"][0] > 0.1
+
+
 def test_adaptive_solvers_do_not_warn(drop):
     with warnings.catch_warnings():
         warnings.simplefilter("error", FmuWarning)

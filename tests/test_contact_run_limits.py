@@ -64,6 +64,17 @@ def test_start_values_the_fmu_refuses_are_bad_input(drop, start, reason):
     assert exc.value.argument == "start_values"
 
 
+def test_fmi3_refuses_and_warns_alike(example_build):
+    """The FMI 3.0 FMU of the same scene: the refusal at fmi3ExitInitializationMode is bad input
+    with the same one reason, the fixed-step warning names fmi3ExitInitializationMode."""
+    fmu = example_build("drop_bounce", fmi=3).fmu
+    with pytest.raises(gyrowheel.ArgumentError) as exc:
+        gyrowheel.simulate(fmu, stop_time=0.01, start_values={"restitution": 1.5})
+    assert str(exc.value) == "start_values: the FMU refused the start values: restitution must be <= 1"
+    with pytest.warns(FmuWarning, match=r"^fmi3ExitInitializationMode: solver rk4: the contact modes "):
+        gyrowheel.simulate(fmu, stop_time=0.01, start_values={"solver": "rk4"})
+
+
 def test_wheel_tumbling_through_flat_in_flight_stops_with_its_reason(drop):
     """Thrown at lean 1.2 rad with beta_dot = -20 rad/s and no other rate: torque-free rotation
     about a diameter (a principal axis) at a constant rate, so beta reaches beta_min = 1e-3 rad at

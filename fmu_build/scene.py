@@ -37,6 +37,7 @@ from pathlib import Path
 
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build.platforms import parse_platforms
+from gyrowheel.fmu_build.scene_toml import scene_toml  # noqa: F401 (part of this module's API)
 from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, SLIDE_NEEDS_REDUCED, start_values, touchdown_lean,
                                    wheel_parameters)
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
@@ -553,49 +554,6 @@ def _describes(text: str, scene: Scene) -> bool:
         return _content(parse_scene(text, f"{scene.name}.toml")) == _content(scene)
     except SceneError:
         return False
-
-
-def _toml_string(text: str) -> str:
-    """A TOML basic string: the quote, the backslash and control characters (but tab) escaped."""
-    def char(c: str) -> str:
-        if c in '"\\':
-            return "\\" + c
-        if (ord(c) < 32 and c != "\t") or ord(c) == 127:
-            return f"\\u{ord(c):04x}"
-        return c
-    return '"' + "".join(map(char, text)) + '"'
-
-
-def _toml_value(value) -> str:
-    if isinstance(value, str):
-        return _toml_string(value)
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    return repr(value)  # an int, or a finite float: Python's repr is a TOML float read back exactly
-
-
-def scene_toml(scene: Scene) -> str:
-    """The scene file of a checked Scene (check_scene): TOML whose parse_scene gives the same
-    scene (angles in rad, presets as their numbers). Source: docs/scenes.md."""
-    lines = ["# written by gyrowheel from a Scene object", "[model]"]
-    lines += [f"{key} = {_toml_value(getattr(scene, key))}" for key in ("name", "description", "formulation")]
-
-    def table(name: str, values: dict) -> None:
-        lines.extend(["", f"[{name}]"] + [f"{key} = {_toml_value(value)}" for key, value in values.items()])
-
-    table("wheel", scene.wheel)
-    for effect, options in scene.effects.items():
-        table(f"effects.{effect}", options)
-    table("initial", scene.initial)
-    table("experiment", dataclasses.asdict(scene.experiment))
-    if scene.outputs is not None:
-        table("outputs", {"keep": scene.outputs})
-    build = {**({} if scene.platforms is None else {"platforms": scene.platforms}),
-             **({} if scene.fmi == 2 else {"fmi": scene.fmi}),
-             **({} if scene.arrays else {"arrays": False})}
-    if build:
-        table("build", build)
-    return "\n".join(lines) + "\n"
 
 
 def load_scene(path: str | Path) -> Scene:

@@ -183,6 +183,9 @@ typedef struct {
     gw_taylor_kernel taylor; /* zero: the model has no Taylor kernel */
     int n_arrays;            /* FMI 3.0 only; 0 in an FMI 2.0 model */
     const gw_array *arrays;  /* sorted by vr, each vr above every row of vars */
+    /* NULL, or what the fixed-step solvers cannot do for this model: gw_initialize logs it as a
+     * warning (category logStatusWarning) when the solver is euler or rk4 */
+    const char *fixed_step_caveat;
 } gw_model;
 
 #endif /* GW_MODEL_H */

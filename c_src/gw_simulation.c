@@ -185,10 +185,9 @@ GW_INTERNAL gw_status gw_validity_check(gw_instance *I, const char *fn) {
     if (gw_eval_chk(I, I->c) != 0) GW_SIM_FAIL("%s: evaluation of the validity checks failed", fn);
     for (i = 0; i < m->nc; i++)
         if (!(I->c[i] > 0.0)) {
-            GW_LOG_ERR(I, "%s: %s (check value %g)", fn,
+            GW_LOG_ERR(I, "%s: %s", fn,
                        (m->check_messages && m->check_messages[i]) ? m->check_messages[i]
-                                                                   : "validity check failed",
-                       I->c[i]);
+                                                                   : "validity check failed");
             ok = 0;
         }
     return ok ? GW_OK : GW_ERROR;
@@ -288,6 +287,9 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
         I->fcur_valid = 0;
         return GW_ERROR;
     }
+    if (m->fixed_step_caveat && (I->solver == GW_SOLVER_EULER || I->solver == GW_SOLVER_RK4))
+        gw_log(I, GW_WARNING, GW_LOG_WARNING, "%s: solver %s: %s", fn, gw_solver_name(I->solver),
+               m->fixed_step_caveat);
     /* from here on y is the simulation's output */
     I->in_setup = 0;
     I->y_valid = 1;
@@ -348,6 +350,7 @@ GW_API gw_status gw_advance(gw_instance *I, const char *fn, double t_end) {
     memcpy(I->xc_bak, I->xc, nxb);
     I->n_call_steps = 0;
     I->t_call = t0;
+    I->run_n_fast = 0;
     I->stopped_at_update = 0;
     I->edot_valid = 0; /* a front end may have changed the state since */
     if (m->ne > 0) {

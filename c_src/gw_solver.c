@@ -30,6 +30,15 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
  *     39x over the budget in tests/c/test_stiff.c, is left to the budget).  Rejected steps do
  *     not reset this count.
  *  3. the budget itself (gw_next_attempt): when it is spent the call stops, with the estimate.
+ *  4. the run (gw_budget_run, adaptive solvers, a stop time defined): the internal steps since
+ *     initialisation (I->n_accepted + I->n_rejected) are at most GW_RUN_BUDGETS times the
+ *     budget, and once they exceed one budget, GW_SETTLE attempts in a row, h settled as in
+ *     check 2, each projecting that the rest of the run to the stop time needs more steps of h
+ *     than the run has left, refuse the call with the estimate.  Without it a run of many short
+ *     communication steps costs up to the budget per step: a stiff onset that the explicit
+ *     solvers resolve with ~1e-9 s steps took hours to run out (examples/scenes/euler_disk_end.toml,
+ *     DOPRI5, 1 ms steps: ~4.6e5 internal steps per communication step, none refused;
+ *     benchmarks/run_budget.py).
  * Refusing is GW_INT_ERROR: gw_advance restores the state at the start of the call. */
 GW_INTERNAL void gw_budget_message(gw_instance *I, const char *what, double remaining, double h) {
     const char *hint = I->solver == GW_SOLVER_ROSENBROCK || I->solver == GW_SOLVER_EULER ||
@@ -77,6 +86,33 @@ static int gw_budget_projection(gw_instance *I, double remaining, double h, doub
     if (++(*n_fast) <= GW_SETTLE) return 0;
     gw_budget_message(I, "the step size has settled", remaining, h);
     return -1;
+}
+
+/* check 4; 0 or -1 logged */
+static int gw_budget_run(gw_instance *I, double h) {
+    const double taken = (double)(I->n_accepted + I->n_rejected);
+    const double left = GW_RUN_BUDGETS * I->max_internal_steps - taken;
+    const double remaining = I->t_stop - I->t;
+    const char *hint = I->solver == GW_SOLVER_ROSENBROCK ? "" : " or stiff (try solver rosenbrock)";
+    if (!I->stop_defined || taken < I->max_internal_steps) return 0;
+    if (left <= 0.0 || remaining > left * h) {
+        if (left > 0.0 && (I->run_n_fast == 0 || h > 2.0 * I->run_h_ref || h < 0.5 * I->run_h_ref)) {
+            I->run_h_ref = h;
+            I->run_n_fast = 1;
+            return 0;
+        }
+        if (left > 0.0 && ++I->run_n_fast <= GW_SETTLE) return 0;
+        GW_LOG_ERR(I, "at t=%.17g the run's budget refuses the rest: the remaining %g s to the stop "
+                   "time %.17g would need about %.3g internal steps of h=%g, more than the %.0f left "
+                   "of the run's %.0f (%.0f x max_internal_steps = %.0f; %.0f steps taken since "
+                   "initialisation): the dynamics are far too fast for the tolerance%s; raise "
+                   "max_internal_steps or loosen the tolerance", I->t, remaining, I->t_stop,
+                   remaining / h, h, left > 0.0 ? left : 0.0, GW_RUN_BUDGETS * I->max_internal_steps,
+                   GW_RUN_BUDGETS, I->max_internal_steps, taken, hint);
+        return -1;
+    }
+    I->run_n_fast = 0;
+    return 0;
 }
 
 GW_INTERNAL double gw_h_min(double t) {
@@ -226,6 +262,7 @@ GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last,
         return -1;
     }
     I->n_call_steps++;
+    if (gw_budget_run(I, *h)) return -1;
     if (*last) return 0;
     if (gw_budget_projection(I, remaining, *h, h_ref, n_fast)) return -1;
     if (*h < gw_h_min(I->t) || !(*t1 > I->t)) { /* steps that no longer advance time */

@@ -48,6 +48,9 @@
  * beyond it, stopped when it is spent. */
 #define GW_SETTLE 100
 #define GW_PROJECTION_MARGIN 100.0
+/* The budget of a whole run to a defined stop time (gw_budget_run): GW_RUN_BUDGETS times
+ * max_internal_steps internal steps of the adaptive solvers in all. */
+#define GW_RUN_BUDGETS 100.0
 /* step size stabilisation of DOP853 and DOPRI5 (Hairer's BETA; benchmarks/work_precision.py
  * measures the rejected-step fraction) */
 #define GW_DOP853_BETA 0.04

@@ -24,6 +24,7 @@ import functools
 import hashlib
 import os
 import re
+import shutil
 import subprocess
 from collections.abc import Callable
 from contextlib import contextmanager
@@ -57,7 +58,6 @@ def _compiler_identity(path: str, size: int, mtime_ns: int) -> bytes:
 
 def compiler_identity(cc: str) -> bytes:
     """The compiler's resolved path and its `--version` output (kept per binary and its mtime)."""
-    import shutil
     found = shutil.which(cc) or cc
     real = os.path.realpath(found)
     st = os.stat(real)

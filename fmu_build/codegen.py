@@ -248,6 +248,7 @@ static const gw_model GW_MODEL = {{
     .n_init_rows = {len(init_row)},
     .init_rows = gwm_init_rows,
     .default_max_internal_steps = {float(exp.max_internal_steps)!r},
+    .fixed_step_caveat = {_c_string(spec.fixed_step_caveat) if spec.fixed_step_caveat else "0"},
     .n_pre = {fns["ode_pre"].numel_out(0) if "ode_pre" in fns else 0},
 {_taylor_slot(taylor)}{arrays_slot}
 }};

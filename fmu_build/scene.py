@@ -37,6 +37,7 @@ from pathlib import Path
 
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build.platforms import parse_platforms
+from gyrowheel.fmu_build.scene_toml import scene_toml  # noqa: F401 (part of this module's API)
 from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, SLIDE_NEEDS_REDUCED, start_values, touchdown_lean,
                                    wheel_parameters)
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
@@ -214,13 +215,13 @@ def _wheel(r: _Reader, data: dict) -> dict[str, float]:
     elif isinstance(data.get("beta_min"), str):
         raise r.fail("wheel", "beta_min", f"unknown preset {data['beta_min']!r}; valid: {TOUCHDOWN} or a number")
     wheel = _numbers_with_degrees(r, "wheel", data, [q.name for q in wheel_parameters()])
+    defaults = {q.name: q.start for q in wheel_parameters()}
     for key in ("M", "R", "k_diam", "k_axial", "beta_min"):
         if key in wheel and wheel[key] <= 0:
             raise r.fail("wheel", key, f"must be > 0, got {wheel[key]!r}")
     if touchdown:
         if "beta_min_deg" in data:
             raise r.fail("wheel", "beta_min_deg", "beta_min given twice (as a preset and in deg)")
-        defaults = {q.name: q.start for q in wheel_parameters()}
         try:  # where the body touches the ground (gyrowheel.model.build.touchdown_lean), not below the default
             lean = touchdown_lean(wheel.get("k_diam", defaults["k_diam"]), wheel.get("k_axial", defaults["k_axial"]))
         except ValueError as exc:
@@ -228,6 +229,12 @@ def _wheel(r: _Reader, data: dict) -> dict[str, float]:
         wheel["beta_min"] = max(lean, BETA_MIN_DEFAULT)
     if wheel.get("beta_min", 0.0) >= math.pi / 2:
         raise r.fail("wheel", "beta_min", "must be < pi/2 (90 deg)")
+    k_diam, k_axial = (wheel.get(k, defaults[k]) for k in ("k_diam", "k_axial"))
+    if k_axial > 1:
+        raise r.fail("wheel", "k_axial", f"must be <= 1 (a ring, all mass at radius R, is the limit), got {k_axial!r}")
+    if k_axial > 2 * k_diam:
+        raise r.fail("wheel", "k_axial", f"must be <= 2 k_diam (I_axial <= 2 I_diam for any rigid body), "
+                     f"got {k_axial!r} with k_diam {k_diam!r}")
     return wheel
 
 
@@ -247,7 +254,32 @@ def _initial(r: _Reader, data: dict, effects: dict[str, dict]) -> dict[str, floa
     beta = initial.get("beta")
     if beta is not None and not 0 < beta < math.pi:
         raise r.fail("initial", "beta", f"must lie in (0, pi) (0 and pi are lying flat), got {beta!r}")
+    for q in quantities:
+        if q.name in initial:
+            _in_limits(r, "initial", q, initial[q.name])
+    if initial.get("vz", 0.0) != 0.0 and not initial.get("height", 0.0) > 0.0:
+        raise r.fail("initial", "vz", f"must be 0 unless height > 0 (in contact the centre's vertical velocity "
+                     f"follows the lean rate), got {initial['vz']!r} with height {initial.get('height', 0.0)!r}")
     return initial
+
+
+def _in_limits(r: _Reader, table: str, quantity, value: float) -> None:
+    """Refuse a value outside the quantity's inclusive limits (Quantity.minimum, .maximum), as
+    the FMU's checks at initialisation would (model/effects/base.py, Effect.declare)."""
+    if quantity.minimum is not None and value < quantity.minimum:
+        raise r.fail(table, quantity.name, f"must be >= {quantity.minimum:g}, got {value!r}")
+    if quantity.maximum is not None and value > quantity.maximum:
+        raise r.fail(table, quantity.name, f"must be <= {quantity.maximum:g}, got {value!r}")
+
+
+def _lean_above_fall(r: _Reader, scene: Scene) -> None:
+    """The start lean strictly between beta_min and pi - beta_min (the FMU's check at
+    initialisation, model/build.py): a wheel that starts at or below the fall lean has fallen."""
+    beta = scene.initial.get("beta", next(q.start for q in start_values() if q.name == "beta"))
+    beta_min = scene.wheel.get("beta_min", BETA_MIN_DEFAULT)
+    if not math.sin(beta) > math.sin(beta_min):
+        raise r.fail("initial", "beta", f"must lie between beta_min and pi - beta_min ({beta_min!r} .. "
+                     f"{math.pi - beta_min!r} rad): the wheel would start fallen, got {beta!r}")
 
 
 def _effect_value(r: _Reader, table: str, key: str, value, cls) -> float | str:
@@ -264,10 +296,7 @@ def _effect_value(r: _Reader, table: str, key: str, value, cls) -> float | str:
         return presets[value]
     quantity = next(q for q in cls.parameters() if q.name == key)
     v = r.number(table, key, value)
-    if quantity.minimum is not None and v < quantity.minimum:
-        raise r.fail(table, key, f"must be >= {quantity.minimum:g}, got {v!r}")
-    if quantity.maximum is not None and v > quantity.maximum:
-        raise r.fail(table, key, f"must be <= {quantity.maximum:g}, got {v!r}")
+    _in_limits(r, table, quantity, v)
     return v
 
 
@@ -280,8 +309,17 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
         if not isinstance(options, dict):
             raise r.fail(table, None, f"must be a {r.mapping}")
         cls = CATALOGUE[name]
-        r.unknown(table, options, {q.name for q in cls.parameters()} | set(cls.choices()))
-        effects[name] = {key: _effect_value(r, table, key, value, cls) for key, value in options.items()}
+        angles = {q.name for q in cls.parameters() if q.unit == "rad"}  # also as <name>_deg, in degrees
+        r.unknown(table, options, {q.name for q in cls.parameters()} | set(cls.choices())
+                  | {f"{a}_deg" for a in angles})
+        effects[name] = {}
+        for key, value in options.items():
+            base = key[:-4] if key.endswith("_deg") and key[:-4] in angles else key
+            if base in effects[name]:
+                raise r.fail(table, key, f"{base} given twice (in rad and in deg)")
+            if base != key:
+                value = math.radians(r.number(table, key, value))
+            effects[name][base] = _effect_value(r, table, base, value, cls)
         conflict = cls.option_conflict(effects[name])
         if conflict:
             raise r.fail(table, conflict[0], conflict[1])
@@ -372,6 +410,7 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
         scene.effects = _effects(r, r.table(data, "effects"))
     scene.initial = _initial(r, r.table(data, "initial"), scene.effects)
     _sliding(r, scene)
+    _lean_above_fall(r, scene)
     scene.experiment = _experiment(r, r.table(data, "experiment"))
     outputs = r.table(data, "outputs")
     r.unknown("outputs", outputs, {"keep"})
@@ -515,49 +554,6 @@ def _describes(text: str, scene: Scene) -> bool:
         return _content(parse_scene(text, f"{scene.name}.toml")) == _content(scene)
     except SceneError:
         return False
-
-
-def _toml_string(text: str) -> str:
-    """A TOML basic string: the quote, the backslash and control characters (but tab) escaped."""
-    def char(c: str) -> str:
-        if c in '"\\':
-            return "\\" + c
-        if (ord(c) < 32 and c != "\t") or ord(c) == 127:
-            return f"\\u{ord(c):04x}"
-        return c
-    return '"' + "".join(map(char, text)) + '"'
-
-
-def _toml_value(value) -> str:
-    if isinstance(value, str):
-        return _toml_string(value)
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    return repr(value)  # an int, or a finite float: Python's repr is a TOML float read back exactly
-
-
-def scene_toml(scene: Scene) -> str:
-    """The scene file of a checked Scene (check_scene): TOML whose parse_scene gives the same
-    scene (angles in rad, presets as their numbers). Source: docs/scenes.md."""
-    lines = ["# written by gyrowheel from a Scene object", "[model]"]
-    lines += [f"{key} = {_toml_value(getattr(scene, key))}" for key in ("name", "description", "formulation")]
-
-    def table(name: str, values: dict) -> None:
-        lines.extend(["", f"[{name}]"] + [f"{key} = {_toml_value(value)}" for key, value in values.items()])
-
-    table("wheel", scene.wheel)
-    for effect, options in scene.effects.items():
-        table(f"effects.{effect}", options)
-    table("initial", scene.initial)
-    table("experiment", dataclasses.asdict(scene.experiment))
-    if scene.outputs is not None:
-        table("outputs", {"keep": scene.outputs})
-    build = {**({} if scene.platforms is None else {"platforms": scene.platforms}),
-             **({} if scene.fmi == 2 else {"fmi": scene.fmi}),
-             **({} if scene.arrays else {"arrays": False})}
-    if build:
-        table("build", build)
-    return "\n".join(lines) + "\n"
 
 
 def load_scene(path: str | Path) -> Scene:

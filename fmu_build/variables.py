@@ -195,7 +195,7 @@ def _states(spec: ModelSpec, rows: list[Variable], add) -> None:
         state_rows.append(row)
     for i, row in enumerate(state_rows):
         unit = row.quantity.unit
-        add(quantity=Quantity(f"der({row.name})", _per_second(unit), f"time derivative of {row.name}"),
+        add(quantity=Quantity(f"der({row.name})", per_second(unit), f"time derivative of {row.name}"),
             type="Real", causality="local", variability="continuous", initial="calculated",
             kind="derivative", index=i, derivative_of=rows.index(row) + 1)
 
@@ -218,16 +218,24 @@ def _arrays(spec: ModelSpec, rows: list[Variable], add) -> None:
 
 
 def _unit_of_state(spec: ModelSpec, name: str) -> str:
-    for q in spec.starts:  # a local state of a general system (model/system.py) keeps its unit
-        if q.name == name:
-            return q.unit
-    if name.endswith("_dot"):
-        return "m/s" if name in ("x_dot", "y_dot") else "rad/s"
-    return "1"
+    """The unit of state `name`: the model's declaration (ModelSpec.x_units). Raises ValueError
+    for a model that declares none."""
+    if len(spec.x_units) != len(spec.x_names):
+        raise ValueError(f"model {spec.name}: no unit declared for its states (ModelSpec.x_units)")
+    return spec.x_units[spec.x_names.index(name)]
 
 
-def _per_second(unit: str) -> str:
-    return {"m": "m/s", "rad": "rad/s", "rad/s": "rad/s2", "m/s": "m/s2", "J": "W", "1": "1/s"}.get(unit, "1/s")
+def per_second(unit: str) -> str:
+    """The unit of a time derivative (unit / s) in modelDescription's notation: m -> m/s,
+    rad/s -> rad/s2, m/s -> m/s2, J -> W, N.s -> N, 1 (or none) -> 1/s; ValueError for a unit
+    it cannot write."""
+    if unit in ("", "1"):
+        return "1/s"
+    if unit.endswith("/s"):
+        return unit + "2"
+    if unit.endswith("/s2"):
+        raise ValueError(f"no unit for the derivative of {unit}")
+    return {"J": "W", "N.s": "N", "N.m.s": "N.m"}.get(unit, unit + "/s")
 
 
 def _structure(spec: ModelSpec, rows: list[Variable]) -> None:

@@ -242,12 +242,14 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
     flat) ends the run early; its last row is at the event and the Boolean output 'fallen' is
     True there.
     Raises FmuError (no such file, not an FMI 2.0 FMU that can run here: which and why),
-    ArgumentError (a bad time, start value or output path, named; a run whose rows would take
+    ArgumentError (a bad time, start value or output path, named; a start value the FMU refuses
+    at initialisation, out of its range or in a combination the model cannot take: `start_values:
+    the FMU refused the start values: restitution must be <= 1`; a run whose rows would take
     more than half of this machine's memory, naming stop_time and output_interval),
     ArgumentTypeError (an argument of the wrong type), SimulationError (the FMU refused the run:
     its logged reason), MissingExtraError (plot without matplotlib).
     """
-    from gyrowheel.simulation import SimulationError, check_start_values, run, write_csv
+    from gyrowheel.simulation import SimulationError, StartValueError, check_start_values, run, write_csv
 
     checked = _fmu(fmu)
     path, md = checked.path, checked.model_description
@@ -262,7 +264,10 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
     except SimulationError as exc:
         raise ArgumentError(f"start_values: {exc}", argument="start_values") from None
     _check_rows(md, stop_time, output_interval)
-    result = run(path, stop_time=stop_time, output_interval=output_interval, start_values=starts)
+    try:
+        result = run(path, stop_time=stop_time, output_interval=output_interval, start_values=starts)
+    except StartValueError as exc:  # a parameter out of its range, a combination the model refuses
+        raise ArgumentError(f"start_values: {exc}", argument="start_values") from None
     if csv is not None:
         with replaced_atomically(csv, "output") as part:
             write_csv(result, part)

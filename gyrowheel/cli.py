@@ -25,6 +25,7 @@ import re
 import signal
 import sys
 import threading
+import warnings
 from pathlib import Path
 
 from gyrowheel import __version__
@@ -124,18 +125,23 @@ def cmd_build(args) -> int:
 
 def cmd_simulate(args) -> int:
     from gyrowheel.api import simulate
-    from gyrowheel.simulation import SimulationError
+    from gyrowheel.simulation import FmuWarning, SimulationError
 
     if args.plot:
         require("plot", "gyrowheel simulate --plot")
     output = args.output or Path(args.fmu).with_suffix(".csv").name
     try:
-        result = simulate(args.fmu, stop_time=args.stop_time, output_interval=args.output_interval,
-                          start_values=args.set or [], output=output, plot=args.plot)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", FmuWarning)
+            result = simulate(args.fmu, stop_time=args.stop_time, output_interval=args.output_interval,
+                              start_values=args.set or [], output=output, plot=args.plot)
     except SimulationError as exc:  # the FMU refused the run: its logged reason
         raise CliError(str(exc), EXIT_FAILURE) from None
     except GyrowheelError as exc:
         raise CliError(flagged(exc, SIMULATE_FLAGS)) from None
+    for warning in caught:  # the FMU's warnings (a fixed-step solver for the contact modes), one line each
+        if issubclass(warning.category, FmuWarning):
+            print(f"gyrowheel: warning: {warning.message}", file=sys.stderr)
     print(f"wrote {output}: {len(result)} rows, t = {result['time'][0]:g} .. {result['time'][-1]:g} s"
           + _events_summary(result))
     if args.plot:

@@ -252,6 +252,9 @@ class FmuInfo:
             cells = [r[0].ljust(width[0]), r[1].ljust(width[1]), r[2].ljust(width[2]), r[3].rjust(width[3]),
                      r[4].ljust(width[4]), r[5]]
             lines.append("  ".join(cells).rstrip())
+        lines += [f"items of {v.name} ({v.declared_type}): "
+                  + ", ".join(f"{name} = {value}" for name, value in sorted(v.items.items(), key=lambda kv: kv[1]))
+                  for v in self.variables if v.items]
         return "\n".join(lines)
 
 

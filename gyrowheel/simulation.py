@@ -5,6 +5,7 @@ from __future__ import annotations
 import ctypes
 import math
 import os
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -44,6 +45,37 @@ class SimulationError(GyrowheelError, RuntimeError):
     """The FMU refused a value or failed; the message carries the FMU's logged reason."""
 
 
+class FmuWarning(UserWarning):
+    """A warning the FMU logged with status warning whatever its logging categories (e.g. a
+    fixed-step solver chosen for a model it serves badly, c_src/gw_simulation.c): run() issues
+    each once (warnings.warn), `gyrowheel simulate` prints it as `gyrowheel: warning: ...`."""
+
+
+class StartValueError(SimulationError):
+    """The FMU refused the start values before the run began: a value set (fmi2SetReal, ...) or
+    the checks of initialisation (fmi2ExitInitializationMode: a parameter out of its range, a
+    combination the model cannot take). Bad input, not a failure of the run: gyrowheel.simulate
+    raises it as an ArgumentError naming start_values (`gyrowheel simulate` exits 2)."""
+
+
+# the calls of FMI 2.0 and 3.0 before the first step: an error logged by one of them is a value
+# the FMU refused (its message begins with the call's name, c_src/gw_simulation.c)
+BEFORE_THE_RUN = ("fmi2SetReal", "fmi2SetInteger", "fmi2SetBoolean", "fmi2SetString", "fmi2SetupExperiment",
+                  "fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi3SetFloat64", "fmi3SetInt32",
+                  "fmi3SetBoolean", "fmi3SetString", "fmi3EnterInitializationMode", "fmi3ExitInitializationMode")
+
+
+def refusal(errors: list[str]) -> tuple[str, bool]:
+    """The FMU's logged errors as one line, each reason once (in the order logged), and whether
+    every one was logged before the run began (BEFORE_THE_RUN: the start values refused), in
+    which case the calls' names are left out: `restitution must be <= 1`."""
+    unique = list(dict.fromkeys(errors))
+    before = bool(unique) and all(m.split(":", 1)[0] in BEFORE_THE_RUN for m in unique)
+    if before:
+        unique = list(dict.fromkeys(m.split(":", 1)[1].strip() for m in unique))
+    return "; ".join(unique), before
+
+
 @dataclass
 class Messages:
     """Collects the FMU's log messages: the logger callback of FMI 2.0 (component,
@@ -59,6 +91,10 @@ class Messages:
 
     def errors(self) -> list[str]:
         return [m for s, m in self.lines if s >= 3]  # fmi2Error / fmi3Error, fmi2Fatal / fmi3Fatal
+
+    def warnings(self) -> list[str]:
+        """The messages logged with status warning (fmi2Warning, fmi3Warning), each once."""
+        return list(dict.fromkeys(m for s, m in self.lines if s == 1))
 
 
 def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[str, object]:
@@ -185,13 +221,18 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
             # FMI 3: early return allowed, so that a fall inside a step ends the result at its
             # lastSuccessfulTime (fmpy reads it only after an early return), as FMI 2's does
             early = {"early_return_allowed": True} if md.fmiVersion.startswith("3") else {}
-            return simulate_fmu(unpacked, fmi_type="CoSimulation", stop_time=stop_time,
-                                output_interval=output_interval, start_values=start_values or {}, output=recorded,
-                                relative_tolerance=solver_tolerance, logger=messages, debug_logging=False,
-                                **early)
+            result = simulate_fmu(unpacked, fmi_type="CoSimulation", stop_time=stop_time,
+                                  output_interval=output_interval, start_values=start_values or {},
+                                  output=recorded, relative_tolerance=solver_tolerance, logger=messages,
+                                  debug_logging=False, **early)
+            for text in messages.warnings():
+                warnings.warn(text, FmuWarning, stacklevel=2)
+            return result
         except FMICallException as exc:
-            reason = "; ".join(messages.errors()) or str(exc)
-            raise SimulationError(f"the FMU reported an error: {reason}") from None
+            reason, before = refusal(messages.errors())
+            if before:
+                raise StartValueError(f"the FMU refused the start values: {reason}") from None
+            raise SimulationError(f"the FMU reported an error: {reason or exc}") from None
         except GyrowheelError:
             raise
         except Exception as exc:  # fmpy's own failures are plain Exceptions: one line, the FMU named

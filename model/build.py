@@ -53,6 +53,29 @@ SLIDE_NEEDS_REDUCED = ('"slide" needs formulation = "reduced" (the sliding mode 
 FLY_NEEDS_ANGLE_RATES = '"fly" needs speeds = "angle_rates" (the flight mode is derived in the angle rates)'
 
 
+def state_units(x_names: list[str], free: list, states: list) -> list[str]:
+    """The unit of every state of x_names (the wheel's continuous state): the coordinates x, y
+    in m, the angles in rad (an effect's free coordinate its start value's unit), each speed
+    NAME_dot its coordinate's unit per second, the body speeds omega_l, omega_m, omega_n rad/s,
+    the effects' states (ctx.states) their quantity's unit."""
+    coordinate = {c.name: ("m" if c.name in ("x", "y") else c.start.unit if c.start is not None else "rad")
+                  for c in free}
+    local = {st.quantity.name: st.quantity.unit for st in states}
+    units = []
+    for name in x_names:
+        if name in local:
+            units.append(local[name])
+        elif name in coordinate:
+            units.append(coordinate[name])
+        elif name.endswith("_dot") and name[:-4] in coordinate:
+            units.append(coordinate[name[:-4]] + "/s")
+        elif name in BODY_SPEEDS:
+            units.append("rad/s")
+        else:
+            raise ValueError(f"state {name!r}: no unit known")
+    return units
+
+
 def touchdown_lean(k_diam: float, k_axial: float) -> float:
     """Lean [rad] below which every wheel with these inertias touches the ground beside its rim.
 
@@ -132,7 +155,8 @@ def base_context(wheel: dict[str, float]) -> WheelContext:
     ctx.check(R, "R (radius) must be > 0")
     ctx.check(P["k_diam"], "k_diam must be > 0")
     ctx.check(P["k_axial"], "k_axial must be > 0")
-    ctx.check_true(P["k_axial"] <= 2 * P["k_diam"],
+    # each refusal once: the combined check only where k_diam itself passes its own
+    ctx.check_true(ca.logic_or(P["k_diam"] <= 0, P["k_axial"] <= 2 * P["k_diam"]),
                    "k_axial must be <= 2 k_diam (I_axial <= 2 I_diam for any rigid body)")
     ctx.check_true(P["k_axial"] <= 1,
                    "k_axial must be <= 1 (a ring, all mass at radius R, is the limit)")
@@ -315,6 +339,7 @@ class _Assembler:
                 (Quantity("lambda_y", "N", "constraint multiplier: contact force along y"), lam[1]),
             ]
         x_names += [st.quantity.name for st in ctx.states]
+        x_units = state_units(x_names, self.free, ctx.states)
 
         P_diss, P_act = self.powers()
         tau_driven = system.driven_forces()
@@ -381,17 +406,22 @@ class _Assembler:
                 if qq.name == "contact_mode":
                     qq.description = "contact mode: 0 rolling, 1 sliding, 2 flight"
                     qq.items = contact_modes.MODE_NAMES
-            outputs = [(qq, ca.if_else(flying, fl.z.sym, e) if qq.name == "z" else
-                        ca.if_else(flying, flight.T + flight.V, e) if qq.name == "energy" else e)
+            in_flight = dict(zip(("slip_long", "slip_lat"), contact_flight.flight_slip(ctx, flight)))
+            in_flight.update(z=fl.z.sym, energy=flight.T + flight.V)
+            outputs = [(qq, ca.if_else(flying, in_flight[qq.name], e) if qq.name in in_flight else e)
                        for qq, e in outputs]
 
         fallen = Quantity("fallen", "", "true once the wheel has fallen flat (beta <= beta_min or >= pi - beta_min)")
-        events = [Event("fall", ca.sin(self.q[3]) - ca.sin(P["beta_min"]), "terminate", fallen)]
+        lean = ca.sin(self.q[3]) - ca.sin(P["beta_min"])
+        if fl is not None:  # flat in flight is no fall: its own event (contact_flight.attitude_limit_event)
+            lean = ca.if_else(sl.mode.sym > 1.5, 1, lean)
+        events = [Event("fall", lean, "terminate", fallen)]
         events += [Event(n, bind(self._late(e)), a, f) for n, e, a, f in ctx.events]
         if sl is not None:
             events.append(contact_modes.contact_event(ctx, x, bind_r, bind_s, Fc, T, speed_rows))
         if fl is not None:
             events.append(contact_flight.flight_event(ctx, x, bind_r, bind_s, flight, Fc))
+            events.append(contact_flight.attitude_limit_event(ctx))
         n_mech = x.numel() - len(ctx.states)
         for law in ctx.stick_slip:
             mode_row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)
@@ -409,7 +439,8 @@ class _Assembler:
         beta0 = s_by_name["beta"]
         ctx.check(beta0, "beta (initial lean) must be > 0")
         ctx.check(math.pi - beta0, "beta (initial lean) must be < pi")
-        ctx.check(ca.sin(beta0) - ca.sin(P["beta_min"]),
+        # only where beta0 lies in (0, pi), so a lean outside is refused once, by the checks above
+        ctx.check(ca.if_else(ca.logic_and(beta0 > 0, beta0 < math.pi), ca.sin(beta0) - ca.sin(P["beta_min"]), 1),
                   "initial lean beta must lie between beta_min and pi - beta_min (the wheel is already flat)")
         if fl is not None:  # the flight start values' checks (contact_flight.declare_flight) in s
             syms = ca.vertcat(*[sym for _, sym in ctx.extra_starts])
@@ -423,11 +454,12 @@ class _Assembler:
         nominal = ca.vertcat(P["R"], P["R"], *([1.0] * (nf - 2)), *[rate * r for r in nominal_rates],
                              *[st.nominal for st in ctx.states])
         return ModelSpec(
-            name=name, description=description, t=ca.SX.sym("t"), x=x, x_names=x_names,
+            name=name, description=description, t=ca.SX.sym("t"), x=x, x_names=x_names, x_units=x_units,
             s=s, starts=starts, u=ca.vertcat(*[sym for _, sym in ctx.inputs]) if ctx.inputs else ca.SX(0, 1),
             inputs=[qq for qq, _ in ctx.inputs], p=p, parameters=ctx.parameters,
             init=init, ode=ode, outputs=outputs, events=events, checks=ctx.checks, nominal=nominal,
             effects=effect_names, force_kinds=sorted({f.kind for f in ctx.forces}), formulation=self.formulation,
+            fixed_step_caveat=contact_modes.FIXED_STEP_CAVEAT if sl is not None else "",
             about=WHEEL_ABOUT.format(self.formulation) + (contact_modes.ABOUT if sl else "")
             + (contact_flight.ABOUT if fl else ""))
 

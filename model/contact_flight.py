@@ -80,6 +80,16 @@ class FlightContact:
         return [self.z, self.vz, self.impulse]
 
 
+def flight_starts() -> list[Quantity]:
+    """The flight mode's start values: height (m, >= 0; > 0 starts the wheel in flight) and vz
+    (m/s; 0 unless height > 0). The scene reader checks their limits (fmu_build/scene.py), the
+    FMU again at initialisation (declare_flight)."""
+    return [Quantity("height", "m", "height of the lowest rim point above the ground; > 0 at the start: "
+                     "the wheel starts in flight", 0.0, minimum=0.0),
+            Quantity("vz", "m/s", "vertical velocity of the centre (a start value in flight only: 0 unless "
+                     "height > 0)", 0.0)]
+
+
 def declare_flight(ctx: WheelContext, restitution: ca.SX) -> FlightContact:
     """Add the flight mode's states and start values to ctx (after declare_sliding); return it
     (also as ctx.flight). restitution: the parameter symbol (1, 0..1)."""
@@ -97,12 +107,10 @@ def declare_flight(ctx: WheelContext, restitution: ca.SX) -> FlightContact:
     imp = local("last_impulse", "N.s", "normal impulse of the last touchdown", ctx.par["M"] * R * rate)
     z.derivative = kin.centre_velocity[2]  # d/dt R sin(beta): follows the contact
     vz.derivative = ctx.acceleration(kin.centre)[2]
-    starts = [Quantity("height", "m", "height of the lowest rim point above the ground; > 0 at the start: "
-                       "the wheel starts in flight", 0.0),
-              Quantity("vz", "m/s", "vertical velocity of the centre (a start value in flight only)", 0.0)]
+    starts = flight_starts()
     syms = [ca.SX.sym(q.name + "_0") for q in starts]
     ctx.extra_starts += list(zip(starts, syms))
-    ctx.check_true(ca.logic_and(restitution >= 0, restitution <= 1), "restitution must lie in 0..1")
+    # restitution's range is checked with every parameter's (Effect.declare)
     ctx.check_true(syms[0] >= 0, "height must be >= 0 (the lowest rim point cannot start below the ground)")
     ctx.check_true(ca.logic_or(syms[0] > 0, syms[1] == 0),
                    "vz must be 0 unless height > 0 (in contact the centre's vertical velocity follows the lean rate)")
@@ -135,6 +143,12 @@ class Flight:
         self.qdd, self.T, self.V, self.P_diss, self.P_act, self.tau_driven = (
             to_state(e) for e in (fs.qdd, fs.T, fs.V, fs.P_diss, fs.P_act, fs.tau_driven))
         self.height = fl.z.sym - P["R"] * ca.sin(c[3].q)
+
+    def rim_velocity(self) -> ca.SX:
+        """The velocity (3, m/s, ground axes) of the wheel's lowest rim point, the material point
+        that touches the ground in contact: the centre's free velocity plus omega x R l (eq. 14);
+        omega in alpha, beta and the angle rates (state symbols)."""
+        return self.wf[0:3] + ca.cross(self.ctx.kin.omega, self.ctx.par["R"] * self.ctx.kin.l)
 
     def speed_rows(self) -> list[int]:
         """Rows of x holding the flight speeds wf (x_dot, y_dot, z_dot and the independent speeds)."""
@@ -202,8 +216,7 @@ def flight_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable
     # flight: h + tau max(u_n, 0) (u_n = dh/dt, the contact point's vertical velocity; tau = sqrt(R/g)):
     # h itself where the wheel comes down, positive once it rises (after a bounce, and at once after
     # a lift-off, where h = 0 and u_n = 0 to rounding), so only a descent reaches 0
-    omega = ctx.kin.omega  # in alpha, beta and the angle rates (state symbols)
-    u = flight.wf[0:3] + ca.cross(omega, R * ctx.kin.l)  # the contact point's velocity (eq. 14)
+    u = flight.rim_velocity()
     tau = 1 / ctx.natural_rate()
     indicator = ca.if_else(mode < 0.5, Fn_r, ca.if_else(mode < 1.5, Fn_s,
                                                         flight.height + tau * ca.fmax(u[2], 0)))
@@ -293,3 +306,24 @@ def flight_outputs(ctx: WheelContext, flight: Flight, by_name: dict) -> list[tup
     return [(by_name["height"], ca.if_else(mode > 1.5, flight.height, 0)),
             (by_name["vz"], ca.if_else(mode > 1.5, fl.vz.sym, ctx.par["R"] * ca.cos(ctx.q[3]) * ctx.qd[3])),
             (Quantity("impact_impulse", "N.s", "normal impulse of the last touchdown (0 before any)"), fl.impulse.sym)]
+
+
+def flight_slip(ctx: WheelContext, flight: Flight) -> tuple[ca.SX, ca.SX]:
+    """slip_long, slip_lat in flight (m/s): the lowest rim point's horizontal velocity along the
+    heading (cos alpha, sin alpha) and across it, to the left; the sliding mode's slip velocity
+    continued into the air, so a wheel started in flight reads its start values slip_long, slip_lat
+    (the centre's horizontal velocity is the rolling one plus that slip, contact_init)."""
+    u, a = flight.rim_velocity(), ctx.q[2]
+    return u[0] * ca.cos(a) + u[1] * ca.sin(a), -u[0] * ca.sin(a) + u[1] * ca.cos(a)
+
+
+def attitude_limit_event(ctx: WheelContext) -> Event:
+    """The event flight_attitude_limit (terminate): in flight, the lean reaching beta_min (or pi -
+    beta_min), where the Euler angles (alpha, beta, gamma) become singular (a wheel tumbling
+    through flat in the air); the fall event is the contact modes' only. Indicator sin(beta) -
+    sin(beta_min) in flight, 1 in contact."""
+    flying = ctx.sliding.mode.sym > 1.5
+    indicator = ca.if_else(flying, ca.sin(ctx.q[3]) - ca.sin(ctx.par["beta_min"]), 1)
+    flag = Quantity("flat_in_flight", "", "true once the wheel lies flat in flight (beta <= beta_min or >= pi - "
+                    "beta_min): its Euler angles are singular there, so the run stops (flight_attitude_limit)")
+    return Event("flight_attitude_limit", indicator, "terminate", flag)

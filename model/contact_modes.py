@@ -133,6 +133,14 @@ def excess_slip(ctx: WheelContext, g_roll: ca.SX, v_scale: ca.SX) -> ca.SX:
     return ca.fmin(ca.fmax(-g_roll, 0) / (ctx.par["M"] * ctx.natural_rate()), 0.5 * SLIP_SEED * v_scale)
 
 
+# what the fixed-step solvers cannot do for the contact modes (docs/runtime.md, "Contact modes with
+# each solver"): the FMU logs it as a warning when euler or rk4 initialises
+FIXED_STEP_CAVEAT = ('the contact modes (on_slip = "slide", on_lift_off = "fly") get no error control from a fixed '
+                     'step through the switches and impacts, so the energy drifts (euler at the default max_step: '
+                     'a dropped wheel bounces on and never rests; rk4: a slip freezes near its end); use dopri5, '
+                     'dop853, rosenbrock or taylor (docs/runtime.md, "Contact modes with each solver")')
+
+
 def declare_sliding(ctx: WheelContext, mu: ca.SX, mu_k: ca.SX) -> SlidingContact:
     """Add the sliding mode to ctx and return it (also as ctx.sliding).
 

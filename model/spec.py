@@ -77,6 +77,9 @@ class ModelSpec:
     checks: list[Check] = field(default_factory=list)
     nominal: ca.SX | None = None  # x scale(p) for absolute tolerances
     effects: list[str] = field(default_factory=list)
+    x_units: list[str] = field(default_factory=list)  # the unit of each state of x_names (empty: unknown)
+    # logged as a warning when a run initialises with a fixed-step solver (euler, rk4); "" none
+    fixed_step_caveat: str = ""
     # kinds of the non-conservative forces ("dissipative", "actuator": model/context.py); empty:
     # energy is conserved, else energy + dissipated_energy - actuator_work is (the energy effect)
     force_kinds: list[str] = field(default_factory=list)

@@ -157,7 +157,7 @@ class System:
         nominal = ca.DM([n for _, _, _, n in self._states]) if starts else None
         return ModelSpec(
             name=self.name, description=self.description, t=self.t, x=x,
-            x_names=[q.name for q in starts], s=s, starts=starts, u=u,
+            x_names=[q.name for q in starts], x_units=[q.unit for q in starts], s=s, starts=starts, u=u,
             inputs=[q for q, _ in self._inputs], p=p, parameters=[q for q, _ in self._params],
             init=s, ode=ode, outputs=outputs, events=self._events, checks=checks,
             nominal=ca.SX(nominal) if nominal is not None else None, effects=[], formulation="",

@@ -218,8 +218,8 @@ def test_simulate_reports_the_fall(moon):
     (str(SCENES / "paper_moon.toml"), {}, "FmuError", "paper_moon.toml: a scene, not an FMU; build its FMU first", "fmu"),
     ("{tmp}", {}, "FmuError", "{tmp}: is a directory, not an FMU file", "fmu"),
     ("{text}", {}, "FmuError", "{text}: not a readable FMU", "fmu"),
-    ("{moon}", dict(start_values={"M": -2.0}, stop_time=0.1), "SimulationError",
-     "the FMU reported an error: fmi2ExitInitializationMode: M (mass) must be > 0", None),
+    ("{moon}", dict(start_values={"M": -2.0}, stop_time=0.1), "ArgumentError",
+     "start_values: the FMU refused the start values: M (mass) must be > 0", "start_values"),
 ])
 def test_simulate_errors_name_the_argument(moon, tmp_path, fmu, kwargs, error, message, argument):
     (tmp_path / "text.fmu").write_text("not a zip")
@@ -310,7 +310,7 @@ def test_info_text_and_json(moon, capsys):
     """`gyrowheel info` prints str(info): model, description, guid, experiment, interfaces,
     effects, solvers, platforms, sources, then the variable table, every column as wide as its
     longest entry (a long name or start value never runs into the next column), an Enumeration's
-    start by its item's name; `--json` prints info.as_dict()."""
+    start by its item's name, then each Enumeration's items; `--json` prints info.as_dict()."""
     from fmpy import read_model_description
     info = gyrowheel.info(moon)
     md = read_model_description(str(moon.fmu))
@@ -323,7 +323,8 @@ def test_info_text_and_json(moon, capsys):
             f"generated    {md.generationDateAndTime}", "effects      gravity",
             "solvers      euler, rk4, dopri5, rosenbrock, dop853", "platforms    x86_64-linux (binaries/linux64)", "sources      yes"]
     assert lines[:len(head)] == head
-    table = lines[len(head):]
+    table = lines[len(head):-1]
+    assert lines[-1] == "items of solver (Solver): euler = 1, rk4 = 2, dopri5 = 3, rosenbrock = 4, dop853 = 5"
     assert len(table) == 1 + len(md.modelVariables)
     header = table[0].split()
     assert header == ["name", "causality", "variability", "start", "unit", "description"]

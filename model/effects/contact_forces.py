@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from gyrowheel.model.contact_flight import declare_flight
+from gyrowheel.model.contact_flight import declare_flight, flight_starts
 from gyrowheel.model.contact_modes import declare_sliding
 from gyrowheel.model.context import WheelContext
 from gyrowheel.model.effects.base import Effect
@@ -48,10 +48,7 @@ class ContactForces(Effect):
     def starts(cls) -> list[Quantity]:
         return [Quantity("slip_long", "m/s", "slip velocity of the contact point along the heading", 0.0),
                 Quantity("slip_lat", "m/s", "slip velocity of the contact point across the heading (left)", 0.0),
-                Quantity("height", "m", "height of the lowest rim point above the ground (on_lift_off = \"fly\"; "
-                         "> 0 starts the wheel in flight)", 0.0),
-                Quantity("vz", "m/s", "vertical velocity of the centre at the start (on_lift_off = \"fly\", "
-                         "in flight only: height > 0)", 0.0)]
+                *flight_starts()]
 
     @classmethod
     def choices(cls) -> dict[str, tuple[str, ...]]:
@@ -67,7 +64,8 @@ class ContactForces(Effect):
         if fly and not slide:
             return "on_lift_off", '"fly" needs on_slip = "slide" (a wheel that lands may slide)'
         if "restitution" in options and not fly:
-            return "restitution", 'is the touchdown\'s restitution of on_lift_off = "fly"; remove it or set it'
+            return "restitution", ('is the touchdown\'s restitution of on_lift_off = "fly"; remove it or set '
+                                   'on_lift_off = "fly" (with on_slip = "slide")')
         if slide and options.get("on_lift_off", ACTIONS[0]) not in ("terminate", "fly"):
             return "on_lift_off", ('must be "terminate" or "fly" with on_slip = "slide": sliding friction, '
                                    'proportional to the normal force, would push once F_n < 0')
@@ -103,7 +101,9 @@ class ContactForces(Effect):
             ctx.events.append(("lift_off", F_n, lift,
                                Quantity("lifted_off", "", "true once the normal force has reached zero")))
         if slip == "slide":
-            ctx.check_true(p["mu_k"] <= p["mu"], "mu_k must be <= mu (kinetic friction does not exceed static)")
+            # only where mu passes its own range: each refusal once
+            ctx.check_true(ca.logic_or(p["mu"] < 0, p["mu_k"] <= p["mu"]),
+                           "mu_k must be <= mu (kinetic friction does not exceed static)")
             declare_sliding(ctx, p["mu"], p["mu_k"])
             if lift == "fly":
                 declare_flight(ctx, p["restitution"])

@@ -186,8 +186,8 @@ static void test_checks_and_settings(void) {
         double v;
         const char *msg;
     } cases[] = {
-        {VR_K, -1.0, "k must be > 0 (check value -1)"},
-        {VR_K, 0.0, "k must be > 0 (check value 0)"},
+        {VR_K, -1.0, "k must be > 0"},
+        {VR_K, 0.0, "k must be > 0"},
     };
     /* settings outside their ranges are refused at the call (gw_core.h, docs/fmi.md) */
     static const struct {

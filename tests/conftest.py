@@ -6,6 +6,7 @@ import math
 import os
 import pickle
 import shutil
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -111,6 +112,19 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         counts[item.path.name] = counts.get(item.path.name, 0) + 1
     items.sort(key=lambda item: (rank.get(item.path.name, len(rank)), -counts[item.path.name], item.path.name))
+
+
+@contextmanager
+def compiled_at(level: str):
+    """Within: compile_shared (every FMU build) compiles at optimisation `level` ("-O1") instead
+    of the product's -O2 (gyrowheel.fmu_build.compiler OPTIMISE; the warnings stay errors).  For
+    the builds of one test file whose FMU no test times or compares bit for bit with another
+    build: GCC's -O2 takes most of such a build (flight_loads of tests/test_contact_flight.py:
+    38 s of CPU at -O2).  Not for shared builds (conftest shared_build): those stay the product's."""
+    from gyrowheel.fmu_build import compiler
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(compiler, "OPTIMISE", [level, *compiler.OPTIMISE[1:]])
+        yield
 
 
 def _run_dir(tmp_path_factory) -> Path:

@@ -6,6 +6,7 @@ import math
 import os
 import pickle
 import shutil
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -89,17 +90,26 @@ def casadi_wheel() -> type[CasadiWheel]:
     return CasadiWheel
 
 
-# The most expensive test files (builds of all platforms, of the closed loops, of every example
-# scene as FMI 3.0, of the contact scenes; the sanitizer and emulator runs), most expensive first: started first, so
-# that a parallel run does not end with one of them on one worker while the other idles (longest
-# processing time first).  `make test` runs pytest-xdist with --no-loadscope-reorder so that this
-# order, not the number of tests per file, decides; the other files follow, largest first.
+# The most expensive test files, most expensive first: started first, so that a parallel run
+# does not end with one of them on one worker while the other idles (longest processing time
+# first).  `make test` runs pytest-xdist with --no-loadscope-reorder so that this order, not the
+# number of tests per file, decides; the other files follow, largest first.  Files that make the
+# same shared builds (conftest shared_build) are kept apart, so that one worker does not wait on
+# the other's build: test_fmi3_agreement.py builds every example scene as FMI 2.0 and 3.0 early,
+# test_fmi3_build.py (the same FMI 3.0 builds) runs after it; test_system_files.py builds the
+# earth loop early, test_system_fmi3.py (which starts from it) runs after it.  The order is that
+# of each file's share of a whole run, measured with
+#   .venv/bin/python -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder --junitxml=run.xml
+# (the sum of the <testcase> times of each file).
 EXPENSIVE_FIRST = (
-    "test_platforms_run.py", "test_system_files.py", "test_ensemble_lane_steps.py", "test_system_fmi3.py",
-    "test_fmi3_build.py", "test_only_what_is_called_for.py", "test_export_c_cross.py", "test_fmi3_agreement.py",
-    "test_contact_flight.py", "test_contact_sliding.py",
-    "test_ensemble_runs.py", "test_wheel_install.py", "test_fmu_sources.py", "test_export_c_sanitizers.py",
-    "test_export_c.py", "test_c_fmi3.py", "test_c_fmi3_me.py", "test_c_fmi3_partials.py",
+    "test_platforms_run.py", "test_fmi3_agreement.py", "test_system_files.py", "test_taylor_events.py",
+    "test_export_c_sanitizers.py", "test_effects.py", "test_fmu_sources.py", "test_c_runtime.py",
+    "test_fastmath.py", "test_contact_solvers.py", "test_c_fmi3_me.py", "test_c_fmi3.py", "test_export_c_cross.py",
+    "test_only_what_is_called_for.py", "test_ensemble_lane_steps.py", "test_wheel_install.py", "test_export_c.py",
+    "test_system_fmi3.py", "test_fmi3_build.py", "test_taylor_solver.py", "test_contact_flight.py",
+    "test_flight_effects.py", "test_c_fmi3_partials.py", "test_sweep_cluster.py", "test_taylor_rewrite.py",
+    "test_cli.py", "test_c_solvers.py", "test_cli_new_user.py", "test_taylor_kernel.py", "test_c_model_exchange.py",
+    "test_contact_sliding.py", "test_ensemble.py", "test_hard_dynamics.py",
 )
 
 
@@ -111,6 +121,19 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         counts[item.path.name] = counts.get(item.path.name, 0) + 1
     items.sort(key=lambda item: (rank.get(item.path.name, len(rank)), -counts[item.path.name], item.path.name))
+
+
+@contextmanager
+def compiled_at(level: str):
+    """Within: compile_shared (every FMU build) compiles at optimisation `level` ("-O1") instead
+    of the product's -O2 (gyrowheel.fmu_build.compiler OPTIMISE; the warnings stay errors).  For
+    the builds of one test file whose FMU no test times or compares bit for bit with another
+    build: GCC's -O2 takes most of such a build (flight_loads of tests/test_contact_flight.py:
+    38 s of CPU at -O2).  Not for shared builds (conftest shared_build): those stay the product's."""
+    from gyrowheel.fmu_build import compiler
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(compiler, "OPTIMISE", [level, *compiler.OPTIMISE[1:]])
+        yield
 
 
 def _run_dir(tmp_path_factory) -> Path:

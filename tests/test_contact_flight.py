@@ -9,29 +9,28 @@ from __future__ import annotations
 
 import math
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from gyrowheel.fmu_build import build_fmu, load_scene, parse_scene
+from gyrowheel.fmu_build import build_fmu, parse_scene
+from conftest import compiled_at
 from fmi_helpers import Slave, replayed, simulate_logged
 from gyrowheel.fmu_build.scene import SceneError
 from paper_wheel import G, KA, KD, M, R
 from paper_wheel import PAPER_WHEEL_TOML as WHEEL
 
 TIGHT = {"rel_tol": 1e-12, "abs_tol": 1e-14}
-SCENE = Path(__file__).parent.parent / "examples" / "scenes" / "drop_bounce.toml"
 OUT = ["x", "y", "z", "vx", "vy", "vz", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot", "height",
        "contact_mode", "energy", "dissipated_energy", "impact_impulse", "F_n"]
 V_REST = 1e-3 * math.sqrt(G * R)  # model/contact_flight.py V_REST sqrt(g R)
 
 
 @pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
-    root = tmp_path_factory.mktemp("flight")
-    return str(build_fmu(load_scene(SCENE), root / "drop_bounce.fmu", build_dir=root / "build").fmu)
+def fmu(example_build):
+    """examples/scenes/drop_bounce.toml's FMU: the run's one build of it (conftest example_build)."""
+    return str(example_build("drop_bounce").fmu)
 
 
 def run(fmu, stop, dt=0.001, **start):
@@ -250,7 +249,8 @@ mu = 0.3
 def loaded(tmp_path_factory):
     root = tmp_path_factory.mktemp("flight_loads")
     scene = parse_scene('[model]\nname = "flight_loads"\n' + WHEEL + LOADS, "flight_loads.toml")
-    return str(build_fmu(scene, root / "flight_loads.fmu", build_dir=root / "build").fmu)
+    with compiled_at("-O1"):  # its runs take 0.1 s; GCC's -O2 took most of the build
+        return str(build_fmu(scene, root / "flight_loads.fmu", build_dir=root / "build").fmu)
 
 
 @pytest.mark.parametrize("start", [
@@ -316,9 +316,6 @@ GROUND_GUIDS = {"paper_earth": "{c4dc22d4-d4a0-5bfa-b970-6a405754ef9c}",  # roll
 
 
 @pytest.mark.parametrize("name", sorted(GROUND_GUIDS))
-def test_scenes_without_flight_generate_what_they_did(name, tmp_path, monkeypatch):
-    from gyrowheel.fmu_build import builder
-    monkeypatch.setattr(builder, "write_binaries", lambda *args, **kwargs: None)
-    scene = load_scene(SCENE.parent / f"{name}.toml")
-    fmu = build_fmu(scene, tmp_path / f"{name}.fmu", build_dir=tmp_path / "build").fmu
+def test_scenes_without_flight_generate_what_they_did(name, example_build):
+    fmu = example_build(name).fmu  # build_fmu(load_scene(<scene>)): the run's one build of the scene
     assert read_model_description(str(fmu)).guid == GROUND_GUIDS[name]

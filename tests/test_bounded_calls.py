@@ -47,10 +47,10 @@ def slave(earth_fmu):
 
 def refused(s: Slave, t: float, h: float) -> tuple[float, str]:
     """fmi2DoStep(t, h) must fail with fmi2Error; returns (seconds, log)."""
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     with pytest.raises(FMICallException) as exc:
         s.slave.doStep(t, h)
-    seconds = time.perf_counter() - t0
+    seconds = time.process_time() - t0
     assert exc.value.status == 3
     return seconds, s.log_text()
 

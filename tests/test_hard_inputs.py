@@ -95,10 +95,10 @@ def test_overflowing_start_value_fails_at_initialisation(slave):
 def test_huge_rates_fail_fast_with_a_reason(slave, solver, rate):
     """1e9 rad/s: fmi2Error within seconds (no hang), state restored to the step start, nothing NaN."""
     slave.init(solver=solver, **{rate: 1e9})
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     with pytest.raises(FMICallException) as exc:
         slave.slave.doStep(0.0, 1.0)
-    elapsed = time.perf_counter() - t0
+    elapsed = time.process_time() - t0
     assert exc.value.status == 3
     assert elapsed < 3.0, elapsed
     log = slave.log_text()
@@ -121,10 +121,10 @@ def test_huge_lean_rate_falls_within_nanoseconds(slave, solver):
     forces steps of 5e-13 s, and DOPRI5's step budget, which extrapolates that step over the whole
     remaining 1 s, refuses (fmi2Error with the estimate) 1e-11 s before the fall."""
     slave.init(solver=solver, beta_dot=1e9, beta_min=BETA_MIN)
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     with pytest.raises(FMICallException) as exc:
         slave.slave.doStep(0.0, 1.0)
-    assert time.perf_counter() - t0 < 3.0
+    assert time.process_time() - t0 < 3.0
     assert exc.value.status == 2
     t_fall = slave.slave.getRealStatus(fmi2LastSuccessfulTime)
     assert t_fall == pytest.approx((math.pi - BETA_MIN - math.radians(80)) / 1e9, rel=1e-3)
@@ -146,13 +146,13 @@ def test_huge_spin_with_rosenbrock_returns_fast(slave):
     rolling along x at R gamma_dot, lean held by the gyroscopic stiffness, energy conserved."""
     slave.init(solver=4, gamma_dot=1e9)
     e0 = slave.get("energy")
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     try:
         slave.slave.doStep(0.0, 1.0)
         status = 0
     except FMICallException as exc:
         status = exc.status
-    assert time.perf_counter() - t0 < 3.0
+    assert time.process_time() - t0 < 3.0
     assert all(math.isfinite(v) for v in slave.get(*STATES))
     if status:
         assert status == 3 and "would need about" in slave.log_text()
@@ -188,15 +188,16 @@ def test_huge_spin_with_a_fixed_step_solver_is_not_reported_as_a_fall(slave, max
 
 @pytest.mark.parametrize("solver", [3, 4, 5])
 def test_large_but_sane_spin_simply_works(fmu, solver):
-    """gamma_dot = 2e4 rad/s (rim at 3.4 km/s): 1 s in one step, in well under a second of CPU,
+    """gamma_dot = 2e4 rad/s (rim at 3.4 km/s): 1 s in one step, in under 2 s of process CPU time
+    (not wall time, which a loaded machine stretches),
     energy conserved, rolling at R gamma_dot, lean held."""
     s = Slave(fmu)
     try:
         s.init(solver=solver, gamma_dot=2e4, rel_tol=1e-10, abs_tol=1e-12, max_step=1.0)
         e0 = s.get("energy")
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         s.slave.doStep(0.0, 1.0)
-        elapsed = time.perf_counter() - t0
+        elapsed = time.process_time() - t0
         x, beta, gamma, e = s.get("x", "beta", "gamma", "energy")
     finally:
         s.free()

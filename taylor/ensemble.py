@@ -334,7 +334,8 @@ class Ensemble:
     advanced together (default None: this CPU's count, gyrowheel.taylor.lanes.cpu_lanes, 8 with
     AVX-512F, 4 with AVX2, else PORTABLE_LANES; any integer >= 1 overrides it, each width its own
     cached library; `self.lanes` is the count built; a trajectory's result is the same bit for
-    bit in any job and on 2 to 16 lanes; on 1 lane equal to rounding); cache: where the library is kept (default ~/.cache/gyrowheel/ensemble);
+    bit in any job and on 2 to 16 lanes; on 1 lane equal to rounding); cache: where the library
+    (and the lane-count probe) is kept (default ~/.cache/gyrowheel/ensemble);
     defines: extra C macros of this build, {name: integer or one-line string} (switches of the
     ensemble path and the solver, e.g.
     {"GW_ENSEMBLE_LANE_STEPS": 1}: every lane-step through the solver code), part of the

@@ -30,6 +30,7 @@ generator, c_src/ and its Ensemble; 4 lanes), interleaved: before and after a ch
 
     python benchmarks/ensemble_scaling.py [--scenario paper] [--n 8 16 64] [--lanes 8 4]
         [--variants nominal mass_radius] [--targets 1e-4 1e-10] [--repeat 3] [--against main]
+        [--defines GW_NO_CLONES=1]
 """
 from __future__ import annotations
 
@@ -182,7 +183,16 @@ def main() -> int:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scenario", default="paper", choices=["paper", "long", "near_flat"])
     ap.add_argument("--against", default=None, help="a git revision whose ensemble is timed too")
+    ap.add_argument("--defines", nargs="*", default=[], metavar="NAME=VALUE",
+                    help="C macros of gyrowheel's ensemble builds, e.g. GW_NO_CLONES=1: the portable code "
+                         "a CPU without AVX2 runs")
     args = ap.parse_args()
+    defines = {}
+    for item in args.defines:
+        name, sep, value = item.partition("=")
+        if not sep:
+            ap.error(f"--defines: {item!r} is not NAME=VALUE")
+        defines[name] = int(value) if value.lstrip("-").isdigit() else value
     import heyoka as hy
 
     simd = hy.recommended_simd_size()
@@ -199,14 +209,16 @@ def main() -> int:
         fns = built.spec.functions()
         start_names = [q.name for q in built.spec.starts]
         param_names = [q.name for q in built.spec.parameters]
-        ens = {f"gyrowheel W={w}": Ensemble(built.fmu, lanes=w, cache=work / "ens") for w in lanes}
+        ens = {f"gyrowheel W={w}": Ensemble(built.fmu, lanes=w, cache=work / "ens", defines=defines or None)
+               for w in lanes}
         if args.against:
             ens[f"{args.against} W=4"] = ensemble_at(args.against, scene, work)
         hb = HeyokaBatch(g, param_names, simd)
         heyoka_name = f"heyoka batch {simd}"
         cols = list(ens) + [heyoka_name]
         print(f"### ensemble scaling, {args.scenario} scenario ({stop:g} s), time per trajectory (ms)\n")
-        print(f"CPU lanes (gyrowheel.taylor.lanes.cpu_lanes): {cpu}; heyoka.recommended_simd_size(): {simd}\n")
+        print(f"CPU lanes (gyrowheel.taylor.lanes.cpu_lanes): {cpu}; heyoka.recommended_simd_size(): {simd}"
+              + (f"; gyrowheel built with {defines}" if defines else "") + "\n")
         print("| trajectories | target | N | " + " | ".join(cols) + " | heyoka / gyrowheel best |")
         print("|---|---|---|" + "---|" * (len(cols) + 1))
         summary = {}

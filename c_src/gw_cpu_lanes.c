@@ -17,9 +17,9 @@
  * portable build, SSE2 pairs on x86-64, GW_NO_CLONES) 2 lanes measured fastest per trajectory,
  * about half the time of 1 or 4 lanes at N = 8, 16 and 64.
  *
- * Compiled on its own without GW_CPU_LANES_LIB the file is empty (it travels in an FMU's
- * sources/ with the rest of the runtime, as gw_ensemble_lib.c does); gyrowheel.taylor.lanes
- * compiles it with -DGW_CPU_LANES_LIB.
+ * gyrowheel.taylor.lanes compiles it from the installed runtime with -DGW_CPU_LANES_LIB; it is
+ * no part of an FMU or an export (fmu_build/builder.py, HOST_ONLY), and compiled without that
+ * macro it is empty, as every runtime file on its own.
  */
 #ifndef GW_CPU_LANES_LIB
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */

@@ -46,7 +46,7 @@ def test_cpu_lanes_follow_the_cpu_features(tmp_path):
 def test_probe_is_strict_c99_and_falls_back_to_its_compile_time_default(cc, tmp_path):
     """Warning-clean C99 under gcc and clang; compiled where the builtin cannot be asked (no x86
     macro defined: another architecture) it answers GW_CPU_LANES_PORTABLE and no feature; alone
-    (without GW_CPU_LANES_LIB, as in an FMU's sources/) it defines no symbol."""
+    (without GW_CPU_LANES_LIB) it defines no symbol, as every runtime file."""
     asked = tmp_path / "asked.so"
     subprocess.run([cc, *STRICT, "-DGW_CPU_LANES_LIB", str(PROBE), "-o", str(asked)], check=True)
     lib = ctypes.CDLL(str(asked))
@@ -70,9 +70,14 @@ def test_bad_portable_count_is_refused_naming_it(tmp_path):
 
 def test_ensemble_and_sweep_engine_take_the_cpu_count(example_build, tmp_path, monkeypatch):
     """Ensemble(fmu).lanes is the CPU's count (what the library was built with: it reports its
-    GW_ENSEMBLE_LANES), lanes=W overrides it, and the sweep engine's batches run on the CPU's count."""
+    GW_ENSEMBLE_LANES), lanes=W overrides it, and the sweep engine's batches run on the CPU's count;
+    the FMU does not carry the probe."""
+    import zipfile
+
     from gyrowheel.studies import ensemble_path, sweep
     fmu = example_build("paper_earth", taylor=True).fmu
+    with zipfile.ZipFile(fmu) as zf:  # the probe is built from the installed runtime, not the FMU's
+        assert "sources/gw_cpu_lanes.c" not in zf.namelist() and "sources/gw_ensemble.c" in zf.namelist()
     want = cpu_lanes(tmp_path)
     assert Ensemble(fmu, cache=tmp_path).lanes == want
     other = 4 if want != 4 else 8

@@ -1,33 +1,44 @@
 """The ensemble path's time per trajectory against heyoka's batch mode, measured in one run.
 
-Scenario paper (earth, 20 s; --scenario long, near_flat: benchmarks/work_precision.py).  For each target error (max abs error of the 8 states at 20 s
-against heyoka in long double at tol 1e-19) the cheapest tolerance reaching it is found first,
-on one trajectory, for each method separately (a grid of half decades; gyrowheel: abs_tol =
-rel_tol * {1e-2, 1}); then N trajectories (gamma_dot spread over 6 +- 1 %, so that the lanes
-take different steps) are timed at each method's 3 cheapest settings reaching the target (the
-same for both methods: one trajectory's timing is noisy, and the cheapest at N = 1 need not be the
-cheapest at N), the best of them counted:
-  gyrowheel  gyrowheel.taylor.ensemble.Ensemble(lanes=W).run, W = 1, 4, 8 (the whole call: marshalling,
-             instances' initialisation, integration)
-  heyoka     taylor_adaptive_batch of N (N = 1: taylor_adaptive), propagate_until, state reset
-             included; its JIT compilation is not counted
-Every time is thread CPU time, best of --repeat, the methods interleaved; ratios compare
-per-trajectory times in this one run (absolute times on a loaded machine are not to be quoted).
+Scenario paper (examples/scenes/paper_earth.toml, 20 s; --scenario long, near_flat:
+benchmarks/work_precision.py).  N trajectories (N = 8, 16, 64) spread over the start values
+beta0 70-85 deg and gamma_dot0 5-8 rad/s (trajectory i of N: beta0 = 70 + 15 (i + 1/2) / N deg,
+gamma_dot0 = 5 + 3 frac((i + 1/2) phi) rad/s, phi the golden ratio, so that the N pairs fill the
+rectangle), and a variant "M, R +-20 %" with also the mass and the radius per trajectory at
+(1 + 0.2 u) times the scene's, u in [-1, 1] stratified the same way (frac((i + 1/2) sqrt 2),
+frac((i + 1/2) sqrt 3)).
+  gyrowheel  gyrowheel.taylor.ensemble.Ensemble(lanes=W).run on the N trajectories, W = the CPU's
+             count (gyrowheel.taylor.lanes.cpu_lanes) and the other of 4 and 8: the whole call
+             (marshalling, the lanes' initialisation, integration), abs_tol = rel_tol x {1e-2, 1}
+  heyoka     taylor_adaptive_batch of heyoka.recommended_simd_size() (8 on AVX-512) on the FMU's own
+             expression graph (taylor_vs_heyoka.to_heyoka; M and R as runtime parameters,
+             heyoka.par, in the variant), the N trajectories in consecutive batches as a user
+             loops over them: set time, state (and parameters), propagate_until, read the state;
+             its JIT compilation is not timed
+Error: the largest absolute error of the final states over the N trajectories, against heyoka in
+80-bit long double at tolerance 1e-19 on the same graph, each trajectory with its own start and
+parameters.  For each target error (1e-4, 1e-7, 1e-10, 1e-12) and N the cheapest setting of a
+half-decade grid of tolerances that reaches it counts, per method.  Every time is thread CPU time,
+best of --repeat, all settings of all methods interleaved in each repetition; ratios compare
+per-trajectory times in this one run.  The table: time per trajectory of each method and
+heyoka / gyrowheel's best (above 1: the ensemble faster).
 Also the fixed cost of one run: N = 1 to t_end = 1 ms (a handful of steps), and N = 4 to
-1e-9 s at rel_tol 1e-4 (what a run of the 1e-4 rows pays besides its steps).
+1e-9 s at rel_tol 1e-4 (what a run pays besides its steps).
 --against REF (a git revision, e.g. main, or a checkout directory; either layout of the project:
 benchmarks/ref_tree.py) also times REF's ensemble (the same scene built by REF's whole tree: its
-generator, c_src/ and its Ensemble; 4 lanes, at gyrowheel's tolerances), interleaved: before and
-after a change in the same run.
+generator, c_src/ and its Ensemble; 4 lanes), interleaved: before and after a change in one run.
 
-    python benchmarks/ensemble_scaling.py [--scenario paper] [--n 1 4 16 64] [--lanes 1 4 8]
-        [--targets 1e-4 1e-10] [--against main]
+    python benchmarks/ensemble_scaling.py [--scenario paper] [--n 8 16 64] [--lanes 8 4]
+        [--variants nominal mass_radius] [--targets 1e-4 1e-10] [--repeat 3] [--against main]
+        [--defines GW_NO_CLONES=1]
 """
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -41,11 +52,11 @@ from work_precision import SCENARIOS, best_time  # noqa: E402
 
 from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
 from gyrowheel.taylor.ensemble import Ensemble  # noqa: E402
+from gyrowheel.taylor.lanes import cpu_lanes  # noqa: E402
 
 TOLS = [10.0 ** -(k / 2) for k in range(6, 30)]  # 1e-3 .. 10^-14.5
-# the calibration's timing is one trajectory, best of CALIBRATION_REPEAT; its CANDIDATES cheapest settings
-# reaching a target are then timed at every N (a noisy calibration no longer decides the setting)
-CALIBRATION_REPEAT, CANDIDATES = 5, 3
+VARIANTS = {"nominal": "beta0, gamma_dot0 spread", "mass_radius": "beta0, gamma_dot0 spread, M, R +-20 %"}
+SPREAD = ("M", "R")  # the parameters of the variant mass_radius
 
 
 def best(fn, repeat: int) -> float:
@@ -56,11 +67,84 @@ def best(fn, repeat: int) -> float:
 def best_of_many(fn, k: int) -> float:
     """CPU seconds of the calling thread per call, k calls in a row (a call of a few us is
     below the clock's resolution)."""
-    import time
     t0 = time.thread_time()
     for _ in range(k):
         fn()
     return (time.thread_time() - t0) / k
+
+
+def spread(n: int, s0, start_names, p0, param_names, vary: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(starts (n, ns), parameters (n, np)) of the n trajectories (the module's docstring)."""
+    i = np.arange(n) + 0.5
+    starts, params = np.tile(np.asarray(s0, float), (n, 1)), np.tile(np.asarray(p0, float), (n, 1))
+    starts[:, start_names.index("beta")] = np.radians(70.0 + 15.0 * i / n)
+    starts[:, start_names.index("gamma_dot")] = 5.0 + 3.0 * np.modf(i * (1 + math.sqrt(5)) / 2)[0]
+    if vary:
+        for name, irrational in zip(SPREAD, (math.sqrt(2), math.sqrt(3))):
+            u = 2.0 * np.modf(i * irrational)[0] - 1.0
+            params[:, param_names.index(name)] *= 1.0 + 0.2 * u
+    return starts, params
+
+
+class HeyokaBatch:
+    """heyoka's batch mode on the FMU's graph, `simd` trajectories per batch, the parameters SPREAD
+    as heyoka.par (so one compilation serves every trajectory), compiled per tolerance."""
+
+    def __init__(self, g: SameGraph, param_names, simd: int):
+        import heyoka as hy
+        self.g, self.simd = g, simd
+        self.k = [param_names.index(n) for n in SPREAD]
+        p = list(g.p)
+        for j, k in enumerate(self.k):
+            p[k] = hy.par[j]
+        self.eqs = list(zip(g.xs, to_heyoka(g.f, g.xs, p)))
+        self.compiled: dict[float, object] = {}
+
+    def integrator(self, tol: float):
+        import heyoka as hy
+        if tol not in self.compiled:
+            x0 = np.tile(self.g.x0[:, None], (1, self.simd))
+            pars = np.tile(np.array([self.g.p[k] for k in self.k])[:, None], (1, self.simd))
+            self.compiled[tol] = hy.taylor_adaptive_batch(self.eqs, x0, tol=tol, pars=pars)
+        return self.compiled[tol]
+
+    def runner(self, tol: float, x0s: np.ndarray, params: np.ndarray, stop: float):
+        """A call that integrates every trajectory (x0s (nx, N), params (N, np); N a multiple of
+        simd) and returns the final states (N, nx)."""
+        tb, w = self.integrator(tol), self.simd
+        pars = params[:, self.k].T.copy()
+        n = x0s.shape[1]
+        out = np.empty((n, x0s.shape[0]))
+
+        def run():
+            for c in range(0, n, w):
+                tb.set_time(0.0)
+                tb.state[:] = x0s[:, c:c + w]
+                tb.pars[:] = pars[:, c:c + w]
+                tb.propagate_until(stop)
+                out[c:c + w] = tb.state.T
+            return out
+        return run
+
+
+def references(g: SameGraph, param_names, x0s: np.ndarray, params: np.ndarray, stop: float) -> np.ndarray:
+    """Final states (N, nx) by heyoka in long double at tol 1e-19 on the same graph."""
+    import heyoka as hy
+    ld = np.longdouble
+    k = [param_names.index(n) for n in SPREAD]
+    p = list(g.p)
+    for j, kk in enumerate(k):
+        p[kk] = hy.par[j]
+    ta = hy.taylor_adaptive(list(zip(g.xs, to_heyoka(g.f, g.xs, p, ld))), g.x0.astype(ld), tol=ld(1e-19),
+                            fp_type=ld, pars=np.array([g.p[kk] for kk in k], dtype=ld))
+    out = np.empty((x0s.shape[1], x0s.shape[0]))
+    for j in range(x0s.shape[1]):
+        ta.time = ld(0.0)
+        ta.state[:] = x0s[:, j].astype(ld)
+        ta.pars[:] = params[j, k].astype(ld)
+        ta.propagate_until(ld(stop))
+        out[j] = np.asarray(ta.state, dtype=float)
+    return out
 
 
 def ensemble_at(ref: str, scene: str, work: Path, lanes: int = 4):
@@ -76,108 +160,115 @@ def ensemble_at(ref: str, scene: str, work: Path, lanes: int = 4):
     return tree.load("gyrowheel.taylor.ensemble").Ensemble(out, lanes=lanes, cache=work / "ens")
 
 
+def measure(methods: dict, repeat: int) -> dict:
+    """{(method, setting): (seconds, final states)}: every setting of every method once per
+    repetition, interleaved, the best time kept."""
+    out = {key: (float("inf"), None) for key in methods}
+    for _ in range(repeat):
+        for key, run in methods.items():
+            t0 = time.thread_time()
+            x = run()
+            sec = time.thread_time() - t0
+            out[key] = (min(sec, out[key][0]), np.array(x, copy=True))
+    return out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, nargs="*", default=[1, 4, 16, 64])
-    ap.add_argument("--lanes", type=int, nargs="*", default=[1, 4, 8])
+    ap.add_argument("--n", type=int, nargs="*", default=[8, 16, 64])
+    ap.add_argument("--lanes", type=int, nargs="*", default=None,
+                    help="ensemble widths to time (default: the CPU's count and the other of 4 and 8)")
+    ap.add_argument("--variants", nargs="*", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--targets", type=float, nargs="*", default=[1e-4, 1e-7, 1e-10, 1e-12])
-    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scenario", default="paper", choices=["paper", "long", "near_flat"])
     ap.add_argument("--against", default=None, help="a git revision whose ensemble is timed too")
+    ap.add_argument("--defines", nargs="*", default=[], metavar="NAME=VALUE",
+                    help="C macros of gyrowheel's ensemble builds, e.g. GW_NO_CLONES=1: the portable code "
+                         "a CPU without AVX2 runs")
     args = ap.parse_args()
+    defines = {}
+    for item in args.defines:
+        name, sep, value = item.partition("=")
+        if not sep:
+            ap.error(f"--defines: {item!r} is not NAME=VALUE")
+        defines[name] = int(value) if value.lstrip("-").isdigit() else value
     import heyoka as hy
 
+    simd = hy.recommended_simd_size()
+    if any(n % simd for n in args.n):
+        ap.error(f"--n: every N must be a multiple of heyoka's batch size {simd}")
+    cpu = cpu_lanes()
+    lanes = args.lanes or [cpu, 4 if cpu != 4 else 8]
     text, stop = SCENARIOS[args.scenario]
     with tempfile.TemporaryDirectory(prefix="gw-ens-scaling-") as tmp:
         work = Path(tmp)
         scene = f'[model]\nname = "ens_{args.scenario}"\n' + text
         built = build_fmu(parse_scene(scene, "scene.toml"), work / "scene.fmu", build_dir=work / "b", taylor=True)
-        g = SameGraph(built, stop)  # heyoka on the FMU's graph and the long-double reference
-        fns, p, x0, s0 = built.spec.functions(), g.p, g.x0, np.array(g.s0)
-        eqs = list(zip(g.xs, to_heyoka(g.f, g.xs, p)))
-        ens = {w: Ensemble(built.fmu, lanes=w, cache=work / "ens") for w in args.lanes}
-        cols = [f"gyrowheel W={w}" for w in args.lanes]
+        g = SameGraph(built, stop)
+        fns = built.spec.functions()
+        start_names = [q.name for q in built.spec.starts]
+        param_names = [q.name for q in built.spec.parameters]
+        ens = {f"gyrowheel W={w}": Ensemble(built.fmu, lanes=w, cache=work / "ens", defines=defines or None)
+               for w in lanes}
         if args.against:
-            ens[args.against] = ensemble_at(args.against, scene, work)
-            cols.append(f"{args.against} W=4")
-        i_spin = [q.name for q in built.spec.starts].index("gamma_dot")
-
-        # calibration: the cheapest tolerance per target, one trajectory each
-        gw_pts, hy_pts = [], []
-        e1 = ens[args.lanes[0]]
-        for tol in TOLS:
-            for af in (1e-2, 1.0):
-                r = e1.run(stop, rel_tol=tol, abs_tol=tol * af)
-                sec = best(lambda: e1.run(stop, rel_tol=tol, abs_tol=tol * af), CALIBRATION_REPEAT)
-                gw_pts.append((sec, float(np.max(np.abs(g.out(r.x_final[0]) - g.ref))), tol, af))
-            sec, err, _, _ = g.time_heyoka(tol, stop, CALIBRATION_REPEAT)
-            hy_pts.append((sec, err, tol))
-
-        def pick(points, target):
-            """The CANDIDATES cheapest settings reaching target on one trajectory, cheapest first."""
-            return sorted(q for q in points if q[1] <= target)[:CANDIDATES]
-
+            ens[f"{args.against} W=4"] = ensemble_at(args.against, scene, work)
+        hb = HeyokaBatch(g, param_names, simd)
+        heyoka_name = f"heyoka batch {simd}"
+        cols = list(ens) + [heyoka_name]
         print(f"### ensemble scaling, {args.scenario} scenario ({stop:g} s), time per trajectory (ms)\n")
-        print("| target | N | " + " | ".join(cols) + " | heyoka batch N | best W / heyoka |"
-              + (f" {args.against} / heyoka |" if args.against else ""))
-        print("|---|---|" + "---|" * (len(cols) + 2 + bool(args.against)))
-        for target in args.targets:
-            gs, hs = pick(gw_pts, target), pick(hy_pts, target)
-            if not gs or not hs:
-                print(f"| {target:g} | - | not reached (gyrowheel {bool(gs)}, heyoka {bool(hs)}) |")
-                continue
+        print(f"CPU lanes (gyrowheel.taylor.lanes.cpu_lanes): {cpu}; heyoka.recommended_simd_size(): {simd}"
+              + (f"; gyrowheel built with {defines}" if defines else "") + "\n")
+        print("| trajectories | target | N | " + " | ".join(cols) + " | heyoka / gyrowheel best |")
+        print("|---|---|---|" + "---|" * (len(cols) + 1))
+        summary = {}
+        for variant in args.variants:
             for n in args.n:
-                spin = s0[i_spin] * (1.0 + 0.01 * np.linspace(-1.0, 1.0, n) if n > 1 else np.ones(1))
-                starts = np.tile(s0, (n, 1))
-                starts[:, i_spin] = spin
-                x0s = np.array([np.array(fns["init"](row, p)).ravel() for row in starts]).T
-                hy_runs = {}
-                for h in hs:
-                    if n == 1:
-                        tb = hy.taylor_adaptive(eqs, x0, tol=h[2])
-
-                        def hy_run(tb=tb):
-                            tb.time, tb.state[:] = 0.0, x0
-                            tb.propagate_until(stop)
-                    else:
-                        tb = hy.taylor_adaptive_batch(eqs, x0s.copy(), tol=h[2])
-
-                        def hy_run(tb=tb):
-                            tb.set_time(0.0)
-                            tb.state[:] = x0s
-                            tb.propagate_until(stop)
-                    hy_runs[h[2]] = hy_run
-                # each method at each of its candidate settings, all interleaved; its best counts
-                times = {(w, q[2], q[3]): float("inf") for w in ens for q in gs}
-                t_hys = {tol: float("inf") for tol in hy_runs}
-                for _ in range(args.repeat):
-                    for (w, tol, af) in times:
-                        times[w, tol, af] = min(times[w, tol, af], best(
-                            lambda: ens[w].run(stop, starts=starts, rel_tol=tol, abs_tol=tol * af), 1))
-                    for tol, run in hy_runs.items():
-                        t_hys[tol] = min(t_hys[tol], best(run, 1))
-                t_hy, h_tol = min((t, tol) for tol, t in t_hys.items())
-                per_w = {w: min((t, tol) for (v, tol, _), t in times.items() if v == w) for w in ens}
-                bw, g_tol = min(per_w[w] for w in args.lanes)
-                cells = " | ".join(f"{per_w[w][0] / n * 1e3:.4f}" for w in ens)
-                print(f"| {target:g} (gw tol {g_tol:.1e}, heyoka {h_tol:.1e}) | {n} | {cells} | "
-                      f"{t_hy / n * 1e3:.4f} | {bw / t_hy:.2f}x |"
-                      + (f" {per_w[args.against][0] / t_hy:.2f}x |" if args.against else ""), flush=True)
-        print("\nfixed cost of one run (N = 1, t_end = 1 ms, rel_tol 1e-10; N = 4 as at 1e-4 above, "
-              "t_end = 1e-9 s: Python, marshalling, the lanes' initialisation, one step):")
-        starts4 = np.tile(s0, (4, 1))
-        starts4[:, i_spin] = s0[i_spin] * (1.0 + 0.01 * np.linspace(-1.0, 1.0, 4))
+                starts, params = spread(n, g.s0, start_names, g.p, param_names, variant == "mass_radius")
+                x0s = np.array([np.array(fns["init"](starts[j], params[j])).ravel() for j in range(n)]).T
+                ref = references(g, param_names, x0s, params, stop)
+                pdict = {name: params[:, k] for k, name in enumerate(param_names) if name in SPREAD}
+                methods = {}
+                for name, e in ens.items():
+                    for tol in TOLS:
+                        for af in (1e-2, 1.0):
+                            methods[name, tol, af] = (lambda e=e, tol=tol, af=af: e.run(
+                                stop, starts=starts, parameters=pdict, rel_tol=tol, abs_tol=tol * af).x_final)
+                for tol in TOLS:
+                    methods[heyoka_name, tol, 0.0] = hb.runner(tol, x0s, params, stop)
+                timed = measure(methods, args.repeat)
+                for target in args.targets:
+                    cheapest = {}
+                    for (name, tol, af), (sec, x) in timed.items():
+                        if float(np.max(np.abs(x - ref))) <= target and sec < cheapest.get(name, (np.inf,))[0]:
+                            cheapest[name] = (sec, tol)
+                    ours = [cheapest[c][0] for c in ens if c in cheapest]
+                    cells = " | ".join(f"{cheapest[c][0] / n * 1e3:.4f} (tol {cheapest[c][1]:.0e})" if c in cheapest
+                                       else "-" for c in cols)
+                    ratio = (cheapest[heyoka_name][0] / min(ours)) if ours and heyoka_name in cheapest else None
+                    summary[variant, target, n] = ratio
+                    print(f"| {VARIANTS[variant]} | {target:g} | {n} | {cells} | "
+                          f"{'-' if ratio is None else f'{ratio:.2f}'} |", flush=True)
+        print("\nheyoka / gyrowheel per trajectory (above 1: the ensemble faster):\n")
+        print("| trajectories | N | " + " | ".join(f"{t:g}" for t in args.targets) + " |")
+        print("|---|---|" + "---|" * len(args.targets))
+        for variant in args.variants:
+            for n in args.n:
+                cells = " | ".join("-" if summary[variant, t, n] is None else f"{summary[variant, t, n]:.2f}"
+                                   for t in args.targets)
+                print(f"| {VARIANTS[variant]} | {n} | {cells} |")
+        print("\nfixed cost of one run (N = 1, t_end = 1 ms, rel_tol 1e-10; N = 4, t_end = 1e-9 s, rel_tol "
+              "1e-4: Python, marshalling, the lanes' initialisation, one step):")
+        starts4, _ = spread(4, g.s0, start_names, g.p, param_names, False)
         fixed = {w: (lambda w=w: ens[w].run(1e-3, rel_tol=1e-10)) for w in ens}
-        short = {w: (lambda w=w: ens[w].run(1e-9, starts=starts4, rel_tol=1e-4, abs_tol=1e-6))
-                 for w in ens}
+        short = {w: (lambda w=w: ens[w].run(1e-9, starts=starts4, rel_tol=1e-4, abs_tol=1e-6)) for w in ens}
         t1, t4 = dict.fromkeys(ens, float("inf")), dict.fromkeys(ens, float("inf"))
         for _ in range(args.repeat * 4):  # interleaved, best of
             for w in ens:
                 t1[w] = min(t1[w], best(fixed[w], 1))
                 t4[w] = min(t4[w], best_of_many(short[w], 200))
         for w in ens:
-            name = f"W = {w}" if w in args.lanes else f"{w} (W = 4)"
-            print(f"  {name}: {t1[w] * 1e3:.3f} ms; N = 4 to 1e-9 s: {t4[w] * 1e6:.1f} us")
+            print(f"  {w}: {t1[w] * 1e3:.3f} ms; N = 4 to 1e-9 s: {t4[w] * 1e6:.1f} us")
     return 0
 
 

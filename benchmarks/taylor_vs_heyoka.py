@@ -42,7 +42,8 @@ TOLS = [10.0 ** -k for k in range(3, 17)]
 
 
 def to_heyoka(f, xs, p, fp=float):
-    """The ode's SX algorithm as heyoka expressions (same graph, parameters as numbers).
+    """The ode's SX algorithm as heyoka expressions (same graph, parameters as numbers; an entry
+    of p that is a heyoka expression, e.g. heyoka.par[k], is used as it is: a runtime parameter).
 
     Raises ValueError, before heyoka is imported, for an input other than t, x and p (inputs u,
     a hoisted ode's constants c): heyoka would otherwise integrate a different system.
@@ -61,7 +62,11 @@ def to_heyoka(f, xs, p, fp=float):
     for k in range(f.n_instructions()):
         op, i, o = OP_NAMES[f.instruction_id(k)], f.instruction_input(k), f.instruction_output(k)
         if op == "input":
-            work[o[0]] = xs[i[1]] if i[0] == 1 else (hy.expression(fp(p[i[1]])) if i[0] == 3 else hy.time)
+            if i[0] == 3:
+                v = p[i[1]]
+                work[o[0]] = v if isinstance(v, hy.expression) else hy.expression(fp(v))
+            else:
+                work[o[0]] = xs[i[1]] if i[0] == 1 else hy.time
         elif op == "const":
             work[o[0]] = hy.expression(fp(f.instruction_constant(k)))
         elif op == "output":

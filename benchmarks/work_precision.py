@@ -1,16 +1,22 @@
 """Work-precision benchmark: what accuracy costs in time, for every solver, against peers.
 
-Scenarios (each a scene, built into an FMU):
-  paper      the paper's earth scenario, 20 s
-  long       the same wheel for 1000 s (conservative rolling)
+Scenarios (each a scene, built into two FMUs: the default build and one with the Taylor kernel):
+  paper      the paper's earth scenario, examples/scenes/paper_earth.toml, 20 s
+  long       the same scene for 1000 s (conservative rolling)
   stiff      Gyrover with a 10^4 rpm flywheel and a stiff tilt servo (double eigenvalue -2e4 1/s)
   near_flat  Euler-disk-like precession at 10 deg above the ground
 Methods:
-  gyrowheel/<solver>  the FMU's internal solvers, one fmi2DoStep(0, T) through fmpy (the FMUs
-                      are built with the Taylor kernel, so solver taylor is among them)
-  heyoka              heyoka's adaptive Taylor method (LLVM), one trajectory, on the minimal
-                      closed form of the base wheel (benchmarks/peers.py)
-  heyoka batch N      heyoka's batch mode, N trajectories together, time per trajectory
+  gyrowheel/<solver>  the FMU's internal solvers through fmpy's FMU2Slave, as a user runs an
+                      instance it holds: reset, set the solver settings, initialise, one
+                      fmi2DoStep(0, T) with max_step = T, read the 8 states (instantiation not
+                      timed; the doStep alone is kept in the JSON as step_seconds).  Solver
+                      taylor runs in the FMU built with the Taylor kernel (--taylor), every other
+                      solver in the default build
+  heyoka              heyoka's adaptive Taylor method (LLVM), taylor_adaptive, one trajectory, on
+                      the minimal closed form of the base wheel (benchmarks/peers.py), timed as a
+                      user calls it: set time and state, propagate_until, read the state
+  heyoka batch N      (peer heyoka-batch) heyoka's batch mode, N trajectories together, time per
+                      trajectory
   plain C DOP853      Hairer's DOP853 in plain C around the minimal hand-written RHS
   casadi/cvodes       CasADi's integrator on the FMU's expression graph (BDF; cvodes-adams: Adams)
   scipy/<method>      scipy.integrate.solve_ivp (DOP853, Radau, LSODA) calling the CasADi function
@@ -20,12 +26,18 @@ check that the minimal form equals the FMU's right-hand side at random states.
 Error: max abs error of the 8 states at the stop time against a reference: heyoka in 80-bit long
 double at tolerance 1e-19 on the base-wheel scenarios (cross-checked against the FMU's DOP853 at
 1e-13), the FMU's DOP853 at 1e-13 otherwise; also the relative energy drift.
-Table: the cheapest time to reach each error (1e-4, 1e-7, 1e-10, 1e-12) as a multiple of
-gyrowheel's best in the same run. Time = CPU time of the calling thread (time.thread_time: time
+Tables, per scenario: rows = methods, columns = target errors (1e-4, 1e-7, 1e-10, 1e-12), each
+cell the cheapest time to reach that error (over the tolerance grid; a method's settings families,
+e.g. taylor with abs_tol = rel_tol / 100 and = rel_tol, count as one row) and the ratio heyoka's
+time / that time (above 1: faster than heyoka); the row "gyrowheel best" is the fastest
+gyrowheel solver.  Then the limit per target (benchmarks/work_limit.py: the fewest Taylor steps
+x order x the operations of the minimal closed form x a measured cost per operation) and each
+method's distance from it (time / limit).  Time = CPU time of the calling thread (time.thread_time: time
 the scheduler gives to other processes does not count, so runs of 0.2 ms and of 100 ms compare on a
 loaded machine), best of 3; compilation (heyoka's JIT, the FMU) is not timed.
 
     python benchmarks/work_precision.py [--quick] [--scenarios paper stiff] [--peers heyoka plain]
+                                        [--solvers dopri5 dop853 taylor] [--repeat 3]
                                         [--out results/bench] [--png-dir DIR]
 
 Writes <out>/work_precision_<scenario>.png (in --png-dir if given), the figure's points as
@@ -49,14 +61,30 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import peers  # noqa: E402
+import work_limit  # noqa: E402
 from fmi_slave import FmuRunner, solver_counts  # noqa: E402
 
 from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
 
+PAPER_SCENE = HERE.parent / "examples" / "scenes" / "paper_earth.toml"
 WHEEL = ""  # [wheel] at the scene defaults: the paper wheel (M 2 kg, R 0.17 m, k 0.25 / 0.4, beta_min 0.02)
+
+
+def scene_body(path: Path) -> str:
+    """A scene file's text without its [model] table (each benchmark names its own model)."""
+    kept, in_model = [], False
+    for line in path.read_text().splitlines():
+        if line.strip().startswith("["):
+            in_model = line.strip() == "[model]"
+        if not in_model:
+            kept.append(line)
+    return "\n".join(kept) + "\n"
+
+
+PAPER = scene_body(PAPER_SCENE)  # Nandy & Xu's earth scenario, as a user has it
 SCENARIOS = {
-    "paper": (WHEEL + "[effects.gravity]\ng = 9.81\n[initial]\nbeta_deg = 80.0\ngamma_dot = 6.0\n", 20.0),
-    "long": (WHEEL + "[effects.gravity]\ng = 9.81\n[initial]\nbeta_deg = 80.0\ngamma_dot = 6.0\n", 1000.0),
+    "paper": (PAPER, 20.0),
+    "long": (PAPER, 1000.0),
     "stiff": (WHEEL + "[effects.gravity]\ng = 9.81\n[effects.gyrover]\nflywheel_rate = 1047.2\n"
               "tilt_omega = 20000.0\n[initial]\nbeta_deg = 85.0\ngamma_dot = 8.0\ntilt = 0.2\n", 2.0),
     "near_flat": ("[wheel]\nk_axial = 0.5\n" + "[effects.gravity]\ng = 9.81\n"
@@ -65,8 +93,11 @@ SCENARIOS = {
 TARGETS = (1e-4, 1e-7, 1e-10, 1e-12)
 TOLS = [10.0 ** -k for k in range(3, 16)]
 BASE_WHEEL = ("paper", "long", "near_flat")  # gravity only: the minimal closed form applies
-PEERS = ("heyoka", "plain", "cvodes", "scipy", "fmpy", "multipliers")
+PEERS = ("heyoka", "heyoka-batch", "plain", "cvodes", "scipy", "fmpy", "multipliers")
 HEYOKA_BATCH = 4
+HEYOKA = "heyoka (taylor_adaptive, one trajectory)"
+# settings families of one solver: one row of the tables (the cheapest of either counts)
+FAMILY_LABELS = (" (rel_tol only)", " (abs_tol = rel_tol)")
 try:  # a benchmark dependency (pyproject.toml [bench]), not a core one
     import heyoka  # noqa: F401
     HAVE_HEYOKA = True
@@ -83,6 +114,9 @@ class Point:
     seconds: float
     error: float
     energy_drift: float
+    steps: int = 0  # Taylor runs: steps taken (accepted + rejected), for the limit
+    order: int = 0  # Taylor runs: the order
+    step_seconds: float = float("nan")  # gyrowheel: the fmi2DoStep call alone
 
 
 def best_time(fn, repeat: int) -> tuple[float, object]:
@@ -95,13 +129,20 @@ def best_time(fn, repeat: int) -> tuple[float, object]:
 
 
 class Scenario:
-    def __init__(self, name: str, text: str, stop: float, work: Path, formulation: str = "reduced"):
+    def __init__(self, name: str, text: str, stop: float, work: Path, formulation: str = "reduced",
+                 default_build: bool = False):
+        """runner: the FMU built with the Taylor kernel; default_runner and default_sources (with
+        default_build): the default build of the same scene and its C sources, None otherwise."""
         self.name, self.stop = name, stop
         header = f'[model]\nname = "bench_{name}"\nformulation = "{formulation}"\n'
         scene = parse_scene(header + text, f"{name}.toml")
         built = build_fmu(scene, work / f"{name}.fmu", build_dir=work / name, taylor=True)
-        self.fmu, self.spec = built.fmu, built.spec
+        self.fmu, self.spec, self.sources = built.fmu, built.spec, built.sources
         self.runner = FmuRunner(self.fmu)
+        self.default_runner, self.default_sources = None, None
+        if default_build:
+            plain = build_fmu(scene, work / f"{name}_default.fmu", build_dir=work / f"{name}_default")
+            self.default_runner, self.default_sources = FmuRunner(plain.fmu), plain.sources
         self.fns = self.spec.functions()
         self.p = np.array([q.start for q in self.spec.parameters], dtype=float)
         self.s0 = np.array([q.start for q in self.spec.starts], dtype=float)
@@ -126,7 +167,10 @@ class Scenario:
 def run_internal(sc: Scenario, solver: str, settings, repeat: int, label: str = "",
                  tolerance_only: bool = False, atol_per_rtol: float = 1e-2) -> list[Point]:
     """tolerance_only: set rel_tol alone (abs_tol left at the scene default, 0 = rel_tol / 100);
-    otherwise abs_tol = atol_per_rtol * rel_tol."""
+    otherwise abs_tol = atol_per_rtol * rel_tol.  Solver taylor runs in the FMU with the Taylor
+    kernel (and its steps are counted, for the limit), the others in the default build when the
+    scenario has one.  seconds: the whole call (FmuRunner.last_call_seconds), best of repeat."""
+    runner = sc.runner if solver == "taylor" or sc.default_runner is None else sc.default_runner
     points = []
     for value in settings:
         values = {"solver": SOLVER_CODES[solver], "max_internal_steps": 2**31 - 1}
@@ -137,14 +181,20 @@ def run_internal(sc: Scenario, solver: str, settings, repeat: int, label: str = 
         else:
             values.update(rel_tol=value, abs_tol=value * atol_per_rtol, max_step=sc.stop)
         try:
-            seconds = float("inf")
+            seconds = step_seconds = float("inf")
             for _ in range(repeat):
-                res = sc.runner.one_step(sc.stop, sc.state_names + ["energy"], **values)
-                seconds = min(seconds, sc.runner.last_seconds)
+                res = runner.one_step(sc.stop, sc.state_names + ["energy"], **values)
+                seconds = min(seconds, runner.last_call_seconds)
+                step_seconds = min(step_seconds, runner.last_seconds)
         except Exception as exc:  # a solver that cannot do this scenario at this setting
             print(f"  {solver} {value:g}: {exc}", file=sys.stderr)
             continue
-        points.append(sc.score(f"gyrowheel/{solver}{label}", value, seconds, res[:-1], res[-1]))
+        point = sc.score(f"gyrowheel/{solver}{label}", value, seconds, res[:-1], res[-1])
+        point.step_seconds = step_seconds
+        if solver == "taylor":
+            counts = solver_counts(sc.fmu, sc.stop, **values)
+            point.steps, point.order = counts["accepted"] + counts["rejected"], work_limit.taylor_order(value)
+        points.append(point)
     return points
 
 
@@ -191,15 +241,20 @@ def energy_of(sc: Scenario, x: np.ndarray) -> float:
     return sc.outputs_of(np.asarray(x, dtype=float))[1]
 
 
-def run_heyoka(sc: Scenario, repeat: int) -> list[Point]:
-    """heyoka, one trajectory and batch mode, on the minimal form (compilation not timed)."""
+def run_heyoka(sc: Scenario, repeat: int, batch: bool = False) -> list[Point]:
+    """heyoka, one trajectory (and batch mode with batch), on the minimal form (compilation not
+    timed)."""
     hy = peers.Heyoka(wheel_params(sc), sc.x0, sc.stop)
     points = []
     for tol in TOLS:
-        seconds, x = hy.single(tol, repeat)
-        points.append(sc.score("heyoka", tol, seconds, x, energy_of(sc, x)))
-        seconds, x = hy.batch(tol, HEYOKA_BATCH, repeat)
-        points.append(sc.score(f"heyoka batch {HEYOKA_BATCH} (per trajectory)", tol, seconds, x, energy_of(sc, x)))
+        seconds, x, steps, order = hy.single(tol, repeat)
+        point = sc.score(HEYOKA, tol, seconds, x, energy_of(sc, x))
+        point.steps, point.order = steps, order
+        points.append(point)
+        if batch:
+            seconds, x = hy.batch(tol, HEYOKA_BATCH, repeat)
+            points.append(sc.score(f"heyoka batch {HEYOKA_BATCH} (per trajectory)", tol, seconds, x,
+                                   energy_of(sc, x)))
     return points
 
 
@@ -299,31 +354,63 @@ def error_floor(points: list[Point], prefix: str = "gyrowheel") -> float:
     return min((p.error for p in points if p.method.startswith(prefix)), default=float("nan"))
 
 
+def row_of(method: str) -> str:
+    """The table row of a method: its settings families (FAMILY_LABELS) are one row."""
+    for label in FAMILY_LABELS:
+        if method.endswith(label):
+            return method[: -len(label)]
+    return method
+
+
+def cheapest_rows(points: list[Point], target: float) -> dict[str, float]:
+    """{row: the cheapest seconds reaching target} over the settings of each row."""
+    out: dict[str, float] = {}
+    for method, seconds in cheapest(points, target).items():
+        row = row_of(method)
+        out[row] = min(seconds, out.get(row, float("inf")))
+    return out
+
+
 def table(name: str, points: list[Point]) -> str:
-    """Cheapest time to reach each error, as a multiple of gyrowheel's best (docs/performance.md's table)."""
+    """Rows = methods, columns = target errors; each cell the cheapest time to reach the error
+    and (in parentheses) heyoka's time / that time: above 1, faster than heyoka (docs/performance.md)."""
     cols = " | ".join(f"{t:.0e}" for t in TARGETS)
-    lines = [f"### {name}", "", f"| method | {cols} |", "|---|" + "---|" * len(TARGETS)]
-    best = {t: min((s for m, s in cheapest(points, t).items() if m.startswith("gyrowheel")), default=None)
-            for t in TARGETS}
+    per = {t: cheapest_rows(points, t) for t in TARGETS}
+    rows = list(dict.fromkeys(row_of(p.method) for p in points))
+    ours = [r for r in rows if r.startswith("gyrowheel")]
     floor = error_floor(points)
-    cells = [f"1 ({best[t] * 1e3:.3g} ms)" if best[t] else f"not reached (floor {floor:.1e})" for t in TARGETS]
+
+    def cell(seconds, target) -> str:
+        if seconds is None:
+            return "-"
+        ref = per[target].get(HEYOKA)
+        return f"{seconds * 1e3:.3g} ms" + (f" ({ref / seconds:.2f})" if ref is not None else "")
+    lines = [f"### {name}", "", f"| method | {cols} |", "|---|" + "---|" * len(TARGETS)]
+    cells = []
+    for t in TARGETS:
+        best = min(((per[t][r], r) for r in ours if r in per[t]), default=None)
+        cells.append(f"not reached (floor {floor:.1e})" if best is None
+                     else f"{cell(best[0], t)}, {best[1].removeprefix('gyrowheel/')}")
     lines.append("| gyrowheel best | " + " | ".join(cells) + " |")
-    for method in dict.fromkeys(p.method for p in points):
-        cells = []
-        for t in TARGETS:
-            s = cheapest(points, t).get(method)
-            if s is None:
-                cells.append("-")
-            elif best[t]:
-                cells.append(f"{s / best[t]:.2g}")
-            else:
-                cells.append(f"reached ({s * 1e3:.3g} ms)")
-        lines.append(f"| {method} | " + " | ".join(cells) + " |")
+    for row in rows:
+        lines.append(f"| {row} | " + " | ".join(cell(per[t].get(row), t) for t in TARGETS) + " |")
     lines.append("")
-    lines.append(f"Cheapest time to reach each final-state error (max abs error of the 8 states), as a multiple "
-                 f"of gyrowheel's best at that error in the same run (\"-\": not reached). gyrowheel's error "
-                 f"floor: {floor:.1e}.")
+    lines.append("Cheapest time to reach each final-state error (max abs error of the 8 states), thread CPU time "
+                 "of the whole call, best of the repetitions; in parentheses heyoka's time over it (above 1: "
+                 f"faster than heyoka; \"-\": not reached). gyrowheel's error floor: {floor:.1e}.")
     return "\n".join(lines)
+
+
+def limit_section(name: str, sc: Scenario, points: list[Point], work: Path) -> str:
+    """The limit per target and each method's distance from it (benchmarks/work_limit.py)."""
+    work.mkdir(parents=True, exist_ok=True)
+    n_ops = work_limit.operation_count(wheel_params(sc))
+    t_rhs = work_limit.rhs_seconds(sc.default_sources, work)  # rhs_bench builds on the default build
+    lim = work_limit.limits(points, TARGETS, t_rhs)
+    per = {t: cheapest_rows(points, t) for t in TARGETS}
+    rows = {row: {t: per[t][row] for t in TARGETS if row in per[t]}
+            for row in dict.fromkeys(row_of(p.method) for p in points)}
+    return work_limit.limit_table(name, rows, lim, TARGETS, n_ops, t_rhs)
 
 
 def step_counts(sc: Scenario, solver: str = "dop853") -> str:
@@ -349,6 +436,7 @@ def main() -> int:
     parser.add_argument("--solvers", nargs="*", default=["euler", "rk4", "dopri5", "dop853", "rosenbrock", "taylor"],
                         choices=list(SOLVER_CODES), help="gyrowheel solvers to measure")
     parser.add_argument("--quick", action="store_true", help="few settings, no repetitions (a smoke run)")
+    parser.add_argument("--repeat", type=int, default=3, help="repetitions of each timing, best counted")
     parser.add_argument("--out", default="results/bench")
     parser.add_argument("--png-dir", help="directory for the figures (default: --out; make figures: docs/img)")
     args = parser.parse_args()
@@ -356,7 +444,7 @@ def main() -> int:
     out.mkdir(parents=True, exist_ok=True)
     if args.png_dir:
         Path(args.png_dir).mkdir(parents=True, exist_ok=True)
-    repeat = 1 if args.quick else 3
+    repeat = 1 if args.quick else args.repeat
     global TOLS, FIXED_STEPS
     if args.quick:
         TOLS, FIXED_STEPS = [1e-4, 1e-7], [1e-2, 1e-3]
@@ -370,7 +458,7 @@ def main() -> int:
             text, stop = SCENARIOS[name]
             if args.quick:
                 stop = min(stop, 2.0)
-            sc = Scenario(name, text, stop, Path(tmp))
+            sc = Scenario(name, text, stop, Path(tmp), default_build=True)
             ref_fmu = np.asarray(sc.runner.one_step(stop, sc.state_names, solver=SOLVER_CODES["dop853"],
                                                     rel_tol=1e-13, abs_tol=1e-15, max_step=stop))
             notes: list[str] = []
@@ -401,7 +489,7 @@ def main() -> int:
                 points += run_internal(sc, "taylor", TOLS, repeat, " (abs_tol = rel_tol)", atol_per_rtol=1.0)
             if base and "heyoka" in args.peers:
                 if HAVE_HEYOKA:
-                    points += run_heyoka(sc, repeat)
+                    points += run_heyoka(sc, repeat, batch="heyoka-batch" in args.peers)
                 else:
                     notes.append("heyoka is not installed (pip install -e '.[bench]'): its rows are missing.")
             if base and plain is not None:
@@ -424,7 +512,9 @@ def main() -> int:
             plot(name, points, Path(args.png_dir or out) / f"work_precision_{name}.png")
             (out / f"work_precision_{name}.json").write_text(json.dumps([vars(p) for p in points], indent=0) + "\n")
             text_table = table(f"{name} ({stop:g} s)", points)
-            print(text_table)
+            if base and HAVE_HEYOKA and "heyoka" in args.peers:
+                text_table += "\n\n" + limit_section(f"{name} ({stop:g} s)", sc, points, Path(tmp) / f"{name}_rhs")
+            print(text_table, flush=True)
             for note in notes:
                 print(note)
             figure_path = os.path.relpath(Path(args.png_dir or out) / f"work_precision_{name}.png", out)

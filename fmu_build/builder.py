@@ -75,6 +75,9 @@ class BuildResult:
 TAYLOR_ONLY = {"gw_taylor_ops.h", "gw_solver_taylor_step.h", "gw_solver_taylor_increment.h",
                "gw_ensemble.c", "gw_ensemble.h", "gw_ensemble_passes.h", "gw_ensemble_ctx.h",
                "gw_ensemble_batch.h", "gw_ensemble_lib.c", "gw_fm_logexp.h"}
+# runtime files gyrowheel compiles on the host from the installed runtime, never part of an FMU or
+# an export: the ensemble's lane-count probe (gyrowheel.taylor.lanes)
+HOST_ONLY = {"gw_cpu_lanes.c"}
 
 
 def model_spec(scene: Scene) -> ModelSpec:
@@ -222,6 +225,8 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         fns = generate_functions(spec, src, table)
         kernel = generate_taylor(fns, spec.name, src, wanted=taylor or experiment.solver == "taylor")
         for f in runtime_sources(fmi):
+            if f.name in HOST_ONLY:
+                continue
             if f.name in TAYLOR_ONLY and isinstance(kernel, str):
                 continue  # no kernel: nothing of solver taylor beyond the one-comment model file
             shutil.copy2(f, src / f.name)

@@ -29,7 +29,7 @@ from pathlib import Path
 
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build import c_names
-from gyrowheel.fmu_build.builder import TAYLOR_ONLY, _guid, _spec
+from gyrowheel.fmu_build.builder import HOST_ONLY, TAYLOR_ONLY, _guid, _spec
 from gyrowheel.fmu_build.runtime import EXPORT_DIR, fmi_version_of, runtime_sources
 from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
 from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
@@ -91,7 +91,7 @@ def check_identifier(name: str) -> str:
 
 
 # the ensemble library's files (gyrowheel.taylor.ensemble), never part of <model>.c
-ENSEMBLE_ONLY = frozenset(n for n in TAYLOR_ONLY if n.startswith("gw_ensemble")) | {"gw_fm_logexp.h"}
+ENSEMBLE_ONLY = frozenset(n for n in TAYLOR_ONLY if n.startswith("gw_ensemble")) | {"gw_fm_logexp.h"} | HOST_ONLY
 
 
 def core_sources(kernel: bool) -> list[Path]:

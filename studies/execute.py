@@ -151,8 +151,9 @@ def run_loop(plan, writer, batch_size: int | None = None, progress: bool = False
     Default batches of LOOP_BATCH points, not one batch of every point: rows reach the writer
     (the table on disk, the progress bar) as batches end, so one batch left a Ctrl-C with no row
     at all however long the sweep had run. 64 points: enough for the ensemble path (it advances
-    a batch's points together, 4 lanes at a time), and no slower than one batch (1200 points of
-    the paper's moon scene: 8.1 s in batches of 50, 300 or 1200 alike)."""
+    a batch's points together, the CPU's lane count at a time: gyrowheel.taylor.lanes), and no
+    slower than one batch (1200 points of the paper's moon scene: 8.1 s in batches of 50, 300 or
+    1200 alike)."""
     tasks = plan.tasks(batch_size or LOOP_BATCH)
     payload = plan.target.payload()
     with _progress(len(plan.values), progress) as bar:

@@ -44,14 +44,11 @@ __all__ = ["Ensemble", "EnsembleResult", "EnsembleError", "STATUS_OK", "STATUS_T
            "STATUS_ERROR", "LANES"]
 
 STATUS_OK, STATUS_TERMINATED, STATUS_ERROR = 0, 2, 3  # gw_status values
-# trajectories advanced together (GW_ENSEMBLE_LANES): 4, one AVX2 vector of doubles.  Wider
-# batches do not pay per trajectory: the kernel is throughput-bound (its interior sums' loads and
-# multiply-adds), so 8 lanes cost what two 4-lane slices cost (per lane-step 1.0x of 4 lanes with
-# the slices unrolled, 1.15x before; 16 lanes 1.1x, their series outgrow L1), and the per-lane
-# control does not shrink with the width; a job of N < 8 leaves lanes idle (paper, 1e-4, loaded
-# machine, one run: N = 16 0.041 ms per trajectory on 4 and 8 lanes, N = 64 0.041 / 0.040, N = 4
-# 0.044 / 0.073).  docs/taylor.md, docs/performance.md
-LANES = 4
+# trajectories advanced together (GW_ENSEMBLE_LANES) by default: the CPU's count, chosen at run
+# time (gyrowheel.taylor.lanes.cpu_lanes: 8 with AVX-512F, 4 with AVX2, else 2); LANES = None
+# means that choice, an integer passed as `lanes` overrides it.  docs/performance.md, "The
+# ensemble's lane count"
+LANES = None
 KIND_PARAM, KIND_START, KIND_OUTPUT, KIND_EVENT = 0, 1, 3, 5  # gw_kind
 FLAGS = ["-O3", "-ffp-contract=fast"]  # portable: the x86-64-v3 kernel is a target clone
 
@@ -334,10 +331,11 @@ class Ensemble:
 
     fmu: the .fmu, built by gyrowheel with the Taylor kernel (gyrowheel.build(..., taylor=True)):
     a path (str or os.PathLike) or the BuildResult of gyrowheel.build; lanes: trajectories
-    advanced together (default LANES, 4: as cheap per trajectory as 8 or 16 at N >= 16 and much
-    cheaper below, measured; any integer >= 1 is built, each width its own cached library; a
-    trajectory's result is the same bit for bit in any job and on 2 to 16 lanes; on 1 lane equal
-    to rounding); cache: where the library is kept (default ~/.cache/gyrowheel/ensemble);
+    advanced together (default None: this CPU's count, gyrowheel.taylor.lanes.cpu_lanes, 8 with
+    AVX-512F, 4 with AVX2, else PORTABLE_LANES; any integer >= 1 overrides it, each width its own
+    cached library; `self.lanes` is the count built; a trajectory's result is the same bit for
+    bit in any job and on 2 to 16 lanes; on 1 lane equal to rounding); cache: where the library
+    (and the lane-count probe) is kept (default ~/.cache/gyrowheel/ensemble);
     defines: extra C macros of this build, {name: integer or one-line string} (switches of the
     ensemble path and the solver, e.g.
     {"GW_ENSEMBLE_LANE_STEPS": 1}: every lane-step through the solver code), part of the
@@ -346,8 +344,11 @@ class Ensemble:
     no sources or its model no Taylor kernel, CompileError if the compiler fails.
     """
 
-    def __init__(self, fmu: str | Path, lanes: int = LANES, cache: str | Path | None = None,
+    def __init__(self, fmu: str | Path, lanes: int | None = LANES, cache: str | Path | None = None,
                  defines: dict | None = None):
+        if lanes is None:
+            from gyrowheel.taylor.lanes import cpu_lanes
+            lanes = cpu_lanes(cache)
         _check_lanes(lanes)
         lanes, defines, fmu = int(lanes), _checked_defines(defines), _fmu_path(fmu)
         # the front end is the installed runtime's (its functions and layout are what this class

@@ -60,7 +60,7 @@ def _probe(cache: Path | None, portable: int) -> ctypes.CDLL:
 
 
 def cpu_lanes(cache: str | os.PathLike | None = None, portable: int = PORTABLE_LANES) -> int:
-    """The lane count for this CPU: 8 with AVX-512F, 4 with AVX2, else `portable` (an integer
+    """The lane count for this CPU: 4 with AVX2 or AVX-512F, else `portable` (an integer
     >= 1).  cache: where the probe library is kept (default the ensemble cache)."""
     return int(_probe(Path(cache) if cache else None, portable).gw_cpu_lanes())
 

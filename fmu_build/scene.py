@@ -162,10 +162,22 @@ class _Reader:
 
     def __init__(self, where: str, mapping: str = "table"):
         self.where, self.mapping = where, mapping
+        self.degrees: dict[tuple[str, str], float] = {}  # (table, angle) -> the value given as <angle>_deg
 
     def fail(self, table: str, key: str | None, problem: str) -> SceneError:
+        """The error at [table] key. An angle given in degrees is named as it was written: the
+        rules check it in rad, so the message adds the value in degrees the user wrote."""
+        deg = self.degrees.get((table, key)) if key else None
+        if deg is not None:
+            key, problem = f"{key}_deg", f"{problem} (rad; given as {key}_deg = {deg!r} deg)"
         loc = f"[{table}]" + (f" {key}" if key else "")
         return SceneError(f"{self.where}: {loc}: {problem}")
+
+    def in_degrees(self, table: str, key: str, value) -> float:
+        """<angle>_deg = value: the angle in rad, remembered as given in degrees (see fail)."""
+        deg = self.number(table, f"{key}_deg", value)
+        self.degrees[(table, key)] = deg
+        return math.radians(deg)
 
     def table(self, data: dict, name: str) -> dict:
         value = data.get(name, {})
@@ -202,8 +214,7 @@ def _numbers_with_degrees(r: _Reader, table: str, data: dict, names: list[str],
         name = key[:-4] if key.endswith("_deg") else key
         if name in out:
             raise r.fail(table, key, f"{name} given twice (in rad and in deg)")
-        v = r.number(table, key, value)
-        out[name] = math.radians(v) if key.endswith("_deg") else v
+        out[name] = r.in_degrees(table, name, value) if key.endswith("_deg") else r.number(table, key, value)
     return out
 
 
@@ -318,7 +329,7 @@ def _effects(r: _Reader, data: dict) -> dict[str, dict]:
             if base in effects[name]:
                 raise r.fail(table, key, f"{base} given twice (in rad and in deg)")
             if base != key:
-                value = math.radians(r.number(table, key, value))
+                value = r.in_degrees(table, base, value)
             effects[name][base] = _effect_value(r, table, base, value, cls)
         conflict = cls.option_conflict(effects[name])
         if conflict:

@@ -23,12 +23,14 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import re
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 from gyrowheel import arguments
 from gyrowheel.arguments import check_memory, count, existing_file, flag, number, path
-from gyrowheel.errors import ArgumentError, ArgumentTypeError, GyrowheelError, MissingExtraError, SweepSpecError
+from gyrowheel.errors import (ArgumentError, ArgumentTypeError, GyrowheelError, MissingExtraError, SweepSpecError,
+                              UnknownArgumentNameError)
 from gyrowheel.extras import require
 from gyrowheel.output_files import check_output_file, replaced_atomically
 from gyrowheel.scratch import temporary_directory
@@ -262,12 +264,13 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
         given = _assignments(start_values, "start_values")
         starts = check_start_values(path, given)
     except SimulationError as exc:
-        raise ArgumentError(f"start_values: {exc}", argument="start_values") from None
+        raise _start_value_error(exc, "start_values") from None
     _check_rows(md, stop_time, output_interval)
     try:
         result = run(path, stop_time=stop_time, output_interval=output_interval, start_values=starts)
     except StartValueError as exc:  # a parameter out of its range, a combination the model refuses
-        raise ArgumentError(f"start_values: {exc}", argument="start_values") from None
+        raise ArgumentError(f"start_values: {exc}{_as_given_in_degrees(str(exc), given, starts)}",
+                            argument="start_values") from None
     if csv is not None:
         with replaced_atomically(csv, "output") as part:
             write_csv(result, part)
@@ -515,6 +518,24 @@ def system_run(system, *, step: float = 0.01, stop_time: float | None = None, st
     return result
 
 
+def _as_given_in_degrees(reason: str, given: dict[str, str], starts: dict[str, object]) -> str:
+    """The FMU checks angles in rad: for each angle its refusal names that was given as
+    <angle>_deg, the text '; <angle> given as <angle>_deg = 100 (1.745 rad)', else ''."""
+    notes = [f"; {name[:-4]} given as {name} = {text} ({starts[name[:-4]]!r} rad)"
+             for name, text in given.items()
+             if name.endswith("_deg") and name[:-4] in starts and re.search(rf"\b{re.escape(name[:-4])}\b", reason)]
+    return "".join(notes)
+
+
+def _start_value_error(exc: Exception, where: str) -> ArgumentError:
+    """A start value refused while checked against the FMU, as the error naming start_values: an
+    UnknownArgumentNameError (also a KeyError) for a name the FMU does not have, else an
+    ArgumentError."""
+    from gyrowheel.simulation import UnknownVariableError
+    error = UnknownArgumentNameError if isinstance(exc, UnknownVariableError) else ArgumentError
+    return error(f"{where}: {exc}", argument="start_values")
+
+
 def _system_start_values(system, values) -> dict[str, dict[str, object]]:
     """start_values (see system_run) -> {component: {variable: typed value}}, checked against
     each component's FMU as simulate checks them. Raises ArgumentError naming the entry."""
@@ -543,5 +564,5 @@ def _system_start_values(system, values) -> dict[str, dict[str, object]]:
         try:
             out[component] = check_start_values(system.component(component).fmu, own)
         except SimulationError as exc:
-            raise ArgumentError(f"start_values, component {component}: {exc}", argument="start_values") from None
+            raise _start_value_error(exc, f"start_values, component {component}") from None
     return out

@@ -10,6 +10,7 @@ GyrowheelError, so `except gyrowheel.GyrowheelError` catches whatever gyrowheel 
       FmuError (ValueError)             an `fmu` argument that is not a usable FMI 2.0 FMU
       SweepSpecError (ValueError)       a sweep that cannot be run as specified
       UnknownNameError (KeyError)       a name (variable, parameter, output, extra) that is not there
+        UnknownArgumentNameError        ... given in an argument (also an ArgumentError)
       MissingExtraError (ImportError)   an optional part of gyrowheel is not installed
     and, defined beside the code that raises them: SceneError, ExportError, AnimationError,
     SystemFileError (ValueErrors), SimulationError, MasterError, EnsembleError, CompileError
@@ -60,6 +61,11 @@ class UnknownNameError(GyrowheelError, KeyError):
 
     def __str__(self) -> str:  # KeyError's str() would quote the whole message
         return str(self.args[0]) if self.args else ""
+
+
+class UnknownArgumentNameError(ArgumentError, UnknownNameError):
+    """An argument that names what is not there (start_values={'nosuch': 1}): an ArgumentError
+    naming the argument and an UnknownNameError, so a ValueError and a KeyError both."""
 
 
 class SweepSpecError(GyrowheelError, ValueError):

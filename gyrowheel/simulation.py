@@ -51,6 +51,11 @@ class FmuWarning(UserWarning):
     each once (warnings.warn), `gyrowheel simulate` prints it as `gyrowheel: warning: ...`."""
 
 
+class UnknownVariableError(SimulationError):
+    """A start value names no variable of the FMU; gyrowheel.simulate and system_run raise it as
+    an UnknownArgumentNameError (an ArgumentError and an UnknownNameError) naming start_values."""
+
+
 class StartValueError(SimulationError):
     """The FMU refused the start values before the run began: a value set (fmi2SetReal, ...) or
     the checks of initialisation (fmi2ExitInitializationMode: a parameter out of its range, a
@@ -107,7 +112,7 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
         name, degrees = _angle_name(given, by_name)
         v = by_name.get(name)
         if v is None:
-            raise SimulationError(f"unknown variable {name!r}; settable: "
+            raise UnknownVariableError(f"unknown variable {name!r}; settable: "
                                   + ", ".join(sorted(n for n, w in by_name.items() if _settable(w)))
                                   + " (angles also as NAME_deg)")
         if name in out:

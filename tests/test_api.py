@@ -203,7 +203,7 @@ def test_simulate_reports_the_fall(moon):
      "stop_time"),
     ("{moon}", dict(output_interval=float("inf")), "ArgumentError", "output_interval must be finite, got inf",
      "output_interval"),
-    ("{moon}", dict(start_values={"colour": 3}), "ArgumentError", "start_values: unknown variable 'colour'",
+    ("{moon}", dict(start_values={"colour": 3}), "UnknownArgumentNameError", "start_values: unknown variable 'colour'",
      "start_values"),
     ("{moon}", dict(start_values={"max_internal_steps": 1.5}), "ArgumentError",
      "start_values: value '1.5' for 'max_internal_steps' is not a valid Integer", "start_values"),

@@ -331,3 +331,15 @@ def test_a_figure_names_its_run_once(moon, tmp_path, monkeypatch):
     plot_trajectories({"a": run, "b": run}, tmp_path / "two.png", title="runs")
     assert titles == ["runs"]
 
+
+
+def test_an_unknown_start_value_name_is_a_key_error_and_an_argument_error(moon):
+    """A name the FMU does not have is an UnknownNameError (a KeyError, README "Errors") and an
+    ArgumentError (a ValueError) naming start_values, whatever the value."""
+    with pytest.raises(gyrowheel.UnknownArgumentNameError) as exc:
+        gyrowheel.simulate(moon.fmu, start_values={"nosuch": 1}, stop_time=0.1)
+    error = exc.value
+    assert isinstance(error, KeyError) and isinstance(error, gyrowheel.UnknownNameError)
+    assert isinstance(error, ValueError) and isinstance(error, gyrowheel.ArgumentError)
+    assert error.argument == "start_values"
+    assert str(error).startswith("start_values: unknown variable 'nosuch'; settable: ")  # not quoted as KeyError's

@@ -18,6 +18,7 @@ import sys
 
 import pytest
 
+import gyrowheel
 from gyrowheel.fmu_build.scene import SceneError, parse_scene
 from gyrowheel.model.build import build_model
 from gyrowheel.model.effects import CATALOGUE
@@ -75,9 +76,9 @@ def test_every_limited_start_value_and_parameter_is_refused_when_read():
                                  "body), got 0.9 with k_diam 0.25"),
     ("[wheel]\nk_axial = 1.2\nk_diam = 1.0\n", "s.toml: [wheel] k_axial: must be <= 1 (a ring, all mass at radius R, "
                                                "is the limit), got 1.2"),
-    ("[wheel]\nbeta_min_deg = 10\n[initial]\nbeta_deg = 5\n", "s.toml: [initial] beta: must lie between beta_min "
+    ("[wheel]\nbeta_min_deg = 10\n[initial]\nbeta_deg = 5\n", "s.toml: [initial] beta_deg: must lie between beta_min "
                                                               "and pi - beta_min"),
-    ("[wheel]\nbeta_min_deg = 10\n[initial]\nbeta_deg = 175\n", "s.toml: [initial] beta: must lie between beta_min"),
+    ("[wheel]\nbeta_min_deg = 10\n[initial]\nbeta_deg = 175\n", "s.toml: [initial] beta_deg: must lie between beta_min"),
 ])
 def test_combined_ranges_are_refused_when_read(text, message):
     """The FMU's checks of more than one value, made by the reader too (model/build.py)."""
@@ -102,7 +103,11 @@ def test_effect_angles_take_degrees():
     scene = parse_scene("[effects.gravity]\n[effects.slope]\nslope_angle_deg = 5\nslope_direction_deg = 90\n")
     assert scene.effects["slope"] == {"slope_angle": math.radians(5), "slope_direction": math.radians(90)}
     assert _refused("[effects.gravity]\n[effects.slope]\nslope_angle_deg = 100\n") == \
-        f"s.toml: [effects.slope] slope_angle: must be <= 1.5, got {math.radians(100)!r}"
+        f"s.toml: [effects.slope] slope_angle_deg: must be <= 1.5, got {math.radians(100)!r} " \
+        "(rad; given as slope_angle_deg = 100.0 deg)"
+    assert _refused("[effects.gravity]\n[initial]\nbeta_deg = 200\n") == (
+        "s.toml: [initial] beta_deg: must lie in (0, pi) (0 and pi are lying flat), "
+        f"got {math.radians(200)!r} (rad; given as beta_deg = 200.0 deg)")
     assert _refused("[effects.gravity]\n[effects.slope]\nslope_angle = 0.1\nslope_angle_deg = 5\n") == \
         "s.toml: [effects.slope] slope_angle_deg: slope_angle given twice (in rad and in deg)"
     angles = [(name, q.name) for name, cls in CATALOGUE.items() for q in cls.parameters() if q.unit == "rad"]
@@ -122,6 +127,10 @@ def test_set_takes_the_same_angle_names(example_build):
     assert "slope_angle" in rad
     values = coerce_start_values(fmu, {f"{n}_deg": "2.5" for n in rad})
     assert values == {n: math.radians(2.5) for n in rad}
+    with pytest.raises(gyrowheel.ArgumentError) as refused:  # the FMU checks in rad; named as given
+        gyrowheel.simulate(fmu, start_values={"slope_angle_deg": 100}, stop_time=0.01)
+    assert str(refused.value) == ("start_values: the FMU refused the start values: slope_angle must be <= 1.5; "
+                                  f"slope_angle given as slope_angle_deg = 100 ({math.radians(100)!r} rad)")
 
 
 DANGLING = re.compile(r"\b(it|or|and|the|a|an|to|of|with|set|remove|than|from|by|as|in|on|at|be|is)$")

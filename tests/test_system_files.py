@@ -259,10 +259,10 @@ def test_animate_a_system_run_with_the_ssp_as_geometry(earth_loop, tmp_path):
 
 def test_controller_tilt_stop_is_at_most_a_right_angle(controller_fmu, tmp_path):
     """tilt_max (the gimbal stop) past pi/2, e.g. 10 rad, would turn the spin axis through the link
-    (docs/system.md): refused at initialisation, with the reason."""
+    (docs/system.md): refused at initialisation, with the reason, as bad input (exit 2)."""
     r = gyrowheel("simulate", controller_fmu, "--stop-time", "0.05", "--set", "tilt_max=2", "-o", tmp_path / "c.csv",
                   cwd=tmp_path)
-    assert r.returncode == 1 and "tilt_max must be <= 1.5708" in r.stderr, r.stderr
+    assert r.returncode == 2 and "tilt_max must be <= 1.5708" in r.stderr, r.stderr
     r = gyrowheel("simulate", controller_fmu, "--stop-time", "0.05", "--set", "tilt_max=1.5", "-o", tmp_path / "c.csv",
                   cwd=tmp_path)
     assert r.returncode == 0, r.stderr

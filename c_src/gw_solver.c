@@ -271,6 +271,11 @@ GW_INTERNAL double gw_initial_step(gw_instance *I, double hmax, double order) {
                                               : pow(0.01 / der12, 1.0 / order);
     if (!isfinite(h1)) h1 = h * 1e-3;
     h = 100.0 * h < h1 ? 100.0 * h : h1;
+    /* Hairer's estimate scales with abs_tol where a state starts at 0 with a nonzero rate (a
+     * free fall's height rate): a tiny abs_tol gives a first step below the step-size floor,
+     * which gw_next_attempt would refuse before the error control ever judged a step.  Start at
+     * GW_H0_FLOORS floors at least: the error control shrinks it if it must. */
+    if (h < GW_H0_FLOORS * gw_h_min(I->t)) h = GW_H0_FLOORS * gw_h_min(I->t);
     return h < hmax ? h : hmax;
 }
 

@@ -19,10 +19,13 @@ from gyrowheel.model.context import Body, WheelContext
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 from gyrowheel.model.kinematics import WheelKinematics, norm
 from gyrowheel.model.lagrangian import ConstrainedSystem
-from gyrowheel.model.spec import Event, ModelSpec, Quantity
+from gyrowheel.model.spec import MASS_RANGE, SPEED_OF_LIGHT, Event, ModelSpec, Quantity
 from gyrowheel.model.stiction import law_update, stuck_rate_rows
 
 FORMULATIONS = ("reduced", "multipliers")
+MASS_REFUSAL = (f"M (mass) must lie in [{MASS_RANGE[0]:g}, {MASS_RANGE[1]:g}] kg (beyond, the contact's products of "
+                "masses and squared speeds leave double precision)")
+SPEED_REFUSAL = "must lie in [-c, c], c = 299792458 m/s (Newtonian mechanics: below the speed of light)"
 SPEED_CHOICES = ("body", "angle_rates")
 BODY_SPEEDS = ("omega_l", "omega_m", "omega_n")
 
@@ -105,7 +108,8 @@ def touchdown_lean(k_diam: float, k_axial: float) -> float:
 def wheel_parameters() -> list[Quantity]:
     """Parameters of the base wheel (docs/interface.md), with their defaults."""
     return [
-        Quantity("M", "kg", "wheel mass", 2.0),
+        Quantity("M", "kg", f"wheel mass, in [{MASS_RANGE[0]:g}, {MASS_RANGE[1]:g}] kg", 2.0,
+                 minimum=MASS_RANGE[0], maximum=MASS_RANGE[1]),
         Quantity("R", "m", "wheel (rolling) radius", 0.17),
         Quantity("k_diam", "1", "diametral inertia I_diam = k_diam M R^2", 0.25),
         Quantity("k_axial", "1", "axial (spin-axis) inertia I_axial = k_axial M R^2", 0.4),
@@ -152,6 +156,8 @@ def base_context(wheel: dict[str, float]) -> WheelContext:
     ctx.kinetic.append(0.5 * M * ca.dot(v, v) + 0.5 * ca.mtimes([w.T, inertia, w]))
     ctx.bodies.append(Body(M, kin.centre))
     ctx.check(M, "M (mass) must be > 0")
+    # each refusal once: the range only where M > 0
+    ctx.check_true(ca.logic_or(M <= 0, ca.logic_and(M >= MASS_RANGE[0], M <= MASS_RANGE[1])), MASS_REFUSAL)
     ctx.check(R, "R (radius) must be > 0")
     ctx.check(P["k_diam"], "k_diam must be > 0")
     ctx.check(P["k_axial"], "k_axial must be > 0")
@@ -442,7 +448,10 @@ class _Assembler:
         # only where beta0 lies in (0, pi), so a lean outside is refused once, by the checks above
         ctx.check(ca.if_else(ca.logic_and(beta0 > 0, beta0 < math.pi), ca.sin(beta0) - ca.sin(P["beta_min"]), 1),
                   "initial lean beta must lie between beta_min and pi - beta_min (the wheel is already flat)")
-        if fl is not None:  # the flight start values' checks (contact_flight.declare_flight) in s
+        for qq, sym in ctx.extra_starts:  # the start velocities of the contact modes (slip, vz)
+            if qq.unit == "m/s":
+                ctx.check_true(ca.fabs(sym) <= SPEED_OF_LIGHT, f"{qq.name} {SPEED_REFUSAL}")
+        if ctx.extra_starts:  # the start values' checks (contact_flight.declare_flight, speeds) in s
             syms = ca.vertcat(*[sym for _, sym in ctx.extra_starts])
             vals = ca.vertcat(*[s_by_name[qq.name] for qq, _ in ctx.extra_starts])
             for ch in ctx.checks:

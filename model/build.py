@@ -10,6 +10,7 @@ from the same T, V and A (model/lagrangian.py).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import casadi as ca
@@ -23,6 +24,12 @@ from gyrowheel.model.spec import MASS_RANGE, SPEED_OF_LIGHT, Event, ModelSpec, Q
 from gyrowheel.model.stiction import law_update, stuck_rate_rows
 
 FORMULATIONS = ("reduced", "multipliers")
+# what the contact outputs are in flight, added to their descriptions in a scene with flight
+IN_FLIGHT = {"F_n": "; 0 in flight", "F_long": "; 0 in flight", "F_lat": "; 0 in flight",
+             "friction_use": "; -1 in flight",
+             "contact_x": "; in flight the lowest rim point's", "contact_y": "; in flight the lowest rim point's",
+             "slip_long": "; in flight the lowest rim point's horizontal velocity along the heading",
+             "slip_lat": "; in flight the lowest rim point's horizontal velocity across the heading"}
 MASS_REFUSAL = (f"M (mass) must lie in [{MASS_RANGE[0]:g}, {MASS_RANGE[1]:g}] kg (beyond, the contact's products of "
                 "masses and squared speeds leave double precision)")
 SPEED_REFUSAL = "must lie in [-c, c], c = 299792458 m/s (Newtonian mechanics: below the speed of light)"
@@ -384,12 +391,15 @@ class _Assembler:
             init = contact_flight.flight_init(ctx, x, init, s_by_name)
 
         by_name = {qq.name: qq for qq in starts}
-        velocity_source = "from the rolling constraint" + (" while rolling, free while sliding" if sl else "")
+        velocity_source = "from the rolling constraint" + (
+            " while rolling, free (a state) while sliding" + (" and in flight" if fl else "") if sl else "")
+        height = ("centre height: R sin(beta) in contact (rolling, sliding), free (the state z_centre) in flight"
+                  if fl else "centre height R sin(beta)")
         outputs = [(by_name[n], self.q[i]) for i, n in enumerate(COORDINATES)]
         outputs += [(by_name[n], bind(self.qd[2 + i])) for i, n in enumerate(SPEEDS)]
         kin = ctx.kin
         outputs += [
-            (Quantity("z", "m", "centre height R sin(beta)"), kin.centre[2]),
+            (Quantity("z", "m", height), kin.centre[2]),
             (Quantity("vx", "m/s", f"centre velocity x, {velocity_source}"), bind(kin.centre_velocity[0])),
             (Quantity("vy", "m/s", f"centre velocity y, {velocity_source}"), bind(kin.centre_velocity[1])),
             (Quantity("energy", "J", "total mechanical energy T + V"), bind(T + V)),
@@ -412,6 +422,8 @@ class _Assembler:
                 if qq.name == "contact_mode":
                     qq.description = "contact mode: 0 rolling, 1 sliding, 2 flight"
                     qq.items = contact_modes.MODE_NAMES
+            outputs = [(dataclasses.replace(qq, description=qq.description + IN_FLIGHT[qq.name])
+                        if qq.name in IN_FLIGHT else qq, e) for qq, e in outputs]
             in_flight = dict(zip(("slip_long", "slip_lat"), contact_flight.flight_slip(ctx, flight)))
             in_flight.update(z=fl.z.sym, energy=flight.T + flight.V)
             outputs = [(qq, ca.if_else(flying, in_flight[qq.name], e) if qq.name in in_flight else e)
@@ -428,6 +440,10 @@ class _Assembler:
         if fl is not None:
             events.append(contact_flight.flight_event(ctx, x, bind_r, bind_s, flight, Fc))
             events.append(contact_flight.attitude_limit_event(ctx))
+            for ev in events:  # switches on the ground only; lift-off and landing are contact_flown's
+                if ev.flag.name == "contact_switched":
+                    ev.flag.description = ("true once the contact has switched between rolling and sliding on the "
+                                           "ground (lift-off and landing: contact_flown)")
         n_mech = x.numel() - len(ctx.states)
         for law in ctx.stick_slip:
             mode_row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)

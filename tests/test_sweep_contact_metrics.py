@@ -49,3 +49,16 @@ def test_contact_mode_is_read_at_the_end_only(drop_fmu):
     with pytest.raises(SweepSpecError, match=r"no Real output 'nope'.*Integer/Enumeration outputs \(final: only\): "
                                              r"contact_mode"):
         sweep(drop_fmu, grid={"restitution": [0.5]}, metrics=["final:nope"], workers=0)
+
+
+def test_the_cli_sweep_takes_final_contact_mode(drop_fmu, tmp_path, capsys):
+    """The reported command line, with --metrics final:contact_mode (refused before): the table
+    holds the item names."""
+    from gyrowheel.cli import main
+    from gyrowheel.studies import read_table
+    out = tmp_path / "s.csv"
+    assert main(["sweep", str(drop_fmu), "--grid", "restitution=0:1:5", "--grid", "mu=0,0.3", "--set", "mu_k=0",
+                 "--workers", "0", "--metrics", "energy_drift,final:contact_mode", "-o", str(out)]) == 0
+    table = read_table(out)
+    assert len(table) == 10 and (table["energy_drift"] < 1e-10).all()
+    assert list(table["final_contact_mode"]) == ["sliding", "rolling"] * 4 + ["flight"] * 2

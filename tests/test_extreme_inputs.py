@@ -4,8 +4,8 @@ and its reason (exit 2, nothing written), or run.
 Physical ranges (model/spec.py): the start speeds of the contact modes (vz, slip_long, slip_lat)
 below the speed of light, the wheel's mass M in [1e-30, 1e30] kg; the scene reader and the FMU's
 checks at initialisation (`gyrowheel simulate --set`) refuse others alike. Tolerances: every
-abs_tol of the documented range [1e-30, 1] runs (a tiny abs_tol no longer makes the first step
-smaller than the step-size floor); the run agrees with the default tolerance's to rounding.
+abs_tol of the documented range [1e-30, 1] runs (the first step of an adaptive solver is at least
+1000 step-size floors, whatever abs_tol); the run agrees with the default tolerance's to rounding.
 """
 from __future__ import annotations
 
@@ -73,8 +73,8 @@ def test_the_range_edges_run(drop, tmp_path):
 
 @pytest.mark.parametrize("abs_tol", ["1e-25", "1e-30"])
 def test_abs_tol_down_to_its_documented_least_runs(drop, tmp_path, abs_tol):
-    """abs_tol 1e-25 and 1e-30 (inside [1e-30, 1]) failed at t = 0 with a first step below the
-    step-size floor; they run, and give the default tolerance's trajectory to rounding (both
+    """abs_tol 1e-25 and 1e-30 (inside [1e-30, 1]), where Hairer's first-step estimate lies below
+    the step-size floor, run and give the default tolerance's trajectory to rounding (both
     converged: the drop's flight is a parabola, its landing located)."""
     r, out = _simulate(drop, tmp_path, f"abs_tol={abs_tol}")
     assert r.returncode == 0, r.stderr

@@ -52,8 +52,8 @@ def test_contact_mode_is_read_at_the_end_only(drop_fmu):
 
 
 def test_the_cli_sweep_takes_final_contact_mode(drop_fmu, tmp_path, capsys):
-    """The reported command line, with --metrics final:contact_mode (refused before): the table
-    holds the item names."""
+    """The user's command line with --metrics energy_drift,final:contact_mode: the table holds
+    the item names."""
     from gyrowheel.cli import main
     from gyrowheel.studies import read_table
     out = tmp_path / "s.csv"

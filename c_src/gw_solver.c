@@ -40,11 +40,33 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
  *     DOPRI5, 1 ms steps: ~4.6e5 internal steps per communication step, none refused;
  *     benchmarks/run_budget.py).
  * Refusing is GW_INT_ERROR: gw_advance restores the state at the start of the call. */
+/* The budget the model declares (max_internal_steps' default): a run refused within what it
+ * covers was stopped by the budget the user set lower, not by the dynamics. */
+static double gw_default_budget(const gw_instance *I) {
+    return I->m->default_max_internal_steps > 0.0 ? I->m->default_max_internal_steps
+                                                  : GW_DEFAULT_MAX_INTERNAL_STEPS;
+}
+
+/* The message when a budget set below the default is what refuses `needed` internal steps,
+ * which the default budget `covering` would allow; 1 if logged, 0 if not that case. */
+static int gw_budget_set_too_low(gw_instance *I, const char *what, double needed, double covering,
+                                 const char *scope, double taken, const char *since) {
+    if (!(I->max_internal_steps < gw_default_budget(I)) || !(needed <= covering)) return 0;
+    GW_LOG_ERR(I, "at t=%.17g (%s) the step budget max_internal_steps = %.0f is exhausted (%.0f steps "
+               "taken %s): %s would need about %.3g internal steps, which the default "
+               "max_internal_steps = %.0f covers; raise it", I->t, what, I->max_internal_steps, taken,
+               since, scope, needed, gw_default_budget(I));
+    return 1;
+}
+
 GW_INTERNAL void gw_budget_message(gw_instance *I, const char *what, double remaining, double h) {
     const char *hint = I->solver == GW_SOLVER_ROSENBROCK || I->solver == GW_SOLVER_EULER ||
                                I->solver == GW_SOLVER_RK4
                            ? ""
                            : " or stiff (try solver rosenbrock)";
+    if (gw_budget_set_too_low(I, what, (double)I->n_call_steps + remaining / h, gw_default_budget(I),
+                              "this communication step", (double)I->n_call_steps, "in this call"))
+        return;
     GW_LOG_ERR(I, "at t=%.17g %s: the remaining %g s of this communication step (from t=%.17g) "
                "would need about %.3g internal steps of h=%g, more than the %.0f left of "
                "max_internal_steps = %.0f (%llu steps taken in this call): the dynamics are far "
@@ -102,6 +124,9 @@ static int gw_budget_run(gw_instance *I, double h) {
             return 0;
         }
         if (left > 0.0 && ++I->run_n_fast <= GW_SETTLE) return 0;
+        if (gw_budget_set_too_low(I, "the run's budget refuses the rest", taken + remaining / h, GW_RUN_BUDGETS * gw_default_budget(I),
+                                  "the run to its stop time", taken, "since initialisation"))
+            return -1;
         GW_LOG_ERR(I, "at t=%.17g the run's budget refuses the rest: the remaining %g s to the stop "
                    "time %.17g would need about %.3g internal steps of h=%g, more than the %.0f left "
                    "of the run's %.0f (%.0f x max_internal_steps = %.0f; %.0f steps taken since "
@@ -246,6 +271,11 @@ GW_INTERNAL double gw_initial_step(gw_instance *I, double hmax, double order) {
                                               : pow(0.01 / der12, 1.0 / order);
     if (!isfinite(h1)) h1 = h * 1e-3;
     h = 100.0 * h < h1 ? 100.0 * h : h1;
+    /* Hairer's estimate scales with abs_tol where a state starts at 0 with a nonzero rate (a
+     * free fall's height rate): a tiny abs_tol gives a first step below the step-size floor,
+     * which gw_next_attempt would refuse before the error control ever judged a step.  Start at
+     * GW_H0_FLOORS floors at least: the error control shrinks it if it must. */
+    if (h < GW_H0_FLOORS * gw_h_min(I->t)) h = GW_H0_FLOORS * gw_h_min(I->t);
     return h < hmax ? h : hmax;
 }
 

@@ -47,6 +47,8 @@
  * front when ceil(H / max_step) exceeds it, refused when GW_SETTLE attempts in a row project
  * beyond it, stopped when it is spent. */
 #define GW_SETTLE 100
+/* The least first step of an adaptive solver, in step-size floors gw_h_min (gw_initial_step) */
+#define GW_H0_FLOORS 1000.0
 #define GW_PROJECTION_MARGIN 100.0
 /* The budget of a whole run to a defined stop time (gw_budget_run): GW_RUN_BUDGETS times
  * max_internal_steps internal steps of the adaptive solvers in all. */

@@ -38,9 +38,10 @@ from pathlib import Path
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build.platforms import parse_platforms
 from gyrowheel.fmu_build.scene_toml import scene_toml  # noqa: F401 (part of this module's API)
-from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, SLIDE_NEEDS_REDUCED, start_values, touchdown_lean,
-                                   wheel_parameters)
+from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, MASS_REFUSAL, SLIDE_NEEDS_REDUCED, SPEED_REFUSAL,
+                                   start_values, touchdown_lean, wheel_parameters)
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
+from gyrowheel.model.spec import MASS_RANGE, SPEED_OF_LIGHT
 
 SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
@@ -230,6 +231,9 @@ def _wheel(r: _Reader, data: dict) -> dict[str, float]:
     for key in ("M", "R", "k_diam", "k_axial", "beta_min"):
         if key in wheel and wheel[key] <= 0:
             raise r.fail("wheel", key, f"must be > 0, got {wheel[key]!r}")
+    for q in wheel_parameters():
+        if q.name in wheel:
+            _in_limits(r, "wheel", q, wheel[q.name])
     if touchdown:
         if "beta_min_deg" in data:
             raise r.fail("wheel", "beta_min_deg", "beta_min given twice (as a preset and in deg)")
@@ -276,7 +280,13 @@ def _initial(r: _Reader, data: dict, effects: dict[str, dict]) -> dict[str, floa
 
 def _in_limits(r: _Reader, table: str, quantity, value: float) -> None:
     """Refuse a value outside the quantity's inclusive limits (Quantity.minimum, .maximum), as
-    the FMU's checks at initialisation would (model/effects/base.py, Effect.declare)."""
+    the FMU's checks at initialisation would (model/effects/base.py, Effect.declare; the
+    physical ranges of mass and start speeds, model/build.py), with the FMU's reason."""
+    if quantity.name == "M" and not MASS_RANGE[0] <= value <= MASS_RANGE[1]:
+        raise r.fail(table, quantity.name, f"{MASS_REFUSAL.removeprefix('M (mass) ')}, got {value!r}")
+    if quantity.unit == "m/s" and (quantity.minimum, quantity.maximum) == (-SPEED_OF_LIGHT, SPEED_OF_LIGHT) \
+            and not abs(value) <= SPEED_OF_LIGHT:
+        raise r.fail(table, quantity.name, f"{SPEED_REFUSAL}, got {value!r}")
     if quantity.minimum is not None and value < quantity.minimum:
         raise r.fail(table, quantity.name, f"must be >= {quantity.minimum:g}, got {value!r}")
     if quantity.maximum is not None and value > quantity.maximum:

@@ -10,6 +10,7 @@ from the same T, V and A (model/lagrangian.py).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import casadi as ca
@@ -19,10 +20,19 @@ from gyrowheel.model.context import Body, WheelContext
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 from gyrowheel.model.kinematics import WheelKinematics, norm
 from gyrowheel.model.lagrangian import ConstrainedSystem
-from gyrowheel.model.spec import Event, ModelSpec, Quantity
+from gyrowheel.model.spec import MASS_RANGE, SPEED_OF_LIGHT, Event, ModelSpec, Quantity
 from gyrowheel.model.stiction import law_update, stuck_rate_rows
 
 FORMULATIONS = ("reduced", "multipliers")
+# what the contact outputs are in flight, added to their descriptions in a scene with flight
+IN_FLIGHT = {"F_n": "; 0 in flight", "F_long": "; 0 in flight", "F_lat": "; 0 in flight",
+             "friction_use": "; -1 in flight",
+             "contact_x": "; in flight the lowest rim point's", "contact_y": "; in flight the lowest rim point's",
+             "slip_long": "; in flight the lowest rim point's horizontal velocity along the heading",
+             "slip_lat": "; in flight the lowest rim point's horizontal velocity across the heading"}
+MASS_REFUSAL = (f"M (mass) must lie in [{MASS_RANGE[0]:g}, {MASS_RANGE[1]:g}] kg (beyond, the contact's products of "
+                "masses and squared speeds leave double precision)")
+SPEED_REFUSAL = "must lie in [-c, c], c = 299792458 m/s (Newtonian mechanics: below the speed of light)"
 SPEED_CHOICES = ("body", "angle_rates")
 BODY_SPEEDS = ("omega_l", "omega_m", "omega_n")
 
@@ -105,7 +115,8 @@ def touchdown_lean(k_diam: float, k_axial: float) -> float:
 def wheel_parameters() -> list[Quantity]:
     """Parameters of the base wheel (docs/interface.md), with their defaults."""
     return [
-        Quantity("M", "kg", "wheel mass", 2.0),
+        Quantity("M", "kg", f"wheel mass, in [{MASS_RANGE[0]:g}, {MASS_RANGE[1]:g}] kg", 2.0,
+                 minimum=MASS_RANGE[0], maximum=MASS_RANGE[1]),
         Quantity("R", "m", "wheel (rolling) radius", 0.17),
         Quantity("k_diam", "1", "diametral inertia I_diam = k_diam M R^2", 0.25),
         Quantity("k_axial", "1", "axial (spin-axis) inertia I_axial = k_axial M R^2", 0.4),
@@ -152,6 +163,8 @@ def base_context(wheel: dict[str, float]) -> WheelContext:
     ctx.kinetic.append(0.5 * M * ca.dot(v, v) + 0.5 * ca.mtimes([w.T, inertia, w]))
     ctx.bodies.append(Body(M, kin.centre))
     ctx.check(M, "M (mass) must be > 0")
+    # each refusal once: the range only where M > 0
+    ctx.check_true(ca.logic_or(M <= 0, ca.logic_and(M >= MASS_RANGE[0], M <= MASS_RANGE[1])), MASS_REFUSAL)
     ctx.check(R, "R (radius) must be > 0")
     ctx.check(P["k_diam"], "k_diam must be > 0")
     ctx.check(P["k_axial"], "k_axial must be > 0")
@@ -378,12 +391,15 @@ class _Assembler:
             init = contact_flight.flight_init(ctx, x, init, s_by_name)
 
         by_name = {qq.name: qq for qq in starts}
-        velocity_source = "from the rolling constraint" + (" while rolling, free while sliding" if sl else "")
+        velocity_source = "from the rolling constraint" + (
+            " while rolling, free (a state) while sliding" + (" and in flight" if fl else "") if sl else "")
+        height = ("centre height: R sin(beta) in contact (rolling, sliding), free (the state z_centre) in flight"
+                  if fl else "centre height R sin(beta)")
         outputs = [(by_name[n], self.q[i]) for i, n in enumerate(COORDINATES)]
         outputs += [(by_name[n], bind(self.qd[2 + i])) for i, n in enumerate(SPEEDS)]
         kin = ctx.kin
         outputs += [
-            (Quantity("z", "m", "centre height R sin(beta)"), kin.centre[2]),
+            (Quantity("z", "m", height), kin.centre[2]),
             (Quantity("vx", "m/s", f"centre velocity x, {velocity_source}"), bind(kin.centre_velocity[0])),
             (Quantity("vy", "m/s", f"centre velocity y, {velocity_source}"), bind(kin.centre_velocity[1])),
             (Quantity("energy", "J", "total mechanical energy T + V"), bind(T + V)),
@@ -406,6 +422,8 @@ class _Assembler:
                 if qq.name == "contact_mode":
                     qq.description = "contact mode: 0 rolling, 1 sliding, 2 flight"
                     qq.items = contact_modes.MODE_NAMES
+            outputs = [(dataclasses.replace(qq, description=qq.description + IN_FLIGHT[qq.name])
+                        if qq.name in IN_FLIGHT else qq, e) for qq, e in outputs]
             in_flight = dict(zip(("slip_long", "slip_lat"), contact_flight.flight_slip(ctx, flight)))
             in_flight.update(z=fl.z.sym, energy=flight.T + flight.V)
             outputs = [(qq, ca.if_else(flying, in_flight[qq.name], e) if qq.name in in_flight else e)
@@ -422,6 +440,10 @@ class _Assembler:
         if fl is not None:
             events.append(contact_flight.flight_event(ctx, x, bind_r, bind_s, flight, Fc))
             events.append(contact_flight.attitude_limit_event(ctx))
+            for ev in events:  # switches on the ground only; lift-off and landing are contact_flown's
+                if ev.flag.name == "contact_switched":
+                    ev.flag.description = ("true once the contact has switched between rolling and sliding on the "
+                                           "ground (lift-off and landing: contact_flown)")
         n_mech = x.numel() - len(ctx.states)
         for law in ctx.stick_slip:
             mode_row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)
@@ -442,7 +464,10 @@ class _Assembler:
         # only where beta0 lies in (0, pi), so a lean outside is refused once, by the checks above
         ctx.check(ca.if_else(ca.logic_and(beta0 > 0, beta0 < math.pi), ca.sin(beta0) - ca.sin(P["beta_min"]), 1),
                   "initial lean beta must lie between beta_min and pi - beta_min (the wheel is already flat)")
-        if fl is not None:  # the flight start values' checks (contact_flight.declare_flight) in s
+        for qq, sym in ctx.extra_starts:  # the start velocities of the contact modes (slip, vz)
+            if qq.unit == "m/s":
+                ctx.check_true(ca.fabs(sym) <= SPEED_OF_LIGHT, f"{qq.name} {SPEED_REFUSAL}")
+        if ctx.extra_starts:  # the start values' checks (contact_flight.declare_flight, speeds) in s
             syms = ca.vertcat(*[sym for _, sym in ctx.extra_starts])
             vals = ca.vertcat(*[s_by_name[qq.name] for qq, _ in ctx.extra_starts])
             for ch in ctx.checks:

@@ -53,7 +53,7 @@ from gyrowheel.model.context import BREAKAWAY, State, WheelContext
 from gyrowheel.model.flight_system import free_system
 from gyrowheel.model.impact import generalised_impact
 from gyrowheel.model.kinematics import norm
-from gyrowheel.model.spec import Event, Quantity
+from gyrowheel.model.spec import SPEED_OF_LIGHT, Event, Quantity
 
 ROLLING, SLIDING, FLIGHT = 0, 1, 2
 V_REST = 1e-3  # rebound speeds below V_REST sqrt(g R) end in a persistent contact
@@ -87,7 +87,7 @@ def flight_starts() -> list[Quantity]:
     return [Quantity("height", "m", "height of the lowest rim point above the ground; > 0 at the start: "
                      "the wheel starts in flight", 0.0, minimum=0.0),
             Quantity("vz", "m/s", "vertical velocity of the centre (a start value in flight only: 0 unless "
-                     "height > 0)", 0.0)]
+                     "height > 0)", 0.0, minimum=-SPEED_OF_LIGHT, maximum=SPEED_OF_LIGHT)]
 
 
 def declare_flight(ctx: WheelContext, restitution: ca.SX) -> FlightContact:

@@ -13,6 +13,14 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 
+# Physical ranges the FMU and the scene reader hold values to (docs/scenes.md, "Rules"): Newtonian
+# speeds stay below the speed of light; a mass between 1e-30 kg and 1e30 kg (any wheel, with room
+# either way) keeps the products of masses, inertias and squared speeds in the contact's impulse
+# arithmetic inside double precision (M = 1e150 kg overflows to NaN at a touchdown)
+SPEED_OF_LIGHT = 299792458.0  # m/s
+MASS_RANGE = (1e-30, 1e30)  # kg
+
+
 @dataclass
 class Quantity:
     """A named scalar of the model: a parameter, start value, input or output."""

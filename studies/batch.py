@@ -57,7 +57,8 @@ def run_point(instance, values: dict, settings: Settings, metrics: MetricSet, in
         times[i + 1] = t = t_next
     if not np.all(np.isfinite(out[:k])):  # the FMU promises never to output NaN; hold it to that
         raise PointFailure("non-finite output")
-    run = Run(times[:k], out[:k], names, settings.stop_time, terminated, instance.flags() if terminated else [])
+    finals = instance.finals(metrics.discrete) if metrics.discrete else {}
+    run = Run(times[:k], out[:k], names, settings.stop_time, terminated, instance.flags() if terminated else [], finals)
     return metrics.evaluate(run, inputs)
 
 

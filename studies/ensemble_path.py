@@ -78,7 +78,7 @@ def run_batch_ensemble(target, payload, settings, metrics, batch: list, run_plai
     """Rows of `batch` (as gyrowheel.studies.batch.run_batch returns them) through the ensemble, or
     None when the ensemble path does not apply (the caller then runs the batch the plain way).
     run_plain(points) runs the given [(point, values, inputs)] the plain way (failed points)."""
-    if not applies(target, settings):
+    if not applies(target, settings) or metrics.discrete:  # the ensemble records Real outputs only
         return None
     tol = _settings(target, settings.fixed)
     rest = {k: v for k, v in settings.fixed.items() if k not in SETTINGS}

@@ -8,9 +8,13 @@ Built in (all SI, angles in rad; beta is the paper's lean angle, pi/2 upright):
     min_beta, max_beta     extremes of beta over the communication points
     max_lean        rad    max |beta - pi/2|: the largest lean away from upright
     final_position  m      columns final_x, final_y (the centre at the end)
-    energy_drift    1      max |E(t) - E(0)| / |E(0)| over the communication points
-    final:NAME             any Real output at the end (column final_NAME)
-    max:NAME, min:NAME, mean:NAME   over the communication points (column max_NAME, ...)
+    energy_drift    1      max |B(t) - B(0)| / |B(0)| over the communication points, B the energy
+                           balance energy + dissipated_energy - actuator_work (each of the two last
+                           terms where the unit outputs it; B = energy without them), constant in
+                           exact arithmetic (docs/effects.md, "energy")
+    final:NAME             any Real output at the end (column final_NAME); an Integer output's
+                           value (int), an Enumeration output's item name (str, e.g. 'rolling')
+    max:NAME, min:NAME, mean:NAME   a Real output over the communication points (column max_NAME, ...)
 A user's function (module:function or path/to/file.py:function, or a Python callable through
 the API) receives the trajectory as a numpy structured array (fields 'time' and every Real
 output, as fmpy.simulate_fmu returns) and, if it takes a second argument, the point's inputs
@@ -53,6 +57,7 @@ class Run:
     stop_time: float
     terminated: bool
     flags: list[str]
+    finals: dict = field(default_factory=dict)  # Integer/Enumeration outputs at the end, by name
 
     def column(self, name: str) -> np.ndarray:
         return self.outputs[:, self.names.index(name)]
@@ -83,10 +88,23 @@ def _builtin(name: str, run: Run) -> dict[str, object]:
     if name == "final_position":
         return {"final_x": float(run.column("x")[-1]), "final_y": float(run.column("y")[-1])}
     if name == "energy_drift":
-        e = run.column("energy")
-        return {"energy_drift": float(np.max(np.abs(e - e[0])) / abs(e[0]))}
+        balance = energy_balance(run)
+        return {"energy_drift": float(np.max(np.abs(balance - balance[0])) / abs(balance[0]))}
     kind, var = name.split(":", 1)
+    if var in run.finals:
+        return {f"{kind}_{var}": run.finals[var]}
     return {f"{kind}_{var}": float(REDUCERS[kind](run.column(var)))}
+
+
+def energy_balance(run: Run) -> np.ndarray:
+    """B(t) = energy + dissipated_energy - actuator_work (k,) [J], the terms the unit outputs:
+    constant in exact arithmetic, with or without dissipative and actuator effects."""
+    balance = run.column("energy").copy()
+    if "dissipated_energy" in run.names:
+        balance += run.column("dissipated_energy")
+    if "actuator_work" in run.names:
+        balance -= run.column("actuator_work")
+    return balance
 
 
 @dataclass
@@ -183,9 +201,17 @@ class MetricSet:
 
     names: tuple[str, ...] = DEFAULT
     functions: tuple[UserFunction, ...] = ()
+    discrete: dict = field(default_factory=dict)  # the final:NAME of Integer/Enumeration outputs: {NAME: items}
 
     @classmethod
-    def parse(cls, names, functions=(), outputs: list[str] | None = None) -> "MetricSet":
+    def parse(cls, names, functions=(), outputs: list[str] | None = None,
+              discrete: dict | None = None) -> "MetricSet":
+        """The metrics `names` (None: the defaults the unit's outputs allow) and user `functions`,
+        checked against the unit's Real `outputs` and its Integer/Enumeration outputs `discrete`
+        ({name: {value: item}}, {} for an Integer), which only final:NAME reads. SweepSpecError
+        naming the metric for anything the unit cannot give."""
+        discrete = discrete or {}
+        used = {}
         defaulted = names is None
         if defaulted:
             names = DEFAULT
@@ -198,6 +224,12 @@ class MetricSet:
                 if kind not in REDUCERS:
                     raise SweepSpecError(f"--metrics {name!r}: unknown; use final:NAME, max:NAME, min:NAME, mean:NAME "
                                          "(user functions go in --metric-function)")
+                if var in discrete:
+                    if kind != "final":
+                        raise SweepSpecError(f"--metrics {name!r}: {var!r} is an Integer/Enumeration output, read "
+                                             f"at the end only: use final:{var}")
+                    used[var] = discrete[var]
+                    continue
                 needed = (var,)
             elif name not in BUILTIN:
                 raise SweepSpecError(f"--metrics {name!r}: unknown metric; valid: {', '.join(BUILTIN)}, "
@@ -208,14 +240,16 @@ class MetricSet:
                 for var in needed:
                     if var not in outputs:
                         raise SweepSpecError(f"--metrics {name!r}: the unit has no Real output {var!r}; "
-                                             f"outputs: {', '.join(outputs)}")
+                                             f"outputs: {', '.join(outputs)}"
+                                             + (f"; Integer/Enumeration outputs (final: only): {', '.join(discrete)}"
+                                                if discrete else ""))
         if defaulted and outputs is not None:  # the defaults adapt to what the unit outputs
             names = tuple(n for n in names if all(v in outputs for v in _needed(n)))
         if functions and not isinstance(functions, UserFunction):
             functions = items_of(functions, "--metric-function",
                                  "a list of 'module:function' references or functions")
         funcs = tuple(f if isinstance(f, UserFunction) else UserFunction.parse(f) for f in functions or ())
-        return cls(names, funcs)
+        return cls(names, funcs, used)
 
     def columns(self) -> dict[str, str]:
         """The table's metric columns known before anything runs, in order, {column: kind}: kind
@@ -228,7 +262,7 @@ class MetricSet:
                 out.update(final_x="number", final_y="number")
             elif ":" in name:
                 kind, var = name.split(":", 1)
-                out[f"{kind}_{var}"] = "number"
+                out[f"{kind}_{var}"] = "text" if self.discrete.get(var) else "number"
             else:
                 out[name] = {"survived": "bool", "event": "text"}.get(name, "number")
         return out

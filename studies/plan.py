@@ -197,5 +197,6 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, sol
         values.append(own)
     settings = Settings(stop_time=stop, output_interval=interval, start_time=float(start_time), fixed=fixed_values,
                         ensemble=ensemble)
-    metric_set = MetricSet.parse(metrics, metric_functions, outputs=list(target.outputs))
+    metric_set = MetricSet.parse(metrics, metric_functions, outputs=list(target.outputs),
+                                 discrete=getattr(target, "discrete_outputs", None))
     return Plan(target, settings, metric_set, inputs, values)

@@ -108,6 +108,11 @@ class FmuTarget:
         self.outputs = [v.name for v in self._variables.values() if v.causality == "output" and v.type == "Real"]
         self.flag_names = [v.name for v in self._variables.values()
                            if v.causality == "output" and v.type == "Boolean"]
+        # Integer and Enumeration outputs, read at the end of a point only: {name: {value: item}}
+        # (the items of an Enumeration; {} for an Integer)
+        self.discrete_outputs = {v.name: {value: item for item, value in v.items.items()}
+                                 for v in self._variables.values()
+                                 if v.causality == "output" and v.type in ("Integer", "Enumeration")}
         # a gyrowheel FMU built with the Taylor kernel: batches may take the ensemble path
         self.taylor_kernel = _has_taylor_kernel(self._data)
 
@@ -288,6 +293,20 @@ class FmuInstance:
             value = c_int(0)
             if self._f["fmi2GetBoolean"](self._c, byref(c_uint(vr)), 1, byref(value)) <= 1 and value.value:
                 out.append(name)
+        return out
+
+    def finals(self, names) -> dict[str, object]:
+        """The present values of the Integer/Enumeration outputs `names`: an Enumeration's as its
+        item's name (str), an Integer's as int."""
+        out = {}
+        for name in names:
+            v = self._vars[name]
+            value = int(self.get(v.vr, v.type))
+            if v.type == "Enumeration":
+                by_value = {number: item for item, number in v.items.items()}
+                out[name] = by_value.get(value, str(value))
+            else:
+                out[name] = value
         return out
 
     def close(self) -> None:

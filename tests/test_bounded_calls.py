@@ -215,3 +215,29 @@ def test_budget_survives_a_saved_state(slave):
     slave.slave.setFMUstate(state)
     assert slave.get("max_internal_steps") == 1234
     assert math.isfinite(slave.get("beta"))
+
+
+def test_a_budget_set_below_the_default_is_named_as_the_cause(example_build, tmp_path, capsys):
+    """The drop (examples/scenes/drop_bounce.toml) with max_internal_steps = 1: 1 ms communication
+    steps of a 1 s run need about 1000 internal steps, which the default budget (1e6) covers; the
+    run stops at t = 0.1 s (100 x the budget spent) and says that the budget set is the cause, not
+    fast dynamics."""
+    from gyrowheel.cli import main
+    fmu = example_build("drop_bounce").fmu
+    assert main(["simulate", str(fmu), "--set", "max_internal_steps=1", "-o", str(tmp_path / "d.csv")]) == 1
+    err = capsys.readouterr().err
+    assert "at t=0.10000000000000001 (the run's budget refuses the rest) the step budget max_internal_steps = 1 " \
+           "is exhausted" in err and "raise it" in err, err
+    s = Slave(fmu)
+    try:
+        s.init(max_internal_steps=1)
+        t = 0.0
+        with pytest.raises(FMICallException):
+            while t < 1.0:
+                s.slave.doStep(t, 1e-3)
+                t += 1e-3
+        log = s.log_text()
+    finally:
+        s.free()
+    assert "the step budget max_internal_steps = 1 is exhausted" in log and "raise it" in log
+    assert "far too fast" not in log and "rosenbrock" not in log

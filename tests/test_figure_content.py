@@ -96,3 +96,27 @@ def test_sweep_cost_log_axes_have_two_labelled_ticks_or_more():
             shown = [t for t in axis.get_major_ticks()
                      if lo * (1 - 1e-9) <= t.get_loc() <= hi * (1 + 1e-9) and t.label1.get_text()]
             assert len(shown) >= 2, (ax.get_xlabel(), axis.axis_name, [t.label1.get_text() for t in shown])
+
+
+def test_a_drop_plots_its_height_and_contact_mode(example_build, earth_fmu, monkeypatch, tmp_path):
+    """`simulate --plot` of the drop (examples/scenes/drop_bounce.toml, an FMU with height, vz and
+    contact_mode): the figure has a height panel that starts at the drop height 0.1 m and a
+    contact-mode panel whose step line starts in flight and ends rolling, its ticks the modes'
+    names; a rolling-only FMU's figure keeps its four panels."""
+    import gyrowheel
+    from gyrowheel import plotting
+    figures = []
+    real = plotting.trajectories_figure
+    monkeypatch.setattr(plotting, "trajectories_figure", lambda *a, **k: figures.append(real(*a, **k)) or figures[-1])
+    gyrowheel.simulate(example_build("drop_bounce").fmu, stop_time=0.6, plot=tmp_path / "drop.png")
+    gyrowheel.simulate(earth_fmu, stop_time=0.1, plot=tmp_path / "earth.png")
+    drop, earth = figures
+    labels = [ax.get_ylabel() for ax in drop.axes]
+    assert labels == ["y [m]", "lean beta [deg]", "heading alpha [deg]", "spin rate gamma_dot [rad/s]",
+                      "height (lowest rim point) [m]", "contact mode"]
+    height = drop.axes[4].get_lines()[0].get_ydata()
+    assert height[0] == pytest.approx(0.1, abs=1e-15) and height[-1] == 0.0
+    mode = drop.axes[5].get_lines()[0].get_ydata()
+    assert mode[0] == 2 and mode[-1] == 0
+    assert [t.get_text() for t in drop.axes[5].get_yticklabels()] == ["rolling", "sliding", "flight"]
+    assert len(earth.axes) == 4

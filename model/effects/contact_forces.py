@@ -25,7 +25,7 @@ from gyrowheel.model.contact_modes import declare_sliding
 from gyrowheel.model.context import WheelContext
 from gyrowheel.model.effects.base import Effect
 from gyrowheel.model.kinematics import norm
-from gyrowheel.model.spec import Quantity
+from gyrowheel.model.spec import SPEED_OF_LIGHT, Quantity
 
 ACTIONS = ("terminate", "warn", "ignore", "fly")
 SLIP_ACTIONS = ("warn", "terminate", "ignore", "slide")
@@ -46,8 +46,10 @@ class ContactForces(Effect):
 
     @classmethod
     def starts(cls) -> list[Quantity]:
-        return [Quantity("slip_long", "m/s", "slip velocity of the contact point along the heading", 0.0),
-                Quantity("slip_lat", "m/s", "slip velocity of the contact point across the heading (left)", 0.0),
+        return [Quantity("slip_long", "m/s", "slip velocity of the contact point along the heading", 0.0,
+                         minimum=-SPEED_OF_LIGHT, maximum=SPEED_OF_LIGHT),
+                Quantity("slip_lat", "m/s", "slip velocity of the contact point across the heading (left)", 0.0,
+                         minimum=-SPEED_OF_LIGHT, maximum=SPEED_OF_LIGHT),
                 *flight_starts()]
 
     @classmethod

@@ -14,7 +14,7 @@ import math
 
 import casadi as ca
 
-from gyrowheel.model import contact_flight, contact_modes
+from gyrowheel.model import contact_flight, contact_modes, painleve
 from gyrowheel.model.context import Body, WheelContext
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 from gyrowheel.model.kinematics import WheelKinematics, norm
@@ -422,6 +422,8 @@ class _Assembler:
         if fl is not None:
             events.append(contact_flight.flight_event(ctx, x, bind_r, bind_s, flight, Fc))
             events.append(contact_flight.attitude_limit_event(ctx))
+        if sl is not None:  # sliding past its rigid solution: the Painleve stop (model/painleve.py)
+            events.append(painleve.painleve_event(ctx, bind_s, contact_modes.friction_direction(ctx, sl)))
         n_mech = x.numel() - len(ctx.states)
         for law in ctx.stick_slip:
             mode_row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)

@@ -41,9 +41,10 @@ as a crossing of the other mode's indicator in the same instant. The update:
   along -F_t there made a wheel whose friction need hovers at the limit with mu_k = mu stop and
   restart every 4e-8 s: -F_t is the slip's direction only in the limit, and the friction keeps the
   seeded direction while |v_slip| < SLIP_SEED v_scale.)
-Friction direction while sliding: e = (v_slip + SLIP_SEED v_scale d) / |...|: v_slip / |v_slip| to
+Friction direction while sliding: e = (v_slip + SLIP_SEED v_scale d_+) / |...|: v_slip / |v_slip| to
 SLIP_SEED v_scale / |v_slip| (exactly when v_slip is along d, as in every straight slide), and d at
-v_slip = 0, where the slip starts.
+v_slip = 0, where the slip starts; d_+ is d less its part against the slip (friction_direction), so
+the friction never does positive work (e . v_slip >= 0).
 
 Chattering: a switch back to rolling needs the slip velocity to reach 0 along d after it has been
 seen > 0 (the runtime fires only on > 0 -> <= 0), and rolling needs the friction to reach the limit
@@ -134,9 +135,16 @@ def excess_slip(ctx: WheelContext, g_roll: ca.SX, v_scale: ca.SX) -> ca.SX:
 
 
 def friction_direction(ctx: WheelContext, sl: "SlidingContact") -> ca.SX:
-    """e = (v_slip + SLIP_SEED v_scale d) / |...| (2, unit, placeholders): the direction the sliding
-    friction -mu_k F_n e opposes (module docstring), d the stored slip direction."""
-    return unit_vector(slip_velocity(ctx) + SLIP_SEED * velocity_scale(ctx) * sl.direction)
+    """e = (v_slip + SLIP_SEED v_scale d_+) / |...| (2, unit, placeholders): the direction the
+    sliding friction -mu_k F_n e opposes (module docstring, "Friction direction"), d the stored slip
+    direction and d_+ = d - min(d . v_slip, 0) v_slip / |v_slip|^2 its part that does not point
+    against the slip (d itself while d . v_slip >= 0, else its component across the slip), so that
+    e . v_slip >= 0: the friction's power -mu_k F_n e . v_slip never turns positive, also where a slip
+    of round-off size (~1e-9 m/s just after an onset at mu_k = mu) points against d."""
+    v = slip_velocity(ctx)
+    d = sl.direction
+    d_plus = d - ca.fmin(ca.dot(d, v), 0) * v / (ca.dot(v, v) + 1e-300)
+    return unit_vector(v + SLIP_SEED * velocity_scale(ctx) * d_plus)
 
 
 # what the fixed-step solvers cannot do for the contact modes (docs/runtime.md, "Contact modes with

@@ -143,7 +143,9 @@ def friction_direction(ctx: WheelContext, sl: "SlidingContact") -> ca.SX:
     of round-off size (~1e-9 m/s just after an onset at mu_k = mu) points against d."""
     v = slip_velocity(ctx)
     d = sl.direction
-    d_plus = d - ca.fmin(ca.dot(d, v), 0) * v / (ca.dot(v, v) + 1e-300)
+    dv = ca.dot(d, v)
+    against = dv < 0  # implies v != 0; the guard keeps 1 / |v|^2 out of the other branch (Taylor series at v = 0)
+    d_plus = d - ca.if_else(against, dv / ca.if_else(against, ca.dot(v, v), 1), 0) * v
     return unit_vector(v + SLIP_SEED * velocity_scale(ctx) * d_plus)
 
 

@@ -313,7 +313,7 @@ def test_flight_adds_its_variables(fmu):
 # a change meant for those scenes (ice_slide: the rolling and sliding modes, model/contact_modes.py,
 # its friction direction and the Painleve stop, model/painleve.py).
 GROUND_GUIDS = {"paper_earth": "{c4dc22d4-d4a0-5bfa-b970-6a405754ef9c}",  # rolling, base wheel
-                "ice_slide": "{3de4a99a-68cb-5da6-a9bb-8a67491b9d14}"}  # rolling and sliding
+                "ice_slide": "{3ee684bf-3332-578a-8dc7-8f7910145916}"}  # rolling and sliding
 
 
 @pytest.mark.parametrize("name", sorted(GROUND_GUIDS))

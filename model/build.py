@@ -244,7 +244,7 @@ class _Assembler:
         for f in self.forces(mode):
             p = ca.dot(ca.vec(f.value), ca.vec(f.velocity))
             if f.kind == "dissipative":
-                diss = diss - p if f.power is None else diss + f.power
+                diss = diss - p
             elif f.kind == "actuator":
                 act = act + p
         return diss, act

@@ -43,14 +43,7 @@ as a crossing of the other mode's indicator in the same instant. The update:
   seeded direction while |v_slip| < SLIP_SEED v_scale.)
 Friction direction while sliding: e = (v_slip + SLIP_SEED v_scale d) / |...|: v_slip / |v_slip| to
 SLIP_SEED v_scale / |v_slip| (exactly when v_slip is along d, as in every straight slide), and d at
-v_slip = 0, where the slip starts. The dissipated power counted is Coulomb's, mu_k F_n |v_slip| (>= 0),
-not the regularised force's -F . v_slip = mu_k F_n e . v_slip: the two agree exactly on a straight
-slide (e = v_slip / |v_slip|) and to mu_k F_n (SLIP_SEED v_scale)^2 / |v_slip| elsewhere, but where the
-slip is of round-off size just after an onset at mu_k = mu (~1e-9 m/s) it may point against d, and
-there the seed's part of e . v_slip is negative: counted as the force's power, dissipated_power would
-be negative and dissipated_energy would fall there. energy + dissipated_energy then carries the seed's work,
-the difference of the two (+2.7e-10 J over the onset of the drop in tests/test_sliding_friction_power.py,
-3e-11 of its energy).
+v_slip = 0, where the slip starts.
 
 Chattering: a switch back to rolling needs the slip velocity to reach 0 along d after it has been
 seen > 0 (the runtime fires only on > 0 -> <= 0), and rolling needs the friction to reach the limit
@@ -142,7 +135,7 @@ def excess_slip(ctx: WheelContext, g_roll: ca.SX, v_scale: ca.SX) -> ca.SX:
 
 def friction_direction(ctx: WheelContext, sl: "SlidingContact") -> ca.SX:
     """e = (v_slip + SLIP_SEED v_scale d) / |...| (2, unit, placeholders): the direction the sliding
-    friction -mu_k F_n e opposes (module docstring, "Friction direction"), d the stored slip direction."""
+    friction -mu_k F_n e opposes (module docstring), d the stored slip direction."""
     return unit_vector(slip_velocity(ctx) + SLIP_SEED * velocity_scale(ctx) * sl.direction)
 
 
@@ -161,7 +154,7 @@ def declare_sliding(ctx: WheelContext, mu: ca.SX, mu_k: ca.SX) -> SlidingContact
     states (x_dot, y_dot in m/s, contact_state, slip_dir_x, slip_dir_y), the start values slip_long,
     slip_lat (m/s, ctx.extra_starts) and the Coulomb friction -mu_k F_n e (N, 2 components in the
     ground plane) on the slip velocity, a force of the sliding mode only: its generalised force
-    J^T F (J = d v_slip / d q_dot), Coulomb's power mu_k F_n |v_slip| dissipated (module docstring). e: the module
+    J^T F (J = d v_slip / d q_dot), its power -mu_k F_n e . v_slip dissipated. e: the module
     docstring. Source: Coulomb's law at a point contact; docs/effects.md, "Sliding"."""
     def local(name, unit, text, nominal=1.0):
         st = State(Quantity(name, unit, text), ca.SX.sym(name), ca.SX(0), output=False,
@@ -187,9 +180,8 @@ def declare_sliding(ctx: WheelContext, mu: ca.SX, mu_k: ca.SX) -> SlidingContact
     syms = [ca.SX.sym(q.name + "_0") for q in starts]
     ctx.extra_starts += list(zip(starts, syms))
     sl = SlidingContact(mu, mu_k, vx, vy, mode, dx, dy, syms[0], syms[1])
-    v_slip = slip_velocity(ctx)
-    ctx.forces.append(Force(-mu_k * ctx.Fn * friction_direction(ctx, sl), v_slip, "dissipative", False, SLIDING,
-                            power=mu_k * ctx.Fn * norm(v_slip)))
+    ctx.forces.append(Force(-mu_k * ctx.Fn * friction_direction(ctx, sl), slip_velocity(ctx), "dissipative", False,
+                            SLIDING))
     ctx.sliding = sl
     return sl
 

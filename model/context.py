@@ -63,7 +63,6 @@ class Force:
     kind: str = "dissipative"
     point: bool = False
     mode: int | None = None  # None: in every contact mode; else only in that one (model/contact_modes.py)
-    power: ca.SX | None = None  # dissipated power (W) if not -F . v (Coulomb's sliding friction: mu_k F_n |v_slip|)
 
 
 # Breakaway margin of the stiction laws: a stuck mode holds while the holding force needed stays

@@ -144,9 +144,17 @@ def cmd_simulate(args) -> int:
             print(f"gyrowheel: warning: {warning.message}", file=sys.stderr)
     print(f"wrote {output}: {len(result)} rows, t = {result['time'][0]:g} .. {result['time'][-1]:g} s"
           + _events_summary(result))
+    if "painleve_paradox" in result.dtype.names and result["painleve_paradox"][-1]:
+        print(f"gyrowheel: warning: {PAINLEVE_STOP.format(t=result['time'][-1])}", file=sys.stderr)
     if args.plot:
         print(f"wrote {args.plot}")
     return 0
+
+
+# the Painleve stop's reason and remedy (model/painleve.py; docs/effects.md, "Sliding")
+PAINLEVE_STOP = ("sliding stopped at t = {t:.9g} s (event painleve): the normal force diverges there, the "
+                 "friction's share of the normal inverse mass reached D / W_nn = 0.05 (Painleve's paradox); the "
+                 "rigid Coulomb contact has no solution beyond it: lower mu_k")
 
 
 def _events_summary(result) -> str:

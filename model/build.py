@@ -15,7 +15,7 @@ import math
 
 import casadi as ca
 
-from gyrowheel.model import contact_flight, contact_modes
+from gyrowheel.model import contact_flight, contact_modes, painleve
 from gyrowheel.model.context import Body, WheelContext
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 from gyrowheel.model.kinematics import WheelKinematics, norm
@@ -444,6 +444,8 @@ class _Assembler:
                 if ev.flag.name == "contact_switched":
                     ev.flag.description = ("true once the contact has switched between rolling and sliding on the "
                                            "ground (lift-off and landing: contact_flown)")
+        if sl is not None:  # sliding past its rigid solution: the Painleve stop (model/painleve.py)
+            events.append(painleve.painleve_event(ctx, bind_s, contact_modes.friction_direction(ctx, sl)))
         n_mech = x.numel() - len(ctx.states)
         for law in ctx.stick_slip:
             mode_row = n_mech + next(i for i, st in enumerate(ctx.states) if st is law.mode)

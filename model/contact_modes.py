@@ -133,6 +133,12 @@ def excess_slip(ctx: WheelContext, g_roll: ca.SX, v_scale: ca.SX) -> ca.SX:
     return ca.fmin(ca.fmax(-g_roll, 0) / (ctx.par["M"] * ctx.natural_rate()), 0.5 * SLIP_SEED * v_scale)
 
 
+def friction_direction(ctx: WheelContext, sl: "SlidingContact") -> ca.SX:
+    """e = (v_slip + SLIP_SEED v_scale d) / |...| (2, unit, placeholders): the direction the sliding
+    friction -mu_k F_n e opposes (module docstring), d the stored slip direction."""
+    return unit_vector(slip_velocity(ctx) + SLIP_SEED * velocity_scale(ctx) * sl.direction)
+
+
 # what the fixed-step solvers cannot do for the contact modes (docs/runtime.md, "Contact modes with
 # each solver"): the FMU logs it as a warning when euler or rk4 initialises
 FIXED_STEP_CAVEAT = ('the contact modes (on_slip = "slide", on_lift_off = "fly") get no error control from a fixed '
@@ -174,9 +180,8 @@ def declare_sliding(ctx: WheelContext, mu: ca.SX, mu_k: ca.SX) -> SlidingContact
     syms = [ca.SX.sym(q.name + "_0") for q in starts]
     ctx.extra_starts += list(zip(starts, syms))
     sl = SlidingContact(mu, mu_k, vx, vy, mode, dx, dy, syms[0], syms[1])
-    v_slip = slip_velocity(ctx)
-    e = unit_vector(v_slip + SLIP_SEED * velocity_scale(ctx) * sl.direction)
-    ctx.forces.append(Force(-mu_k * ctx.Fn * e, v_slip, "dissipative", False, SLIDING))
+    ctx.forces.append(Force(-mu_k * ctx.Fn * friction_direction(ctx, sl), slip_velocity(ctx), "dissipative", False,
+                            SLIDING))
     ctx.sliding = sl
     return sl
 

@@ -15,6 +15,16 @@ lateral component e_lat (+: slip_lat > 0, the side on which friction lowers D fo
 at mu_k = (k_diam + cos^2 beta) / (sin beta cos beta), smallest, 2 sqrt(k_diam (1 + k_diam)), at
 tan beta = sqrt((1 + k_diam) / k_diam) (the Painleve rod's condition, Stewart 2000, section 3).
 The FMU computes D from the free system's mass matrix (CasADi); nothing here comes from it.
+
+A switch into sliding can land directly where D / W_nn <= PAINLEVE_MARGIN: rolling -> sliding,
+whose friction direction is the onset direction d = -F_t / |F_t| (F_t the friction the rolling
+constraint needed), and a touchdown that lands sliding, e along the slip the impact leaves. Sliding
+cannot be continued there, so the run stops in the switch's instant with the event painleve (a
+continuous approach is located at D / W_nn = 0.05 instead). The rolling dynamics and the slip onset
+(|F_t| = mu F_n (1 + 1e-9)) do not depend on mu_k, nor does d, so the kinetic coefficient at which
+the switch lands on the margin follows from the closed form at the switch: mu_k* = (1 - margin)
+(k_diam + cos^2 beta) / (e_lat sin(beta) cos(beta)); 1 % above it the run stops at the switch, 1 %
+below it the wheel slides on.
 """
 from __future__ import annotations
 
@@ -105,3 +115,64 @@ def test_start_sliding_past_the_margin_is_refused_with_the_analytic_indicator(dr
     assert float(m.group(1)) == pytest.approx(share(beta, 1.01 * mu_margin, 1) - MARGIN, rel=1e-5)
     for mu_k, slip in ((0.99 * mu_margin, 0.5), (1.01 * mu_margin, -0.5)):
         gyrowheel.simulate(drop, stop_time=1e-3, start_values={**start, "mu_k": mu_k, "slip_lat": slip})
+
+
+# a leaning wheel spinning fast with a large lean rate on the ground (height 0): at mu = 2 the
+# friction it needs reaches the limit at t = 0.0148 s, with the onset direction across the heading
+ROLLING = {"height": 0.0, "beta": 1.88, "beta_dot": -5.66, "gamma_dot": 39.3, "alpha_dot": 4.6, "mu": 2.0}
+# thrown from 0.1 m, leaning and spinning: it lands sliding at t = 0.19535 s
+THROWN = {"height": 0.1, "beta": 1.17, "beta_dot": -5.8, "gamma_dot": 29.0, "alpha_dot": -5.0, "mu": 1.3}
+
+
+def run_from(drop, start, mu_k, stop=0.2):
+    """gyrowheel.simulate from `start` at kinetic coefficient mu_k, a row per ms."""
+    return gyrowheel.simulate(drop, stop_time=stop, output_interval=1e-3, start_values={**start, "mu_k": mu_k})
+
+
+def test_rolling_to_sliding_switch_past_the_margin_stops_at_the_switch(drop):
+    """mu_k = mu: the onset lands below the margin (D / W_nn = -0.21 from the closed form); the
+    run's last row is the switch's instant, sliding, with both flags; every row before rolls.
+    Then mu_k 1 % above and below the closed form's mu_k*: stop at the same instant, slide on."""
+    out = run_from(drop, ROLLING, 2.0)
+    last = out[-1]
+    t_switch = out["time"][-1]
+    assert 0.0148 < t_switch < 0.0149
+    assert last["painleve_paradox"] and last["contact_switched"] and last["contact_mode"] == 1
+    assert not out["painleve_paradox"][:-1].any() and (out["contact_mode"][:-1] == 0).all()
+    assert all(np.isfinite(out[n]).all() for n in out.dtype.names)
+    # the sliding friction at the switch is -mu_k F_n d (v_slip = 0): d from the last row
+    e = -np.array([last["F_long"], last["F_lat"]]) / (2.0 * last["F_n"])
+    assert np.hypot(*e) == pytest.approx(1, abs=1e-9)
+    assert share(last["beta"], 2.0, e[1]) < MARGIN - 0.2
+    s, c = np.sin(last["beta"]), np.cos(last["beta"])
+    mu_star = (1 - MARGIN) * (K_DIAM + c * c) / (e[1] * s * c)
+    assert 0 < mu_star < 2.0
+
+    above = run_from(drop, ROLLING, 1.01 * mu_star)
+    assert above["time"][-1] == pytest.approx(t_switch, abs=1e-12)
+    assert above["painleve_paradox"][-1] and above["contact_mode"][-1] == 1
+    assert share(above["beta"][-1], 1.01 * mu_star, e[1]) < MARGIN
+
+    below = run_from(drop, ROLLING, 0.99 * mu_star)
+    assert below["time"][-1] == 0.2 and not below["painleve_paradox"].any()
+    assert below["contact_switched"][-1]  # it did switch to sliding (and lifted off soon after)
+
+
+def test_touchdown_landing_past_the_margin_stops_at_the_touchdown(drop):
+    """The thrown wheel lands sliding at D / W_nn = 0.0026 (closed form, e along the slip the impact
+    leaves): the run stops in the touchdown's instant (the row before is in flight, 4.3e-8 m above
+    the ground), no NaN. With mu_k = 1 the same flight lands and the run goes on."""
+    out = run_from(drop, THROWN, 1.3, stop=0.3)
+    last = out[-1]
+    assert 0.1953 < out["time"][-1] < 0.1954
+    assert last["painleve_paradox"] and last["contact_mode"] == 1
+    assert (out["contact_mode"][:-1] == 2).all() and not out["painleve_paradox"][:-1].any()
+    assert 0 < out["height"][-2] < 1e-6
+    assert all(np.isfinite(out[n]).all() for n in out.dtype.names)
+    e_lat = last["slip_lat"] / np.hypot(last["slip_long"], last["slip_lat"])
+    d = share(last["beta"], 1.3, e_lat)
+    assert d < MARGIN - 0.04  # below the margin at once: a continuous approach stops at 0.05
+
+    lower = run_from(drop, THROWN, 1.0, stop=0.3)
+    assert lower["time"][-1] == 0.3 and not lower["painleve_paradox"].any()
+    assert lower["contact_flown"].any() and (lower["contact_mode"] != 2).any()

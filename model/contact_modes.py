@@ -43,7 +43,10 @@ as a crossing of the other mode's indicator in the same instant. The update:
   seeded direction while |v_slip| < SLIP_SEED v_scale.)
 Friction direction while sliding: e = (v_slip + SLIP_SEED v_scale d) / |...|: v_slip / |v_slip| to
 SLIP_SEED v_scale / |v_slip| (exactly when v_slip is along d, as in every straight slide), and d at
-v_slip = 0, where the slip starts.
+v_slip = 0, where the slip starts. Its power, mu_k F_n e . v_slip (dissipated_power), is negative only
+where a slip of the seed's size points against d; the sliding indicator keeps d . v_slip >=
+-SLIP_SEED v_scale / 2, and e . v_slip >= -a over the slips with d . v_slip = -a, so the power is
+>= -mu_k F_n SLIP_SEED v_scale / 2 (docs/effects.md, "The friction's power at a slip onset").
 
 Chattering: a switch back to rolling needs the slip velocity to reach 0 along d after it has been
 seen > 0 (the runtime fires only on > 0 -> <= 0), and rolling needs the friction to reach the limit

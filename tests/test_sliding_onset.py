@@ -14,9 +14,8 @@ hand from the two formulas, on every sliding row
 What the rigid Coulomb law gives (the slip grows along d from the onset, d . v_slip > 0, power >= 0)
 the regularised law follows where the integrator resolves the direction's fast mode (rate
 ~ mu_k F_n |K| / (SLIP_SEED v_scale), K the contact's tangential inverse mass, ~1e9 1/s): dop853
-and rosenbrock do, and there dissipated_energy never falls; dopri5's step sits at its stability
-limit there, the slip wanders against d within the indicator's band, and the power dips to about
--0.3 of the bound above.
+and rosenbrock do, and there dissipated_energy never falls; with dopri5 the slip wanders against d
+within the indicator's band for ~0.5 ms, and the power dips to about -0.3 of the bound above.
 """
 from __future__ import annotations
 

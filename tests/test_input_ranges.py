@@ -148,3 +148,20 @@ def test_declared_min_max_are_the_runtimes_refusal_bounds(drop):
 def test_fmpy_validates_the_fmu_with_its_ranges(drop):
     from fmpy.validation import validate_fmu
     assert validate_fmu(drop) == []
+
+
+def test_a_combination_too_stiff_to_integrate_says_why(tmp_path):
+    """In range one by one, a 1e-30 kg wheel with linear drag c_lin = 1e6 N s/m relaxes its speed
+    in about 1e-36 s, far below the step-size floor: the run stops with the solver's step size
+    underflow and says what it means, naming the ranges' documentation (exit 1: a run that
+    failed, not a value out of range)."""
+    scene = tmp_path / "drag.toml"
+    scene.write_text('[model]\nname = "drag"\n[effects.gravity]\n[effects.air_drag]\n')
+    fmu = gyrowheel.build(scene, output=tmp_path / "drag.fmu").fmu
+    with pytest.raises(SimulationError) as exc:
+        gyrowheel.simulate(fmu, stop_time=0.01, start_values={"M": 1e-30, "c_lin": 1e6})
+    text = str(exc.value)
+    assert "step size underflow" in text and "\n" not in text
+    assert text.endswith("the model's fastest time scale is shorter than the solver's smallest step, 16 eps "
+                         "max(|t|, 1) s: values that make it this stiff (e.g. strong damping on a light wheel) "
+                         "cannot be integrated (docs/interface.md, \"Valid ranges\")")

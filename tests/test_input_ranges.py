@@ -165,3 +165,14 @@ def test_a_combination_too_stiff_to_integrate_says_why(tmp_path):
     assert text.endswith("the model's fastest time scale is shorter than the solver's smallest step, 16 eps "
                          "max(|t|, 1) s: values that make it this stiff (e.g. strong damping on a light wheel) "
                          "cannot be integrated (docs/interface.md, \"Valid ranges\")")
+
+
+def test_fmi3_declares_the_same_bounds(earth, fmi3_earth_fmu):
+    """FMI 3.0 (<Float64 min max>, <Int32 min max>) declares the bounds of the FMI 2.0 twin."""
+    from fmpy.validation import validate_fmu
+    with zipfile.ZipFile(fmi3_earth_fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    bounds3 = {v.get("name"): (v.get("min"), v.get("max")) for v in root.find("ModelVariables")
+               if "min" in v.attrib or "max" in v.attrib}
+    assert bounds3 == {name: (low, high) for name, (low, high, _) in _bounds(earth).items()}
+    assert validate_fmu(str(fmi3_earth_fmu)) == []

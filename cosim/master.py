@@ -19,6 +19,7 @@ every output of every component as "<component>.<variable>", sampled at the comm
 from __future__ import annotations
 
 import math
+import re
 import shutil
 import time as _time
 from dataclasses import dataclass
@@ -40,6 +41,37 @@ NUMERIC = ("Real", "Integer", "Boolean")  # recorded as numbers; String and Bina
 
 class MasterError(GyrowheelError, RuntimeError):
     """A component refused a call; the message names the component and carries its log."""
+
+
+class StartValueRefusedError(MasterError):
+    """A component refused its start values before the run began (a value out of its range, a
+    combination its model cannot take): bad input, not a failure of the run. The message names
+    the component, the FMU's reason and the values it names: `wheel refused the start values: M
+    (mass) must be > 0 (wheel.M = -1)`. given: whether one of the values it names (or, naming
+    none, one of the component's) came from run()'s start_values rather than the system's
+    bindings."""
+
+    def __init__(self, message: str, given: bool):
+        super().__init__(message)
+        self.given = given
+
+
+def _refused_start_values(units: list[Unit], applied: dict[str, dict], given: dict[str, dict]):
+    """The StartValueRefusedError of the first unit that logged an error while its start values
+    were set and the system initialised (before the first step: a value out of range, an output
+    that is not finite with them), its reasons once each without the calls' names; else None."""
+    for u in units:
+        reasons = [m.split(":", 1)[1].strip() if re.match(r"fmi[23]\w+:", m) else m for m in u.messages]
+        reason = "; ".join(dict.fromkeys(reasons))
+        if not reason:
+            continue
+        values = applied.get(u.name, {})
+        named = [n for n in values if re.search(rf"(?<![\w.]){re.escape(n)}\b", reason)]
+        shown = "".join(f" ({u.name}.{n} = {values[n]!r})" for n in named)
+        user = given.get(u.name, {})
+        return StartValueRefusedError(f"{u.name} refused the start values: {reason}{shown}",
+                                      any(n in user for n in named) if named else bool(user))
+    return None
 
 
 @dataclass
@@ -94,6 +126,7 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
                  f"{count_text(n_steps + 1)} communication points of {columns} columns",
                  "choose a shorter stop_time or a longer step", argument="stop_time")
     units = []
+    applied: dict[str, dict] = {}  # the start values set, by component; cleared once the run begins
     try:
         for c in system.components:
             unit = new_unit(c.name, read_model_description(str(c.fmu)))
@@ -109,7 +142,8 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
                           (k.factor, k.offset) if k.transformed else None))
         for c, u in zip(system.components, units):
             u.before_start_values(t0)
-            for name, value in {**c.start_values, **(start_values or {}).get(c.name, {})}.items():
+            applied[c.name] = {**c.start_values, **(start_values or {}).get(c.name, {})}
+            for name, value in applied[c.name].items():
                 _set(u, name, value)
             u.enter_initialization(t0)
 
@@ -120,6 +154,7 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
                               + ", ".join(describe(system.connections[i]) for i in moving) + " still change")
         for u in units:
             u.slave.exitInitializationMode()
+        applied = {}
         names = ["time"] + [f"{u.name}.{o}" for u in units for o in u.outputs]
         data = np.zeros(n_steps + 1, dtype=[(n, np.float64) for n in names])  # every point, filled as it runs
         count = 0
@@ -155,6 +190,9 @@ def run(system: SystemDescription, step: float, stop_time: float | None = None,
     except MasterError:
         raise
     except Exception as exc:  # fmpy raises FMICallException (fmi2Error, fmi3Error) and plain Exceptions
+        refused = _refused_start_values(units, applied, start_values or {}) if applied else None
+        if refused is not None:
+            raise refused from None
         logged = "; ".join(f"{u.name}: {m}" for u in units for m in u.messages)
         raise MasterError(f"{logged} ({exc})" if logged else str(exc)) from None
     finally:

@@ -118,6 +118,7 @@ def write_model_description(model_name: str, exp: Experiment, table: list[Variab
                 type_attrs["derivative"] = str(v.derivative_of)
             if v.quantity.display_unit:
                 type_attrs["displayUnit"] = v.quantity.display_unit
+        type_attrs.update(range_attrs(v))
         if (start := start_text(v)) is not None:
             type_attrs["start"] = start
         ET.SubElement(sv, v.type, type_attrs)
@@ -165,6 +166,24 @@ def enumerations(table: list[Variable], taylor: bool) -> dict[str, list[tuple[st
     """Every Enumeration type of the FMU, {name: [(item, value)]}: Solver (solver_items) and
     those of the Enumeration outputs (variables.enumeration_types, e.g. ContactMode)."""
     return {"Solver": solver_items(taylor), **enumeration_types(table)}
+
+
+def range_attrs(v: Variable) -> dict[str, str]:
+    """The min and max attributes (FMI 2.0.4 section 2.2.7, FMI 3.0.2 section 2.4.7.4: inclusive
+    limits of the value) of a parameter or solver setting whose Quantity has them: the bounds the
+    FMU refuses values beyond (at fmi2SetReal for the settings, at fmi2ExitInitializationMode for
+    the model's parameters; docs/interface.md, "Valid ranges"). Start values of outputs carry
+    none: an output's min and max would bound its values during the run too, which the start
+    values' ranges do not. Returns {} or {"min": ..., "max": ...} (either alone)."""
+    if v.kind not in ("param", "setting") or v.type not in ("Real", "Integer"):
+        return {}
+    text = _fmt if v.type == "Real" else (lambda x: str(int(x)))
+    attrs = {}
+    if v.quantity.minimum is not None:
+        attrs["min"] = text(v.quantity.minimum)
+    if v.quantity.maximum is not None:
+        attrs["max"] = text(v.quantity.maximum)
+    return attrs
 
 
 def start_text(v: Variable) -> str | None:

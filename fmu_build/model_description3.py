@@ -14,8 +14,8 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from datetime import datetime, timezone
 
-from gyrowheel.fmu_build.model_description import (LOG_CATEGORIES, _unit_of, enumerations, start_text, variable_attrs,
-                                                   write_log_categories_and_experiment, write_units)
+from gyrowheel.fmu_build.model_description import (LOG_CATEGORIES, _unit_of, enumerations, range_attrs, start_text,
+                                                   variable_attrs, write_log_categories_and_experiment, write_units)
 from gyrowheel.fmu_build.scene import Experiment
 from gyrowheel.fmu_build.variables import Variable
 
@@ -120,6 +120,7 @@ def _variable_attrs(v: Variable, reinit: bool) -> dict[str, str]:
             attrs["unit"] = u
         if v.quantity.display_unit:
             attrs["displayUnit"] = v.quantity.display_unit
+    attrs.update(range_attrs(v))
     if (start := start_text(v)) is not None:
         attrs["start"] = start
     if v.derivative_of is not None:

@@ -38,10 +38,10 @@ from pathlib import Path
 from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build.platforms import parse_platforms
 from gyrowheel.fmu_build.scene_toml import scene_toml  # noqa: F401 (part of this module's API)
-from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, MASS_REFUSAL, SLIDE_NEEDS_REDUCED, SPEED_REFUSAL,
-                                   start_values, touchdown_lean, wheel_parameters)
+from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, MASS_REFUSAL, RIM_SPEED_REFUSAL, SLIDE_NEEDS_REDUCED,
+                                   SPEED_REFUSAL, SPEEDS, start_values, touchdown_lean, wheel_parameters)
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
-from gyrowheel.model.spec import MASS_RANGE, SPEED_OF_LIGHT
+from gyrowheel.model.spec import MASS_RANGE, SPEED_OF_LIGHT, range_refusal
 
 SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
@@ -287,6 +287,9 @@ def _in_limits(r: _Reader, table: str, quantity, value: float) -> None:
     if quantity.unit == "m/s" and (quantity.minimum, quantity.maximum) == (-SPEED_OF_LIGHT, SPEED_OF_LIGHT) \
             and not abs(value) <= SPEED_OF_LIGHT:
         raise r.fail(table, quantity.name, f"{SPEED_REFUSAL}, got {value!r}")
+    if quantity.closed_range and not quantity.minimum <= value <= quantity.maximum:
+        refusal = range_refusal(quantity.name, quantity.minimum, quantity.maximum, quantity.unit)
+        raise r.fail(table, quantity.name, f"{refusal.removeprefix(quantity.name + ' ')}, got {value!r}")
     if quantity.minimum is not None and value < quantity.minimum:
         raise r.fail(table, quantity.name, f"must be >= {quantity.minimum:g}, got {value!r}")
     if quantity.maximum is not None and value > quantity.maximum:
@@ -301,6 +304,16 @@ def _lean_above_fall(r: _Reader, scene: Scene) -> None:
     if not math.sin(beta) > math.sin(beta_min):
         raise r.fail("initial", "beta", f"must lie between beta_min and pi - beta_min ({beta_min!r} .. "
                      f"{math.pi - beta_min!r} rad): the wheel would start fallen, got {beta!r}")
+
+
+def _rim_below_light(r: _Reader, scene: Scene) -> None:
+    """Each start rate's rim speed R |rate| at most the speed of light (the FMU's check at
+    initialisation, model/build.py RIM_SPEED_REFUSAL)."""
+    radius = scene.wheel.get("R", next(q.start for q in wheel_parameters() if q.name == "R"))
+    for speed in SPEEDS:
+        rate = scene.initial.get(speed, 0.0)
+        if not radius * abs(rate) <= SPEED_OF_LIGHT:
+            raise r.fail("initial", speed, f"|{speed}| {RIM_SPEED_REFUSAL}, got {rate!r} with R = {radius!r}")
 
 
 def _effect_value(r: _Reader, table: str, key: str, value, cls) -> float | str:
@@ -432,6 +445,7 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
     scene.initial = _initial(r, r.table(data, "initial"), scene.effects)
     _sliding(r, scene)
     _lean_above_fall(r, scene)
+    _rim_below_light(r, scene)
     scene.experiment = _experiment(r, r.table(data, "experiment"))
     outputs = r.table(data, "outputs")
     r.unknown("outputs", outputs, {"keep"})

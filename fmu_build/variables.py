@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from gyrowheel.fmu_build.scene import SOLVERS, Experiment
+from gyrowheel.fmu_build.scene import MAX_INTERNAL_STEPS_RANGE, SOLVERS, TOLERANCE_RANGES, Experiment
 from gyrowheel.model.spec import ModelSpec, Quantity
 
 # The variables every FMU keeps (docs/interface.md); [outputs] keep cannot remove them.
@@ -77,17 +77,19 @@ def _solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
         (Quantity("solver", "", "internal Co-Simulation integrator", SOLVERS[exp.solver]), "Enumeration", "Solver"),
         (Quantity("rel_tol", "1", "relative error tolerance of adaptive solvers, in [2.2e-15, 1]; "
                   "when not set, a tolerance passed to fmi2SetupExperiment replaces it",
-                  exp.rel_tol), "Real", None),
+                  exp.rel_tol, minimum=TOLERANCE_RANGES["rel_tol"][0], maximum=TOLERANCE_RANGES["rel_tol"][1]),
+         "Real", None),
         (Quantity("abs_tol", "1", "absolute error tolerance of adaptive solvers, 0 or in [1e-30, 1], "
                   "scaled by each state's nominal value; 0: follow rel_tol (rel_tol / 100); when not "
                   "set, scaled with a tolerance passed to fmi2SetupExperiment (0 stays 0)",
-                  exp.abs_tol), "Real", None),
+                  exp.abs_tol, minimum=0.0, maximum=TOLERANCE_RANGES["abs_tol"][1]), "Real", None),
         (Quantity("max_step", "s", "upper bound of internal steps; the fixed step of euler and rk4",
                   exp.max_step), "Real", None),
         (Quantity("max_internal_steps", "", "budget of internal steps (accepted and rejected) of one "
                   "fmi2DoStep, from 1 to 2147483647: a step needing more is refused up front or stopped, "
                   "state kept at its start",
-                  exp.max_internal_steps), "Integer", None),
+                  exp.max_internal_steps, minimum=MAX_INTERNAL_STEPS_RANGE[0], maximum=MAX_INTERNAL_STEPS_RANGE[1]),
+         "Integer", None),
     ]
 
 

@@ -486,9 +486,13 @@ def system_run(system, *, step: float = 0.01, stop_time: float | None = None, st
     Raises SystemFileError (the .ssp, naming the element at fault; a file that is no .ssp),
     ArgumentError (step, stop_time, start_values, output; a run whose rows would take more than
     half of this machine's memory), ArgumentTypeError (an argument of the wrong type),
-    MasterError (a component failed: its logged reason).
+    MasterError (a component failed: its logged reason). A component that refuses its start
+    values before the run (a value out of its range) is bad input: ArgumentError naming
+    start_values when a value given here is named (`start_values: wheel refused the start values:
+    M (mass) must lie in [1e-30, 1e+30] kg ... (wheel.M = 1e+150)`), SystemFileError when one of
+    the system's own bindings is.
     """
-    from gyrowheel.cosim.master import run
+    from gyrowheel.cosim.master import StartValueRefusedError, run
     from gyrowheel.cosim.system import SystemDescription, SystemFileError
     from gyrowheel.cosim.ssp import read_ssp
     from gyrowheel.simulation import write_csv
@@ -507,6 +511,10 @@ def system_run(system, *, step: float = 0.01, stop_time: float | None = None, st
         starts = _system_start_values(description, start_values)
         try:
             result = run(description, step, stop_time, start_values=starts)
+        except StartValueRefusedError as exc:  # bad input: the user's value or the system file's
+            if exc.given:
+                raise ArgumentError(f"start_values: {exc}", argument="start_values") from None
+            raise SystemFileError(f"{system if description is not system else 'system'}: {exc}") from None
         except GyrowheelError:
             raise
         except ValueError as exc:  # the master's checks: a stop time off the step grid, a result too large

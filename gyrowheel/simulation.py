@@ -237,7 +237,7 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
             reason, before = refusal(messages.errors())
             if before:
                 raise StartValueError(f"the FMU refused the start values: {reason}") from None
-            raise SimulationError(f"the FMU reported an error: {reason or exc}") from None
+            raise SimulationError(f"the FMU reported an error: {reason or exc}{_underflow_note(reason)}") from None
         except GyrowheelError:
             raise
         except Exception as exc:  # fmpy's own failures are plain Exceptions: one line, the FMU named
@@ -246,6 +246,17 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
         finally:
             os.chdir(cwd)  # fmpy changes into the binary's directory to load it, and stays on failure
             restore_fmpy_logger()
+
+
+# what "step size underflow" means for a user: the runtime's solvers stop at their step-size floor
+UNDERFLOW_NOTE = ("; the model's fastest time scale is shorter than the solver's smallest step, 16 eps max(|t|, 1) s: "
+                  "values that make it this stiff (e.g. strong damping on a light wheel) cannot be integrated "
+                  "(docs/interface.md, \"Valid ranges\")")
+
+
+def _underflow_note(reason: str) -> str:
+    """UNDERFLOW_NOTE if the FMU's reason is a step size underflow, else ''."""
+    return UNDERFLOW_NOTE if "step size underflow" in reason else ""
 
 
 def _read_by_a_run(name: str) -> bool:

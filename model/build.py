@@ -20,7 +20,8 @@ from gyrowheel.model.context import Body, WheelContext
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 from gyrowheel.model.kinematics import WheelKinematics, norm
 from gyrowheel.model.lagrangian import ConstrainedSystem
-from gyrowheel.model.spec import MASS_RANGE, SPEED_OF_LIGHT, Event, ModelSpec, Quantity
+from gyrowheel.model.spec import (K_DIAM_MAX, MASS_RANGE, RADIUS_RANGE, RATE_RANGE, SPEED_OF_LIGHT, Event, ModelSpec,
+                                  Quantity, range_refusal)
 from gyrowheel.model.stiction import law_update, stuck_rate_rows
 
 FORMULATIONS = ("reduced", "multipliers")
@@ -33,6 +34,8 @@ IN_FLIGHT = {"F_n": "; 0 in flight", "F_long": "; 0 in flight", "F_lat": "; 0 in
 MASS_REFUSAL = (f"M (mass) must lie in [{MASS_RANGE[0]:g}, {MASS_RANGE[1]:g}] kg (beyond, the contact's products of "
                 "masses and squared speeds leave double precision)")
 SPEED_REFUSAL = "must lie in [-c, c], c = 299792458 m/s (Newtonian mechanics: below the speed of light)"
+# each start rate times R, the speed its rate gives a rim point, below the speed of light
+RIM_SPEED_REFUSAL = "R must be <= c = 299792458 m/s (Newtonian mechanics: a rim point below the speed of light)"
 SPEED_CHOICES = ("body", "angle_rates")
 BODY_SPEEDS = ("omega_l", "omega_m", "omega_n")
 
@@ -117,8 +120,10 @@ def wheel_parameters() -> list[Quantity]:
     return [
         Quantity("M", "kg", f"wheel mass, in [{MASS_RANGE[0]:g}, {MASS_RANGE[1]:g}] kg", 2.0,
                  minimum=MASS_RANGE[0], maximum=MASS_RANGE[1]),
-        Quantity("R", "m", "wheel (rolling) radius", 0.17),
-        Quantity("k_diam", "1", "diametral inertia I_diam = k_diam M R^2", 0.25),
+        Quantity("R", "m", f"wheel (rolling) radius, in [{RADIUS_RANGE[0]:g}, {RADIUS_RANGE[1]:g}] m", 0.17,
+                 minimum=RADIUS_RANGE[0], maximum=RADIUS_RANGE[1], closed_range=True),
+        Quantity("k_diam", "1", f"diametral inertia I_diam = k_diam M R^2, at most {K_DIAM_MAX:g}", 0.25,
+                 maximum=K_DIAM_MAX),
         Quantity("k_axial", "1", "axial (spin-axis) inertia I_axial = k_axial M R^2", 0.4),
         Quantity("beta_min", "rad", "lean at which the wheel counts as fallen flat "
                  "(default: as near flat as the Euler angles keep their accuracy, docs/model.md)",
@@ -134,9 +139,12 @@ def start_values() -> list[Quantity]:
         Quantity("alpha", "rad", "precession (heading) angle", 0.0, display_unit="deg"),
         Quantity("beta", "rad", "lean angle, pi/2 upright", math.radians(80.0), display_unit="deg"),
         Quantity("gamma", "rad", "spin angle", 0.0, display_unit="deg"),
-        Quantity("alpha_dot", "rad/s", "precession rate", 0.0),
-        Quantity("beta_dot", "rad/s", "lean rate", 0.0),
-        Quantity("gamma_dot", "rad/s", "spin rate", 6.0),
+        Quantity("alpha_dot", "rad/s", "precession rate", 0.0, minimum=RATE_RANGE[0], maximum=RATE_RANGE[1],
+                 closed_range=True),
+        Quantity("beta_dot", "rad/s", "lean rate", 0.0, minimum=RATE_RANGE[0], maximum=RATE_RANGE[1],
+                 closed_range=True),
+        Quantity("gamma_dot", "rad/s", "spin rate", 6.0, minimum=RATE_RANGE[0], maximum=RATE_RANGE[1],
+                 closed_range=True),
     ]
 
 
@@ -166,8 +174,11 @@ def base_context(wheel: dict[str, float]) -> WheelContext:
     # each refusal once: the range only where M > 0
     ctx.check_true(ca.logic_or(M <= 0, ca.logic_and(M >= MASS_RANGE[0], M <= MASS_RANGE[1])), MASS_REFUSAL)
     ctx.check(R, "R (radius) must be > 0")
+    ctx.check_true(ca.logic_or(R <= 0, ca.logic_and(R >= RADIUS_RANGE[0], R <= RADIUS_RANGE[1])),
+                   range_refusal("R", *RADIUS_RANGE, "m"))
     ctx.check(P["k_diam"], "k_diam must be > 0")
     ctx.check(P["k_axial"], "k_axial must be > 0")
+    ctx.check_true(P["k_diam"] <= K_DIAM_MAX, f"k_diam must be <= {K_DIAM_MAX:g}")
     # each refusal once: the combined check only where k_diam itself passes its own
     ctx.check_true(ca.logic_or(P["k_diam"] <= 0, P["k_axial"] <= 2 * P["k_diam"]),
                    "k_axial must be <= 2 k_diam (I_axial <= 2 I_diam for any rigid body)")
@@ -466,6 +477,15 @@ class _Assembler:
         # only where beta0 lies in (0, pi), so a lean outside is refused once, by the checks above
         ctx.check(ca.if_else(ca.logic_and(beta0 > 0, beta0 < math.pi), ca.sin(beta0) - ca.sin(P["beta_min"]), 1),
                   "initial lean beta must lie between beta_min and pi - beta_min (the wheel is already flat)")
+        for speed in SPEEDS:  # the wheel's start rates (a closed range: spec.RATE_RANGE)
+            rate0 = s_by_name[speed]
+            in_range = ca.logic_and(rate0 >= RATE_RANGE[0], rate0 <= RATE_RANGE[1])
+            ctx.check_true(in_range, range_refusal(speed, *RATE_RANGE, "rad/s"))
+            # each refusal once: the rim speed only where the rate and R lie in their ranges
+            radius_in_range = ca.logic_and(P["R"] >= RADIUS_RANGE[0], P["R"] <= RADIUS_RANGE[1])
+            ctx.check_true(ca.logic_or(ca.logic_not(ca.logic_and(in_range, radius_in_range)),
+                                       P["R"] * ca.fabs(rate0) <= SPEED_OF_LIGHT),
+                           f"|{speed}| {RIM_SPEED_REFUSAL}")
         for qq, sym in ctx.extra_starts:  # the start velocities of the contact modes (slip, vz)
             if qq.unit == "m/s":
                 ctx.check_true(ca.fabs(sym) <= SPEED_OF_LIGHT, f"{qq.name} {SPEED_REFUSAL}")

@@ -19,6 +19,27 @@ import casadi as ca
 # arithmetic inside double precision (M = 1e150 kg overflows to NaN at a touchdown)
 SPEED_OF_LIGHT = 299792458.0  # m/s
 MASS_RANGE = (1e-30, 1e30)  # kg
+# The wheel's time scales stay far above the adaptive solvers' step-size floor, 16 eps max(|t|, 1)
+# (3.6e-15 s up to t = 1 s): sqrt(R / g) >= 1 microsecond, 1 / |rate| >= 1 ns (2.8e5 floors); and the
+# energies stay inside double precision whatever M in MASS_RANGE (M g R <= 1e42 J, M R^2 rate^2 <=
+# 1e60 J). Beyond, R = 1e-20 m, g = 1e20 m/s2, gamma_dot = 1e20 rad/s failed with "step size
+# underflow", R = 1e-300 m, g = 1e300 m/s2 with NaN in the touchdown's update; at the ends every
+# combination runs or stops with the budget's message (tests/test_input_ranges.py).
+RADIUS_RANGE = (1e-6, 1e6)  # m
+GRAVITY_RANGE = (0.0, 1e6)  # m/s2
+RATE_RANGE = (-1e9, 1e9)  # rad/s, each of alpha_dot, beta_dot, gamma_dot
+# the largest diametral inertia ratio k_diam (an axle 1000 R long) and the largest coefficient of
+# air drag and pivot friction: at 1e300 their terms overflow to NaN, at 1e6 they stay finite (a law
+# stiff for the wheel's inertia then stops with the solver's step-size floor or the step budget)
+K_DIAM_MAX = 1e6
+COEFFICIENT_MAX = 1e6
+RANGE_NOTE = "(the wheel's time scales, sqrt(R/g) >= 1 us and 1/|rate| >= 1 ns, above the solvers' step-size floor)"
+
+
+def range_refusal(name: str, low: float, high: float, unit: str, note: str = RANGE_NOTE) -> str:
+    """The refusal of a value outside [low, high]: `R must lie in [1e-06, 1e+06] m (note)`; one
+    text for the scene reader (fmu_build/scene.py) and the FMU's check at initialisation."""
+    return f"{name} must lie in [{low:g}, {high:g}] {unit} {note}".replace("  ", " ")
 
 
 @dataclass
@@ -36,6 +57,8 @@ class Quantity:
     # an output that takes whole values 0, 1, ... naming states: the names, in value order (an
     # FMI Enumeration, type `<Name>` of the CamelCase name: fmu_build/variables.py); empty: a real
     items: tuple[str, ...] = ()
+    # the closed range's refusal names it in one text (spec.range_refusal), not as >= and <= apart
+    closed_range: bool = False
 
 
 @dataclass

@@ -6,10 +6,11 @@
 - one varying input: the metric against it;
 - random inputs: the metric against each of them (scatter) and its histogram; a yes/no metric
   (survived) as the fraction of yes in bins of each input, with its 95% Wilson interval.
-Failed points are marked with a red x. Every axis carries its unit: the FMU's unit of an input
-(deg for NAME_deg), the metric's own (studies/metrics.py). The default metric is one that has a
-value at most points (fall_time only if most points fell). The maps in docs/sweeps.md add physics
-on top of these.
+A text metric (an Enumeration output's items, final:contact_mode) is plotted as categories
+(studies/plot_categories.py). Failed points are marked with a red x. Every axis carries its
+unit: the FMU's unit of an input (deg for NAME_deg), the metric's own (studies/metrics.py). The
+default metric is one that has a value at most points (fall_time only if most points fell). The
+maps in docs/sweeps.md add physics on top of these.
 """
 from __future__ import annotations
 
@@ -18,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from gyrowheel.studies.plot_categories import category_figure, is_categorical
 
 SKIP = {"point", "status", "reason", "wall_time", "event"}
 
@@ -156,10 +159,14 @@ def table_figure(table: pd.DataFrame, inputs: list[str], metric: str | None = No
     import matplotlib.pyplot as plt
 
     metric = metric or default_metric(table, inputs)
+    if metric not in table.columns and metric.replace(":", "_", 1) in table.columns:
+        metric = metric.replace(":", "_", 1)  # as --metrics names it (final:contact_mode): its column
     if metric not in table.columns:
         raise ValueError(f"--plot-metric {metric!r}: no such column; columns: {', '.join(table.columns)}")
     varying = [c for c in inputs if table[c].nunique() > 1]
     grid_like = [c for c in varying if table[c].nunique() < len(table)]
+    if is_categorical(table[metric]):  # an Enumeration output's item names: categories, not numbers
+        return category_figure(table, metric, varying, grid_like, inputs, lambda c: label(c, units))
     values = table[metric].astype(float)
     failed = table["status"] != "ok"
     yes_no = _is_yes_no(values)

@@ -586,8 +586,8 @@ def test_system_run_from_an_ssp_and_from_its_description(moon, solo, tmp_path):
      "start_values, component wheel: unknown variable 'colour'", "start_values"),
     ("{solo}", dict(output="{tmp}"), "ArgumentError", "output {tmp}: is a directory", "output"),
     ("{tmp}/missing.ssp", {}, "SystemFileError", "missing.ssp: no such SSP file", "system"),
-    ("{solo}", dict(start_values={"wheel.M": -1.0}, stop_time=0.1), "MasterError",
-     "wheel: fmi2ExitInitializationMode: M (mass) must be > 0", None),
+    ("{solo}", dict(start_values={"wheel.M": -1.0}, stop_time=0.1), "ArgumentError",
+     "start_values: wheel refused the start values: M (mass) must be > 0 (wheel.M = -1.0)", "start_values"),
 ])
 def test_system_run_errors_name_the_argument(solo, tmp_path, system, kwargs, error, message, argument):
     fill = dict(solo=solo, tmp=tmp_path)

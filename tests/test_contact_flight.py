@@ -312,8 +312,8 @@ def test_flight_adds_its_variables(fmu):
 # variable table, the experiment and the name): flight adds nothing to them. Change these only with
 # a change meant for those scenes (ice_slide: the rolling and sliding modes, model/contact_modes.py,
 # and the Painleve stop, model/painleve.py).
-GROUND_GUIDS = {"paper_earth": "{8b356b44-66dc-58ad-96b3-6bd0d81eef26}",  # rolling, base wheel
-                "ice_slide": "{c939e1eb-95e4-5280-b65b-8abcda06a66b}"}  # rolling and sliding
+GROUND_GUIDS = {"paper_earth": "{27c0c82f-d150-5df2-b0bc-f210ed2ed844}",  # rolling, base wheel
+                "ice_slide": "{df3659f9-3f2c-5ce7-a913-3f255232503c}"}  # rolling and sliding
 
 
 @pytest.mark.parametrize("name", sorted(GROUND_GUIDS))

@@ -182,8 +182,8 @@ def test_scene_refuses_what_sliding_cannot_honour(text, message):
 # variable table, the experiment and the name, so an equal GUID is the same generated model,
 # variables and value references: the sliding mode adds nothing to them. Change these only with a
 # change meant for rolling scenes (and say so in its commit).
-ROLLING_GUIDS = {"paper_earth": "{8b356b44-66dc-58ad-96b3-6bd0d81eef26}",  # base wheel
-                 "slope_hold": "{4ce365f1-4774-5583-be5a-ca6f47d264e6}"}  # contact_forces + a stiction law
+ROLLING_GUIDS = {"paper_earth": "{27c0c82f-d150-5df2-b0bc-f210ed2ed844}",  # base wheel
+                 "slope_hold": "{e9805ddb-e966-58f1-a4ce-0a4092868a09}"}  # contact_forces + a stiction law
 
 
 @pytest.mark.parametrize("name", sorted(ROLLING_GUIDS))

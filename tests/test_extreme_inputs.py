@@ -2,8 +2,9 @@
 and its reason (exit 2, nothing written), or run.
 
 Physical ranges (model/spec.py): the start speeds of the contact modes (vz, slip_long, slip_lat)
-below the speed of light, the wheel's mass M in [1e-30, 1e30] kg; the scene reader and the FMU's
-checks at initialisation (`gyrowheel simulate --set`) refuse others alike. Tolerances: every
+below the speed of light, the wheel's mass M in [1e-30, 1e30] kg, its radius, start rates (and
+their rim speed) and the effects' coefficients (tests/test_input_ranges.py runs them); the scene
+reader and the FMU's checks at initialisation (`gyrowheel simulate --set`) refuse others alike. Tolerances: every
 abs_tol of the documented range [1e-30, 1] runs (the first step of an adaptive solver is at least
 1000 step-size floors, whatever abs_tol); the run agrees with the default tolerance's to rounding.
 """
@@ -20,6 +21,7 @@ from gyrowheel.fmu_build.scene import SceneError, parse_scene
 C = "c = 299792458 m/s (Newtonian mechanics: below the speed of light)"
 MASS = "M (mass) must lie in [1e-30, 1e+30] kg (beyond, the contact's products of masses and squared speeds " \
        "leave double precision)"
+TIME_SCALES = "(the wheel's time scales, sqrt(R/g) >= 1 us and 1/|rate| >= 1 ns, above the solvers' step-size floor)"
 FLY = '[model]\nname = "x"\n[effects.gravity]\n[effects.contact_forces]\non_slip = "slide"\non_lift_off = "fly"\n'
 
 
@@ -57,6 +59,12 @@ def test_set_outside_the_physical_range_is_refused_naming_it(drop, tmp_path, val
     ("wheel", "M = 1e150", "[wheel] M: must lie in [1e-30, 1e+30] kg (beyond, the contact's products of masses "
                            "and squared speeds leave double precision), got 1e+150"),
     ("wheel", "M = 1e-300", "[wheel] M: must lie in [1e-30, 1e+30] kg"),
+    ("wheel", "R = 1e-300", f"[wheel] R: must lie in [1e-06, 1e+06] m {TIME_SCALES}, got 1e-300"),
+    ("initial", "gamma_dot = 1e150", f"[initial] gamma_dot: must lie in [-1e+09, 1e+09] rad/s {TIME_SCALES}, "
+                                     "got 1e+150"),
+    ("initial", "gamma_dot = 1e9\n[wheel]\nR = 1.0", "[initial] gamma_dot: |gamma_dot| R must be <= c = 299792458 "
+     "m/s (Newtonian mechanics: a rim point below the speed of light), got 1000000000.0 with R = 1.0"),
+    ("effects.air_drag", "rho_air = 1e300", "[effects.air_drag] rho_air: must be <= 1e+06, got 1e+300"),
 ])
 def test_scene_outside_the_physical_range_is_refused_naming_it(table, line, message):
     with pytest.raises(SceneError) as err:

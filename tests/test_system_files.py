@@ -16,7 +16,7 @@ import pytest
 import xmlschema
 
 from conftest import ROOT, loop_accuracy
-from gyrowheel.cosim.master import MasterError, run
+from gyrowheel.cosim.master import MasterError, StartValueRefusedError, run
 from gyrowheel.cosim.system import SystemFileError
 from gyrowheel.cosim.ssp import read_ssp, write_ssp
 
@@ -150,7 +150,7 @@ def test_every_binding_type_is_applied(unpacked, earth_loop, tmp_path):
                                                            "mission_rate_2": 0.4}
     # applied: with no internal steps allowed the wheel cannot take its first step
     starved = bind(ssd, "wheel", param("max_internal_steps", "Integer", "0"))
-    with pytest.raises(MasterError, match=r"^wheel: .*max_internal_steps"):
+    with pytest.raises(MasterError, match=r"^wheel refused the start values: .*max_internal_steps"):
         run(read_ssp(archive(tmp_path / "starved.ssp", starved, fmus), tmp_path / "s"), 0.01, stop_time=0.1)
     # the writer writes each binding as its variable's type; the file is valid SSP 1.0 and reads back
     system.component("wheel").start_values = {"max_internal_steps": 9, "M": 2.5}
@@ -188,18 +188,20 @@ def test_master_start_values_are_checked_like_bindings(unpacked, tmp_path, name,
         run(system, 0.01, stop_time=0.02, start_values={"wheel": {name: value}})
 
 
-def test_a_failing_component_says_why(unpacked, tmp_path):
-    """A component that refuses a bound value: MasterError names it and carries the FMU's logged
-    reason; the CLI prints that one line and exits 1. Not 'fmi2ExitInitializationMode failed with
-    status 3 (run again with the FMU's logging categories on ...)', which the command cannot do,
-    with the reason printed by fmpy to stdout."""
+def test_a_component_refusing_a_bound_value_says_why(unpacked, tmp_path):
+    """A component that refuses a value the system file binds: the error names it, the FMU's
+    logged reason and the value; the CLI prints that one line and exits 2 (bad input: the file's).
+    Not 'fmi2ExitInitializationMode failed with status 3 (run again with the FMU's logging
+    categories on ...)', which the command cannot do, with the reason printed by fmpy to stdout."""
     ssd, fmus = unpacked
     path = archive(tmp_path / "neg.ssp", bind(ssd, "wheel", param("M", "Real", "-1")), fmus)
-    with pytest.raises(MasterError, match=r"^wheel: fmi2ExitInitializationMode: M \(mass\) must be > 0"):
+    reason = "wheel refused the start values: M (mass) must be > 0 (wheel.M = -1.0)"
+    with pytest.raises(StartValueRefusedError, match=rf"^{re.escape(reason)}$") as exc:
         run(read_ssp(path, tmp_path / "u"), 0.01, stop_time=0.1)
+    assert isinstance(exc.value, MasterError) and not exc.value.given
     r = gyrowheel("system", "run", path, "--stop-time", "0.1", cwd=tmp_path)
-    assert r.returncode == 1 and "Traceback" not in r.stderr and r.stdout == ""
-    assert r.stderr.count("\n") == 1 and "the system failed: wheel: " in r.stderr and "M (mass) must be > 0" in r.stderr
+    assert r.returncode == 2 and "Traceback" not in r.stderr and r.stdout == ""
+    assert r.stderr == f"gyrowheel: error: {path}: {reason}\n"
 
 
 @pytest.mark.parametrize("args,code,fragment", [

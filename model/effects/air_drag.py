@@ -12,7 +12,7 @@ import casadi as ca
 from gyrowheel.model.context import WheelContext
 from gyrowheel.model.effects.base import Effect
 from gyrowheel.model.kinematics import norm
-from gyrowheel.model.spec import Quantity
+from gyrowheel.model.spec import COEFFICIENT_MAX, Quantity
 
 
 class AirDrag(Effect):
@@ -22,10 +22,10 @@ class AirDrag(Effect):
     @classmethod
     def parameters(cls) -> list[Quantity]:
         return [
-            Quantity("rho_air", "kg/m3", "air density", 1.225, minimum=0.0),
-            Quantity("cd_area", "m2", "drag coefficient x frontal area", 0.02, minimum=0.0),
-            Quantity("c_lin", "N.s/m", "linear (viscous) drag coefficient", 0.0, minimum=0.0),
-            Quantity("cm_spin", "1", "spin drag moment coefficient", 0.01, minimum=0.0),
+            Quantity("rho_air", "kg/m3", "air density", 1.225, minimum=0.0, maximum=COEFFICIENT_MAX),
+            Quantity("cd_area", "m2", "drag coefficient x frontal area", 0.02, minimum=0.0, maximum=COEFFICIENT_MAX),
+            Quantity("c_lin", "N.s/m", "linear (viscous) drag coefficient", 0.0, minimum=0.0, maximum=COEFFICIENT_MAX),
+            Quantity("cm_spin", "1", "spin drag moment coefficient", 0.01, minimum=0.0, maximum=COEFFICIENT_MAX),
         ]
 
     @staticmethod

@@ -1,8 +1,10 @@
 """The interface every effect implements."""
 from __future__ import annotations
 
+import casadi as ca
+
 from gyrowheel.model.context import WheelContext
-from gyrowheel.model.spec import Quantity
+from gyrowheel.model.spec import Quantity, range_refusal
 
 
 class Effect:
@@ -65,6 +67,10 @@ class Effect:
             if q.name in self.options:
                 q.start = float(self.options[q.name])
             syms[q.name] = ctx.parameter(q)
+            if q.closed_range:
+                ctx.check_true(ca.logic_and(syms[q.name] >= q.minimum, syms[q.name] <= q.maximum),
+                               range_refusal(q.name, q.minimum, q.maximum, q.unit))
+                continue
             if q.minimum is not None:
                 ctx.check_true(syms[q.name] >= q.minimum, f"{q.name} must be >= {q.minimum:g}")
             if q.maximum is not None:

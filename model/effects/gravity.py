@@ -8,7 +8,7 @@ import casadi as ca
 
 from gyrowheel.model.context import WheelContext
 from gyrowheel.model.effects.base import Effect
-from gyrowheel.model.spec import Quantity
+from gyrowheel.model.spec import GRAVITY_RANGE, Quantity
 
 PRESETS = {"earth": 9.81, "mars": 3.721, "moon": 1.625}
 
@@ -19,7 +19,8 @@ class Gravity(Effect):
 
     @classmethod
     def parameters(cls) -> list[Quantity]:
-        return [Quantity("g", "m/s2", "gravitational acceleration", 9.81, minimum=0.0)]
+        return [Quantity("g", "m/s2", "gravitational acceleration", 9.81,
+                         minimum=GRAVITY_RANGE[0], maximum=GRAVITY_RANGE[1])]
 
     @classmethod
     def presets(cls) -> dict[str, dict[str, float]]:

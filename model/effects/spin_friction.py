@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from gyrowheel.model.context import WheelContext
 from gyrowheel.model.effects.coulomb import CoulombLaw
-from gyrowheel.model.spec import Quantity
+from gyrowheel.model.spec import COEFFICIENT_MAX, Quantity
 
 
 class SpinFriction(CoulombLaw):
@@ -24,8 +24,9 @@ class SpinFriction(CoulombLaw):
     @classmethod
     def parameters(cls) -> list[Quantity]:
         return [
-            Quantity("c_pivot", "m", "pivot friction: coefficient x contact-patch radius", 1e-3, minimum=0.0),
-            Quantity("d_pivot", "N.m.s", "viscous pivot friction", 0.0, minimum=0.0),
+            Quantity("c_pivot", "m", "pivot friction: coefficient x contact-patch radius", 1e-3, minimum=0.0,
+                     maximum=COEFFICIENT_MAX),
+            Quantity("d_pivot", "N.m.s", "viscous pivot friction", 0.0, minimum=0.0, maximum=COEFFICIENT_MAX),
             Quantity("pivot_omega_eps", "rad/s", "law smoothed: pivot rate below which the Coulomb part fades (tanh)",
                      0.01, minimum=1e-9),
         ]

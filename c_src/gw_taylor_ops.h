@@ -57,7 +57,12 @@
 #define GW_TL_STATIC static GW_MAYBE_UNUSED
 #endif
 
-#if defined(__GNUC__) && GW_TL_W % 4 == 0
+/* GW_TL_VW_MAX: the widest slice, 4 unless the including file says 8 (gw_ensemble.c with
+ * GW_ENSEMBLE_AVX512: a multiple of 8 lanes on a CPU with AVX-512F, whose x86-64-v4 clone of the
+ * kernel then runs each slice as one 8-double register) */
+#if defined(__GNUC__) && defined(GW_TL_VW_MAX) && GW_TL_VW_MAX >= 8 && GW_TL_W % 8 == 0
+#define GW_TL_VW 8
+#elif defined(__GNUC__) && GW_TL_W % 4 == 0
 #define GW_TL_VW 4
 #elif defined(__GNUC__) && GW_TL_W % 2 == 0
 #define GW_TL_VW 2

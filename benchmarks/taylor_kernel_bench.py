@@ -3,7 +3,8 @@
 Builds a scene's FMU with the Taylor kernel, compiles its gw_taylor_model.h into small C
 drivers the way the runtime does (W = 1: the FMU's c_src/gw_taylor.c with its flags, -std=c99
 -O2 -fno-math-errno; W > 1 as in the ensemble library: -O3 -ffp-contract=fast, the kernel
-target clones for x86-64-v4 and x86-64-v3 beside the portable default, as c_src/gw_ensemble.c) and times jet at the scene's initial state: thread CPU time of a batch of
+target clones for x86-64-v4 and x86-64-v3 beside the portable default, as c_src/gw_ensemble.c,
+with 8-double slices where the CPU has AVX-512F and W is a multiple of 8) and times jet at the scene's initial state: thread CPU time of a batch of
 calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8, 16 at orders 6, 10, 13,
 15 (rel_tol 1e-4, 1e-7, 1e-10, 1e-12) and the ratio of a W-lane call to a one-lane call (the
 cost of W trajectories against one: 1 would be perfect vectorisation, W none at all).
@@ -37,6 +38,7 @@ from ref_tree import RefTree  # noqa: E402
 
 from gyrowheel.fmu_build import build_fmu, load_scene  # noqa: E402
 from gyrowheel.fmu_build.codegen import taylor_ode  # noqa: E402
+from gyrowheel.taylor.lanes import slice_width  # noqa: E402
 from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, compiler  # noqa: E402
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR  # noqa: E402
 from gyrowheel.taylor.ensemble import FLAGS as ENSEMBLE_FLAGS  # noqa: E402
@@ -56,6 +58,9 @@ DRIVER = r"""#define _POSIX_C_SOURCE 199309L
 #define GW_TL(name) gw_tlb_##name
 #if defined(__x86_64__) && !defined(__clang__)
 #define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#if {slice} == 8 /* AVX-512F and a multiple of 8 lanes: 8-double slices (gyrowheel.taylor.lanes.slice_width) */
+#define GW_TL_VW_MAX 8
+#endif
 #endif
 #include "gw_taylor_model.h"
 #endif
@@ -108,7 +113,7 @@ class Kernel:
     def __init__(self, src: Path, lanes: int, work: Path, name: str, runtime: Path = RUNTIME_DIR):
         self.lanes = lanes
         c = work / f"{name}_w{lanes}.c"
-        c.write_text(DRIVER.format(lanes=lanes))
+        c.write_text(DRIVER.format(lanes=lanes, slice=slice_width(lanes)))
         lib = work / f"{name}_w{lanes}.so"
         flags = [*STANDARD, *OPTIMISE] if lanes == 1 else ["-std=c99", *ENSEMBLE_FLAGS]
         subprocess.run([compiler(), *flags, "-shared", "-fPIC", f"-I{src}", f"-I{runtime}",

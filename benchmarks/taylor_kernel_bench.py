@@ -3,8 +3,9 @@
 Builds a scene's FMU with the Taylor kernel, compiles its gw_taylor_model.h into small C
 drivers the way the runtime does (W = 1: the FMU's c_src/gw_taylor.c with its flags, -std=c99
 -O2 -fno-math-errno; W > 1 as in the ensemble library: -O3 -ffp-contract=fast, the kernel
-target clones for x86-64-v4 and x86-64-v3 beside the portable default, as c_src/gw_ensemble.c) and times jet at the scene's initial state: thread CPU time of a batch of
-calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8, 16 at orders 6, 10, 13,
+target clones for x86-64-v4 and x86-64-v3 beside the portable default, as c_src/gw_ensemble.c,
+with 8-double slices where the CPU has AVX-512F and W is a multiple of 8) and times jet at the
+scene's initial state: thread CPU time of a batch of calls, best over interleaved rounds.  Prints us per call for W = 1, 4, 8, 16 at orders 6, 10, 13,
 15 (rel_tol 1e-4, 1e-7, 1e-10, 1e-12) and the ratio of a W-lane call to a one-lane call (the
 cost of W trajectories against one: 1 would be perfect vectorisation, W none at all).
 
@@ -15,8 +16,11 @@ gw_taylor.c and runtime headers, is timed in the same rounds, and its states' se
 compared with this tree's (they differ by rounding only: the summation order).  Timings on a loaded machine
 are noisy: compare ratios from one run; re-measure absolute times on a quiet machine.
 
+With --narrow this tree's kernel is also timed in slices of at most 4 lanes (as on a CPU
+without AVX-512F), in the same rounds.
+
     python benchmarks/taylor_kernel_bench.py [--scene examples/scenes/paper_earth.toml]
-        [--baseline main] [--lanes 1 4 8 16] [--orders 6 10 13 15] [--rounds 15]
+        [--baseline main] [--narrow] [--lanes 1 4 8 16] [--orders 6 10 13 15] [--rounds 15]
 """
 from __future__ import annotations
 
@@ -37,6 +41,9 @@ from ref_tree import RefTree  # noqa: E402
 
 from gyrowheel.fmu_build import build_fmu, load_scene  # noqa: E402
 from gyrowheel.fmu_build.codegen import taylor_ode  # noqa: E402
+from gyrowheel.taylor.lanes import slice_width  # noqa: E402
+
+NARROW = "4-double slices"  # --narrow: this tree's kernel in slices of at most 4 lanes
 from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, compiler  # noqa: E402
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR  # noqa: E402
 from gyrowheel.taylor.ensemble import FLAGS as ENSEMBLE_FLAGS  # noqa: E402
@@ -56,6 +63,9 @@ DRIVER = r"""#define _POSIX_C_SOURCE 199309L
 #define GW_TL(name) gw_tlb_##name
 #if defined(__x86_64__) && !defined(__clang__)
 #define GW_TL_STATIC static __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#if {slice} == 8 /* AVX-512F and a multiple of 8 lanes: 8-double slices (gyrowheel.taylor.lanes.slice_width) */
+#define GW_TL_VW_MAX 8
+#endif
 #endif
 #include "gw_taylor_model.h"
 #endif
@@ -105,10 +115,12 @@ def baseline_source(ref: RefTree, ode, model: str, out: Path) -> None:
 class Kernel:
     """One compiled instance: a kernel directory at a lane count."""
 
-    def __init__(self, src: Path, lanes: int, work: Path, name: str, runtime: Path = RUNTIME_DIR):
+    def __init__(self, src: Path, lanes: int, work: Path, name: str, runtime: Path = RUNTIME_DIR,
+                 slice_max: int | None = None):
         self.lanes = lanes
         c = work / f"{name}_w{lanes}.c"
-        c.write_text(DRIVER.format(lanes=lanes))
+        width = slice_width(lanes) if slice_max is None else min(slice_max, slice_width(lanes))
+        c.write_text(DRIVER.format(lanes=lanes, slice=width))
         lib = work / f"{name}_w{lanes}.so"
         flags = [*STANDARD, *OPTIMISE] if lanes == 1 else ["-std=c99", *ENSEMBLE_FLAGS]
         subprocess.run([compiler(), *flags, "-shared", "-fPIC", f"-I{src}", f"-I{runtime}",
@@ -146,6 +158,8 @@ def main() -> int:
     parser.add_argument("--lanes", type=int, nargs="*", default=[1, 4, 8, 16])
     parser.add_argument("--orders", type=int, nargs="*", default=[6, 10, 13, 15])
     parser.add_argument("--rounds", type=int, default=15)
+    parser.add_argument("--narrow", action="store_true",
+                        help="also time this tree with 4-double slices where the CPU would take 8")
     parser.add_argument("--seconds", type=float, default=0.004, help="per timed batch")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="gw-tkernel-") as tmp:
@@ -158,14 +172,16 @@ def main() -> int:
         x0 = np.array(fns["init"](s0, p)).ravel()
         u = np.array([q.start for q in built.spec.inputs], dtype=float)
         nx = x0.size
-        variants = {"this tree": (built.sources, RUNTIME_DIR)}
+        variants = {"this tree": (built.sources, RUNTIME_DIR, None)}
+        if args.narrow:
+            variants[NARROW] = (built.sources, RUNTIME_DIR, 4)
         if args.baseline:
             ref = RefTree(args.baseline, work)
             base = work / "base"
             baseline_source(ref, taylor_ode(fns), scene.name, base)
-            variants[args.baseline] = (base, ref.file("c_src"))
-        kernels = {(v, W): Kernel(src, W, work, f"k{i}", runtime) for i, (v, (src, runtime)) in enumerate(variants.items())
-                   for W in args.lanes}
+            variants[args.baseline] = (base, ref.file("c_src"), None)
+        kernels = {(v, W): Kernel(src, W, work, f"k{i}", runtime, width)
+                   for i, (v, (src, runtime, width)) in enumerate(variants.items()) for W in args.lanes}
         print(f"{args.scene}: {nx} states; work series: "
               + ", ".join(f"{v} {kernels[(v, args.lanes[0])].nvar}" for v in variants))
         best = {}
@@ -173,7 +189,7 @@ def main() -> int:
             for k in kernels.values():
                 k.setup(x0, u, p, order)
             if args.baseline:
-                a, b = (kernels[(v, 1)].states(nx) for v in variants)
+                a, b = (kernels[(v, 1)].states(nx) for v in ("this tree", args.baseline))
                 scale = np.maximum(np.abs(b).max(axis=1, keepdims=True), np.finfo(float).tiny)
                 dev = np.max(np.abs(a - b) / scale)  # (a state whose series is all 0: absolute)
                 print(f"order {order}: states' series of the two kernels differ by {dev:.1e} "
@@ -194,13 +210,13 @@ def main() -> int:
                     cells.append(f"{t * 1e6:.3f}" + ("" if W == args.lanes[0] else
                                                      f" ({t / one:.2f}x; {t * 1e6 / W:.3f}/traj)"))
                 print(f"| {order} | " + " | ".join(cells) + " |")
-        if args.baseline:
-            print(f"\n### speed-up of this tree over {args.baseline} (time ratio, > 1: faster)\n")
+        for other in [v for v in variants if v != "this tree"]:
+            print(f"\n### speed-up of this tree over {other} (time ratio, > 1: faster)\n")
             print("| order | " + " | ".join(f"W = {W}" for W in args.lanes) + " |")
             print("|---|" + "---|" * len(args.lanes))
             for order in args.orders:
                 print(f"| {order} | " + " | ".join(
-                    f"{best[((args.baseline, W), order)] / best[(('this tree', W), order)]:.2f}"
+                    f"{best[((other, W), order)] / best[(('this tree', W), order)]:.2f}"
                     for W in args.lanes) + " |")
     return 0
 

@@ -3,7 +3,7 @@
  * together, gyrowheel.taylor.lanes.cpu_lanes): a small shared library of its own, compiled once
  * and asked before an ensemble library of that width is built.
  *
- *     int gw_cpu_lanes(void)     4 with AVX2 (AVX-512F included), else GW_CPU_LANES_PORTABLE
+ *     int gw_cpu_lanes(void)     8 with AVX-512F, 4 with AVX2, else GW_CPU_LANES_PORTABLE
  *     int gw_cpu_lanes_isa(void) 2: AVX-512F, 1: AVX2, 0: neither or not asked
  *
  * The features are read with __builtin_cpu_supports (GCC >= 4.8, clang), i.e. from what the
@@ -12,11 +12,12 @@
  * architecture) the answer is GW_CPU_LANES_PORTABLE, a compile-time default.
  *
  * The widths (docs/performance.md, "The ensemble's lane count"): a lane slice of the Taylor
- * kernel is one 4-double vector (gw_taylor_ops.h), one AVX2 register: 4 lanes with AVX2, and
- * 4 with AVX-512 too, where 8 lanes are two such slices and measured 1.25-1.37x slower per
- * trajectory at N = 8, 1.05-1.10x at N = 16 (benchmarks/ensemble_scaling.py); without either (the
- * portable build, SSE2 pairs on x86-64, GW_NO_CLONES) 2 lanes measured fastest per trajectory,
- * about half the time of 1 or 4 lanes at N = 8, 16 and 64.
+ * kernel is one vector register (gw_taylor_ops.h): 4 doubles with AVX2, 8 with AVX-512F (an
+ * ensemble of 8 lanes there is built with 8-double slices, gyrowheel.taylor.lanes.slice_width;
+ * per trajectory 0.63-0.78x the time of 4 lanes at N = 16 and 64, about the same at N = 8,
+ * benchmarks/ensemble_scaling.py); without either (the portable build, SSE2 pairs on x86-64,
+ * GW_NO_CLONES) 2 lanes measured fastest per trajectory, about half the time of 1 or 4 lanes at
+ * N = 8, 16 and 64.
  *
  * gyrowheel.taylor.lanes compiles it from the installed runtime with -DGW_CPU_LANES_LIB; it is
  * no part of an FMU or an export (fmu_build/builder.py, HOST_ONLY), and compiled without that
@@ -58,8 +59,9 @@ GW_CPU_EXPORT int gw_cpu_lanes_isa(void) {
 GW_CPU_EXPORT int gw_cpu_lanes(void);
 GW_CPU_EXPORT int gw_cpu_lanes(void) {
     switch (gw_cpu_lanes_isa()) {
-    case 2: /* AVX-512F: still one 4-double slice per lane group (see above) */
-    case 1:
+    case 2: /* AVX-512F: one 8-double slice */
+        return 8;
+    case 1: /* AVX2: one 4-double slice */
         return 4;
     default:
         return GW_CPU_LANES_PORTABLE;

@@ -46,6 +46,15 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
  * registers), the same values */
 #define GW_TL_STATIC                                                                              \
     static __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+/* GW_ENSEMBLE_AVX512 (gyrowheel.taylor.lanes.slice_width: the CPU has AVX-512F, the lanes are a
+ * multiple of 8): the kernel's slices are 8 doubles, one AVX-512 register in the x86-64-v4
+ * clone that CPU runs (per trajectory 0.63-0.78x the time of 4-double slices at 8 lanes, N = 16
+ * and 64, paper; benchmarks/ensemble_scaling.py).  Each lane's operations are those of a
+ * 4-double slice, so the bits are the same.  Not without the clones: the portable code would
+ * run the 8-double vectors as 2-double pieces through memory. */
+#if defined(GW_ENSEMBLE_AVX512) && GW_ENSEMBLE_AVX512
+#define GW_TL_VW_MAX 8
+#endif
 #else
 #define GW_TL_STATIC static GW_MAYBE_UNUSED
 #endif
@@ -55,6 +64,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #undef GW_TL
 #undef GW_TL_W
 #undef GW_TL_STATIC
+#undef GW_TL_VW_MAX
 
 /* one lane: its instance, the trajectory it holds (-1: none), the bookkeeping of its run */
 typedef struct {
@@ -79,6 +89,8 @@ enum { GW_ENS_LANES = GW_ENSEMBLE_LANES };
  * w[i GW_ENS_SI + k GW_ENS_SO + l].  Read in place: gw_tlb_jet's copy of the states' series into
  * a state-major block was 4% of a run (N = 4, 4 lanes). */
 #define GW_ENS_SI ((size_t)GW_ENS_LANES)
+/* the series blocks' alignment (bytes): a slice of 8 lanes, else of 4 (gw_taylor_ops.h) */
+#define GW_ENS_ALIGN (GW_ENS_LANES % 8 == 0 ? 64u : 32u)
 #define GW_ENS_SO ((size_t)gw_tlb_row * GW_ENS_LANES)
 
 /* With this many active lanes or fewer the batch runs each lane's series with the one-lane
@@ -102,7 +114,7 @@ typedef struct {
     double *w, *c, *x, *u, *p, t[GW_ENS_LANES]; /* batch kernel memory, lanes innermost */
     double *wb[2]; /* the series blocks: w is one, the other keeps the previous batch's series,
                       which a pending attempt's retries and event location read */
-    double *wa[2]; /* wb[0], wb[1] aligned to 32 bytes (the kernel's vectors of 4 lanes) */
+    double *wa[2]; /* wb[0], wb[1] aligned to GW_ENS_ALIGN bytes (the kernel's slices) */
     /* the lane-innermost step passes (gw_ens_norms, _defects, _increments), nx x lanes each:
      * (atol / rel_tol) nominal_i and atol nominal_i of each lane, the pending attempt's P'(h),
      * the increment's Horner sums (then dx) and their derivatives (then P'(h)) */

@@ -64,7 +64,8 @@ GW_API gw_ensemble_ctx *gw_ensemble_new(const gw_model *m, const gw_callbacks *c
     gw_ens_arrays(&C->E, a, n);
     for (k = 0; k < GW_ENS_ARRAYS; k++) ok &= (*a[k] = (double *)gw_ens_alloc(cb, n[k])) != NULL;
     for (k = 0; ok && k < 2; k++) /* room: n_var >= the kernel's row + 1 series (gw_tlb_jet) */
-        C->E.wa[k] = (double *)(void *)(((uintptr_t)C->E.wb[k] + 31u) & ~(uintptr_t)31u);
+        C->E.wa[k] = (double *)(void *)(((uintptr_t)C->E.wb[k] + GW_ENS_ALIGN - 1u) &
+                                        ~(uintptr_t)(GW_ENS_ALIGN - 1u));
     if (ok) return C;
     gw_ensemble_free(C);
     return NULL;

@@ -42,10 +42,12 @@
  *   GW_TLST(p, s)          p[l] = s
  * and the boundary phase writes slice statements on GW_TLX(p) (the slice at p, an lvalue;
  * read-only: GW_TLR).  Under GCC and clang a slice is 4 lanes (W a multiple of 4: one AVX2
- * register, a term one vector multiply-add) or 2, with their vector extension; otherwise (and
- * for W = 1) one lane, a double.  Wider vectors than the hardware's were measured 10x slower
- * (GCC lowers an 8-double vector on AVX2 through memory).  The generated kernel undefines
- * these macros at its end.
+ * register, a term one vector multiply-add) or 2, with their vector extension, and 8 where the
+ * includer defines GW_TL_VW_MAX 8 and W is a multiple of 8 (gw_ensemble.c on an AVX-512F CPU:
+ * one zmm register in its x86-64-v4 clone); otherwise (and for W = 1) one lane, a double.
+ * Wider vectors than the hardware's were measured 10x slower (GCC lowers an 8-double vector on
+ * AVX2 through memory), hence 8 only on request.  The generated kernel undefines these macros
+ * at its end.
  *
  * Before including: GW_TL_W (lanes) and GW_TL(name) (the name prefix of this instance).
  * Checked against CasADi's own derivatives and mpmath: tests/test_taylor_kernel.py.
@@ -57,7 +59,12 @@
 #define GW_TL_STATIC static GW_MAYBE_UNUSED
 #endif
 
-#if defined(__GNUC__) && GW_TL_W % 4 == 0
+/* GW_TL_VW_MAX: the widest slice, 4 unless the including file says 8 (gw_ensemble.c with
+ * GW_ENSEMBLE_AVX512: a multiple of 8 lanes on a CPU with AVX-512F, whose x86-64-v4 clone of the
+ * kernel then runs each slice as one 8-double register) */
+#if defined(__GNUC__) && defined(GW_TL_VW_MAX) && GW_TL_VW_MAX >= 8 && GW_TL_W % 8 == 0
+#define GW_TL_VW 8
+#elif defined(__GNUC__) && GW_TL_W % 4 == 0
 #define GW_TL_VW 4
 #elif defined(__GNUC__) && GW_TL_W % 2 == 0
 #define GW_TL_VW 2

@@ -3,7 +3,7 @@
 The plain path (gyrowheel.studies.batch.run_point) drives one FMU instance point after point;
 when the unit is a gyrowheel FMU that carries the Taylor kernel and its solver for the sweep is
 taylor, the same points can run several at a time (the CPU's lane count,
-gyrowheel.taylor.lanes.cpu_lanes: 4 with AVX2 or AVX-512F, else 2) with the Taylor coefficients of
+gyrowheel.taylor.lanes.cpu_lanes: 8 with AVX-512F, 4 with AVX2, else 2) with the Taylor coefficients of
 all lanes computed together (c_src/gw_ensemble.c). Each lane is a full gw_instance advanced
 from communication point to communication point as fmi2DoStep advances it (same grid
 t_i = t0 + i h, the last landing on the stop time; the budget, event count and step guard of

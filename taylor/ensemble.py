@@ -45,7 +45,7 @@ __all__ = ["Ensemble", "EnsembleResult", "EnsembleError", "STATUS_OK", "STATUS_T
 
 STATUS_OK, STATUS_TERMINATED, STATUS_ERROR = 0, 2, 3  # gw_status values
 # trajectories advanced together (GW_ENSEMBLE_LANES) by default: the CPU's count, chosen at run
-# time (gyrowheel.taylor.lanes.cpu_lanes: 4 with AVX2 or AVX-512F, else 2); LANES = None
+# time (gyrowheel.taylor.lanes.cpu_lanes: 8 with AVX-512F, 4 with AVX2, else 2); LANES = None
 # means that choice, an integer passed as `lanes` overrides it.  docs/performance.md, "The
 # ensemble's lane count"
 LANES = None
@@ -331,8 +331,8 @@ class Ensemble:
 
     fmu: the .fmu, built by gyrowheel with the Taylor kernel (gyrowheel.build(..., taylor=True)):
     a path (str or os.PathLike) or the BuildResult of gyrowheel.build; lanes: trajectories
-    advanced together (default None: this CPU's count, gyrowheel.taylor.lanes.cpu_lanes, 4 with
-    AVX2 or AVX-512F, else PORTABLE_LANES; any integer >= 1 overrides it, each width its own
+    advanced together (default None: this CPU's count, gyrowheel.taylor.lanes.cpu_lanes, 8 with
+    AVX-512F, 4 with AVX2, else PORTABLE_LANES; any integer >= 1 overrides it, each width its own
     cached library; `self.lanes` is the count built; a trajectory's result is the same bit for
     bit in any job and on 2 to 16 lanes; on 1 lane equal to rounding); cache: where the library
     (and the lane-count probe) is kept (default ~/.cache/gyrowheel/ensemble);
@@ -346,11 +346,13 @@ class Ensemble:
 
     def __init__(self, fmu: str | Path, lanes: int | None = LANES, cache: str | Path | None = None,
                  defines: dict | None = None):
+        from gyrowheel.taylor.lanes import cpu_lanes, slice_defines
         if lanes is None:
-            from gyrowheel.taylor.lanes import cpu_lanes
             lanes = cpu_lanes(cache)
         _check_lanes(lanes)
         lanes, defines, fmu = int(lanes), _checked_defines(defines), _fmu_path(fmu)
+        # the CPU's slice width (8 lanes per vector with AVX-512F), unless the caller's defines say
+        defines = {**{k: str(v) for k, v in slice_defines(lanes, cache).items()}, **defines}
         # the front end is the installed runtime's (its functions and layout are what this class
         # reads), compiled with the FMU's model and runtime
         front = RUNTIME_DIR / LIBRARY_SOURCE

@@ -358,8 +358,9 @@ def test_increments_pass_equals_the_one_lane_increment(paper, tmp_path, cc):
 
 
 def test_lane_counts_two_and_more_give_the_same_bits(paper, tmp_path):
-    """Ensemble(fmu, lanes=3 / 8 / 16), 4 and the CPU's default (gyrowheel.taylor.lanes: 4 with
-    AVX2 or AVX-512F): the same steps and values bit for bit (each
+    """Ensemble(fmu, lanes=3 / 8 / 16), 4 and the CPU's default (gyrowheel.taylor.lanes: 8 with
+    AVX-512F, 4 with AVX2), and 8 lanes in slices of 8 and of 4 doubles (GW_ENSEMBLE_AVX512 1
+    and 0, whatever the CPU): the same steps and values bit for bit (each
     lane's kernel slice and passes do the same operations, and a job's tail stays in the lane
     kernel: with the one-lane tail kernel, GW_ENSEMBLE_SINGLE_MAX 1 of 3 and 6 of 16, the widths
     are 1e-13 apart in some trajectories).  lanes = 1 runs the scalar kernel, contracted
@@ -373,3 +374,6 @@ def test_lane_counts_two_and_more_give_the_same_bits(paper, tmp_path):
         assert 0 < ref.terminated.sum() < 13
         for lanes in (3, 8, 16, None):
             _same(Ensemble(paper.fmu, lanes=lanes, cache=tmp_path).run(6.0, **kw), ref)
+        for wide in (0, 1):
+            ens = Ensemble(paper.fmu, lanes=8, cache=tmp_path, defines={"GW_ENSEMBLE_AVX512": wide})
+            _same(ens.run(6.0, **kw), ref)

@@ -16,7 +16,7 @@ import pytest
 from gyrowheel.errors import ArgumentError
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR
 from gyrowheel.taylor.ensemble import Ensemble
-from gyrowheel.taylor.lanes import PORTABLE_LANES, cpu_features, cpu_lanes
+from gyrowheel.taylor.lanes import PORTABLE_LANES, cpu_features, cpu_lanes, slice_defines, slice_width
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-shared", "-fPIC"]
 PROBE = RUNTIME_DIR / "gw_cpu_lanes.c"
@@ -33,11 +33,16 @@ def _cpuinfo_flags() -> set[str]:
 @pytest.mark.skipif(not sys.platform.startswith("linux") or not Path("/proc/cpuinfo").is_file(),
                     reason="the kernel's account of the CPU is read from /proc/cpuinfo (Linux)")
 def test_cpu_lanes_follow_the_cpu_features(tmp_path):
-    """4 lanes with AVX2 or AVX-512F, else the portable count, against the flags the
-    kernel found (a source the probe does not read: it asks the compiler's runtime)."""
+    """8 lanes with AVX-512F, 4 with AVX2, else the portable count, against the flags the
+    kernel found (a source the probe does not read: it asks the compiler's runtime); the
+    kernel's slices are 8 lanes wide only with AVX-512F and a multiple of 8 lanes."""
     flags = _cpuinfo_flags()
-    want = 4 if "avx512f" in flags or "avx2" in flags else PORTABLE_LANES
+    want = 8 if "avx512f" in flags else 4 if "avx2" in flags else PORTABLE_LANES
     assert cpu_lanes(tmp_path) == want
+    wide = 8 if "avx512f" in flags else 4
+    assert [slice_width(w, tmp_path) for w in (1, 2, 3, 4, 6, 8, 12, 16)] == [1, 2, 1, 4, 2, wide, 4, wide]
+    assert slice_defines(16, tmp_path) == ({"GW_ENSEMBLE_AVX512": 1} if wide == 8 else {})
+    assert slice_defines(4, tmp_path) == {}
     assert cpu_features(tmp_path) == ("avx512f" if "avx512f" in flags else "avx2" if "avx2" in flags
                                       else "portable")
 
@@ -66,6 +71,9 @@ def test_bad_portable_count_is_refused_naming_it(tmp_path):
     for bad in (0, -2, 2.5, True, "4"):
         with pytest.raises(ArgumentError, match="portable"):
             cpu_lanes(tmp_path, portable=bad)
+    for bad in (0, -8, 8.0, True, "8"):
+        with pytest.raises(ArgumentError, match="lanes"):
+            slice_width(bad, tmp_path)
 
 
 def test_ensemble_and_sweep_engine_take_the_cpu_count(example_build, tmp_path, monkeypatch):

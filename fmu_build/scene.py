@@ -17,6 +17,9 @@ Scene objects they are read into (docs/scenes.md).
                   arrays = true or false: an FMI 3 FMU's array outputs x_state and
                   contact_force (optional; default true; `gyrowheel build --no-arrays` leaves
                   them out; an FMI 2 FMU has none)
+                  taylor = true or false: the Taylor kernel in the FMU (optional; default:
+                  where the solver is taylor, or auto and the kernel supports the model;
+                  `gyrowheel build --taylor / --no-taylor` overrides it)
 
 One set of rules serves both ways in: parse_scene reads a file's tables through it, and
 check_scene puts a Scene made or changed in Python (dataclasses.replace, attribute assignment)
@@ -43,7 +46,7 @@ from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, MASS_REFUSAL,
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 from gyrowheel.model.spec import MASS_RANGE, SPEED_OF_LIGHT
 
-SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
+SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6, "auto": 7}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
 TOUCHDOWN = "touchdown"  # [wheel] beta_min preset: the lean at which the body must touch the ground
 TABLES = ("model", "wheel", "effects", "initial", "experiment", "outputs", "build")
@@ -76,13 +79,17 @@ class Experiment:
     output_interval   s, > 0: DefaultExperiment stepSize, the communication step of
                       gyrowheel simulate
     solver            the FMU's Enumeration parameter `solver`: one of SOLVERS (euler, rk4,
-                      dopri5, rosenbrock, dop853, taylor; taylor also puts the Taylor kernel
-                      into the FMU, docs/taylor.md)
+                      dopri5, rosenbrock, dop853, taylor, auto; taylor also puts the Taylor
+                      kernel into the FMU, docs/taylor.md); auto (the default) integrates with
+                      taylor where the FMU has the kernel, else dop853, docs/accuracy.md
+                      "Solver auto"
     rel_tol           1, relative tolerance of the adaptive solvers in [2.22e-15, 1]; also
                       DefaultExperiment tolerance
     abs_tol           1, absolute tolerance (scaled by each state's nominal value) in [1e-30, 1],
                       or 0 (the default): rel_tol / 100, following the tolerance in force
-    max_step          s, > 0: bound of the internal step (the fixed step of euler and rk4)
+    max_step          s, > 0: bound of the internal step (the fixed step of euler and rk4);
+                      default (None): stop_time - start_time under solver auto (the step
+                      follows the tolerance alone), 0.01 s under the others
     max_internal_steps  whole number in [1, 2**31 - 1]: budget of internal steps of one
                       fmi2DoStep (docs/fmi.md, "Bounded calls")
     """
@@ -90,11 +97,19 @@ class Experiment:
     start_time: float = 0.0
     stop_time: float = 20.0
     output_interval: float = 0.01
-    solver: str = "dopri5"
+    solver: str = "auto"
     rel_tol: float = 1e-8
     abs_tol: float = 0.0  # 0: follow rel_tol (rel_tol / 100, so a tolerance-only run has no floor)
-    max_step: float = 0.01
+    max_step: float | None = None  # None: the run's length under auto, else FIXED_SOLVER_MAX_STEP
     max_internal_steps: int = 1_000_000  # budget of internal steps of one fmi2DoStep (docs/fmi.md)
+
+    def __post_init__(self):
+        if self.max_step is None:
+            self.max_step = (self.stop_time - self.start_time if self.solver == "auto"
+                             else FIXED_SOLVER_MAX_STEP)
+
+
+FIXED_SOLVER_MAX_STEP = 0.01  # s: the default max_step of a scene that names its solver
 
 
 @dataclass
@@ -151,6 +166,7 @@ class Scene:
     experiment: Experiment = field(default_factory=Experiment)
     outputs: list[str] | None = None
     platforms: str | list[str] | None = None
+    taylor: bool | None = None  # [build] taylor; None: where the solver needs it (builder.kernel_choice)
     fmi: int = 2
     arrays: bool = True
     source: str = ""  # the TOML text, shipped in the FMU's documentation
@@ -377,24 +393,25 @@ MAX_INTERNAL_STEPS_RANGE = (1, 2**31 - 1)  # an fmi2Integer (GW_MAX_INTERNAL_STE
 
 
 def _experiment(r: _Reader, data: dict) -> Experiment:
-    exp = Experiment()
     r.unknown("experiment", data, set(Experiment.__dataclass_fields__))
+    values: dict = {}
     for key, value in data.items():
         if key == "solver":
             if not isinstance(value, str) or value not in SOLVERS:
                 raise r.fail("experiment", key, f"unknown solver {value!r}; valid: {', '.join(SOLVERS)}")
-            exp.solver = value
+            values[key] = value
         elif key == "start_time":
-            exp.start_time = r.number("experiment", key, value)
+            values[key] = r.number("experiment", key, value)
         elif key == "max_internal_steps":
             low, high = MAX_INTERNAL_STEPS_RANGE
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= value <= high:
                 raise r.fail("experiment", key, f"must be a whole number from {low} to {high}, got {value!r}")
-            exp.max_internal_steps = int(value)
+            values[key] = int(value)
         elif key == "abs_tol":  # 0 allowed (follow rel_tol); the range below
-            exp.abs_tol = r.number("experiment", key, value)
+            values[key] = r.number("experiment", key, value)
         else:
-            setattr(exp, key, r.positive("experiment", key, value))
+            values[key] = r.positive("experiment", key, value)
+    exp = Experiment(**values)  # the max_step default follows the solver and the run (Experiment)
     if exp.stop_time <= exp.start_time:
         raise r.fail("experiment", "stop_time", "must be greater than start_time")
     for key, (low, high) in TOLERANCE_RANGES.items():  # the FMU refuses others (docs/fmi.md)
@@ -441,7 +458,7 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
             raise r.fail("outputs", "keep", "must be a list of output names")
         scene.outputs = list(keep)
     build = r.table(data, "build")
-    r.unknown("build", build, {"platforms", "fmi", "arrays"})
+    r.unknown("build", build, {"platforms", "fmi", "arrays", "taylor"})
     if "platforms" in build:
         scene.platforms = _platforms(r, build["platforms"])
     if "fmi" in build:
@@ -450,6 +467,10 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
         if not isinstance(build["arrays"], bool):
             raise r.fail("build", "arrays", f"must be true or false, got {build['arrays']!r}")
         scene.arrays = build["arrays"]
+    if "taylor" in build:
+        if not isinstance(build["taylor"], bool):
+            raise r.fail("build", "taylor", f"must be true or false, got {build['taylor']!r}")
+        scene.taylor = build["taylor"]
     return scene
 
 
@@ -527,7 +548,7 @@ def _tables(r: _Reader, scene: Scene) -> dict:
             "experiment": {f.name: getattr(scene.experiment, f.name) for f in dataclasses.fields(Experiment)},
             "outputs": {} if scene.outputs is None else {"keep": scene.outputs},
             "build": {**({} if scene.platforms is None else {"platforms": scene.platforms}), "fmi": scene.fmi,
-                      "arrays": scene.arrays}}
+                      "arrays": scene.arrays, **({} if scene.taylor is None else {"taylor": scene.taylor})}}
 
 
 def _content(scene: Scene) -> tuple:

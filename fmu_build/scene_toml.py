@@ -47,7 +47,8 @@ def scene_toml(scene: Scene) -> str:
         table("outputs", {"keep": scene.outputs})
     build = {**({} if scene.platforms is None else {"platforms": scene.platforms}),
              **({} if scene.fmi == 2 else {"fmi": scene.fmi}),
-             **({} if scene.arrays else {"arrays": False})}
+             **({} if scene.arrays else {"arrays": False}),
+             **({} if scene.taylor is None else {"taylor": scene.taylor})}
     if build:
         table("build", build)
     return "\n".join(lines) + "\n"

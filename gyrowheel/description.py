@@ -212,12 +212,27 @@ class FmuInfo:
     sources: bool
     taylor: bool
 
+    @property
+    def auto_solver(self) -> str | None:
+        """The solver item auto (7) integrates with: "taylor" where the FMU has the Taylor kernel
+        (its Solver enumeration lists taylor), "dop853" otherwise, at every rel_tol (the rule of
+        c_src gw_solver_auto, docs/accuracy.md "Solver auto"); None for an FMU without auto."""
+        if "auto" not in self.solvers:
+            return None
+        return "taylor" if "taylor" in self.solvers else "dop853"
+
     def variable(self, name: str) -> VariableInfo:
         """The variable called `name`; UnknownNameError (a KeyError) lists the names."""
         for v in self.variables:
             if v.name == name:
                 return v
         raise UnknownNameError(f"no variable {name!r}; variables: {', '.join(v.name for v in self.variables)}")
+
+    def _tolerance_text(self) -> str:
+        """The default tolerance, in the words of the auto line."""
+        exp = self.default_experiment
+        tol = None if exp is None else _text(exp.tolerance)
+        return f"the default tolerance {tol}" if tol else "every tolerance"
 
     def as_dict(self) -> dict:
         """Everything as plain JSON types (path as text, tuples as lists)."""
@@ -240,6 +255,8 @@ class FmuInfo:
                   f"generated    {self.generation_date or 'unknown'}",
                   f"effects      {'not recorded' if self.effects is None else ', '.join(self.effects) or 'none'}",
                   f"solvers      {', '.join(self.solvers) or 'none declared'}",
+                  *([f"auto         {self.auto_solver} at {self._tolerance_text()} (rule: taylor at every rel_tol "
+                     f"where the FMU has the Taylor kernel, else dop853)"] if self.auto_solver else []),
                   f"platforms    {', '.join(map(str, self.platforms)) or 'none (no binaries)'}",
                   f"sources      {'yes' if self.sources else 'no'}"
                   + (", with the Taylor kernel (solver taylor, the ensemble path)" if self.taylor else "")]

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gyrowheel.errors import GyrowheelError
+from gyrowheel.fmu_build.experiment import FIXED_SOLVER_MAX_STEP, SOLVERS, Experiment  # noqa: F401 (API)
 from gyrowheel.fmu_build.platforms import parse_platforms
 from gyrowheel.fmu_build.scene_toml import scene_toml  # noqa: F401 (part of this module's API)
 from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, MASS_REFUSAL, SLIDE_NEEDS_REDUCED, SPEED_REFUSAL,
@@ -46,7 +47,6 @@ from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, MASS_REFUSAL,
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 from gyrowheel.model.spec import MASS_RANGE, SPEED_OF_LIGHT
 
-SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6, "auto": 7}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
 TOUCHDOWN = "touchdown"  # [wheel] beta_min preset: the lean at which the body must touch the ground
 TABLES = ("model", "wheel", "effects", "initial", "experiment", "outputs", "build")
@@ -69,47 +69,6 @@ class SceneError(GyrowheelError, ValueError):
     `paper.toml: [wheel] M: must be > 0, got -1.0`."""
 
 
-@dataclass
-class Experiment:
-    """A scene's [experiment]: the FMU's DefaultExperiment and the defaults of its solver
-    parameters (docs/scenes.md, docs/fmi.md); all can still be set when the FMU is used.
-
-    start_time        s, DefaultExperiment startTime (any finite number)
-    stop_time         s, DefaultExperiment stopTime, > start_time
-    output_interval   s, > 0: DefaultExperiment stepSize, the communication step of
-                      gyrowheel simulate
-    solver            the FMU's Enumeration parameter `solver`: one of SOLVERS (euler, rk4,
-                      dopri5, rosenbrock, dop853, taylor, auto; taylor also puts the Taylor
-                      kernel into the FMU, docs/taylor.md); auto (the default) integrates with
-                      taylor where the FMU has the kernel, else dop853, docs/accuracy.md
-                      "Solver auto"
-    rel_tol           1, relative tolerance of the adaptive solvers in [2.22e-15, 1]; also
-                      DefaultExperiment tolerance
-    abs_tol           1, absolute tolerance (scaled by each state's nominal value) in [1e-30, 1],
-                      or 0 (the default): rel_tol / 100, following the tolerance in force
-    max_step          s, > 0: bound of the internal step (the fixed step of euler and rk4);
-                      default (None): stop_time - start_time under solver auto (the step
-                      follows the tolerance alone), 0.01 s under the others
-    max_internal_steps  whole number in [1, 2**31 - 1]: budget of internal steps of one
-                      fmi2DoStep (docs/fmi.md, "Bounded calls")
-    """
-
-    start_time: float = 0.0
-    stop_time: float = 20.0
-    output_interval: float = 0.01
-    solver: str = "auto"
-    rel_tol: float = 1e-8
-    abs_tol: float = 0.0  # 0: follow rel_tol (rel_tol / 100, so a tolerance-only run has no floor)
-    max_step: float | None = None  # None: the run's length under auto, else FIXED_SOLVER_MAX_STEP
-    max_internal_steps: int = 1_000_000  # budget of internal steps of one fmi2DoStep (docs/fmi.md)
-
-    def __post_init__(self):
-        if self.max_step is None:
-            self.max_step = (self.stop_time - self.start_time if self.solver == "auto"
-                             else FIXED_SOLVER_MAX_STEP)
-
-
-FIXED_SOLVER_MAX_STEP = 0.01  # s: the default max_step of a scene that names its solver
 
 
 @dataclass
@@ -153,6 +112,10 @@ class Scene:
     source       the scene's TOML text, shipped in the FMU's documentation/index.html
                  ("Built from"); check_scene writes it anew when it no longer describes the
                  scene (a Scene changed in Python, or made there)
+    taylor       [build] taylor: True, the Taylor kernel in the FMU whatever the solver; False,
+                 none (refused with solver taylor); None (the default): the kernel for solver
+                 taylor, and for solver auto where the model's operations allow it
+                 (gyrowheel.fmu_build.codegen.kernel_choice)
     file         the scene file it was loaded from (load_scene), or None; build_fmu refuses to
                  write the FMU over it
     """

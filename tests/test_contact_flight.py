@@ -312,8 +312,8 @@ def test_flight_adds_its_variables(fmu):
 # variable table, the experiment and the name): flight adds nothing to them. Change these only with
 # a change meant for those scenes (ice_slide: the rolling and sliding modes, model/contact_modes.py,
 # and the Painleve stop, model/painleve.py).
-GROUND_GUIDS = {"paper_earth": "{8b356b44-66dc-58ad-96b3-6bd0d81eef26}",  # rolling, base wheel
-                "ice_slide": "{c939e1eb-95e4-5280-b65b-8abcda06a66b}"}  # rolling and sliding
+GROUND_GUIDS = {"paper_earth": "{e6a6d389-9705-5910-a961-f1bce00015ab}",  # rolling, base wheel
+                "ice_slide": "{1e64a1b5-153d-5816-a535-b04bd38bbe8e}"}  # rolling and sliding
 
 
 @pytest.mark.parametrize("name", sorted(GROUND_GUIDS))

@@ -181,9 +181,10 @@ def test_scene_refuses_what_sliding_cannot_honour(text, message):
 # GUIDs of rolling-only example scenes' FMUs: the GUID hashes the generated C (gw_funcs.c), the
 # variable table, the experiment and the name, so an equal GUID is the same generated model,
 # variables and value references: the sliding mode adds nothing to them. Change these only with a
-# change meant for rolling scenes (and say so in its commit).
-ROLLING_GUIDS = {"paper_earth": "{8b356b44-66dc-58ad-96b3-6bd0d81eef26}",  # base wheel
-                 "slope_hold": "{4ce365f1-4774-5583-be5a-ca6f47d264e6}"}  # contact_forces + a stiction law
+# change meant for rolling scenes (and say so in its commit). Both run the default solver auto
+# (its experiment: solver auto, max_step the run's length).
+ROLLING_GUIDS = {"paper_earth": "{e6a6d389-9705-5910-a961-f1bce00015ab}",  # base wheel
+                 "slope_hold": "{dc16735b-700b-545e-b166-f2497daab01d}"}  # contact_forces + a stiction law
 
 
 @pytest.mark.parametrize("name", sorted(ROLLING_GUIDS))

@@ -28,7 +28,8 @@ def test_defaults_are_the_paper_scenario():
     scene = parse_scene("")
     assert scene.effects == {"gravity": {}}
     assert scene.formulation == "reduced"
-    assert scene.experiment.solver == "dopri5"
+    assert scene.experiment.solver == "auto"
+    assert scene.experiment.max_step == scene.experiment.stop_time - scene.experiment.start_time
 
 
 @pytest.mark.parametrize("text,fragment", [

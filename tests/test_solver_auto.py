@@ -164,3 +164,21 @@ def test_taylor_false_with_solver_taylor_is_refused(tmp_path):
         build_fmu(scene, tmp_path / "s.fmu", taylor=False)
     with pytest.raises(Exception, match=r"\[build\] taylor: must be true or false, got 'no'"):
         parse_scene('[effects.gravity]\n[build]\ntaylor = "no"\n', "s.toml")
+
+
+def test_a_scene_naming_its_solver_generates_what_it_did(tmp_path, monkeypatch):
+    """The paper's earth scene as it was written before auto (solver = "dopri5", abs_tol 1e-10,
+    max_step 0.05 s) builds the FMU it built then: the GUID hashes the generated C, the variable
+    table and the experiment, and equals the one recorded then (no compile: binaries do not enter
+    it). Without those lines the scene runs auto, and the GUID differs."""
+    from fmpy import read_model_description
+
+    from gyrowheel.fmu_build import builder
+    monkeypatch.setattr(builder, "write_binaries", lambda *args, **kwargs: None)
+    text = (ROOT / "examples" / "scenes" / "paper_earth.toml").read_text()
+    named = text.replace("[experiment]\n", '[experiment]\nsolver = "dopri5"\nabs_tol = 1e-10\nmax_step = 0.05\n')
+    guids = [read_model_description(str(build_fmu(parse_scene(t, "paper_earth.toml"), tmp_path / f"{k}.fmu",
+                                                   build_dir=tmp_path / str(k)).fmu)).guid
+             for k, t in enumerate((named, text))]
+    assert guids[0] == "{8b356b44-66dc-58ad-96b3-6bd0d81eef26}" != guids[1]
+    assert "GW_TL_NVAR" not in (tmp_path / "0" / "fmu" / "sources" / "gw_taylor_model.h").read_text()

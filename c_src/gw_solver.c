@@ -442,7 +442,7 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
 }
 
 GW_API int gw_solver_auto(const gw_model *m) {
-    return m->taylor.jet ? GW_SOLVER_TAYLOR : GW_SOLVER_DOP853;
+    return m->taylor.jet && !m->upd.eval ? GW_SOLVER_TAYLOR : GW_SOLVER_DOP853;
 }
 
 GW_INTERNAL void gw_solver_select(gw_instance *I) {

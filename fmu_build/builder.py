@@ -191,8 +191,9 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     experiment: DefaultExperiment and the solver settings' defaults (Experiment() if None);
     keep: the outputs to expose (None: all); source: text shipped in documentation/index.html
     (the scene file, the gains); taylor: the Taylor kernel of solver taylor and the ensemble
-    path, by codegen.kernel_choice(experiment.solver, taylor): True always, False never, None
-    for solver taylor, and for solver auto where the model's operations allow it;
+    path, by codegen.kernel_choice(experiment.solver, taylor, modes): True always, False never,
+    None for solver taylor, and for solver auto where the model has no update events and its
+    operations allow it;
     platforms: the platforms whose binaries the FMU carries (parse_platforms; None: the host
     only): the host's compiled by the host's C compiler, the others by zig (write_binaries);
     fmi: the FMI version, 2 (FMI 2.0.4: modelDescription.xml lists gw_fmu.c, binaries in
@@ -228,7 +229,8 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         identifier = spec.name
         unity = UNITY_SOURCES[fmi]
         fns = generate_functions(spec, src, table)
-        kernel = generate_taylor(fns, spec.name, src, wanted=kernel_choice(experiment.solver, taylor))
+        modes = any(e.action == "update" for e in spec.events)
+        kernel = generate_taylor(fns, spec.name, src, wanted=kernel_choice(experiment.solver, taylor, modes))
         for f in runtime_sources(fmi):
             if f.name in HOST_ONLY:
                 continue
@@ -246,7 +248,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         has_kernel = not isinstance(kernel, str)
         if fmi == 3:
             xml = write_model_description3(spec.name, experiment, table, identifier, guid, spec.description,
-                                           taylor=has_kernel, reinit=any(e.action == "update" for e in spec.events))
+                                           taylor=has_kernel, reinit=modes)
             (src / BUILD_DESCRIPTION).write_text(write_build_description(identifier, unity))
         else:
             xml = write_model_description(spec.name, experiment, table, identifier, guid, [unity], spec.description,

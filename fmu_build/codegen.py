@@ -135,13 +135,15 @@ NO_KERNEL = ("built without a Taylor kernel (build it from a scene with solver =
              "or with the Taylor kernel: gyrowheel build --taylor, build_fmu(..., taylor=True))")
 
 
-def kernel_choice(solver: str, taylor: bool | None) -> bool | None:
-    """Whether a build generates the Taylor kernel, for the scene's solver and the build option
-    `taylor` (build_fmu's argument, `gyrowheel build --taylor / --no-taylor`, [build] taylor):
+def kernel_choice(solver: str, taylor: bool | None, modes: bool = False) -> bool | None:
+    """Whether a build generates the Taylor kernel, for the scene's solver, the build option
+    `taylor` (build_fmu's argument, `gyrowheel build --taylor / --no-taylor`, [build] taylor) and
+    whether the model switches modes at events (modes: it has update events, the contact modes).
     True: the kernel, an operation without a recurrence an error (solver taylor, taylor=True);
-    False: none (taylor=False; by default every solver but taylor and auto, whose generated C
-    stays as without solver taylor); None: the kernel where the model's operations allow it
-    (solver auto: it then integrates with taylor, docs/accuracy.md "Solver auto").
+    False: none (taylor=False; by default every solver but taylor, and auto in a model with
+    modes, which integrates with dop853 there; the generated C stays as without solver taylor);
+    None: the kernel where the model's operations allow it (solver auto in a model without
+    modes: it then integrates with taylor, docs/accuracy.md "Solver auto").
     Raises ArgumentError naming `taylor` for taylor=False with solver taylor."""
     if solver == "taylor":
         if taylor is False:
@@ -151,7 +153,7 @@ def kernel_choice(solver: str, taylor: bool | None) -> bool | None:
         return True
     if taylor is not None:
         return bool(taylor)
-    return None if solver == "auto" else False
+    return None if solver == "auto" and not modes else False
 
 
 def generate_taylor(fns: dict[str, ca.Function], model: str, out_dir: Path,

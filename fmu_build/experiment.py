@@ -21,7 +21,7 @@ class Experiment:
     solver            the FMU's Enumeration parameter `solver`: one of SOLVERS (euler, rk4,
                       dopri5, rosenbrock, dop853, taylor, auto; taylor also puts the Taylor
                       kernel into the FMU, docs/taylor.md); auto (the default) integrates with
-                      taylor where the FMU has the kernel, else dop853, docs/accuracy.md
+                      taylor where the FMU has the kernel and no contact modes, else dop853, docs/accuracy.md
                       "Solver auto"
     rel_tol           1, relative tolerance of the adaptive solvers in [2.22e-15, 1]; also
                       DefaultExperiment tolerance

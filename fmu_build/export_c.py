@@ -403,7 +403,8 @@ def _write(scene: Scene, model: str, out_dir: Path, scene_file: str, check: bool
     table = build_table(spec, exp, scene.outputs)
     src = out_dir / "src"
     fns = generate_functions(spec, src)
-    kernel = generate_taylor(fns, model, src, wanted=kernel_choice(exp.solver, scene.taylor))  # as the FMU's
+    modes = any(e.action == "update" for e in spec.events)
+    kernel = generate_taylor(fns, model, src, wanted=kernel_choice(exp.solver, scene.taylor, modes))  # as the FMU's
     guid = _guid((src / f"{FUNCTION_FILE}.c").read_text(),
                  repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]), repr(exp), model)
     write_model_desc(spec, table, exp, model, guid, fns, src, kernel)

@@ -1,7 +1,8 @@
 """Solver item auto (7), the default: what it integrates with and that it is that solver.
 
 The rule (c_src gw_solver_auto, docs/accuracy.md "Solver auto"): taylor where the FMU has the
-Taylor kernel, dop853 where it has none, at every rel_tol.  Checked through the FMU alone: the
+Taylor kernel and its model no mode switches (update events: the contact modes), dop853 otherwise,
+at every rel_tol.  Checked through the FMU alone: the
 logSolver line of every communication step names the solver that integrated, `gyrowheel info`
 names auto's pick, and auto's trajectory equals the named solver's bit for bit (the same steps,
 the same events located at the same times), while another solver's differs.
@@ -182,3 +183,29 @@ def test_a_scene_naming_its_solver_generates_what_it_did(tmp_path, monkeypatch):
              for k, t in enumerate((named, text))]
     assert guids[0] == "{8b356b44-66dc-58ad-96b3-6bd0d81eef26}" != guids[1]
     assert "GW_TL_NVAR" not in (tmp_path / "0" / "fmu" / "sources" / "gw_taylor_model.h").read_text()
+
+
+def test_contact_modes_take_dop853(tmp_path):
+    """A scene with the sliding mode (update events) gets no kernel by default and auto runs
+    dop853 there, also in an FMU built with the kernel: the upright wheel on an incline just past
+    its friction limit slides from t = 0 at zero slip, where the slip direction's Taylor series
+    diverge (solver taylor refuses the step); auto equals dop853 bit for bit, and the centre
+    accelerates at g (sin th - mu_k cos th), the closed form, to 1e-9."""
+    import math
+
+    from test_contact_sliding import KA, MU, SLIDE, WHEEL, G
+    scene = parse_scene('[model]\nname = "sliding"\n' + WHEEL + SLIDE, "sliding.toml")
+    plain = build_fmu(scene, tmp_path / "plain.fmu").fmu
+    kernel = build_fmu(scene, tmp_path / "kernel.fmu", taylor=True).fmu
+    assert (read_info(plain).taylor, read_info(kernel).taylor) == (False, True)
+    assert read_info(plain).auto_solver == read_info(kernel).auto_solver == "dop853"
+    above = math.atan(MU * (1 + KA) / KA) * (1 + 1e-6)
+    start = dict(rel_tol=1e-12, abs_tol=1e-14, beta=math.pi / 2, gamma_dot=0.0, slope_angle=above, mu_k=MU)
+    for fmu in (plain, kernel):
+        auto, t, lines = run(fmu, 0.5, steps=5, logged=True, **start)
+        assert t == 0.5 and solvers_logged(lines) == {"dop853"}
+        assert auto == run(fmu, 0.5, steps=5, solver=CODES["dop853"], **start)[0]
+        a = G * (math.sin(above) - MU * math.cos(above))
+        assert abs(auto[0] - 0.5 * a * 0.5**2) < 1e-9 * 0.5 * a * 0.5**2  # x, down the incline
+    _, t_taylor, _ = run(kernel, 0.5, steps=5, solver=CODES["taylor"], **start)
+    assert t_taylor == 0.0  # taylor fails at the first step: why auto does not pick it here

@@ -82,7 +82,8 @@ typedef enum {
     GYROWHEEL_SOLVER_DOP853 = 5,     /* Dormand-Prince 8(5,3), adaptive, dense output */
     GYROWHEEL_SOLVER_TAYLOR = 6,     /* Taylor series of adaptive order; needs the model's Taylor
                                         kernel (a scene with solver taylor or auto) */
-    GYROWHEEL_SOLVER_AUTO = 7        /* taylor where the model has the Taylor kernel, else dop853
+    GYROWHEEL_SOLVER_AUTO = 7        /* taylor where the model has the Taylor kernel and no update
+                                        events, else dop853
                                         (the default of a scene that names no solver) */
 } gyrowheel_solver;
 

@@ -6,6 +6,10 @@ Scenarios (each a scene, built into two FMUs: the default build and one with the
   stiff      Gyrover with a 10^4 rpm flywheel and a stiff tilt servo (double eigenvalue -2e4 1/s)
   near_flat  Euler-disk-like precession at 10 deg above the ground
 Methods:
+  default settings (auto), only rel_tol set
+                      the default build of the scene (solver auto, the Taylor kernel where it
+                      applies, max_step and abs_tol at their defaults) with rel_tol alone set,
+                      as a user who sets only a tolerance runs it; compared with gyrowheel best
   gyrowheel/<solver>  the FMU's internal solvers through fmpy's FMU2Slave, as a user runs an
                       instance it holds: reset, set the solver settings, initialise, one
                       fmi2DoStep(0, T) with max_step = T, read the 8 states (instantiation not
@@ -104,7 +108,8 @@ try:  # a benchmark dependency (pyproject.toml [bench]), not a core one
 except ImportError:
     HAVE_HEYOKA = False
 FIXED_STEPS = [10.0 ** -k for k in (2, 2.5, 3, 3.5, 4)]
-SOLVER_CODES = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
+SOLVER_CODES = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6, "auto": 7}
+AUTO_ROW = "default settings (auto), only rel_tol set"
 
 
 @dataclass
@@ -194,6 +199,26 @@ def run_internal(sc: Scenario, solver: str, settings, repeat: int, label: str = 
         if solver == "taylor":
             counts = solver_counts(sc.fmu, sc.stop, **values)
             point.steps, point.order = counts["accepted"] + counts["rejected"], work_limit.taylor_order(value)
+        points.append(point)
+    return points
+
+
+def run_default(sc: Scenario, settings, repeat: int) -> list[Point]:
+    """AUTO_ROW: the scene's default build with nothing set but rel_tol (solver, abs_tol,
+    max_step and the budget at the FMU's defaults); seconds as run_internal's."""
+    points = []
+    for value in settings:
+        seconds = step_seconds = float("inf")
+        try:
+            for _ in range(repeat):
+                res = sc.default_runner.one_step(sc.stop, sc.state_names + ["energy"], rel_tol=value)
+                seconds = min(seconds, sc.default_runner.last_call_seconds)
+                step_seconds = min(step_seconds, sc.default_runner.last_seconds)
+        except Exception as exc:  # a tolerance outside the FMU's range
+            print(f"  auto {value:g}: {exc}", file=sys.stderr)
+            continue
+        point = sc.score(AUTO_ROW, value, seconds, res[:-1], res[-1])
+        point.step_seconds = step_seconds
         points.append(point)
     return points
 
@@ -392,8 +417,17 @@ def table(name: str, points: list[Point]) -> str:
         cells.append(f"not reached (floor {floor:.1e})" if best is None
                      else f"{cell(best[0], t)}, {best[1].removeprefix('gyrowheel/')}")
     lines.append("| gyrowheel best | " + " | ".join(cells) + " |")
+    if any(AUTO_ROW in per[t] for t in TARGETS):  # beside the best: its time and time / best
+        auto = []
+        for t in TARGETS:
+            best = min((per[t][r] for r in ours if r in per[t]), default=None)
+            seconds = per[t].get(AUTO_ROW)
+            auto.append("-" if seconds is None or best is None
+                        else f"{seconds * 1e3:.3g} ms, {seconds / best:.2f}x best")
+        lines.append(f"| {AUTO_ROW} | " + " | ".join(auto) + " |")
     for row in rows:
-        lines.append(f"| {row} | " + " | ".join(cell(per[t].get(row), t) for t in TARGETS) + " |")
+        if row != AUTO_ROW:
+            lines.append(f"| {row} | " + " | ".join(cell(per[t].get(row), t) for t in TARGETS) + " |")
     lines.append("")
     lines.append("Cheapest time to reach each final-state error (max abs error of the 8 states), thread CPU time "
                  "of the whole call, best of the repetitions; in parentheses heyoka's time over it (above 1: "
@@ -433,7 +467,8 @@ def main() -> int:
     parser.add_argument("--scenarios", nargs="*", default=list(SCENARIOS), choices=list(SCENARIOS))
     parser.add_argument("--peers", nargs="*", default=list(PEERS), choices=list(PEERS),
                         help="peers to measure beside gyrowheel (default: all)")
-    parser.add_argument("--solvers", nargs="*", default=["euler", "rk4", "dopri5", "dop853", "rosenbrock", "taylor"],
+    parser.add_argument("--solvers", nargs="*",
+                        default=["euler", "rk4", "dopri5", "dop853", "rosenbrock", "taylor", "auto"],
                         choices=list(SOLVER_CODES), help="gyrowheel solvers to measure")
     parser.add_argument("--quick", action="store_true", help="few settings, no repetitions (a smoke run)")
     parser.add_argument("--repeat", type=int, default=3, help="repetitions of each timing, best counted")
@@ -484,6 +519,8 @@ def main() -> int:
                     points += run_internal(sc, solver, TOLS, repeat)
             if "dop853" in args.solvers:
                 points += run_internal(sc, "dop853", TOLS, repeat, " (rel_tol only)", tolerance_only=True)
+            if "auto" in args.solvers:
+                points += run_default(sc, TOLS, repeat)
             if "taylor" in args.solvers:  # the Taylor step is set by the weights: abs_tol = rel_tol too
                 points += run_internal(sc, "taylor", TOLS, repeat)
                 points += run_internal(sc, "taylor", TOLS, repeat, " (abs_tol = rel_tol)", atol_per_rtol=1.0)

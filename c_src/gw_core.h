@@ -238,6 +238,15 @@ GW_API int gw_event_ended(const gw_instance *I, int i);
 
 GW_API int gw_solver_available(int solver); /* 1 for a known gw_solver value */
 GW_API const char *gw_solver_name(int solver);
+/* The solver GW_SOLVER_AUTO integrates with (docs/accuracy.md, "Solver auto"): taylor where
+ * the model has the Taylor kernel (m->taylor.jet) and no mode switches (update events: m->upd,
+ * the contact modes), dop853 otherwise, at every rel_tol in its range.  Measured with
+ * benchmarks/work_precision.py (paper scenario): from rel_tol 0.1 to 1e-14 taylor reaches every
+ * error in less time than dop853, and dop853 in less than dopri5, so the tolerance does not
+ * enter the rule.  A mode switch can start a sliding mode at zero slip, where the slip
+ * direction's series diverge (a wheel that slides from rest on an incline), so models with
+ * update events take dop853, whose steps need the right-hand side's values only. */
+GW_API int gw_solver_auto(const gw_model *m);
 
 /* ---- saving and restoring the state (gw_state.c, gw_state_checks.c) --------------------------
  * A state is a byte blob (layout in gw_state.c) holding everything but the logging settings,

@@ -222,7 +222,7 @@ static int gw_event_end_slopes(gw_instance *I, double t0, double t1) {
         I->edot_t = t0;
         I->edot_valid = 1;
     }
-    if (!I->k7_valid && I->solver != GW_SOLVER_TAYLOR && I->solver != GW_SOLVER_ROSENBROCK)
+    if (!I->k7_valid && I->solver_in_use != GW_SOLVER_TAYLOR && I->solver_in_use != GW_SOLVER_ROSENBROCK)
         gw_dense_prepare(I); /* euler, rk4: f(t1, xnew) into k[6], reused by the next step */
     if (I->k7_valid) return gw_event_slopes(I, t1, I->xnew, I->enew, I->k[6], dt, I->edot_new);
     return gw_event_slopes(I, t1, I->xnew, I->enew, NULL, -dt, I->edot_new);

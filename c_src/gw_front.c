@@ -162,7 +162,7 @@ GW_INTERNAL void gw_front_step_log(gw_instance *I, const char *fn, double tc, do
         gw_log(I, GW_OK, GW_LOG_SOLVER,
                "%s t=%.17g h=%.17g -> t=%.17g solver=%s accepted=%llu rejected=%llu "
                "rhs=%llu h_next=%g status=%s",
-               fn, tc, h, I->t, gw_solver_name(I->solver), I->n_accepted - c0->accepted,
+               fn, tc, h, I->t, gw_solver_name(I->solver_in_use), I->n_accepted - c0->accepted,
                I->n_rejected - c0->rejected, I->n_rhs - c0->rhs, I->h_adapt, status);
 }
 

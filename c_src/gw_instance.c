@@ -203,6 +203,7 @@ GW_API void gw_instance_reset(gw_instance *I) {
     I->max_internal_steps = m->default_max_internal_steps > 0.0 ? m->default_max_internal_steps
                                                                 : GW_DEFAULT_MAX_INTERNAL_STEPS;
     gw_update_atol_eff(I);
+    gw_solver_select(I);
     I->err_old = 0.0;
     I->t_start = 0.0;
     I->t_stop = 0.0;

@@ -36,7 +36,10 @@ struct gw_instance {
                                    GW_DISCARD (Model Exchange: the importer may retry) */
 
     /* settings */
-    int solver;
+    int solver;       /* the setting: a gw_solver, GW_SOLVER_AUTO included */
+    int solver_in_use; /* the solver that integrates: solver, or what GW_SOLVER_AUTO picks
+                          (gw_solver_select: whenever the setting changes, at initialisation,
+                          at every integration call) */
     double rel_tol, abs_tol, max_step;
     int rel_tol_set, abs_tol_set; /* set explicitly: a set-up tolerance does not replace them */
     double max_internal_steps; /* budget of internal steps of one gw_advance */
@@ -210,6 +213,8 @@ GW_INTERNAL gw_int_result gw_integrate(gw_instance *I, double t_end);
 /* Dense output of the last accepted step: prepare once, then evaluate at t within it. */
 GW_INTERNAL void gw_dense_prepare(gw_instance *I);
 GW_INTERNAL void gw_dense_eval(const gw_instance *I, double t, double *x_out);
+/* I->solver_in_use from the setting I->solver (GW_SOLVER_AUTO: gw_solver_auto) */
+GW_INTERNAL void gw_solver_select(gw_instance *I);
 GW_INTERNAL int gw_solver_alloc(gw_instance *I); /* 0 on success, -1: out of memory */
 GW_INTERNAL void gw_solver_free(gw_instance *I);
 

@@ -100,7 +100,9 @@ typedef enum {
     GW_SOLVER_DOPRI5 = 3,
     GW_SOLVER_ROSENBROCK = 4, /* linearly implicit Rosenbrock RODAS4, uses jac */
     GW_SOLVER_DOP853 = 5,     /* Dormand-Prince 8(5,3) */
-    GW_SOLVER_TAYLOR = 6      /* Taylor series of adaptive order (needs the model's taylor kernel) */
+    GW_SOLVER_TAYLOR = 6,     /* Taylor series of adaptive order (needs the model's taylor kernel) */
+    GW_SOLVER_AUTO = 7        /* taylor where the model has the Taylor kernel and no update
+                                 events, else dop853 (gw_solver_auto, gw_core.h) */
 } gw_solver;
 
 /* The Taylor kernel of solver `taylor`, generated from the ode (taylor/kernel_c.py,

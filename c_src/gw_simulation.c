@@ -287,6 +287,13 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
         I->fcur_valid = 0;
         return GW_ERROR;
     }
+    gw_solver_select(I);
+    if (gw_log_enabled(I, GW_LOG_SOLVER) && I->solver == GW_SOLVER_AUTO)
+        gw_log(I, GW_OK, GW_LOG_SOLVER, "%s: solver auto: %s (%s)", fn,
+               gw_solver_name(I->solver_in_use),
+               !m->taylor.jet ? "no Taylor kernel"
+               : m->upd.eval  ? "the model switches modes at events"
+                              : "the model has the Taylor kernel");
     if (m->fixed_step_caveat && (I->solver == GW_SOLVER_EULER || I->solver == GW_SOLVER_RK4))
         gw_log(I, GW_WARNING, GW_LOG_WARNING, "%s: solver %s: %s", fn, gw_solver_name(I->solver),
                m->fixed_step_caveat);

@@ -60,8 +60,8 @@ static int gw_budget_set_too_low(gw_instance *I, const char *what, double needed
 }
 
 GW_INTERNAL void gw_budget_message(gw_instance *I, const char *what, double remaining, double h) {
-    const char *hint = I->solver == GW_SOLVER_ROSENBROCK || I->solver == GW_SOLVER_EULER ||
-                               I->solver == GW_SOLVER_RK4
+    const char *hint = I->solver_in_use == GW_SOLVER_ROSENBROCK || I->solver_in_use == GW_SOLVER_EULER ||
+                               I->solver_in_use == GW_SOLVER_RK4
                            ? ""
                            : " or stiff (try solver rosenbrock)";
     if (gw_budget_set_too_low(I, what, (double)I->n_call_steps + remaining / h, gw_default_budget(I),
@@ -83,7 +83,7 @@ static int gw_budget_upfront(gw_instance *I, double t_end) {
     GW_LOG_ERR(I, "communication step %g s from t=%.17g would need %s%.3g internal steps of "
                "max_step=%g, more than max_internal_steps = %.0f: raise max_internal_steps or "
                "max_step, or shorten the communication step (refused before any work)", H, I->t,
-               (I->solver == GW_SOLVER_EULER || I->solver == GW_SOLVER_RK4) ? "" : "at least ",
+               (I->solver_in_use == GW_SOLVER_EULER || I->solver_in_use == GW_SOLVER_RK4) ? "" : "at least ",
                n_min, I->max_step, I->max_internal_steps);
     return -1;
 }
@@ -115,7 +115,7 @@ static int gw_budget_run(gw_instance *I, double h) {
     const double taken = (double)(I->n_accepted + I->n_rejected);
     const double left = GW_RUN_BUDGETS * I->max_internal_steps - taken;
     const double remaining = I->t_stop - I->t;
-    const char *hint = I->solver == GW_SOLVER_ROSENBROCK ? "" : " or stiff (try solver rosenbrock)";
+    const char *hint = I->solver_in_use == GW_SOLVER_ROSENBROCK ? "" : " or stiff (try solver rosenbrock)";
     if (!I->stop_defined || taken < I->max_internal_steps) return 0;
     if (left <= 0.0 || remaining > left * h) {
         if (left > 0.0 && (I->run_n_fast == 0 || h > 2.0 * I->run_h_ref || h < 0.5 * I->run_h_ref)) {
@@ -198,7 +198,7 @@ GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events)
     I->n_accepted++;
     if (bad >= 0) {
         GW_LOG_ERR(I, "state %s is not finite (%g) at t=%.17g (solver %s)", gw_x_name(I, bad),
-                   I->xnew[bad], t1, gw_solver_name(I->solver));
+                   I->xnew[bad], t1, gw_solver_name(I->solver_in_use));
         return GW_INT_ERROR;
     }
     I->dense_t0 = I->t;
@@ -297,7 +297,7 @@ GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last,
     if (gw_budget_projection(I, remaining, *h, h_ref, n_fast)) return -1;
     if (*h < gw_h_min(I->t) || !(*t1 > I->t)) { /* steps that no longer advance time */
         GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, solver %s)", I->t, *h,
-                   gw_solver_name(I->solver));
+                   gw_solver_name(I->solver_in_use));
         return -1;
     }
     return 0;
@@ -354,7 +354,7 @@ GW_INTERNAL void gw_sum_update(gw_instance *I) {
  * accepted step (at its start point); a rejected step only refactors W with the new h.
  * A singular W is treated like a rejected step with h halved. */
 static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
-    const int ros = (I->solver == GW_SOLVER_ROSENBROCK);
+    const int ros = (I->solver_in_use == GW_SOLVER_ROSENBROCK);
     const double fac_min = ros ? 0.2 : 1.0 / 3.0, fac_max = 6.0, hmax = I->max_step;
     int events = 0, rejected_last = 0, jac_valid = 0;
     double lu_h = 0.0; /* step size of the factors in I->lu (0: none) */
@@ -428,7 +428,7 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
             rejected_last = 1;
             if (I->h_adapt < gw_h_min(I->t)) {
                 GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, error norm %g, solver %s)",
-                           I->t, I->h_adapt, err, gw_solver_name(I->solver));
+                           I->t, I->h_adapt, err, gw_solver_name(I->solver_in_use));
                 return GW_INT_ERROR;
             }
         }
@@ -441,9 +441,18 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
     return result;
 }
 
+GW_API int gw_solver_auto(const gw_model *m) {
+    return m->taylor.jet && !m->upd.eval ? GW_SOLVER_TAYLOR : GW_SOLVER_DOP853;
+}
+
+GW_INTERNAL void gw_solver_select(gw_instance *I) {
+    I->solver_in_use = I->solver == GW_SOLVER_AUTO ? gw_solver_auto(I->m) : I->solver;
+}
+
 GW_INTERNAL gw_int_result gw_integrate(gw_instance *I, double t_end) {
+    gw_solver_select(I);
     if (gw_budget_upfront(I, t_end)) return GW_INT_ERROR;
-    switch (I->solver) {
+    switch (I->solver_in_use) {
     case GW_SOLVER_EULER:
     case GW_SOLVER_RK4: return gw_integrate_fixed(I, t_end);
     case GW_SOLVER_DOPRI5: return gw_integrate_dopri5(I, t_end);
@@ -451,7 +460,7 @@ GW_INTERNAL gw_int_result gw_integrate(gw_instance *I, double t_end) {
     case GW_SOLVER_ROSENBROCK: return gw_integrate_adaptive(I, t_end);
     case GW_SOLVER_TAYLOR: return gw_integrate_taylor(I, t_end);
     default:
-        GW_LOG_ERR(I, "solver %s (%d) not available", gw_solver_name(I->solver), I->solver);
+        GW_LOG_ERR(I, "solver %s (%d) not available", gw_solver_name(I->solver_in_use), I->solver);
         return GW_INT_ERROR;
     }
 }
@@ -467,11 +476,11 @@ GW_INTERNAL void gw_dense_prepare(gw_instance *I) {
     const double *x = I->x, *xn = I->xnew, *k1 = I->k[0], *k7 = I->k[6];
     double *r0 = I->rcont, *r1 = r0 + nx, *r2 = r1 + nx, *r3 = r2 + nx, *r4 = r3 + nx;
     if (I->dense_ready) return;
-    if (I->solver == GW_SOLVER_TAYLOR) { /* the step's own polynomial */
+    if (I->solver_in_use == GW_SOLVER_TAYLOR) { /* the step's own polynomial */
         I->dense_ready = 1;
         return;
     }
-    if (I->solver == GW_SOLVER_ROSENBROCK) {
+    if (I->solver_in_use == GW_SOLVER_ROSENBROCK) {
         gw_rodas4_dense(I);
         I->dense_ready = 1;
         return;
@@ -495,8 +504,8 @@ GW_INTERNAL void gw_dense_prepare(gw_instance *I) {
         r3[i] = ydiff - h * k7[i] - bspl;
         r4[i] = 0.0;
     }
-    if (I->solver == GW_SOLVER_DOPRI5) gw_dopri5_dense(I);
-    if (I->solver == GW_SOLVER_DOP853) gw_dop853_dense(I);
+    if (I->solver_in_use == GW_SOLVER_DOPRI5) gw_dopri5_dense(I);
+    if (I->solver_in_use == GW_SOLVER_DOP853) gw_dop853_dense(I);
     I->dense_ready = 1;
 }
 
@@ -508,14 +517,14 @@ GW_INTERNAL void gw_dense_eval(const gw_instance *I, double t, double *x_out) {
         memcpy(x_out, I->xnew, (size_t)nx * sizeof(double));
         return;
     }
-    if (I->solver == GW_SOLVER_TAYLOR) {
+    if (I->solver_in_use == GW_SOLVER_TAYLOR) {
         gw_taylor_dense_eval(I, t < I->dense_t0 ? I->dense_t0 : t, x_out);
         return;
     }
     th = (t - I->dense_t0) / I->dense_h;
     if (th < 0.0) th = 0.0;
     th1 = 1.0 - th;
-    if (I->solver == GW_SOLVER_DOP853) {
+    if (I->solver_in_use == GW_SOLVER_DOP853) {
         gw_dop853_dense_eval(I, th, th1, x_out);
         return;
     }
@@ -528,7 +537,7 @@ GW_INTERNAL void gw_dense_eval(const gw_instance *I, double t, double *x_out) {
 GW_API int gw_solver_available(int solver) {
     return solver == GW_SOLVER_EULER || solver == GW_SOLVER_RK4 || solver == GW_SOLVER_DOPRI5 ||
            solver == GW_SOLVER_ROSENBROCK || solver == GW_SOLVER_DOP853 ||
-           solver == GW_SOLVER_TAYLOR;
+           solver == GW_SOLVER_TAYLOR || solver == GW_SOLVER_AUTO;
 }
 
 GW_INTERNAL int gw_solver_alloc(gw_instance *I) {
@@ -573,6 +582,7 @@ GW_API const char *gw_solver_name(int solver) {
     case GW_SOLVER_ROSENBROCK: return "rosenbrock";
     case GW_SOLVER_DOP853: return "dop853";
     case GW_SOLVER_TAYLOR: return "taylor";
+    case GW_SOLVER_AUTO: return "auto";
     default: return "unknown";
     }
 }

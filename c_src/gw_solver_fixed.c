@@ -113,7 +113,7 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
                  * silently be longer than the fixed step asked for */
                 GW_LOG_ERR(I, "%s cannot take steps of max_step=%g at t=%.17g: doubles there are %g s "
                            "apart, so a step would be %g s; start nearer t = 0 or raise max_step",
-                           gw_solver_name(I->solver), I->max_step, I->t, nextafter(I->t, HUGE_VAL) - I->t, h);
+                           gw_solver_name(I->solver_in_use), I->max_step, I->t, nextafter(I->t, HUGE_VAL) - I->t, h);
                 return GW_INT_ERROR;
             }
             if ((double)I->n_call_steps >= I->max_internal_steps) { /* events restart substeps */
@@ -122,7 +122,7 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
             }
             I->n_call_steps++;
             if (gw_ensure_f0(I)) return GW_INT_ERROR;
-            if (I->solver == GW_SOLVER_EULER) {
+            if (I->solver_in_use == GW_SOLVER_EULER) {
                 /* Euler's instability: increments that more than double, step after step */
                 double d;
                 gw_euler_step(I, h);

@@ -373,6 +373,7 @@ GW_API void gw_state_apply(gw_instance *I, const unsigned char *buf) {
     I->abs_tol = sc.dbl[GW_SD_ABS_TOL];
     I->max_step = sc.dbl[GW_SD_MAX_STEP];
     I->max_internal_steps = sc.dbl[GW_SD_MAX_INTERNAL_STEPS];
+    gw_solver_select(I); /* auto: the solver the saved settings pick */
     I->h_adapt = sc.dbl[GW_SD_H];
     I->err_old = sc.dbl[GW_SD_ERR_OLD];
     I->n_rhs = sc.u64[0];

@@ -81,7 +81,7 @@ static int gw_setting_in_range(gw_instance *I, const char *fn, const gw_variable
         if (value == floor(value) && fabs(value) < 1e9 && gw_solver_available((int)value))
             return 1;
         GW_LOG_ERR(I, "%s: %s = %.17g is not a solver: valid are 1 (euler), 2 (rk4), 3 (dopri5), "
-                   "4 (rosenbrock), 5 (dop853), 6 (taylor)", fn, v->name, value);
+                   "4 (rosenbrock), 5 (dop853), 6 (taylor), 7 (auto)", fn, v->name, value);
         return 0;
     case GW_SET_REL_TOL:
         if (value >= GW_REL_TOL_MIN && value <= GW_REL_TOL_MAX) return 1;
@@ -169,7 +169,10 @@ GW_API void gw_value_set(gw_instance *I, const gw_variable *v, double value) {
         break;
     case GW_VAR_SETTING:
         switch (v->index) {
-        case GW_SET_SOLVER: I->solver = (int)value; break;
+        case GW_SET_SOLVER:
+            I->solver = (int)value;
+            gw_solver_select(I);
+            break;
         case GW_SET_REL_TOL:
             I->rel_tol = value;
             I->rel_tol_set = 1; /* explicit: wins over a set-up tolerance */

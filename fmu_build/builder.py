@@ -13,7 +13,8 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
+from gyrowheel.fmu_build.codegen import (FUNCTION_FILE, generate_functions, generate_taylor, kernel_choice,
+                                        write_model_desc)
 from gyrowheel.fmu_build.compiler import (STANDARD, WARNINGS, compile_shared, fmi_headers_dir,
                                           optimisation_for)
 from gyrowheel.fmu_build import platforms as _platforms
@@ -142,15 +143,17 @@ def _guid(*parts: str) -> str:
 
 
 def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = None,
-              taylor: bool = False, platforms=None, fmi: int | None = None,
+              taylor: bool | None = None, platforms=None, fmi: int | None = None,
               arrays: bool | None = None) -> BuildResult:
     """Build the FMU of `scene` at `output`: the wheel's ModelSpec through build_spec_fmu.
 
     scene: a Scene, checked first by the scene file's rules (check_scene); output: the .fmu to
     write (check_output: a name ending in .fmu, not the scene's own file); build_dir: keep the
     generated C there (BuildResult.sources), else a temporary directory is used and removed;
-    taylor: also generate the Taylor kernel (solver taylor, the ensemble path) when the scene's
-    solver is not taylor already; platforms: the platforms to carry binaries for
+    taylor: True: generate the Taylor kernel (solver taylor, the ensemble path) whatever the
+    scene's solver; False: none (ArgumentError with solver taylor); None: the scene's [build]
+    taylor, and without one the kernel where the solver is taylor, or auto and the model's
+    operations allow it (codegen.kernel_choice); platforms: the platforms to carry binaries for
     (fmu_build/platforms.py parse_platforms: "all", "host", a comma-separated string or a list
     of FMI 3.0 platform tuples), overriding the scene's [build] platforms; None: the scene's
     [build] platforms, and without one the host only; fmi: the FMI version, 2 or 3, overriding
@@ -173,21 +176,24 @@ def build_fmu(scene: Scene, output: str | Path, build_dir: str | Path | None = N
     output = check_output(output, scene.file)
     wanted = _wanted_platforms(scene.platforms if platforms is None else platforms)  # before the model
     return build_spec_fmu(_spec(scene), output, scene.experiment, build_dir=build_dir,
-                          keep=scene.outputs, source=scene.source, taylor=taylor, platforms=wanted, fmi=version,
+                          keep=scene.outputs, source=scene.source, taylor=scene.taylor if taylor is None else taylor,
+                          platforms=wanted, fmi=version,
                           arrays=scene.arrays if arrays is None else arrays)
 
 
 def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment | None = None,
                    build_dir: str | Path | None = None, keep: list[str] | None = None,
-                   source: str = "", taylor: bool = False, platforms=None, fmi: int = 2,
+                   source: str = "", taylor: bool | None = None, platforms=None, fmi: int = 2,
                    arrays: bool = True) -> BuildResult:
     """Build the FMI 2.0 or 3.0 FMU of any ModelSpec (a wheel's, a controller's: model/system.py),
     Co-Simulation and Model Exchange, its C sources included.
 
     experiment: DefaultExperiment and the solver settings' defaults (Experiment() if None);
     keep: the outputs to expose (None: all); source: text shipped in documentation/index.html
-    (the scene file, the gains); taylor: generate the Taylor kernel of solver taylor and the
-    ensemble path even if experiment.solver is not "taylor" (only those FMUs carry it);
+    (the scene file, the gains); taylor: the Taylor kernel of solver taylor and the ensemble
+    path, by codegen.kernel_choice(experiment.solver, taylor, modes): True always, False never,
+    None for solver taylor, and for solver auto where the model has no update events and its
+    operations allow it;
     platforms: the platforms whose binaries the FMU carries (parse_platforms; None: the host
     only): the host's compiled by the host's C compiler, the others by zig (write_binaries);
     fmi: the FMI version, 2 (FMI 2.0.4: modelDescription.xml lists gw_fmu.c, binaries in
@@ -204,7 +210,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
     platform and the compiler's first error), MissingExtraError when a platform other than the
     host's needs zig and ziglang is not installed (before anything is generated).
     """
-    experiment = experiment or Experiment()
+    experiment = (experiment or Experiment()).resolved()  # max_step as built: its default resolved
     fmi = check_fmi(fmi)
     check_arrays(fmi, arrays)
     output = check_output(output)
@@ -223,7 +229,8 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         identifier = spec.name
         unity = UNITY_SOURCES[fmi]
         fns = generate_functions(spec, src, table)
-        kernel = generate_taylor(fns, spec.name, src, wanted=taylor or experiment.solver == "taylor")
+        modes = any(e.action == "update" for e in spec.events)
+        kernel = generate_taylor(fns, spec.name, src, wanted=kernel_choice(experiment.solver, taylor, modes))
         for f in runtime_sources(fmi):
             if f.name in HOST_ONLY:
                 continue
@@ -241,7 +248,7 @@ def build_spec_fmu(spec: ModelSpec, output: str | Path, experiment: Experiment |
         has_kernel = not isinstance(kernel, str)
         if fmi == 3:
             xml = write_model_description3(spec.name, experiment, table, identifier, guid, spec.description,
-                                           taylor=has_kernel, reinit=any(e.action == "update" for e in spec.events))
+                                           taylor=has_kernel, reinit=modes)
             (src / BUILD_DESCRIPTION).write_text(write_build_description(identifier, unity))
         else:
             xml = write_model_description(spec.name, experiment, table, identifier, guid, [unity], spec.description,

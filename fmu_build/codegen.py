@@ -16,6 +16,7 @@ import casadi as ca
 
 from gyrowheel.fmu_build.casadi_c import UNITY_GUARD_CLOSE, UNITY_GUARD_OPEN, make_internal
 from gyrowheel.fmu_build.scene import SOLVERS, Experiment
+from gyrowheel.taylor.graph import TaylorUnsupportedError
 from gyrowheel.taylor.kernel_c import KERNEL_FILE, TaylorKernel, write_taylor_kernel
 from gyrowheel.fmu_build.variables import KIND, TYPE, Variable
 from gyrowheel.model.hoist import split_parameters
@@ -134,20 +135,49 @@ NO_KERNEL = ("built without a Taylor kernel (build it from a scene with solver =
              "or with the Taylor kernel: gyrowheel build --taylor, build_fmu(..., taylor=True))")
 
 
+def kernel_choice(solver: str, taylor: bool | None, modes: bool = False) -> bool | None:
+    """Whether a build generates the Taylor kernel, for the scene's solver, the build option
+    `taylor` (build_fmu's argument, `gyrowheel build --taylor / --no-taylor`, [build] taylor) and
+    whether the model switches modes at events (modes: it has update events, the contact modes).
+    True: the kernel, an operation without a recurrence an error (solver taylor, taylor=True);
+    False: none (taylor=False; by default every solver but taylor, and auto in a model with
+    modes, which integrates with dop853 there; the generated C stays as without solver taylor);
+    None: the kernel where the model's operations allow it (solver auto in a model without
+    modes: it then integrates with taylor, docs/accuracy.md "Solver auto").
+    Raises ArgumentError naming `taylor` for taylor=False with solver taylor."""
+    if solver == "taylor":
+        if taylor is False:
+            from gyrowheel.errors import ArgumentError
+            raise ArgumentError('taylor: false leaves out the Taylor kernel that the scene\'s solver = "taylor" '
+                                "needs: name another solver or build with the kernel", argument="taylor")
+        return True
+    if taylor is not None:
+        return bool(taylor)
+    return None if solver == "auto" and not modes else False
+
+
 def generate_taylor(fns: dict[str, ca.Function], model: str, out_dir: Path,
-                    wanted: bool) -> TaylorKernel | str:
+                    wanted: bool | None) -> TaylorKernel | str:
     """Write gw_taylor_model.h (solver `taylor`); the kernel, or why the model has none.
 
-    Only an FMU that asks for it gets the kernel (wanted: the scene's solver is taylor, or the
-    build option for the ensemble path): it doubles the C to compile (docs/taylor.md, build
-    time), so every other FMU builds as fast as without solver taylor and carries a
-    gw_taylor_model.h of one comment.  wanted and an operation without a recurrence raises
-    TaylorUnsupportedError naming it.
+    Only an FMU that asks for it gets the kernel (wanted, kernel_choice: True, or None for
+    where the model allows it): it adds C to compile (docs/taylor.md, build time), so an FMU
+    without it builds as fast as without solver taylor and carries a gw_taylor_model.h of one
+    comment.  wanted True and an operation without a recurrence raises
+    TaylorUnsupportedError naming it; wanted None returns that message instead (the FMU's
+    solver auto then integrates with dop853).
     """
-    if not wanted:
+    if wanted is False:
         (out_dir / KERNEL_FILE).write_text(f"/* no Taylor kernel: {NO_KERNEL} */\n")
         return NO_KERNEL
-    return write_taylor_kernel(taylor_ode(fns), model, out_dir, fns.get("evt"))
+    try:
+        return write_taylor_kernel(taylor_ode(fns), model, out_dir, fns.get("evt"))
+    except TaylorUnsupportedError as exc:
+        if wanted:
+            raise
+        why = f"no Taylor kernel: {exc}"
+        (out_dir / KERNEL_FILE).write_text("/* " + why.replace("*/", "* /") + " */\n")
+        return why
 
 
 def _c_string(text: str) -> str:

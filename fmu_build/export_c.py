@@ -31,7 +31,8 @@ from gyrowheel.errors import GyrowheelError
 from gyrowheel.fmu_build import c_names
 from gyrowheel.fmu_build.builder import HOST_ONLY, TAYLOR_ONLY, _guid, _spec
 from gyrowheel.fmu_build.runtime import EXPORT_DIR, fmi_version_of, runtime_sources
-from gyrowheel.fmu_build.codegen import FUNCTION_FILE, generate_functions, generate_taylor, write_model_desc
+from gyrowheel.fmu_build.codegen import (FUNCTION_FILE, generate_functions, generate_taylor, kernel_choice,
+                                        write_model_desc)
 from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
 from gyrowheel.fmu_build.platforms import PLATFORMS, Platform
 from gyrowheel.fmu_build.scene import Scene, check_scene
@@ -402,7 +403,8 @@ def _write(scene: Scene, model: str, out_dir: Path, scene_file: str, check: bool
     table = build_table(spec, exp, scene.outputs)
     src = out_dir / "src"
     fns = generate_functions(spec, src)
-    kernel = generate_taylor(fns, model, src, wanted=exp.solver == "taylor")  # as the FMU's
+    modes = any(e.action == "update" for e in spec.events)
+    kernel = generate_taylor(fns, model, src, wanted=kernel_choice(exp.solver, scene.taylor, modes))  # as the FMU's
     guid = _guid((src / f"{FUNCTION_FILE}.c").read_text(),
                  repr([(v.vr, v.name, v.kind, v.index, v.start) for v in table]), repr(exp), model)
     write_model_desc(spec, table, exp, model, guid, fns, src, kernel)

@@ -17,6 +17,9 @@ Scene objects they are read into (docs/scenes.md).
                   arrays = true or false: an FMI 3 FMU's array outputs x_state and
                   contact_force (optional; default true; `gyrowheel build --no-arrays` leaves
                   them out; an FMI 2 FMU has none)
+                  taylor = true or false: the Taylor kernel in the FMU (optional; default:
+                  where the solver is taylor, or auto and the kernel supports the model;
+                  `gyrowheel build --taylor / --no-taylor` overrides it)
 
 One set of rules serves both ways in: parse_scene reads a file's tables through it, and
 check_scene puts a Scene made or changed in Python (dataclasses.replace, attribute assignment)
@@ -36,6 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gyrowheel.errors import GyrowheelError
+from gyrowheel.fmu_build.experiment import FIXED_SOLVER_MAX_STEP, SOLVERS, Experiment  # noqa: F401 (API)
 from gyrowheel.fmu_build.platforms import parse_platforms
 from gyrowheel.fmu_build.scene_toml import scene_toml  # noqa: F401 (part of this module's API)
 from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, MASS_REFUSAL, RIM_SPEED_REFUSAL, SLIDE_NEEDS_REDUCED,
@@ -43,7 +47,6 @@ from gyrowheel.model.build import (BETA_MIN_DEFAULT, FORMULATIONS, MASS_REFUSAL,
 from gyrowheel.model.effects import CATALOGUE, lift_off_conflict
 from gyrowheel.model.spec import MASS_RANGE, SPEED_OF_LIGHT, range_refusal
 
-SOLVERS = {"euler": 1, "rk4": 2, "dopri5": 3, "rosenbrock": 4, "dop853": 5, "taylor": 6}
 ANGLES = {"alpha", "beta", "gamma", "beta_min"}
 TOUCHDOWN = "touchdown"  # [wheel] beta_min preset: the lean at which the body must touch the ground
 TABLES = ("model", "wheel", "effects", "initial", "experiment", "outputs", "build")
@@ -66,35 +69,6 @@ class SceneError(GyrowheelError, ValueError):
     `paper.toml: [wheel] M: must be > 0, got -1.0`."""
 
 
-@dataclass
-class Experiment:
-    """A scene's [experiment]: the FMU's DefaultExperiment and the defaults of its solver
-    parameters (docs/scenes.md, docs/fmi.md); all can still be set when the FMU is used.
-
-    start_time        s, DefaultExperiment startTime (any finite number)
-    stop_time         s, DefaultExperiment stopTime, > start_time
-    output_interval   s, > 0: DefaultExperiment stepSize, the communication step of
-                      gyrowheel simulate
-    solver            the FMU's Enumeration parameter `solver`: one of SOLVERS (euler, rk4,
-                      dopri5, rosenbrock, dop853, taylor; taylor also puts the Taylor kernel
-                      into the FMU, docs/taylor.md)
-    rel_tol           1, relative tolerance of the adaptive solvers in [2.22e-15, 1]; also
-                      DefaultExperiment tolerance
-    abs_tol           1, absolute tolerance (scaled by each state's nominal value) in [1e-30, 1],
-                      or 0 (the default): rel_tol / 100, following the tolerance in force
-    max_step          s, > 0: bound of the internal step (the fixed step of euler and rk4)
-    max_internal_steps  whole number in [1, 2**31 - 1]: budget of internal steps of one
-                      fmi2DoStep (docs/fmi.md, "Bounded calls")
-    """
-
-    start_time: float = 0.0
-    stop_time: float = 20.0
-    output_interval: float = 0.01
-    solver: str = "dopri5"
-    rel_tol: float = 1e-8
-    abs_tol: float = 0.0  # 0: follow rel_tol (rel_tol / 100, so a tolerance-only run has no floor)
-    max_step: float = 0.01
-    max_internal_steps: int = 1_000_000  # budget of internal steps of one fmi2DoStep (docs/fmi.md)
 
 
 @dataclass
@@ -138,6 +112,10 @@ class Scene:
     source       the scene's TOML text, shipped in the FMU's documentation/index.html
                  ("Built from"); check_scene writes it anew when it no longer describes the
                  scene (a Scene changed in Python, or made there)
+    taylor       [build] taylor: True, the Taylor kernel in the FMU whatever the solver; False,
+                 none (refused with solver taylor); None (the default): the kernel for solver
+                 taylor, and for solver auto where the model's operations allow it
+                 (gyrowheel.fmu_build.codegen.kernel_choice)
     file         the scene file it was loaded from (load_scene), or None; build_fmu refuses to
                  write the FMU over it
     """
@@ -151,6 +129,7 @@ class Scene:
     experiment: Experiment = field(default_factory=Experiment)
     outputs: list[str] | None = None
     platforms: str | list[str] | None = None
+    taylor: bool | None = None  # [build] taylor; None: where the solver needs it (builder.kernel_choice)
     fmi: int = 2
     arrays: bool = True
     source: str = ""  # the TOML text, shipped in the FMU's documentation
@@ -390,24 +369,25 @@ MAX_INTERNAL_STEPS_RANGE = (1, 2**31 - 1)  # an fmi2Integer (GW_MAX_INTERNAL_STE
 
 
 def _experiment(r: _Reader, data: dict) -> Experiment:
-    exp = Experiment()
     r.unknown("experiment", data, set(Experiment.__dataclass_fields__))
+    values: dict = {}
     for key, value in data.items():
         if key == "solver":
             if not isinstance(value, str) or value not in SOLVERS:
                 raise r.fail("experiment", key, f"unknown solver {value!r}; valid: {', '.join(SOLVERS)}")
-            exp.solver = value
+            values[key] = value
         elif key == "start_time":
-            exp.start_time = r.number("experiment", key, value)
+            values[key] = r.number("experiment", key, value)
         elif key == "max_internal_steps":
             low, high = MAX_INTERNAL_STEPS_RANGE
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= value <= high:
                 raise r.fail("experiment", key, f"must be a whole number from {low} to {high}, got {value!r}")
-            exp.max_internal_steps = int(value)
+            values[key] = int(value)
         elif key == "abs_tol":  # 0 allowed (follow rel_tol); the range below
-            exp.abs_tol = r.number("experiment", key, value)
+            values[key] = r.number("experiment", key, value)
         else:
-            setattr(exp, key, r.positive("experiment", key, value))
+            values[key] = r.positive("experiment", key, value)
+    exp = Experiment(**values)  # the max_step default follows the solver and the run (Experiment)
     if exp.stop_time <= exp.start_time:
         raise r.fail("experiment", "stop_time", "must be greater than start_time")
     for key, (low, high) in TOLERANCE_RANGES.items():  # the FMU refuses others (docs/fmi.md)
@@ -455,7 +435,7 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
             raise r.fail("outputs", "keep", "must be a list of output names")
         scene.outputs = list(keep)
     build = r.table(data, "build")
-    r.unknown("build", build, {"platforms", "fmi", "arrays"})
+    r.unknown("build", build, {"platforms", "fmi", "arrays", "taylor"})
     if "platforms" in build:
         scene.platforms = _platforms(r, build["platforms"])
     if "fmi" in build:
@@ -464,6 +444,10 @@ def _validate(r: _Reader, data: dict, default_name: str) -> Scene:
         if not isinstance(build["arrays"], bool):
             raise r.fail("build", "arrays", f"must be true or false, got {build['arrays']!r}")
         scene.arrays = build["arrays"]
+    if "taylor" in build:
+        if not isinstance(build["taylor"], bool):
+            raise r.fail("build", "taylor", f"must be true or false, got {build['taylor']!r}")
+        scene.taylor = build["taylor"]
     return scene
 
 
@@ -538,10 +522,11 @@ def _tables(r: _Reader, scene: Scene) -> dict:
                                          f"got {type(scene.experiment).__name__}")
     return {"model": {"name": scene.name, "description": scene.description, "formulation": scene.formulation},
             "wheel": scene.wheel, "effects": scene.effects, "initial": scene.initial,
-            "experiment": {f.name: getattr(scene.experiment, f.name) for f in dataclasses.fields(Experiment)},
+            "experiment": {f.name: getattr(scene.experiment, f.name) for f in dataclasses.fields(Experiment)
+                           if getattr(scene.experiment, f.name) is not None},  # None: the default
             "outputs": {} if scene.outputs is None else {"keep": scene.outputs},
             "build": {**({} if scene.platforms is None else {"platforms": scene.platforms}), "fmi": scene.fmi,
-                      "arrays": scene.arrays}}
+                      "arrays": scene.arrays, **({} if scene.taylor is None else {"taylor": scene.taylor})}}
 
 
 def _content(scene: Scene) -> tuple:

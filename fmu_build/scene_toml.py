@@ -42,12 +42,14 @@ def scene_toml(scene: Scene) -> str:
     for effect, options in scene.effects.items():
         table(f"effects.{effect}", options)
     table("initial", scene.initial)
-    table("experiment", dataclasses.asdict(scene.experiment))
+    table("experiment", {k: v for k, v in dataclasses.asdict(scene.experiment).items()
+                         if v is not None})  # max_step None: its default, left to follow the run
     if scene.outputs is not None:
         table("outputs", {"keep": scene.outputs})
     build = {**({} if scene.platforms is None else {"platforms": scene.platforms}),
              **({} if scene.fmi == 2 else {"fmi": scene.fmi}),
-             **({} if scene.arrays else {"arrays": False})}
+             **({} if scene.arrays else {"arrays": False}),
+             **({} if scene.taylor is None else {"taylor": scene.taylor})}
     if build:
         table("build", build)
     return "\n".join(lines) + "\n"

@@ -163,7 +163,7 @@ def _assignments(values, argument: str) -> dict[str, object]:
 
 # -- the verbs ---------------------------------------------------------------------------------
 
-def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms=None, fmi=None,
+def build(scene, output=None, *, build_dir=None, taylor: bool | None = None, platforms=None, fmi=None,
           arrays=None):
     """Build the FMI 2.0 or 3.0 FMU of a scene (Co-Simulation and Model Exchange, sources
     included).
@@ -171,8 +171,11 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms
     scene: a scene file (str or os.PathLike, TOML: docs/scenes.md) or a gyrowheel.Scene.
     output: the .fmu to write (default: '<scene name>.fmu' in the working directory); its
     directory is created. build_dir: keep the generated C and objects there (default: a
-    temporary directory, removed). taylor: also generate the Taylor kernel (solver taylor at
-    run time, gyrowheel.Ensemble); implied by solver = "taylor" in the scene.
+    temporary directory, removed). taylor: True: generate the Taylor kernel (solver taylor at
+    run time, gyrowheel.Ensemble) whatever the scene's solver; False: leave it out (refused
+    for solver = "taylor"); None (default): the scene's [build] taylor, else the kernel for
+    solver taylor, and for solver auto (the default solver) where the model's operations
+    allow it, so that auto integrates with taylor (docs/accuracy.md, "Solver auto").
     platforms: the platforms whose binaries the FMU carries, as FMI 3.0 platform tuples
     (FMI 3.0, section 2.5.1.4.1; each in the folder FMI 2.0.4, section 2.3 prescribes:
     docs/fmi.md, "Platforms"): "all" (x86_64-linux, aarch64-linux, x86_64-windows,
@@ -210,7 +213,7 @@ def build(scene, output=None, *, build_dir=None, taylor: bool = False, platforms
         raise ArgumentError(f"output {out}: is a directory; give a file name", argument="output")
     out = _output_file(builder.check_output(out, parsed.file), "output")  # (.fmu, not the scene: made after)
     build_dir = None if build_dir is None else _output_directory(build_dir, "build_dir")
-    taylor = flag(taylor, "taylor")
+    taylor = None if taylor is None else flag(taylor, "taylor")
     arrays = None if arrays is None else flag(arrays, "arrays")
     try:
         return builder.build_fmu(parsed, out, build_dir=build_dir, taylor=taylor, platforms=platforms, fmi=fmi,

@@ -241,9 +241,13 @@ def make_parser() -> argparse.ArgumentParser:
     b.add_argument("scene", help="scene file (TOML)")
     b.add_argument("-o", "--output", help="FMU to write (default: <scene name>.fmu)")
     b.add_argument("--keep-build", metavar="DIR", help="keep generated sources and objects in DIR")
-    b.add_argument("--taylor", action="store_true",
-                   help="also generate the Taylor kernel (solver taylor at run time, the ensemble "
-                        "path); implied by solver = \"taylor\" in the scene")
+    kernel = b.add_mutually_exclusive_group()
+    kernel.add_argument("--taylor", action="store_true", default=None,
+                        help="generate the Taylor kernel (solver taylor at run time, the ensemble path) "
+                             "whatever the scene's solver; by default it is built for solver taylor, and "
+                             "for solver auto where the model allows it")
+    kernel.add_argument("--no-taylor", dest="taylor", action="store_false",
+                        help="leave the Taylor kernel out (a faster build; solver auto then uses dop853)")
     b.add_argument("--platforms", metavar="LIST",
                    help="the platforms to carry binaries for, comma-separated FMI 3.0 tuples "
                         "(x86_64-linux, aarch64-linux, x86_64-windows, x86-windows, aarch64-windows, "

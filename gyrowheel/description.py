@@ -21,6 +21,8 @@ from gyrowheel.arguments import existing_file
 from gyrowheel.errors import FmuError, UnknownNameError
 
 TAYLOR_HEADER = "sources/gw_taylor_model.h"  # holds GW_TL_NVAR when the model has the Taylor kernel
+MODEL_SOURCE = "sources/model_desc.c"  # GW_MODEL (fmu_build/codegen.py write_model_desc) ...
+MODES_ABSENT = b".upd = {0, 0},"  # ... with this line when the model has no update events
 FMU_WHAT = "a path to an FMU (.fmu) or the gyrowheel.BuildResult of one"
 FMI_VERSIONS = ("2.0", "3.0")  # the fmiVersion attributes gyrowheel reads and runs
 
@@ -192,7 +194,9 @@ class FmuInfo:
     its `solver` parameter (the integrators it can run), () without one. platforms: a
     PlatformInfo for every folder of binaries/ holding a file, by platform tuple
     (x86_64-linux in binaries/linux64); sources: it carries its C sources
-    (sources/); taylor: it has the Taylor kernel (solver taylor, gyrowheel.Ensemble).
+    (sources/); taylor: it has the Taylor kernel (solver taylor, gyrowheel.Ensemble); modes: its
+    model switches modes at events (update events: the contact modes), read from its sources
+    (False for an FMU without them).
     """
 
     path: Path
@@ -211,6 +215,17 @@ class FmuInfo:
     platforms: tuple[PlatformInfo, ...]
     sources: bool
     taylor: bool
+    modes: bool = False
+
+    @property
+    def auto_solver(self) -> str | None:
+        """The solver item auto (7) integrates with: "taylor" where the FMU has the Taylor kernel
+        (its Solver enumeration lists taylor) and its model no mode switches, "dop853" otherwise,
+        at every rel_tol (the rule of c_src gw_solver_auto, docs/accuracy.md "Solver auto");
+        None for an FMU without auto."""
+        if "auto" not in self.solvers:
+            return None
+        return "taylor" if "taylor" in self.solvers and not self.modes else "dop853"
 
     def variable(self, name: str) -> VariableInfo:
         """The variable called `name`; UnknownNameError (a KeyError) lists the names."""
@@ -218,6 +233,12 @@ class FmuInfo:
             if v.name == name:
                 return v
         raise UnknownNameError(f"no variable {name!r}; variables: {', '.join(v.name for v in self.variables)}")
+
+    def _tolerance_text(self) -> str:
+        """The default tolerance, in the words of the auto line."""
+        exp = self.default_experiment
+        tol = None if exp is None else _text(exp.tolerance)
+        return f"the default tolerance {tol}" if tol else "every tolerance"
 
     def as_dict(self) -> dict:
         """Everything as plain JSON types (path as text, tuples as lists)."""
@@ -240,6 +261,9 @@ class FmuInfo:
                   f"generated    {self.generation_date or 'unknown'}",
                   f"effects      {'not recorded' if self.effects is None else ', '.join(self.effects) or 'none'}",
                   f"solvers      {', '.join(self.solvers) or 'none declared'}",
+                  *([f"auto         {self.auto_solver} at {self._tolerance_text()} (rule: taylor at every rel_tol "
+                     f"where the FMU has the Taylor kernel and no mode switches, else dop853)"]
+                   if self.auto_solver else []),
                   f"platforms    {', '.join(map(str, self.platforms)) or 'none (no binaries)'}",
                   f"sources      {'yes' if self.sources else 'no'}"
                   + (", with the Taylor kernel (solver taylor, the ensemble path)" if self.taylor else "")]
@@ -318,6 +342,7 @@ def read_info(fmu: str | Path) -> FmuInfo:
             index = (zf.read("documentation/index.html").decode("utf-8", "replace")
                      if "documentation/index.html" in names else "")
             taylor = TAYLOR_HEADER in names and b"GW_TL_NVAR" in zf.read(TAYLOR_HEADER)
+            modes = MODEL_SOURCE in names and MODES_ABSENT not in zf.read(MODEL_SOURCE)
     except (zipfile.BadZipFile, OSError) as exc:  # an archive changed or broken since it was opened
         raise FmuError(f"{path}: not a readable FMU: {exc}", argument="fmu") from None
     types = {t.name: t for t in md.typeDefinitions}
@@ -343,4 +368,4 @@ def read_info(fmu: str | Path) -> FmuInfo:
             _number(exp.startTime), _number(exp.stopTime), _number(exp.stepSize), _number(exp.tolerance)),
         variables=tuple(variables), effects=_effects(index) if index else None,
         solvers=tuple(solver.items) if solver is not None else (), platforms=tuple(platforms),
-        sources=any(n.startswith("sources/") and not n.endswith("/") for n in names), taylor=taylor)
+        sources=any(n.startswith("sources/") and not n.endswith("/") for n in names), taylor=taylor, modes=modes)

@@ -201,14 +201,16 @@ class _Built:
 
 @pytest.fixture(scope="session")
 def example_build(tmp_path_factory):
-    """example_build("euler_disk", taylor=False, fmi=2): the BuildResult of
-    examples/scenes/<name>.toml (as an FMI 3 FMU with fmi=3), built once per test run (for every
-    module and xdist worker that asks; sources kept beside). Several modules test the same
-    example FMU; the build is the same call, made once."""
+    """example_build("euler_disk", taylor=None, fmi=2): the BuildResult of
+    examples/scenes/<name>.toml (as an FMI 3 FMU with fmi=3; taylor as build_fmu's: None, the
+    scene's default), built once per test run (for every module and xdist worker that asks;
+    sources kept beside). Several modules test the same example FMU; the build is the same call,
+    made once."""
     cache: dict = {}
 
-    def _build(name: str, taylor: bool = False, fmi: int = 2):
-        key = f"{name}{'_taylor' if taylor else ''}{'_fmi3' if fmi == 3 else ''}"
+    def _build(name: str, taylor: bool | None = None, fmi: int = 2):
+        kernel = {None: "", True: "_taylor", False: "_no_taylor"}[taylor]
+        key = f"{name}{kernel}{'_fmi3' if fmi == 3 else ''}"
         if key not in cache:
             path = SCENES / f"{name}.toml"
 

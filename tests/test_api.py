@@ -283,7 +283,8 @@ def test_info_from_a_path_and_the_build_result_against_the_model_description(moo
     solver = info.variable("solver")
     items = [(i.get("name"), int(i.get("value"))) for i in root.iter("Item")]
     assert list(solver.items.items()) == items and info.solvers == tuple(n for n, _ in items)
-    assert "taylor" not in info.solvers and not info.taylor  # built without the Taylor kernel
+    # the scene names no solver: auto, and the Taylor kernel it integrates with
+    assert "taylor" in info.solvers and info.taylor and info.auto_solver == "taylor" and not info.modes
     assert info.variable("g").start == 1.625 and info.variable("g").unit == "m/s2"
     with zipfile.ZipFile(moon.fmu) as zf:
         platforms = {n.split("/")[1] for n in zf.namelist() if n.startswith("binaries/") and not n.endswith("/")}
@@ -321,10 +322,15 @@ def test_info_text_and_json(moon, capsys):
             f"experiment   {e.startTime} .. {e.stopTime} s, step {e.stepSize}, tolerance {e.tolerance}",
             "interfaces   Co-Simulation (paper_moon), Model Exchange (paper_moon)",
             f"generated    {md.generationDateAndTime}", "effects      gravity",
-            "solvers      euler, rk4, dopri5, rosenbrock, dop853", "platforms    x86_64-linux (binaries/linux64)", "sources      yes"]
+            "solvers      euler, rk4, dopri5, rosenbrock, dop853, taylor, auto",
+            "auto         taylor at the default tolerance 1e-08 (rule: taylor at every rel_tol where the FMU has "
+            "the Taylor kernel and no mode switches, else dop853)",
+            "platforms    x86_64-linux (binaries/linux64)",
+            "sources      yes, with the Taylor kernel (solver taylor, the ensemble path)"]
     assert lines[:len(head)] == head
     table = lines[len(head):-1]
-    assert lines[-1] == "items of solver (Solver): euler = 1, rk4 = 2, dopri5 = 3, rosenbrock = 4, dop853 = 5"
+    assert lines[-1] == ("items of solver (Solver): euler = 1, rk4 = 2, dopri5 = 3, rosenbrock = 4, dop853 = 5, "
+                         "taylor = 6, auto = 7")
     assert len(table) == 1 + len(md.modelVariables)
     header = table[0].split()
     assert header == ["name", "causality", "variability", "start", "unit", "description"]
@@ -335,7 +341,7 @@ def test_info_text_and_json(moon, capsys):
         assert line[:left[1]].rstrip() == v.name and line[left[1]:left[2]].rstrip() == v.causality
         start = "" if v.start is None else str(v.start)
         if v.name == "solver":
-            start = f"dopri5 ({v.start})"
+            start = f"auto ({v.start})"
         assert line[left[2]:start_end].split("  ")[0].rstrip() == v.variability, line
         assert line[:start_end].endswith(start), (line, start)
         assert line[unit_col:].startswith(v.unit or (v.declaredType.unit if v.declaredType else None) or " ")
@@ -607,7 +613,9 @@ def test_system_run_errors_name_the_argument(solo, tmp_path, system, kwargs, err
     (["build", "s.toml", "-o", "x.fmu", "--taylor", "--platforms", "all"], "build",
      (("s.toml", "x.fmu"), dict(build_dir=None, taylor=True, platforms="all", fmi=None, arrays=None))),
     (["build", "s.toml", "-o", "x.fmu", "--fmi", "3", "--no-arrays"], "build",
-     (("s.toml", "x.fmu"), dict(build_dir=None, taylor=False, platforms=None, fmi=3, arrays=False))),
+     (("s.toml", "x.fmu"), dict(build_dir=None, taylor=None, platforms=None, fmi=3, arrays=False))),
+    (["build", "s.toml", "-o", "x.fmu", "--no-taylor"], "build",
+     (("s.toml", "x.fmu"), dict(build_dir=None, taylor=False, platforms=None, fmi=None, arrays=None))),
     (["simulate", "m.fmu", "--stop-time", "2", "--set", "M=2", "-o", "o.csv"], "simulate",
      (("m.fmu",), dict(stop_time=2.0, output_interval=None, start_values=["M=2"], output="o.csv", plot=None))),
     (["info", "m.fmu"], "info", (("m.fmu",), {})),

@@ -66,9 +66,9 @@ def steps_taken(log: str) -> int:
 
 def test_huge_communication_step_is_refused_up_front(slave):
     """fmi2DoStep(0, 1e9), hours without a budget (1e4 s take 1.6 s with 720k DOPRI5 steps): refused
-    before any work, since at max_step 0.05 s it needs at least 2e10 steps, more than the default
+    before any work, since at max_step 0.05 s (set) it needs at least 2e10 steps, more than the default
     budget 1e6."""
-    slave.init(solver=3)
+    slave.init(solver=3, max_step=0.05)
     before = slave.get(*STATES)
     seconds, log = refused(slave, 0.0, 1e9)
     assert seconds < 0.5
@@ -76,7 +76,7 @@ def test_huge_communication_step_is_refused_up_front(slave):
     assert "max_internal_steps = 1000000" in log and "refused before any work" in log
     assert_state_kept(slave, before, 0.0)
     slave.slave.reset()  # after fmi2Error FMI 2.0 allows reset; the instance works again
-    slave.init(solver=3)
+    slave.init(solver=3, max_step=0.05)
     slave.slave.doStep(0.0, 0.1)
     assert slave.get("beta") != before[3]
 
@@ -98,9 +98,9 @@ def test_huge_step_with_a_huge_max_step_stops_when_the_budget_is_spent(slave):
 
 
 def test_rosenbrock_long_step_is_bounded(slave):
-    """rosenbrock fmi2DoStep(0, 1e5), more than 30 s without a budget: refused up front at the default
-    max_step (2e6 steps), and with max_step relaxed stopped by a budget of 300 steps in milliseconds."""
-    slave.init(solver=4)
+    """rosenbrock fmi2DoStep(0, 1e5), more than 30 s without a budget: refused up front at max_step
+    0.05 s (2e6 steps), and with max_step relaxed stopped by a budget of 300 steps in milliseconds."""
+    slave.init(solver=4, max_step=0.05)
     seconds, log = refused(slave, 0.0, 1e5)
     assert seconds < 0.5 and "would need at least 2e+06 internal steps" in log
     slave.slave.reset()

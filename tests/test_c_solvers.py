@@ -53,4 +53,6 @@ def test_enumeration_values():
     text = (C_SRC / "gw_model.h").read_text()
     values = dict(re.findall(r"GW_SOLVER_(\w+) = (\d+)", text))
     assert values == {"EULER": "1", "RK4": "2", "DOPRI5": "3", "ROSENBROCK": "4", "DOP853": "5",
-                      "TAYLOR": "6"}
+                      "TAYLOR": "6", "AUTO": "7"}
+    from gyrowheel.fmu_build.scene import SOLVERS
+    assert {name.upper(): str(code) for name, code in SOLVERS.items()} == values

@@ -22,7 +22,7 @@ def test_build_simulate_info(tmp_path):
     assert fmu.is_file() and "built" in r.stdout
     out, png = tmp_path / "moon.csv", tmp_path / "moon.png"
     r = gyrowheel("simulate", fmu, "--stop-time", 2, "--output-interval", 0.5, "--set", "gamma_dot=7",
-                  "--set", "solver=rk4", "-o", out, "--plot", png)
+                  "--set", "solver=rk4", "--set", "max_step=0.05", "-o", out, "--plot", png)  # rk4's step
     assert r.returncode == 0, r.stderr
     rows = list(csv.DictReader(out.open()))
     assert [float(row["time"]) for row in rows] == [0.0, 0.5, 1.0, 1.5, 2.0]
@@ -31,6 +31,7 @@ def test_build_simulate_info(tmp_path):
     r = gyrowheel("info", fmu)
     assert r.returncode == 0
     assert "paper_moon" in r.stdout and "gamma_dot" in r.stdout and "1.625" in r.stdout
+    assert "auto         taylor at the default tolerance 1e-08" in r.stdout  # the scene names no solver
 
 
 @pytest.fixture(scope="module")

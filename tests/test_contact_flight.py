@@ -312,8 +312,8 @@ def test_flight_adds_its_variables(fmu):
 # variable table, the experiment and the name): flight adds nothing to them. Change these only with
 # a change meant for those scenes (ice_slide: the rolling and sliding modes, model/contact_modes.py,
 # and the Painleve stop, model/painleve.py).
-GROUND_GUIDS = {"paper_earth": "{27c0c82f-d150-5df2-b0bc-f210ed2ed844}",  # rolling, base wheel
-                "ice_slide": "{df3659f9-3f2c-5ce7-a913-3f255232503c}"}  # rolling and sliding
+GROUND_GUIDS = {"paper_earth": "{507a1f5e-dce8-52db-bf2e-79fbb8822f46}",  # rolling, base wheel
+                "ice_slide": "{25b2006a-62ab-591f-bea5-f6b61091b02d}"}  # rolling and sliding
 
 
 @pytest.mark.parametrize("name", sorted(GROUND_GUIDS))

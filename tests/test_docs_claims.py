@@ -95,7 +95,7 @@ def test_annotated_scene_example_parses():
     text = (DOCS / "scenes.md").read_text()
     example = re.search(r"## An annotated example\n\n```toml\n(.*?)```", text, re.S).group(1)
     scene = parse_scene(example, "rover_demo.toml")
-    assert scene.experiment.solver == "dopri5" and "gyrover" in scene.effects
+    assert scene.experiment.solver == "auto" and "gyrover" in scene.effects
 
 
 # -- docs/effects.md: drag_force and rolling_resistance_torque ---------------------------------

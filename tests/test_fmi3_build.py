@@ -106,7 +106,7 @@ def test_fmi3_model_structure_names_value_references(earth3):
     assert (cs.get("hasEventMode"), cs.get("providesIntermediateUpdate"), cs.get("maxOutputDerivativeOrder"),
             me.get("needsCompletedIntegratorStep")) == ("true", "false", "0", "false")
     items = [i.get("name") for i in root.find("TypeDefinitions").find("EnumerationType").iter("Item")]
-    assert items == ["euler", "rk4", "dopri5", "rosenbrock", "dop853"]
+    assert items == ["euler", "rk4", "dopri5", "rosenbrock", "dop853", "taylor", "auto"]  # auto: the kernel
 
 
 def test_fmi3_reinit_marks_states_of_a_model_with_update_events(example_build):

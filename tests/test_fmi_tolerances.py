@@ -11,7 +11,8 @@ and scales to 0: it follows a forwarded T too.
 Importers, reproduced as call sequences (communication step 0.01 s, the scenes' stop times):
   PyFMI 2.21, OMSimulator 3.0   forward DefaultExperiment's tolerance, 1e-4 when none is declared.
       the run is identical to the scene's (were no tolerance declared, 1e-4 would put the final
-      states off by 3.8e-7 (paper_earth, alpha) and 3.6e-3 (lunar_rover, alpha_dot)).
+      states off by 3.8e-7 (paper_earth with dopri5, alpha) and 7e-6 (lunar_rover, solver auto:
+      taylor, whose one step per 0.01 s communication step is accurate far below 1e-4)).
   a tool passing its own 1e-4 gets 1e-4 (errors of that size, by design).
   fmpy                          setupExperiment(tolerance) first, then the user's start values:
       a user's rel_tol wins over the forwarded tolerance; OMSimulator sets start values before
@@ -33,6 +34,16 @@ H = 0.01
 @pytest.fixture(scope="module")
 def lunar_fmu(example_build):
     return example_build("lunar_rover").fmu
+
+
+@pytest.fixture(scope="module")
+def earth_abs_fmu(tmp_path_factory):
+    """paper_earth with solver dopri5, an explicit abs_tol = 1e-10 and max_step 0.05 s (the scene
+    itself runs auto, its abs_tol following rel_tol: 0)."""
+    from gyrowheel.fmu_build import build_fmu, parse_scene
+    text = (SCENES / "paper_earth.toml").read_text().replace(
+        "[experiment]\n", '[experiment]\nsolver = "dopri5"\nabs_tol = 1e-10\nmax_step = 0.05\n')
+    return build_fmu(parse_scene(text, "paper_earth.toml"), tmp_path_factory.mktemp("abs") / "earth.fmu").fmu
 
 
 def _final(fmu, tolerance=None, before_setup=None, after_setup=None, read=("rel_tol", "abs_tol")):
@@ -58,16 +69,16 @@ def _final(fmu, tolerance=None, before_setup=None, after_setup=None, read=("rel_
 
 
 # lunar_rover with beta_min = 0.02: it falls at 17.46 s, where a loose tolerance shows most (with the
-# default 1e-3 it rolls on and 1e-4 costs only 3.4e-6 at the end)
-@pytest.mark.parametrize("scene,fixture,undeclared,values", [("paper_earth", "earth_fmu", 3.8e-7, {}),
-                                                             ("lunar_rover", "lunar_fmu", 3.6e-3, {"beta_min": 0.02})])
+# default 1e-3 it rolls on and 1e-4 costs only 3.4e-6 at the end, measured with dopri5)
+@pytest.mark.parametrize("scene,fixture,undeclared,values", [("paper_earth", "earth_abs_fmu", 3.8e-7, {}),
+                                                             ("lunar_rover", "lunar_fmu", 7e-6, {"beta_min": 0.02})])
 def test_forwarded_default_gets_the_scenes_accuracy(scene, fixture, undeclared, values, request):
     """PyFMI / OMSimulator: fmi2SetupExperiment(toleranceDefined, DefaultExperiment's tolerance)."""
     fmu = request.getfixturevalue(fixture)
     exp = load_scene(SCENES / f"{scene}.toml").experiment
+    exp.abs_tol = {"paper_earth": 1e-10, "lunar_rover": 0.0}[scene]  # explicit (earth_abs_fmu); follows rel_tol
     declared = float(read_model_description(str(fmu)).defaultExperiment.tolerance)
     assert declared == exp.rel_tol == 1e-8
-    assert exp.abs_tol == {"paper_earth": 1e-10, "lunar_rover": 0.0}[scene]  # explicit; follows rel_tol
     scene_run, _ = _final(fmu, before_setup=values)
     forwarded, settings = _final(fmu, tolerance=declared, before_setup=values)
     assert np.array_equal(forwarded, scene_run)  # 0 (not `undeclared`, see below)
@@ -82,17 +93,17 @@ def test_forwarded_default_gets_the_scenes_accuracy(scene, fixture, undeclared, 
     assert undeclared / 30 < err < undeclared * 30
 
 
-def test_user_rel_tol_wins_over_a_forwarded_tolerance(earth_fmu):
+def test_user_rel_tol_wins_over_a_forwarded_tolerance(earth_abs_fmu):
     """fmpy's order (setupExperiment first, then start values) and OMSimulator's (start values
     first): the user's rel_tol is used; abs_tol keeps the scene's value unless also set."""
-    alone, settings = _final(earth_fmu, after_setup={"rel_tol": 1e-6})
+    alone, settings = _final(earth_abs_fmu, after_setup={"rel_tol": 1e-6})
     assert settings == {"rel_tol": 1e-6, "abs_tol": 1e-10}
-    fmpy_order, settings = _final(earth_fmu, tolerance=1e-8, after_setup={"rel_tol": 1e-6})
+    fmpy_order, settings = _final(earth_abs_fmu, tolerance=1e-8, after_setup={"rel_tol": 1e-6})
     assert settings == {"rel_tol": 1e-6, "abs_tol": 1e-10}
-    oms_order, settings = _final(earth_fmu, tolerance=1e-4, before_setup={"rel_tol": 1e-6})
+    oms_order, settings = _final(earth_abs_fmu, tolerance=1e-4, before_setup={"rel_tol": 1e-6})
     assert settings == {"rel_tol": 1e-6, "abs_tol": 1e-10}
     assert np.array_equal(fmpy_order, alone) and np.array_equal(oms_order, alone)
-    both, settings = _final(earth_fmu, tolerance=1e-4, after_setup={"abs_tol": 1e-12})
+    both, settings = _final(earth_abs_fmu, tolerance=1e-4, after_setup={"abs_tol": 1e-12})
     assert settings == {"rel_tol": 1e-4, "abs_tol": 1e-12}  # an explicit abs_tol is kept
 
 

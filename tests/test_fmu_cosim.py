@@ -54,7 +54,9 @@ def test_interface_variables(md):
         assert v[name].unit == unit
     assert (v["fallen"].type, v["fallen"].variability, v["fallen"].initial) == ("Boolean", "discrete", "calculated")
     assert v["solver"].type == "Enumeration"
-    assert [i.name for i in v["solver"].declaredType.items] == ["euler", "rk4", "dopri5", "rosenbrock", "dop853"]
+    assert [(i.name, int(i.value)) for i in v["solver"].declaredType.items] == [
+        ("euler", 1), ("rk4", 2), ("dopri5", 3), ("rosenbrock", 4), ("dop853", 5), ("taylor", 6), ("auto", 7)]
+    assert int(v["solver"].start) == 7  # auto: the scene names no solver
     for name in ("rel_tol", "abs_tol", "max_step"):
         assert v[name].causality == "parameter"
     cs = md.coSimulation
@@ -77,7 +79,9 @@ def test_archive_layout_and_exports(earth_fmu, tmp_path):
     # one translation unit (docs/runtime.md): gw_fmu.c includes every other .c file of sources/
     assert md.buildConfigurations[0].sourceFileSets[0].sourceFiles == ["gw_fmu.c"]
     unity = (tmp_path / "sources" / "gw_fmu.c").read_text() + (tmp_path / "sources" / "gw_core.c").read_text()
-    assert {s for s in sources if f'#include "{s}"' not in unity} == {"gw_fmu.c"}
+    # but the ensemble library's sources, which an FMU with the Taylor kernel (this one: solver auto)
+    # carries for gyrowheel.Ensemble to compile on the host (docs/taylor.md)
+    assert {s for s in sources if f'#include "{s}"' not in unity} == {"gw_fmu.c", "gw_ensemble.c", "gw_ensemble_lib.c"}
     nm = subprocess.run(["nm", "-D", "--defined-only", str(tmp_path / "binaries/linux64" / f"{ident}.so")],
                         capture_output=True, text=True, check=True).stdout
     exported = {line.split()[-1] for line in nm.splitlines() if line.strip()}
@@ -192,7 +196,7 @@ def test_unknown_solver_rejected(earth_fmu):
     s = Slave(earth_fmu)
     try:
         with pytest.raises(FMICallException):
-            s.init(solver=7)
+            s.init(solver=8)  # items 1 .. 7 (auto)
         assert "solver" in s.log_text()
     finally:
         s.free()

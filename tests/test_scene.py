@@ -28,7 +28,18 @@ def test_defaults_are_the_paper_scenario():
     scene = parse_scene("")
     assert scene.effects == {"gravity": {}}
     assert scene.formulation == "reduced"
-    assert scene.experiment.solver == "dopri5"
+    assert scene.experiment.solver == "auto"
+    assert scene.experiment.max_step is None  # the default, resolved when the FMU is built
+    assert scene.experiment.max_step_in_force == scene.experiment.stop_time - scene.experiment.start_time
+
+
+def test_default_max_step_follows_a_later_change_of_the_run():
+    """max_step left to its default follows stop_time and the solver set after the scene is made."""
+    scene = parse_scene("")
+    scene.experiment.stop_time = 3.0
+    assert scene.experiment.max_step_in_force == 3.0
+    scene.experiment.solver = "rk4"
+    assert scene.experiment.max_step_in_force == 0.01
 
 
 @pytest.mark.parametrize("text,fragment", [

@@ -85,19 +85,25 @@ def _kernel_in(fmu: Path) -> dict[str, bool]:
             "code": "gw_tl1_jet" in symbols, "item": '<Item name="taylor" value="6"' in xml}
 
 
-def test_default_fmu_has_no_kernel_and_refuses_taylor(earth_fmu, paper):
-    """Only an FMU that asks for it carries the Taylor kernel (build time: docs/taylor.md); a
-    default one refuses solver 6 at the call, with the reason and how to get the kernel."""
+def test_fmu_without_kernel_refuses_taylor(earth_fmu, paper, tmp_path):
+    """Only an FMU that asks for it carries the Taylor kernel (build time: docs/taylor.md): the
+    paper scene names no solver (auto), so its default build has it, as one built with
+    taylor=True; built with taylor=False it has none and refuses solver 6 at the call, with the
+    reason and how to get the kernel."""
     from fmpy.fmi1 import FMICallException
-    assert _kernel_in(earth_fmu) == {"source": False, "slot": False, "code": False, "item": False}
-    with zipfile.ZipFile(earth_fmu) as zf:  # nor the recurrences and the ensemble's sources
+
+    from gyrowheel.fmu_build import load_scene
+    plain = build_fmu(load_scene(SCENES / "paper_earth.toml"), tmp_path / "plain.fmu", taylor=False).fmu
+    assert _kernel_in(plain) == {"source": False, "slot": False, "code": False, "item": False}
+    with zipfile.ZipFile(plain) as zf:  # nor the recurrences and the ensemble's sources
         assert not {"sources/gw_taylor_ops.h", "sources/gw_ensemble.c"} & set(zf.namelist())
-    assert _kernel_in(paper[0].fmu) == {"source": True, "slot": True, "code": True, "item": True}  # taylor=True
-    runner = fmu_runner(earth_fmu)
+    for fmu in (earth_fmu, paper[0].fmu):  # the default build (auto), taylor=True
+        assert _kernel_in(fmu) == {"source": True, "slot": True, "code": True, "item": True}
+    runner = fmu_runner(plain)
     with pytest.raises(FMICallException):
         runner.start(solver=TAYLOR)
     with pytest.raises(EnsembleError, match="no Taylor kernel.*gyrowheel build --taylor"):
-        Ensemble(earth_fmu)
+        Ensemble(plain)
 
 
 @pytest.mark.parametrize("name", ["lunar_rover", "euler_disk"])
@@ -111,7 +117,7 @@ def test_scenes_run_briefly_with_taylor(name, tmp_path):
         assert 'solver = "dopri5"' in text
         text = text.replace('solver = "dopri5"', 'solver = "taylor"')
     built = build_fmu(parse_scene(text, f"{name}.toml"), tmp_path / f"{name}.fmu", build_dir=tmp_path / "b",
-                      taylor=name == "lunar_rover")
+                      taylor=True if name == "lunar_rover" else None)
     assert _kernel_in(built.fmu) == {"source": True, "slot": True, "code": True, "item": True}
     runner = fmu_runner(built.fmu)
     a = one_step(runner, 0.5, STATES, solver=TAYLOR, rel_tol=1e-10, abs_tol=1e-12)

@@ -25,7 +25,8 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #define GWC_SAME(a, b) ((int)GYROWHEEL_SOLVER_##a == (int)GW_SOLVER_##b)
 typedef char gwc_solver_codes_match[(GWC_SAME(EULER, EULER) && GWC_SAME(RK4, RK4) &&
                                      GWC_SAME(DOPRI5, DOPRI5) && GWC_SAME(ROSENBROCK, ROSENBROCK) &&
-                                     GWC_SAME(DOP853, DOP853))
+                                     GWC_SAME(DOP853, DOP853) && GWC_SAME(TAYLOR, TAYLOR) &&
+                                     GWC_SAME(AUTO, AUTO))
                                         ? 1
                                         : -1];
 

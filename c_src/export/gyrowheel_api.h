@@ -80,8 +80,11 @@ typedef enum {
     GYROWHEEL_SOLVER_DOPRI5 = 3,     /* Dormand-Prince 5(4), adaptive, dense output */
     GYROWHEEL_SOLVER_ROSENBROCK = 4, /* RODAS4, linearly implicit, for stiff scenes */
     GYROWHEEL_SOLVER_DOP853 = 5,     /* Dormand-Prince 8(5,3), adaptive, dense output */
-    GYROWHEEL_SOLVER_TAYLOR = 6      /* Taylor series of adaptive order; needs the model's Taylor
-                                        kernel (a scene with solver = "taylor") */
+    GYROWHEEL_SOLVER_TAYLOR = 6,     /* Taylor series of adaptive order; needs the model's Taylor
+                                        kernel (a scene with solver taylor or auto) */
+    GYROWHEEL_SOLVER_AUTO = 7        /* taylor where the model has the Taylor kernel and no update
+                                        events, else dop853
+                                        (the default of a scene that names no solver) */
 } gyrowheel_solver;
 
 /* Integrator settings of a run; <model>_default_settings gives the scene's. */

@@ -65,7 +65,8 @@ static void table(void) {
     paper_earth_default_settings(&st);
     CHECK(p[PAPER_EARTH_P_M] == 2.0 && p[PAPER_EARTH_P_R] == 0.17 && p[PAPER_EARTH_P_g] == 9.81);
     CHECK(s[PAPER_EARTH_I_gamma_dot] == 6.0 && fabs(s[PAPER_EARTH_I_beta] - 80.0 * PI / 180.0) < 1e-15);
-    CHECK(st.solver == GYROWHEEL_SOLVER_DOPRI5 && st.rel_tol == 1e-8 && st.max_step == 0.05);
+    /* the scene names no solver: auto, with max_step the run's length */
+    CHECK(st.solver == GYROWHEEL_SOLVER_AUTO && st.rel_tol == 1e-8 && st.max_step == 20.0);
     CHECK(PAPER_EARTH_STOP_TIME == 20.0 && PAPER_EARTH_OUTPUT_INTERVAL == 0.01);
     CHECK(strcmp(paper_earth_status_string(GYROWHEEL_ERR_TIME),
                  paper_earth_status_string(GYROWHEEL_ERR_STATE)) != 0);
@@ -94,7 +95,8 @@ static void create_and_read(void) {
     CHECK(paper_earth_get(w, GYROWHEEL_KIND_STATE, PAPER_EARTH_X_beta, &value) == GYROWHEEL_OK);
     CHECK(paper_earth_get_outputs(w, y) == GYROWHEEL_OK && value == y[PAPER_EARTH_Y_beta]);
     CHECK(paper_earth_get_statistics(w, &stats) == GYROWHEEL_OK);
-    CHECK(stats.steps_accepted > 10 && stats.rhs_evaluations > 6 * stats.steps_accepted - 1);
+    /* auto integrates with taylor here: one right-hand side per step for its defect check */
+    CHECK(stats.steps_accepted > 0 && stats.rhs_evaluations >= stats.steps_accepted);
     paper_earth_free(w);
 
     CHECK(paper_earth_create_named(4, names, values, NULL, &v) == GYROWHEEL_OK);

@@ -111,11 +111,11 @@ static void horizon(void) {
     gyrowheel_statistics stats;
     int s;
     for (s = 0; s < 3; s++) {
-        /* the scene's max_step 0.05 s: 1e8 s are 2e9 steps, beyond the budget of 10^6 */
-        static const char *const names[1] = {"solver"};
-        const double values[1] = {solvers[s]};
+        /* max_step 0.05 s: 1e8 s are 2e9 steps, beyond the budget of 10^6 */
+        static const char *const names[2] = {"solver", "max_step"};
+        const double values[2] = {solvers[s], 0.05};
         paper_earth *w = NULL;
-        CHECK(paper_earth_create_named(1, names, values, NULL, &w) == GYROWHEEL_OK);
+        CHECK(paper_earth_create_named(2, names, values, NULL, &w) == GYROWHEEL_OK);
         CHECK(paper_earth_advance(w, 1.0) == GYROWHEEL_OK);
         CHECK(paper_earth_advance(w, 1e8) == GYROWHEEL_ERR_SIMULATION);
         CHECK(strstr(paper_earth_last_error(w), "internal steps of max_step=0.05, more than "

@@ -218,8 +218,15 @@ static void test_solver_values(void) {
     fmi2FreeInstance(c);
     c = fmi2Instantiate("names", fmi2CoSimulation, TOKEN, "", &h_callbacks, 0, 0);
     log_clear();
-    CHECK_STATUS(seti(c, VR_SOLVER, 7), fmi2Error); /* refused at the call */
-    CHECK_LOG("solver = 7 is not a solver");
+    CHECK_STATUS(seti(c, VR_SOLVER, 8), fmi2Error); /* refused at the call */
+    CHECK_LOG("solver = 8 is not a solver");
+    fmi2FreeInstance(c);
+    c = start_counted("names", 7, 1e-6, 1e-8, 1.0, -2.0); /* auto: this toy has no kernel */
+    CHECK_STATUS(fmi2GetInteger(c, &vr, 1, &v), fmi2OK);
+    CHECK(v == 7);
+    log_clear();
+    CHECK_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2OK);
+    CHECK_LOG("solver=dop853 accepted=");
     fmi2FreeInstance(c);
     c = fmi2Instantiate("names", fmi2CoSimulation, TOKEN, "", &h_callbacks, 0, 0);
     log_clear();

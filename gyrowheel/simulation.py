@@ -86,20 +86,22 @@ def with_values(reason: str, md, given: dict[str, object]) -> str:
     """reason (the FMU's refusal of the start values) with each variable it names, at its first
     mention, followed by the value the FMU had and where that came from: `mu_k (0.3, the FMU's
     start value) must be <= mu (0, given)`. md: fmpy's model description; given: the start values
-    set (by name, checked). Only a refused combination (two or more variables named) is
-    annotated: a single value's refusal names its variable already."""
+    set (by name, checked). Only a refused combination (two or more variables named in the rule,
+    before its first bracketed explanation) is annotated: a single value's refusal names its
+    variable already."""
+    rule, bracket, why = reason.partition(" (")
     by_name = {v.name: v for v in md.modelVariables if v.start is not None}
     names = sorted(by_name, key=len, reverse=True)  # mu_k before mu
     mention = {name: re.compile(rf"(?<![\w.(]){re.escape(name)}(?![\w(=])") for name in names}
-    if sum(bool(mention[name].search(reason)) for name in names) < 2:
+    if sum(bool(mention[name].search(rule)) for name in names) < 2:
         return reason
     for name in names:
         if name in given:
             told = f"{_as_text(given[name]).removesuffix('.0')}, given"
         else:
             told = f"{by_name[name].start}, the FMU's start value"
-        reason = mention[name].sub(f"{name} ({told})", reason, count=1)
-    return reason
+        rule = mention[name].sub(f"{name} ({told})", rule, count=1)
+    return rule + bracket + why
 
 
 EVENT_LOGGED = re.compile(r"(?:warning: )?event (\w+) at t=([-+0-9.eE]+)")

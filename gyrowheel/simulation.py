@@ -118,6 +118,8 @@ class Messages:
     def __call__(self, *arguments):
         status, _, message = arguments[-3:]
         text = message.decode(errors="replace") if isinstance(message, bytes) else str(message)
+        if int(status) == 0 and not EVENT_LOGGED.match(text):  # a step's log (logSolver): not kept
+            return
         self.lines.append((int(status), text))
 
     def errors(self) -> list[str]:

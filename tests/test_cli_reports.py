@@ -159,3 +159,14 @@ def test_docs_quote_every_start_value_of_the_measured_runs():
     for start in ("alpha = 0.7", "beta = pi/2", "gamma_dot 10", "height 0.3", "vz 1", "mu = 0.3", "g = 9.81",
                   "rel_tol 1e-12", "abs_tol 1e-14", "k_diam = 0.25", "k_axial = 0.4"):
         assert start in row, start
+    # the drag and tumbling rows (tests/test_flight_effects.py): every value the tests start from
+    for case, starts in (("air drag, linear", ("c_lin = 0.8", "cm_spin = 0.5", "rho_air = 1.225", "2 m/s from 1 m",
+                                               "beta = pi/2", "gamma_dot 40", "0.4 s")),
+                         ("air drag, quadratic", ("cd_area = 0.3", "rho_air = 1.225", "3 m/s from 1.5 m",
+                                                  "beta = pi/2", "alpha = 0.4", "gamma_dot 20", "0.5 s")),
+                         ("slope th = 0.15", ("psi = 1.0", "rho_air = 1.225", "cd_area = 0.3", "c_lin = 0.2",
+                                              "cm_spin = 0.5", "height 0.1", "vz 0.5", "beta 1.2", "gamma_dot 25",
+                                              "alpha_dot 2", "beta_dot 1", "0.8 s"))):
+        row = next(line for line in text.splitlines() if line.startswith(f"| {case}"))
+        for start in starts:
+            assert start in row, (case, start)

@@ -228,8 +228,13 @@ def _wheel(r: _Reader, data: dict) -> dict[str, float]:
         raise r.fail("wheel", "k_axial", f"must be <= 1 (a ring, all mass at radius R, is the limit), got {k_axial!r}")
     if k_axial > 2 * k_diam:
         raise r.fail("wheel", "k_axial", f"must be <= 2 k_diam (I_axial <= 2 I_diam for any rigid body), "
-                     f"got {k_axial!r} with k_diam {k_diam!r}")
+                     f"got {k_axial!r} with k_diam {k_diam!r} ({_source(data, 'k_diam')})")
     return wheel
+
+
+def _source(table: dict, key: str) -> str:
+    """Where a scene value of a combination refusal came from: the table (given) or the default."""
+    return "the scene's" if key in table or f"{key}_deg" in table else "the default"
 
 
 def _initial(r: _Reader, data: dict, effects: dict[str, dict]) -> dict[str, float]:
@@ -303,9 +308,10 @@ def _effect_value(r: _Reader, table: str, key: str, value, cls) -> float | str:
         return value
     presets = cls.presets().get(key, {})
     if isinstance(value, str):
+        if not presets:  # a string where only a number can go: no preset was meant
+            raise r.fail(table, key, f"must be a number (no presets), got str {value!r}")
         if value not in presets:
-            valid = f"{', '.join(presets)} or a number" if presets else "a number"
-            raise r.fail(table, key, f"unknown preset {value!r}; valid: {valid}")
+            raise r.fail(table, key, f"unknown preset {value!r}; valid: {', '.join(presets)} or a number")
         return presets[value]
     quantity = next(q for q in cls.parameters() if q.name == key)
     v = r.number(table, key, value)

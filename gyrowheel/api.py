@@ -232,7 +232,8 @@ def build(scene, output=None, *, build_dir=None, taylor: bool | None = None, pla
         raise SceneError(f"{where}: {one_line(exc)}") from exc
 
 
-def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, output=None, plot=None):
+def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, output=None, plot=None,
+             events=None):
     """Simulate an FMU in Co-Simulation with fmpy (FMI 2.0.4, section 4), from its start to stop_time.
 
     fmu: the .fmu (a path, or the BuildResult of gyrowheel.build). stop_time [s] (default: the
@@ -241,7 +242,9 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
     solver settings, initial states: 'gamma_dot', 'solver': 'rk4', 'beta': 1.4 rad) or
     'NAME=VALUE' strings; each checked against the FMU by name and type before the run
     (1.5 for an Integer is refused, not truncated). output: also write the result as CSV
-    (Booleans as 0/1); plot: also write a PNG of the trajectory (needs gyrowheel[plot]).
+    (Booleans as 0/1); plot: also write a PNG of the trajectory (needs gyrowheel[plot]); events:
+    a list to which each event the FMU reports is appended as (event name, t [s]) in firing order
+    (a jump's update or a termination, located in time: `('contact_flight', 0.1427843)`).
     Returns fmpy's structured array, shape (n,): one row per communication point, fields 'time'
     [s] and every output by name (units: gyrowheel.info). A terminating event (the wheel falling
     flat) ends the run early; its last row is at the event and the Boolean output 'fallen' is
@@ -263,6 +266,9 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
         require("plot", "gyrowheel.simulate(plot=...)")
     csv = _output_file(output, "output") if output is not None else None
     png = _figure_file(plot, "plot") if plot is not None else None
+    if events is not None and not isinstance(events, list):
+        raise ArgumentTypeError(f"events must be a list (the events are appended to it), got "
+                                f"{arguments.shown(events)}", argument="events")
     try:
         given = _assignments(start_values, "start_values")
         starts = check_start_values(path, given)
@@ -270,7 +276,8 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
         raise _start_value_error(exc, "start_values") from None
     _check_rows(md, stop_time, output_interval)
     try:
-        result = run(path, stop_time=stop_time, output_interval=output_interval, start_values=starts)
+        result = run(path, stop_time=stop_time, output_interval=output_interval, start_values=starts,
+                     events=events)
     except StartValueError as exc:  # a parameter out of its range, a combination the model refuses
         raise ArgumentError(f"start_values: {exc}{_as_given_in_degrees(str(exc), given, starts)}",
                             argument="start_values") from None

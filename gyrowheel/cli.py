@@ -133,8 +133,9 @@ def cmd_simulate(args) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", FmuWarning)
+            events: list[tuple[str, float]] = []
             result = simulate(args.fmu, stop_time=args.stop_time, output_interval=args.output_interval,
-                              start_values=args.set or [], output=output, plot=args.plot)
+                              start_values=args.set or [], output=output, plot=args.plot, events=events)
     except SimulationError as exc:  # the FMU refused the run: its logged reason
         raise CliError(str(exc), EXIT_FAILURE) from None
     except GyrowheelError as exc:
@@ -143,7 +144,7 @@ def cmd_simulate(args) -> int:
         if issubclass(warning.category, FmuWarning):
             print(f"gyrowheel: warning: {warning.message}", file=sys.stderr)
     print(f"wrote {output}: {len(result)} rows, t = {result['time'][0]:g} .. {result['time'][-1]:g} s"
-          + _events_summary(result))
+          + events_summary(events))
     if "painleve_paradox" in result.dtype.names and result["painleve_paradox"][-1]:
         print(f"gyrowheel: warning: {PAINLEVE_STOP.format(t=result['time'][-1])}", file=sys.stderr)
     if args.plot:
@@ -153,20 +154,20 @@ def cmd_simulate(args) -> int:
 
 # the Painleve stop's reason and remedy (model/painleve.py; docs/effects.md, "Sliding")
 PAINLEVE_STOP = ("sliding stopped at t = {t:.9g} s (event painleve): the normal force diverges there, the "
-                 "friction's share of the normal inverse mass reached D / W_nn = 0.05 (Painleve's paradox); the "
+                 "friction's share of the normal inverse mass fell to D / W_nn <= 0.05 (Painleve's paradox); the "
                  "rigid Coulomb contact has no solution beyond it: lower mu_k")
 
 
-def _events_summary(result) -> str:
-    """' (events: fallen at t = 17.46 s, slipping at t = 3.2 s)' for every Boolean flag that turned true."""
-    import numpy as np
-    fired = []
-    for name in result.dtype.names:
-        if result.dtype[name] == np.bool_ and result[name][-1]:
-            i = int(np.argmax(result[name]))
-            when = "at" if i == len(result) - 1 else "by"  # a terminal event ends the run: exact time
-            fired.append(f"{name} {when} t = {result['time'][i]:.6g} s")
-    return f" (events: {', '.join(fired)})" if fired else ""
+def events_summary(events: list[tuple[str, float]]) -> str:
+    """' (events: contact_flight: 11 times, 0.142784 .. 0.428074 s; fall at t = 1.2 s)': each event
+    the FMU reported ((name, t [s]) in firing order, gyrowheel.simulate's events), by name in the
+    order of its first firing, with its count and its first and last time; '' if none fired."""
+    times: dict[str, list[float]] = {}
+    for name, t in events:
+        times.setdefault(name, []).append(t)
+    fired = [f"{name} at t = {ts[0]:.6g} s" if len(ts) == 1 else
+             f"{name}: {len(ts)} times, {ts[0]:.6g} .. {ts[-1]:.6g} s" for name, ts in times.items()]
+    return f" (events: {'; '.join(fired)})" if fired else ""
 
 
 def cmd_info(args) -> int:
@@ -262,16 +263,19 @@ def make_parser() -> argparse.ArgumentParser:
                         "that read no arrays; refused for an FMI 2 FMU); default: the scene's [build] arrays, else with them")
     b.set_defaults(func=cmd_build)
     s = sub.add_parser("simulate", help="simulate an FMU in Co-Simulation with fmpy")
-    s.add_argument("fmu")
-    s.add_argument("--stop-time", type=finite_float)
-    s.add_argument("--output-interval", type=finite_float)
-    s.add_argument("--set", action="append", metavar="NAME=VALUE", help="start value (repeatable)")
+    s.add_argument("fmu", help="FMU to simulate (.fmu, built by gyrowheel build)")
+    s.add_argument("--stop-time", type=finite_float, metavar="SECONDS",
+                   help="end time [s] (default: the FMU's DefaultExperiment stop time)")
+    s.add_argument("--output-interval", type=finite_float, metavar="SECONDS",
+                   help="time between result rows [s] (default: the FMU's DefaultExperiment step size)")
+    s.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="start value or parameter, e.g. beta=1.4 or beta_deg=80 (repeatable)")
     s.add_argument("-o", "--output", help="CSV file to write (default: <fmu name>.csv)")
     s.add_argument("--plot", metavar="PNG", help="also plot the trajectory (needs gyrowheel[plot])")
     s.set_defaults(func=cmd_simulate)
     y = sub.add_parser("system", help="systems of FMUs (SSP 1.0)").add_subparsers(dest="system_command", required=True)
     yr = y.add_parser("run", help="run an .ssp with gyrowheel's master (fixed communication step, fmpy)")
-    yr.add_argument("ssp")
+    yr.add_argument("ssp", help="system to run (.ssp, SSP 1.0)")
     yr.add_argument("--step", type=finite_float, default=0.01, help="communication step [s] (default 0.01)")
     yr.add_argument("--stop-time", type=finite_float, help="default: the .ssp's DefaultExperiment")
     yr.add_argument("--set", action="append", metavar="COMPONENT.NAME=VALUE",
@@ -288,7 +292,7 @@ def make_parser() -> argparse.ArgumentParser:
     add_animate_arguments(a)
     a.set_defaults(func=cmd_animate)
     i = sub.add_parser("info", help="describe an FMU")
-    i.add_argument("fmu")
+    i.add_argument("fmu", help="FMU to describe (.fmu)")
     i.add_argument("--json", action="store_true", help="print the description as JSON")
     i.set_defaults(func=cmd_info)
     add_sweep_parser(sub)

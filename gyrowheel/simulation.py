@@ -5,6 +5,7 @@ from __future__ import annotations
 import ctypes
 import math
 import os
+import re
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -81,6 +82,31 @@ def refusal(errors: list[str]) -> tuple[str, bool]:
     return "; ".join(unique), before
 
 
+def with_values(reason: str, md, given: dict[str, object]) -> str:
+    """reason (the FMU's refusal of the start values) with each variable it names, at its first
+    mention, followed by the value the FMU had and where that came from: `mu_k (0.3, the FMU's
+    start value) must be <= mu (0, given)`. md: fmpy's model description; given: the start values
+    set (by name, checked). Only a refused combination (two or more variables named in the rule,
+    before its first bracketed explanation) is annotated: a single value's refusal names its
+    variable already."""
+    rule, bracket, why = reason.partition(" (")
+    by_name = {v.name: v for v in md.modelVariables if v.start is not None}
+    names = sorted(by_name, key=len, reverse=True)  # mu_k before mu
+    mention = {name: re.compile(rf"(?<![\w.(]){re.escape(name)}(?![\w(=])") for name in names}
+    if sum(bool(mention[name].search(rule)) for name in names) < 2:
+        return reason
+    for name in names:
+        if name in given:
+            told = f"{_as_text(given[name]).removesuffix('.0')}, given"
+        else:
+            told = f"{by_name[name].start}, the FMU's start value"
+        rule = mention[name].sub(f"{name} ({told})", rule, count=1)
+    return rule + bracket + why
+
+
+EVENT_LOGGED = re.compile(r"(?:warning: )?event (\w+) at t=([-+0-9.eE]+)")
+
+
 @dataclass
 class Messages:
     """Collects the FMU's log messages: the logger callback of FMI 2.0 (component,
@@ -92,10 +118,18 @@ class Messages:
     def __call__(self, *arguments):
         status, _, message = arguments[-3:]
         text = message.decode(errors="replace") if isinstance(message, bytes) else str(message)
+        if int(status) == 0 and not EVENT_LOGGED.match(text):  # a step's log (logSolver): not kept
+            return
         self.lines.append((int(status), text))
 
     def errors(self) -> list[str]:
         return [m for s, m in self.lines if s >= 3]  # fmi2Error / fmi3Error, fmi2Fatal / fmi3Fatal
+
+    def events(self) -> list[tuple[str, float]]:
+        """(event name, t [s]) of each event logged (category logEvents, c_src/gw_events.c:
+        `event NAME at t=T: ...`, `warning: event NAME at t=T`), in the order logged."""
+        return [(m.group(1), float(m.group(2))) for _, line in self.lines
+                for m in [EVENT_LOGGED.match(line)] if m]
 
     def warnings(self) -> list[str]:
         """The messages logged with status warning (fmi2Warning, fmi3Warning), each once."""
@@ -193,13 +227,14 @@ def _settable(v) -> bool:
 
 def run(fmu: str | Path, stop_time: float | None = None, output_interval: float | None = None,
         start_values: dict[str, object] | None = None, solver_tolerance: float | None = None,
-        messages: Messages | None = None) -> np.ndarray:
+        messages: Messages | None = None, events: list | None = None) -> np.ndarray:
     """Simulate in Co-Simulation; returns fmpy's structured result array of the scalar outputs.
 
     start_values are checked by name and type like `gyrowheel simulate --set` (strings or Python
     values: 1.5 for an Integer is refused, not truncated); stop_time, output_interval and
     solver_tolerance must be numbers. Raises SimulationError naming the value, or with the FMU's
-    logged reason."""
+    logged reason. events: a list to which the events the FMU reported (logEvents: its debug
+    log, switched on for this) are appended as (event name, t [s]), in the order they fired."""
     messages = messages or Messages()
     for what, value in (("stop_time", stop_time), ("output_interval", output_interval),
                         ("solver_tolerance", solver_tolerance)):
@@ -229,13 +264,16 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
             result = simulate_fmu(unpacked, fmi_type="CoSimulation", stop_time=stop_time,
                                   output_interval=output_interval, start_values=start_values or {},
                                   output=recorded, relative_tolerance=solver_tolerance, logger=messages,
-                                  debug_logging=False, **early)
+                                  debug_logging=events is not None, **early)
+            if events is not None:
+                events.extend(messages.events())
             for text in messages.warnings():
                 warnings.warn(text, FmuWarning, stacklevel=2)
             return result
         except FMICallException as exc:
             reason, before = refusal(messages.errors())
             if before:
+                reason = with_values(reason, md, start_values or {})
                 raise StartValueError(f"the FMU refused the start values: {reason}") from None
             raise SimulationError(f"the FMU reported an error: {reason or exc}{_underflow_note(reason)}") from None
         except GyrowheelError:

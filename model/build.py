@@ -453,8 +453,7 @@ class _Assembler:
             events.append(contact_flight.attitude_limit_event(ctx))
             for ev in events:  # switches on the ground only; lift-off and landing are contact_flown's
                 if ev.flag.name == "contact_switched":
-                    ev.flag.description = ("true once the contact has switched between rolling and sliding on the "
-                                           "ground (lift-off and landing: contact_flown)")
+                    ev.flag.description = contact_modes.SWITCHED + ", on the ground (lift-off and landing: contact_flown)"
         if sl is not None:  # sliding past its rigid solution: the Painleve stop (model/painleve.py)
             events.append(painleve.painleve_event(ctx, bind_s, contact_modes.friction_direction(ctx, sl)))
         n_mech = x.numel() - len(ctx.states)

@@ -238,6 +238,11 @@ def state_rows(x: ca.SX, states: list[State]) -> list[int]:
     return [next(j for j in range(x.numel()) if ca.is_equal(x[j], st.sym)) for st in states]
 
 
+# the flag of contact_slip: set by every firing, a re-pointed slip direction too (contact_mode tells the mode)
+SWITCHED = ("true once the event contact_slip has fired: a switch between rolling and sliding (either way), "
+            "or a slip that kept sliding having its direction re-pointed (contact_mode unchanged)")
+
+
 def contact_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable, Fc: ca.SX, T: ca.SX,
                   speed_rows: list[int]) -> Event:
     """The event contact_slip (module docstring): indicator and update, expressions of (t, x, u, p).
@@ -291,7 +296,7 @@ def contact_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callabl
         row = x.numel() - len(ctx.states) + lost[0]
         x_s[row] = x[row] + ca.if_else(holds, T_s - ca.substitute(T_s, x, x_p), 0)
     update = ca.if_else(mode < 0.5, x_r, ca.if_else(mode < 1.5, x_s, x))
-    flag = Quantity("contact_switched", "", "true once the contact has switched mode (rolling <-> sliding)")
+    flag = Quantity("contact_switched", "", SWITCHED)
     return Event("contact_slip", indicator, "update", flag, update)
 
 

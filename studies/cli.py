@@ -28,9 +28,9 @@ def add_parser(sub) -> None:
     e.add_argument("--stop-time", type=finite_float, help="s (default: the unit's DefaultExperiment)")
     e.add_argument("--output-interval", type=finite_float, help="communication step, s (default: the unit's step size)")
     e.add_argument("--solver", help="euler, rk4, dopri5, dop853, rosenbrock, taylor (FMUs with the Taylor kernel)")
-    e.add_argument("--rel-tol", type=finite_float)
-    e.add_argument("--abs-tol", type=finite_float)
-    e.add_argument("--max-step", type=finite_float)
+    e.add_argument("--rel-tol", type=finite_float, help="relative tolerance of the adaptive solvers (default: the unit's)")
+    e.add_argument("--abs-tol", type=finite_float, help="absolute tolerance of the adaptive solvers (default: the unit's)")
+    e.add_argument("--max-step", type=finite_float, help="largest internal step, s (default: the unit's)")
     m = s.add_argument_group("metrics and output")
     m.add_argument("--metrics", help="comma-separated: survived, fall_time, end_time, event, min_beta, max_beta, "
                    "max_lean, final_position, energy_drift, final:NAME, max:NAME, min:NAME, mean:NAME")

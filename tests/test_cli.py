@@ -87,7 +87,7 @@ def test_bad_input_is_one_line(built, tmp_path, args, fragment):
 def test_simulate_reports_the_fall(built, tmp_path):
     r = gyrowheel("simulate", built, "--set", "gamma_dot=1", "--set", "beta_min=0.1", "-o", tmp_path / "f.csv")
     assert r.returncode == 0, r.stderr
-    assert "(events: fallen at t = " in r.stdout
+    assert "(events: fall at t = " in r.stdout
     rows = list(csv.DictReader((tmp_path / "f.csv").open()))
     assert rows[0]["fallen"] == "0" and rows[-1]["fallen"] == "1"
 

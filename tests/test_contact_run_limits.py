@@ -46,10 +46,12 @@ def test_set_out_of_range_is_one_line_naming_the_field_exit_2(drop, tmp_path):
 
 @pytest.mark.parametrize("start, reason", [
     ({"height": -0.1}, "height must be >= 0 (the lowest rim point cannot start below the ground)"),
-    ({"height": 0.0, "vz": 1.0}, "vz must be 0 unless height > 0 (in contact the centre's vertical velocity "
-                                 "follows the lean rate)"),
+    # a combination names each value and its source
+    ({"height": 0.0, "vz": 1.0}, "vz (1, given) must be 0 unless height (0, given) > 0 (in contact the centre's "
+                                 "vertical velocity follows the lean rate)"),
     ({"M": -1.0}, "M (mass) must be > 0"),
-    ({"k_axial": 0.9}, "k_axial must be <= 2 k_diam (I_axial <= 2 I_diam for any rigid body)"),
+    ({"k_axial": 0.9}, "k_axial (0.9, given) must be <= 2 k_diam (0.25, the FMU's start value) (I_axial <= 2 "
+                       "I_diam for any rigid body)"),
     # one value, one reason: the combined checks hold back where a value fails its own range
     ({"k_diam": -1.0}, "k_diam must be > 0"),
     ({"beta": -1.0}, "beta (initial lean) must be > 0"),

@@ -54,8 +54,9 @@ REFUSED = [
     ("g=1e300", "g must be <= 1e+06"),
     ("g=1e20", "g must be <= 1e+06"),
     ("k_diam=1e300", "k_diam must be <= 1e+06"),
-    ("R=1e6 gamma_dot=300", f"|gamma_dot| {RIM}"),
-    ("R=1 alpha_dot=-299792458.000001", f"|alpha_dot| {RIM}"),
+    # a combination: each value named with its source
+    ("R=1e6 gamma_dot=300", f"|gamma_dot (300, given)| R (1000000, given){RIM[1:]}"),
+    ("R=1 alpha_dot=-299792458.000001", f"|alpha_dot (-299792458.000001, given)| R (1, given){RIM[1:]}"),
 ]
 
 

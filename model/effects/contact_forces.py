@@ -73,7 +73,9 @@ class ContactForces(Effect):
                                    'proportional to the normal force, would push once F_n < 0')
         mu = options.get("mu", cls.parameters()[0].start)
         if slide and options.get("mu_k", mu) > mu:
-            return "mu_k", f"must be <= mu (kinetic friction does not exceed static), got {options['mu_k']!r} > {mu!r}"
+            where = "the scene's" if "mu" in options else "the default"
+            return "mu_k", (f"must be <= mu (kinetic friction does not exceed static), got mu_k = {options['mu_k']!r} "
+                            f"> mu = {mu!r} ({where})")
         return None
 
     def apply(self, ctx: WheelContext) -> None:

@@ -220,9 +220,10 @@ def flight_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable
     mode = sl.mode.sym
     R, beta = P["R"], ctx.q[3]
     Fn_r, Fn_s = bind_r(Fc)[2], bind_s(Fc)[2]
-    # flight: h + tau max(u_n, 0) (u_n = dh/dt, the contact point's vertical velocity; tau = sqrt(R/g)):
-    # h itself where the wheel comes down, positive once it rises (after a bounce, and at once after
-    # a lift-off, where h = 0 and u_n = 0 to rounding), so only a descent reaches 0
+    # flight: h + TOUCH_SLACK R + tau max(u_n, 0) (u_n = dh/dt, the contact point's vertical velocity;
+    # tau = sqrt(R/g)): h + slack where the wheel comes down, positive on the ground and once it rises
+    # (after a bounce, and at once after a lift-off, where h = 0 and u_n = 0 to rounding), so only a
+    # descent reaches 0, whether it starts above the ground or on it
     u = flight.rim_velocity()
     tau = 1 / ctx.natural_rate()
     # sliding past the Painleve limit (gap <= 0) has F_n = -N / D < 0 where the contact point is

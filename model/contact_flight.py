@@ -16,7 +16,7 @@ One event, `contact_flight` (action "update"), switches both ways; its indicator
     sliding:           F_n of the mode where D / W_nn > PAINLEVE_MARGIN (model/painleve.py), else 1
     flight:            h + TOUCH_SLACK R + sqrt(R/g) max(u_n, 0)  (touchdown where h = z - R sin(beta)
                          reaches -TOUCH_SLACK R moving down: u_n = dh/dt the contact point's vertical
-                         velocity; positive while it rises; the slack, 1e-12 R, makes the indicator
+                         velocity; positive while it rises; the slack, 1e-15 R, makes the indicator
                          > 0 on the ground, so a body that starts flight there and falls back,
                          rather than rising, still crosses it: an impact at once, never a sink)
 The update:
@@ -63,7 +63,8 @@ from gyrowheel.model.spec import SPEED_OF_LIGHT, Event, Quantity
 
 ROLLING, SLIDING, FLIGHT = 0, 1, 2
 V_REST = 1e-3  # rebound speeds below V_REST sqrt(g R) end in a persistent contact
-TOUCH_SLACK = 1e-12  # the touchdown indicator's offset, in R: > 0 on the ground, so a sink is a crossing
+TOUCH_SLACK = 1e-15  # the touchdown indicator's offset, in R: > 0 on the ground, so a sink is a crossing;
+# a landing that ends on the ground lifts the centre by it: M g TOUCH_SLACK R, 3e-15 J for the paper wheel
 ABOUT = (" With on_lift_off = \"fly\" the wheel leaves the ground where the normal force reaches 0 and flies "
          "as a free rigid body under gravity; at touchdown an impact (a spring-damper contact's "
          "rigid limit with Coulomb friction, never creating energy) lands it rolling or sliding or bounces it (event contact_flight; outputs "

@@ -153,9 +153,10 @@ def cmd_simulate(args) -> int:
 
 
 # the Painleve stop's reason and remedy (model/painleve.py; docs/effects.md, "Sliding")
-PAINLEVE_STOP = ("sliding stopped at t = {t:.9g} s (event painleve): the normal force diverges there, the "
-                 "friction's share of the normal inverse mass fell to D / W_nn <= 0.05 (Painleve's paradox); the "
-                 "rigid Coulomb contact has no solution beyond it: lower mu_k")
+PAINLEVE_STOP = ("sliding stopped at t = {t:.9g} s (event painleve): the friction's share of the normal inverse "
+                 "mass reached D / W_nn <= 0.05, where the normal force diverges or turns negative against a "
+                 "contact driven into the ground (Painleve's paradox); the rigid Coulomb contact has no solution "
+                 "beyond it: lower mu_k")
 
 
 def events_summary(events: list[tuple[str, float]]) -> str:

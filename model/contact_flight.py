@@ -12,13 +12,16 @@ entry to a contact mode sets them from it exactly) and `last_impulse` (N s, the 
 the last touchdown, zero derivative).
 
 One event, `contact_flight` (action "update"), switches both ways; its indicator is
-    rolling, sliding:  F_n of the mode        (lift-off where it reaches 0)
-    flight:            h + sqrt(R/g) max(u_n, 0)  (touchdown where h = z - R sin(beta) reaches 0
-                                                  moving down: u_n = dh/dt the contact point's
-                                                  vertical velocity; positive while it rises)
+    rolling:           F_n of the mode        (lift-off where it reaches 0)
+    sliding:           F_n of the mode where D / W_nn > PAINLEVE_MARGIN (model/painleve.py), else 1
+    flight:            h + TOUCH_SLACK R + sqrt(R/g) max(u_n, 0)  (touchdown where h = z - R sin(beta)
+                         reaches -TOUCH_SLACK R moving down: u_n = dh/dt the contact point's vertical
+                         velocity; positive while it rises; the slack, 1e-15 R, makes the indicator
+                         > 0 on the ground, so a body that starts flight there and falls back,
+                         rather than rising, still crosses it: an impact at once, never a sink)
 The update:
 - lift-off: velocities continuous (x_dot, y_dot the mode's centre velocity, z_dot = R cos(beta)
-  beta_dot), z = R sin(beta); the flight indicator is then h = 0 (>= 0), rising (the free body's
+  beta_dot), z = R sin(beta); the flight indicator is then TOUCH_SLACK R > 0, rising (the free body's
   contact point accelerates away from the ground once the constraint would have to pull);
 - touchdown: the impulse of model/impact.py (Coulomb friction integrated over the impulse, the
   normal impulse of a Kelvin-Voigt contact in its rigid limit) on the Delassus matrix W = J M^-1 J^T
@@ -28,7 +31,9 @@ The update:
   rebound becomes a persistent contact, which ends a bouncing wheel's series of impacts. After it:
   flight again if the contact point leaves (u_n+ > 0); else rolling if it stopped tangentially
   and rolling holds there (the contact_slip indicator > 0 and F_n > 0), else sliding (d along the
-  slip, or -F_t where it is 0) if F_n > 0 in sliding, else flight (the constraint would pull).
+  slip, or -F_t where it is 0) if F_n > 0 in sliding or sliding is past the Painleve limit (there
+  the event painleve stops the run: F_n < 0 with D <= 0 is no lift-off), else flight from the
+  ground (h = 0; the constraint would pull).
   z, z_dot are set from the constraint; the impact's energy loss -dT (>= 0) is added to
   dissipated_energy, the driven coordinates' motors' impulsive work T(w+) - T(w-) - dT to
   actuator_work; impact_impulse = P_n.
@@ -48,15 +53,18 @@ from typing import Callable
 
 import casadi as ca
 
-from gyrowheel.model.contact_modes import state_rows, unit_vector
+from gyrowheel.model.contact_modes import friction_direction, state_rows, unit_vector
 from gyrowheel.model.context import BREAKAWAY, State, WheelContext
 from gyrowheel.model.flight_system import free_system
 from gyrowheel.model.impact import generalised_impact
 from gyrowheel.model.kinematics import norm
+from gyrowheel.model.painleve import painleve_gap
 from gyrowheel.model.spec import SPEED_OF_LIGHT, Event, Quantity
 
 ROLLING, SLIDING, FLIGHT = 0, 1, 2
 V_REST = 1e-3  # rebound speeds below V_REST sqrt(g R) end in a persistent contact
+TOUCH_SLACK = 1e-15  # the touchdown indicator's offset, in R: > 0 on the ground, so a sink is a crossing;
+# a landing that ends on the ground lifts the centre by it: M g TOUCH_SLACK R, 3e-15 J for the paper wheel
 ABOUT = (" With on_lift_off = \"fly\" the wheel leaves the ground where the normal force reaches 0 and flies "
          "as a free rigid body under gravity; at touchdown an impact (a spring-damper contact's "
          "rigid limit with Coulomb friction, never creating energy) lands it rolling or sliding or bounces it (event contact_flight; outputs "
@@ -213,13 +221,18 @@ def flight_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable
     mode = sl.mode.sym
     R, beta = P["R"], ctx.q[3]
     Fn_r, Fn_s = bind_r(Fc)[2], bind_s(Fc)[2]
-    # flight: h + tau max(u_n, 0) (u_n = dh/dt, the contact point's vertical velocity; tau = sqrt(R/g)):
-    # h itself where the wheel comes down, positive once it rises (after a bounce, and at once after
-    # a lift-off, where h = 0 and u_n = 0 to rounding), so only a descent reaches 0
+    # flight: h + TOUCH_SLACK R + tau max(u_n, 0) (u_n = dh/dt, the contact point's vertical velocity;
+    # tau = sqrt(R/g)): h + slack where the wheel comes down, positive on the ground and once it rises
+    # (after a bounce, and at once after a lift-off, where h = 0 and u_n = 0 to rounding), so only a
+    # descent reaches 0, whether it starts above the ground or on it
     u = flight.rim_velocity()
     tau = 1 / ctx.natural_rate()
-    indicator = ca.if_else(mode < 0.5, Fn_r, ca.if_else(mode < 1.5, Fn_s,
-                                                        flight.height + tau * ca.fmax(u[2], 0)))
+    # sliding past the Painleve limit (gap <= 0) has F_n = -N / D < 0 where the contact point is
+    # driven into the ground: no lift-off (the event painleve stops the run there)
+    gap = painleve_gap(ctx, bind_s, friction_direction(ctx, sl))
+    lifts = ca.if_else(gap > 0, Fn_s, 1)
+    indicator = ca.if_else(mode < 0.5, Fn_r, ca.if_else(mode < 1.5, lifts,
+                                                        flight.height + TOUCH_SLACK * R + tau * ca.fmax(u[2], 0)))
     z_c, vz_c = R * ca.sin(beta), R * ca.cos(beta) * ctx.qd[3]  # the contact's z, z_dot (beta_dot a state)
 
     # lift-off: velocities continuous, z on the constraint
@@ -263,11 +276,14 @@ def flight_event(ctx: WheelContext, x: ca.SX, bind_r: Callable, bind_s: Callable
     v_slip = ca.substitute(u[0:2], x, x_b)
     d = ca.if_else(ca.dot(v_slip, v_slip) > 0, unit_vector(v_slip), ca.substitute(-unit_vector(F_t), x, x_roll))
     x_slide[r_dx], x_slide[r_dy] = d[0], d[1]
-    slides = ca.substitute(Fn_s, x, x_slide) > 0
+    # past the Painleve limit it lands sliding whatever F_n's sign, and the event painleve stops it
+    slides = ca.logic_or(ca.substitute(Fn_s, x, x_slide) > 0, ca.substitute(gap, x, x_slide) <= 0)
     # a persistent contact (rebound below v_rest: target u_n+ = 0) never bounces, whatever the
     # rounding of u_n+ (a rounded +1e-17 would fly on at h = 0 and sink before the next touchdown)
     bounces = ca.logic_and(res.u_plus[2] > 0, ca.logic_not(res.persistent))
-    x_t = ca.if_else(bounces, x_b, ca.if_else(rolls, x_roll, ca.if_else(slides, x_slide, x_b)))
+    # flight on from the ground (the constraint would pull): h = 0, so the indicator starts at
+    # TOUCH_SLACK R > 0 and a fall back is a touchdown
+    x_t = ca.if_else(bounces, x_b, ca.if_else(rolls, x_roll, ca.if_else(slides, x_slide, on)))
     # stiction laws (rolling_resistance, spin_friction; limits c F_n): sliding with the rate's sign
     # in flight, where the limit is 0 (a stuck law would freeze its rate: stiction.stuck_rate_rows);
     # on landing m = sign(r), as at the start, 0 (stuck) for a rate of exactly 0

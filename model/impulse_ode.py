@@ -45,6 +45,7 @@ TURN = 0.4  # a step turns the slip's direction by at most about this (rad)
 SWING = 0.08  # a step advances the normal oscillation by at most this phase (rad)
 NEWTON = 6  # Newton iterations locating an event inside a step
 STAGES = 12
+JAM_SLIP = 1e-10  # slip / max|u-| below which a jamming direction is passed in no finite impulse
 END = 5  # the `_quantity` row of -G (rising to 0 at the end of the contact)
 
 
@@ -173,8 +174,10 @@ def _scan(row: int) -> ca.Function:
 @lru_cache(maxsize=None)
 def grid_function() -> ca.Function:
     """gw_impulse_grid(y0 (5,), W (3 x 3), mu, zeta) -> (y_end (5,), compression found, y_c (5,),
-    contact end found, y_r (5,)): the sliding impact integrated over the chi grid from y0 (slip
-    v != 0), where its compression (u_n = 0) and its contact (G = 0) end if they lie in it."""
+    contact end found, y_r (5,), jam before compression's end, jam before the contact's end): the
+    sliding impact integrated over the chi grid from y0 (slip v != 0), where its compression
+    (u_n = 0) and its contact (G = 0) end if they lie in it, and whether a grid point it passes
+    before either end jams (`_jams`)."""
     y0, W, mu, zeta = ca.MX.sym("y0", 5), ca.MX.sym("W", 3, 3), ca.MX.sym("mu"), ca.MX.sym("zeta")
     rate = ca.norm_2(W[0:2, 2]) + mu * ca.sqrt(ca.sumsqr(W[0:2, 0:2]))
     rep = lambda v: ca.repmat(v, 1, STEPS)  # noqa: E731
@@ -186,9 +189,29 @@ def grid_function() -> ca.Function:
         carry = scans(ca.DM.zeros(8), Y_lo, Y, H, rep(zeta), rep(W))[:, -1]
         found.append(carry[0])
         ys.append(_locate_function(row)(carry[1:6], carry[6], carry[7], W, mu, zeta)[0])
-    return ca.Function("gw_impulse_grid", [y0, W, mu, zeta], [Y[:, -1], found[0], ys[0], found[1], ys[1]],
-                       ["y0", "W", "mu", "zeta"], ["y_end", "found_c", "y_c", "found_r", "y_r"],
+    jam_c, jam_r = _jams(ca.horzcat(y0, Y), W, mu, zeta)
+    return ca.Function("gw_impulse_grid", [y0, W, mu, zeta],
+                       [Y[:, -1], found[0], ys[0], found[1], ys[1], jam_c, jam_r],
+                       ["y0", "W", "mu", "zeta"], ["y_end", "found_c", "y_c", "found_r", "y_r", "jam_c", "jam_r"],
                        {"never_inline": True})
+
+
+def _jams(Y: ca.MX, W: ca.MX, mu, zeta) -> tuple[ca.MX, ca.MX]:
+    """(jam before the end of compression, jam before the end of the contact): 1 where the normal
+    rate du_n/dP_n = W_nn - mu W_nt . v/|v| is <= 0 at a grid point Y (5 x N, the slip v != 0) the
+    impact passes before that end (u_n < 0, resp. G >= 0, at every grid point up to it), else 0.
+    There sliding drives the contact point into the ground (a jam: Stronge, "Impact Mechanics",
+    2000, ch. 5; Batlle, 1996); the rate on a slip direction the impact does not traverse is no jam,
+    nor is it on a slip below JAM_SLIP max|u-| (Y[:, 0] the approach): a converging slip's
+    direction keeps turning as it dies out, over a normal impulse of the order of the slip itself."""
+    v = Y[0:2, :]
+    r = ca.sqrt(ca.sum1(v * v))
+    rate = W[2, 2] * r - mu * ca.mtimes(W[2, 0:2], v)  # |v| du_n/dP_n
+    G = Y[4, :] - 2 * zeta * Y[2, :] / W[2, 2]
+    before_c = ca.cumsum(Y[2, :] >= 0, 1) == 0
+    before_r = ca.cumsum(G < 0, 1) == 0
+    jammed = (rate <= 0) * (r > JAM_SLIP * ca.mmax(ca.fabs(Y[0:3, 0])))
+    return ca.sum2(jammed * before_c) > 0, ca.sum2(jammed * before_r) > 0
 
 
 def restitution(zeta):

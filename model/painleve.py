@@ -20,7 +20,10 @@ The event `painleve` (action terminate, flag `painleve_paradox`) fires where, wh
 reaches 0; its indicator is 1 in every other mode, so a switch into sliding (rolling -> sliding, a
 touchdown that lands sliding) at D / W_nn <= PAINLEVE_MARGIN takes it from > 0 to <= 0 in the
 switch's instant and the run stops there (the runtime's event iteration), and a start sliding there
-is refused at initialisation. Why D / W_nn and not F_n: F_n = -N / D is large wherever the normal
+is refused at initialisation. D <= 0 is inside that range: there the sliding F_n = -N / D comes out
+negative wherever the free contact point accelerates into the ground (N < 0), which is no lift-off;
+so with flight (model/contact_flight.py) sliding never lifts off at D / W_nn <= PAINLEVE_MARGIN, and
+a touchdown whose sliding end mode lies there lands sliding (and stops here) whatever F_n's sign. Why D / W_nn and not F_n: F_n = -N / D is large wherever the normal
 load N is large (a fast wheel's centripetal terms), and where N < 0 the wheel lifts off (F_n <= 0)
 whatever D is; D / W_nn is the dimensionless share of the frictionless normal compliance that
 friction leaves, a property of the attitude and of mu_k alone, 1 without friction. At the margin
@@ -65,13 +68,19 @@ def normal_share(W: ca.SX, mu_k: ca.SX, e: ca.SX) -> ca.SX:
     return 1 - mu_k * ca.dot(W[2, 0:2].T, e) / W[2, 2]
 
 
+def painleve_gap(ctx: WheelContext, bind_s: Callable, direction: ca.SX) -> ca.SX:
+    """D / W_nn - PAINLEVE_MARGIN (1) of the sliding mode, an expression of (t, x, u, p): <= 0 where
+    sliding has no rigid solution (module docstring), whatever the sign of D. bind_s: the sliding
+    mode's binding; direction: the friction direction e (2, placeholders) of the sliding force."""
+    return normal_share(delassus(ctx), ctx.sliding.mu_k, bind_s(direction)) - PAINLEVE_MARGIN
+
+
 def painleve_event(ctx: WheelContext, bind_s: Callable, direction: ca.SX) -> Event:
     """The event painleve (module docstring), an expression of (t, x, u, p). bind_s: the sliding
     mode's binding; direction: the friction direction e (2, placeholders) of the sliding force."""
     sl = ctx.sliding
-    share = normal_share(delassus(ctx), sl.mu_k, bind_s(direction))
     sliding = ca.logic_and(sl.mode.sym > 0.5, sl.mode.sym < 1.5)
-    indicator = ca.if_else(sliding, share - PAINLEVE_MARGIN, 1)
+    indicator = ca.if_else(sliding, painleve_gap(ctx, bind_s, direction), 1)
     flag = Quantity("painleve_paradox", "", f"true once sliding has reached D / W_nn <= {PAINLEVE_MARGIN} (D = W_nn - "
                     "mu_k W_nt . e, the effective normal inverse mass under Coulomb friction): the normal force "
                     "diverges there and the rigid Coulomb contact has no solution beyond (Painleve's paradox), "

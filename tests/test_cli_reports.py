@@ -82,7 +82,7 @@ def test_contact_switched_is_described_as_every_firing_of_contact_slip(drop, tmp
 
 def test_painleve_warning_says_at_or_below_the_margin():
     from gyrowheel.model.painleve import PAINLEVE_MARGIN
-    assert f"D / W_nn <= {PAINLEVE_MARGIN:g} " in PAINLEVE_STOP
+    assert f"D / W_nn <= {PAINLEVE_MARGIN:g}," in PAINLEVE_STOP
 
 
 def test_upright_rest_is_unstable_at_the_inverted_pendulum_rate(drop, tmp_path):
@@ -96,8 +96,7 @@ def test_upright_rest_is_unstable_at_the_inverted_pendulum_rate(drop, tmp_path):
     assert rate == pytest.approx(math.sqrt(G_EARTH / (R * (1 + K_DIAM))), rel=0.01)
     assert out["fallen"][-1] and 5.8 < out["time"][-1] < 6.0
     comment = (SCENES / "drop_bounce.toml").read_text()
-    assert "unstable equilibrium" in comment and "5.911 s" in comment
-    assert f"{out['time'][-1]:.4g}" == "5.911"
+    assert "unstable equilibrium" in comment and "about 5.9 s" in comment
 
 
 SLIDE = '[effects.gravity]\n[effects.contact_forces]\non_slip = "slide"\non_lift_off = "fly"\n'
@@ -147,13 +146,13 @@ def test_every_option_of_every_subcommand_has_help():
 
 
 def test_docs_quote_every_start_value_of_the_measured_runs():
-    from test_painleve import REPORTED
+    from test_painleve import THROWN
     text = (ROOT / "docs" / "effects.md").read_text()
     stop = text[text.index("**The Painleve stop.**"):]
-    stop = stop[:stop.index("stops at t = 0.184151318 s")]
+    stop = stop[:stop.index("stops at t = 0.19795 s")]
     command = re.search(r"`gyrowheel simulate drop_bounce.fmu([^`]*)`", stop).group(1)
     sets = dict(re.findall(r"--set (\w+)=(\S+)", " ".join(command.split())))
-    assert {k: float(v) for k, v in sets.items()} == {**{k: float(v) for k, v in REPORTED.items()}, "mu_k": 4.0}
+    assert {k: float(v) for k, v in sets.items()} == {**{k: float(v) for k, v in THROWN.items()}, "mu_k": 1.15}
     assert "--stop-time 1.5" in " ".join(command.split())
     row = next(line for line in text.splitlines() if "(0.617722, 0.450674)" in line)
     for start in ("alpha = 0.7", "beta = pi/2", "gamma_dot 10", "height 0.3", "vz 1", "mu = 0.3", "g = 9.81",

@@ -40,16 +40,17 @@ SANITIZER_ENV = {"ASAN_OPTIONS": "detect_leaks=1:abort_on_error=0", "UBSAN_OPTIO
 
 @pytest.fixture(scope="session")
 def exports(tmp_path_factory) -> dict[str, Path]:
-    """paper_earth (no Taylor kernel) and the same scene with solver taylor (the kernel),
+    """paper_earth with solver dopri5 (no Taylor kernel) and with solver taylor (the kernel),
     exported once per test run."""
     def make(d: Path) -> dict[str, Path]:
         text = (SCENES / "paper_earth.toml").read_text()
-        assert 'solver = "dopri5"' in text
-        taylor = d / "paper_taylor.toml"
-        taylor.write_text(text.replace('solver = "dopri5"', 'solver = "taylor"').replace(
-            'name = "paper_earth"', 'name = "paper_taylor"'))
-        return {"no_kernel": export_c(load_scene(SCENES / "paper_earth.toml"), d / "earth", check=False).directory,
-                "kernel": export_c(load_scene(taylor), d / "taylor", check=False).directory}
+        assert "solver =" not in text and "[experiment]\n" in text  # the default, auto
+        scenes = {}
+        for kind, solver in (("no_kernel", "dopri5"), ("kernel", "taylor")):
+            scenes[kind] = d / f"paper_{kind}.toml"
+            scenes[kind].write_text(text.replace("[experiment]\n", f'[experiment]\nsolver = "{solver}"\n').replace(
+                'name = "paper_earth"', f'name = "paper_{kind}"'))
+        return {kind: export_c(load_scene(path), d / kind, check=False).directory for kind, path in scenes.items()}
     return shared_build(tmp_path_factory, "export_c_sanitizers", make)
 
 

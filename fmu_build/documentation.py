@@ -54,7 +54,7 @@ C runtime.</p>
 <li>{"guid" if fmi == 2 else "instantiationToken"}: <code>{html.escape(guid)}</code></li>
 <li>effects: {html.escape(effects)}</li>
 <li>default experiment: {exp.start_time} s to {exp.stop_time} s, output every {exp.output_interval} s,
-solver {html.escape(exp.solver)}, rel_tol {exp.rel_tol}, abs_tol {exp.abs_tol}, max_step {exp.max_step} s</li></ul>
+solver {html.escape(exp.solver)}, rel_tol {exp.rel_tol}, abs_tol {exp.abs_tol}, max_step {exp.max_step_in_force} s</li></ul>
 <h2>Behaviour</h2>
 {BEHAVIOUR[fmi]}
 <h2>Variables</h2>

@@ -84,7 +84,7 @@ def _solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
                   "set, scaled with a tolerance passed to fmi2SetupExperiment (0 stays 0)",
                   exp.abs_tol, minimum=0.0, maximum=TOLERANCE_RANGES["abs_tol"][1]), "Real", None),
         (Quantity("max_step", "s", "upper bound of internal steps; the fixed step of euler and rk4",
-                  exp.max_step), "Real", None),
+                  exp.max_step_in_force), "Real", None),
         (Quantity("max_internal_steps", "", "budget of internal steps (accepted and rejected) of one "
                   "fmi2DoStep, from 1 to 2147483647: a step needing more is refused up front or stopped, "
                   "state kept at its start",

@@ -20,7 +20,8 @@ from gyrowheel.errors import ArgumentTypeError
 
 @pytest.fixture(scope="module")
 def moon(example_build):
-    return example_build("paper_moon")
+    """The moon wheel without the Taylor kernel (the refusals of solver taylor below)."""
+    return example_build("paper_moon", taylor=False)
 
 
 @pytest.fixture(scope="module")
@@ -225,8 +226,8 @@ def test_an_argument_of_the_wrong_type_is_named(moon, tmp_path):
 
 @pytest.mark.parametrize("kwargs, error, argument, message", [
     (dict(solver="taylor"), gyrowheel.SweepSpecError, "solver",
-     "solver: value 'taylor' for 'solver' is not one of its items; valid: euler, rk4, dopri5, rosenbrock, dop853 (or "
-     "their numbers); taylor needs an FMU built with the Taylor kernel: gyrowheel.build(scene, output, taylor=True)"),
+     "solver: value 'taylor' for 'solver' is not one of its items; valid: euler, rk4, dopri5, rosenbrock, dop853, auto "
+     "(or their numbers); taylor needs an FMU built with the Taylor kernel: gyrowheel.build(scene, output, taylor=True)"),
     (dict(solver="nope"), gyrowheel.SweepSpecError, "solver",
      "solver: value 'nope' for 'solver' is not one of its items; valid: "),
     (dict(max_step=math.nan), gyrowheel.SweepSpecError, "max_step", "max_step: value nan for 'max_step' is not finite"),
@@ -314,7 +315,7 @@ def test_simulate_names_what_it_cannot_use(moon, tmp_path):
     _names(exc, "start_values", "start_values: 'gamma_dot' given twice (gamma_dot=8, gamma_dot=9)")
     with pytest.raises(gyrowheel.ArgumentError) as exc:
         gyrowheel.simulate(moon, start_values={"solver": "taylor"})
-    _names(exc, "start_values", "valid: euler, rk4, dopri5, rosenbrock, dop853; taylor needs an FMU built with the "
+    _names(exc, "start_values", "valid: euler, rk4, dopri5, rosenbrock, dop853, auto; taylor needs an FMU built with the "
                                 "Taylor kernel: gyrowheel.build(scene, output, taylor=True) or `gyrowheel build "
                                 "--taylor SCENE -o FMU`")
 

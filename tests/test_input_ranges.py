@@ -157,7 +157,7 @@ def test_a_combination_too_stiff_to_integrate_says_why(tmp_path):
     underflow and says what it means, naming the ranges' documentation (exit 1: a run that
     failed, not a value out of range)."""
     scene = tmp_path / "drag.toml"
-    scene.write_text('[model]\nname = "drag"\n[effects.gravity]\n[effects.air_drag]\n')
+    scene.write_text('[model]\nname = "drag"\n[effects.gravity]\n[effects.air_drag]\n[experiment]\nsolver = "dop853"\n')
     fmu = gyrowheel.build(scene, output=tmp_path / "drag.fmu").fmu
     with pytest.raises(SimulationError) as exc:
         gyrowheel.simulate(fmu, stop_time=0.01, start_values={"M": 1e-30, "c_lin": 1e6})

@@ -67,9 +67,10 @@ def test_plain_path_when_the_solver_is_not_taylor(taylor_fmu, ensemble_calls):
     assert (table["status"] == "ok").all() and ensemble_calls == []
 
 
-def test_default_fmu_refuses_solver_taylor_before_running(earth_fmu, ensemble_calls):
+def test_default_fmu_refuses_solver_taylor_before_running(example_build, ensemble_calls):
     """An FMU without the kernel lists no solver taylor: the sweep is refused before it runs."""
-    with pytest.raises(SweepSpecError, match="'taylor' for 'solver'.*valid: euler, rk4, dopri5, rosenbrock, dop853 "):
+    earth_fmu = example_build("paper_earth", taylor=False).fmu
+    with pytest.raises(SweepSpecError, match="'taylor' for 'solver'.*valid: euler, rk4, dopri5, rosenbrock, dop853, auto "):
         sweep(earth_fmu, points=POINTS[:2], metrics=["survived"], stop_time=0.5, output_interval=0.1,
               solver="taylor", workers=0)
     assert ensemble_calls == []

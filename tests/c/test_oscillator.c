@@ -213,7 +213,7 @@ static void test_checks_and_settings(void) {
     for (i = 0; i < sizeof(settings) / sizeof(settings[0]); i++)
         EXPECT_ERROR(c, setr(c, settings[i].vr, settings[i].v), settings[i].msg);
     /* 4 rosenbrock, 5 dop853: test_c_solvers */
-    EXPECT_ERROR(c, seti(c, VR_SOLVER, 7), "solver = 7 is not a solver: valid are 1 (euler)");
+    EXPECT_ERROR(c, seti(c, VR_SOLVER, 8), "solver = 8 is not a solver: valid are 1 (euler)");
     EXPECT_ERROR(c, seti(c, VR_SOLVER, 0), "solver = 0 is not a solver");
     EXPECT_ERROR(c, seti(c, VR_SOLVER, 99), "solver = 99 is not a solver");
     /* the budget of internal steps, an Integer setting: refused at the call (fmi2SetInteger) */

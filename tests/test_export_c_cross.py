@@ -133,7 +133,8 @@ def test_aarch64_example_under_qemu(copy, host_csv):
     """The README's one command for aarch64-linux, with the strict warnings: silent, an aarch64
     executable whose CSV equals the host's to 1e-12 (measured 2.3e-13, most values differ in
     their last bits: clang fuses multiplies and adds on ARM, gcc's C99 build does not); with
-    -ffp-contract=off the same bytes."""
+    -ffp-contract=off too (the host runs the Taylor kernel's FMA copy where the CPU has FMA, so
+    unfused ARM code need not give the host's bytes)."""
     cc = command(readme_commands(copy)["aarch64-linux"][1])
     out = cc[cc.index("-o") + 1]
     r = run([*cc, *STRICT], cwd=copy)
@@ -145,7 +146,8 @@ def test_aarch64_example_under_qemu(copy, host_csv):
     assert np.max(np.abs(a - h)) <= 1e-12, np.max(np.abs(a - h))
 
     run([*cc, *STRICT, "-ffp-contract=off", "-o", "unfused"], cwd=copy)
-    assert on_aarch64(copy / "unfused") == host_csv
+    unfused = csv(on_aarch64(copy / "unfused"))
+    assert unfused.shape == h.shape and np.max(np.abs(unfused - h)) <= 1e-12, np.max(np.abs(unfused - h))
 
 
 # slow (5 s, 20 s with a cold zig cache): CMake's compiler checks link aarch64 test programs, the

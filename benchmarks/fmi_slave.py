@@ -88,14 +88,15 @@ class FmuRunner:
         self.last_seconds = self.last_call_seconds = float("nan")
         self._fresh = True
 
-    def start(self, **values) -> None:
-        """Reset (after the first run), set the values (one call per FMI type, as a user sets
-        several values) and initialise."""
+    def start(self, tolerance: float | None = None, **values) -> None:
+        """Reset (after the first run), set up the experiment (with `tolerance`, when given, as
+        fmi2SetupExperiment's), set the values (one call per FMI type, as a user sets several
+        values) and initialise."""
         s = self.slave
         if not self._fresh:
             s.reset()
         self._fresh = False
-        s.setupExperiment(startTime=0.0)
+        s.setupExperiment(tolerance=tolerance, startTime=0.0)
         ints = [name for name in values if self.types[name] in ("Integer", "Enumeration")]
         reals = [name for name in values if name not in ints]
         if ints:
@@ -105,9 +106,10 @@ class FmuRunner:
         s.enterInitializationMode()
         s.exitInitializationMode()
 
-    def one_step(self, stop: float, names: list[str], **values) -> list[float]:
+    def one_step(self, stop: float, names: list[str], tolerance: float | None = None,
+                 **values) -> list[float]:
         t_call = time.thread_time()
-        self.start(**values)
+        self.start(tolerance, **values)
         t0 = time.thread_time()
         self.slave.doStep(0.0, stop)
         t1 = time.thread_time()

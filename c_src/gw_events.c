@@ -224,7 +224,12 @@ static int gw_event_end_slopes(gw_instance *I, double t0, double t1) {
     }
     if (!I->k7_valid && I->solver_in_use != GW_SOLVER_TAYLOR && I->solver_in_use != GW_SOLVER_ROSENBROCK)
         gw_dense_prepare(I); /* euler, rk4: f(t1, xnew) into k[6], reused by the next step */
+    if (I->edot_new_ready) { /* from the Taylor series at t1 (GW_TL(evt_slope)): exact */
+        I->edot_new_ready = 0;
+        return 0;
+    }
     if (I->k7_valid) return gw_event_slopes(I, t1, I->xnew, I->enew, I->k[6], dt, I->edot_new);
+    if (I->tl_fnew) return gw_event_slopes(I, t1, I->xnew, I->enew, I->tl_fnew, dt, I->edot_new);
     return gw_event_slopes(I, t1, I->xnew, I->enew, NULL, -dt, I->edot_new);
 }
 
@@ -257,6 +262,12 @@ static int gw_event_dip(gw_instance *I, int i, double t0, double t1, double *ta,
     int n = 0, k, it;
     if ((g0 > 0.0) != (g1 > 0.0) || !isfinite(g0) || !isfinite(g1) || !isfinite(d0) ||
         !isfinite(d1))
+        return 0;
+    /* p's Bernstein coefficients g0, g0 + d0/3, g1 - d1/3, g1 bound s p from below (convex
+     * hull): with the inner two at or beyond half the nearer end value, so is p's extremum and
+     * the test below fails; most steps end here, without the roots' sqrt and divisions */
+    if (s * (g0 + d0 * (1.0 / 3.0)) >= 0.5 * (q0 < q1 ? q0 : q1) &&
+        s * (g1 - d1 * (1.0 / 3.0)) >= 0.5 * (q0 < q1 ? q0 : q1))
         return 0;
     /* p'(th) = A th^2 + B th + C; a minimum of s p where s p'' = s (2 A th + B) > 0 */
     if (A == 0.0) {

@@ -234,6 +234,7 @@ GW_API void gw_instance_reset(gw_instance *I) {
     I->y_valid = 0;
     I->pre_valid = 0;
     I->enew_ready = 0;
+    I->edot_new_ready = 0;
     I->edot_valid = 0;
     I->fcur_valid = 0;
     I->xdot_valid = 0;

@@ -83,6 +83,8 @@ struct gw_instance {
     double *enew, *eev;                /* ne */
     int enew_ready; /* enew holds the indicators at the pending attempt's end (t1, xnew), read
                        from the Taylor kernel's order-0 row (gw_taylor_model.h: GW_TL(evt)) */
+    int edot_new_ready; /* edot_new holds their time derivatives there, from the rows of order
+                           0 and 1 (GW_TL(evt_slope)) */
     /* compensated summation of the state (TwoSum): x + xc is the state to twice the working
      * precision; xcnew goes with xnew; xc_x is the x that xc belongs to (a front end that
      * writes x makes xc stale) */
@@ -151,6 +153,10 @@ struct gw_instance {
     void (*tl_fetch)(gw_instance *I, void *env);
     void *tl_fetch_env;
     int tl_si, tl_so; /* their layout: state i's coefficient k at [i tl_si + k tl_so] */
+    /* f(t1, xnew) of the attempt being concluded, order 1 of the series at its end point
+     * (gw_integrate_taylor), contiguous; NULL where that series was not computed.  The
+     * indicators' slopes at t1 come from it as from DOPRI5's FSAL stage (gw_events.c) */
+    const double *tl_fnew;
 };
 
 /* ---- gw_instance.c ------------------------------------------------------------------------ */

@@ -123,16 +123,22 @@ GW_INTERNAL double gw_taylor_step(const gw_instance *I, const gw_taylor_run *run
     const int nx = I->m->nx;
     const double floor_scale = I->atol_eff / I->rel_tol;
     const double *nominal = I->nominal;
-    double n1 = 0.0, n2 = 0.0;
+    double n1 = 0.0, n2 = 0.0, z1 = 0.0, z2 = 0.0;
     int i;
     for (i = 0; i < nx; i++) { /* N_j = max_i |x_i^[j]| / sc_i, j = p-1 and p, in one pass */
         const double *xi = X + (size_t)i * si;
         const double rsc = 1.0 / (fabs(xi[0]) + floor_scale * nominal[i]);
         const double r1 = fabs(xi[(size_t)(order - 1) * so]) * rsc;
         const double r2 = fabs(xi[(size_t)order * so]) * rsc;
-        n1 = r1 > n1 || r1 != r1 ? r1 : n1; /* a NaN sticks: gw_taylor_bad_order names it */
-        n2 = r2 > n2 || r2 != r2 ? r2 : n2;
+        /* the maxima without a branch on the data (maxsd; which ratio is largest is not
+         * predictable); z_j turns NaN with any non-finite ratio, a NaN the maximum skips */
+        n1 = r1 > n1 ? r1 : n1;
+        n2 = r2 > n2 ? r2 : n2;
+        z1 += r1 - r1;
+        z2 += r2 - r2;
     }
+    if (z1 != z1 && !(n1 > DBL_MAX)) n1 = z1; /* gw_taylor_bad_order names the order */
+    if (z2 != z2 && !(n2 > DBL_MAX)) n2 = z2;
     return gw_taylor_step_size(run, order, n1, n2, bad_order);
 }
 
@@ -324,7 +330,8 @@ GW_INTERNAL gw_int_result gw_taylor_conclude_err(gw_instance *I, double t_end, g
     int last;
     *fresh = 0;
     while (err > 1.0) {
-        I->enew_ready = 0; /* xnew moves: gw_evt at the retry's end */
+        I->enew_ready = I->edot_new_ready = 0; /* xnew moves: gw_evt at the retry's end */
+        I->tl_fnew = NULL; /* and the series there is not its */
         /* the coefficients' step was too long (a near pole the last two orders do not show, a
          * stiff mode): shorter steps on the same series, as a rejected step of any solver */
         I->n_rejected++;
@@ -397,14 +404,21 @@ GW_INTERNAL gw_int_result gw_integrate_taylor(gw_instance *I, double t_end) {
             I->n_rhs++;
 #if defined(GW_TL_HAS_EVT) && GW_TL_HAS_EVT && GW_TAYLOR_KERNEL_EVT
             if (I->m->ne > 0 && gw_eval_pre(I) == 0) { /* the indicators there: its order 0 */
+#if defined(GW_TL_HAS_EVT_SLOPE) && GW_TL_HAS_EVT_SLOPE /* and their slopes: order 1 */
+                gw_tl1_evt_slope(I->tl_wn, I->tl_wn + I->tl_so, t1, I->u, I->p, I->pre_c,
+                                 I->enew, I->edot_new);
+                I->edot_new_ready = 1;
+#else
                 gw_tl1_evt(I->tl_wn, t1, I->u, I->p, I->pre_c, I->enew);
+#endif
                 I->enew_ready = 1;
             }
 #endif
         }
-        result = gw_taylor_conclude(I, t_end, &run, h, t1, last ? NULL : I->tl_wn + I->tl_so,
-                                    (size_t)I->tl_si, &fresh);
-        I->enew_ready = 0;
+        I->tl_fnew = last ? NULL : I->tl_wn + I->tl_so; /* tl_si 1: contiguous */
+        result = gw_taylor_conclude(I, t_end, &run, h, t1, I->tl_fnew, (size_t)I->tl_si, &fresh);
+        I->enew_ready = I->edot_new_ready = 0;
+        I->tl_fnew = NULL;
         if (result != GW_INT_OK) break;
         have = fresh;
         if (have) gw_swap_series(&I->tl_w, &I->tl_wn);

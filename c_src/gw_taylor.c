@@ -4,8 +4,8 @@
  * after gw_funcs.c, before model_desc.c.  The ensemble library instantiates the cst and jet
  * templates with GW_ENSEMBLE_LANES lanes (gw_ensemble.c).
  *
- * A model built without a kernel (the default: only a scene with solver = "taylor" or the build
- * option asks for one) has a gw_taylor_model.h of one comment: this file then defines nothing
+ * A model built without a kernel (a scene with contact modes, a named solver other than taylor,
+ * or the build option --no-taylor) has a gw_taylor_model.h of one comment: this file then defines nothing
  * and leaves GW_TAYLOR_KERNEL undefined, so gw_solver_taylor.c compiles only the refusal of
  * solver taylor and the binary holds no Taylor code.  With a kernel it defines
  *   GW_TAYLOR_KERNEL          1: the unit has the kernel (gw_solver_taylor.c, gw_solver.h)
@@ -15,6 +15,8 @@
  *                             [k GW_TL_NODES + n])
  *   gw_tl1_evt                the event indicators from a series' order 0 (taylor/events.py),
  *                             where the model has them (GW_TL_HAS_EVT)
+ *   gw_tl1_evt_slope          the same and their time derivatives from orders 0 and 1
+ *                             (GW_TL_HAS_EVT_SLOPE)
  *
  * Two copies (GW_TAYLOR_FAST): on x86-64 with GCC >= 8 or clang >= 14 the kernel is compiled
  * twice, as portable code (gw_tl1d_*) and for x86-64-v3 (gw_tl1v3_*; GCC < 12 and clang, whose
@@ -122,6 +124,13 @@ static GW_MAYBE_UNUSED void gw_tl1_evt(const double *w0, double t, const double 
                                        const double *p, const double *c, double *e) {
     gw_tl1d_evt(w0, t, u, p, c, e);
 }
+#if GW_TL_HAS_EVT_SLOPE
+static GW_MAYBE_UNUSED void gw_tl1_evt_slope(const double *w0, const double *w1, double t,
+                                             const double *u, const double *p, const double *c,
+                                             double *e, double *d) {
+    gw_tl1d_evt_slope(w0, w1, t, u, p, c, e, d);
+}
+#endif
 #endif
 #endif /* GW_TL_NX */
 #undef GW_TL_W

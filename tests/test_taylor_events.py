@@ -36,22 +36,47 @@ _HARNESS = """#include <math.h>
 #define GW_TL_W 1
 #define GW_TL(name) gw_tl1_##name
 #include "gw_taylor_model.h"
-int evt(int order, double t, const double *x, const double *u, const double *p, const double *pc,
-        double *e);
-/* the kernel's series at (t, x), then the indicators from its order-0 row */
-int evt(int order, double t, const double *x, const double *u, const double *p, const double *pc,
-        double *e) {
-    double c[GW_TL_NCST + 1];
-    double *w = (double *)malloc(sizeof(double) * ((size_t)GW_TL_NVAR * (size_t)(order + 1) + 8));
-    double *wi = (double *)(void *)(((uintptr_t)w + 31u) & ~(uintptr_t)31u);
-    if (!w) return -1;
+/* the kernel's series at (t, x) in *w (free it), 32-byte aligned: the returned pointer; NULL */
+static double *series_at(int order, double t, const double *x, const double *u, const double *p,
+                         double **w) {
+    double c[GW_TL_NCST + 1], *wi;
+    *w = (double *)malloc(sizeof(double) * ((size_t)GW_TL_NVAR * (size_t)(order + 1) + 8));
+    if (!*w) return NULL;
+    wi = (double *)(void *)(((uintptr_t)*w + 31u) & ~(uintptr_t)31u);
     gw_tl1_cst(u, p, c);
     gw_tl1_series(order, &t, x, c, wi);
+    return wi;
+}
+int evt(int order, double t, const double *x, const double *u, const double *p, const double *pc,
+        double *e);
+/* the indicators from the order-0 row of the series at (t, x) */
+int evt(int order, double t, const double *x, const double *u, const double *p, const double *pc,
+        double *e) {
+    double *w, *wi = series_at(order, t, x, u, p, &w);
+    if (!wi) return -1;
 #if GW_TL_HAS_EVT
     gw_tl1_evt(wi, t, u, p, pc, e);
+#else
+    (void)pc, (void)e;
 #endif
     free(w);
     return GW_TL_HAS_EVT;
+}
+int evt_slope(int order, double t, const double *x, const double *u, const double *p,
+              const double *pc, double *e, double *d);
+/* the same with the indicators' time derivatives from the rows of order 0 and 1; 0 without */
+int evt_slope(int order, double t, const double *x, const double *u, const double *p,
+              const double *pc, double *e, double *d) {
+#if defined(GW_TL_HAS_EVT_SLOPE) && GW_TL_HAS_EVT_SLOPE
+    double *w, *wi = series_at(order, t, x, u, p, &w);
+    if (!wi) return -1;
+    gw_tl1_evt_slope(wi, wi + GW_TL_NODES, t, u, p, pc, e, d);
+    free(w);
+    return 1;
+#else
+    (void)order, (void)t, (void)x, (void)u, (void)p, (void)pc, (void)e, (void)d, (void)series_at;
+    return 0;
+#endif
 }
 """
 
@@ -81,12 +106,14 @@ SCENE_FILES = sorted(SCENES.glob("*.toml"))
 
 
 @pytest.mark.parametrize("path", SCENE_FILES, ids=lambda p: p.stem)
-def test_kernel_indicators_equal_the_event_function(path, tmp_path):
+def test_kernel_indicators_and_slopes_equal_the_event_function(path, tmp_path):
     """At random states (the scene's parameters), every indicator from the kernel's row equals
     gw_evt's function (CasADi evaluating it) to a rounding of a sine; every scene's fall event
     reads sin(beta) from the kernel, so each scene with events has the function.  (The C of
     gw_evt's own operations is checked bit for bit by the ensemble tests below and in
-    test_taylor_solver.py, which compare whole runs.)"""
+    test_taylor_solver.py, which compare whole runs.)  The indicators' time derivatives from the
+    rows of order 0 and 1 (what the crossing search inside a step uses at each step's end) equal
+    CasADi's forward derivative of gw_evt along gw_ode, their values GW_TL(evt)'s bit for bit."""
     spec = model_spec(load_scene(path))
     fns = _functions(spec)
     if "evt" not in fns:
@@ -97,7 +124,8 @@ def test_kernel_indicators_equal_the_event_function(path, tmp_path):
     p = np.array([q.start for q in spec.parameters], dtype=float)
     u = np.array([q.start or 0.0 for q in spec.inputs] or [0.0], dtype=float)
     pc = np.array(fns["ode_pre"](p), dtype=float).ravel() if "ode_pre" in fns else np.zeros(1)
-    ne, exact, n = evt.nnz_out(0), 0, 0
+    ne, exact, n, slopes = evt.nnz_out(0), 0, 0, 0
+    slope_fn = _slope_function(evt, fns["ode"])
     for _ in range(50):
         x, t = rng.uniform(-2.0, 2.0, nx), float(rng.uniform(0.0, 10.0))
         args = [t, x, u[: spec.u.numel()], p] + ([pc] if evt.n_in() == 5 else [])
@@ -111,7 +139,18 @@ def test_kernel_indicators_equal_the_event_function(path, tmp_path):
         np.testing.assert_allclose(e[ok], ref[ok], rtol=0, atol=1e-13 * (1.0 + np.abs(ref[ok]).max()))
         exact += int(np.sum(e[ok] == ref[ok]))
         n += int(ok.sum())
+        slope = np.array(slope_fn(*args), dtype=float).ravel()
+        es, d = np.full(ne, np.nan), np.full(ne, np.nan)
+        assert lib.evt_slope(3, ctypes.c_double(t), _ptr(x), _ptr(u), _ptr(p), _ptr(pc), _ptr(es), _ptr(d)) == 1
+        np.testing.assert_array_equal(es, e)
+        fine = np.isfinite(slope) & (np.abs(slope) < 1e8)  # a rate near a pole of f says nothing
+        # (the kernel's rates x' differ from gw_ode's by roundings, which an indicator's
+        # cancelling terms raise: gyrover_ice's normal force to 2.4e-11; a wrong rule is O(1) off)
+        np.testing.assert_allclose(d[fine], slope[fine], rtol=1e-9,
+                                   atol=1e-10 * (1.0 + np.abs(slope[fine]).max()))
+        slopes += int(fine.sum())
     assert exact > 0  # libm's sin here, gw_sin's in gw_evt: mostly the same bits
+    assert slopes >= 40
 
 
 def test_an_operation_without_c_here_keeps_gw_evt():
@@ -129,6 +168,50 @@ def test_an_operation_without_c_here_keeps_gw_evt():
     assert "GW_TL_HAS_EVT 1" in source(ca.sin(x[0]) - p[0])
     assert "GW_TL_HAS_EVT 0" in source(ca.erf(x[1]) + ca.sin(x[0]))
     assert "GW_TL_HAS_EVT 0" in source(x[1] - p[0])  # nothing from the kernel
+
+
+def _slope_function(evt: ca.Function, ode: ca.Function) -> ca.Function:
+    """(evt's inputs) -> de/dt = de/dx f(t, x) + de/dt|_x: CasADi's forward derivative of the
+    indicators along the right-hand side (not the generator's instruction-by-instruction rules)."""
+    t, x = ca.MX.sym("t"), ca.MX.sym("x", evt.size1_in(1))
+    rest = [ca.MX.sym(f"a{k}", evt.sparsity_in(k)) for k in range(2, evt.n_in())]
+    e = evt(t, x, *rest)
+    f = ode(t, x, rest[0], rest[1], *(rest[2:] if ode.n_in() == 5 else []))
+    return ca.Function("d", [t, x, *rest], [ca.jtimes(e, x, f) + ca.jacobian(e, t)])
+
+
+def test_slope_rules_of_each_operation():
+    """Each operation the slope generator has a rule for, differentiated along x' = (x1, -sin x0,
+    1): the C rules (compiled) against CasADi's derivative, with constant operands (one-sided
+    rules) and state operands; an operation without a rule (pow with a varying exponent) leaves
+    GW_TL_HAS_EVT_SLOPE 0 while GW_TL(evt) stays."""
+    t, x, u, p = ca.SX.sym("t"), ca.SX.sym("x", 3), ca.SX.sym("u", 0), ca.SX.sym("p", 1)
+    names = ["t", "x", "u", "p"]
+    ode = ca.Function("gw_ode", [t, x, u, p], [ca.vertcat(x[1], -ca.sin(x[0]), 1.0 + 0.0 * x[2])], names, ["xdot"])
+    s0 = ca.sin(x[0])
+    exprs = [s0 * x[1] - p[0], s0 / (2.0 + x[1] ** 2), ca.sqrt(2.0 + s0), ca.atan2(s0, 1.5 + x[2]),
+             ca.atan2(s0, p[0]), ca.fabs(s0 - 0.1), ca.fmin(s0, x[1]), ca.fmax(s0, p[0] * x[1]),
+             ca.if_else(x[2] > 0.3, s0 * t, x[1]), ca.tanh(s0) + ca.exp(0.1 * x[1]) + ca.log(2.0 + s0),
+             ca.atan(s0) + ca.asin(0.5 * s0) + ca.acos(0.4 * s0), ca.cos(x[1]) * ca.sin(x[2]) + s0,
+             ca.sinh(0.3 * x[1]) + ca.cosh(0.2 * x[2]) + s0, s0 ** 3 + 1.0 / (3.0 + s0), ca.tan(0.3 * s0),
+             p[0] * s0 - t, ca.cos(x[0]) + 2.0 * s0]
+    fns = {"ode": optimised(ode), "evt": optimised(ca.Function("gw_evt", [t, x, u, p], [ca.vertcat(*exprs)],
+                                                                 names, ["e"]))}
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        lib = _library(fns, Path(tmp))
+        rng = np.random.default_rng(3)
+        slope_fn = _slope_function(fns["evt"], fns["ode"])
+        for _ in range(20):
+            xv, tv, pv = rng.uniform(-1.0, 1.0, 3), float(rng.uniform(0.0, 2.0)), np.array([0.7])
+            ref = np.array(slope_fn(tv, xv, np.zeros(0), pv), dtype=float).ravel()
+            e, d = np.full(len(exprs), np.nan), np.full(len(exprs), np.nan)
+            uv = np.zeros(1)
+            assert lib.evt_slope(3, ctypes.c_double(tv), _ptr(xv), _ptr(uv), _ptr(pv), _ptr(uv), _ptr(e), _ptr(d)) == 1
+            np.testing.assert_allclose(d, ref, rtol=1e-12, atol=1e-13)
+    dec = decompose(fns["ode"])
+    varying = event_source(optimised(ca.Function("gw_evt", [t, x, u, p], [s0 ** x[1]], names, ["e"])), dec)
+    assert "GW_TL_HAS_EVT 1" in varying and "GW_TL_HAS_EVT_SLOPE 0" in varying
 
 
 FALLS = """[model]

@@ -274,6 +274,30 @@ static double gw_taylor_defect(gw_instance *I, double t1, double h, const double
     return isfinite(err) ? err : HUGE_VAL;
 }
 
+/* The solution's time scale from its series where some orders are not finite: the least
+ * N_k^(-1/k) over the orders k = 1..order whose N_k (gw_taylor_step's norm) is finite and
+ * positive; HUGE_VAL if none.  Only for the error message: a strongly damped mode of rate
+ * lambda has N_k ~ lambda^k and gives about 1 / lambda. */
+static double gw_taylor_time_scale(const gw_instance *I, int order) {
+    const double floor_scale = I->atol_eff / I->rel_tol;
+    double scale = HUGE_VAL;
+    int i, k;
+    for (k = 1; k <= order; k++) {
+        double n = 0.0;
+        for (i = 0; i < I->m->nx; i++) {
+            const double *xi = I->tl_w + (size_t)i * (size_t)I->tl_si;
+            const double r = fabs(xi[(size_t)k * (size_t)I->tl_so]) /
+                             (fabs(xi[0]) + floor_scale * I->nominal[i]);
+            n = r > n ? r : n;
+        }
+        if (n > 0.0 && n <= DBL_MAX) {
+            const double rho = pow(n, -1.0 / k);
+            scale = rho < scale ? rho : scale;
+        }
+    }
+    return scale;
+}
+
 GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
                                                  gw_taylor_run *run, const double *norms,
                                                  double *h, double *t1, int *last) {
@@ -296,8 +320,14 @@ GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
         hs = gw_taylor_step(I, run, I->tl_w, (size_t)I->tl_si, (size_t)I->tl_so, p, &bad);
     }
     if (bad) {
-        GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g (the solution's "
-                   "series diverges: a singularity of the right-hand side?)", bad, I->t);
+        const double scale = gw_taylor_time_scale(I, p);
+        if (scale < gw_h_min(I->t))
+            GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g: the solution's "
+                       "time scale, %.2g s from the finite orders, is below the smallest step, 16 eps "
+                       "max(|t|, 1) s (a model too stiff to integrate)", bad, I->t, scale);
+        else
+            GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g (the solution's "
+                       "series diverges: a singularity of the right-hand side?)", bad, I->t);
         return GW_INT_ERROR;
     }
     I->h_adapt = hs < I->max_step ? hs : I->max_step;

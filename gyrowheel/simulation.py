@@ -292,9 +292,17 @@ UNDERFLOW_NOTE = ("; the model's fastest time scale is shorter than the solver's
                   "(docs/interface.md, \"Valid ranges\")")
 
 
+# the same for solver taylor, whose series overflows first (its reason names the time scale)
+STIFF_NOTE = ("; values that make it this stiff (e.g. strong damping on a light wheel) cannot be integrated "
+              "(docs/interface.md, \"Valid ranges\")")
+
+
 def _underflow_note(reason: str) -> str:
-    """UNDERFLOW_NOTE if the FMU's reason is a step size underflow, else ''."""
-    return UNDERFLOW_NOTE if "step size underflow" in reason else ""
+    """UNDERFLOW_NOTE if the FMU's reason is a step size underflow, STIFF_NOTE if it is solver
+    taylor's time scale below the smallest step, else ''."""
+    if "step size underflow" in reason:
+        return UNDERFLOW_NOTE
+    return STIFF_NOTE if "too stiff to integrate" in reason else ""
 
 
 def _read_by_a_run(name: str) -> bool:

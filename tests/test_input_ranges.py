@@ -151,21 +151,45 @@ def test_fmpy_validates_the_fmu_with_its_ranges(drop):
     assert validate_fmu(drop) == []
 
 
-def test_a_combination_too_stiff_to_integrate_says_why(tmp_path):
+@pytest.fixture(scope="module")
+def drag(tmp_path_factory):
+    """A scene with air drag, the default build (solver auto: taylor, the kernel built in)."""
+    tmp = tmp_path_factory.mktemp("drag")
+    scene = tmp / "drag.toml"
+    scene.write_text('[model]\nname = "drag"\n[effects.gravity]\n[effects.air_drag]\n')
+    return gyrowheel.build(scene, output=tmp / "drag.fmu").fmu
+
+
+def test_a_combination_too_stiff_to_integrate_says_why(drag):
     """In range one by one, a 1e-30 kg wheel with linear drag c_lin = 1e6 N s/m relaxes its speed
-    in about 1e-36 s, far below the step-size floor: the run stops with the solver's step size
-    underflow and says what it means, naming the ranges' documentation (exit 1: a run that
-    failed, not a value out of range)."""
-    scene = tmp_path / "drag.toml"
-    scene.write_text('[model]\nname = "drag"\n[effects.gravity]\n[effects.air_drag]\n[experiment]\nsolver = "dop853"\n')
-    fmu = gyrowheel.build(scene, output=tmp_path / "drag.fmu").fmu
+    in about M / c_lin = 1e-36 s, far below the step-size floor: the run stops with the solver's
+    step size underflow (dop853) and says what it means, naming the ranges' documentation (exit
+    1: a run that failed, not a value out of range)."""
     with pytest.raises(SimulationError) as exc:
-        gyrowheel.simulate(fmu, stop_time=0.01, start_values={"M": 1e-30, "c_lin": 1e6})
+        gyrowheel.simulate(drag, stop_time=0.01, start_values={"M": 1e-30, "c_lin": 1e6, "solver": "dop853"})
     text = str(exc.value)
     assert "step size underflow" in text and "\n" not in text
     assert text.endswith("the model's fastest time scale is shorter than the solver's smallest step, 16 eps "
                          "max(|t|, 1) s: values that make it this stiff (e.g. strong damping on a light wheel) "
                          "cannot be integrated (docs/interface.md, \"Valid ranges\")")
+
+
+def test_a_combination_too_stiff_for_the_taylor_series_names_its_time_scale(drag):
+    """The same combination under the default solver auto (taylor here): the series overflows at
+    the first step; the message gives the solution's time scale from the finite orders, the drag's
+    relaxation time M (1 + k_axial) / c_lin = 1.4e-36 s (the rolling wheel's spin slows with its
+    speed: its effective mass is M (1 + k_axial), k_axial = 0.4), says it is below the smallest
+    step and what that means.  A model whose series diverges for another reason keeps
+    the singularity wording (tests/test_taylor_near_pole.py)."""
+    with pytest.raises(SimulationError) as exc:
+        gyrowheel.simulate(drag, stop_time=0.01, start_values={"M": 1e-30, "c_lin": 1e6})
+    text = str(exc.value)
+    assert "\n" not in text and "Taylor coefficients of order" in text
+    scale = float(text.split("time scale, ")[1].split(" s from")[0])
+    assert scale == pytest.approx(1.4e-30 * 1e-6, rel=0.04)
+    assert text.endswith("is below the smallest step, 16 eps max(|t|, 1) s (a model too stiff to integrate); "
+                         "values that make it this stiff (e.g. strong damping on a light wheel) cannot be "
+                         "integrated (docs/interface.md, \"Valid ranges\")")
 
 
 def test_fmi3_declares_the_same_bounds(earth, fmi3_earth_fmu):

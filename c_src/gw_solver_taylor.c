@@ -320,7 +320,9 @@ GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
         hs = gw_taylor_step(I, run, I->tl_w, (size_t)I->tl_si, (size_t)I->tl_so, p, &bad);
     }
     if (bad) {
-        const double scale = gw_taylor_time_scale(I, p);
+        double scale;
+        if (I->tl_fetch) I->tl_fetch(I, I->tl_fetch_env); /* an ensemble lane: its series */
+        scale = gw_taylor_time_scale(I, p);
         if (scale < gw_h_min(I->t))
             GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g: the solution's "
                        "time scale, %.2g s from the finite orders, is below the smallest step, 16 eps "

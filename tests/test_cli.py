@@ -35,10 +35,10 @@ def test_build_simulate_info(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    fmu = tmp_path_factory.mktemp("cli") / "earth.fmu"
-    assert gyrowheel("build", SCENES / "paper_earth.toml", "-o", fmu).returncode == 0
-    return fmu
+def built(earth_fmu):
+    """The paper's earth FMU, the run's shared default build (conftest earth_fmu), read only;
+    `gyrowheel build` itself is test_build_simulate_info's."""
+    return earth_fmu
 
 
 def _bad_scene(tmp_path, text):

@@ -162,7 +162,7 @@ def _experiment(src: Path, dest: Path, **attributes) -> Path:
 
 
 @pytest.fixture(scope="module")
-def files(earth_fmu, tmp_path_factory) -> dict[str, Path]:
+def files(earth_fmu, example_build, tmp_path_factory) -> dict[str, Path]:
     """The inputs of the rows, made once: corrupt FMUs from the paper's earth FMU, scenes, outputs."""
     d = tmp_path_factory.mktemp("new_user")
     fmu = d / "earth.fmu"
@@ -173,8 +173,7 @@ def files(earth_fmu, tmp_path_factory) -> dict[str, Path]:
                           ("empty", b"")):
         out[name] = d / f"{name}.fmu"
         out[name].write_bytes(content)
-    from gyrowheel.fmu_build import build_fmu, load_scene  # the paper FMU without the Taylor kernel
-    out["plain"] = build_fmu(load_scene(SCENES / "paper_earth.toml"), d / "plain.fmu", taylor=False).fmu
+    out["plain"] = example_build("paper_earth", taylor=False).fmu  # the paper FMU without the Taylor kernel
     out["nomd"] = _rewrite(fmu, d / "nomd.fmu", drop=("modelDescription.xml",))
     out["badmd"] = _rewrite(fmu, d / "badmd.fmu", replace={"modelDescription.xml": b"<fmiModelDescription fmiVersion"})
     out["badbin"] = _rewrite(fmu, d / "badbin.fmu", replace={"binaries/linux64/paper_earth.so": b"not an ELF file"})

@@ -55,11 +55,8 @@ def test_ulp_error_against_long_double(cc, extra, tmp_path):
     assert "gw_sincos2 against gw_sincos: 0 pairs not bit-equal" in r.stdout, r.stdout
 
 
-def test_generated_code_merges_sincos(tmp_path):
-    from gyrowheel.fmu_build import build_fmu, load_scene
-    from pathlib import Path
-    scene = load_scene(Path(__file__).resolve().parent.parent / "examples" / "scenes" / "paper_earth.toml")
-    built = build_fmu(scene, tmp_path / "earth.fmu", build_dir=tmp_path / "b")
+def test_generated_code_merges_sincos(example_build):
+    built = example_build("paper_earth")  # the run's one default build of the scene, its sources kept
     text = (built.sources / "gw_funcs.c").read_text()
     assert '#include "gw_sincos.h"' in text
     # the vendored msun / fdlibm code travels with Sun's notice, which its terms require kept

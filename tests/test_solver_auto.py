@@ -15,9 +15,10 @@ from pathlib import Path
 import pytest
 from fmpy.fmi2 import fmi2LastSuccessfulTime
 
+from conftest import compiled_at
 from fmi_helpers import Slave
 from gyrowheel.description import read_info
-from gyrowheel.fmu_build import build_fmu, load_scene, parse_scene
+from gyrowheel.fmu_build import build_fmu, parse_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 STATES = ("x", "y", "alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")
@@ -29,14 +30,18 @@ FALLING = ('[model]\nname = "falls"\n[wheel]\nbeta_min = 0.3\n[effects.gravity]\
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
+def fmus(tmp_path_factory, example_build):
     """The paper's earth scene (no solver named: auto) with the Taylor kernel (the default
-    build) and without it (taylor=False), and a falling wheel's scene both ways."""
+    build) and without it (taylor=False), the run's shared builds (conftest example_build), and
+    a falling wheel's scene both ways, compiled at -O1 (conftest compiled_at: the tests compare
+    runs of one FMU with each other, never with another build, and time nothing)."""
     work = tmp_path_factory.mktemp("auto")
-    earth = load_scene(ROOT / "examples" / "scenes" / "paper_earth.toml")
     falls = parse_scene(FALLING, "falls.toml")
-    return {(name, kernel): build_fmu(scene, work / f"{name}_{kernel}.fmu", taylor=None if kernel else False).fmu
-            for name, scene in (("earth", earth), ("falls", falls)) for kernel in (True, False)}
+    with compiled_at("-O1"):
+        built = {("falls", kernel): build_fmu(falls, work / f"falls_{kernel}.fmu", taylor=None if kernel else False).fmu
+                 for kernel in (True, False)}
+    return {**built, ("earth", True): example_build("paper_earth").fmu,
+            ("earth", False): example_build("paper_earth", taylor=False).fmu}
 
 
 def run(fmu, stop: float, steps: int = 4, logged: bool = False, **values):
@@ -195,8 +200,11 @@ def test_contact_modes_take_dop853(tmp_path):
 
     from test_contact_sliding import KA, MU, SLIDE, WHEEL, G
     scene = parse_scene('[model]\nname = "sliding"\n' + WHEEL + SLIDE, "sliding.toml")
-    plain = build_fmu(scene, tmp_path / "plain.fmu").fmu
-    kernel = build_fmu(scene, tmp_path / "kernel.fmu", taylor=True).fmu
+    # at -O1, as tests/test_contact_sliding.py builds this scene: its compile is shared (conftest
+    # _build_cache), and nothing here times the FMUs or compares them with another build
+    with compiled_at("-O1"):
+        plain = build_fmu(scene, tmp_path / "plain.fmu").fmu
+        kernel = build_fmu(scene, tmp_path / "kernel.fmu", taylor=True).fmu
     assert (read_info(plain).taylor, read_info(kernel).taylor) == (False, True)
     assert read_info(plain).auto_solver == read_info(kernel).auto_solver == "dop853"
     above = math.atan(MU * (1 + KA) / KA) * (1 + 1e-6)

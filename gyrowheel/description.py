@@ -332,6 +332,14 @@ def _effects(index_html: str) -> tuple[str, ...] | None:
     return () if text == "none" else tuple(e.strip() for e in text.split(",") if e.strip())
 
 
+def kernel_and_modes(zf: zipfile.ZipFile, names) -> tuple[bool, bool]:
+    """(the FMU has the Taylor kernel, its model has mode switches) from its sources: what solver
+    auto's rule reads (FmuInfo.auto_solver)."""
+    taylor = TAYLOR_HEADER in names and b"GW_TL_NVAR" in zf.read(TAYLOR_HEADER)
+    modes = MODEL_SOURCE in names and MODES_ABSENT not in zf.read(MODEL_SOURCE)
+    return taylor, modes
+
+
 def read_info(fmu: str | Path) -> FmuInfo:
     """Describe the FMU at `fmu` (see FmuInfo). Raises FmuError naming the file when it is not
     an FMI 2.0 or 3.0 FMU gyrowheel can read (open_fmu)."""
@@ -341,8 +349,7 @@ def read_info(fmu: str | Path) -> FmuInfo:
         with zipfile.ZipFile(path) as zf:
             index = (zf.read("documentation/index.html").decode("utf-8", "replace")
                      if "documentation/index.html" in names else "")
-            taylor = TAYLOR_HEADER in names and b"GW_TL_NVAR" in zf.read(TAYLOR_HEADER)
-            modes = MODEL_SOURCE in names and MODES_ABSENT not in zf.read(MODEL_SOURCE)
+            taylor, modes = kernel_and_modes(zf, names)
     except (zipfile.BadZipFile, OSError) as exc:  # an archive changed or broken since it was opened
         raise FmuError(f"{path}: not a readable FMU: {exc}", argument="fmu") from None
     types = {t.name: t for t in md.typeDefinitions}

@@ -231,8 +231,8 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     processes than points; more than 4 per core is refused: use a scheduler), scheduler
     (address of a running Dask scheduler) or client (a distributed.Client); batch_size points
     per task (default: gyrowheel.studies.execute.auto_batch_size).
-    ensemble: when the unit is an FMU with the Taylor kernel and the sweep's solver is taylor,
-    each batch runs through the ensemble path (gyrowheel.studies.ensemble_path: several points
+    ensemble: when the unit is an FMU with the Taylor kernel and the sweep's solver is taylor (or
+    auto, the default, where auto integrates with taylor: FmuInfo.auto_solver), each batch runs through the ensemble path (gyrowheel.studies.ensemble_path: several points
     at once, results equal to the plain loop to rounding); False: always one FMU run per point.
     output: .parquet or .csv, kept current while the sweep runs (gyrowheel.studies.output: an
     existing file is replaced once a point has finished, and left as it was by a sweep that

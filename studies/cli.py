@@ -27,7 +27,8 @@ def add_parser(sub) -> None:
     e = s.add_argument_group("experiment")
     e.add_argument("--stop-time", type=finite_float, help="s (default: the unit's DefaultExperiment)")
     e.add_argument("--output-interval", type=finite_float, help="communication step, s (default: the unit's step size)")
-    e.add_argument("--solver", help="euler, rk4, dopri5, dop853, rosenbrock, taylor (FMUs with the Taylor kernel)")
+    e.add_argument("--solver", help="euler, rk4, dopri5, dop853, rosenbrock, taylor (FMUs with the Taylor kernel), "
+                   "auto (default: the unit's)")
     e.add_argument("--rel-tol", type=finite_float, help="relative tolerance of the adaptive solvers (default: the unit's)")
     e.add_argument("--abs-tol", type=finite_float, help="absolute tolerance of the adaptive solvers (default: the unit's)")
     e.add_argument("--max-step", type=finite_float, help="largest internal step, s (default: the unit's)")
@@ -47,7 +48,8 @@ def add_parser(sub) -> None:
     x.add_argument("--batch-size", type=int, help="points per task (default: about 4 tasks per worker)")
     x.add_argument("--no-progress", action="store_true", help="no progress bar")
     x.add_argument("--no-ensemble", action="store_true",
-                   help="with solver taylor, run every point through the FMU instead of the ensemble path")
+                   help="with solver taylor (or auto integrating with taylor), run every point through the "
+                   "FMU instead of the ensemble path")
     s.set_defaults(func=cmd_sweep)
 
 

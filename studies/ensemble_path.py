@@ -2,7 +2,8 @@
 
 The plain path (gyrowheel.studies.batch.run_point) drives one FMU instance point after point;
 when the unit is a gyrowheel FMU that carries the Taylor kernel and its solver for the sweep is
-taylor, the same points can run several at a time (the CPU's lane count,
+taylor (named, or auto, the default, in a model without mode switches: auto integrates with
+taylor there), the same points can run several at a time (the CPU's lane count,
 gyrowheel.taylor.lanes.cpu_lanes: 8 with AVX-512F, 4 with AVX2, else 2) with the Taylor coefficients of
 all lanes computed together (c_src/gw_ensemble.c). Each lane is a full gw_instance advanced
 from communication point to communication point as fmi2DoStep advances it (same grid
@@ -28,7 +29,7 @@ from gyrowheel.studies.metrics import Run
 from gyrowheel.scratch import temporary_directory
 from gyrowheel.studies.target import PointFailure
 
-TAYLOR = 6  # the solver enumeration's value (c_src/gw_model.h)
+TAYLOR, AUTO = 6, 7  # the solver enumeration's values (c_src/gw_model.h)
 SETTINGS = ("solver", "rel_tol", "abs_tol", "max_step")
 _ENSEMBLES: dict[str, object] = {}  # FMU digest -> Ensemble, per worker process
 _LOCK = threading.Lock()
@@ -58,7 +59,8 @@ def _ensemble(target, payload):
 
 
 def _settings(target, fixed: dict) -> dict[str, float] | None:
-    """solver settings of the batch (fixed values over the FMU's defaults), None if not taylor"""
+    """solver settings of the batch (fixed values over the FMU's defaults), None unless the
+    solver is taylor, or auto where auto integrates with taylor (the FMU's default)"""
     variables = target.variables()
     out = {}
     for name in SETTINGS:
@@ -66,7 +68,8 @@ def _settings(target, fixed: dict) -> dict[str, float] | None:
         if value is None:
             return None
         out[name] = float(value)
-    return out if out["solver"] == TAYLOR else None
+    taylor = out["solver"] == TAYLOR or (out["solver"] == AUTO and getattr(target, "auto_taylor", False))
+    return out if taylor else None
 
 
 def applies(target, settings) -> bool:

@@ -113,8 +113,9 @@ class FmuTarget:
         self.discrete_outputs = {v.name: {value: item for item, value in v.items.items()}
                                  for v in self._variables.values()
                                  if v.causality == "output" and v.type in ("Integer", "Enumeration")}
-        # a gyrowheel FMU built with the Taylor kernel: batches may take the ensemble path
-        self.taylor_kernel = _has_taylor_kernel(self._data)
+        # a gyrowheel FMU built with the Taylor kernel: batches may take the ensemble path (with
+        # solver taylor, or auto where auto integrates with taylor: no mode switches)
+        self.taylor_kernel, self.auto_taylor = _kernel_and_auto(self._data)
 
     def __getstate__(self):
         state = dict(self.__dict__)
@@ -150,13 +151,18 @@ class FmuTarget:
         return None
 
 
-def _has_taylor_kernel(data: bytes) -> bool:
+def _kernel_and_auto(data: bytes) -> tuple[bool, bool]:
+    """(the FMU has the Taylor kernel, its solver auto integrates with taylor): auto's rule,
+    gyrowheel.description.FmuInfo.auto_solver."""
     import io
+
+    from gyrowheel.description import kernel_and_modes
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as zf:
-            return b"GW_TL_NVAR" in zf.read("sources/gw_taylor_model.h")
+            kernel, modes = kernel_and_modes(zf, set(zf.namelist()))
     except (KeyError, zipfile.BadZipFile):
-        return False
+        return False, False
+    return kernel, kernel and not modes
 
 
 def _unpack(target: FmuTarget, payload: bytes | None) -> str:

@@ -360,4 +360,6 @@ def test_ctrl_c_anywhere_in_a_dask_sweep_ends_cleanly(earth_fmu, scheduler, tmp_
         assert not out.exists()
         return
     table = read_table(out)
-    assert 0 < len(table) < len(plan.values) and (table["status"] == "ok").all() and table["point"].is_unique
+    # the points written before Ctrl-C landed: every point when they had all finished by then (a
+    # first batch that compiles the unit's ensemble library lets the others finish meanwhile)
+    assert 0 < len(table) <= len(plan.values) and (table["status"] == "ok").all() and table["point"].is_unique

@@ -57,6 +57,44 @@ def test_ensemble_table_equals_plain_loop(taylor_fmu, ensemble_calls):
     np.testing.assert_allclose(ens["energy_drift"].iloc[:10], plain["energy_drift"].iloc[:10], atol=1e-12)
 
 
+def test_default_build_under_auto_takes_the_ensemble_path(example_build, ensemble_calls):
+    """The default build (solver auto, the Taylor kernel built in: auto integrates with taylor)
+    swept with no solver named goes through the ensemble, as with solver taylor, and equals the
+    plain loop; the target reads auto's rule from the FMU's sources as gyrowheel info does."""
+    from gyrowheel.description import read_info
+    from gyrowheel.studies.target import FmuTarget
+
+    fmu = example_build("paper_earth").fmu
+    assert read_info(fmu).auto_solver == "taylor" and FmuTarget(fmu).auto_taylor
+    kw = dict(stop_time=2.0, output_interval=0.1, rel_tol=1e-10, batch_size=6)
+    ens = sweep(fmu, points=POINTS, metrics=METRICS, workers=0, **kw)
+    assert len(ensemble_calls) == 2  # 11 points in batches of 6
+    plain = sweep(fmu, points=POINTS, metrics=METRICS, workers=0, ensemble=False, **kw)
+    assert len(ensemble_calls) == 2
+    assert list(ens["status"]) == list(plain["status"]) == ["ok"] * 10 + ["error"]
+    for col in ("survived", "event"):
+        assert list(ens[col]) == list(plain[col]), col
+    for col in ("fall_time", "end_time", "min_beta", "final_x", "final_alpha"):
+        np.testing.assert_allclose(ens[col].iloc[:10], plain[col].iloc[:10], rtol=1e-9, atol=1e-9, err_msg=col)
+
+
+def test_auto_takes_the_ensemble_path_only_where_it_integrates_with_taylor():
+    """Solver auto (7) sends a sweep to the ensemble only for an FMU whose auto is taylor: with
+    mode switches (contact modes, stiction) auto integrates with dop853, and so does every point."""
+    from types import SimpleNamespace
+
+    from gyrowheel.studies import ensemble_path
+
+    def target(auto_taylor):
+        start = {"solver": 7, "rel_tol": 1e-8, "abs_tol": 0.0, "max_step": 0.0}
+        variables = {k: SimpleNamespace(start=v) for k, v in start.items()}
+        return SimpleNamespace(taylor_kernel=True, auto_taylor=auto_taylor, variables=lambda: variables)
+    assert ensemble_path._settings(target(True), {})["solver"] == 7
+    assert ensemble_path._settings(target(False), {}) is None
+    assert ensemble_path._settings(target(False), {"solver": 6})["solver"] == 6
+    assert ensemble_path._settings(target(True), {"solver": 5}) is None
+
+
 def test_plain_path_when_the_solver_is_not_taylor(taylor_fmu, ensemble_calls):
     """dop853 (the sweep's solver), or a per-point solver setting: no ensemble."""
     table = sweep(taylor_fmu, points=POINTS[:2], metrics=["survived"], stop_time=0.5, output_interval=0.1,

@@ -35,13 +35,14 @@ def _refusing_address() -> str:
 
 
 def test_relative_output_is_written_where_the_sweep_started(earth_fmu, tmp_path, monkeypatch, capsys):
-    """An FMU whose binary does not load: fmpy changes into the binary's directory and stays there;
-    the table must still be ./t.csv, with both points as error rows, and the working directory
-    must be the one the sweep started in."""
+    """An FMU whose binary does not load, run through the FMU (--no-ensemble: the ensemble path
+    compiles the FMU's sources and never loads its binary): fmpy changes into the binary's
+    directory and stays there; the table must still be ./t.csv, with both points as error rows,
+    and the working directory must be the one the sweep started in."""
     monkeypatch.chdir(tmp_path)
     _broken_copy(earth_fmu, tmp_path / "broken.fmu")
     code = main(["sweep", "broken.fmu", "--grid", "M=1,2", "--stop-time", "0.1", "--workers", "0", "--no-progress",
-                 "-o", "t.csv"])
+                 "--no-ensemble", "-o", "t.csv"])
     assert code == 0 and capsys.readouterr().out.strip() == "wrote t.csv: 2 rows (2 failed)"
     assert Path.cwd() == tmp_path
     table = read_table(tmp_path / "t.csv")

@@ -55,11 +55,12 @@ def test_a_worker_killed_mid_run_leaves_nothing(earth_fmu, tmp_path):
 
 def test_a_killed_sweep_leaves_nothing_past_the_next_one(earth_fmu, tmp_path):
     """`gyrowheel sweep --workers 0` killed by its point leaves its unpacked FMU, named with its
-    pid; the next sweep on this machine finds that process gone and removes it."""
+    pid (run through the FMU: the ensemble path unpacks nothing that outlives the library's
+    load); the next sweep on this machine finds that process gone and removes it."""
     scratch = tmp_path / "tmp"
     scratch.mkdir()
     killed = _sweep(earth_fmu, tmp_path, scratch, "--grid", "M=3", "--metric-function",
-                    f"{tmp_path / 'kill.py'}:kill", "--workers", "0")
+                    f"{tmp_path / 'kill.py'}:kill", "--workers", "0", "--no-ensemble")
     assert killed.returncode == -9, killed.stderr
     left = [p.name for p in scratch.iterdir()]
     assert len(left) == 1 and left[0].startswith("gyrowheel-sweep-unit-"), left

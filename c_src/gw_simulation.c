@@ -27,7 +27,7 @@ GW_INTERNAL gw_status gw_experiment_check(gw_instance *I, const char *fn, int to
     if (tolerance_defined &&
         !(tolerance >= GW_REL_TOL_MIN && tolerance <= GW_REL_TOL_MAX))
         GW_SIM_FAIL("%s: tolerance %g is outside the valid range of a relative tolerance "
-                    "[%.3g, %g]", fn, tolerance, GW_REL_TOL_MIN, GW_REL_TOL_MAX);
+                    "[%.17g, %g]", fn, tolerance, GW_REL_TOL_MIN, GW_REL_TOL_MAX);
     if (stop_time_defined) {
         if (!isfinite(stop_time) || stop_time < start_time)
             GW_SIM_FAIL("%s: stopTime %g must be finite and >= startTime %g", fn, stop_time,

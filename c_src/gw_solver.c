@@ -388,8 +388,8 @@ static gw_int_result gw_integrate_adaptive(gw_instance *I, double t_end) {
                     I->h_adapt = 0.5 * h;
                     rejected_last = 1;
                     if (I->h_adapt < gw_h_min(I->t)) {
-                        GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g): the matrix "
-                                   "I/(gamma h) - J stays singular", I->t, I->h_adapt);
+                        GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, solver rosenbrock): "
+                                   "the matrix I/(gamma h) - J stays singular", I->t, I->h_adapt);
                         return GW_INT_ERROR;
                     }
                     continue;

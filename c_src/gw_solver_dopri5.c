@@ -124,8 +124,8 @@ GW_INTERNAL gw_int_result gw_integrate_dopri5(gw_instance *I, double t_end) {
             I->h_adapt = h * fac;
             rejected_last = 1;
             if (I->h_adapt < gw_h_min(I->t)) {
-                GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, error norm %g)", I->t,
-                           I->h_adapt, err);
+                GW_LOG_ERR(I, "step size underflow at t=%.17g (h=%g, error norm %g, solver dopri5)",
+                           I->t, I->h_adapt, err);
                 return GW_INT_ERROR;
             }
         }

@@ -326,7 +326,7 @@ GW_INTERNAL gw_int_result gw_taylor_attempt_size(gw_instance *I, double t_end,
         if (scale < gw_h_min(I->t))
             GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g: the solution's "
                        "time scale, %.2g s from the finite orders, is below the smallest step, 16 eps "
-                       "max(|t|, 1) s (a model too stiff to integrate)", bad, I->t, scale);
+                       "max(|t|, 1) s (too stiff for an explicit method)", bad, I->t, scale);
         else
             GW_LOG_ERR(I, "Taylor coefficients of order %d are not finite at t=%.17g (the solution's "
                        "series diverges: a singularity of the right-hand side?)", bad, I->t);

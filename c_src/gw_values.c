@@ -85,7 +85,7 @@ static int gw_setting_in_range(gw_instance *I, const char *fn, const gw_variable
         return 0;
     case GW_SET_REL_TOL:
         if (value >= GW_REL_TOL_MIN && value <= GW_REL_TOL_MAX) return 1;
-        GW_LOG_ERR(I, "%s: %s = %g is outside its valid range [%.3g, %g] (a relative error "
+        GW_LOG_ERR(I, "%s: %s = %g is outside its valid range [%.17g, %g] (a relative error "
                    "tolerance: at most 1, at least 10 machine epsilons)", fn, v->name, value,
                    GW_REL_TOL_MIN, GW_REL_TOL_MAX);
         return 0;

@@ -23,7 +23,7 @@ class Experiment:
                       kernel into the FMU, docs/taylor.md); auto (the default) integrates with
                       taylor where the FMU has the kernel and no contact modes, else dop853, docs/accuracy.md
                       "Solver auto"
-    rel_tol           1, relative tolerance of the adaptive solvers in [2.22e-15, 1]; also
+    rel_tol           1, relative tolerance of the adaptive solvers in [10 eps, 1] (10 eps = 2.2204460492503131e-15); also
                       DefaultExperiment tolerance
     abs_tol           1, absolute tolerance (scaled by each state's nominal value) in [1e-30, 1],
                       or 0 (the default): rel_tol / 100, following the tolerance in force

@@ -75,7 +75,7 @@ def solver_settings(exp: Experiment, fmi: int = 2) -> list[tuple[Quantity, str, 
 def _solver_settings(exp: Experiment) -> list[tuple[Quantity, str, str | None]]:
     return [
         (Quantity("solver", "", "internal Co-Simulation integrator", SOLVERS[exp.solver]), "Enumeration", "Solver"),
-        (Quantity("rel_tol", "1", "relative error tolerance of adaptive solvers, in [2.2e-15, 1]; "
+        (Quantity("rel_tol", "1", "relative error tolerance of adaptive solvers, in [2.2204460492503131e-15, 1] (10 eps to 1); "
                   "when not set, a tolerance passed to fmi2SetupExperiment replaces it",
                   exp.rel_tol, minimum=TOLERANCE_RANGES["rel_tol"][0], maximum=TOLERANCE_RANGES["rel_tol"][1]),
          "Real", None),

@@ -286,23 +286,28 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
             restore_fmpy_logger()
 
 
-# what "step size underflow" means for a user: the runtime's solvers stop at their step-size floor
+# what "step size underflow" means for a user: the runtime's solvers stop at their step-size floor;
+# an explicit one (every solver but rosenbrock) where rosenbrock, implicit and L-stable, may go on
 UNDERFLOW_NOTE = ("; the model's fastest time scale is shorter than the solver's smallest step, 16 eps max(|t|, 1) s: "
                   "values that make it this stiff (e.g. strong damping on a light wheel) cannot be integrated "
                   "(docs/interface.md, \"Valid ranges\")")
+EXPLICIT_NOTE = ("; the model's fastest time scale is shorter than the solver's smallest step, 16 eps max(|t|, 1) s: "
+                 "an explicit solver cannot follow values this stiff (e.g. strong damping on a light wheel); "
+                 "solver rosenbrock (implicit, L-stable) may (docs/interface.md, \"Valid ranges\")")
 
 
 # the same for solver taylor, whose series overflows first (its reason names the time scale)
-STIFF_NOTE = ("; values that make it this stiff (e.g. strong damping on a light wheel) cannot be integrated "
-              "(docs/interface.md, \"Valid ranges\")")
+STIFF_NOTE = ("; values this stiff (e.g. strong damping on a light wheel) need an implicit solver: solver "
+              "rosenbrock (L-stable) may integrate them (docs/interface.md, \"Valid ranges\")")
 
 
 def _underflow_note(reason: str) -> str:
-    """UNDERFLOW_NOTE if the FMU's reason is a step size underflow, STIFF_NOTE if it is solver
-    taylor's time scale below the smallest step, else ''."""
+    """What the FMU's reason means for a user: a step size underflow of rosenbrock (UNDERFLOW_NOTE)
+    or of an explicit solver (EXPLICIT_NOTE: try rosenbrock), solver taylor's time scale below the
+    smallest step (STIFF_NOTE), else ''."""
     if "step size underflow" in reason:
-        return UNDERFLOW_NOTE
-    return STIFF_NOTE if "too stiff to integrate" in reason else ""
+        return UNDERFLOW_NOTE if "solver rosenbrock" in reason else EXPLICIT_NOTE
+    return STIFF_NOTE if "too stiff for an explicit method" in reason else ""
 
 
 def _read_by_a_run(name: str) -> bool:

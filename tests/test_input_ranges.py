@@ -11,6 +11,8 @@ Positions and angles have no range: x = 1e300 m runs, its motion below the doubl
 """
 from __future__ import annotations
 
+import math
+
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -146,6 +148,25 @@ def test_declared_min_max_are_the_runtimes_refusal_bounds(drop):
                 gyrowheel.simulate(drop, stop_time=0.001, start_values=beyond)
 
 
+@pytest.mark.parametrize("route", ["rel_tol", "tolerance"])
+def test_the_printed_lower_bound_of_the_tolerance_is_accepted(drop, route):
+    """The refusal of a tolerance below 10 eps prints the bound with every digit: typed back (as
+    the start value rel_tol, or as fmi2SetupExperiment's tolerance), it runs."""
+    from fmpy import simulate_fmu
+    below = 2.22e-15  # the bound rounded to 3 digits: below 10 eps = 2.2204460492503131e-15
+    with pytest.raises(Exception) as exc:
+        if route == "rel_tol":
+            gyrowheel.simulate(drop, stop_time=1e-4, start_values={"rel_tol": below})
+        else:
+            simulate_fmu(str(drop), stop_time=1e-4, relative_tolerance=below)
+    if route == "rel_tol":
+        printed = str(exc.value).split("valid range [")[1].split(",")[0]
+        assert float(printed) == 10 * np.finfo(float).eps
+        gyrowheel.simulate(drop, stop_time=1e-4, start_values={"rel_tol": float(printed)})
+    else:
+        simulate_fmu(str(drop), stop_time=1e-4, relative_tolerance=2.2204460492503131e-15)
+
+
 def test_fmpy_validates_the_fmu_with_its_ranges(drop):
     from fmpy.validation import validate_fmu
     assert validate_fmu(drop) == []
@@ -160,18 +181,33 @@ def drag(tmp_path_factory):
     return gyrowheel.build(scene, output=tmp / "drag.fmu").fmu
 
 
-def test_a_combination_too_stiff_to_integrate_says_why(drag):
+@pytest.mark.parametrize("solver", ["dop853", "dopri5"])
+def test_a_combination_too_stiff_for_an_explicit_solver_says_why(drag, solver):
     """In range one by one, a 1e-30 kg wheel with linear drag c_lin = 1e6 N s/m relaxes its speed
-    in about M / c_lin = 1e-36 s, far below the step-size floor: the run stops with the solver's
-    step size underflow (dop853) and says what it means, naming the ranges' documentation (exit
-    1: a run that failed, not a value out of range)."""
+    in M (1 + k_axial) / c_lin = 1.4e-36 s, far below the step-size floor: an explicit solver stops
+    with its step size underflow, named, and the message says what it means and what may work
+    (rosenbrock: the next test), naming the ranges' documentation (exit 1: a run that failed, not
+    a value out of range)."""
     with pytest.raises(SimulationError) as exc:
-        gyrowheel.simulate(drag, stop_time=0.01, start_values={"M": 1e-30, "c_lin": 1e6, "solver": "dop853"})
+        gyrowheel.simulate(drag, stop_time=0.01, start_values={"M": 1e-30, "c_lin": 1e6, "solver": solver})
     text = str(exc.value)
-    assert "step size underflow" in text and "\n" not in text
+    assert "step size underflow" in text and f"solver {solver})" in text and "\n" not in text
     assert text.endswith("the model's fastest time scale is shorter than the solver's smallest step, 16 eps "
-                         "max(|t|, 1) s: values that make it this stiff (e.g. strong damping on a light wheel) "
-                         "cannot be integrated (docs/interface.md, \"Valid ranges\")")
+                         "max(|t|, 1) s: an explicit solver cannot follow values this stiff (e.g. strong damping "
+                         "on a light wheel); solver rosenbrock (implicit, L-stable) may (docs/interface.md, "
+                         "\"Valid ranges\")")
+
+
+def test_rosenbrock_integrates_the_combination_too_stiff_for_explicit_solvers(drag):
+    """The same 1e-30 kg wheel with c_lin = 1e6 N s/m under rosenbrock (L-stable): 20 s run; the
+    drag stops the rolling at once (gamma_dot below 1e-12 rad/s) and the wheel keeps only its
+    potential energy M g z_c, z_c = R sin(beta) the centre's height (energy to 1e-9 relative)."""
+    result = gyrowheel.simulate(drag, stop_time=20.0, start_values={"M": 1e-30, "c_lin": 1e6, "solver": "rosenbrock"})
+    assert result["time"][-1] == 20.0 and abs(result["gamma_dot"][-1]) < 1e-12
+    info = gyrowheel.info(drag)
+    R, g = (info.variable(n).start for n in ("R", "g"))
+    assert result["energy"][-1] == pytest.approx(1e-30 * g * R * math.sin(result["beta"][-1]), rel=1e-9)
+    assert result["energy"][-1] < result["energy"][0]
 
 
 def test_a_combination_too_stiff_for_the_taylor_series_names_its_time_scale(drag):
@@ -179,17 +215,17 @@ def test_a_combination_too_stiff_for_the_taylor_series_names_its_time_scale(drag
     the first step; the message gives the solution's time scale from the finite orders, the drag's
     relaxation time M (1 + k_axial) / c_lin = 1.4e-36 s (the rolling wheel's spin slows with its
     speed: its effective mass is M (1 + k_axial), k_axial = 0.4), says it is below the smallest
-    step and what that means.  A model whose series diverges for another reason keeps
-    the singularity wording (tests/test_taylor_near_pole.py)."""
+    step and what may work.  A model whose series diverges for another reason keeps the
+    singularity wording (tests/test_taylor_near_pole.py)."""
     with pytest.raises(SimulationError) as exc:
         gyrowheel.simulate(drag, stop_time=0.01, start_values={"M": 1e-30, "c_lin": 1e6})
     text = str(exc.value)
     assert "\n" not in text and "Taylor coefficients of order" in text
     scale = float(text.split("time scale, ")[1].split(" s from")[0])
     assert scale == pytest.approx(1.4e-30 * 1e-6, rel=0.04)
-    assert text.endswith("is below the smallest step, 16 eps max(|t|, 1) s (a model too stiff to integrate); "
-                         "values that make it this stiff (e.g. strong damping on a light wheel) cannot be "
-                         "integrated (docs/interface.md, \"Valid ranges\")")
+    assert text.endswith("is below the smallest step, 16 eps max(|t|, 1) s (too stiff for an explicit method); "
+                         "values this stiff (e.g. strong damping on a light wheel) need an implicit solver: solver "
+                         "rosenbrock (L-stable) may integrate them (docs/interface.md, \"Valid ranges\")")
 
 
 def test_an_ensemble_lane_too_stiff_names_its_time_scale(drag, tmp_path):

@@ -77,7 +77,7 @@ def test_cli_errors_are_one_line_exit_2(earth_fmu, tmp_path, capsys, argv, messa
     # refused before running: every grid point would run 3 times alike / every row would fail
     (dict(grid={"M": [1.0]}, samples=3), "--samples 3 without --random: there is nothing to draw"),
     (dict(grid={"M": [1.0]}, rel_tol=-1.0), r"--rel-tol: the unit refuses -1.0 for every point: fmi2SetReal: "
-                                            r"rel_tol = -1 is outside its valid range \[2.22e-15, 1\]"),
+                                            r"rel_tol = -1 is outside its valid range \[2.2204460492503131e-15, 1\]"),
     (dict(grid={"M": [1.0]}, fixed={"max_step": 0.0}), "--set max_step: the unit refuses 0.0 for every point"),
     (dict(grid={"M": [1.0]}, client=SimpleNamespace(submit=print, nthreads=dict, cancel=print)),
      "--workers and client exclude each other: give one of them"),

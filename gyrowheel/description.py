@@ -241,9 +241,10 @@ class FmuInfo:
         return f"the default tolerance {tol}" if tol else "every tolerance"
 
     def as_dict(self) -> dict:
-        """Everything as plain JSON types (path as text, tuples as lists)."""
+        """Everything as plain JSON types (path as text, tuples as lists), auto_solver included."""
         out = asdict(self)
         out["path"] = str(self.path)
+        out["auto_solver"] = self.auto_solver
         return out
 
     def __str__(self) -> str:

@@ -353,6 +353,7 @@ def test_info_text_and_json(moon, capsys):
     data = json.loads(capsys.readouterr().out)
     assert data == json.loads(json.dumps(info.as_dict())) and data["variables"][0]["name"] == "M"
     assert data["default_experiment"]["stop_time"] == 20.0 and data["effects"] == ["gravity"]
+    assert data["auto_solver"] == info.auto_solver == ("taylor" if info.taylor else "dop853")
 
 
 def test_info_errors(tmp_path):

@@ -122,7 +122,8 @@ def run_batch_ensemble(target, payload, settings, metrics, batch: list, run_plai
         times = res.grid[:k].copy()
         if terminated:
             times[k - 1] = res.t_final[j]
-        flags = [name for name, fired in zip(ens.event_names, res.flags[j]) if fired and name in target.flag_names]
+        fired = {name for name, on in zip(ens.event_names, res.flags[j]) if on}
+        flags = [name for name in target.flag_names if name in fired]  # the plain loop's order
         try:
             row = metrics.evaluate(Run(times, out, list(target.outputs), settings.stop_time, bool(terminated),
                                        flags), inputs)

@@ -100,3 +100,19 @@ def test_the_cli_table_holds_the_warning(slipwarn_fmu, tmp_path):
     table = read_table(out)
     assert list(table["event"]) == ["slipping"] * 4
     assert list(table["final_slipping"]) == [True] * 4
+
+
+def test_a_run_that_ends_at_lift_off_keeps_its_earlier_warning(slipwarn_fmu):
+    """gamma_dot = 0: the wheel falls over; the friction it needs passes mu = 0.3 on the way and
+    F_n reaches 0 (lift-off, which terminates) at 0.371 s. Both paths give both flags, in the
+    order of the unit's Boolean outputs, as the single run's final values."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = gyrowheel.simulate(slipwarn_fmu, start_values={"mu": 0.3, "gamma_dot": 0.0, "solver": "taylor"})
+    assert r["time"][-1] == pytest.approx(0.3714, abs=1e-4)
+    assert [bool(r[name][-1]) for name in ("fallen", "lifted_off", "slipping")] == [False, True, True]
+    for ens in (True, False):
+        row = sweep(slipwarn_fmu, points=[{"mu": 0.3, "gamma_dot": 0.0}], fixed={"solver": "taylor"},
+                    metrics=METRICS + ["end_time"], workers=0, ensemble=ens).iloc[0]
+        assert row["event"] == "lifted_off,slipping" and not row["survived"], ens
+        assert row["end_time"] == pytest.approx(r["time"][-1], abs=1e-9)

@@ -124,7 +124,7 @@ GW_INTERNAL void gw_events_log_too_many(const gw_instance *I, double te, int lim
                    "%s kept firing: a mode switches back and forth faster than solver %s can "
                    "follow, each switch undone within a step (a law's time scale far below the "
                    "step, such as a stiction law's viscous one, inertia / damping); %sa law with "
-                   "a longer time scale (a smaller damping coefficient)",
+                   "a longer time scale (for a viscous part, a smaller damping coefficient)",
                    limit, I->t_call, te, names, gw_solver_name(I->solver_in_use),
                    rosenbrock ? "try " : "try solver rosenbrock (implicit, it follows such a "
                                          "fast mode), or ");

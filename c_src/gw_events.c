@@ -28,6 +28,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "gw_instance.h"
@@ -89,6 +90,49 @@ static int gw_event_locate(gw_instance *I, int i, double a, double fa, double b,
 
 static int gw_event_action_of(const gw_instance *I, int i) {
     return I->m->event_actions ? I->m->event_actions[i] : GW_EVENT_TERMINATE;
+}
+
+/* The names of the events that fired in the present gw_advance (last firing after I->t_call, or
+ * at te, the latest instant), comma-separated into buf (size > 4; cut with "..." where they do
+ * not fit).  Returns 1 if one of them is an update event (a mode switch), else 0. */
+static int gw_events_fired_names(const gw_instance *I, double te, char *buf, size_t size) {
+    int i, update = 0;
+    size_t used = 0;
+    buf[0] = '\0';
+    for (i = 0; i < I->m->ne; i++) {
+        int n;
+        if (!I->flags[i] || !(I->t_events[i] > I->t_call || I->t_events[i] == te)) continue;
+        if (gw_event_action_of(I, i) == GW_EVENT_UPDATE) update = 1;
+        n = snprintf(buf + used, size - used, "%s%s", used ? ", " : "", gw_event_name(I, i));
+        if (n < 0 || (size_t)n >= size - used) {
+            memcpy(buf + size - 4, "...", 4);
+            break;
+        }
+        used += (size_t)n;
+    }
+    return update;
+}
+
+/* More than `limit` events in one communication step: which events, what it
+ * means (a mode that switches back and forth faster than the solver's steps: a time scale of
+ * the law far below the step) and what to try (docs/runtime.md, "Events and state updates"). */
+GW_INTERNAL void gw_events_log_too_many(const gw_instance *I, double te, int limit) {
+    char names[256];
+    const int rosenbrock = I->solver_in_use == GW_SOLVER_ROSENBROCK;
+    if (gw_events_fired_names(I, te, names, sizeof names))
+        GW_LOG_ERR(I, "more than %d events in one communication step, from t=%.17g to t=%.17g: "
+                   "%s kept firing: a mode switches back and forth faster than solver %s can "
+                   "follow, each switch undone within a step (a law's time scale far below the "
+                   "step, such as a stiction law's viscous one, inertia / damping); %sa law with "
+                   "a longer time scale (for a viscous part, a smaller damping coefficient)",
+                   limit, I->t_call, te, names, gw_solver_name(I->solver_in_use),
+                   rosenbrock ? "try " : "try solver rosenbrock (implicit, it follows such a "
+                                         "fast mode), or ");
+    else
+        GW_LOG_ERR(I, "more than %d events in one communication step, from t=%.17g to t=%.17g: "
+                   "%s kept firing (solver %s): the event indicators cross zero again and "
+                   "again; the limit is per communication step: try a shorter one",
+                   limit, I->t_call, te, names, gw_solver_name(I->solver_in_use));
 }
 
 static void gw_event_log(const gw_instance *I, int i, double te, int terminate) {

@@ -230,6 +230,9 @@ GW_INTERNAL void gw_solver_free(gw_instance *I);
  * <= 0, locates the earliest crossing te, writes the state there into I->xev and
  * the indicators into I->eev, sets flags, logs, and returns *t_event = te. */
 GW_INTERNAL gw_ev_result gw_events_check(gw_instance *I, double t0, double t1, double *t_event);
+/* The error of a communication step with more than `limit` events (GW_MAX_EVENTS_PER_STEP; the
+ * latest at te): the events that fired since I->t_call, what it means, what to try. */
+GW_INTERNAL void gw_events_log_too_many(const gw_instance *I, double te, int limit);
 /* gw_initialize: update events whose indicator is <= 0 at the start (I->e) fire now, so the
  * model's discrete state (a stiction mode) is settled before the first step.  0 or -1 logged. */
 GW_INTERNAL int gw_events_initial(gw_instance *I, const char *fn);

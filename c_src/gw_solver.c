@@ -234,8 +234,7 @@ GW_INTERNAL gw_int_result gw_accept_step(gw_instance *I, double t1, int *events)
     if (ev == GW_EV_TERMINATE) return GW_INT_TERMINATED;
     if (ev == GW_EV_UPDATE && I->stop_at_update != GW_STOP_NEVER) return GW_INT_EVENT;
     if (++(*events) > GW_MAX_EVENTS_PER_STEP) {
-        GW_LOG_ERR(I, "more than %d events in one communication step at t=%.17g",
-                   GW_MAX_EVENTS_PER_STEP, te);
+        gw_events_log_too_many(I, te, GW_MAX_EVENTS_PER_STEP);
         return GW_INT_ERROR;
     }
     return GW_INT_OK;

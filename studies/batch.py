@@ -58,7 +58,7 @@ def run_point(instance, values: dict, settings: Settings, metrics: MetricSet, in
     if not np.all(np.isfinite(out[:k])):  # the FMU promises never to output NaN; hold it to that
         raise PointFailure("non-finite output")
     finals = instance.finals(metrics.discrete) if metrics.discrete else {}
-    run = Run(times[:k], out[:k], names, settings.stop_time, terminated, instance.flags() if terminated else [], finals)
+    run = Run(times[:k], out[:k], names, settings.stop_time, terminated, instance.flags(), finals)
     return metrics.evaluate(run, inputs)
 
 

@@ -9,7 +9,10 @@ all lanes computed together (c_src/gw_ensemble.c). Each lane is a full gw_instan
 from communication point to communication point as fmi2DoStep advances it (same grid
 t_i = t0 + i h, the last landing on the stop time; the budget, event count and step guard of
 each communication step), so a point's outputs and metrics equal the plain loop's to rounding
-(the ensemble library is compiled with FMA contraction: tests/test_sweep_ensemble.py).
+(the ensemble library is compiled with FMA contraction: tests/test_sweep_ensemble.py), but for
+the flags of a grazing crossing: the lanes look at the event indicators at their step ends only,
+so an indicator that dips below zero and back within one lane step fires in the plain loop only
+(docs/sweeps.md, "The ensemble path"; tests/test_sweep_warning_flags.py).
 
 It applies only when every value a point sets is a parameter or start value of the model and
 the solver settings are common to the batch; otherwise (an input, a per-point solver setting,
@@ -122,10 +125,11 @@ def run_batch_ensemble(target, payload, settings, metrics, batch: list, run_plai
         times = res.grid[:k].copy()
         if terminated:
             times[k - 1] = res.t_final[j]
-        flags = [name for name, fired in zip(ens.event_names, res.flags[j]) if fired and name in target.flag_names]
+        fired = {name for name, on in zip(ens.event_names, res.flags[j]) if on}
+        flags = [name for name in target.flag_names if name in fired]  # the plain loop's order
         try:
             row = metrics.evaluate(Run(times, out, list(target.outputs), settings.stop_time, bool(terminated),
-                                       flags if terminated else []), inputs)
+                                       flags), inputs)
             row.update(status="ok", reason="")
         except PointFailure as exc:  # a user metric that raised: as in the plain path
             row = {"status": "error", "reason": str(exc)}

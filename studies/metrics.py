@@ -4,7 +4,8 @@ Built in (all SI, angles in rad; beta is the paper's lean angle, pi/2 upright):
     survived        bool   reached the stop time without a terminating event
     fall_time       s      time of the fall (the FMU's located event time), NaN if it did not fall
     end_time        s      time reached (stop time, or the time of a terminating event)
-    event                  Boolean outputs true at the end, e.g. 'fallen' ('' if none)
+    event                  Boolean outputs true at the end, e.g. 'fallen', 'slipping' ('' if none):
+                           terminating and warning events alike (each flag stays true once fired)
     min_beta, max_beta     extremes of beta over the communication points
     max_lean        rad    max |beta - pi/2|: the largest lean away from upright
     final_position  m      columns final_x, final_y (the centre at the end)
@@ -13,7 +14,8 @@ Built in (all SI, angles in rad; beta is the paper's lean angle, pi/2 upright):
                            terms where the unit outputs it; B = energy without them), constant in
                            exact arithmetic (docs/effects.md, "energy")
     final:NAME             any Real output at the end (column final_NAME); an Integer output's
-                           value (int), an Enumeration output's item name (str, e.g. 'rolling')
+                           value (int), an Enumeration output's item name (str, e.g. 'rolling'),
+                           a Boolean output's value (bool, e.g. final:slipping)
     max:NAME, min:NAME, mean:NAME   a Real output over the communication points (column max_NAME, ...)
 A user's function (module:function or path/to/file.py:function, or a Python callable through
 the API) receives the trajectory as a numpy structured array (fields 'time' and every Real
@@ -56,7 +58,7 @@ class Run:
     names: list[str]
     stop_time: float
     terminated: bool
-    flags: list[str]
+    flags: list[str]  # the Boolean outputs true at the end (fired flags), terminating or not
     finals: dict = field(default_factory=dict)  # Integer/Enumeration outputs at the end, by name
 
     def column(self, name: str) -> np.ndarray:
@@ -71,7 +73,7 @@ class Run:
         return arr
 
 
-def _builtin(name: str, run: Run) -> dict[str, object]:
+def _builtin(name: str, run: Run, booleans=()) -> dict[str, object]:
     if name == "survived":
         return {"survived": not run.terminated}
     if name == "fall_time":
@@ -91,6 +93,8 @@ def _builtin(name: str, run: Run) -> dict[str, object]:
         balance = energy_balance(run)
         return {"energy_drift": float(np.max(np.abs(balance - balance[0])) / abs(balance[0]))}
     kind, var = name.split(":", 1)
+    if var in booleans:  # a Boolean output (final: only): true at the end
+        return {f"{kind}_{var}": var in run.flags}
     if var in run.finals:
         return {f"{kind}_{var}": run.finals[var]}
     return {f"{kind}_{var}": float(REDUCERS[kind](run.column(var)))}
@@ -202,16 +206,19 @@ class MetricSet:
     names: tuple[str, ...] = DEFAULT
     functions: tuple[UserFunction, ...] = ()
     discrete: dict = field(default_factory=dict)  # the final:NAME of Integer/Enumeration outputs: {NAME: items}
+    booleans: tuple[str, ...] = ()  # the final:NAME of Boolean outputs (read from Run.flags)
 
     @classmethod
     def parse(cls, names, functions=(), outputs: list[str] | None = None,
-              discrete: dict | None = None) -> "MetricSet":
+              discrete: dict | None = None, booleans=None) -> "MetricSet":
         """The metrics `names` (None: the defaults the unit's outputs allow) and user `functions`,
-        checked against the unit's Real `outputs` and its Integer/Enumeration outputs `discrete`
-        ({name: {value: item}}, {} for an Integer), which only final:NAME reads. SweepSpecError
-        naming the metric for anything the unit cannot give."""
+        checked against the unit's Real `outputs`, its Integer/Enumeration outputs `discrete`
+        ({name: {value: item}}, {} for an Integer) and its Boolean outputs `booleans` (names), the
+        last two read by final:NAME only. SweepSpecError naming the metric for anything the unit
+        cannot give."""
         discrete = discrete or {}
-        used = {}
+        booleans = tuple(booleans or ())
+        used, used_booleans = {}, []
         defaulted = names is None
         if defaulted:
             names = DEFAULT
@@ -230,6 +237,12 @@ class MetricSet:
                                              f"at the end only: use final:{var}")
                     used[var] = discrete[var]
                     continue
+                if var in booleans:
+                    if kind != "final":
+                        raise SweepSpecError(f"--metrics {name!r}: {var!r} is a Boolean output, read at the end "
+                                             f"only: use final:{var} (true or false) or the metric event")
+                    used_booleans.append(var)
+                    continue
                 needed = (var,)
             elif name not in BUILTIN:
                 raise SweepSpecError(f"--metrics {name!r}: unknown metric; valid: {', '.join(BUILTIN)}, "
@@ -242,18 +255,20 @@ class MetricSet:
                         raise SweepSpecError(f"--metrics {name!r}: the unit has no Real output {var!r}; "
                                              f"outputs: {', '.join(outputs)}"
                                              + (f"; Integer/Enumeration outputs (final: only): {', '.join(discrete)}"
-                                                if discrete else ""))
+                                                if discrete else "")
+                                             + (f"; Boolean outputs (final: only): {', '.join(booleans)}"
+                                                if booleans else ""))
         if defaulted and outputs is not None:  # the defaults adapt to what the unit outputs
             names = tuple(n for n in names if all(v in outputs for v in _needed(n)))
         if functions and not isinstance(functions, UserFunction):
             functions = items_of(functions, "--metric-function",
                                  "a list of 'module:function' references or functions")
         funcs = tuple(f if isinstance(f, UserFunction) else UserFunction.parse(f) for f in functions or ())
-        return cls(names, funcs, used)
+        return cls(names, funcs, used, tuple(used_booleans))
 
     def columns(self) -> dict[str, str]:
         """The table's metric columns known before anything runs, in order, {column: kind}: kind
-        'bool' (survived), 'text' (event) or 'number'. Every built-in metric's, and a user
+        'bool' (survived, final: of a Boolean output), 'text' (event) or 'number'. Every built-in metric's, and a user
         function's own name for one that returns a number; the columns of a function that returns
         a dict are its keys, known once a point has run."""
         out: dict[str, str] = {}
@@ -262,7 +277,8 @@ class MetricSet:
                 out.update(final_x="number", final_y="number")
             elif ":" in name:
                 kind, var = name.split(":", 1)
-                out[f"{kind}_{var}"] = "text" if self.discrete.get(var) else "number"
+                out[f"{kind}_{var}"] = ("bool" if var in self.booleans else
+                                        "text" if self.discrete.get(var) else "number")
             else:
                 out[name] = {"survived": "bool", "event": "text"}.get(name, "number")
         return out
@@ -273,7 +289,7 @@ class MetricSet:
 
         out: dict[str, object] = {}
         for name in self.names:
-            out.update(_builtin(name, run))
+            out.update(_builtin(name, run, self.booleans))
         if self.functions:
             traj = run.structured()
             for fn in self.functions:

@@ -198,5 +198,6 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, sol
     settings = Settings(stop_time=stop, output_interval=interval, start_time=float(start_time), fixed=fixed_values,
                         ensemble=ensemble)
     metric_set = MetricSet.parse(metrics, metric_functions, outputs=list(target.outputs),
-                                 discrete=getattr(target, "discrete_outputs", None))
+                                 discrete=getattr(target, "discrete_outputs", None),
+                                 booleans=getattr(target, "flag_names", None))
     return Plan(target, settings, metric_set, inputs, values)

@@ -16,7 +16,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
  * One call that advances time (gw_advance: fmi2DoStep, the core's front ends) takes at most
  * I->max_internal_steps internal steps, accepted and rejected together (a Rosenbrock
  * refactorisation after a singular W counts as a rejected step), so every call returns in a
- * time bounded by the budget times the cost of one step.  Three checks:
+ * time bounded by the budget times the cost of one step.  Four checks:
  *  1. up front (gw_budget_upfront): no internal step is longer than max_step, so a
  *     communication step H needs at least ceil(H / max_step) steps, exactly that many for
  *     euler and rk4; more than the budget is refused before any work.

@@ -14,6 +14,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #include "gw_events.c"
 #include "gw_state.c"
 #include "gw_state_checks.c"
+#include "gw_budget.c"
 #include "gw_solver.c"
 #include "gw_solver_fixed.c"
 #include "gw_solver_dopri5.c"

@@ -92,7 +92,7 @@ struct gw_instance {
     double err_old;                 /* PI controller: error norm of the last accepted step (0: none) */
     unsigned long long n_call_steps; /* internal steps (accepted + rejected) of this gw_advance */
     double t_call;                   /* where this gw_advance started */
-    /* the run budget's projection window (gw_solver.c, check 4), restarted by every gw_advance */
+    /* the run budget's projection window (gw_budget.c, check 4), restarted by every gw_advance */
     double run_h_ref;
     unsigned long run_n_fast;
 

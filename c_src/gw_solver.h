@@ -43,10 +43,13 @@
 #define GW_DOPRI5_FAC_MAX 10.0 /* largest increase of h per step */
 #define GW_MAX_EVENTS_PER_STEP 1000
 
-/* The budget of internal steps of one call (I->max_internal_steps; gw_solver.c): refused up
- * front when ceil(H / max_step) exceeds it, refused when GW_SETTLE attempts in a row project
- * beyond it, stopped when it is spent. */
+/* The budget of internal steps of one call (I->max_internal_steps; gw_budget.c): refused up
+ * front when ceil(H / max_step) exceeds it, refused when a window of settled attempts in a row
+ * (GW_SETTLE at least) project beyond it, stopped when it is spent. */
 #define GW_SETTLE 100
+/* ... and at least this many time scales h rel_tol^(-1/q) of the solver's order q
+ * (gw_settle_attempts, gw_budget.c): a stiff mode's transient is not a settled step size */
+#define GW_SETTLE_SPANS 20.0
 /* The least first step of an adaptive solver, in step-size floors gw_h_min (gw_initial_step) */
 #define GW_H0_FLOORS 1000.0
 #define GW_PROJECTION_MARGIN 100.0
@@ -58,9 +61,20 @@
 #define GW_DOP853_BETA 0.04
 #define GW_DOPRI5_BETA 0.0
 
-/* ---- gw_solver.c: the step driver's helpers, shared by the families ----------------------- */
+/* ---- gw_budget.c: the budget of internal steps ----------------------------------------------- */
 /* log that the budget of internal steps refuses the rest of the call (what: why now) */
 GW_INTERNAL void gw_budget_message(gw_instance *I, const char *what, double remaining, double h);
+/* refuse before any work a call to t_end that needs more steps of max_step than the budget;
+ * 0 or -1 logged */
+GW_INTERNAL int gw_budget_upfront(gw_instance *I, double t_end);
+/* The next attempt of an adaptive loop: the controller's h, bounded by max_step and shortened
+ * to land exactly on t_end (*last), refused by the budget or when it no longer advances time.
+ * *h_ref and *n_fast hold the window of the budget projection (zero at the call's start).
+ * Returns 0, or -1 with the reason logged. */
+GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last, double *h_ref,
+                                unsigned long *n_fast, double *h, double *t1, int *last);
+
+/* ---- gw_solver.c: the step driver's helpers, shared by the families ----------------------- */
 /* smallest step size allowed at time t before "step size underflow" */
 GW_INTERNAL double gw_h_min(double t);
 GW_INTERNAL const char *gw_x_name(const gw_instance *I, int i);
@@ -82,11 +96,6 @@ GW_INTERNAL double gw_step_factor(gw_instance *I, double err, double q, double b
 GW_INTERNAL void gw_sum_update(gw_instance *I);
 /* Hairer's initial step size estimate (one extra RHS evaluation). */
 GW_INTERNAL double gw_initial_step(gw_instance *I, double hmax, double order);
-/* The next attempt of an adaptive loop: the controller's h, bounded by max_step and shortened
- * to land exactly on t_end (*last), refused by the feasibility guard or when it no longer
- * advances time. Returns 0, or -1 with the reason logged. */
-GW_INTERNAL int gw_next_attempt(gw_instance *I, double t_end, int rejected_last, double *h_ref,
-                                unsigned long *n_fast, double *h, double *t1, int *last);
 
 /* ---- gw_solver_fixed.c ------------------------------------------------------------------------ */
 /* ceil((t_end - I->t) / max_step) less the rounding of t (>= 1): the fixed-step solvers' exact

@@ -85,7 +85,7 @@ static int gw_rk4_step(gw_instance *I, double h, double t1) {
  * real-time step, at random): up to 8 ulps of t are absorbed into the substeps, and never more
  * than a quarter of a step (far from t = 0 the doubles may be too coarse for max_step: refused
  * in gw_integrate_fixed, not absorbed).  Also the lower bound of every solver's step count that
- * the budget checks up front (gw_solver.c). */
+ * the budget checks up front (gw_budget.c). */
 GW_INTERNAL double gw_fixed_substeps(const gw_instance *I, double t_end) {
     const double t0 = I->t, H = t_end - t0;
     const double slack = fmin(1e-12 * I->max_step + 8.0 * DBL_EPSILON * fmax(fabs(t0), fabs(t_end)),

@@ -244,7 +244,7 @@ def _fmu_path(fmu) -> Path:
     return path
 
 
-# the advice of the runtime's budget messages (c_src/gw_solver.c) names what an FMU's user
+# the advice of the runtime's budget messages (c_src/gw_budget.c) names what an FMU's user
 # sets; a run of the ensemble sets the communication steps through its grid, not the budget
 _BUDGET_ADVICE = (
     ("raise max_internal_steps or max_step, or shorten the communication step",

@@ -164,7 +164,7 @@ def test_a_loose_tolerance_costs_no_more_than_order_three(paper):
     0.1.  rel_tol 0.5 and 1 cost what 0.1 costs, and the lean lands within 1e-2 rad of scipy
     DOP853 at rtol 1e-13 (order 3 at these tolerances over 20 s: 2e-3).  (The same dip of h in a
     1 s step at rel_tol 0.5 would make the budget guard refuse the call after 330 steps, "the
-    step size has settled", but for the guard's window restarting when h halves, gw_solver.c.)"""
+    step size has settled", but for the guard's window restarting when h halves, gw_budget.c.)"""
     import re
 
     from fmi_helpers import Slave

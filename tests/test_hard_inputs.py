@@ -142,23 +142,15 @@ def test_huge_spin_guard_names_the_step_count(slave):
 
 
 def test_huge_spin_with_rosenbrock_returns_fast(slave):
-    """Rosenbrock (L-stable) first resolves the 1e9 rad/s nutation with h ~ 4e-9 s, so the guard
-    refuses the step; if it ever damps the nutation instead, the slow motion must be right:
-    rolling along x at R gamma_dot, lean held by the gyroscopic stiffness, energy conserved."""
+    """Rosenbrock (L-stable) damps the 1e9 rad/s nutation's fast mode instead of resolving it
+    and finishes the second in a few dozen steps; the slow motion is right: rolling along x at
+    R gamma_dot, lean held by the gyroscopic stiffness, energy conserved."""
     slave.init(solver=4, gamma_dot=1e9)
     e0 = slave.get("energy")
     t0 = time.process_time()
-    try:
-        slave.slave.doStep(0.0, 1.0)
-        status = 0
-    except FMICallException as exc:
-        status = exc.status
+    slave.slave.doStep(0.0, 1.0)
     assert time.process_time() - t0 < 3.0
     assert all(math.isfinite(v) for v in slave.get(*STATES))
-    if status:
-        assert status == 3 and "would need about" in slave.log_text()
-        assert "try solver rosenbrock" not in slave.log_text()
-        return
     x, beta, gamma_dot, e = slave.get("x", "beta", "gamma_dot", "energy")
     assert x == pytest.approx(0.17 * 1e9, rel=1e-9)
     assert beta == pytest.approx(math.radians(80), abs=1e-9)

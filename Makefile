@@ -122,7 +122,7 @@ figures: $(STAMP)
 	$(PY) examples/sweeps/monte_carlo.py --workers 2 --png docs/img/sweep_monte_carlo.png --record docs/img/sweep_monte_carlo.json
 	$(PY) examples/sweeps/monte_carlo.py --closed-loop --samples 300 --workers 2 --png docs/img/sweep_monte_carlo_closed_loop.png --record docs/img/sweep_monte_carlo_closed_loop.json
 	$(PY) benchmarks/sweep_scaling.py --png docs/img/sweep_cost.png
-	$(PY) benchmarks/work_precision.py --scenarios paper long near_flat --peers heyoka plain --out results/bench --png-dir docs/img
+	$(PY) benchmarks/work_precision.py --scenarios paper long near_flat --peers heyoka plain --repeat 5 --out results/bench --png-dir docs/img
 	$(PY) benchmarks/work_precision.py --scenarios stiff --out results/bench/stiff --png-dir docs/img
 
 clean:

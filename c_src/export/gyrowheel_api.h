@@ -91,7 +91,7 @@ typedef enum {
 typedef struct {
     double start_time; /* s, finite */
     int solver;        /* gyrowheel_solver */
-    double rel_tol;    /* 1, in [2.22e-15, 1]: relative tolerance of the adaptive solvers */
+    double rel_tol;    /* 1, in [10 eps = 2.2204460492503131e-15, 1]: relative tolerance of the adaptive solvers */
     double abs_tol;    /* 1, 0 or in [1e-30, 1]: absolute tolerance, scaled by each state's
                           nominal value; 0: rel_tol / 100 (follows the tolerance) */
     double max_step;   /* s, > 0: bound of internal steps; THE step of euler and rk4 */

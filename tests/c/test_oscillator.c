@@ -195,7 +195,7 @@ static void test_checks_and_settings(void) {
         double v;
         const char *msg;
     } settings[] = {
-        {VR_REL_TOL, 0.0, "rel_tol = 0 is outside its valid range [2.22e-15, 1]"},
+        {VR_REL_TOL, 0.0, "rel_tol = 0 is outside its valid range [2.2204460492503131e-15, 1]"},
         {VR_REL_TOL, 1e-16, "rel_tol = 1e-16 is outside its valid range"},
         {VR_REL_TOL, 1e6, "rel_tol = 1e+06 is outside its valid range"},
         {VR_ABS_TOL, -1e-9, "abs_tol = -1e-09 is outside its valid range [1e-30, 1]"},

@@ -225,7 +225,7 @@ class FmuInfo:
         None for an FMU without auto."""
         if "auto" not in self.solvers:
             return None
-        return "taylor" if "taylor" in self.solvers and not self.modes else "dop853"
+        return auto_pick("taylor" in self.solvers, self.modes)
 
     def variable(self, name: str) -> VariableInfo:
         """The variable called `name`; UnknownNameError (a KeyError) lists the names."""
@@ -331,6 +331,12 @@ def _effects(index_html: str) -> tuple[str, ...] | None:
         return None
     text = html.unescape(match.group(1)).strip()
     return () if text == "none" else tuple(e.strip() for e in text.split(",") if e.strip())
+
+
+def auto_pick(kernel: bool, modes: bool) -> str:
+    """The solver auto integrates with: "taylor" in an FMU with the Taylor kernel whose model has
+    no mode switches, else "dop853" (c_src gw_solver_auto's rule, docs/accuracy.md "Solver auto")."""
+    return "taylor" if kernel and not modes else "dop853"
 
 
 def kernel_and_modes(zf: zipfile.ZipFile, names) -> tuple[bool, bool]:

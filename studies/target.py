@@ -156,13 +156,13 @@ def _kernel_and_auto(data: bytes) -> tuple[bool, bool]:
     gyrowheel.description.FmuInfo.auto_solver."""
     import io
 
-    from gyrowheel.description import kernel_and_modes
+    from gyrowheel.description import auto_pick, kernel_and_modes
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as zf:
             kernel, modes = kernel_and_modes(zf, set(zf.namelist()))
     except (KeyError, zipfile.BadZipFile):
         return False, False
-    return kernel, kernel and not modes
+    return kernel, auto_pick(kernel, modes) == "taylor"
 
 
 def _unpack(target: FmuTarget, payload: bytes | None) -> str:

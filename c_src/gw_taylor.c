@@ -59,9 +59,13 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 #define GW_TAYLOR_BASE_ATTR
 #define GW_TAYLOR_FAST_ATTR __attribute__((target(GW_TAYLOR_FAST_TARGET)))
 #else
-#define GW_TAYLOR_BASE_ATTR __attribute__((optimize("fp-contract=fast")))
-#define GW_TAYLOR_FAST_ATTR                                                                        \
-    __attribute__((target(GW_TAYLOR_FAST_TARGET), optimize("fp-contract=fast")))
+/* expensive-optimizations: GCC forms the fused multiply-adds in a pass that only that flag (on
+ * from -O2) runs, so without it a build at -O1 (OPTIMISE_LARGE, GYROWHEEL_OPTIMISE) would have a
+ * kernel without FMAs, slower and with other bits than at -O2; with it the kernel's results are
+ * the same at -O1 and -O2 (tests/test_fmu_sources.py) */
+#define GW_TAYLOR_OPT optimize("fp-contract=fast", "expensive-optimizations")
+#define GW_TAYLOR_BASE_ATTR __attribute__((GW_TAYLOR_OPT))
+#define GW_TAYLOR_FAST_ATTR __attribute__((target(GW_TAYLOR_FAST_TARGET), GW_TAYLOR_OPT))
 #endif
 #else
 #define GW_TAYLOR_FAST 0
@@ -76,7 +80,7 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
  * clone of its passes on Intel and AMD CPUs. */
 #if defined(GW_ENSEMBLE_LANES) && GW_TAYLOR_FAST && defined(__ELF__) && defined(__GLIBC__)
 #define GW_TL_CLONED                                                                               \
-    __attribute__((target_clones("arch=x86-64-v3", "default"), optimize("fp-contract=fast")))
+    __attribute__((target_clones("arch=x86-64-v3", "default"), GW_TAYLOR_OPT))
 #endif
 
 /* the portable copy (the only one without GW_TAYLOR_FAST) */

@@ -31,6 +31,13 @@ OPTIMISE = ["-O2", "-fno-math-errno"]
 # Past this size the FMU is compiled at -O1.
 LARGE_SOURCE_BYTES = 1_500_000
 OPTIMISE_LARGE = ["-O1", "-fno-math-errno"]
+# GYROWHEEL_OPTIMISE="-O1" (say) compiles every build at that level instead: a quicker build when
+# the binary's speed does not matter (the test suite sets -O1: GCC's -O2 takes most of a build's
+# time, 34 s against 9 s for euler_disk_end's 1.3 MB of generated C).  Without -ffast-math the
+# levels compute the same IEEE operations in the same order (C99: no contraction into FMA), so
+# the results are the same bits (tests/test_fmu_sources.py checks a run's).
+OPTIMISE_ENV = "GYROWHEEL_OPTIMISE"
+LEVELS = ("-O0", "-O1", "-O2", "-O3", "-Os", "-Og")
 UNITY_SOURCE = UNITY_SOURCES[2]  # an FMI 2 FMU's only <SourceFiles> entry
 
 
@@ -64,7 +71,16 @@ def _env(tmp) -> dict:
 
 
 def optimisation_for(source_dir: Path) -> list[str]:
-    """OPTIMISE, or OPTIMISE_LARGE when one C file in `source_dir` exceeds LARGE_SOURCE_BYTES."""
+    """OPTIMISE, or OPTIMISE_LARGE when one C file in `source_dir` exceeds LARGE_SOURCE_BYTES;
+    the level GYROWHEEL_OPTIMISE names instead, when it is set and not empty.
+
+    Raises CompileError when GYROWHEEL_OPTIMISE is not one of LEVELS."""
+    level = os.environ.get(OPTIMISE_ENV, "")
+    if level:
+        if level not in LEVELS:
+            raise CompileError(f"{OPTIMISE_ENV}={level!r}: not an optimisation level; use one of "
+                               f"{', '.join(LEVELS)} (unset: {OPTIMISE[0]})")
+        return [level, *OPTIMISE[1:]]
     largest = max((f.stat().st_size for f in Path(source_dir).glob("*.c")), default=0)
     return OPTIMISE_LARGE if largest > LARGE_SOURCE_BYTES else OPTIMISE
 

@@ -125,14 +125,12 @@ def pytest_collection_modifyitems(config, items):
 
 @contextmanager
 def compiled_at(level: str):
-    """Within: compile_shared (every FMU build) compiles at optimisation `level` ("-O1") instead
-    of the product's -O2 (gyrowheel.fmu_build.compiler OPTIMISE; the warnings stay errors).  For
-    the builds of one test file whose FMU no test times or compares bit for bit with another
-    build: GCC's -O2 takes most of such a build (flight_loads of tests/test_contact_flight.py:
-    38 s of CPU at -O2).  Not for shared builds (conftest shared_build): those stay the product's."""
-    from gyrowheel.fmu_build import compiler
+    """Within: every FMU build (compile_shared and the cross builds) compiles at optimisation
+    `level` ("-O2"), through GYROWHEEL_OPTIMISE (gyrowheel.fmu_build.compiler), so command-line
+    builds the tests start follow it too."""
+    from gyrowheel.fmu_build.compiler import OPTIMISE_ENV
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(compiler, "OPTIMISE", [level, *compiler.OPTIMISE[1:]])
+        mp.setenv(OPTIMISE_ENV, level)
         yield
 
 
@@ -149,11 +147,14 @@ def _build_cache(tmp_path_factory):
     shared by its workers: tests that compile the same source with the same flags and compiler
     (the same FMU built in several modules' directories, an Ensemble's library in each test's
     cache) run the compiler once.  Set for the whole run, so the command-line runs the tests
-    start use it too; nothing is reused from an earlier run."""
+    start use it too; nothing is reused from an earlier run.  Every build compiles at -O1
+    (compiled_at): the same bits as the product's -O2 in a quarter of the compile time
+    (tests/test_fmu_sources.py checks the bits)."""
     from gyrowheel.fmu_build.build_cache import ENV
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv(ENV, str(_run_dir(tmp_path_factory) / "build_cache"))
-        yield
+        with compiled_at("-O1"):
+            yield
 
 
 def shared_build(tmp_path_factory, key: str, make):

@@ -15,7 +15,6 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from gyrowheel.fmu_build import build_fmu, parse_scene
-from conftest import compiled_at
 from fmi_helpers import Slave, replayed, simulate_logged
 from gyrowheel.fmu_build.scene import SceneError
 from paper_wheel import G, KA, KD, M, R
@@ -249,8 +248,7 @@ mu = 0.3
 def loaded(tmp_path_factory):
     root = tmp_path_factory.mktemp("flight_loads")
     scene = parse_scene('[model]\nname = "flight_loads"\n' + WHEEL + LOADS, "flight_loads.toml")
-    with compiled_at("-O1"):  # its runs take 0.1 s; GCC's -O2 took most of the build
-        return str(build_fmu(scene, root / "flight_loads.fmu", build_dir=root / "build").fmu)
+    return str(build_fmu(scene, root / "flight_loads.fmu", build_dir=root / "build").fmu)
 
 
 @pytest.mark.parametrize("start", [

@@ -22,7 +22,6 @@ from fmpy import simulate_fmu
 from scipy.optimize import fsolve
 
 from fmi_helpers import Slave, simulate_logged
-from conftest import compiled_at
 from gyrowheel.fmu_build import build_fmu, parse_scene
 from paper_wheel import G, M, R
 from paper_wheel import PAPER_WHEEL_TOML as WHEEL
@@ -41,9 +40,8 @@ MU_10 = {"mu": 10.0, "mu_k": 10.0}  # the hybrid's friction for a landing lift-o
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
     root = tmp_path_factory.mktemp("lift_off")
-    with compiled_at("-O1"):
-        return {name: str(build_fmu(parse_scene(text, f"{name}.toml"), root / f"{name}.fmu").fmu)
-                for name, text in (("rolling", ROLLING), ("hybrid", HYBRID))}
+    return {name: str(build_fmu(parse_scene(text, f"{name}.toml"), root / f"{name}.fmu").fmu)
+            for name, text in (("rolling", ROLLING), ("hybrid", HYBRID))}
 
 
 class Forces:

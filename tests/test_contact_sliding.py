@@ -18,7 +18,6 @@ import pytest
 from fmpy import simulate_fmu
 
 from fmi_helpers import Slave, simulate_logged
-from conftest import compiled_at
 from gyrowheel.fmu_build import build_fmu, parse_scene
 from gyrowheel.fmu_build.scene import SceneError
 from paper_wheel import G, KA, M, R
@@ -42,8 +41,7 @@ OUT = ["x", "vx", "gamma_dot", "beta", "contact_mode", "slip_long", "slip_lat", 
 def fmu(tmp_path_factory):
     root = tmp_path_factory.mktemp("sliding")
     scene = parse_scene('[model]\nname = "sliding"\n' + WHEEL + SLIDE, "sliding.toml")
-    with compiled_at("-O1"):
-        return str(build_fmu(scene, root / "sliding.fmu", build_dir=root / "build").fmu)
+    return str(build_fmu(scene, root / "sliding.fmu", build_dir=root / "build").fmu)
 
 
 def run(fmu, stop, dt=0.01, **start):
@@ -397,8 +395,7 @@ def test_rolling_resistance_breaks_away_and_acts_while_sliding(tmp_path):
     scene = parse_scene('[model]\nname = "slide_rr"\n' + WHEEL + SLIDE.replace(
         "[effects.contact_forces]", f"[effects.rolling_resistance]\nc_rr = {c_rr}\n[effects.contact_forces]"),
         "slide_rr.toml")
-    with compiled_at("-O1"):
-        fmu = str(build_fmu(scene, tmp_path / "slide_rr.fmu", build_dir=tmp_path / "build").fmu)
+    fmu = str(build_fmu(scene, tmp_path / "slide_rr.fmu", build_dir=tmp_path / "build").fmu)
     t_star = v0 / (G * (mu_k + (mu_k - c_rr) / KA))
     r, events = run(fmu, 0.6, beta=math.pi / 2, gamma_dot=0.0, slip_long=v0, mu_k=mu_k)
     assert events[0] == ("rolling_stiction", 0.0)

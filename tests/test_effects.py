@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from conftest import PAPER, SCENES, compiled_at, steady_precession
+from conftest import PAPER, SCENES, steady_precession
 from fmi_helpers import Slave
 from gyrowheel.fmu_build import build_fmu, parse_scene
 from gyrowheel.studies.analysis import fit_circle
@@ -18,17 +18,14 @@ from paper_wheel import PAPER_WHEEL_TOML as BASE
 
 @pytest.fixture(scope="module")
 def build(tmp_path_factory):
-    """Build (and cache) an FMU from scene text, compiled at -O1 (conftest compiled_at): these
-    tests check the physics each FMU computes, none times an FMU or compares its bits with
-    another build's, and GCC's -O2 took most of each build (the Gyrover's: 22 s at -O2)."""
+    """Build (and cache) an FMU from scene text."""
     root = tmp_path_factory.mktemp("effects")
     cache: dict[str, str] = {}
 
     def _build(text: str, name: str) -> str:
         if text not in cache:
             scene = parse_scene(f'[model]\nname = "{name}"\n' + text, f"{name}.toml")
-            with compiled_at("-O1"):
-                cache[text] = str(build_fmu(scene, root / f"{name}.fmu", build_dir=root / f"{name}_build").fmu)
+            cache[text] = str(build_fmu(scene, root / f"{name}.fmu", build_dir=root / f"{name}_build").fmu)
         return cache[text]
     return _build
 

@@ -25,7 +25,6 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from fmi_helpers import simulate_logged
-from conftest import compiled_at
 from gyrowheel.fmu_build import build_fmu, parse_scene
 from gyrowheel.fmu_build.scene import SceneError
 from paper_wheel import G, KA, M, R
@@ -54,8 +53,7 @@ OUT = ["x", "y", "z", "vx", "vy", "vz", "beta", "gamma_dot", "height", "contact_
 def fmu(tmp_path_factory):
     root = tmp_path_factory.mktemp("flight_effects")
     scene = parse_scene('[model]\nname = "flight_effects"\n' + WHEEL + EFFECTS, "flight_effects.toml")
-    with compiled_at("-O1"):
-        return str(build_fmu(scene, root / "flight_effects.fmu").fmu)
+    return str(build_fmu(scene, root / "flight_effects.fmu").fmu)
 
 
 def run(fmu, stop, dt=0.001, **start):
@@ -157,8 +155,7 @@ M_FLY, L_PEND, I_FA, I_FD, W_FLY = 0.4, 0.03, 5e-4, 2.5e-4, 400.0  # the gyrover
 def gyrover_fmu(tmp_path_factory):
     root = tmp_path_factory.mktemp("flight_gyrover")
     scene = parse_scene('[model]\nname = "flight_gyrover"\n' + WHEEL + GYROVER, "flight_gyrover.toml")
-    with compiled_at("-O1"):
-        return str(build_fmu(scene, root / "flight_gyrover.fmu").fmu)
+    return str(build_fmu(scene, root / "flight_gyrover.fmu").fmu)
 
 
 def total_momentum(r):

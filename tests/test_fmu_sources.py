@@ -20,6 +20,9 @@ modelDescription.xml <SourceFiles>, FMI 3 in sources/buildDescription.xml).
   test_fmpy_build_platform_binary_strict    fmpy's CMake build (only the listed source files)
                                             with all warnings as errors, then simulated: the
                                             results of the FMU as built
+  test_optimisation_levels_compute_the_same_bits   GYROWHEEL_OPTIMISE -O1 (the test suite's
+                                            builds) against the product's -O2: every solver's run
+                                            is the same bits; a level that is none is refused
   test_make_internal_*                      gyrowheel.fmu_build.casadi_c on CasADi-shaped input
 """
 from __future__ import annotations
@@ -183,6 +186,42 @@ def test_fmpy_build_platform_binary_strict(fmi, example_build, tmp_path):
         np.testing.assert_allclose(got[name], ref[name], rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.parametrize("scene, solvers", [
+    ("paper_earth", ["taylor", "dop853", "dopri5", "rosenbrock", "rk4"]),
+    ("paper_earth_friction", ["dopri5", "rosenbrock"]),  # its stiction events
+])
+def test_optimisation_levels_compute_the_same_bits(scene, solvers, example_build, tmp_path):
+    """The suite builds at -O1 (conftest compiled_at); the product at -O2.  Without -ffast-math
+    and with C99's contraction off, both levels compute the same IEEE operations in the same
+    order; the Taylor kernel, which fuses multiply-adds, asks GCC for its FMA pass at any level
+    (c_src/gw_taylor.c, GW_TAYLOR_OPT).  So every solver's run is bit for bit the same."""
+    from conftest import SCENES, compiled_at
+    from gyrowheel import simulate
+    from gyrowheel.fmu_build import build_fmu, load_scene
+    fast = example_build(scene).fmu
+    with compiled_at("-O2"):
+        product = build_fmu(load_scene(SCENES / f"{scene}.toml"), tmp_path / f"{scene}.fmu").fmu
+    assert product.read_bytes() != Path(fast).read_bytes()
+    for solver in solvers:
+        a = simulate(product, start_values={"solver": solver}, stop_time=20.0)
+        b = simulate(fast, start_values={"solver": solver}, stop_time=20.0)
+        assert len(a) > 10
+        for name in a.dtype.names:
+            np.testing.assert_array_equal(a[name], b[name], err_msg=f"{solver}: {name}")
+
+
+def test_an_unknown_optimisation_level_is_refused(tmp_path, monkeypatch):
+    from gyrowheel.fmu_build.compiler import OPTIMISE_ENV, CompileError, optimisation_for
+    monkeypatch.setenv(OPTIMISE_ENV, "-Ofast")  # not IEEE: refused, not passed on
+    with pytest.raises(CompileError, match=r"GYROWHEEL_OPTIMISE='-Ofast': not an optimisation level; use one of -O0"):
+        optimisation_for(tmp_path)
+    proc = subprocess.run([sys.executable, "-m", "gyrowheel", "build", "examples/scenes/paper_moon.toml", "-o",
+                           str(tmp_path / "m.fmu")], capture_output=True, text=True,
+                          cwd=Path(__file__).parents[1])
+    assert proc.returncode != 0 and "GYROWHEEL_OPTIMISE='-Ofast'" in proc.stderr, proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
 # ---- gyrowheel.fmu_build.casadi_c -------------------------------------------------------------------------
 
 GENERATED = """\
@@ -245,10 +284,12 @@ def test_make_internal_refuses_what_it_does_not_know():
         make_internal(GENERATED + "\ncasadi_int gw_counter = 0;\n", {"gw_ode", "gw_ode_work"})
 
 
-def test_large_generated_sources_are_compiled_at_O1(tmp_path):
+def test_large_generated_sources_are_compiled_at_O1(tmp_path, monkeypatch):
     """-O2 on CasADi's multi-megabyte straight-line functions costs minutes (docs/runtime.md);
     the level follows the largest file the unity build includes."""
-    from gyrowheel.fmu_build.compiler import LARGE_SOURCE_BYTES, OPTIMISE, OPTIMISE_LARGE, optimisation_for
+    from gyrowheel.fmu_build.compiler import (LARGE_SOURCE_BYTES, OPTIMISE, OPTIMISE_ENV, OPTIMISE_LARGE,
+                                              optimisation_for)
+    monkeypatch.delenv(OPTIMISE_ENV)  # the product's rule, not the test suite's -O1
     (tmp_path / "gw_fmu.c").write_text("/* unity */\n")
     (tmp_path / "gw_funcs.c").write_text("x" * 1000)
     assert optimisation_for(tmp_path) == OPTIMISE and "-O2" in OPTIMISE

@@ -13,7 +13,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 
-from conftest import PAPER, SCENES, STATES, CasadiWheel, compiled_at
+from conftest import PAPER, SCENES, STATES, CasadiWheel
 from fmi_helpers import Slave
 from gyrowheel.fmu_build import build_fmu, parse_scene
 from gyrowheel.studies.scipy_reference import solve_hybrid
@@ -177,9 +177,8 @@ def test_fast_spin_2000_rad_s_upright(earth_fmu, solver):
 def fast_flywheel(tmp_path_factory):
     text = (SCENES / "gyrover_steering.toml").read_text().replace("flywheel_rate = 400.0", "flywheel_rate = 1047.2")
     # its runs name dopri5 and rosenbrock: no Taylor kernel (half of this model's build)
-    with compiled_at("-O1"):
-        return build_fmu(parse_scene(text, "fast_flywheel.toml"), tmp_path_factory.mktemp("fly") / "fast.fmu",
-                         taylor=False).fmu
+    return build_fmu(parse_scene(text, "fast_flywheel.toml"), tmp_path_factory.mktemp("fly") / "fast.fmu",
+                     taylor=False).fmu
 
 
 def _fast_flywheel_run(fmu, solver):

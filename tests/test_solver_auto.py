@@ -15,7 +15,6 @@ from pathlib import Path
 import pytest
 from fmpy.fmi2 import fmi2LastSuccessfulTime
 
-from conftest import compiled_at
 from fmi_helpers import Slave
 from gyrowheel.description import read_info
 from gyrowheel.fmu_build import build_fmu, parse_scene
@@ -33,13 +32,11 @@ FALLING = ('[model]\nname = "falls"\n[wheel]\nbeta_min = 0.3\n[effects.gravity]\
 def fmus(tmp_path_factory, example_build):
     """The paper's earth scene (no solver named: auto) with the Taylor kernel (the default
     build) and without it (taylor=False), the run's shared builds (conftest example_build), and
-    a falling wheel's scene both ways, compiled at -O1 (conftest compiled_at: the tests compare
-    runs of one FMU with each other, never with another build, and time nothing)."""
+    a falling wheel's scene both ways."""
     work = tmp_path_factory.mktemp("auto")
     falls = parse_scene(FALLING, "falls.toml")
-    with compiled_at("-O1"):
-        built = {("falls", kernel): build_fmu(falls, work / f"falls_{kernel}.fmu", taylor=None if kernel else False).fmu
-                 for kernel in (True, False)}
+    built = {("falls", kernel): build_fmu(falls, work / f"falls_{kernel}.fmu", taylor=None if kernel else False).fmu
+             for kernel in (True, False)}
     return {**built, ("earth", True): example_build("paper_earth").fmu,
             ("earth", False): example_build("paper_earth", taylor=False).fmu}
 
@@ -202,9 +199,8 @@ def test_contact_modes_take_dop853(tmp_path):
     scene = parse_scene('[model]\nname = "sliding"\n' + WHEEL + SLIDE, "sliding.toml")
     # at -O1, as tests/test_contact_sliding.py builds this scene: its compile is shared (conftest
     # _build_cache), and nothing here times the FMUs or compares them with another build
-    with compiled_at("-O1"):
-        plain = build_fmu(scene, tmp_path / "plain.fmu").fmu
-        kernel = build_fmu(scene, tmp_path / "kernel.fmu", taylor=True).fmu
+    plain = build_fmu(scene, tmp_path / "plain.fmu").fmu
+    kernel = build_fmu(scene, tmp_path / "kernel.fmu", taylor=True).fmu
     assert (read_info(plain).taylor, read_info(kernel).taylor) == (False, True)
     assert read_info(plain).auto_solver == read_info(kernel).auto_solver == "dop853"
     above = math.atan(MU * (1 + KA) / KA) * (1 + 1e-6)

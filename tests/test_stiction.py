@@ -17,7 +17,6 @@ from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi2 import FMU2Model
 
 from fmi_helpers import Slave
-from conftest import compiled_at
 from gyrowheel.fmu_build import build_fmu, parse_scene
 from gyrowheel.fmu_build.scene import SceneError
 from gyrowheel.studies.scipy_reference import solve_hybrid
@@ -39,8 +38,7 @@ def build(tmp_path_factory):
     def _build(name: str, text: str) -> str:
         if name not in cache:
             scene = parse_scene(f'[model]\nname = "{name}"\n' + WHEEL + text, f"{name}.toml")
-            with compiled_at("-O1"):
-                cache[name] = str(build_fmu(scene, root / f"{name}.fmu", build_dir=root / name).fmu)
+            cache[name] = str(build_fmu(scene, root / f"{name}.fmu", build_dir=root / name).fmu)
         return cache[name]
     return _build
 

@@ -17,7 +17,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from conftest import SCENES, compiled_at
+from conftest import SCENES
 from gyrowheel.fmu_build import build_fmu, load_scene, parse_scene
 from gyrowheel.fmu_build.builder import model_spec
 from gyrowheel.fmu_build.codegen import hoisted, optimised, taylor_ode
@@ -229,9 +229,8 @@ def test_fall_times_as_with_the_event_function(tmp_path):
     one-lane tail): the same steps and fall times as the same library evaluating gw_evt at every
     step (GW_TAYLOR_KERNEL_EVT 0), to the event location's tolerance (1e-12 s relative; the
     kernel's sin(beta) may differ from gw_sin's by a rounding), and the same states to 1e-9."""
-    with compiled_at("-O1"):  # the FMU's own binary runs nowhere here: the ensemble builds its library
-        built = build_fmu(parse_scene(FALLS, "scene.toml"), tmp_path / "f.fmu", build_dir=tmp_path / "b",
-                          taylor=True)
+    built = build_fmu(parse_scene(FALLS, "scene.toml"), tmp_path / "f.fmu", build_dir=tmp_path / "b",
+                      taylor=True)
     assert "GW_TL_HAS_EVT 1" in (tmp_path / "b" / "fmu" / "sources" / "gw_taylor_model.h").read_text()
     kw = dict(parameters={"g": [9.81, 3.721, 9.81, 9.81, 0.0, 9.81, 5.0, 1.625, 9.81], "beta_min": 0.1},
               starts={"gamma_dot": [6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 0.2, 4.0, 6.1]}, rel_tol=1e-8)

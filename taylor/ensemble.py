@@ -38,6 +38,7 @@ from gyrowheel import arguments
 from gyrowheel.errors import ArgumentError, ArgumentTypeError, FmuError, GyrowheelError, UnknownNameError
 from gyrowheel.fmu_build.compiler import compile_shared
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR
+from gyrowheel.fmu_build.scene import TOLERANCE_RANGES
 from gyrowheel.scratch import temporary_directory
 
 __all__ = ["Ensemble", "EnsembleResult", "EnsembleError", "STATUS_OK", "STATUS_TERMINATED",
@@ -192,8 +193,8 @@ def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
     an ArgumentError naming the field, an ArgumentTypeError for one that is no number ('10', a
     string, is refused as every gyrowheel function refuses it: gyrowheel.arguments.number).
     Returns the grid as a contiguous float array (empty: none).
-    The ranges the instances check themselves (rel_tol within [10 eps, 1]) are reported per
-    trajectory by them.  (math.isfinite on the scalars: numpy's took 2 us of a small run.)"""
+    rel_tol outside the FMU's range [10 eps, 1] (fmu_build.scene.TOLERANCE_RANGES) is refused
+    here, once, rather than by every trajectory's instance.  (math.isfinite on the scalars: numpy's took 2 us of a small run.)"""
     def number(name, v):
         return arguments.number(v, name, finite=False)
     t0, t1, rtol = number("t_start", t_start), number("t_end", t_end), number("rel_tol", rel_tol)
@@ -203,6 +204,9 @@ def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
         raise ArgumentError(f"t_end = {t1!r} must be greater than t_start = {t0!r}")
     if not (math.isfinite(rtol) and rtol > 0):
         raise ArgumentError(f"rel_tol must be a finite number > 0, got {rtol!r}")
+    lo, hi = TOLERANCE_RANGES["rel_tol"]
+    if not lo <= rtol <= hi:  # the instances' own range: one error, not one per trajectory
+        raise ArgumentError(f"rel_tol must be within [{lo!r}, {hi:g}] (10 eps to 1), got {rtol!r}")
     if abs_tol is not None:
         atol = number("abs_tol", abs_tol)
         if not (math.isfinite(atol) and atol >= 0):
@@ -376,6 +380,8 @@ class Ensemble:
                 compile_shared(unity, [src], part, extra_flags=FLAGS)
                 part.replace(lib)
         self.library = lib
+        self.fmu = fmu
+        self._angle_names: frozenset[str] | None = None
         self._lib = ctypes.CDLL(str(lib))
         fn = lambda name: getattr(self._lib, f"{self.identifier}_ensemble_{name}")  # noqa: E731
         sizes = (ctypes.c_int * 8)()
@@ -434,14 +440,24 @@ class Ensemble:
         if isinstance(values, dict):
             cols = {}
             for k, v in values.items():
+                given = k
+                deg = k not in names and what == "start value" and k.endswith("_deg") and k[:-4] in self._angles()
+                if deg:
+                    if k[:-4] in values:
+                        raise ArgumentError(f"start value {k[:-4]!r} given twice: as {k[:-4]!r} and as {k!r}")
+                    k = k[:-4]
                 if k not in names:
-                    raise UnknownNameError(f"unknown {what} {k!r}; {what}s: {', '.join(names)}")
+                    raise UnknownNameError(f"unknown {what} {k!r}; {what}s: {', '.join(names)}"
+                                           + (" (angles also as NAME_deg, in degrees)" if what == "start value"
+                                              else ""))
                 try:  # (a string, None, a 2-D array: numpy's message named no field, or none came)
                     cols[k] = np.atleast_1d(_numbers(v).astype(float))
+                    if deg:
+                        cols[k] = np.radians(cols[k])
                     if cols[k].ndim != 1:
                         raise ValueError(v)  # named below
                 except ValueError:
-                    raise ArgumentError(f"{what} {k!r} must be a number or a 1-D sequence of numbers "
+                    raise ArgumentError(f"{what} {given!r} must be a number or a 1-D sequence of numbers "
                                         f"(one per trajectory), got {v!r}") from None
             sizes = {len(c) for c in cols.values() if len(c) != 1}
             if len(sizes) > 1 or (n is not None and sizes and sizes != {n}):
@@ -461,13 +477,25 @@ class Ensemble:
                                 f"got {table.shape}")
         return table
 
+    def _angles(self) -> frozenset[str]:
+        """The start values that are angles (unit rad), which `starts` also takes in degrees as
+        NAME_deg (beta_deg = 80), as scenes, simulate and sweep do; read from the FMU's
+        modelDescription.xml once, when first asked."""
+        if self._angle_names is None:
+            from fmpy import read_model_description
+            md = read_model_description(str(self.fmu))
+            unit = {v.name: v.unit or (v.declaredType.unit if v.declaredType else None) for v in md.modelVariables}
+            self._angle_names = frozenset(n for n in self.start_names if unit.get(n) == "rad")
+        return self._angle_names
+
     def run(self, t_end: float, parameters=None, starts=None, *, t_start: float = 0.0,
             rel_tol: float = 1e-10, abs_tol: float | None = None,
             max_step: float | None = None, grid=None) -> EnsembleResult:
         """Integrate every trajectory from t_start to t_end (s) with solver taylor.
 
         parameters: (N, np) array in `parameter_names` order, or {name: value or (N,) values}
-        over the defaults; starts likewise ((N, ns), `start_names`).  N is taken from them
+        over the defaults; starts likewise ((N, ns), `start_names`; in the dict an angle, unit
+        rad, also as NAME_deg in degrees: {"beta_deg": [70, 80]}).  N is taken from them
         (1 if both are None).  abs_tol defaults to rel_tol * 1e-2, max_step to the span.
         grid: communication points (s) after t_start, increasing, the last == t_end: each
         trajectory then advances as through fmi2DoStep from point to point and the result holds
@@ -475,7 +503,8 @@ class Ensemble:
         A trajectory that the budget of internal steps (the FMU's max_internal_steps, per
         communication step) cannot carry to its next point ends with STATUS_ERROR, its message
         advising a grid of shorter communication steps.
-        Raises ArgumentError (a ValueError) naming a bad value or shape, or a grid whose outputs
+        Raises ArgumentError (a ValueError) naming a bad value or shape (rel_tol outside the
+        FMU's range [10 eps, 1] included, once for the job), or a grid whose outputs
         would take more than half of this machine's memory; ArgumentTypeError (also a TypeError)
         for a value that is no number (the string '10' too); UnknownNameError (a KeyError) for an
         unknown name; EnsembleError for a refused job.

@@ -127,6 +127,10 @@ def test_ensemble_bad_job_names_the_field(paper, tmp_path):
              ({"t_end": float("inf")}, "t_start and t_end must be finite"),
              ({"t_end": 1.0, "rel_tol": 0.0}, "rel_tol must be a finite number > 0"),
              ({"t_end": 1.0, "rel_tol": nan}, "rel_tol must be a finite number > 0"),
+             # the FMU's range, once for the job (not one error per trajectory)
+             ({"t_end": 1.0, "rel_tol": 1e-16, "starts": {"gamma_dot": [5.0] * 9}},
+              "rel_tol must be within [2.220446049250313e-15, 1] (10 eps to 1), got 1e-16"),
+             ({"t_end": 1.0, "rel_tol": 2.0}, "rel_tol must be within [2.220446049250313e-15, 1]"),
              ({"t_end": 1.0, "abs_tol": -1.0}, "abs_tol must be a finite number >= 0"),
              ({"t_end": 1.0, "max_step": 0.0}, "max_step must be a finite number > 0"),
              ({"t_end": 1.0, "grid": [0.5, 0.9]}, "last communication point 0.9 must equal t_end"),
@@ -139,6 +143,8 @@ def test_ensemble_bad_job_names_the_field(paper, tmp_path):
             ens.run(t_end, **kwargs)
     res = ens.run(1.0, rel_tol=1e-8, grid=[0.5, 1.0])  # a good job still runs
     assert list(res.status) == [STATUS_OK]
+    lowest = ens.run(0.01, rel_tol=2.220446049250313e-15)  # the bound itself is in the range
+    assert list(lowest.status) == [STATUS_OK]
     # lanes: 0 or -1 would fail in the compiler, 2.5 would be truncated to 2 silently
     for lanes in (0, -1, 2.5, "4", True):
         with pytest.raises(ArgumentError, match="lanes must be an integer >= 1"):
@@ -177,6 +183,24 @@ def test_ensemble_of_a_file_that_is_no_fmu_names_it(tmp_path):
         assert str(info.value) == message and info.value.argument == "fmu"
     with pytest.raises(ArgumentTypeError, match="fmu must be a path to an FMU .* got int"):
         Ensemble(3, cache=tmp_path / "cache")
+
+
+def test_ensemble_takes_angles_in_degrees_as_name_deg(paper, tmp_path):
+    """starts={"beta_deg": ...}: the angle beta (unit rad) in degrees, as scenes, simulate and
+    sweep take it; the same bits as the radians; a non-angle's _deg and a name given twice are
+    refused naming them."""
+    built, _ = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    deg = ens.run(2.0, starts={"beta_deg": [70.0, 80.0], "gamma_dot": 6.0}, rel_tol=1e-8)
+    rad = ens.run(2.0, starts={"beta": np.radians([70.0, 80.0]), "gamma_dot": 6.0}, rel_tol=1e-8)
+    np.testing.assert_array_equal(deg.x_final, rad.x_final)
+    assert deg.x_final[1, STATES.index("beta")] != deg.x_final[0, STATES.index("beta")]
+    with pytest.raises(UnknownNameError, match=r"unknown start value 'gamma_dot_deg'.*\(angles also as NAME_deg"):
+        ens.run(1.0, starts={"gamma_dot_deg": 6.0})  # a rate (rad/s), not an angle
+    with pytest.raises(ArgumentError, match="start value 'beta' given twice: as 'beta' and as 'beta_deg'"):
+        ens.run(1.0, starts={"beta": 1.2, "beta_deg": 70.0})
+    with pytest.raises(ArgumentError, match="start value 'beta_deg' must be a number"):
+        ens.run(1.0, starts={"beta_deg": "steep"})
 
 
 def test_ensemble_bad_values_name_the_field(paper, tmp_path):

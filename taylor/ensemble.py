@@ -264,10 +264,21 @@ _BUDGET_ADVICE = (
 )
 
 
+# solver taylor's series overflowing on a time scale below the smallest step (the FMU's message
+# says "too stiff for an explicit method"): what simulate adds to it (gyrowheel.simulation's
+# STIFF_NOTE), for a run that only has solver taylor
+STIFF_ADVICE = ("; values this stiff (e.g. strong damping on a light wheel) need an implicit solver: simulate "
+                "the FMU with solver rosenbrock (L-stable), or sweep it with --solver rosenbrock "
+                "(the ensemble runs solver taylor only; docs/interface.md, \"Valid ranges\")")
+
+
 def _ensemble_advice(message: str) -> str:
-    """A trajectory's message with the budget's advice in the words of Ensemble.run."""
+    """A trajectory's message with the budget's advice in the words of Ensemble.run, and the
+    stiffness advice (STIFF_ADVICE) where the series overflowed on a too short time scale."""
     for fmu_words, run_words in _BUDGET_ADVICE:
         message = message.replace(fmu_words, run_words)
+    if "too stiff for an explicit method" in message and STIFF_ADVICE not in message:
+        message += STIFF_ADVICE
     return message
 
 

@@ -231,12 +231,17 @@ def test_a_combination_too_stiff_for_the_taylor_series_names_its_time_scale(drag
 def test_an_ensemble_lane_too_stiff_names_its_time_scale(drag, tmp_path):
     """The ensemble's lanes keep their series in the batch's block: the message of a lane that
     is too stiff reads that lane's series (1.4e-36 s), while the lane beside it (the nominal
-    2 kg wheel, c_lin = 0.1 N s/m) runs to the end."""
+    2 kg wheel, c_lin = 0.1 N s/m) runs to the end.  It ends with what may work instead: the
+    ensemble runs only solver taylor, so the FMU with rosenbrock."""
     from gyrowheel.taylor.ensemble import STATUS_ERROR, STATUS_OK, Ensemble
     result = Ensemble(drag, lanes=2, cache=tmp_path).run(0.01, parameters={"M": [1e-30, 2.0], "c_lin": [1e6, 0.1]})
     assert list(result.status) == [STATUS_ERROR, STATUS_OK]
     (message,) = [m for m in result.messages if m.startswith("ensemble trajectory 0")]
     assert "time scale, 1.4e-36 s from the finite orders, is below the smallest step" in message
+    assert message.endswith("(too stiff for an explicit method); values this stiff (e.g. strong damping on a "
+                            "light wheel) need an implicit solver: simulate the FMU with solver rosenbrock "
+                            "(L-stable), or sweep it with --solver rosenbrock (the ensemble runs "
+                            "solver taylor only; docs/interface.md, \"Valid ranges\")"), message
 
 
 def test_fmi3_declares_the_same_bounds(earth, fmi3_earth_fmu):

@@ -282,8 +282,19 @@ def _ensemble_advice(message: str) -> str:
     return message
 
 
-def _sources(fmu: Path, work: Path) -> tuple[Path, str, str]:
-    """Extract sources/ and read (identifier, guid) from modelDescription.xml."""
+def _start_value(md, name: str) -> float | None:
+    """The start value of variable `name` in a parsed modelDescription.xml (FMI 2: on its type
+    element, FMI 3: on the variable), None if it has none."""
+    for v in md.iter():
+        if v.get("name") == name:
+            start = v.get("start") or next((c.get("start") for c in v if c.get("start")), None)
+            return float(start) if start else None
+    return None
+
+
+def _sources(fmu: Path, work: Path) -> tuple[Path, str, str, dict]:
+    """Extract sources/ and read (identifier, guid, {setting: start value}) from
+    modelDescription.xml (the settings rel_tol and abs_tol, when the FMU has them)."""
     import xml.etree.ElementTree as ET
     try:
         zf = zipfile.ZipFile(fmu)
@@ -306,7 +317,8 @@ def _sources(fmu: Path, work: Path) -> tuple[Path, str, str]:
         zf.extractall(work, names)
     cs = md.find("CoSimulation")
     identifier = cs.get("modelIdentifier") if cs is not None else md.get("modelName")
-    return work / "sources", identifier, md.get("guid", "")
+    settings = {k: v for k in ("rel_tol", "abs_tol") if (v := _start_value(md, k)) is not None}
+    return work / "sources", identifier, md.get("guid", ""), settings
 
 
 def _cache_dir() -> Path:
@@ -372,7 +384,7 @@ class Ensemble:
         # reads), compiled with the FMU's model and runtime
         front = RUNTIME_DIR / LIBRARY_SOURCE
         with temporary_directory("ens") as tmp:
-            src, self.identifier, self.guid = _sources(fmu, Path(tmp))
+            src, self.identifier, self.guid, settings = _sources(fmu, Path(tmp))
             unity_text = library_source(self.identifier, lanes, defines)
             digest = hashlib.sha256(fmu.read_bytes() + unity_text.encode() + front.read_bytes()
                                     + " ".join(FLAGS).encode()).hexdigest()[:20]
@@ -392,6 +404,9 @@ class Ensemble:
                 part.replace(lib)
         self.library = lib
         self.fmu = fmu
+        # run()'s default tolerances: the FMU's own (its rel_tol; its abs_tol, 0 following
+        # rel_tol / 100), so that a run without them is the FMU's run with solver taylor
+        self.rel_tol, self.abs_tol = settings.get("rel_tol", 1e-8), settings.get("abs_tol", 0.0)
         self._angle_names: frozenset[str] | None = None
         self._lib = ctypes.CDLL(str(lib))
         fn = lambda name: getattr(self._lib, f"{self.identifier}_ensemble_{name}")  # noqa: E731
@@ -500,14 +515,17 @@ class Ensemble:
         return self._angle_names
 
     def run(self, t_end: float, parameters=None, starts=None, *, t_start: float = 0.0,
-            rel_tol: float = 1e-10, abs_tol: float | None = None,
+            rel_tol: float | None = None, abs_tol: float | None = None,
             max_step: float | None = None, grid=None) -> EnsembleResult:
         """Integrate every trajectory from t_start to t_end (s) with solver taylor.
 
         parameters: (N, np) array in `parameter_names` order, or {name: value or (N,) values}
         over the defaults; starts likewise ((N, ns), `start_names`; in the dict an angle, unit
         rad, also as NAME_deg in degrees: {"beta_deg": [70, 80]}).  N is taken from them
-        (1 if both are None).  abs_tol defaults to rel_tol * 1e-2, max_step to the span.
+        (1 if both are None).  rel_tol defaults to the FMU's (`self.rel_tol`, its parameter
+        rel_tol: a run as simulate's with solver taylor), abs_tol to the FMU's (`self.abs_tol`)
+        when rel_tol is not given and that is not 0, else to rel_tol * 1e-2 (the FMU's rule for
+        abs_tol 0); max_step to the span.
         grid: communication points (s) after t_start, increasing, the last == t_end: each
         trajectory then advances as through fmi2DoStep from point to point and the result holds
         the outputs at t_start and at every point reached (y_grid, n_rows) and the fired events.
@@ -520,6 +538,10 @@ class Ensemble:
         for a value that is no number (the string '10' too); UnknownNameError (a KeyError) for an
         unknown name; EnsembleError for a refused job.
         """
+        if rel_tol is None:
+            rel_tol = self.rel_tol
+            if abs_tol is None and self.abs_tol > 0:
+                abs_tol = self.abs_tol
         g = _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid)
         t_start, t_end, rel_tol = float(t_start), float(t_end), float(rel_tol)  # (numpy's numbers too)
         P = self._table("parameter", parameters, self.parameter_names, self.default_parameters, None)

@@ -185,6 +185,21 @@ def test_ensemble_of_a_file_that_is_no_fmu_names_it(tmp_path):
         Ensemble(3, cache=tmp_path / "cache")
 
 
+def test_ensemble_runs_at_the_fmus_tolerance_by_default(paper, tmp_path):
+    """run() without rel_tol is the FMU's run with solver taylor: its rel_tol (1e-8 in
+    paper_earth's scene), abs_tol rel_tol / 100 (the FMU's abs_tol 0); the final states equal
+    fmi2DoStep's at those settings to rounding (the library fuses multiply-adds)."""
+    built, runner = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    assert (ens.rel_tol, ens.abs_tol) == (1e-8, 0.0)
+    default = ens.run(2.0, starts={"gamma_dot": [6.0, 7.0]})
+    named = ens.run(2.0, starts={"gamma_dot": [6.0, 7.0]}, rel_tol=1e-8, abs_tol=1e-10)
+    np.testing.assert_array_equal(default.x_final, named.x_final)
+    assert not np.array_equal(default.x_final, ens.run(2.0, starts={"gamma_dot": [6.0, 7.0]}, rel_tol=1e-10).x_final)
+    alone = np.array(runner.one_step(2.0, STATES, solver=TAYLOR, gamma_dot=7.0, max_step=2.0))
+    np.testing.assert_allclose(default.x_final[1], alone, rtol=1e-9, atol=1e-12)
+
+
 def test_ensemble_takes_angles_in_degrees_as_name_deg(paper, tmp_path):
     """starts={"beta_deg": ...}: the angle beta (unit rad) in degrees, as scenes, simulate and
     sweep take it; the same bits as the radians; a non-angle's _deg and a name given twice are

@@ -544,15 +544,22 @@ class Ensemble:
                 abs_tol = self.abs_tol
         g = _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid)
         t_start, t_end, rel_tol = float(t_start), float(t_end), float(rel_tol)  # (numpy's numbers too)
-        P = self._table("parameter", parameters, self.parameter_names, self.default_parameters, None)
-        S = self._table("start value", starts, self.start_names, self.default_starts,
-                        None if P is None else P.shape[0])
-        if P is None:
-            P = self._table("parameter", None, self.parameter_names, self.default_parameters,
-                            1 if S is None else S.shape[0])
-        if S is None:
-            S = self._table("start value", None, self.start_names, self.default_starts, P.shape[0])
+        try:  # (the tables of values given as one huge array: numpy's bare MemoryError otherwise)
+            P = self._table("parameter", parameters, self.parameter_names, self.default_parameters, None)
+            S = self._table("start value", starts, self.start_names, self.default_starts,
+                            None if P is None else P.shape[0])
+            if P is None:
+                P = self._table("parameter", None, self.parameter_names, self.default_parameters,
+                                1 if S is None else S.shape[0])
+            if S is None:
+                S = self._table("start value", None, self.start_names, self.default_starts, P.shape[0])
+        except MemoryError:
+            raise ArgumentError("parameters, starts: the trajectories' values do not fit in this machine's "
+                                "memory: run fewer trajectories per call", argument="parameters") from None
         n, G = P.shape[0], g.size
+        # the run's buffer (the values in, the final states and outputs out): the memory rule
+        arguments.check_memory(n * (self.np + self.ns + 2 * self.nx + self.ny + self.ne + 8), 8,
+                               f"{n} trajectories", "run fewer trajectories per call", argument="parameters")
         lay = self._layouts.get((n, G))
         if lay is None:
             lay = self._layout(n, G)

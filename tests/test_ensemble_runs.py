@@ -113,6 +113,16 @@ def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
         res.output("nope")
     with pytest.raises(ArgumentError, match=r"shape \(N, 6\)"):
         ens.run(1.0, parameters=np.ones((2, 3)))
+    # more trajectories than the memory holds: a message naming them, not numpy's MemoryError
+    huge = np.broadcast_to(2.0, (10**12,))  # a view: no memory of its own
+    with pytest.raises(ArgumentError, match="do not fit in this machine's memory: run fewer trajectories"):
+        ens.run(1.0, parameters={"M": huge})
+    with pytest.MonkeyPatch.context() as mp:  # a 1 MiB machine: the tables fit, the run's buffer not
+        from gyrowheel import arguments
+        mp.setattr(arguments, "physical_memory", lambda: 2**20)
+        with pytest.raises(ArgumentError, match=r"^10000 trajectories would take .* GiB, more than half of this "
+                                                r"machine's 0.000977 GiB: run fewer trajectories per call"):
+            ens.run(1.0, parameters={"M": np.full(10**4, 2.0)})
 
 
 def test_ensemble_bad_job_names_the_field(paper, tmp_path):

@@ -311,7 +311,7 @@ GW_API gw_status gw_initialize(gw_instance *I, const char *fn) {
         I->flags[i] = 1; /* a warning event that holds already at the start */
         I->t_events[i] = I->t;
         if (gw_log_enabled(I, GW_LOG_EVENTS))
-            gw_log(I, GW_OK, GW_LOG_EVENTS, "warning: event %s holds already at the start t=%.17g",
+            gw_log(I, GW_WARNING, GW_LOG_EVENTS, "warning: event %s holds already at the start t=%.17g",
                    m->event_names ? m->event_names[i] : "?", I->t);
     }
     I->terminated = 0;

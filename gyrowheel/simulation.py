@@ -132,8 +132,23 @@ class Messages:
                 for m in [EVENT_LOGGED.match(line)] if m]
 
     def warnings(self) -> list[str]:
-        """The messages logged with status warning (fmi2Warning, fmi3Warning), each once."""
-        return list(dict.fromkeys(m for s, m in self.lines if s == 1))
+        """The messages logged with status warning (fmi2Warning, fmi3Warning), each once, without
+        the FMU's own `warning: ` prefix; a warning event (`warning: event NAME at t=T`, an
+        event the scene set to warn, logged each time it fires) as one message per event:
+        `event NAME at t = T s`, or `event NAME: N times, t = T1 .. Tn s`."""
+        plain: list[str] = []
+        fired: dict[str, list[float]] = {}
+        for s, m in self.lines:
+            if s != 1:
+                continue
+            event = EVENT_LOGGED.fullmatch(m)
+            if event:
+                fired.setdefault(event.group(1), []).append(float(event.group(2)))
+            else:
+                plain.append(m.removeprefix("warning: "))
+        return list(dict.fromkeys(plain)) + [
+            f"event {name} at t = {ts[0]:.9g} s" if len(ts) == 1
+            else f"event {name}: {len(ts)} times, t = {ts[0]:.6g} .. {ts[-1]:.6g} s" for name, ts in fired.items()]
 
 
 def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[str, object]:

@@ -62,6 +62,31 @@ def test_events_summary_wording():
         " (events: impact: 3 times, 0.5 .. 1.5 s; fall at t = 2 s)")
 
 
+def test_a_warning_event_is_one_line_with_its_count(tmp_path):
+    """on_slip = "warn": the slip check fires each time the friction needed exceeds mu (here
+    every precession cycle, about 0.33 s); stderr has one line for it, with its count and first
+    and last time, not one line per firing.  A slip that holds from the start (mu = 0.01) is a
+    warning too, its own line, without a doubled "warning:"."""
+    text = (SCENES / "paper_earth.toml").read_text().replace('name = "paper_earth"', 'name = "warn_slip"').replace(
+        "[initial]", '[effects.contact_forces]\nmu = 0.143\non_slip = "warn"\n\n[initial]')
+    scene = tmp_path / "warn_slip.toml"
+    scene.write_text(text)
+    fmu = tmp_path / "warn_slip.fmu"
+    built = subprocess.run([sys.executable, "-m", "gyrowheel", "build", str(scene), "-o", str(fmu)],
+                           capture_output=True, text=True)
+    assert built.returncode == 0, built.stderr
+    r = simulate(str(fmu), tmp_path, "--set", "gamma_dot=15")
+    assert r.returncode == 0, r.stderr
+    lines = r.stderr.splitlines()
+    m = re.fullmatch(r"gyrowheel: warning: event slip: (\d+) times, t = (\S+) \.\. (\S+) s", lines[0])
+    assert len(lines) == 1 and m, r.stderr
+    n, first, last = int(m.group(1)), float(m.group(2)), float(m.group(3))
+    assert n > 20 and first == pytest.approx(0.101206, abs=1e-6) and last > 19.0
+    assert f"slip: {n} times" in r.stdout  # the events' summary agrees
+    r = simulate(str(fmu), tmp_path, "--set", "gamma_dot=15", "--set", "mu=0.01", "--stop-time", 1)
+    assert r.stderr.splitlines() == ["gyrowheel: warning: event slip holds already at the start t=0"], r.stderr
+
+
 # the reported run: thrown leaning and spinning; it lands, slides, and contact_slip fires while it
 # keeps sliding (the slip direction re-pointed), never rolling
 THROWN = ("--stop-time", 3, "--set", "height=0.5", "--set", "vz=1", "--set", "beta=1.2", "--set", "gamma_dot=30",

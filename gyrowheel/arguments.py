@@ -45,8 +45,9 @@ def number(value, name: str, *, what: str = "a number", finite: bool = True, arg
     what: how the message calls the expected value ('a number of seconds'). finite: refuse inf
     and NaN (with `error`). Raises ArgumentTypeError for anything that is not a number:
     `stop_time must be a number of seconds, got str '5'`."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ArgumentTypeError(f"{name} must be {what}, got {shown(value)}", argument=_argument(name, argument))
+    if type(value) is not float and type(value) is not int:  # (the usual types skip the ABC's check)
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise ArgumentTypeError(f"{name} must be {what}, got {shown(value)}", argument=_argument(name, argument))
     value = float(value)
     if finite and not math.isfinite(value):
         raise error(f"{name} must be finite, got {value!r}", argument=_argument(name, argument))

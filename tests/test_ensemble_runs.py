@@ -120,9 +120,9 @@ def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
     with pytest.MonkeyPatch.context() as mp:  # a 1 MiB machine: the tables fit, the run's buffer not
         from gyrowheel import arguments
         mp.setattr(arguments, "physical_memory", lambda: 2**20)
-        with pytest.raises(ArgumentError, match=r"^10000 trajectories would take .* GiB, more than half of this "
+        with pytest.raises(ArgumentError, match=r"^100000 trajectories would take .* GiB, more than half of this "
                                                 r"machine's 0.000977 GiB: run fewer trajectories per call"):
-            ens.run(1.0, parameters={"M": np.full(10**4, 2.0)})
+            ens.run(1.0, parameters={"M": np.full(10**5, 2.0)})
 
 
 def test_ensemble_bad_job_names_the_field(paper, tmp_path):

@@ -277,7 +277,7 @@ def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, ou
     _check_rows(md, stop_time, output_interval)
     try:
         result = run(path, stop_time=stop_time, output_interval=output_interval, start_values=starts,
-                     events=events)
+                     events=events, stacklevel=3)  # (the warnings: the line calling simulate)
     except StartValueError as exc:  # a parameter out of its range, a combination the model refuses
         raise ArgumentError(f"start_values: {exc}{_as_given_in_degrees(str(exc), given, starts)}",
                             argument="start_values") from None

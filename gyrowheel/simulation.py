@@ -242,14 +242,17 @@ def _settable(v) -> bool:
 
 def run(fmu: str | Path, stop_time: float | None = None, output_interval: float | None = None,
         start_values: dict[str, object] | None = None, solver_tolerance: float | None = None,
-        messages: Messages | None = None, events: list | None = None) -> np.ndarray:
+        messages: Messages | None = None, events: list | None = None, stacklevel: int = 2) -> np.ndarray:
     """Simulate in Co-Simulation; returns fmpy's structured result array of the scalar outputs.
 
     start_values are checked by name and type like `gyrowheel simulate --set` (strings or Python
     values: 1.5 for an Integer is refused, not truncated); stop_time, output_interval and
     solver_tolerance must be numbers. Raises SimulationError naming the value, or with the FMU's
     logged reason. events: a list to which the events the FMU reported (logEvents: its debug
-    log, switched on for this) are appended as (event name, t [s]), in the order they fired."""
+    log, switched on for this) are appended as (event name, t [s]), in the order they fired.
+    The FMU's warnings are FmuWarnings attributed to the caller `stacklevel` frames up (2: the
+    caller of run; gyrowheel.simulate passes 3, its own caller), so that Python's warning
+    filter keeps one per line of the user's code, not one per process."""
     messages = messages or Messages()
     for what, value in (("stop_time", stop_time), ("output_interval", output_interval),
                         ("solver_tolerance", solver_tolerance)):
@@ -283,7 +286,7 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
             if events is not None:
                 events.extend(messages.events())
             for text in messages.warnings():
-                warnings.warn(text, FmuWarning, stacklevel=2)
+                warnings.warn(text, FmuWarning, stacklevel=stacklevel)
             return result
         except FMICallException as exc:
             reason, before = refusal(messages.errors())

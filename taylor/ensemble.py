@@ -179,11 +179,12 @@ _NO_GRID.flags.writeable = False
 
 
 def _numbers(v):
-    """v as an array of numbers, ValueError otherwise (np.asarray(v, float) made None a NaN)."""
+    """v as an array of numbers, ValueError otherwise (np.asarray(v, float) made None a NaN, and
+    True a 1: a Boolean is no number here, as arguments.number refuses it)."""
     a = np.asarray(v)
-    if a.dtype.kind == "O" and not any(x is None for x in a.flat):  # numbers as objects
+    if a.dtype.kind == "O" and not any(x is None or isinstance(x, bool) for x in a.flat):  # numbers as objects
         return a.astype(float)  # (ValueError from a string among them)
-    if a.dtype.kind not in "biuf":
+    if a.dtype.kind not in "iuf":
         raise ValueError(v)  # the callers name the field
     return a
 
@@ -211,6 +212,9 @@ def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
         atol = number("abs_tol", abs_tol)
         if not (math.isfinite(atol) and atol >= 0):
             raise ArgumentError(f"abs_tol must be a finite number >= 0, got {atol!r}")
+        lo, hi = TOLERANCE_RANGES["abs_tol"]
+        if atol != 0 and not lo <= atol <= hi:  # the instances' own range, once for the job
+            raise ArgumentError(f"abs_tol must be 0 (rel_tol / 100) or within [{lo:g}, {hi:g}], got {atol!r}")
     if max_step is not None:
         hmax = number("max_step", max_step)
         if not (math.isfinite(hmax) and hmax > 0):
@@ -449,11 +453,33 @@ class Ensemble:
         self._default_tables: dict[tuple[str, int], np.ndarray] = {}
         weakref.finalize(self, _free_contexts, free, self._contexts)
 
-    def _table(self, what: str, values, names: list[str], default: np.ndarray, n: int | None):
-        """(N, len(names)) from an array of that shape or a {name: scalar or (N,)} dict."""
+    @staticmethod
+    def _trajectories(parameters, starts) -> int:
+        """N, the number of trajectories: the length of every column given with more than one
+        value (a dict's value) and the rows of an array given; 1 when every value is one value.
+        Raises ArgumentError naming the columns when they give different numbers."""
+        lengths: dict[str, int] = {}
+        for what, values in (("parameters", parameters), ("starts", starts)):
+            items = values.items() if isinstance(values, dict) else [] if values is None else [(None, values)]
+            for k, v in items:
+                try:
+                    shape = np.shape(v)
+                except ValueError:  # (ragged lists: _table names the field)
+                    continue
+                if k is None and len(shape) == 2:
+                    lengths[f"{what} ({shape[0]} rows)"] = shape[0]
+                elif k is not None and len(shape) == 1 and shape[0] != 1:
+                    lengths[f"{what}[{k!r}] ({shape[0]} values)"] = shape[0]
+        if len(set(lengths.values())) > 1:
+            raise ArgumentError(f"parameters and starts give different numbers of trajectories: "
+                                f"{', '.join(lengths)}; give each column one value per trajectory, or one "
+                                f"value for all", argument="starts" if starts is not None else "parameters")
+        return next(iter(lengths.values()), 1)
+
+    def _table(self, what: str, values, names: list[str], default: np.ndarray, n: int):
+        """(n, len(names)) from an array of that shape or a {name: scalar or (n,)} dict (n from
+        _trajectories), the defaults' table for None."""
         if values is None:
-            if n is None:
-                return None
             key = (what, n)  # the defaults' table of N rows, made once (the C side only reads it)
             table = self._default_tables.get(key)  # one look-up: another thread may clear the
             if table is None:                      # cache between a test and a read (KeyError)
@@ -466,6 +492,9 @@ class Ensemble:
         if isinstance(values, dict):
             cols = {}
             for k, v in values.items():
+                if not isinstance(k, str):
+                    raise ArgumentTypeError(f"{what} names must be strings, got {arguments.shown(k)}",
+                                            argument="parameters" if what == "parameter" else "starts")
                 given = k
                 deg = k not in names and what == "start value" and k.endswith("_deg") and k[:-4] in self._angles()
                 if deg:
@@ -485,11 +514,7 @@ class Ensemble:
                 except ValueError:
                     raise ArgumentError(f"{what} {given!r} must be a number or a 1-D sequence of numbers "
                                         f"(one per trajectory), got {v!r}") from None
-            sizes = {len(c) for c in cols.values() if len(c) != 1}
-            if len(sizes) > 1 or (n is not None and sizes and sizes != {n}):
-                raise ArgumentError(f"{what}s: columns of different lengths {sorted(sizes | {n or 0})}")
-            rows = n if n is not None else (sizes.pop() if sizes else 1)
-            table = np.tile(default, (rows, 1))
+            table = np.tile(default, (n, 1))  # (every column of one value or n: _trajectories)
             for k, c in cols.items():
                 table[:, names.index(k)] = c
             return table
@@ -498,9 +523,9 @@ class Ensemble:
         except ValueError:
             raise ArgumentError(f"{what}s must be an (N, {len(names)}) array of numbers ({', '.join(names)}) "
                                 f"or a {{name: values}} dict, got {values!r}") from None
-        if table.ndim != 2 or table.shape[1] != len(names) or (n is not None and table.shape[0] != n):
-            raise ArgumentError(f"{what}s must have shape (N, {len(names)}) ({', '.join(names)}), "
-                                f"got {table.shape}")
+        if table.ndim != 2 or table.shape[1] != len(names) or table.shape[0] != n:
+            raise ArgumentError(f"{what}s must have shape (N, {len(names)}) ({', '.join(names)}), N = {n} "
+                                f"trajectories, got {table.shape}")
         return table
 
     def _angles(self) -> frozenset[str]:
@@ -545,16 +570,11 @@ class Ensemble:
         g = _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid)
         t_start, t_end, rel_tol = float(t_start), float(t_end), float(rel_tol)  # (numpy's numbers too)
         try:  # (the tables of values given as one huge array: numpy's bare MemoryError otherwise)
-            P = self._table("parameter", parameters, self.parameter_names, self.default_parameters, None)
-            S = self._table("start value", starts, self.start_names, self.default_starts,
-                            None if P is None else P.shape[0])
-            if P is None:
-                P = self._table("parameter", None, self.parameter_names, self.default_parameters,
-                                1 if S is None else S.shape[0])
-            if S is None:
-                S = self._table("start value", None, self.start_names, self.default_starts, P.shape[0])
+            n = self._trajectories(parameters, starts)
+            P = self._table("parameter", parameters, self.parameter_names, self.default_parameters, n)
+            S = self._table("start value", starts, self.start_names, self.default_starts, n)
         except MemoryError:
-            raise ArgumentError("parameters, starts: the trajectories' values do not fit in this machine's "
+            raise ArgumentError("parameters, starts: the trajectories' values do not fit in this process's "
                                 "memory: run fewer trajectories per call", argument="parameters") from None
         n, G = P.shape[0], g.size
         # the run's buffer (the values in, the final states and outputs out): the memory rule,
@@ -576,7 +596,13 @@ class Ensemble:
         # 1 us): the scalars, the grid, P and S (copied: cheaper than their addresses), the
         # float outputs (NaN until written), then the C longs and ints, which the C side writes
         # for every trajectory of a run it accepts (run_packed)
-        f = np.empty(size)
+        try:
+            f = np.empty(size)
+        except MemoryError:  # (a process limit below the machine's memory: ulimit -v, a container)
+            raise ArgumentError(f"{n} trajectories" + (f" of {arguments.count(G + 1)} communication points" if G else "")
+                                + f": the run's {size * 8 / 2**30:.3g} GiB do not fit in this process's memory: "
+                                "run fewer trajectories per call" + (", or give a coarser grid" if G else ""),
+                                argument="grid" if G else "parameters") from None
         f[:5] = (t_start, t_end, rel_tol, rel_tol * 1e-2 if abs_tol is None else float(abs_tol),
                  (t_end - t_start) if max_step is None else float(max_step))
         if G:

@@ -62,20 +62,25 @@ def test_events_summary_wording():
         " (events: impact: 3 times, 0.5 .. 1.5 s; fall at t = 2 s)")
 
 
-def test_a_warning_event_is_one_line_with_its_count(tmp_path):
-    """on_slip = "warn": the slip check fires each time the friction needed exceeds mu (here
-    every precession cycle, about 0.33 s); stderr has one line for it, with its count and first
-    and last time, not one line per firing.  A slip that holds from the start (mu = 0.01) is a
-    warning too, its own line, without a doubled "warning:"."""
+@pytest.fixture(scope="module")
+def warn_slip(tmp_path_factory) -> str:
+    """paper_earth with the slip check set to warn at mu = 0.143: at gamma_dot = 15 the friction
+    needed exceeds mu once every precession cycle, about 0.33 s."""
+    root = tmp_path_factory.mktemp("warn_slip")
     text = (SCENES / "paper_earth.toml").read_text().replace('name = "paper_earth"', 'name = "warn_slip"').replace(
         "[initial]", '[effects.contact_forces]\nmu = 0.143\non_slip = "warn"\n\n[initial]')
-    scene = tmp_path / "warn_slip.toml"
-    scene.write_text(text)
-    fmu = tmp_path / "warn_slip.fmu"
-    built = subprocess.run([sys.executable, "-m", "gyrowheel", "build", str(scene), "-o", str(fmu)],
-                           capture_output=True, text=True)
+    (root / "warn_slip.toml").write_text(text)
+    built = subprocess.run([sys.executable, "-m", "gyrowheel", "build", str(root / "warn_slip.toml"), "-o",
+                            str(root / "warn_slip.fmu")], capture_output=True, text=True)
     assert built.returncode == 0, built.stderr
-    r = simulate(str(fmu), tmp_path, "--set", "gamma_dot=15")
+    return str(root / "warn_slip.fmu")
+
+
+def test_a_warning_event_is_one_line_with_its_count(warn_slip, tmp_path):
+    """on_slip = "warn": stderr has one line for the slip check, with its count and first and
+    last time, not one line per firing.  A slip that holds from the start (mu = 0.01) is a
+    warning too, its own line, without a doubled "warning:"."""
+    r = simulate(warn_slip, tmp_path, "--set", "gamma_dot=15")
     assert r.returncode == 0, r.stderr
     lines = r.stderr.splitlines()
     m = re.fullmatch(r"gyrowheel: warning: event slip: (\d+) times, t = (\S+) \.\. (\S+) s", lines[0])
@@ -83,8 +88,25 @@ def test_a_warning_event_is_one_line_with_its_count(tmp_path):
     n, first, last = int(m.group(1)), float(m.group(2)), float(m.group(3))
     assert n > 20 and first == pytest.approx(0.101206, abs=1e-6) and last > 19.0
     assert f"slip: {n} times" in r.stdout  # the events' summary agrees
-    r = simulate(str(fmu), tmp_path, "--set", "gamma_dot=15", "--set", "mu=0.01", "--stop-time", 1)
+    r = simulate(warn_slip, tmp_path, "--set", "gamma_dot=15", "--set", "mu=0.01", "--stop-time", 1)
     assert r.stderr.splitlines() == ["gyrowheel: warning: event slip holds already at the start t=0"], r.stderr
+
+
+def test_a_warning_event_warns_at_each_call_of_simulate(warn_slip):
+    """gyrowheel.simulate(..., events=[]): one FmuWarning per event and call, attributed to the
+    caller's line (not to gyrowheel's own), so that Python's default filter shows a second call's
+    warning too."""
+    import warnings
+
+    import gyrowheel
+    from gyrowheel.simulation import FmuWarning
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("default")
+        gyrowheel.simulate(warn_slip, start_values={"gamma_dot": 15.0}, events=[])
+        gyrowheel.simulate(warn_slip, start_values={"gamma_dot": 15.0}, events=[])
+    slips = [w for w in caught if issubclass(w.category, FmuWarning)]
+    assert len(slips) == 2 and all(w.filename == __file__ for w in slips), [(w.filename, w.lineno) for w in slips]
+    assert str(slips[0].message).startswith("event slip: ") and slips[0].lineno != slips[1].lineno
 
 
 # the reported run: thrown leaning and spinning; it lands, slides, and contact_slip fires while it

@@ -115,7 +115,7 @@ def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
         ens.run(1.0, parameters=np.ones((2, 3)))
     # more trajectories than the memory holds: a message naming them, not numpy's MemoryError
     huge = np.broadcast_to(2.0, (10**12,))  # a view: no memory of its own
-    with pytest.raises(ArgumentError, match="do not fit in this machine's memory: run fewer trajectories"):
+    with pytest.raises(ArgumentError, match="do not fit in this process's memory: run fewer trajectories"):
         ens.run(1.0, parameters={"M": huge})
     with pytest.MonkeyPatch.context() as mp:  # a 1 MiB machine: the tables fit, the run's buffer not
         from gyrowheel import arguments
@@ -228,6 +228,47 @@ def test_ensemble_takes_angles_in_degrees_as_name_deg(paper, tmp_path):
         ens.run(1.0, starts={"beta_deg": "steep"})
 
 
+def test_ensemble_under_a_process_memory_limit_names_the_run(paper, tmp_path):
+    """A process limited below the machine's memory (ulimit -v, a container): a run whose buffer
+    does not fit is an ArgumentError naming the trajectories and the way out, not numpy's
+    MemoryError (the memory rule compares with the machine's memory only)."""
+    import subprocess
+    import sys
+    built, _ = paper
+    code = ("import resource, sys, numpy as np\n"
+            "from gyrowheel.taylor.ensemble import Ensemble\n"
+            "ens = Ensemble(sys.argv[1], cache=sys.argv[2])\n"
+            "resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))\n"
+            "try:\n"
+            "    ens.run(1e-6, starts={'gamma_dot': np.broadcast_to(6.0, (30_000_000,))})\n"
+            "except Exception as exc:\n"
+            "    print(type(exc).__name__, exc)\n")
+    r = subprocess.run([sys.executable, "-c", code, str(built.fmu), str(tmp_path)], capture_output=True, text=True)
+    assert r.returncode == 0 and r.stdout.startswith("ArgumentError 30000000 trajectories: the run's "), r.stdout + r.stderr
+    assert r.stdout.rstrip().endswith("do not fit in this process's memory: run fewer trajectories per call"), r.stdout
+
+
+def test_ensemble_counts_trajectories_over_parameters_and_starts(paper, tmp_path):
+    """N is the length of every column with more than one value, in parameters and starts alike;
+    a column of one value is that value for all N, either way round; columns of different
+    lengths are one ArgumentError naming each with its length."""
+    built, _ = paper
+    ens = Ensemble(built.fmu, cache=tmp_path)
+    for kwargs in (dict(parameters={"M": [2.0]}, starts={"gamma_dot": [5.0, 6.0, 7.0]}),
+                   dict(parameters={"M": [2.0, 2.0, 2.0]}, starts={"gamma_dot": 6.0}),
+                   dict(parameters={"M": 2.0, "R": [0.17, 0.17, 0.17]})):
+        assert len(ens.run(0.1, rel_tol=1e-8, **kwargs).status) == 3, kwargs
+    one = ens.run(0.1, rel_tol=1e-8, parameters={"M": [2.5]}, starts={"gamma_dot": [5.0, 7.0]})
+    both = ens.run(0.1, rel_tol=1e-8, parameters={"M": [2.5, 2.5]}, starts={"gamma_dot": [5.0, 7.0]})
+    np.testing.assert_array_equal(one.x_final, both.x_final)
+    with pytest.raises(ArgumentError, match=re.escape(
+            "parameters and starts give different numbers of trajectories: starts['beta_deg'] (2 values), "
+            "starts['gamma_dot'] (3 values); give each column one value per trajectory, or one value for all")):
+        ens.run(1.0, starts={"beta_deg": [70.0, 80.0], "gamma_dot": [1.0, 2.0, 3.0]})
+    with pytest.raises(ArgumentError, match=re.escape("parameters['M'] (2 values), starts (3 rows)")):
+        ens.run(1.0, parameters={"M": [2.0, 3.0]}, starts=np.tile(ens.default_starts, (3, 1)))
+
+
 def test_ensemble_bad_values_name_the_field(paper, tmp_path):
     """A value that is not a number names its field (not numpy's "could not convert string to
     float: 'heavy'" for {'M': 'heavy'}, a broadcast error for a 2-D column, a silent NaN start
@@ -239,11 +280,18 @@ def test_ensemble_bad_values_name_the_field(paper, tmp_path):
              ({"parameters": {"M": [[1.0, 2.0], [3.0, 4.0]]}}, "parameter 'M' must be a number"),
              ({"starts": {"gamma_dot": None}}, "start value 'gamma_dot' must be a number"),
              ({"starts": {"gamma_dot": [5.0, None]}}, "start value 'gamma_dot' must be a number"),
+             # a Boolean is no number (True ran as 1 degree)
+             ({"starts": {"beta_deg": [True]}}, "start value 'beta_deg' must be a number"),
+             ({"starts": {"beta": np.array([True, False])}}, "start value 'beta' must be a number"),
+             ({"abs_tol": 1e300}, "abs_tol must be 0 (rel_tol / 100) or within [1e-30, 1], got 1e+300"),
+             ({"abs_tol": 1e-40}, "abs_tol must be 0 (rel_tol / 100) or within [1e-30, 1], got 1e-40"),
              ({"parameters": [["a"] * len(ens.parameter_names)]}, "parameters must be an (N, 6) array of numbers"),
              ({"grid": "abc"}, "grid must be a sequence of communication points")]
     for kwargs, message in cases:
         with pytest.raises(ValueError, match=re.escape(message)):
             ens.run(1.0, **kwargs)
+    with pytest.raises(ArgumentTypeError, match=re.escape("start value names must be strings, got tuple ('beta_deg',)")):
+        ens.run(1.0, starts={("beta_deg",): [70.0]})
     for name, text in (("t_end", "10"), ("t_start", "0"), ("rel_tol", "1e-8"), ("abs_tol", "1e-10"),
                        ("max_step", "0.5")):
         kwargs = {"t_end": 1.0, name: text}

@@ -105,6 +105,8 @@ def with_values(reason: str, md, given: dict[str, object]) -> str:
 
 
 EVENT_LOGGED = re.compile(r"(?:warning: )?event (\w+) at t=([-+0-9.eE]+)")
+# a warning event whose condition holds at initialisation: flagged at the start time
+EVENT_AT_START = re.compile(r"warning: event (\w+) holds already at the start t=([-+0-9.eE]+)")
 
 
 @dataclass
@@ -127,9 +129,10 @@ class Messages:
 
     def events(self) -> list[tuple[str, float]]:
         """(event name, t [s]) of each event logged (category logEvents, c_src/gw_events.c:
-        `event NAME at t=T: ...`, `warning: event NAME at t=T`), in the order logged."""
+        `event NAME at t=T: ...`, `warning: event NAME at t=T`; a warning event holding at the
+        start, `... holds already at the start t=T`), in the order logged."""
         return [(m.group(1), float(m.group(2))) for _, line in self.lines
-                for m in [EVENT_LOGGED.match(line)] if m]
+                for m in [EVENT_LOGGED.match(line) or EVENT_AT_START.match(line)] if m]
 
     def warnings(self) -> list[str]:
         """The messages logged with status warning (fmi2Warning, fmi3Warning), each once, without

@@ -90,6 +90,7 @@ def test_a_warning_event_is_one_line_with_its_count(warn_slip, tmp_path):
     assert f"slip: {n} times" in r.stdout  # the events' summary agrees
     r = simulate(warn_slip, tmp_path, "--set", "gamma_dot=15", "--set", "mu=0.01", "--stop-time", 1)
     assert r.stderr.splitlines() == ["gyrowheel: warning: event slip holds already at the start t=0"], r.stderr
+    assert "(events: slip at t = 0 s)" in r.stdout, r.stdout  # listed among the events too
 
 
 def test_a_warning_event_warns_at_each_call_of_simulate(warn_slip):

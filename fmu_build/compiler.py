@@ -34,8 +34,9 @@ OPTIMISE_LARGE = ["-O1", "-fno-math-errno"]
 # GYROWHEEL_OPTIMISE="-O1" (say) compiles every build at that level instead: a quicker build when
 # the binary's speed does not matter (the test suite sets -O1: GCC's -O2 takes most of a build's
 # time, 34 s against 9 s for euler_disk_end's 1.3 MB of generated C).  Without -ffast-math the
-# levels compute the same IEEE operations in the same order (C99: no contraction into FMA), so
-# the results are the same bits (tests/test_fmu_sources.py checks a run's).
+# levels compute the same IEEE operations in the same order (C99: no contraction into FMA; the
+# Taylor kernel, which fuses, asks GCC for its FMA pass at any level: c_src/gw_taylor.c), so -O1
+# gives -O2's results bit for bit (tests/test_fmu_sources.py checks a run's).
 OPTIMISE_ENV = "GYROWHEEL_OPTIMISE"
 LEVELS = ("-O0", "-O1", "-O2", "-O3", "-Os", "-Og")
 UNITY_SOURCE = UNITY_SOURCES[2]  # an FMI 2 FMU's only <SourceFiles> entry

@@ -194,8 +194,9 @@ def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
     an ArgumentError naming the field, an ArgumentTypeError for one that is no number ('10', a
     string, is refused as every gyrowheel function refuses it: gyrowheel.arguments.number).
     Returns the grid as a contiguous float array (empty: none).
-    rel_tol outside the FMU's range [10 eps, 1] (fmu_build.scene.TOLERANCE_RANGES) is refused
-    here, once, rather than by every trajectory's instance.  (math.isfinite on the scalars: numpy's took 2 us of a small run.)"""
+    rel_tol and abs_tol outside the FMU's ranges (fmu_build.scene.TOLERANCE_RANGES) are refused
+    here, once, rather than by every trajectory's instance.  (math.isfinite on the scalars:
+    numpy's took 2 us of a small run.)"""
     def number(name, v):
         return arguments.number(v, name, finite=False)
     t0, t1, rtol = number("t_start", t_start), number("t_end", t_end), number("rel_tol", rel_tol)
@@ -411,7 +412,7 @@ class Ensemble:
         # run()'s default tolerances: the FMU's own (its rel_tol; its abs_tol, 0 following
         # rel_tol / 100), so that a run without them is the FMU's run with solver taylor
         self.rel_tol, self.abs_tol = settings.get("rel_tol", 1e-8), settings.get("abs_tol", 0.0)
-        self._angle_names: frozenset[str] | None = None
+        self._variables: dict | None = None  # the FMU's variables by name, for NAME_deg
         self._lib = ctypes.CDLL(str(lib))
         fn = lambda name: getattr(self._lib, f"{self.identifier}_ensemble_{name}")  # noqa: E731
         sizes = (ctypes.c_int * 8)()
@@ -495,12 +496,11 @@ class Ensemble:
                 if not isinstance(k, str):
                     raise ArgumentTypeError(f"{what} names must be strings, got {arguments.shown(k)}",
                                             argument="parameters" if what == "parameter" else "starts")
-                given = k
-                deg = k not in names and what == "start value" and k.endswith("_deg") and k[:-4] in self._angles()
-                if deg:
-                    if k[:-4] in values:
-                        raise ArgumentError(f"start value {k[:-4]!r} given twice: as {k[:-4]!r} and as {k!r}")
-                    k = k[:-4]
+                given, deg = k, False
+                if k not in names and what == "start value":
+                    k, deg = self._in_radians(k)
+                    if deg and k in values:
+                        raise ArgumentError(f"start value {k!r} given twice: as {k!r} and as {given!r}")
                 if k not in names:
                     raise UnknownNameError(f"unknown {what} {k!r}; {what}s: {', '.join(names)}"
                                            + (" (angles also as NAME_deg, in degrees)" if what == "start value"
@@ -528,16 +528,16 @@ class Ensemble:
                                 f"trajectories, got {table.shape}")
         return table
 
-    def _angles(self) -> frozenset[str]:
-        """The start values that are angles (unit rad), which `starts` also takes in degrees as
-        NAME_deg (beta_deg = 80), as scenes, simulate and sweep do; read from the FMU's
+    def _in_radians(self, name: str) -> tuple[str, bool]:
+        """(the start value, whether `name` gives it in degrees): NAME_deg names the angle NAME
+        (unit rad) in degrees, as scenes, simulate and sweep take it (beta_deg = 80), by the rule
+        simulate applies (gyrowheel.simulation._angle_name) to the FMU's variables, read from its
         modelDescription.xml once, when first asked."""
-        if self._angle_names is None:
+        from gyrowheel.simulation import _angle_name
+        if self._variables is None:
             from fmpy import read_model_description
-            md = read_model_description(str(self.fmu))
-            unit = {v.name: v.unit or (v.declaredType.unit if v.declaredType else None) for v in md.modelVariables}
-            self._angle_names = frozenset(n for n in self.start_names if unit.get(n) == "rad")
-        return self._angle_names
+            self._variables = {v.name: v for v in read_model_description(str(self.fmu)).modelVariables}
+        return _angle_name(name, self._variables)
 
     def run(self, t_end: float, parameters=None, starts=None, *, t_start: float = 0.0,
             rel_tol: float | None = None, abs_tol: float | None = None,

@@ -18,7 +18,8 @@ frac((i + 1/2) sqrt 3)).
 Error: the largest absolute error of the final states over the N trajectories, against heyoka in
 80-bit long double at tolerance 1e-19 on the same graph, each trajectory with its own start and
 parameters.  For each target error (1e-4, 1e-7, 1e-10, 1e-12) and N the cheapest setting of a
-half-decade grid of tolerances that reaches it counts, per method.  Every time is thread CPU time,
+grid of tolerances (work_precision.tolerance_grid: --per-decade per decade, 4 by default, the same
+for both) that reaches it counts, per method.  Every time is thread CPU time,
 best of --repeat, all settings of all methods interleaved in each repetition; ratios compare
 per-trajectory times in this one run.  The table: time per trajectory of each method and
 heyoka / gyrowheel's best (above 1: the ensemble faster).
@@ -48,13 +49,12 @@ sys.path.insert(0, str(HERE))
 
 from ref_tree import RefTree  # noqa: E402
 from taylor_vs_heyoka import SameGraph, to_heyoka  # noqa: E402
-from work_precision import SCENARIOS, best_time  # noqa: E402
+from work_precision import PER_DECADE, SCENARIOS, best_time, tolerance_grid  # noqa: E402
 
 from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
 from gyrowheel.taylor.ensemble import Ensemble  # noqa: E402
 from gyrowheel.taylor.lanes import cpu_lanes  # noqa: E402
 
-TOLS = [10.0 ** -(k / 2) for k in range(6, 30)]  # 1e-3 .. 10^-14.5
 VARIANTS = {"nominal": "beta0, gamma_dot0 spread", "mass_radius": "beta0, gamma_dot0 spread, M, R +-20 %"}
 SPREAD = ("M", "R")  # the parameters of the variant mass_radius
 
@@ -181,12 +181,17 @@ def main() -> int:
     ap.add_argument("--variants", nargs="*", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--targets", type=float, nargs="*", default=[1e-4, 1e-7, 1e-10, 1e-12])
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--per-decade", type=int, default=PER_DECADE,
+                    help=f"tolerances per decade of the grid (default {PER_DECADE})")
     ap.add_argument("--scenario", default="paper", choices=["paper", "long", "near_flat"])
     ap.add_argument("--against", default=None, help="a git revision whose ensemble is timed too")
     ap.add_argument("--defines", nargs="*", default=[], metavar="NAME=VALUE",
                     help="C macros of gyrowheel's ensemble builds, e.g. GW_NO_CLONES=1: the portable code "
                          "a CPU without AVX2 runs")
     args = ap.parse_args()
+    if args.per_decade < 1:
+        ap.error(f"--per-decade must be a positive integer, got {args.per_decade}")
+    tols = tolerance_grid(args.per_decade)
     defines = {}
     for item in args.defines:
         name, sep, value = item.partition("=")
@@ -230,11 +235,11 @@ def main() -> int:
                 pdict = {name: params[:, k] for k, name in enumerate(param_names) if name in SPREAD}
                 methods = {}
                 for name, e in ens.items():
-                    for tol in TOLS:
+                    for tol in tols:
                         for af in (1e-2, 1.0):
                             methods[name, tol, af] = (lambda e=e, tol=tol, af=af: e.run(
                                 stop, starts=starts, parameters=pdict, rel_tol=tol, abs_tol=tol * af).x_final)
-                for tol in TOLS:
+                for tol in tols:
                     methods[heyoka_name, tol, 0.0] = hb.runner(tol, x0s, params, stop)
                 timed = measure(methods, args.repeat)
                 for target in args.targets:

@@ -48,3 +48,16 @@ def test_limit_takes_the_fewest_steps_times_order_that_reach_the_target(work_lim
     assert 1e-10 not in lim  # reached only by a method without steps x order
     text = wl.limit_table("s", {"gyrowheel/dop853": {1e-4: 6e-6}}, lim, (1e-4, 1e-7, 1e-10), 38, 2e-8)
     assert "| gyrowheel/dop853 | 1 | - | - |" in text and "30 steps x order 10, taylor" in text
+
+
+def test_tolerance_grid_spans_1e_3_to_rel_tols_end_at_the_asked_density(work_limit):
+    _, wp = work_limit
+    import numpy as np
+    half = wp.tolerance_grid(2)
+    assert half == [10.0 ** -(k / 2) for k in range(6, 30)]  # 1e-3, 10^-3.5, ..., 10^-14.5
+    quarter = np.array(wp.tolerance_grid(4))
+    assert len(quarter) == 47 and quarter[0] == 1e-3 and quarter[-1] == 10.0 ** -14.5
+    assert np.allclose(np.diff(np.log10(quarter)), -0.25, rtol=0, atol=1e-12)
+    assert set(half) <= set(quarter.tolist())  # the finer grid keeps every coarse point
+    with pytest.raises(ValueError, match="per_decade"):
+        wp.tolerance_grid(0)

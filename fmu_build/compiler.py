@@ -46,6 +46,11 @@ class CompileError(GyrowheelError, RuntimeError):
     """The C compiler failed; the message carries its output."""
 
 
+class OptimiseLevelError(CompileError):
+    """GYROWHEEL_OPTIMISE names no level of LEVELS: a setting of the user's, refused before the
+    compiler runs (the CLI reports it as bad input, not as a failed compilation)."""
+
+
 def fmi_headers_dir() -> Path:
     """FMI 2.0 and 3.0 headers shipped with fmpy, not a copy in the repository (docs/architecture.md)."""
     return Path(fmpy.__file__).parent / "c-code"
@@ -75,11 +80,11 @@ def optimisation_for(source_dir: Path) -> list[str]:
     """OPTIMISE, or OPTIMISE_LARGE when one C file in `source_dir` exceeds LARGE_SOURCE_BYTES;
     the level GYROWHEEL_OPTIMISE names instead, when it is set and not empty.
 
-    Raises CompileError when GYROWHEEL_OPTIMISE is not one of LEVELS."""
+    Raises OptimiseLevelError (a CompileError) when GYROWHEEL_OPTIMISE is not one of LEVELS."""
     level = os.environ.get(OPTIMISE_ENV, "")
     if level:
         if level not in LEVELS:
-            raise CompileError(f"{OPTIMISE_ENV}={level!r}: not an optimisation level; use one of "
+            raise OptimiseLevelError(f"{OPTIMISE_ENV}={level!r}: not an optimisation level; use one of "
                                f"{', '.join(LEVELS)} (unset: {OPTIMISE[0]})")
         return [level, *OPTIMISE[1:]]
     largest = max((f.stat().st_size for f in Path(source_dir).glob("*.c")), default=0)

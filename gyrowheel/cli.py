@@ -96,6 +96,15 @@ def _failed(what: str, where: str, exc: BaseException) -> CliError:
                     "this is a gyrowheel defect, please report it with the scene", EXIT_FAILURE)
 
 
+def compile_failed(exc, what: str) -> CliError:
+    """The CLI's error for a CompileError of building `what`: a bad GYROWHEEL_OPTIMISE is the
+    user's setting (exit 2, its own message), anything else a failed compilation (exit 1)."""
+    from gyrowheel.fmu_build.compiler import OptimiseLevelError
+    if isinstance(exc, OptimiseLevelError):
+        return CliError(str(exc))
+    return CliError(f"compiling {what} failed: {exc}", EXIT_FAILURE)
+
+
 def cmd_build(args) -> int:
     from gyrowheel.api import build
     from gyrowheel.errors import ArgumentError, MissingExtraError
@@ -110,7 +119,7 @@ def cmd_build(args) -> int:
     except ArgumentError as exc:  # an output or build directory that cannot be written, a platform (exit 2)
         raise CliError(flagged(exc, BUILD_FLAGS)) from None
     except CompileError as exc:
-        raise CliError(f"compiling the FMU failed: {exc}", EXIT_FAILURE) from None
+        raise compile_failed(exc, "the FMU") from None
     except GyrowheelError:  # the scene: one line naming the file, table and key (exit 2)
         raise
     except OSError as exc:
@@ -211,7 +220,7 @@ def cmd_export_c(args) -> int:
     except SceneError:  # one line naming the file, table and key
         raise
     except CompileError as exc:
-        raise CliError(f"compiling the export failed: {exc}", EXIT_FAILURE) from None
+        raise compile_failed(exc, "the export") from None
     except GyrowheelError as exc:
         raise CliError(f"{args.scene}: {flagged(exc, EXPORT_FLAGS)}") from None
     except OSError as exc:

@@ -212,7 +212,7 @@ static gw_status gw_check_setup(gw_instance *I, const char *fn) {
     ok = gw_check_finite_vec(I, fn, I->p, m->np, GW_VAR_PARAM, "parameter");
     ok &= gw_check_finite_vec(I, fn, I->s, m->ns, GW_VAR_START, "start value");
     ok &= gw_check_finite_vec(I, fn, I->u, m->nu, GW_VAR_INPUT, "input");
-    if (!ok) GW_SIM_FAIL("%s: non-finite values", fn);
+    if (!ok) return GW_ERROR; /* each value logged by name: no summary line repeating them */
     gw_resolve_tolerances(I);
     /* the settings were checked when set; checked again for front ends that store directly
      * (and for settings a front end does not expose, e.g. the C API's max_internal_steps) */

@@ -106,6 +106,12 @@ def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
     assert list(res.status) == [STATUS_OK, STATUS_OK, 3, STATUS_OK]
     assert res.messages and all(m.startswith("ensemble trajectory 2: ") for m in res.messages), res.messages
     assert "max_internal_steps" in res.messages[0]
+    # a start or parameter that is not finite: one message per value, naming it and its trajectory
+    res = ens.run(1.0, starts={"beta": [1.2, np.nan, np.inf]}, parameters={"M": [2.0, 2.0, -np.inf]}, rel_tol=1e-8)
+    assert list(res.status) == [STATUS_OK, 3, 3]
+    assert res.messages == ["ensemble trajectory 1: start value beta is not finite (nan)",
+                            "ensemble trajectory 2: parameter M is not finite (-inf)",
+                            "ensemble trajectory 2: start value beta is not finite (inf)"], res.messages
     with pytest.raises(UnknownNameError, match="unknown parameter 'mass'") as info:  # a KeyError
         ens.run(1.0, parameters={"mass": [1.0]})
     assert isinstance(info.value, KeyError) and str(info.value).startswith("unknown parameter 'mass'")

@@ -16,7 +16,8 @@ then the library.  It is written to a temporary file and renamed (os.replace), s
 never sees half an entry; an entry whose digest does not match its bytes (a damaged disk, a
 copy cut short) is not used: the library is built again and the entry rewritten.  Builds of one
 key wait for each other (an advisory lock, fcntl.flock, where the platform has it), so two
-processes asking at once compile once.
+processes asking at once compile once.  The generated C's entries (gyrowheel.fmu_build.codegen_cache)
+live in the same directory and are kept the same way (cached_entry).
 """
 from __future__ import annotations
 
@@ -86,7 +87,7 @@ def build_key(cc: str, flags: list[str], include_dirs: list[Path], source: Path,
 
 
 def _read_entry(entry: Path) -> bytes | None:
-    """The library an entry holds, or None when it is missing or its digest does not match."""
+    """The bytes an entry holds, or None when it is missing or its digest does not match."""
     try:
         data = entry.read_bytes()
     except FileNotFoundError:
@@ -116,16 +117,27 @@ def _locked(lock_path: Path):
         yield
 
 
+def cached_entry(directory: Path, key: str, suffix: str, make: Callable[[], bytes]) -> tuple[bytes, bool]:
+    """The bytes of entry <key><suffix> in the cache directory when a sound one is there, else
+    make()'s, then stored (digest line, bytes; written atomically).  Makers of one key wait for
+    each other (the key's lock), so two processes asking at once make once.  (bytes, hit)."""
+    entry = directory / f"{key}{suffix}"
+    with _locked(directory / f"{key}.lock"):
+        data = _read_entry(entry)
+        if data is not None:
+            return data, True
+        data = make()
+        _write_atomic(entry, hashlib.sha256(data).hexdigest().encode() + b"\n" + data)
+        return data, False
+
+
 def cached_build(directory: Path, key: str, output: Path, build: Callable[[], None]) -> bool:
     """Write the library of `key` to `output`: from the cache directory when a sound entry is
     there, else by build() (which writes `output`), then stored.  True on a hit."""
-    entry = directory / f"{key}{SUFFIX}"
-    with _locked(directory / f"{key}.lock"):
-        library = _read_entry(entry)
-        if library is not None:
-            _write_atomic(output, library)
-            return True
+    def make() -> bytes:
         build()
-        library = output.read_bytes()
-        _write_atomic(entry, hashlib.sha256(library).hexdigest().encode() + b"\n" + library)
-        return False
+        return output.read_bytes()
+    library, hit = cached_entry(directory, key, SUFFIX, make)
+    if hit:
+        _write_atomic(output, library)
+    return hit

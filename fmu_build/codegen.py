@@ -10,11 +10,13 @@ they are empty.
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import casadi as ca
 
 from gyrowheel.fmu_build.casadi_c import UNITY_GUARD_CLOSE, UNITY_GUARD_OPEN, make_internal
+from gyrowheel.fmu_build.codegen_cache import cached_generation
 from gyrowheel.fmu_build.scene import SOLVERS, Experiment
 from gyrowheel.taylor.graph import TaylorUnsupportedError
 from gyrowheel.taylor.kernel_c import KERNEL_FILE, TaylorKernel, write_taylor_kernel
@@ -100,19 +102,23 @@ def generate_functions(spec: ModelSpec, out_dir: Path, table: list[Variable] | N
     functions = hoisted(spec)
     if table is not None and (dini := init_jacobian(spec, table)) is not None:
         functions["dini"] = dini
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / f"{FUNCTION_FILE}.c"
+    return cached_generation(functions, path, lambda: _generate(functions, path))
+
+
+def _generate(functions: dict[str, ca.Function], path: Path) -> dict[str, ca.Function]:
+    """Write `path` (gw_funcs.c) from `functions` merged by optimised(); those by slot name."""
     fns = {slot: optimised(f) for slot, f in functions.items()}
     cwd = Path.cwd()
-    out_dir.mkdir(parents=True, exist_ok=True)
     try:  # CodeGenerator writes into the working directory
-        import os
-        os.chdir(out_dir)
-        cg = ca.CodeGenerator(FUNCTION_FILE + ".c", {"with_header": False, "with_export": False})
+        os.chdir(path.parent)
+        cg = ca.CodeGenerator(path.name, {"with_header": False, "with_export": False})
         for f in fns.values():
             cg.add(f)
         cg.generate()
     finally:
         os.chdir(cwd)
-    path = out_dir / f"{FUNCTION_FILE}.c"
     keep = {n for f in fns.values() for n in (f.name(), f.name() + "_work")}
     path.write_text(make_internal(path.read_text(), keep))
     return fns

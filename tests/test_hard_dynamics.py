@@ -13,9 +13,8 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
 
-from conftest import PAPER, SCENES, STATES, CasadiWheel
+from conftest import PAPER, STATES, CasadiWheel
 from fmi_helpers import Slave
-from gyrowheel.fmu_build import build_fmu, parse_scene
 from gyrowheel.studies.scipy_reference import solve_hybrid
 from gyrowheel.model.build import BETA_MIN_DEFAULT
 
@@ -173,18 +172,21 @@ def test_fast_spin_2000_rad_s_upright(earth_fmu, solver):
     np.testing.assert_allclose(x[3:], ref.y[3:, -1], atol=1e-6 * 2000)
 
 
+FAST_FLYWHEEL = 1047.2  # rad/s, 10^4 rpm
+
+
 @pytest.fixture(scope="module")
-def fast_flywheel(tmp_path_factory):
-    text = (SCENES / "gyrover_steering.toml").read_text().replace("flywheel_rate = 400.0", "flywheel_rate = 1047.2")
-    # its runs name dopri5 and rosenbrock: no Taylor kernel (half of this model's build)
-    return build_fmu(parse_scene(text, "fast_flywheel.toml"), tmp_path_factory.mktemp("fly") / "fast.fmu",
-                     taylor=False).fmu
+def fast_flywheel(example_build):
+    """examples/scenes/gyrover_steering.toml's FMU, the run's one build (conftest example_build);
+    its runs set the parameter flywheel_rate to FAST_FLYWHEEL."""
+    return example_build("gyrover_steering").fmu
 
 
 def _fast_flywheel_run(fmu, solver):
     s = Slave(fmu)
     try:
-        s.init(solver=solver, rel_tol=1e-10, abs_tol=1e-12, beta=math.pi / 2, gamma_dot=10.0)
+        s.init(solver=solver, rel_tol=1e-10, abs_tol=1e-12, beta=math.pi / 2, gamma_dot=10.0,
+               flywheel_rate=FAST_FLYWHEEL)
         e0 = s.get("energy")
         s.set(tilt_cmd=0.2)
         t = 0.0

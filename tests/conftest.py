@@ -146,10 +146,11 @@ def _build_cache(tmp_path_factory):
     """compile_shared's cache (gyrowheel.fmu_build.build_cache) in a directory of this test run,
     shared by its workers: tests that compile the same source with the same flags and compiler
     (the same FMU built in several modules' directories, an Ensemble's library in each test's
-    cache) run the compiler once.  Set for the whole run, so the command-line runs the tests
-    start use it too; nothing is reused from an earlier run.  Every build compiles at -O1
-    (compiled_at): the same bits as the product's -O2 in a quarter of the compile time
-    (tests/test_fmu_sources.py checks the bits)."""
+    cache) run the compiler once; builds of the same model (an FMU's FMI 2.0 and 3.0 builds)
+    generate its C once (gyrowheel.fmu_build.codegen_cache).  Set for the whole run, so the
+    command-line runs the tests start use it too; nothing is reused from an earlier run.  Every
+    build compiles at -O1 (compiled_at): the same bits as the product's -O2 in a quarter of the
+    compile time (tests/test_fmu_sources.py checks the bits)."""
     from gyrowheel.fmu_build.build_cache import ENV
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv(ENV, str(_run_dir(tmp_path_factory) / "build_cache"))

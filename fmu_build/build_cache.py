@@ -27,9 +27,12 @@ import os
 import re
 import shutil
 import subprocess
+import warnings
 from collections.abc import Callable
 from contextlib import contextmanager
 from pathlib import Path
+
+from gyrowheel.errors import ArgumentError
 
 try:
     import fcntl
@@ -39,15 +42,37 @@ except ImportError:  # not POSIX: builds of one key may run at once (each result
 ENV = "GYROWHEEL_BUILD_CACHE"
 SUFFIX = ".so.entry"
 _LINE_MARKER = re.compile(rb'^(#\s*\d+\s+)"((?:[^"\\]|\\.)*)"', re.MULTILINE)
+# the linker's arguments, left out of the preprocessor's call (they still enter the key): clang
+# with -Werror refuses an argument a call does not use ("-lm: 'linker' input unused")
+_LINK_ONLY = re.compile(r"^(-l.*|-L.*|-Wl,.*|-shared|-static-libgcc|-static)$")
+
+
+class BuildCacheError(ArgumentError):
+    """GYROWHEEL_BUILD_CACHE names a path that cannot be the cache: a file, or a directory that
+    cannot be made.  Raised before anything is built."""
+
+
+class BuildCacheWarning(UserWarning):
+    """The cache could not store a build (a read-only directory, a full disk): the build itself
+    is made and used all the same, only not kept."""
 
 
 def cache_dir() -> Path | None:
-    """The directory GYROWHEEL_BUILD_CACHE names (made when missing), or None when it is unset."""
+    """The directory GYROWHEEL_BUILD_CACHE names (made when missing), or None when it is unset.
+
+    Raises BuildCacheError when the path is not a directory or cannot be made."""
     value = os.environ.get(ENV, "")
     if not value:
         return None
     path = Path(value)
-    path.mkdir(parents=True, exist_ok=True)
+    if path.exists() and not path.is_dir():
+        raise BuildCacheError(f"{ENV}={value!r}: not a directory; name a directory for the build cache, "
+                              f"or unset it to build without one")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BuildCacheError(f"{ENV}={value!r}: the cache's directory cannot be made: "
+                              f"{exc.strerror or exc}") from None
     return path
 
 
@@ -77,7 +102,8 @@ def build_key(cc: str, flags: list[str], include_dirs: list[Path], source: Path,
     Raises subprocess.CalledProcessError when the preprocessor fails (the caller compiles and
     reports the compiler's own message)."""
     includes = [f"-I{d}" for d in include_dirs]
-    pre = subprocess.run([cc, "-E", *flags, *includes, str(source)], capture_output=True, env=env,
+    compile_flags = [f for f in flags if not _LINK_ONLY.match(f)]  # (clang -Werror: "unused" otherwise)
+    pre = subprocess.run([cc, "-E", *compile_flags, *includes, str(source)], capture_output=True, env=env,
                          check=True).stdout
     digest = hashlib.sha256()
     for part in (compiler_identity(cc), "\0".join(flags).encode(), _strip_directories(pre)):
@@ -87,10 +113,11 @@ def build_key(cc: str, flags: list[str], include_dirs: list[Path], source: Path,
 
 
 def _read_entry(entry: Path) -> bytes | None:
-    """The bytes an entry holds, or None when it is missing or its digest does not match."""
+    """The bytes an entry holds, or None when it is missing, cannot be read or its digest does
+    not match."""
     try:
         data = entry.read_bytes()
-    except FileNotFoundError:
+    except OSError:
         return None
     head, sep, library = data.partition(b"\n")
     if not sep or hashlib.sha256(library).hexdigest().encode() != head:
@@ -109,10 +136,20 @@ def _write_atomic(path: Path, data: bytes) -> None:
 
 @contextmanager
 def _locked(lock_path: Path):
+    """The key's lock; in a cache that cannot be written (read-only), the lock file opened for
+    reading where it exists (flock needs no write access), else none: such a cache is only read."""
     if fcntl is None:
         yield
         return
-    with open(lock_path, "a") as lock:
+    try:
+        lock = open(lock_path, "a")
+    except OSError:
+        try:
+            lock = open(lock_path)
+        except OSError:
+            yield
+            return
+    with lock:
         fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
         yield
 
@@ -127,7 +164,12 @@ def cached_entry(directory: Path, key: str, suffix: str, make: Callable[[], byte
         if data is not None:
             return data, True
         data = make()
-        _write_atomic(entry, hashlib.sha256(data).hexdigest().encode() + b"\n" + data)
+        try:
+            _write_atomic(entry, hashlib.sha256(data).hexdigest().encode() + b"\n" + data)
+        except OSError as exc:  # a read-only cache, a full disk: the build stands, only not kept
+            warnings.warn(BuildCacheWarning(f"{ENV}={str(directory)!r}: cannot store this build in the cache "
+                                            f"({exc.strerror or exc}); it was built and is used without it"),
+                          stacklevel=2)
         return data, False
 
 

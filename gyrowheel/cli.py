@@ -105,14 +105,27 @@ def compile_failed(exc, what: str) -> CliError:
     return CliError(f"compiling {what} failed: {exc}", EXIT_FAILURE)
 
 
+def print_warnings(caught, *kinds) -> None:
+    """The warnings `caught` (warnings.catch_warnings(record=True)) of the given kinds as one line
+    each, `gyrowheel: warning: ...`; any other shown as Python shows it."""
+    for w in caught:
+        if issubclass(w.category, kinds):
+            print(f"gyrowheel: warning: {w.message}", file=sys.stderr)
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+
+
 def cmd_build(args) -> int:
     from gyrowheel.api import build
+    from gyrowheel.fmu_build.build_cache import BuildCacheWarning
     from gyrowheel.errors import ArgumentError, MissingExtraError
     from gyrowheel.fmu_build.compiler import CompileError
 
     try:
-        result = build(args.scene, args.output, build_dir=args.keep_build, taylor=args.taylor,
-                       platforms=args.platforms, fmi=args.fmi, arrays=args.arrays)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", BuildCacheWarning)
+            result = build(args.scene, args.output, build_dir=args.keep_build, taylor=args.taylor,
+                           platforms=args.platforms, fmi=args.fmi, arrays=args.arrays)
     except MissingExtraError as exc:  # zig, for a platform not the host's (exit 2)
         verb = "gyrowheel build --platforms" if args.platforms is not None else "gyrowheel build ([build] platforms)"
         raise MissingExtraError(exc.extra, verb, exc.missing) from None
@@ -127,6 +140,7 @@ def cmd_build(args) -> int:
                        EXIT_FAILURE) from None
     except Exception as exc:  # CasADi or a defect of gyrowheel: still one line, never a traceback
         raise _failed("building the FMU", args.scene, exc) from None
+    print_warnings(caught, BuildCacheWarning)
     print(f"built {result.fmu} (model {result.identifier}, effects: {', '.join(result.spec.effects) or 'none'}; "
           f"platforms: {', '.join(result.platforms)}{'; FMI 3.0' if result.fmi == 3 else ''})")
     return 0
@@ -134,6 +148,7 @@ def cmd_build(args) -> int:
 
 def cmd_simulate(args) -> int:
     from gyrowheel.api import simulate
+    from gyrowheel.fmu_build.build_cache import BuildCacheWarning
     from gyrowheel.simulation import FmuWarning, SimulationError
 
     if args.plot:
@@ -142,6 +157,7 @@ def cmd_simulate(args) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", FmuWarning)
+            warnings.simplefilter("always", BuildCacheWarning)
             events: list[tuple[str, float]] = []
             result = simulate(args.fmu, stop_time=args.stop_time, output_interval=args.output_interval,
                               start_values=args.set or [], output=output, plot=args.plot, events=events)
@@ -149,9 +165,8 @@ def cmd_simulate(args) -> int:
         raise CliError(str(exc), EXIT_FAILURE) from None
     except GyrowheelError as exc:
         raise CliError(flagged(exc, SIMULATE_FLAGS)) from None
-    for warning in caught:  # the FMU's warnings (a fixed-step solver for the contact modes), one line each
-        if issubclass(warning.category, FmuWarning):
-            print(f"gyrowheel: warning: {warning.message}", file=sys.stderr)
+    # the FMU's warnings (a fixed-step solver for the contact modes) and the build cache's, one line each
+    print_warnings(caught, FmuWarning, BuildCacheWarning)
     print(f"wrote {output}: {len(result)} rows, t = {result['time'][0]:g} .. {result['time'][-1]:g} s"
           + events_summary(events))
     if "painleve_paradox" in result.dtype.names and result["painleve_paradox"][-1]:

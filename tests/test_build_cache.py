@@ -123,3 +123,88 @@ def test_line_markers_keep_file_names_not_directories():
     text = b'# 1 "/tmp/x/build/gw_fmu.c"\n# 12 "/usr/include/stdio.h" 1 3 4\nint a;\n# 3 "a \\"b\\"/c.h" 2\n'
     assert build_cache._strip_directories(text) == \
         b'# 1 "gw_fmu.c"\n# 12 "stdio.h" 1 3 4\nint a;\n# 3 "c.h" 2\n'
+
+
+@pytest.mark.skipif(shutil.which("clang") is None, reason="clang is not installed")
+def test_clang_builds_are_cached_too(cache, tmp_path, monkeypatch):
+    # the key's preprocessor call leaves out the linker's arguments, which clang -Werror refuses
+    monkeypatch.setenv("CC", "clang")
+    first = _build(tmp_path / "a", "first.so")
+    assert _build(tmp_path / "b", "again.so") == first
+    assert len(cache.compiles) == 1 and len(list(cache.path.glob(f"*{build_cache.SUFFIX}"))) == 1
+
+
+def test_a_cache_path_that_is_no_directory_is_refused_naming_the_variable(tmp_path, monkeypatch):
+    """Through the API and the command line (exit 2, one line), before anything is built."""
+    import subprocess
+    import sys
+    from gyrowheel.errors import ArgumentError
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    monkeypatch.setenv(build_cache.ENV, str(afile))
+    with pytest.raises(ArgumentError, match=rf"^GYROWHEEL_BUILD_CACHE='{afile}': not a directory"):
+        _build(tmp_path / "a", "lib.so")
+    monkeypatch.setenv(build_cache.ENV, str(afile / "below"))  # its parent is a file: cannot be made
+    with pytest.raises(ArgumentError, match=r"^GYROWHEEL_BUILD_CACHE='.*below': the cache's directory cannot be made"):
+        _build(tmp_path / "a", "lib.so")
+    monkeypatch.setenv(build_cache.ENV, str(afile))
+    proc = subprocess.run([sys.executable, "-m", "gyrowheel", "build", "examples/scenes/paper_moon.toml", "-o",
+                           str(tmp_path / "m.fmu")], capture_output=True, text=True, cwd=Path(__file__).parents[1])
+    assert proc.returncode == 2 and proc.stderr == (f"gyrowheel: error: GYROWHEEL_BUILD_CACHE='{afile}': not a "
+                                                    "directory; name a directory for the build cache, or unset it "
+                                                    "to build without one\n"), proc.stderr
+    assert not (tmp_path / "m.fmu").exists()
+
+
+def test_a_cache_that_cannot_be_written_is_read_and_a_miss_built_with_a_warning(cache, tmp_path, monkeypatch):
+    first = _build(tmp_path / "a", "first.so")  # stored while the cache could be written
+    writes = build_cache._write_atomic
+
+    def read_only(path, data):
+        if path.parent == cache.path:
+            raise PermissionError(13, "Permission denied", str(path))
+        writes(path, data)
+    monkeypatch.setattr(build_cache, "_write_atomic", read_only)
+    assert _build(tmp_path / "b", "hit.so") == first and len(cache.compiles) == 1  # still read
+    with pytest.warns(build_cache.BuildCacheWarning, match=r"cannot store this build in the cache \(Permission "
+                                                           r"denied\); it was built and is used without it"):
+        other = _build(tmp_path / "c", "miss.so", answer=7)
+    assert len(cache.compiles) == 2 and other != first
+    assert len(list(cache.path.glob(f"*{build_cache.SUFFIX}"))) == 1
+
+
+def test_a_lock_that_cannot_be_opened_reads_without_it(cache, tmp_path):
+    cache.path.mkdir()
+    data, hit = build_cache.cached_entry(cache.path, "k", ".e", lambda: b"x")
+    (cache.path / "k.lock").unlink()
+    (cache.path / "k.lock").mkdir()  # open() of a directory fails for writing and for reading
+    assert build_cache.cached_entry(cache.path, "k", ".e", lambda: b"y") == (b"x", True)
+    assert (data, hit) == (b"x", False)
+
+
+def test_the_command_line_says_in_one_line_when_a_build_is_not_kept(tmp_path):
+    """Entries that can be neither read nor replaced (here: directories in their place): the FMU is
+    built and correct, and each build the cache could not keep is one `gyrowheel: warning:` line."""
+    import os
+    import subprocess
+    import sys
+    cache = tmp_path / "cache"
+    env = {**os.environ, build_cache.ENV: str(cache)}
+    cmd = [sys.executable, "-m", "gyrowheel", "build", "examples/scenes/paper_moon.toml", "-o"]
+    root = Path(__file__).parents[1]
+    first = subprocess.run([*cmd, str(tmp_path / "a.fmu")], capture_output=True, text=True, env=env, cwd=root)
+    assert first.returncode == 0 and first.stderr == "", first.stderr
+    entries = sorted(cache.glob("*.entry"))
+    assert len(entries) == 2  # the generated C and the library
+    for entry in entries:
+        entry.unlink()
+        entry.mkdir()
+    again = subprocess.run([*cmd, str(tmp_path / "b.fmu")], capture_output=True, text=True, env=env, cwd=root)
+    lines = again.stderr.splitlines()
+    assert again.returncode == 0 and len(lines) == 2, again.stderr
+    assert all(line.startswith(f"gyrowheel: warning: GYROWHEEL_BUILD_CACHE='{cache}': cannot store this build")
+               for line in lines), again.stderr
+    import zipfile
+    with zipfile.ZipFile(tmp_path / "a.fmu") as a, zipfile.ZipFile(tmp_path / "b.fmu") as b:
+        so = [n for n in a.namelist() if n.endswith(".so")]
+        assert so and all(a.read(n) == b.read(n) for n in so)

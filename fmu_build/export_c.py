@@ -33,7 +33,7 @@ from gyrowheel.fmu_build.builder import HOST_ONLY, TAYLOR_ONLY, _guid, _spec
 from gyrowheel.fmu_build.runtime import EXPORT_DIR, fmi_version_of, runtime_sources
 from gyrowheel.fmu_build.codegen import (FUNCTION_FILE, generate_functions, generate_taylor, kernel_choice,
                                         write_model_desc)
-from gyrowheel.fmu_build.compiler import OPTIMISE, STANDARD, WARNINGS, CompileError, compiler
+from gyrowheel.fmu_build.compiler import STANDARD, WARNINGS, CompileError, compiler, optimisation_for
 from gyrowheel.fmu_build.platforms import PLATFORMS, Platform
 from gyrowheel.fmu_build.scene import Scene, check_scene
 from gyrowheel.fmu_build.variables import Variable, build_table
@@ -348,9 +348,12 @@ def _files(out_dir: Path) -> set[str]:
 
 
 def compile_check(unity: Path) -> None:
-    """Compile <model>.c as a user would, strictly (C99, all warnings as errors)."""
+    """Compile <model>.c as a user would, strictly (C99, all warnings as errors), at the level
+    an FMU build of the same C takes (compiler.optimisation_for: GYROWHEEL_OPTIMISE when set,
+    OptimiseLevelError for a bad one)."""
     with temporary_directory("export") as tmp:
-        cmd = [compiler(), *STANDARD, *WARNINGS, *OPTIMISE, "-c", str(unity), "-o", str(Path(tmp) / "model.o")]
+        cmd = [compiler(), *STANDARD, *WARNINGS, *optimisation_for(unity.parent), "-c", str(unity), "-o",
+               str(Path(tmp) / "model.o")]
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0:
             raise CompileError(f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")

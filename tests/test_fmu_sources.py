@@ -220,6 +220,11 @@ def test_an_unknown_optimisation_level_is_refused(tmp_path, monkeypatch):
                           cwd=Path(__file__).parents[1])
     assert proc.returncode == 2 and "GYROWHEEL_OPTIMISE='-Ofast'" in proc.stderr, proc.stderr
     assert "Traceback" not in proc.stderr and "compiling" not in proc.stderr  # a setting, not a failed build
+    # the C export's check compiles at the level of an FMU build of the same C: refused alike
+    proc = subprocess.run([sys.executable, "-m", "gyrowheel", "export-c", "examples/scenes/paper_moon.toml", "-o",
+                           str(tmp_path / "export")], capture_output=True, text=True, cwd=Path(__file__).parents[1])
+    assert proc.returncode == 2 and "GYROWHEEL_OPTIMISE='-Ofast'" in proc.stderr, proc.stderr
+    assert "Traceback" not in proc.stderr and "compiling" not in proc.stderr
 
 
 # ---- gyrowheel.fmu_build.casadi_c -------------------------------------------------------------------------

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
-import math
 import os
 import re
 import shutil
@@ -38,8 +37,9 @@ from gyrowheel import arguments
 from gyrowheel.errors import ArgumentError, ArgumentTypeError, FmuError, GyrowheelError, UnknownNameError
 from gyrowheel.fmu_build.compiler import compile_shared
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR
-from gyrowheel.fmu_build.scene import TOLERANCE_RANGES
 from gyrowheel.scratch import temporary_directory
+from gyrowheel.taylor.ensemble_job import check_job, numbers
+from gyrowheel.taylor.ensemble_messages import advice, named_as_given
 
 __all__ = ["Ensemble", "EnsembleResult", "EnsembleError", "STATUS_OK", "STATUS_TERMINATED",
            "STATUS_ERROR", "LANES"]
@@ -174,68 +174,6 @@ def _address(a: np.ndarray) -> int:
     return ctypes.addressof(ctypes.c_char.from_buffer(a))
 
 
-_NO_GRID = np.zeros(0)
-_NO_GRID.flags.writeable = False
-
-
-def _numbers(v):
-    """v as an array of numbers, ValueError otherwise (np.asarray(v, float) made None a NaN, and
-    True a 1: a Boolean is no number here, as arguments.number refuses it)."""
-    a = np.asarray(v)
-    if a.dtype.kind == "O" and not any(x is None or isinstance(x, bool) for x in a.flat):  # numbers as objects
-        return a.astype(float)  # (ValueError from a string among them)
-    if a.dtype.kind not in "iuf":
-        raise ValueError(v)  # the callers name the field
-    return a
-
-
-def _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
-    """The job's numbers checked before the C library sees them (it can only say "bad job"):
-    an ArgumentError naming the field, an ArgumentTypeError for one that is no number ('10', a
-    string, is refused as every gyrowheel function refuses it: gyrowheel.arguments.number).
-    Returns the grid as a contiguous float array (empty: none).
-    rel_tol and abs_tol outside the FMU's ranges (fmu_build.scene.TOLERANCE_RANGES) are refused
-    here, once, rather than by every trajectory's instance.  (math.isfinite on the scalars:
-    numpy's took 2 us of a small run.)"""
-    def number(name, v):
-        return arguments.number(v, name, finite=False)
-    t0, t1, rtol = number("t_start", t_start), number("t_end", t_end), number("rel_tol", rel_tol)
-    if not math.isfinite(t0) or not math.isfinite(t1):
-        raise ArgumentError(f"t_start and t_end must be finite, got {t0!r} and {t1!r}")
-    if not t1 > t0:
-        raise ArgumentError(f"t_end = {t1!r} must be greater than t_start = {t0!r}")
-    if not (math.isfinite(rtol) and rtol > 0):
-        raise ArgumentError(f"rel_tol must be a finite number > 0, got {rtol!r}")
-    lo, hi = TOLERANCE_RANGES["rel_tol"]
-    if not lo <= rtol <= hi:  # the instances' own range: one error, not one per trajectory
-        raise ArgumentError(f"rel_tol must be within [{lo!r}, {hi:g}] (10 eps to 1), got {rtol!r}")
-    if abs_tol is not None:
-        atol = number("abs_tol", abs_tol)
-        if not (math.isfinite(atol) and atol >= 0):
-            raise ArgumentError(f"abs_tol must be a finite number >= 0, got {atol!r}")
-        lo, hi = TOLERANCE_RANGES["abs_tol"]
-        if atol != 0 and not lo <= atol <= hi:  # the instances' own range, once for the job
-            raise ArgumentError(f"abs_tol must be 0 (rel_tol / 100) or within [{lo:g}, {hi:g}], got {atol!r}")
-    if max_step is not None:
-        hmax = number("max_step", max_step)
-        if not (math.isfinite(hmax) and hmax > 0):
-            raise ArgumentError(f"max_step must be a finite number > 0, got {hmax!r}")
-    if grid is None:
-        return _NO_GRID
-    try:
-        g = np.ascontiguousarray(np.asarray(_numbers(grid), dtype=float).ravel())
-    except ValueError:
-        raise ArgumentError(f"grid must be a sequence of communication points (numbers, s), got {grid!r}") from None
-    if g.size:
-        if not np.all(np.isfinite(g)):
-            raise ArgumentError("grid: communication points must be finite")
-        if not (g[0] > t0 and np.all(np.diff(g) > 0)):
-            raise ArgumentError(f"grid: communication points must increase strictly after t_start = {t0!r}")
-        if g[-1] != t1:
-            raise ArgumentError(f"grid: the last communication point {float(g[-1])!r} must equal t_end = {t1!r}")
-    return g
-
-
 def _fmu_path(fmu) -> Path:
     """The fmu argument (a path; a gyrowheel.BuildResult is one) as a Path: a scene (a .toml, a
     gyrowheel.Scene) is refused naming how to build the FMU the ensemble needs, anything else
@@ -251,40 +189,6 @@ def _fmu_path(fmu) -> Path:
     if path.suffix.lower() == ".toml":
         raise FmuError(f"{path}: a scene, not an FMU; {build}", argument="fmu")
     return path
-
-
-# the advice of the runtime's budget messages (c_src/gw_budget.c) names what an FMU's user
-# sets; a run of the ensemble sets the communication steps through its grid, not the budget
-_BUDGET_ADVICE = (
-    ("raise max_internal_steps or max_step, or shorten the communication step",
-     "raise max_step, or shorten the communication steps: give run() a grid (the budget of "
-     "max_internal_steps is per communication step; without a grid the run from t_start to t_end "
-     "is one step)"),
-    ("raise max_internal_steps or shorten the communication step",
-     "shorten the communication steps: give run() a grid (the budget of max_internal_steps is per "
-     "communication step; without a grid the run from t_start to t_end is one step), or a shorter "
-     "t_end"),
-    (" or stiff (try solver rosenbrock)", " or stiff (then simulate the FMU with solver rosenbrock: the "
-     "ensemble runs solver taylor)"),
-)
-
-
-# solver taylor's series overflowing on a time scale below the smallest step (the FMU's message
-# says "too stiff for an explicit method"): what simulate adds to it (gyrowheel.simulation's
-# STIFF_NOTE), for a run that only has solver taylor
-STIFF_ADVICE = ("; values this stiff (e.g. strong damping on a light wheel) need an implicit solver: simulate "
-                "the FMU with solver rosenbrock (L-stable), or sweep it with --solver rosenbrock "
-                "(the ensemble runs solver taylor only; docs/interface.md, \"Valid ranges\")")
-
-
-def _ensemble_advice(message: str) -> str:
-    """A trajectory's message with the budget's advice in the words of Ensemble.run, and the
-    stiffness advice (STIFF_ADVICE) where the series overflowed on a too short time scale."""
-    for fmu_words, run_words in _BUDGET_ADVICE:
-        message = message.replace(fmu_words, run_words)
-    if "too stiff for an explicit method" in message and STIFF_ADVICE not in message:
-        message += STIFF_ADVICE
-    return message
 
 
 def _start_value(md, name: str) -> float | None:
@@ -506,7 +410,7 @@ class Ensemble:
                                            + (" (angles also as NAME_deg, in degrees)" if what == "start value"
                                               else ""))
                 try:  # (a string, None, a 2-D array: numpy's message named no field, or none came)
-                    cols[k] = np.atleast_1d(_numbers(v).astype(float))
+                    cols[k] = np.atleast_1d(numbers(v).astype(float))
                     if deg:
                         cols[k] = np.radians(cols[k])
                     if cols[k].ndim != 1:
@@ -519,7 +423,7 @@ class Ensemble:
                 table[:, names.index(k)] = c
             return table
         try:
-            table = _numbers(values).astype(float)
+            table = numbers(values).astype(float)
         except ValueError:
             raise ArgumentError(f"{what}s must be an (N, {len(names)}) array of numbers ({', '.join(names)}) "
                                 f"or a {{name: values}} dict, got {values!r}") from None
@@ -567,7 +471,7 @@ class Ensemble:
             rel_tol = self.rel_tol
             if abs_tol is None and self.abs_tol > 0:
                 abs_tol = self.abs_tol
-        g = _check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid)
+        g = check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid)
         t_start, t_end, rel_tol = float(t_start), float(t_end), float(rel_tol)  # (numpy's numbers too)
         try:  # (the tables of values given as one huge array: numpy's bare MemoryError otherwise)
             n = self._trajectories(parameters, starts)
@@ -620,7 +524,7 @@ class Ensemble:
             rc = self._run(ctx.ptr, n, G, _address(f), ctx.logger)
         finally:
             self._contexts.append(ctx)
-        messages[:] = [_ensemble_advice(m) for m in messages]
+        messages[:] = named_as_given([advice(m) for m in messages], starts, self.start_names)
         if rc >= STATUS_ERROR:
             raise EnsembleError("; ".join(messages) or f"ensemble run failed (status {rc})")
         nd, ne = np.ndarray, max(self.ne, 1)

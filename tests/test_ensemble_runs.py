@@ -112,6 +112,9 @@ def test_ensemble_reports_bad_trajectories_and_names(paper, tmp_path):
     assert res.messages == ["ensemble trajectory 1: start value beta is not finite (nan)",
                             "ensemble trajectory 2: parameter M is not finite (-inf)",
                             "ensemble trajectory 2: start value beta is not finite (inf)"], res.messages
+    res = ens.run(1.0, starts={"beta_deg": [80.0, np.inf]}, rel_tol=1e-8)  # named as the caller gave it
+    assert list(res.status) == [STATUS_OK, 3]
+    assert res.messages == ["ensemble trajectory 1: start value beta (given as beta_deg) is not finite (inf)"]
     with pytest.raises(UnknownNameError, match="unknown parameter 'mass'") as info:  # a KeyError
         ens.run(1.0, parameters={"mass": [1.0]})
     assert isinstance(info.value, KeyError) and str(info.value).startswith("unknown parameter 'mass'")

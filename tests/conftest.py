@@ -158,6 +158,30 @@ def _build_cache(tmp_path_factory):
             yield
 
 
+@pytest.fixture
+def own_build_cache(tmp_path, monkeypatch):
+    """A build cache of the test's own (GYROWHEEL_BUILD_CACHE, in place of the run's), and
+    `own_build_cache.calls(owner, name)`: the arguments of every later call of owner.name,
+    which still runs (a test counts the compiles, the code generations, it caused)."""
+    from gyrowheel.fmu_build.build_cache import ENV
+
+    class Cache:
+        path = tmp_path / "cache"
+
+        @staticmethod
+        def calls(owner, name: str) -> list[tuple]:
+            made: list[tuple] = []
+            original = getattr(owner, name)
+
+            def counted(*args):
+                made.append(args)
+                return original(*args)
+            monkeypatch.setattr(owner, name, counted)
+            return made
+    monkeypatch.setenv(ENV, str(Cache.path))
+    return Cache
+
+
 def shared_build(tmp_path_factory, key: str, make):
     """make(directory) run once per test run, whichever worker asks first; its result (pickled)
     for every worker.  The others wait on a lock file (fcntl.flock) meanwhile, so a build is

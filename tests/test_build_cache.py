@@ -16,22 +16,10 @@ SOURCE = '#include "answer.h"\nint gw_answer(void) { return ANSWER; }\n'
 
 
 @pytest.fixture
-def cache(tmp_path, monkeypatch):
+def cache(own_build_cache):
     """A cache of this test's, and the compiler's runs counted: cache.compiles."""
-    directory = tmp_path / "cache"
-    monkeypatch.setenv(build_cache.ENV, str(directory))
-    run = compiler._run
-    calls: list[list[str]] = []
-
-    def counted(cmd):
-        calls.append(cmd)
-        return run(cmd)
-    monkeypatch.setattr(compiler, "_run", counted)
-
-    class Cache:
-        path = directory
-        compiles = calls
-    return Cache
+    own_build_cache.compiles = own_build_cache.calls(compiler, "_run")
+    return own_build_cache
 
 
 def _sources(root: Path, answer: int = 42) -> Path:

@@ -20,26 +20,11 @@ SCENES = Path(__file__).resolve().parent.parent / "examples" / "scenes"
 
 
 @pytest.fixture
-def cache(tmp_path, monkeypatch):
+def cache(own_build_cache):
     """A cache of this test's (compiles too), and the generator's runs counted: cache.generated."""
-    directory = tmp_path / "cache"
-    monkeypatch.setenv(build_cache.ENV, str(directory))
-    generate = codegen._generate
-    runs: list[list[str]] = []
-
-    def counted(functions, path):
-        runs.append(list(functions))
-        return generate(functions, path)
-    monkeypatch.setattr(codegen, "_generate", counted)
-
-    class Cache:
-        path = directory
-        generated = runs
-
-        @staticmethod
-        def entries() -> list[Path]:
-            return list(directory.glob(f"*{codegen_cache.SUFFIX}"))
-    return Cache
+    own_build_cache.generated = own_build_cache.calls(codegen, "_generate")
+    own_build_cache.entries = lambda: list(own_build_cache.path.glob(f"*{codegen_cache.SUFFIX}"))
+    return own_build_cache
 
 
 def _functions(scale: float = 2.0, name: str = "gw_ode") -> dict[str, ca.Function]:

@@ -524,7 +524,10 @@ class Ensemble:
             rc = self._run(ctx.ptr, n, G, _address(f), ctx.logger)
         finally:
             self._contexts.append(ctx)
-        messages[:] = named_as_given([advice(m) for m in messages], starts, self.start_names)
+        messages[:] = [advice(m) for m in messages]
+        if messages and isinstance(starts, dict):  # a start given in degrees: named as given
+            messages[:] = named_as_given(messages, {name: k for k in starts if k not in self.start_names
+                                                    for name, deg in [self._in_radians(k)] if deg})
         if rc >= STATUS_ERROR:
             raise EnsembleError("; ".join(messages) or f"ensemble run failed (status {rc})")
         nd, ne = np.ndarray, max(self.ne, 1)

@@ -36,14 +36,11 @@ def advice(message: str) -> str:
     return message
 
 
-def named_as_given(messages: list[str], starts, start_names: list[str]) -> list[str]:
-    """The trajectories' messages with a start value given in degrees (`starts` a dict with a
-    NAME_deg key, NAME a start in `start_names`) named as the caller gave it: the runtime names
-    the state's start in radians ("start value beta is not finite (inf)")."""
-    if not messages or not isinstance(starts, dict):
-        return messages
-    for given in starts:
-        if isinstance(given, str) and given.endswith("_deg") and given not in start_names:
-            said = f"start value {given[:-4]} is not finite"
-            messages = [m.replace(said, f"start value {given[:-4]} (given as {given}) is not finite") for m in messages]
+def named_as_given(messages: list[str], in_degrees: dict[str, str]) -> list[str]:
+    """The trajectories' messages with each start value given in degrees named as the caller gave
+    it: in_degrees maps the start (beta) to the name given (beta_deg); the runtime names the
+    state's start in radians ("start value beta is not finite (inf)")."""
+    for name, given in in_degrees.items():
+        said = f"start value {name} is not finite"
+        messages = [m.replace(said, f"start value {name} (given as {given}) is not finite") for m in messages]
     return messages

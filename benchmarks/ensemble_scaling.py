@@ -49,7 +49,7 @@ sys.path.insert(0, str(HERE))
 
 from ref_tree import RefTree  # noqa: E402
 from taylor_vs_heyoka import SameGraph, to_heyoka  # noqa: E402
-from work_precision import PER_DECADE, SCENARIOS, best_time, tolerance_grid  # noqa: E402
+from work_precision import PER_DECADE, SCENARIOS, best_time, per_decade_option, tolerance_grid  # noqa: E402
 
 from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
 from gyrowheel.taylor.ensemble import Ensemble  # noqa: E402
@@ -181,7 +181,7 @@ def main() -> int:
     ap.add_argument("--variants", nargs="*", default=list(VARIANTS), choices=list(VARIANTS))
     ap.add_argument("--targets", type=float, nargs="*", default=[1e-4, 1e-7, 1e-10, 1e-12])
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--per-decade", type=int, default=PER_DECADE,
+    ap.add_argument("--per-decade", type=per_decade_option, default=PER_DECADE,
                     help=f"tolerances per decade of the grid (default {PER_DECADE})")
     ap.add_argument("--scenario", default="paper", choices=["paper", "long", "near_flat"])
     ap.add_argument("--against", default=None, help="a git revision whose ensemble is timed too")
@@ -189,8 +189,6 @@ def main() -> int:
                     help="C macros of gyrowheel's ensemble builds, e.g. GW_NO_CLONES=1: the portable code "
                          "a CPU without AVX2 runs")
     args = ap.parse_args()
-    if args.per_decade < 1:
-        ap.error(f"--per-decade must be a positive integer, got {args.per_decade}")
     tols = tolerance_grid(args.per_decade)
     defines = {}
     for item in args.defines:

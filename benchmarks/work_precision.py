@@ -115,6 +115,17 @@ def tolerance_grid(per_decade: int) -> list[float]:
     return [10.0 ** -(k / per_decade) for k in range(3 * per_decade, int(14.5 * per_decade) + 1)]
 
 
+def per_decade_option(text: str) -> int:
+    """argparse type of --per-decade (this script's and ensemble_scaling.py's): a positive integer."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
+    return value
+
+
 # the tolerances of gyrowheel's solvers, heyoka and plain C (a decade grid put a method's cheapest
 # point for a target up to 10x too tight); the slower peers: decades
 TOLS = tolerance_grid(PER_DECADE)  # 1e-3 .. 10^-14.5
@@ -496,15 +507,13 @@ def main() -> int:
                         choices=list(SOLVER_CODES), help="gyrowheel solvers to measure")
     parser.add_argument("--quick", action="store_true", help="few settings, no repetitions (a smoke run)")
     parser.add_argument("--repeat", type=int, default=3, help="repetitions of each timing, best counted")
-    parser.add_argument("--per-decade", type=int, default=None,
+    parser.add_argument("--per-decade", type=per_decade_option, default=None,
                         help=f"tolerances per decade of the grid (default {PER_DECADE}; not with --quick)")
     parser.add_argument("--out", default="results/bench")
     parser.add_argument("--png-dir", help="directory for the figures (default: --out; make figures: docs/img)")
     args = parser.parse_args()
     if args.per_decade is not None and args.quick:
         parser.error("--quick runs its own two tolerances (1e-4, 1e-7): leave out --per-decade")
-    if args.per_decade is not None and args.per_decade < 1:
-        parser.error(f"--per-decade must be a positive integer, got {args.per_decade}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if args.png_dir:

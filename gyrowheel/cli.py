@@ -184,14 +184,12 @@ PAINLEVE_STOP = ("sliding stopped at t = {t:.9g} s (event painleve): the frictio
 
 
 def events_summary(events: list[tuple[str, float]]) -> str:
-    """' (events: contact_flight: 11 times, 0.142784 .. 0.428074 s; fall at t = 1.2 s)': each event
-    the FMU reported ((name, t [s]) in firing order, gyrowheel.simulate's events), by name in the
-    order of its first firing, with its count and its first and last time; '' if none fired."""
-    times: dict[str, list[float]] = {}
-    for name, t in events:
-        times.setdefault(name, []).append(t)
-    fired = [f"{name} at t = {ts[0]:.6g} s" if len(ts) == 1 else
-             f"{name}: {len(ts)} times, {ts[0]:.6g} .. {ts[-1]:.6g} s" for name, ts in times.items()]
+    """' (events: contact_flight: 11 times, t = 0.142784 .. 0.428074 s; fall at t = 1.2 s)': each
+    event the FMU reported ((name, t [s]) in firing order, gyrowheel.simulate's events) in the
+    words of gyrowheel.simulation.fired_events; '' if none fired."""
+    from gyrowheel.simulation import fired_events
+
+    fired = fired_events(events)
     return f" (events: {'; '.join(fired)})" if fired else ""
 
 

@@ -138,20 +138,29 @@ class Messages:
         """The messages logged with status warning (fmi2Warning, fmi3Warning), each once, without
         the FMU's own `warning: ` prefix; a warning event (`warning: event NAME at t=T`, an
         event the scene set to warn, logged each time it fires) as one message per event:
-        `event NAME at t = T s`, or `event NAME: N times, t = T1 .. Tn s`."""
+        `event NAME at t = T s`, or `event NAME: N times, t = T1 .. Tn s` (fired_events)."""
         plain: list[str] = []
-        fired: dict[str, list[float]] = {}
+        fired: list[tuple[str, float]] = []
         for s, m in self.lines:
             if s != 1:
                 continue
             event = EVENT_LOGGED.fullmatch(m)
             if event:
-                fired.setdefault(event.group(1), []).append(float(event.group(2)))
+                fired.append((event.group(1), float(event.group(2))))
             else:
                 plain.append(m.removeprefix("warning: "))
-        return list(dict.fromkeys(plain)) + [
-            f"event {name} at t = {ts[0]:.9g} s" if len(ts) == 1
-            else f"event {name}: {len(ts)} times, t = {ts[0]:.6g} .. {ts[-1]:.6g} s" for name, ts in fired.items()]
+        return list(dict.fromkeys(plain)) + [f"event {phrase}" for phrase in fired_events(fired)]
+
+
+def fired_events(events: list[tuple[str, float]]) -> list[str]:
+    """Each event of `events` ((name, t [s]) in firing order) once, in the order of its first
+    firing: `NAME at t = T s` if it fired once, `NAME: N times, t = T1 .. Tn s` (its first and
+    last time) otherwise; the words of Messages.warnings and of the CLI's events summary."""
+    times: dict[str, list[float]] = {}
+    for name, t in events:
+        times.setdefault(name, []).append(t)
+    return [f"{name} at t = {ts[0]:.6g} s" if len(ts) == 1 else f"{name}: {len(ts)} times, t = {ts[0]:.6g} .. {ts[-1]:.6g} s"
+            for name, ts in times.items()]
 
 
 def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[str, object]:

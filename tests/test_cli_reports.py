@@ -48,7 +48,7 @@ def simulate(fmu, tmp_path, *args):
 def test_events_summary_counts_the_bounces_at_their_analytic_times(drop, tmp_path):
     r = simulate(drop, tmp_path)
     assert r.returncode == 0, r.stderr
-    m = re.search(r"contact_flight: (\d+) times, (\S+) \.\. (\S+) s", r.stdout)
+    m = re.search(r"contact_flight: (\d+) times, t = (\S+) \.\. (\S+) s", r.stdout)
     assert m, r.stdout
     t1 = math.sqrt(2 * H0 / G_EARTH)
     assert int(m.group(1)) == 11
@@ -59,7 +59,7 @@ def test_events_summary_counts_the_bounces_at_their_analytic_times(drop, tmp_pat
 def test_events_summary_wording():
     assert events_summary([]) == ""
     assert events_summary([("impact", 0.5), ("fall", 2.0), ("impact", 1.25), ("impact", 1.5)]) == (
-        " (events: impact: 3 times, 0.5 .. 1.5 s; fall at t = 2 s)")
+        " (events: impact: 3 times, t = 0.5 .. 1.5 s; fall at t = 2 s)")
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +87,7 @@ def test_a_warning_event_is_one_line_with_its_count(warn_slip, tmp_path):
     assert len(lines) == 1 and m, r.stderr
     n, first, last = int(m.group(1)), float(m.group(2)), float(m.group(3))
     assert n > 20 and first == pytest.approx(0.101206, abs=1e-6) and last > 19.0
-    assert f"slip: {n} times" in r.stdout  # the events' summary agrees
+    assert f"slip: {n} times, t = {first:.6g} .. {last:.6g} s" in r.stdout  # the summary: the same words
     r = simulate(warn_slip, tmp_path, "--set", "gamma_dot=15", "--set", "mu=0.01", "--stop-time", 1)
     assert r.stderr.splitlines() == ["gyrowheel: warning: event slip holds already at the start t=0"], r.stderr
     assert "(events: slip at t = 0 s)" in r.stdout, r.stdout  # listed among the events too

@@ -370,9 +370,12 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     Returns a pandas DataFrame, one row per point: point, the inputs, the metrics, status
     ('ok', 'error'), reason, wall_time [s].
     Raises SweepSpecError naming the argument (`grid['beta_deg'] = '60:89': ...`,
-    `fixed['R']: ...`, `stop_time ...`, a value every point sets that the unit refuses, e.g.
-    `rel_tol: ... outside its valid range`, a run whose rows would take more than half of this
-    machine's memory) before anything runs; ArgumentTypeError naming an argument of the wrong
+    `fixed['R']: ...`, `stop_time ...`, a value every point sets that the unit refuses as it is
+    set or at initialisation with the first point's values, with the unit's reason, e.g.
+    `rel_tol: ... outside its valid range`, `fixed['R']: the unit refuses -1.0 for every point:
+    fmi2ExitInitializationMode: R (radius) must be > 0`, a run whose rows would take more than
+    half of this machine's memory) before anything runs (a value of one point the unit refuses
+    is that point's row, status 'error'); ArgumentTypeError naming an argument of the wrong
     type; FmuError for an FMU source that is not an FMI 2.0 FMU that can run here;
     SweepInterrupted (a KeyboardInterrupt) when Ctrl-C stops it, with the table of the points
     done; SceneError for a scene that cannot be read or built; MissingExtraError without

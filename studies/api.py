@@ -242,6 +242,7 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     the first point runs.
     Returns a DataFrame with one row per point: point, inputs, metrics, status, reason, wall_time.
     Raises SweepSpecError (a ValueError) for any bad name, value or spec, before anything runs
+    (a value every point sets included, checked by the unit: plan.make_plan)
     (plot_metric: after, when it names no column of the table); SweepInterrupted (a
     KeyboardInterrupt) when Ctrl-C stops the run, with the points done (on disk in `output` when
     there are any).

@@ -135,6 +135,21 @@ def _times(target, stop_time, output_interval, start_time) -> tuple[float, float
     return float(stop), float(min(output_interval, stop - start_time))
 
 
+def _check_fixed(target, fixed: dict, where: dict, values: list, start_time: float) -> None:
+    """SweepSpecError when the unit refuses the values every point sets (`fixed`, named as
+    `where` says), as they are set or at initialisation with the points' values (`values`): the
+    target's optional refused(values, start_time, points), FmuTarget.refused."""
+    refused = getattr(target, "refused", None)
+    found = refused(fixed, start_time, values) if refused is not None and fixed else None
+    if found is None:
+        return
+    name, reason = found
+    if name is None:  # only their combination
+        raise SweepSpecError(f"{', '.join(where[n] for n in fixed)}: the unit refuses these values together for "
+                             f"every point: {reason}")
+    raise SweepSpecError(f"{where[name]}: the unit refuses {fixed[name]!r} for every point: {reason}")
+
+
 def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, solver_settings: Mapping | None = None,
               derive=None, stop_time: float | None = None, output_interval: float | None = None,
               start_time: float = 0.0, metrics=None, metric_functions=(), ensemble: bool = True) -> Plan:
@@ -142,9 +157,11 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, sol
 
     fixed: values every point sets (--set); solver_settings: the solver settings every point sets
     ({'solver': 'rk4', 'rel_tol': 1e-8, ...}: --solver, --rel-tol, --abs-tol, --max-step), named
-    by their flags in errors. A value of these that the unit refuses as it is set (e.g. rel_tol
-    -1, outside its range) is refused here, before anything runs: every point would fail with it
-    (the target's optional refused(values, start_time)).
+    by their flags in errors. A value of these that the unit refuses, as it is set (e.g. rel_tol
+    -1, outside its range) or at initialisation with a point's values (e.g. R -1: R must be > 0),
+    is refused here, before anything runs: every point would fail with it (the target's optional
+    refused(values, start_time, points): FmuTarget.refused). A point's own value the unit
+    refuses is no error here: that point fails, the others run.
     A point's empty cell (a key other points have, None, NaN) leaves that variable at the unit's
     start value. A variable with two names (beta and beta_deg; M and wheel.M in a system, through
     the target's optional canonical(name)) may be given only once.
@@ -176,11 +193,6 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, sol
         if name in fixed_targets:
             raise SweepSpecError(f"{name!r} is both swept and fixed with --set")
     stop, interval = _times(target, stop_time, output_interval, start_time)
-    refused = getattr(target, "refused", None)
-    found = refused(fixed_values, float(start_time)) if refused is not None and fixed_values else None
-    if found is not None:
-        name, reason = found
-        raise SweepSpecError(f"{where[name]}: the unit refuses {fixed_values[name]!r} for every point: {reason}")
     starts = {n: v.start for n, v in variables.items() if v.start is not None and v.type != "String"}
     values = []
     for point, row in zip(inputs.index, inputs.to_dict("records")):
@@ -195,6 +207,7 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, sol
                 raise SweepSpecError(f"--derive {derive_fn.ref}: must return a dict of unit values, got {extra!r}")
             own.update(res.resolve(n, v, f"--derive {derive_fn.ref}: point {point}: {n}") for n, v in extra.items())
         values.append(own)
+    _check_fixed(target, fixed_values, where, values, float(start_time))
     settings = Settings(stop_time=stop, output_interval=interval, start_time=float(start_time), fixed=fixed_values,
                         ensemble=ensemble)
     metric_set = MetricSet.parse(metrics, metric_functions, outputs=list(target.outputs),

@@ -71,9 +71,11 @@ class SspTarget:
     def open(self, payload) -> "SystemInstance":
         return SystemInstance(self, payload)
 
-    def refused(self, values: dict, start_time: float) -> tuple[str, str] | None:
+    def refused(self, values: dict, start_time: float, points=()) -> tuple[str, str] | None:
         """The first of `values` ({sweep name: value}) its component refuses as it is set
-        (FmuTarget.refused): (the sweep name, '<component>: <reason>'), or None."""
+        (FmuTarget.refused): (the sweep name, '<component>: <reason>'), or None. points: not
+        read: the master initialises the components together, connected, so a refusal at
+        initialisation is a failed point (each point's reason in the table)."""
         split: dict[str, dict] = {}
         for alias, value in values.items():
             component, var = self.where[alias]

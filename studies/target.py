@@ -15,8 +15,10 @@ run by gyrowheel's co-simulation master (studies/system_target.py):
         read(row)                               the outputs into a float64 array
         flags() -> list[str]                    Boolean outputs that are true (e.g. 'fallen')
         close()
-    target.refused(values, start_time) -> None | (name, reason)   optional: the first of the
-                                                values every point sets that the unit refuses
+    target.refused(values, start_time, points) -> None | (name, reason)   optional: the first
+                                                of the values every point sets that the unit
+                                                refuses (as set, or at initialisation with the
+                                                points' own values)
     A point that the instance refuses raises PointFailure(reason); the sweep records it and goes on.
 
 FmuTarget drives a Co-Simulation FMU through fmpy's FMU2Slave and the raw fmi2 functions
@@ -131,11 +133,18 @@ class FmuTarget:
     def open(self, payload: bytes | None) -> "FmuInstance":
         return FmuInstance(self, _unpack(self, payload))
 
-    def refused(self, values: dict[str, object], start_time: float) -> tuple[str, str] | None:
-        """The first of `values` ({variable: value}) the FMU refuses as it is set, each alone in a
-        fresh experiment (fmi2Set*'s own checks, e.g. rel_tol -1 outside its range; not those of
-        initialisation, which depend on the other values): (its name, the FMU's reason); None
-        when it takes them all, or when no instance can be made here (the workers will say)."""
+    def refused(self, values: dict[str, object], start_time: float,
+                points: list[dict] = ()) -> tuple[str | None, str] | None:
+        """The first of `values` ({variable: value}, what every point sets) the FMU refuses:
+        (its name, the FMU's reason); None when it takes them all, or when no instance can be
+        made here (the workers will say).
+
+        First each value alone in a fresh experiment (fmi2Set*'s own checks, e.g. rel_tol -1
+        outside its range); then, given `points` (each point's own {variable: value}, in point
+        order), the FMU's checks at initialisation (e.g. R -1: 'R (radius) must be > 0'), made
+        with a point's values, on which they may depend (refused_at_initialisation). Costs one
+        instance and, when the first point initialises with the values, one initialisation.
+        """
         try:
             instance = self.open(self._data)
         except Exception:  # noqa: BLE001 - e.g. a client that cannot load the workers' binary
@@ -146,9 +155,45 @@ class FmuTarget:
                     instance.set_values({name: value}, start_time)
                 except PointFailure as exc:
                     return name, str(exc)
+            return refused_at_initialisation(instance, values, points, start_time)
         finally:
             instance.close()
+
+
+# points refused on their own that the check of the shared values passes over before it stops
+# (then those points fail as points, and so do the others if the shared values are refused too)
+CHECKED_POINTS = 100
+
+
+def refused_at_initialisation(instance, values: dict, points, start_time: float) -> tuple[str | None, str] | None:
+    """Whether the unit refuses, at initialisation, `values` (what every point sets) with the
+    points' own values (`points`: {variable: value} per point, in order): None, or (the name of
+    the value refused, the unit's reason), or (None, its reason) when only their combination is.
+
+    The values are refused when the first point that initialises without them does not with
+    them; their culprit is the first value with which alone that point does not. A point the
+    unit refuses on its own says nothing about them (it fails as a point): the next is tried,
+    up to CHECKED_POINTS. One initialisation when the first point takes them.
+    """
+    def reason(own: dict) -> str | None:
+        try:
+            instance.start(own, start_time)
+        except PointFailure as exc:
+            return str(exc)
         return None
+
+    for own in list(points)[:CHECKED_POINTS]:
+        why = reason({**values, **own})  # as the point runs (studies/batch.py)
+        if why is None:
+            return None
+        if reason(own) is not None:
+            continue  # the point itself is refused
+        for name, value in values.items():
+            alone = reason({name: value, **own})
+            if alone is not None:
+                return name, alone
+        return None, why
+    return None
 
 
 def _kernel_and_auto(data: bytes) -> tuple[bool, bool]:

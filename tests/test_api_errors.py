@@ -279,10 +279,12 @@ def test_sweep_values_every_point_would_fail_with_are_refused_before_it_runs(moo
 
 
 def test_sweep_table_columns_do_not_depend_on_failed_points(moon):
-    """Every point failing (a mass the model refuses) still gives the metric columns, empty: a
-    table's columns do not depend on its outcomes."""
-    kw = dict(grid={"gamma_dot": [5.0, 6.0]}, stop_time=0.1, workers=0)
-    ok, failed = gyrowheel.sweep(moon, fixed={"M": 2.0}, **kw), gyrowheel.sweep(moon, fixed={"M": -1.0}, **kw)
+    """Every point failing (each with a mass the model refuses: a point's own value, as a fixed
+    one is refused before the sweep runs) still gives the metric columns, empty: a table's
+    columns do not depend on its outcomes."""
+    kw = dict(stop_time=0.1, workers=0)
+    ok = gyrowheel.sweep(moon, grid={"gamma_dot": [5.0, 6.0], "M": [2.0]}, **kw)
+    failed = gyrowheel.sweep(moon, points=[{"gamma_dot": 5.0, "M": -1.0}, {"gamma_dot": 6.0, "M": -2.0}], **kw)
     assert (ok["status"] == "ok").all() and (failed["status"] == "error").all()
     assert list(failed.columns) == list(ok.columns)
     assert failed["survived"].isna().all() and (failed["event"] == "").all() and failed["fall_time"].isna().all()

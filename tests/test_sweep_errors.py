@@ -8,6 +8,7 @@ traceback."""
 from __future__ import annotations
 
 import os
+import re
 import socket
 import threading
 import time
@@ -212,3 +213,63 @@ def test_the_command_says_how_many_workers_it_starts(earth_fmu, tmp_path, capsys
                  "-o", str(tmp_path / "t.csv")])
     err = capsys.readouterr().err
     assert code == 130 and "on a LocalCluster of 2 workers (one per point; --workers 3)\n" in err, err
+
+
+# a value every point shares that the FMU refuses only at initialisation (fmi2ExitInitializationMode
+# checks the wheel's parameters, model/build.py): refused before any point runs, in the FMU's words
+R_REFUSED = "fmi2ExitInitializationMode: R (radius) must be > 0"
+
+
+def test_cli_a_fixed_value_refused_at_initialisation_exits_2(earth_fmu, tmp_path, capsys):
+    out = tmp_path / "t.csv"
+    code = main(["sweep", str(earth_fmu), "--grid", "beta_deg=60:85:6", "--set", "R=-1", "--workers", "0",
+                 "--no-progress", "-o", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and err == f"gyrowheel: error: --set R: the unit refuses -1.0 for every point: {R_REFUSED}\n"
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("value, reason", [
+    (-1, R_REFUSED),
+    (2e6, "fmi2ExitInitializationMode: R must lie in [1e-06, 1e+06] m"),
+])
+def test_api_a_fixed_value_refused_at_initialisation(earth_fmu, value, reason):
+    import gyrowheel
+    with pytest.raises(SweepSpecError) as caught:
+        gyrowheel.sweep(earth_fmu, grid={"beta_deg": "60:85:6"}, fixed={"R": value}, workers=0)
+    assert caught.value.argument == "fixed"
+    assert str(caught.value).startswith(f"fixed['R']: the unit refuses {float(value)!r} for every point: {reason}")
+
+
+def test_fixed_values_refused_only_together_are_named_together(earth_fmu):
+    """Each alone takes the start lean (80 deg); together the lean lies below beta_min."""
+    with pytest.raises(SweepSpecError, match=r"^--set beta_min, --set beta: the unit refuses these values together "
+                                             r"for every point: .*initial lean beta must lie between beta_min"):
+        sweep(earth_fmu, grid={"M": [1.0, 2.0]}, fixed={"beta_min": 1.2, "beta": 1.0}, workers=0, stop_time=0.1)
+
+
+def test_a_grid_value_refused_at_initialisation_is_a_failed_point(earth_fmu):
+    """Fine fixed values: the point the FMU refuses fails with its reason, the others run; a
+    refused first point says nothing of the fixed values, which the next point then checks."""
+    table = sweep(earth_fmu, grid={"M": [-1.0, 2.0]}, fixed={"R": 0.3}, workers=0, stop_time=0.1, ensemble=False)
+    assert list(table["status"]) == ["error", "ok"]
+    assert table["reason"][0] == "fmi2ExitInitializationMode: M (mass) must be > 0"
+    with pytest.raises(SweepSpecError, match=re.escape(f"--set R: the unit refuses -1.0 for every point: {R_REFUSED}")):
+        sweep(earth_fmu, grid={"M": [-1.0, 2.0]}, fixed={"R": -1.0}, workers=0, stop_time=0.1)
+
+
+def test_the_check_of_fixed_values_is_one_initialisation(earth_fmu, monkeypatch):
+    """Fixed values the FMU takes: one initialisation (no step) before the first point runs,
+    then every point runs (one FMU run per point: ensemble=False)."""
+    from gyrowheel.studies.target import FmuInstance
+    calls = {"start": 0, "step": 0}
+    for method in calls:
+        def counted(self, *args, _method=method, _original=getattr(FmuInstance, method)):
+            calls[_method] += 1
+            return _original(self, *args)
+        monkeypatch.setattr(FmuInstance, method, counted)
+    before = []
+    table = sweep(earth_fmu, grid={"beta_deg": "60:85:6"}, fixed={"R": 0.3}, workers=0, stop_time=0.1,
+                  ensemble=False, on_start=lambda plan: before.append(dict(calls)))
+    assert before == [{"start": 1, "step": 0}]
+    assert list(table["status"]) == ["ok"] * 6 and calls["start"] == 7

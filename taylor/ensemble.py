@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from gyrowheel import arguments
-from gyrowheel.errors import ArgumentError, ArgumentTypeError, FmuError, GyrowheelError, UnknownNameError
+from gyrowheel.errors import ArgumentError, ArgumentTypeError, FmuError, GyrowheelError, UnknownArgumentNameError
 from gyrowheel.fmu_build.compiler import compile_shared
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR
 from gyrowheel.scratch import temporary_directory
@@ -77,7 +77,8 @@ def library_source(identifier: str, lanes: int, defines: dict | None = None) -> 
     that is not a C identifier, lanes not an integer >= 1, or a value that is not an integer or
     a one-line string."""
     if not isinstance(identifier, str) or not _C_NAME.fullmatch(identifier):
-        raise ArgumentError(f"identifier must be a C identifier (the FMU's modelIdentifier), got {identifier!r}")
+        raise ArgumentError(f"identifier must be a C identifier (the FMU's modelIdentifier), got {identifier!r}",
+                            argument="identifier")
     _check_lanes(lanes)
     lines = [f"/* The ensemble library of model {identifier}: written by gyrowheel.taylor.ensemble. */"]
     for name, value in _checked_defines(defines).items():
@@ -91,7 +92,8 @@ def _check_lanes(lanes) -> None:
     """lanes becomes GW_ENSEMBLE_LANES, so it is checked here: 0 or less would fail in the
     compiler with the compiler's message, 2.5 would be truncated to 2 without a word."""
     if isinstance(lanes, bool) or not isinstance(lanes, (int, np.integer)) or lanes < 1:
-        raise ArgumentError(f"lanes must be an integer >= 1 (trajectories advanced together), got {lanes!r}")
+        raise ArgumentError(f"lanes must be an integer >= 1 (trajectories advanced together), got {lanes!r}",
+                            argument="lanes")
 
 
 def _checked_defines(defines) -> dict:
@@ -99,14 +101,15 @@ def _checked_defines(defines) -> dict:
     if defines is None:
         return {}
     if not isinstance(defines, dict):
-        raise ArgumentError(f"defines must be a {{name: value}} dict of C macros, got {defines!r}")
+        raise ArgumentError(f"defines must be a {{name: value}} dict of C macros, got {defines!r}", argument="defines")
     out = {}
     for name, value in defines.items():
         if not isinstance(name, str) or not _C_NAME.fullmatch(name):
-            raise ArgumentError(f"defines: {name!r} is not a C identifier")
+            raise ArgumentError(f"defines: {name!r} is not a C identifier", argument="defines")
         if isinstance(value, bool) or not isinstance(value, (int, np.integer, str)) or \
                 (isinstance(value, str) and ("\n" in value or "\\" in value)):
-            raise ArgumentError(f"defines: {name} must be an integer or a one-line string, got {value!r}")
+            raise ArgumentError(f"defines: {name} must be an integer or a one-line string, got {value!r}",
+                                argument="defines")
         out[name] = str(int(value)) if not isinstance(value, str) else value
     return out
 
@@ -157,9 +160,11 @@ class EnsembleResult:
     event_names: list[str] = field(default_factory=list)
 
     def output(self, name: str) -> np.ndarray:
-        """(N,) values of one output at t_final; UnknownNameError (a KeyError) lists the names."""
+        """(N,) values of one output at t_final; UnknownArgumentNameError (a KeyError and a
+        ValueError, argument 'name') lists the names."""
         if name not in self.output_names:
-            raise UnknownNameError(f"no output {name!r}; outputs: {', '.join(self.output_names)}")
+            raise UnknownArgumentNameError(f"no output {name!r}; outputs: {', '.join(self.output_names)}",
+                                           argument="name")
         return self.y_final[:, self.output_names.index(name)]
 
     @property
@@ -222,7 +227,7 @@ def _sources(fmu: Path, work: Path) -> tuple[Path, str, str, dict]:
             raise FmuError(f"{fmu}: modelDescription.xml is not readable XML ({exc})", argument="fmu") from None
         names = [n for n in zf.namelist() if n.startswith("sources/")]
         if not names:
-            raise EnsembleError(f"{fmu}: the FMU carries no sources/ (not built by gyrowheel?)")
+            raise EnsembleError(f"{fmu}: the FMU carries no sources/ (not built by gyrowheel?)", argument="fmu")
         zf.extractall(work, names)
     cs = md.find("CoSimulation")
     identifier = cs.get("modelIdentifier") if cs is not None else md.get("modelName")
@@ -300,7 +305,7 @@ class Ensemble:
             lib = (Path(cache) if cache else _cache_dir()) / digest / "libensemble.so"
             kernel = src / "gw_taylor_model.h"
             if not kernel.is_file() or "GW_TL_NVAR" not in kernel.read_text():
-                raise EnsembleError(f"{fmu}: the FMU has no Taylor kernel (solver taylor), {NO_KERNEL}")
+                raise EnsembleError(f"{fmu}: the FMU has no Taylor kernel (solver taylor), {NO_KERNEL}", argument="fmu")
             if not lib.exists():
                 shutil.copyfile(front, src / LIBRARY_SOURCE)
                 unity = src / f"{self.identifier}_ensemble.c"
@@ -323,7 +328,7 @@ class Ensemble:
         fn("sizes")(sizes)
         self.nx, self.ns, self.nu, self.np, self.ny, self.lanes, has_taylor, self.ne = list(sizes)
         if not has_taylor:
-            raise EnsembleError(f"{fmu}: the model has no Taylor kernel (solver taylor), {NO_KERNEL}")
+            raise EnsembleError(f"{fmu}: the model has no Taylor kernel (solver taylor), {NO_KERNEL}", argument="fmu")
         name = fn("name")
         name.restype = ctypes.c_char_p
 
@@ -383,7 +388,9 @@ class Ensemble:
 
     def _table(self, what: str, values, names: list[str], default: np.ndarray, n: int):
         """(n, len(names)) from an array of that shape or a {name: scalar or (n,)} dict (n from
-        _trajectories), the defaults' table for None."""
+        _trajectories), the defaults' table for None.  Errors name `argument`, the run's argument
+        these values came in ('parameters' or 'starts')."""
+        argument = "parameters" if what == "parameter" else "starts"
         if values is None:
             key = (what, n)  # the defaults' table of N rows, made once (the C side only reads it)
             table = self._default_tables.get(key)  # one look-up: another thread may clear the
@@ -399,16 +406,17 @@ class Ensemble:
             for k, v in values.items():
                 if not isinstance(k, str):
                     raise ArgumentTypeError(f"{what} names must be strings, got {arguments.shown(k)}",
-                                            argument="parameters" if what == "parameter" else "starts")
+                                            argument=argument)
                 given, deg = k, False
                 if k not in names and what == "start value":
                     k, deg = self._in_radians(k)
                     if deg and k in values:
-                        raise ArgumentError(f"start value {k!r} given twice: as {k!r} and as {given!r}")
+                        raise ArgumentError(f"start value {k!r} given twice: as {k!r} and as {given!r}",
+                                            argument=argument)
                 if k not in names:
-                    raise UnknownNameError(f"unknown {what} {k!r}; {what}s: {', '.join(names)}"
-                                           + (" (angles also as NAME_deg, in degrees)" if what == "start value"
-                                              else ""))
+                    raise UnknownArgumentNameError(f"unknown {what} {k!r}; {what}s: {', '.join(names)}"
+                                                   + (" (angles also as NAME_deg, in degrees)"
+                                                      if what == "start value" else ""), argument=argument)
                 try:  # (a string, None, a 2-D array: numpy's message named no field, or none came)
                     cols[k] = np.atleast_1d(numbers(v).astype(float))
                     if deg:
@@ -417,7 +425,7 @@ class Ensemble:
                         raise ValueError(v)  # named below
                 except ValueError:
                     raise ArgumentError(f"{what} {given!r} must be a number or a 1-D sequence of numbers "
-                                        f"(one per trajectory), got {v!r}") from None
+                                        f"(one per trajectory), got {v!r}", argument=argument) from None
             table = np.tile(default, (n, 1))  # (every column of one value or n: _trajectories)
             for k, c in cols.items():
                 table[:, names.index(k)] = c
@@ -426,10 +434,10 @@ class Ensemble:
             table = numbers(values).astype(float)
         except ValueError:
             raise ArgumentError(f"{what}s must be an (N, {len(names)}) array of numbers ({', '.join(names)}) "
-                                f"or a {{name: values}} dict, got {values!r}") from None
+                                f"or a {{name: values}} dict, got {values!r}", argument=argument) from None
         if table.ndim != 2 or table.shape[1] != len(names) or table.shape[0] != n:
             raise ArgumentError(f"{what}s must have shape (N, {len(names)}) ({', '.join(names)}), N = {n} "
-                                f"trajectories, got {table.shape}")
+                                f"trajectories, got {table.shape}", argument=argument)
         return table
 
     def _in_radians(self, name: str) -> tuple[str, bool]:
@@ -462,10 +470,12 @@ class Ensemble:
         communication step) cannot carry to its next point ends with STATUS_ERROR, its message
         advising a grid of shorter communication steps.
         Raises ArgumentError (a ValueError) naming a bad value or shape (rel_tol outside the
-        FMU's range [10 eps, 1] included, once for the job), or a grid whose outputs
-        would take more than half of this machine's memory; ArgumentTypeError (also a TypeError)
-        for a value that is no number (the string '10' too); UnknownNameError (a KeyError) for an
-        unknown name; EnsembleError for a refused job.
+        FMU's range [10 eps, 1] included, once for the job; a grid not 1-D), or a grid whose
+        outputs would take more than half of this machine's memory; ArgumentTypeError (also a
+        TypeError) for a value that is no number (the string '10' too);
+        UnknownArgumentNameError (a KeyError) for an unknown name; EnsembleError for a refused
+        job.  Each error's `argument` is the argument it is about ('t_end', 'grid',
+        'parameters', ...; None only where t_start and t_end are both at fault).
         """
         if rel_tol is None:
             rel_tol = self.rel_tol

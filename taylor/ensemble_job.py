@@ -30,7 +30,9 @@ def check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
     """The job's numbers checked before the C library sees them (it can only say "bad job"):
     an ArgumentError naming the field, an ArgumentTypeError for one that is no number ('10', a
     string, is refused as every gyrowheel function refuses it: gyrowheel.arguments.number).
-    Returns the grid as a contiguous float array (empty: none).
+    Returns the grid as a contiguous float array (empty: none); a grid not 1-D is refused
+    (ArgumentError naming its shape), not flattened.  Each error's `argument` names the field
+    (None only for t_start and t_end both not finite).
     rel_tol and abs_tol outside the FMU's ranges (fmu_build.scene.TOLERANCE_RANGES) are refused
     here, once, rather than by every trajectory's instance.  (math.isfinite on the scalars:
     numpy's took 2 us of a small run.)"""
@@ -38,36 +40,46 @@ def check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
         return arguments.number(v, name, finite=False)
     t0, t1, rtol = number("t_start", t_start), number("t_end", t_end), number("rel_tol", rel_tol)
     if not math.isfinite(t0) or not math.isfinite(t1):
-        raise ArgumentError(f"t_start and t_end must be finite, got {t0!r} and {t1!r}")
+        culprit = None if not (math.isfinite(t0) or math.isfinite(t1)) else "t_end" if math.isfinite(t0) else "t_start"
+        raise ArgumentError(f"t_start and t_end must be finite, got {t0!r} and {t1!r}", argument=culprit)
     if not t1 > t0:
-        raise ArgumentError(f"t_end = {t1!r} must be greater than t_start = {t0!r}")
+        raise ArgumentError(f"t_end = {t1!r} must be greater than t_start = {t0!r}", argument="t_end")
     if not (math.isfinite(rtol) and rtol > 0):
-        raise ArgumentError(f"rel_tol must be a finite number > 0, got {rtol!r}")
+        raise ArgumentError(f"rel_tol must be a finite number > 0, got {rtol!r}", argument="rel_tol")
     lo, hi = TOLERANCE_RANGES["rel_tol"]
     if not lo <= rtol <= hi:  # the instances' own range: one error, not one per trajectory
-        raise ArgumentError(f"rel_tol must be within [{lo!r}, {hi:g}] (10 eps to 1), got {rtol!r}")
+        raise ArgumentError(f"rel_tol must be within [{lo!r}, {hi:g}] (10 eps to 1), got {rtol!r}",
+                            argument="rel_tol")
     if abs_tol is not None:
         atol = number("abs_tol", abs_tol)
         if not (math.isfinite(atol) and atol >= 0):
-            raise ArgumentError(f"abs_tol must be a finite number >= 0, got {atol!r}")
+            raise ArgumentError(f"abs_tol must be a finite number >= 0, got {atol!r}", argument="abs_tol")
         lo, hi = TOLERANCE_RANGES["abs_tol"]
         if atol != 0 and not lo <= atol <= hi:  # the instances' own range, once for the job
-            raise ArgumentError(f"abs_tol must be 0 (rel_tol / 100) or within [{lo:g}, {hi:g}], got {atol!r}")
+            raise ArgumentError(f"abs_tol must be 0 (rel_tol / 100) or within [{lo:g}, {hi:g}], got {atol!r}",
+                                argument="abs_tol")
     if max_step is not None:
         hmax = number("max_step", max_step)
         if not (math.isfinite(hmax) and hmax > 0):
-            raise ArgumentError(f"max_step must be a finite number > 0, got {hmax!r}")
+            raise ArgumentError(f"max_step must be a finite number > 0, got {hmax!r}", argument="max_step")
     if grid is None:
         return NO_GRID
     try:
-        g = np.ascontiguousarray(np.asarray(numbers(grid), dtype=float).ravel())
+        a = numbers(grid)
     except ValueError:
-        raise ArgumentError(f"grid must be a sequence of communication points (numbers, s), got {grid!r}") from None
+        raise ArgumentError(f"grid must be a sequence of communication points (numbers, s), got {grid!r}",
+                            argument="grid") from None
+    if a.ndim != 1:  # ([[0.5], [1.0]] was flattened and run as [0.5, 1.0])
+        raise ArgumentError(f"grid must be 1-D, a sequence of communication points (numbers, s), got shape "
+                            f"{a.shape}", argument="grid")
+    g = np.ascontiguousarray(a, dtype=float)
     if g.size:
         if not np.all(np.isfinite(g)):
-            raise ArgumentError("grid: communication points must be finite")
+            raise ArgumentError("grid: communication points must be finite", argument="grid")
         if not (g[0] > t0 and np.all(np.diff(g) > 0)):
-            raise ArgumentError(f"grid: communication points must increase strictly after t_start = {t0!r}")
+            raise ArgumentError(f"grid: communication points must increase strictly after t_start = {t0!r}",
+                                argument="grid")
         if g[-1] != t1:
-            raise ArgumentError(f"grid: the last communication point {float(g[-1])!r} must equal t_end = {t1!r}")
+            raise ArgumentError(f"grid: the last communication point {float(g[-1])!r} must equal t_end = {t1!r}",
+                                argument="grid")
     return g

@@ -68,11 +68,12 @@ GW_INTERNAL void gw_budget_message(gw_instance *I, const char *what, double rema
         return;
     GW_LOG_ERR(I, "at t=%.17g %s: the remaining %g s of this communication step (from t=%.17g) "
                "would need about %.3g internal steps of h=%g, more than the %.0f left of "
-               "max_internal_steps = %.0f (%llu steps taken in this call): the dynamics are far "
-               "too fast for the tolerance (huge rates?)%s; raise max_internal_steps or shorten "
-               "the communication step", I->t, what, remaining, I->t_call, remaining / h, h,
+               "max_internal_steps = %.0f (%llu steps taken in this call): shorten the communication "
+               "step or raise max_internal_steps; if steps of %g s are far below the time scale of "
+               "the motion, the dynamics are too fast for the tolerance (huge rates?)%s",
+               I->t, what, remaining, I->t_call, remaining / h, h,
                I->max_internal_steps - (double)I->n_call_steps, I->max_internal_steps,
-               I->n_call_steps, hint);
+               I->n_call_steps, h, hint);
 }
 
 /* check 1; 0 or -1 logged */
@@ -155,10 +156,11 @@ static int gw_budget_run(gw_instance *I, double h) {
         GW_LOG_ERR(I, "at t=%.17g the run's budget refuses the rest: the remaining %g s to the stop "
                    "time %.17g would need about %.3g internal steps of h=%g, more than the %.0f left "
                    "of the run's %.0f (%.0f x max_internal_steps = %.0f; %.0f steps taken since "
-                   "initialisation): the dynamics are far too fast for the tolerance%s; raise "
-                   "max_internal_steps or loosen the tolerance", I->t, remaining, I->t_stop,
+                   "initialisation): raise max_internal_steps or loosen the tolerance; if steps of "
+                   "%g s are far below the time scale of the motion, the dynamics are too fast for "
+                   "the tolerance%s", I->t, remaining, I->t_stop,
                    remaining / h, h, left > 0.0 ? left : 0.0, GW_RUN_BUDGETS * I->max_internal_steps,
-                   GW_RUN_BUDGETS, I->max_internal_steps, taken, hint);
+                   GW_RUN_BUDGETS, I->max_internal_steps, taken, h, hint);
         return -1;
     }
     I->run_n_fast = 0;

@@ -1,9 +1,11 @@
 /*
  * gw_solver_fixed.c -- explicit Euler and classical Runge-Kutta 4 with a fixed step: a
  * communication step h is cut into n = ceil(h / max_step) equal substeps on a deterministic
- * grid (t_i = t0 + i h / n, the last one exactly t_end).  Both refuse to go on when the step
- * is far beyond their stability limit (the increments grow or the RK4 stages diverge), since
- * such garbage can cross event indicators.  Dense output: the cubic Hermite of gw_solver.c.
+ * grid (t_i = t0 + i h / n, the last one exactly t_end).  Both refuse a step beyond their
+ * stability limit on the real axis (an estimate of h |lambda| from the step's own derivatives:
+ * Euler's secant, RK4's stages), since such garbage can cross event indicators: a "fall" located
+ * at beta = -31 rad after one step of a wheel spinning at 1e5 rad/s.  Dense output: the cubic
+ * Hermite of gw_solver.c.
  */
 #ifndef GW_UNITY_BUILD
 typedef int gw_unity_build_part; /* compiled on its own this file is empty: see gw_fmu.c */
@@ -16,16 +18,6 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
 
 /* ---- single steps from (I->t, I->x) to t1 = I->t + h: result in I->xnew ---- */
 
-static int gw_euler_step(gw_instance *I, double h) {
-    int i, nx = I->m->nx;
-    const double *x = I->x, *k1 = I->k[0];
-    for (i = 0; i < nx; i++) I->dx[i] = h * k1[i];
-    (void)x;
-    gw_sum_update(I);
-    I->k7_valid = 0;
-    return 0;
-}
-
 /* max_i |a_i - b_i| / nominal_i */
 static double gw_scaled_diff(const gw_instance *I, const double *a, const double *b) {
     int i;
@@ -37,25 +29,61 @@ static double gw_scaled_diff(const gw_instance *I, const double *a, const double
     return m;
 }
 
-/* Explicit fixed steps far beyond their stability limit produce garbage that can cross event
- * indicators; refuse them. For f = lambda y the RK4 stages give |k3 - k2| / |k2 - k1| =
- * h |lambda| / 2, which is O(h) for a resolved motion: above GW_RK4_UNSTABLE (h |lambda| > 20,
- * RK4 is stable up to 2.8) the step means nothing. */
-#define GW_RK4_UNSTABLE 10.0
-
-static int gw_rk4_unstable(gw_instance *I, double h) {
-    const double d21 = gw_scaled_diff(I, I->k[1], I->k[0]), d32 = gw_scaled_diff(I, I->k[2], I->k[1]);
+/* max_i |k1_i| / nominal_i: the scale below which a difference of derivatives is rounding */
+static double gw_scaled_rate(const gw_instance *I) {
     double k1 = 0.0;
     int i;
     for (i = 0; i < I->m->nx; i++) {
         double a = fabs(I->k[0][i]) / I->nominal[i];
         if (a > k1) k1 = a;
     }
-    if (!(d32 > GW_RK4_UNSTABLE * d21) || !(d32 > 1e-6 * k1)) return 0;
-    GW_LOG_ERR(I, "rk4 is unstable at t=%.17g with max_step=%g: h |lambda| ~ %.3g (stable up to 2.8); "
+    return k1;
+}
+
+/* The largest h |lambda| each method takes: Euler is stable for h |lambda| <= 2 on the negative
+ * real axis, RK4 for h |lambda| <= 2.79; a resolved motion has h |lambda| << 1.  An estimate
+ * above the limit means a step whose result grows without meaning (a factor 1.5 per Euler step
+ * at h lambda = -2.5).  The estimates are exact for a linear f = lambda y; the bounds sit 10 %
+ * and 8 % above the limits, so that a step at the limit itself, stable but inaccurate, passes
+ * (tests/c/test_stiff.c: 1.9 and 2.7 pass, 2.5 and 3.2 are refused). */
+#define GW_EULER_UNSTABLE 2.2
+#define GW_RK4_UNSTABLE 3.0
+
+static int gw_fixed_unstable(gw_instance *I, double h, double h_lambda, const char *limit) {
+    GW_LOG_ERR(I, "%s is unstable at t=%.17g with max_step=%g: h |lambda| ~ %.3g (stable up to %s); "
                "the dynamics are faster than the step: reduce max_step or use an adaptive solver",
-               I->t, h, d21 > 0.0 ? 2.0 * d32 / d21 : HUGE_VAL);
+               gw_solver_name(I->solver_in_use), I->t, h, h_lambda, limit);
     return 1;
+}
+
+/* Euler's h |lambda| from the secant along the step, h |f(t1, x1) - f(t0, x0)| / |x1 - x0|.
+ * f(t1, x1) is the next step's k1: kept in k[6] as the step's end derivative (k7_valid, as
+ * dopri5's FSAL stage), so the check costs no evaluation.  An end derivative that cannot be
+ * evaluated or is not finite is left to the next step, which names it. */
+static int gw_euler_unstable(gw_instance *I, double h, double t1) {
+    double df, dx;
+    if (gw_rhs(I, t1, I->xnew, I->k[6]) != 0 || gw_first_nonfinite(I->k[6], I->m->nx) >= 0) return 0;
+    I->k7_valid = 1;
+    df = gw_scaled_diff(I, I->k[6], I->k[0]);
+    dx = gw_scaled_diff(I, I->xnew, I->x);
+    if (!(h * df > GW_EULER_UNSTABLE * dx) || !(df > 1e-6 * gw_scaled_rate(I))) return 0;
+    return gw_fixed_unstable(I, h, h * df / dx, "2");
+}
+
+static int gw_euler_step(gw_instance *I, double h, double t1) {
+    int i, nx = I->m->nx;
+    const double *k1 = I->k[0];
+    for (i = 0; i < nx; i++) I->dx[i] = h * k1[i];
+    gw_sum_update(I);
+    I->k7_valid = 0;
+    return gw_euler_unstable(I, h, t1) ? -1 : 0;
+}
+
+/* RK4's h |lambda| from its stages: for f = lambda y, |k3 - k2| / |k2 - k1| = h |lambda| / 2 */
+static int gw_rk4_unstable(gw_instance *I, double h) {
+    const double d21 = gw_scaled_diff(I, I->k[1], I->k[0]), d32 = gw_scaled_diff(I, I->k[2], I->k[1]);
+    if (!(2.0 * d32 > GW_RK4_UNSTABLE * d21) || !(d32 > 1e-6 * gw_scaled_rate(I))) return 0;
+    return gw_fixed_unstable(I, h, d21 > 0.0 ? 2.0 * d32 / d21 : HUGE_VAL, "2.8");
 }
 
 static int gw_rk4_step(gw_instance *I, double h, double t1) {
@@ -123,9 +151,10 @@ GW_INTERNAL gw_int_result gw_integrate_fixed(gw_instance *I, double t_end) {
             I->n_call_steps++;
             if (gw_ensure_f0(I)) return GW_INT_ERROR;
             if (I->solver_in_use == GW_SOLVER_EULER) {
-                /* Euler's instability: increments that more than double, step after step */
+                /* Euler's instability: the step's h |lambda|, and increments that more than
+                 * double, step after step */
                 double d;
-                gw_euler_step(I, h);
+                if (gw_euler_step(I, h, ti)) return GW_INT_ERROR;
                 d = gw_scaled_diff(I, I->xnew, I->x);
                 growing = (d > 2.0 * d_prev && d_prev > 1e-12) ? growing + 1 : 0;
                 d_prev = d;

@@ -9,7 +9,7 @@ BUDGET_ADVICE = (
      "raise max_step, or shorten the communication steps: give run() a grid (the budget of "
      "max_internal_steps is per communication step; without a grid the run from t_start to t_end "
      "is one step)"),
-    ("raise max_internal_steps or shorten the communication step",
+    ("shorten the communication step or raise max_internal_steps",
      "shorten the communication steps: give run() a grid (the budget of max_internal_steps is per "
      "communication step; without a grid the run from t_start to t_end is one step), or a shorter "
      "t_end"),

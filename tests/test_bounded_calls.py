@@ -97,6 +97,20 @@ def test_huge_step_with_a_huge_max_step_stops_when_the_budget_is_spent(slave):
     assert_state_kept(slave, before, 0.0)
 
 
+def test_a_long_communication_step_of_a_benign_run_is_told_to_shorten_it(slave):
+    """The paper's wheel at its defaults in one call of 1e6 s (as `gyrowheel simulate --stop-time 1e6
+    --output-interval 1e6` makes it): the steps are ordinary (tens of ms), the call is simply longer
+    than the budget covers.  The message says so first, and leaves the diagnosis of a too fast or
+    stiff motion to a step far below the motion's time scale, which it quotes."""
+    slave.init(max_step=1e6)
+    _, log = refused(slave, 0.0, 1e6)
+    h = float(re.search(r"internal steps of h=(\S+), more than", log)[1])
+    assert 1e-3 < h < 1.0, log[-600:]
+    assert (f"steps taken in this call): shorten the communication step or raise max_internal_steps; if steps of "
+            f"{h:g} s are far below the time scale of the motion, the dynamics are too fast") in log, log[-600:]
+    assert "far too fast" not in log
+
+
 def test_rosenbrock_long_step_is_bounded(slave):
     """rosenbrock fmi2DoStep(0, 1e5), more than 30 s without a budget: refused up front at max_step
     0.05 s (2e6 steps), and with max_step relaxed stopped by a budget of 300 steps in milliseconds."""

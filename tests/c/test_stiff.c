@@ -248,6 +248,36 @@ static void test_underflow(int solver) {
     fmi2FreeInstance(c);
 }
 
+/* Euler and RK4 at their stability limits on the real axis (|1 + h lambda| <= 1: h |lambda| <= 2;
+ * RK4's polynomial: <= 2.785), lambda = -k_fast = -100 the fastest mode: a step inside runs to the
+ * end; a step beyond is refused at once with fmi2Error and the reason, its h |lambda| named */
+static void test_fixed_step_stability(int solver, double h_lambda, int stable) {
+    params p = DEFAULTS;
+    fmi2Component c;
+    p.k_fast = 100.0;
+    c = start("limit", solver, 1e-6, 1e-8, h_lambda / p.k_fast, &p);
+    log_clear();
+    if (stable) {
+        double y[2];
+        CHECK_STATUS(fmi2DoStep(c, 0.0, 1.0, fmi2True), fmi2OK);
+        exact(&p, 1.0, y);
+        CHECK(isfinite(getr(c, VR_Y1)) && fabs(getr(c, VR_Y1) - y[0]) < 0.05);
+        CHECK_NO_LOG("unstable");
+    } else {
+        char said[80];
+        CHECK_STATUS(fmi2DoStep(c, 0.0, 1.0, fmi2True), fmi2Error);
+        snprintf(said, sizeof said, "%s is unstable at t=0 ", solver == EULER ? "euler" : "rk4");
+        CHECK_LOG(said);
+        /* the estimate along the step, h (k_slow^2 + k_fast^2) / (k_slow + k_fast) for Euler:
+         * the step is max_step or a little shorter (the grid), so the units digit is checked */
+        snprintf(said, sizeof said, "h |lambda| ~ %d.", (int)h_lambda);
+        CHECK_LOG(said);
+        CHECK_LOG(solver == EULER ? "(stable up to 2)" : "(stable up to 2.8)");
+        CHECK_NEAR(getr(c, VR_Y1), 2.0, 0.0); /* back at the start */
+    }
+    fmi2FreeInstance(c);
+}
+
 /* the instance (with the Rosenbrock work arrays) survives every allocation failure */
 static void test_out_of_memory(void) {
     fmi2Component c;
@@ -278,6 +308,10 @@ int main(void) {
     test_max_step_and_carry();
     test_underflow(ROSENBROCK);
     test_underflow(DOP853);
+    test_fixed_step_stability(EULER, 1.9, 1);
+    test_fixed_step_stability(EULER, 2.5, 0);
+    test_fixed_step_stability(RK4, 2.7, 1);
+    test_fixed_step_stability(RK4, 3.2, 0);
     test_out_of_memory();
     return h_finish("test_stiff");
 }

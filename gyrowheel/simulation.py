@@ -107,19 +107,35 @@ def with_values(reason: str, md, given: dict[str, object]) -> str:
 EVENT_LOGGED = re.compile(r"(?:warning: )?event (\w+) at t=([-+0-9.eE]+)")
 # a warning event whose condition holds at initialisation: flagged at the start time
 EVENT_AT_START = re.compile(r"warning: event (\w+) holds already at the start t=([-+0-9.eE]+)")
+# FMI 3.0's layer puts the name of the call before every message of the simulation core
+# (c_src/gw_fmi3_common.c, gw_fmi3_logger: `fmi3DoStep: event fall at t=T: ...`); FMI 2.0's
+# layer passes them on as they are (`event fall at t=T: ...`)
+FMI3_CALL = re.compile(r"fmi3\w+: ")
+
+
+def core_message(text: str) -> str:
+    """An event's logged message (EVENT_LOGGED, EVENT_AT_START) without the name of the FMI 3.0
+    call that logged it, as FMI 2.0 logs it: `fmi3DoStep: event fall at t=T: ...` -> `event
+    fall at t=T: ...`; any other message unchanged."""
+    call = FMI3_CALL.match(text)
+    if call and (EVENT_LOGGED.match(text, call.end()) or EVENT_AT_START.match(text, call.end())):
+        return text[call.end():]
+    return text
 
 
 @dataclass
 class Messages:
     """Collects the FMU's log messages: the logger callback of FMI 2.0 (component,
     instanceName, status, category, message) and FMI 3.0 (instanceEnvironment, status, category,
-    message); both end with status, category, message, and number the statuses alike."""
+    message); both end with status, category, message, and number the statuses alike. An
+    event's message is kept as FMI 2.0 words it (core_message), so that an FMU of either
+    version reports the same events and warnings."""
 
     lines: list[tuple[int, str]] = field(default_factory=list)
 
     def __call__(self, *arguments):
         status, _, message = arguments[-3:]
-        text = message.decode(errors="replace") if isinstance(message, bytes) else str(message)
+        text = core_message(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
         if int(status) == 0 and not EVENT_LOGGED.match(text):  # a step's log (logSolver): not kept
             return
         self.lines.append((int(status), text))

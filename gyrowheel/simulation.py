@@ -19,6 +19,7 @@ from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMes
 
 from gyrowheel.arguments import missing_item_hint
 from gyrowheel.errors import FmuError, GyrowheelError
+from gyrowheel.fmi_types import out_of_range, whole_number
 from gyrowheel.scratch import temporary_directory
 
 # fmpy 0.3.32 forwards every FMU message through ONE process-global logger (the last one given
@@ -180,7 +181,13 @@ def fired_events(events: list[tuple[str, float]]) -> list[str]:
 
 
 def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[str, object]:
-    """NAME=VALUE strings -> typed start values; unknown names and bad types raise."""
+    """NAME=VALUE strings -> typed start values; unknown names and bad types raise.
+
+    An Integer takes a whole number in any notation ('12', '1e3'; 1.5 is refused, not
+    truncated); one outside its type's 32 bits is refused naming the variable's range (`value
+    '1e10' for 'max_internal_steps' is out of range [1, 2147483647] (Integer)`), one inside
+    them left to the FMU's own checks. Raises SimulationError (UnknownVariableError for an
+    unknown name) naming the variable."""
     md = read_model_description(str(fmu))
     by_name = {v.name: v for v in md.modelVariables}
     enums = {t.name: {i.name: int(i.value) for i in t.items} for t in md.typeDefinitions}
@@ -204,9 +211,10 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
                 if degrees:
                     out[name] = math.radians(out[name])
             elif v.type in INTEGER_TYPES:
-                out[name] = int(text)
-                if not -2**31 <= out[name] < 2**31:  # an fmi2Integer, fmi3Int32: 32 bits; fmpy would wrap it
-                    raise ValueError
+                out[name] = whole_number(text)
+                outside = out_of_range(v, out[name])  # an fmi2Integer, fmi3Int32: 32 bits; fmpy would wrap it
+                if outside:
+                    raise SimulationError(f"value {text!r} for {given!r} is {outside}")
             elif v.type == "Enumeration":
                 items = enums.get(v.declaredType.name if v.declaredType else "", {})
                 out[name] = items[text] if text in items else int(text)

@@ -344,3 +344,25 @@ def test_an_unknown_start_value_name_is_a_key_error_and_an_argument_error(moon):
     assert isinstance(error, ValueError) and isinstance(error, gyrowheel.ArgumentError)
     assert error.argument == "start_values"
     assert str(error).startswith("start_values: unknown variable 'nosuch'; settable: ")  # not quoted as KeyError's
+
+
+def test_a_name_looked_up_that_is_no_string_is_an_argument_type_error(moon, fmi3_earth_fmu):
+    """info(fmu).variable(3) and EnsembleResult.output(3): an ArgumentTypeError (a TypeError and
+    an ArgumentError) naming the argument `name`, not an UnknownNameError saying the FMU has no
+    variable 3; a string it does not have stays an UnknownNameError listing the names."""
+    import numpy as np
+
+    from gyrowheel.taylor.ensemble import EnsembleResult
+    result = EnsembleResult(status=np.zeros(1, int), t_final=np.zeros(1), x_final=np.zeros((1, 1)),
+                            y_final=np.zeros((1, 1)), steps=np.zeros(1, int), output_names=["energy"],
+                            state_names=["x"])
+    lookups = [(gyrowheel.info(fmu).variable, "a variable's name") for fmu in (moon, fmi3_earth_fmu)]
+    for lookup, what in [*lookups, (result.output, "an output's name")]:
+        for name in (3, None, b"g"):
+            with pytest.raises(ArgumentTypeError) as exc:
+                lookup(name)
+            _names(exc, "name", f"name must be {what} (str), got {type(name).__name__} {name!r}")
+            assert not isinstance(exc.value, KeyError)
+        with pytest.raises(gyrowheel.UnknownNameError, match="; (variables|outputs): "):
+            lookup("nosuch")
+    assert lookups[1][0]("g").start == 9.81 and result.output("energy").tolist() == [0.0]

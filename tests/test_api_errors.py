@@ -144,6 +144,22 @@ def test_an_fmu_that_cannot_run_here_says_why(foreign, capsys, kind, message):
         _names(exc, "fmu", message)
 
 
+def test_the_docstrings_say_which_fmi_versions_each_function_takes(fmi3_earth_fmu):
+    """simulate and info take the FMI versions open_fmu reads (FMI_VERSIONS), FMI 2.0 and 3.0,
+    and their docstrings say so (FMI 1.0 refused: above; an FMI 3.0 FMU run and described:
+    below and tests/test_fmi3_events.py); sweep's says it refuses FMI 3.0
+    (tests/test_fmi3_build.py); FmuError's says what it is for."""
+    from gyrowheel.description import FMI_VERSIONS
+    assert FMI_VERSIONS == ("2.0", "3.0")
+    for function in (gyrowheel.simulate, gyrowheel.info):
+        doc = " ".join(function.__doc__.split())
+        assert "an FMI 2.0 or 3.0 FMU" in doc and "another FMI version than 2.0 and 3.0" in doc, function
+        assert "not an FMI 2.0 FMU" not in doc
+    assert "is an FMI 3.0 FMU (a sweep runs FMI 2.0 FMUs)" in " ".join(gyrowheel.sweep.__doc__.split())
+    assert "another FMI version than 2.0 and 3.0" in " ".join(gyrowheel.FmuError.__doc__.split())
+    assert gyrowheel.info(fmi3_earth_fmu).fmi_version == "3.0"
+
+
 def test_info_of_an_fmu_without_a_description(foreign):
     assert "description  none" in str(gyrowheel.info(foreign["undescribed"])).splitlines()[1]
 

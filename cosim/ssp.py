@@ -20,8 +20,9 @@ from fmpy import read_model_description
 
 from gyrowheel.cosim.system import (FMU_TYPE, OMS_ANNOTATION, OMS_NS, SSC_NS, SSD_NS, SSV_NS, Component, Connection,
                                     SystemDescription, SystemFileError, describe, fmu_variables)
-from gyrowheel.cosim.units import integer_range, kind_of
+from gyrowheel.cosim.units import kind_of
 from gyrowheel.extras import require
+from gyrowheel.fmi_types import out_of_range, whole_number
 from gyrowheel.scratch import temporary_directory
 
 # -- SSP ---------------------------------------------------------------------------------------
@@ -133,7 +134,10 @@ def check_bindings(component: Component, where: str = "") -> dict:
 
 
 def coerce_value(v, value, where: str):
-    """value (a number, or the text of an SSV value attribute) as the type of FMU variable v."""
+    """value (a number, or the text of an SSV value attribute) as the type of FMU variable v.
+    Raises SystemFileError naming `where`: a value not of v's type (`'1.5' is not a valid
+    Integer`), a whole number outside its type's range (`3000000000.0 is out of range [1,
+    2147483647] (Integer)`: the variable's declared range, gyrowheel.fmi_types)."""
     text = value.strip() if isinstance(value, str) else value
     try:
         if kind_of(v.type) == "Real":
@@ -150,13 +154,13 @@ def coerce_value(v, value, where: str):
             return bool(text)
         if v.type == "String":
             return str(value)
-        number = float(text)
-        low, high = integer_range(v.type)
-        if isinstance(text, bool) or not number.is_integer() or not low <= number < high:
-            raise ValueError  # ctypes would wrap a value outside the type's range
-        return int(number)
+        number = whole_number(text)
     except (TypeError, ValueError):
         raise SystemFileError(f"{where}: {value!r} is not a valid {v.type}") from None
+    outside = out_of_range(v, number)  # ctypes would wrap it
+    if outside:
+        raise SystemFileError(f"{where}: {value!r} is {outside}")
+    return number
 
 
 def _ssv_element(v, value) -> tuple[str, str]:

@@ -19,10 +19,10 @@ from fmpy import extract
 from fmpy.fmi1 import FMICallException
 
 from gyrowheel.cosim.fmi_log import fmi3_logger, forget_messages, logging_callbacks
+from gyrowheel.fmi_types import FMI3_INTEGERS
 from gyrowheel.scratch import new_directory
 
 FMI2_DISCARD = FMI3_DISCARD = 2  # fmi2Discard, fmi3Discard
-FMI3_INTEGERS = ("Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64")
 
 
 def kind_of(fmi_type: str) -> str:
@@ -40,16 +40,6 @@ def scalar_outputs(md) -> list[str]:
     """The names of md's scalar outputs, in modelDescription order: an FMI 3.0 array variable
     (one with <Dimension>s) is left out."""
     return [v.name for v in md.modelVariables if v.causality == "output" and not v.dimensions]
-
-
-def integer_range(fmi_type: str) -> tuple[int, int]:
-    """[low, high) of a whole-number type, outside which ctypes would wrap the value: FMI 3.0's
-    by their bits; fmi2Integer and Enumerations 32 bits (an FMI 3.0 enumeration is an Int64, but
-    the range is kept to what both versions hold)."""
-    if fmi_type in FMI3_INTEGERS:
-        bits = int(fmi_type.removeprefix("U").removeprefix("Int"))
-        return (0, 2**bits) if fmi_type.startswith("U") else (-2**(bits - 1), 2**(bits - 1))
-    return (-2**31, 2**31)
 
 
 @dataclass

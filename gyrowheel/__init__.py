@@ -1,4 +1,4 @@
-"""gyrowheel: a rolling wheel derived in CasADi and shipped as FMI 2.0 FMUs (docs/architecture.md).
+"""gyrowheel: a rolling wheel derived in CasADi and shipped as FMI 2.0 or 3.0 FMUs (docs/architecture.md).
 
 The command line's verbs as functions (gyrowheel/api.py), each taking a path or the parsed
 object alike and returning data:

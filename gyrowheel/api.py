@@ -234,26 +234,32 @@ def build(scene, output=None, *, build_dir=None, taylor: bool | None = None, pla
 
 def simulate(fmu, *, stop_time=None, output_interval=None, start_values=None, output=None, plot=None,
              events=None):
-    """Simulate an FMU in Co-Simulation with fmpy (FMI 2.0.4, section 4), from its start to stop_time.
+    """Simulate an FMI 2.0 or 3.0 FMU in Co-Simulation with fmpy (FMI 2.0.4, section 4; FMI
+    3.0.2, section 4), from its start to stop_time.
 
-    fmu: the .fmu (a path, or the BuildResult of gyrowheel.build). stop_time [s] (default: the
-    FMU's DefaultExperiment); output_interval [s]: the communication step, one row each
-    (default: the DefaultExperiment's step size). start_values: {name: value} (parameters,
+    fmu: the .fmu, FMI 2.0 or 3.0 (a path, or the BuildResult of gyrowheel.build). stop_time
+    [s] (default: the FMU's DefaultExperiment); output_interval [s]: the communication step, one
+    row each (default: the DefaultExperiment's step size). start_values: {name: value} (parameters,
     solver settings, initial states: 'gamma_dot', 'solver': 'rk4', 'beta': 1.4 rad) or
     'NAME=VALUE' strings; each checked against the FMU by name and type before the run
     (1.5 for an Integer is refused, not truncated). output: also write the result as CSV
     (Booleans as 0/1); plot: also write a PNG of the trajectory (needs gyrowheel[plot]); events:
     a list to which each event the FMU reports is appended as (event name, t [s]) in firing order
-    (a jump's update or a termination, located in time: `('contact_flight', 0.1427843)`).
+    (a jump's update or a termination, located in time: `('contact_flight', 0.1427843)`); the
+    same events, names and times, from an FMU's FMI 2.0 and 3.0 builds.
     Returns fmpy's structured array, shape (n,): one row per communication point, fields 'time'
     [s] and every output by name (units: gyrowheel.info). A terminating event (the wheel falling
     flat) ends the run early; its last row is at the event and the Boolean output 'fallen' is
     True there.
-    Raises FmuError (no such file, not an FMI 2.0 FMU that can run here: which and why),
-    ArgumentError (a bad time, start value or output path, named; a start value the FMU refuses
-    at initialisation, out of its range or in a combination the model cannot take: `start_values:
-    the FMU refused the start values: restitution must be <= 1`; a run whose rows would take
-    more than half of this machine's memory, naming stop_time and output_interval),
+    Raises FmuError (the fmu cannot run here: no such file, not an FMU, another FMI version
+    than 2.0 and 3.0, no Co-Simulation, no binary for this platform or one that does not load:
+    which and why), ArgumentError (a bad time, start value or output path, named: an Integer
+    outside its 32 bits with the variable's range, `start_values: value '1e10' for
+    'max_internal_steps' is out of range [1, 2147483647] (Integer)`; a start value the FMU
+    refuses at initialisation, out of its range or in a combination the model cannot take:
+    `start_values: the FMU refused the start values: restitution must be <= 1`; a run whose
+    rows would take more than half of this machine's memory, naming stop_time and
+    output_interval),
     ArgumentTypeError (an argument of the wrong type), SimulationError (the FMU refused the run:
     its logged reason), MissingExtraError (plot without matplotlib).
     """
@@ -320,7 +326,8 @@ def _check_rows(md, stop_time: float | None, output_interval: float | None) -> N
 
 
 def info(fmu):
-    """Describe an FMU, from its modelDescription.xml (FMI 2.0.4, section 2.2) and its archive.
+    """Describe an FMI 2.0 or 3.0 FMU, from its modelDescription.xml (FMI 2.0.4, section 2.2;
+    FMI 3.0.2, section 2.4) and its archive.
 
     fmu: the .fmu (a path, or the BuildResult of gyrowheel.build).
     Returns gyrowheel.FmuInfo: model name, FMI version, generation tool and date, guid,
@@ -328,8 +335,11 @@ def info(fmu):
     (typed), unit and description, the effects, the solver choices, the platforms in
     binaries/, whether it carries sources and the Taylor kernel. str(info) is the text
     `gyrowheel info` prints, info.as_dict() the JSON of `gyrowheel info --json`.
-    Raises FmuError (no such file, not an FMI 2.0 FMU gyrowheel can read: which and why),
-    ArgumentTypeError (fmu of the wrong type).
+    fmu may be an FMI 2.0 or 3.0 FMU (fmi_version says which; an FMI 3.0 FMU's variables keep
+    their FMI 3.0 types, Float64, Int32, ..., and array variables their dimensions).
+    Raises FmuError (no such file, not an FMU, another FMI version than 2.0 and 3.0, a
+    modelDescription.xml that breaks its version's schema: which and why), ArgumentTypeError
+    (fmu of the wrong type).
     """
     from gyrowheel.description import read_info
     return read_info(fmu)
@@ -376,7 +386,8 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     fmi2ExitInitializationMode: R (radius) must be > 0`, a run whose rows would take more than
     half of this machine's memory) before anything runs (a value of one point the unit refuses
     is that point's row, status 'error'); ArgumentTypeError naming an argument of the wrong
-    type; FmuError for an FMU source that is not an FMI 2.0 FMU that can run here;
+    type; FmuError for an FMU source that cannot run here (as gyrowheel.simulate's fmu) or
+    is an FMI 3.0 FMU (a sweep runs FMI 2.0 FMUs);
     SweepInterrupted (a KeyboardInterrupt) when Ctrl-C stops it, with the table of the points
     done; SceneError for a scene that cannot be read or built; MissingExtraError without
     gyrowheel[sweep]; OSError / TimeoutError for a scheduler that cannot be reached.

@@ -82,6 +82,15 @@ def flag(value, name: str, *, argument: str | None = None) -> bool:
     return value
 
 
+def lookup_name(value, name: str, what: str) -> str:
+    """A name to look up (a variable's, an output's): a str; ArgumentTypeError otherwise, before
+    any lookup, so that a wrong type is not reported as a name that is not there (`name must be
+    a variable's name (str), got int 3`). what: whose name, in words."""
+    if isinstance(value, str):
+        return value
+    raise ArgumentTypeError(f"{name} must be {what} (str), got {shown(value)}", argument=_argument(name, None))
+
+
 def path(value, name: str, what: str = "a file path", *, argument: str | None = None) -> Path:
     """A str or os.PathLike (a BuildResult is one) as a Path; ArgumentTypeError otherwise
     (`output must be a file path, got int`)."""

@@ -17,7 +17,7 @@ import zipfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from gyrowheel.arguments import existing_file
+from gyrowheel.arguments import existing_file, lookup_name
 from gyrowheel.errors import FmuError, UnknownNameError
 
 TAYLOR_HEADER = "sources/gw_taylor_model.h"  # holds GW_TL_NVAR when the model has the Taylor kernel
@@ -228,7 +228,10 @@ class FmuInfo:
         return auto_pick("taylor" in self.solvers, self.modes)
 
     def variable(self, name: str) -> VariableInfo:
-        """The variable called `name`; UnknownNameError (a KeyError) lists the names."""
+        """The variable called `name` (a str). Raises UnknownNameError (a KeyError) listing the
+        names when there is none; ArgumentTypeError (a TypeError) naming `name` for a name that
+        is no str (variable(3))."""
+        lookup_name(name, "name", "a variable's name")
         for v in self.variables:
             if v.name == name:
                 return v

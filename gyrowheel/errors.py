@@ -7,7 +7,7 @@ GyrowheelError, so `except gyrowheel.GyrowheelError` catches whatever gyrowheel 
     GyrowheelError                      the base (Exception)
       ArgumentError (ValueError)        an argument of a gyrowheel function that cannot be used
         ArgumentTypeError (TypeError)   ... because it is of the wrong type (text where a number goes)
-      FmuError (ValueError)             an `fmu` argument that is not a usable FMI 2.0 FMU
+      FmuError (ValueError)             an `fmu` argument that is not a usable FMI 2.0 or 3.0 FMU
       SweepSpecError (ValueError)       a sweep that cannot be run as specified
       UnknownNameError (KeyError)       a name (variable, parameter, output, extra) that is not there
         UnknownArgumentNameError        ... given in an argument (also an ArgumentError)
@@ -50,8 +50,10 @@ class ArgumentTypeError(ArgumentError, TypeError):
 
 
 class FmuError(GyrowheelError, ValueError):
-    """An `fmu` argument that is not a usable FMU: no such file, not an FMU archive, not FMI 2.0
-    Co-Simulation, or a scene where an FMU is expected."""
+    """An `fmu` argument that is not a usable FMU: no such file, not an FMU archive, another
+    FMI version than 2.0 and 3.0 (or one the function does not run: a sweep runs FMI 2.0), no
+    Co-Simulation or no binary for this platform where the FMU is to run, or a scene where an
+    FMU is expected."""
 
 
 class UnknownNameError(GyrowheelError, KeyError):

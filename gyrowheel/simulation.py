@@ -19,6 +19,7 @@ from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, printLogMes
 
 from gyrowheel.arguments import missing_item_hint
 from gyrowheel.errors import FmuError, GyrowheelError
+from gyrowheel.fmi_types import out_of_range, whole_number
 from gyrowheel.scratch import temporary_directory
 
 # fmpy 0.3.32 forwards every FMU message through ONE process-global logger (the last one given
@@ -107,19 +108,35 @@ def with_values(reason: str, md, given: dict[str, object]) -> str:
 EVENT_LOGGED = re.compile(r"(?:warning: )?event (\w+) at t=([-+0-9.eE]+)")
 # a warning event whose condition holds at initialisation: flagged at the start time
 EVENT_AT_START = re.compile(r"warning: event (\w+) holds already at the start t=([-+0-9.eE]+)")
+# FMI 3.0's layer puts the name of the call before every message of the simulation core
+# (c_src/gw_fmi3_common.c, gw_fmi3_logger: `fmi3DoStep: event fall at t=T: ...`); FMI 2.0's
+# layer passes them on as they are (`event fall at t=T: ...`)
+FMI3_CALL = re.compile(r"fmi3\w+: ")
+
+
+def core_message(text: str) -> str:
+    """An event's logged message (EVENT_LOGGED, EVENT_AT_START) without the name of the FMI 3.0
+    call that logged it, as FMI 2.0 logs it: `fmi3DoStep: event fall at t=T: ...` -> `event
+    fall at t=T: ...`; any other message unchanged."""
+    call = FMI3_CALL.match(text)
+    if call and (EVENT_LOGGED.match(text, call.end()) or EVENT_AT_START.match(text, call.end())):
+        return text[call.end():]
+    return text
 
 
 @dataclass
 class Messages:
     """Collects the FMU's log messages: the logger callback of FMI 2.0 (component,
     instanceName, status, category, message) and FMI 3.0 (instanceEnvironment, status, category,
-    message); both end with status, category, message, and number the statuses alike."""
+    message); both end with status, category, message, and number the statuses alike. An
+    event's message is kept as FMI 2.0 words it (core_message), so that an FMU of either
+    version reports the same events and warnings."""
 
     lines: list[tuple[int, str]] = field(default_factory=list)
 
     def __call__(self, *arguments):
         status, _, message = arguments[-3:]
-        text = message.decode(errors="replace") if isinstance(message, bytes) else str(message)
+        text = core_message(message.decode(errors="replace") if isinstance(message, bytes) else str(message))
         if int(status) == 0 and not EVENT_LOGGED.match(text):  # a step's log (logSolver): not kept
             return
         self.lines.append((int(status), text))
@@ -164,7 +181,13 @@ def fired_events(events: list[tuple[str, float]]) -> list[str]:
 
 
 def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[str, object]:
-    """NAME=VALUE strings -> typed start values; unknown names and bad types raise."""
+    """NAME=VALUE strings -> typed start values; unknown names and bad types raise.
+
+    An Integer takes a whole number in any notation ('12', '1e3'; 1.5 is refused, not
+    truncated); one outside its type's 32 bits is refused naming the variable's range (`value
+    '1e10' for 'max_internal_steps' is out of range [1, 2147483647] (Integer)`), one inside
+    them left to the FMU's own checks. Raises SimulationError (UnknownVariableError for an
+    unknown name) naming the variable."""
     md = read_model_description(str(fmu))
     by_name = {v.name: v for v in md.modelVariables}
     enums = {t.name: {i.name: int(i.value) for i in t.items} for t in md.typeDefinitions}
@@ -188,9 +211,10 @@ def coerce_start_values(fmu: str | Path, assignments: dict[str, str]) -> dict[st
                 if degrees:
                     out[name] = math.radians(out[name])
             elif v.type in INTEGER_TYPES:
-                out[name] = int(text)
-                if not -2**31 <= out[name] < 2**31:  # an fmi2Integer, fmi3Int32: 32 bits; fmpy would wrap it
-                    raise ValueError
+                out[name] = whole_number(text)
+                outside = out_of_range(v, out[name])  # an fmi2Integer, fmi3Int32: 32 bits; fmpy would wrap it
+                if outside:
+                    raise SimulationError(f"value {text!r} for {given!r} is {outside}")
             elif v.type == "Enumeration":
                 items = enums.get(v.declaredType.name if v.declaredType else "", {})
                 out[name] = items[text] if text in items else int(text)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import pandas as pd
 
 from gyrowheel.arguments import missing_item_hint, number
+from gyrowheel.fmi_types import out_of_range
 from gyrowheel.studies.batch import Settings
 from gyrowheel.studies.metrics import MetricSet, UserFunction
 from gyrowheel.studies.spec import SweepSpecError
@@ -81,9 +82,9 @@ class Resolver:
         if v.type in ("Integer", "Enumeration"):
             if value != int(value):
                 raise SweepSpecError(f"{where}: {name!r} is an {v.type} and {value!r} is not an integer")
-            if not -2**31 <= value < 2**31:  # an fmi2Integer: ctypes would wrap it (3e9 -> -1294967296)
-                raise SweepSpecError(f"{where}: {name!r} is an {v.type} (32 bits) and {value!r} is out "
-                                     f"of its range [-2147483648, 2147483647]")
+            outside = out_of_range(v, int(value))  # an fmi2Integer: ctypes would wrap it (3e9 -> -1294967296)
+            if outside:
+                raise SweepSpecError(f"{where}: value {value!r} for {name!r} is {outside}")
             value = int(value)
             if v.type == "Enumeration" and v.items and value not in v.items.values():
                 raise SweepSpecError(f"{where}: {value} is not an item of {name!r}; valid: "

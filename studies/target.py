@@ -62,6 +62,8 @@ class Variable:
     start: object
     vr: int
     items: dict = field(default_factory=dict)  # enumeration item name -> value
+    min: str | None = None  # the declared range, as modelDescription.xml writes it (None: not declared)
+    max: str | None = None
 
     @property
     def settable(self) -> bool:
@@ -80,7 +82,7 @@ def _read_variables(md) -> dict[str, Variable]:
             start = int(start)
         out[v.name] = Variable(v.name, v.type, v.causality, v.variability, v.initial,
                                v.unit or (v.declaredType.unit if v.declaredType else None), start,
-                               v.valueReference, items)
+                               v.valueReference, items, v.min, v.max)
     return out
 
 

@@ -160,8 +160,10 @@ class EnsembleResult:
     event_names: list[str] = field(default_factory=list)
 
     def output(self, name: str) -> np.ndarray:
-        """(N,) values of one output at t_final; UnknownArgumentNameError (a KeyError and a
-        ValueError, argument 'name') lists the names."""
+        """(N,) values of one output at t_final. Raises UnknownArgumentNameError (a KeyError and a
+        ValueError, argument 'name') listing the names when there is none; ArgumentTypeError (a
+        TypeError) naming `name` for a name that is no str (output(3))."""
+        arguments.lookup_name(name, "name", "an output's name")
         if name not in self.output_names:
             raise UnknownArgumentNameError(f"no output {name!r}; outputs: {', '.join(self.output_names)}",
                                            argument="name")

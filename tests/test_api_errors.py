@@ -144,6 +144,22 @@ def test_an_fmu_that_cannot_run_here_says_why(foreign, capsys, kind, message):
         _names(exc, "fmu", message)
 
 
+def test_the_docstrings_say_which_fmi_versions_each_function_takes(fmi3_earth_fmu):
+    """simulate and info take the FMI versions open_fmu reads (FMI_VERSIONS), FMI 2.0 and 3.0,
+    and their docstrings say so (FMI 1.0 refused: above; an FMI 3.0 FMU run and described:
+    below and tests/test_fmi3_events.py); sweep's says it refuses FMI 3.0
+    (tests/test_fmi3_build.py); FmuError's says what it is for."""
+    from gyrowheel.description import FMI_VERSIONS
+    assert FMI_VERSIONS == ("2.0", "3.0")
+    for function in (gyrowheel.simulate, gyrowheel.info):
+        doc = " ".join(function.__doc__.split())
+        assert "an FMI 2.0 or 3.0 FMU" in doc and "another FMI version than 2.0 and 3.0" in doc, function
+        assert "not an FMI 2.0 FMU" not in doc
+    assert "is an FMI 3.0 FMU (a sweep runs FMI 2.0 FMUs)" in " ".join(gyrowheel.sweep.__doc__.split())
+    assert "another FMI version than 2.0 and 3.0" in " ".join(gyrowheel.FmuError.__doc__.split())
+    assert gyrowheel.info(fmi3_earth_fmu).fmi_version == "3.0"
+
+
 def test_info_of_an_fmu_without_a_description(foreign):
     assert "description  none" in str(gyrowheel.info(foreign["undescribed"])).splitlines()[1]
 
@@ -346,3 +362,25 @@ def test_an_unknown_start_value_name_is_a_key_error_and_an_argument_error(moon):
     assert isinstance(error, ValueError) and isinstance(error, gyrowheel.ArgumentError)
     assert error.argument == "start_values"
     assert str(error).startswith("start_values: unknown variable 'nosuch'; settable: ")  # not quoted as KeyError's
+
+
+def test_a_name_looked_up_that_is_no_string_is_an_argument_type_error(moon, fmi3_earth_fmu):
+    """info(fmu).variable(3) and EnsembleResult.output(3): an ArgumentTypeError (a TypeError and
+    an ArgumentError) naming the argument `name`, not an UnknownNameError saying the FMU has no
+    variable 3; a string it does not have stays an UnknownNameError listing the names."""
+    import numpy as np
+
+    from gyrowheel.taylor.ensemble import EnsembleResult
+    result = EnsembleResult(status=np.zeros(1, int), t_final=np.zeros(1), x_final=np.zeros((1, 1)),
+                            y_final=np.zeros((1, 1)), steps=np.zeros(1, int), output_names=["energy"],
+                            state_names=["x"])
+    lookups = [(gyrowheel.info(fmu).variable, "a variable's name") for fmu in (moon, fmi3_earth_fmu)]
+    for lookup, what in [*lookups, (result.output, "an output's name")]:
+        for name in (3, None, b"g"):
+            with pytest.raises(ArgumentTypeError) as exc:
+                lookup(name)
+            _names(exc, "name", f"name must be {what} (str), got {type(name).__name__} {name!r}")
+            assert not isinstance(exc.value, KeyError)
+        with pytest.raises(gyrowheel.UnknownNameError, match="; (variables|outputs): "):
+            lookup("nosuch")
+    assert lookups[1][0]("g").start == 9.81 and result.output("energy").tolist() == [0.0]

@@ -56,9 +56,9 @@ def _bad_scene(tmp_path, text):
     (("simulate", "{fmu}", "--set", "solver=rk45"), "valid: euler, rk4, dopri5"),
     (("simulate", "{fmu}", "--set", "energy=3"), "'energy' is a calculated output"),
     (("simulate", "{fmu}", "--set", "M"), "expected NAME=VALUE"),
-    # an fmi2Integer is 32 bits (before: fmpy wrapped it, "max_internal_steps = -1294967296 must be ...")
+    # an fmi2Integer is 32 bits (fmpy would wrap 3000000000 to -1294967296): the variable's range is named
     (("simulate", "{fmu}", "--set", "max_internal_steps=3000000000"),
-     "value '3000000000' for 'max_internal_steps' is not a valid Integer"),
+     "value '3000000000' for 'max_internal_steps' is out of range [1, 2147483647] (Integer)"),
     (("simulate", "{fmu}", "--stop-time", "-1"), "--stop-time must be > 0"),
     (("simulate", "{fmu}", "--set", "M=-2"), "M (mass) must be > 0"),
     (("build", "{bad}"), "bad.toml: [wheel] mass: unknown key"),
@@ -113,6 +113,8 @@ def test_non_finite_numbers_are_refused(tmp_path, args):
 @pytest.mark.parametrize("kwargs,message", [
     # before: int(1.5) = 1, silently, then "the budget of internal steps is spent" from the FMU
     (dict(start_values={"max_internal_steps": 1.5}), "value '1.5' for 'max_internal_steps' is not a valid Integer"),
+    (dict(start_values={"max_internal_steps": 3e9}),
+     "value '3000000000.0' for 'max_internal_steps' is out of range [1, 2147483647] (Integer)"),
     (dict(start_values={"solver": 2.7}), "value '2.7' for 'solver' is not a valid Enumeration"),  # before: rk4
     (dict(start_values={"M": "abc"}), "value 'abc' for 'M' is not a valid Real"),  # before: a bare ValueError
     (dict(start_values={"gamma_dot": True}), "value 'true' for 'gamma_dot' is not a valid Real"),

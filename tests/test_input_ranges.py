@@ -253,3 +253,33 @@ def test_fmi3_declares_the_same_bounds(earth, fmi3_earth_fmu):
                if "min" in v.attrib or "max" in v.attrib}
     assert bounds3 == {name: (low, high) for name, (low, high, _) in _bounds(earth).items()}
     assert validate_fmu(str(fmi3_earth_fmu)) == []
+
+
+@pytest.mark.parametrize("value", ["1e10", "10000000000", "-3000000000", "2147483648"])
+def test_an_integer_outside_its_32_bits_is_out_of_range_naming_the_variables_range(earth, fmi3_earth_fmu, tmp_path,
+                                                                                   value):
+    """max_internal_steps (an fmi2Integer, an fmi3Int32: 32 bits) given a whole number outside
+    them: one line naming the range the FMU declares for it (min, max of modelDescription.xml,
+    [1, 2^31 - 1]), exit 2, nothing written; not "not a valid Integer", which a whole number is."""
+    for fmu, fmi_type in ((earth, "Integer"), (str(fmi3_earth_fmu), "Int32")):
+        low, high = _bounds(earth)["max_internal_steps"][:2] if fmi_type == "Integer" else ("1", str(2**31 - 1))
+        r, out = _simulate(fmu, tmp_path, f"max_internal_steps={value}")
+        assert r.returncode == 2 and not out.exists(), r.stderr
+        assert r.stderr == (f"gyrowheel: error: --set: value '{value}' for 'max_internal_steps' is out of range "
+                            f"[{low}, {high}] ({fmi_type})\n")
+        with pytest.raises(ArgumentError) as exc:
+            gyrowheel.simulate(fmu, stop_time=0.05, start_values={"max_internal_steps": int(float(value))})
+        assert exc.value.argument == "start_values" and str(exc.value) == (
+            f"start_values: value '{int(float(value))}' for 'max_internal_steps' is out of range "
+            f"[{low}, {high}] ({fmi_type})")
+    assert (low, high) == ("1", "2147483647")
+
+
+def test_a_whole_number_in_any_notation_is_an_integer(earth):
+    """'1e3' and 1000.0 are the whole number 1000 (a fraction, 1.5, is refused: tests/test_cli.py;
+    the range's ends: test_declared_min_max_are_the_runtimes_refusal_bounds)."""
+    from gyrowheel.simulation import check_start_values
+    for value in ("1e3", 1000.0, "1000", " 1000 "):
+        typed = check_start_values(earth, {"max_internal_steps": value})["max_internal_steps"]
+        assert typed == 1000 and type(typed) is int
+    assert len(gyrowheel.simulate(earth, stop_time=0.05, start_values={"max_internal_steps": "1e3"})) == 6

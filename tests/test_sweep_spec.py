@@ -102,11 +102,27 @@ def test_resolver_degrees_presets_enumerations():
     ("solver", 1.5, "not an integer"),
     # an fmi2Integer is 32 bits: refused here, not wrapped by ctypes to -1294967296 so that every
     # point fails with the FMU's "max_internal_steps = -1294967296 must be ..."
-    ("solver", 3e9, r"is an Enumeration \(32 bits\) and 3000000000.0 is out of its range"),
+    ("solver", 3e9, r"value 3000000000.0 for 'solver' is out of range \[-2147483648, 2147483647\] \(Enumeration\)"),
 ])
 def test_resolver_errors(name, value, message):
     with pytest.raises(SweepSpecError, match=message):
         Resolver(_variables()).resolve(name, value, "--grid")
+
+
+@pytest.mark.parametrize("value", [1e10, 2**31, -3e9])
+def test_an_integer_outside_its_32_bits_names_the_declared_range(earth_fmu, value):
+    """max_internal_steps (an fmi2Integer, min 1, max 2147483647 in modelDescription.xml) beyond
+    32 bits: out of range, naming the range the FMU declares, as gyrowheel simulate --set does."""
+    from fmpy import read_model_description
+
+    from gyrowheel.studies.target import _read_variables
+    variables = _read_variables(read_model_description(str(earth_fmu)))
+    assert (variables["max_internal_steps"].min, variables["max_internal_steps"].max) == ("1", "2147483647")
+    with pytest.raises(SweepSpecError) as exc:
+        Resolver(variables).resolve("max_internal_steps", value, "--grid")
+    assert str(exc.value) == (f"--grid: value {float(value)!r} for 'max_internal_steps' is out of range "
+                              "[1, 2147483647] (Integer)")
+    assert Resolver(variables).resolve("max_internal_steps", 2**31 - 1, "--grid") == ("max_internal_steps", 2**31 - 1)
 
 
 def test_communication_grid_lands_on_stop_time():

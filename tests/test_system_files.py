@@ -79,9 +79,9 @@ BAD = {
                                r"wheel\.solver: an Enumeration"),
     "bad_integer": (lambda s: bind(s, "wheel", param("max_internal_steps", "Integer", "1.5")),
                     r"wheel\.max_internal_steps: '1.5' is not a valid Integer"),
-    # an fmi2Integer is 32 bits: ctypes would wrap 3e9 to -1294967296
+    # an fmi2Integer is 32 bits: ctypes would wrap 3e9 to -1294967296; the variable's range is named
     "integer_out_of_range": (lambda s: bind(s, "wheel", param("max_internal_steps", "Integer", "3000000000")),
-                             r"wheel\.max_internal_steps: '3000000000' is not a valid Integer"),
+                             r"wheel\.max_internal_steps: '3000000000' is out of range \[1, 2147483647\] \(Integer\)"),
     "type_mismatch": (lambda s: bind(s, "wheel", param("M", "Boolean", "true")),
                       r"wheel\.M: bound as ssv:Boolean, the FMU's variable is a Real"),
     "unit": (lambda s: bind(s, "wheel", param("M", "Real", "2000", ' unit="g"')),
@@ -174,7 +174,8 @@ def gyrowheel(*args, cwd):
 
 @pytest.mark.parametrize("name, value, message", [
     ("max_internal_steps", 1.5, r"wheel\.max_internal_steps: 1\.5 is not a valid Integer"),  # not int() -> 1
-    ("max_internal_steps", 3e9, r"wheel\.max_internal_steps: 3000000000\.0 is not a valid Integer"),  # wrapped
+    ("max_internal_steps", 3e9,  # not wrapped
+     r"wheel\.max_internal_steps: 3000000000\.0 is out of range \[1, 2147483647\] \(Integer\)"),
     ("M", "heavy", r"wheel\.M: 'heavy' is not a valid Real"),
 ])
 def test_master_start_values_are_checked_like_bindings(unpacked, tmp_path, name, value, message):

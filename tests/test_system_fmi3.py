@@ -148,15 +148,20 @@ def test_fmi3_values_are_read_as_their_type(fmi_type, value, expected):
     assert coerce_value(SimpleNamespace(type=fmi_type), value, "c.v") == expected
 
 
-@pytest.mark.parametrize("fmi_type, value", [("UInt8", 256), ("UInt8", -1), ("Int8", 128), ("Int32", 2**31),
-                                             ("Int32", 1.5), ("Float64", True)])
-def test_fmi3_values_outside_their_type_are_refused(fmi_type, value):
-    """A value ctypes would wrap or truncate is refused, naming the variable and its type."""
+@pytest.mark.parametrize("fmi_type, value, reason", [
+    ("UInt8", 256, "is out of range [0, 255] (UInt8)"), ("UInt8", -1, "is out of range [0, 255] (UInt8)"),
+    ("Int8", 128, "is out of range [-128, 127] (Int8)"), ("Int32", 2**31, "is out of range [-2147483648, 2147483647] "
+                                                                         "(Int32)"),
+    ("Int32", 1.5, "is not a valid Int32"), ("Float64", True, "is not a valid Float64")])
+def test_fmi3_values_outside_their_type_are_refused(fmi_type, value, reason):
+    """A value ctypes would wrap is refused naming the variable and its type's range, one it
+    would truncate (or a bool for a number) naming the type."""
     from types import SimpleNamespace
 
     from gyrowheel.cosim.ssp import coerce_value
-    with pytest.raises(SystemFileError, match=f"c.v: {value!r} is not a valid {fmi_type}"):
+    with pytest.raises(SystemFileError) as exc:
         coerce_value(SimpleNamespace(type=fmi_type), value, "c.v")
+    assert str(exc.value) == f"c.v: {value!r} {reason}"
 
 
 FMI3_DESCRIPTION = """<fmiModelDescription fmiVersion="3.0" modelName="m" instantiationToken="t">

@@ -276,10 +276,25 @@ def _settable(v) -> bool:
     return v.causality in ("parameter", "input") or v.initial in ("exact", "approx")
 
 
+def _grid_rows(result: np.ndarray, start: float, interval: float) -> np.ndarray:
+    """The rows of an FMI 3.0 run at the communication points, as an FMI 2.0 run records them:
+    fmpy also records a row where the FMU returned early (at an event inside a step, e.g. each
+    touchdown of a bouncing wheel; FMI 3.0, section 4.2.4) and then goes on to the next point of
+    its grid, start + k interval (fmpy.simulation.simulateCS).  Those rows are dropped; the first
+    and the last (a fall's, at its located time, or the stop time) are kept.  (n,) -> (m,), m <= n."""
+    t = result["time"]
+    k = np.round((t - start) / interval)
+    keep = np.array([start + kk * interval == tt for kk, tt in zip(k.tolist(), t.tolist())], dtype=bool)
+    keep[0] = keep[-1] = True
+    return result[keep]
+
+
 def run(fmu: str | Path, stop_time: float | None = None, output_interval: float | None = None,
         start_values: dict[str, object] | None = None, solver_tolerance: float | None = None,
         messages: Messages | None = None, events: list | None = None, stacklevel: int = 2) -> np.ndarray:
-    """Simulate in Co-Simulation; returns fmpy's structured result array of the scalar outputs.
+    """Simulate in Co-Simulation; returns fmpy's structured result array of the scalar outputs,
+    one row per communication point (and a fall's at its located time) from an FMI 2.0 and an
+    FMI 3.0 FMU alike (_grid_rows).
 
     start_values are checked by name and type like `gyrowheel simulate --set` (strings or Python
     values: 1.5 for an Integer is refused, not truncated); stop_time, output_interval and
@@ -323,6 +338,10 @@ def run(fmu: str | Path, stop_time: float | None = None, output_interval: float 
                 events.extend(messages.events())
             for text in messages.warnings():
                 warnings.warn(text, FmuWarning, stacklevel=stacklevel)
+            if early and output_interval:
+                exp = md.defaultExperiment
+                start = float(exp.startTime) if exp is not None and exp.startTime is not None else 0.0
+                result = _grid_rows(result, start, float(output_interval))
             return result
         except FMICallException as exc:
             reason, before = refusal(messages.errors())

@@ -56,18 +56,23 @@ static int gw_fixed_unstable(gw_instance *I, double h, double h_lambda, const ch
     return 1;
 }
 
-/* Euler's h |lambda| from the secant along the step, h |f(t1, x1) - f(t0, x0)| / |x1 - x0|.
- * f(t1, x1) is the next step's k1: kept in k[6] as the step's end derivative (k7_valid, as
- * dopri5's FSAL stage), so the check costs no evaluation.  An end derivative that cannot be
- * evaluated or is not finite is left to the next step, which names it. */
-static int gw_euler_unstable(gw_instance *I, double h, double t1) {
+/* h |lambda| from the secant between the step's end and a point a of the step: h |f(t1, x1) -
+ * f_a| / |x1 - x_a|; Euler: a = the start (x, k1), RK4: a = its last stage's point (x + h k3, k4),
+ * where a step that turns to garbage near its end (a wheel dipping towards flat, its rates
+ * growing as 1 / sin(beta)) shows it although its first stages did not.  f(t1, x1) is the next
+ * step's k1: kept in k[6] as the step's end derivative (k7_valid, as dopri5's FSAL stage), so
+ * the check costs no evaluation.  An end derivative that cannot be evaluated or is not finite is
+ * left to the next step, which names it; a difference of derivatives below 1e-6 of the
+ * derivatives (rounding, for a resolved step whose two points nearly coincide) tells nothing. */
+static int gw_step_end_unstable(gw_instance *I, double h, double t1, const double *fa, const double *xa,
+                                double bound, const char *limit) {
     double df, dx;
     if (gw_rhs(I, t1, I->xnew, I->k[6]) != 0 || gw_first_nonfinite(I->k[6], I->m->nx) >= 0) return 0;
     I->k7_valid = 1;
-    df = gw_scaled_diff(I, I->k[6], I->k[0]);
-    dx = gw_scaled_diff(I, I->xnew, I->x);
-    if (!(h * df > GW_EULER_UNSTABLE * dx) || !(df > 1e-6 * gw_scaled_rate(I))) return 0;
-    return gw_fixed_unstable(I, h, h * df / dx, "2");
+    df = gw_scaled_diff(I, I->k[6], fa);
+    dx = gw_scaled_diff(I, I->xnew, xa);
+    if (!(h * df > bound * dx) || !(df > 1e-6 * gw_scaled_rate(I))) return 0;
+    return gw_fixed_unstable(I, h, h * df / dx, limit);
 }
 
 static int gw_euler_step(gw_instance *I, double h, double t1) {
@@ -76,7 +81,7 @@ static int gw_euler_step(gw_instance *I, double h, double t1) {
     for (i = 0; i < nx; i++) I->dx[i] = h * k1[i];
     gw_sum_update(I);
     I->k7_valid = 0;
-    return gw_euler_unstable(I, h, t1) ? -1 : 0;
+    return gw_step_end_unstable(I, h, t1, k1, I->x, GW_EULER_UNSTABLE, "2") ? -1 : 0;
 }
 
 /* RK4's h |lambda| from its stages: for f = lambda y, |k3 - k2| / |k2 - k1| = h |lambda| / 2 */
@@ -99,9 +104,9 @@ static int gw_rk4_step(gw_instance *I, double h, double t1) {
     for (i = 0; i < nx; i++) xt[i] = x[i] + h * k3[i];
     if (gw_rhs_checked(I, t1, xt, k4)) return -1;
     for (i = 0; i < nx; i++) I->dx[i] = (h / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
-    gw_sum_update(I);
+    gw_sum_update(I); /* xnew; xt still holds the last stage's point x + h k3 */
     I->k7_valid = 0;
-    return 0;
+    return gw_step_end_unstable(I, h, t1, k4, xt, GW_RK4_UNSTABLE, "2.8") ? -1 : 0;
 }
 
 

@@ -189,6 +189,9 @@ UNSTABLE_FIXED_STEPS = [
     ("euler", {}, 0.01, 20.0),  # the paper's run with euler at 0.01 s: energy x800 by the "fall" at 4.85 s
     ("rk4", {"gamma_dot": 20.0}, 1.0, 100.0),
     ("rk4", {"gamma_dot": 1e3}, 0.01, 20.0),
+    # a dip towards flat (the reference survives it, beta >= 0.105 rad): its rates grow as 1 / sin(beta),
+    # and the step that turned to garbage near its end (energy x2.5e19) passed RK4's check of its stages
+    ("rk4", {"gamma_dot": 3.0, "beta": math.radians(45)}, 0.05, 5.0),
 ]
 
 

@@ -381,7 +381,7 @@ def sweep(source, *, grid=None, random=None, samples: int | None = None, seed: i
     ('ok', 'error'), reason, wall_time [s].
     Raises SweepSpecError naming the argument (`grid['beta_deg'] = '60:89': ...`,
     `fixed['R']: ...`, `stop_time ...`, a value every point sets that the unit refuses as it is
-    set or at initialisation with the first point's values, with the unit's reason, e.g.
+    set or at initialisation with every point's values, with the unit's reason, e.g.
     `rel_tol: ... outside its valid range`, `fixed['R']: the unit refuses -1.0 for every point:
     fmi2ExitInitializationMode: R (radius) must be > 0`, a run whose rows would take more than
     half of this machine's memory) before anything runs (a value of one point the unit refuses

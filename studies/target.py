@@ -162,20 +162,17 @@ class FmuTarget:
             instance.close()
 
 
-# points refused on their own that the check of the shared values passes over before it stops
-# (then those points fail as points, and so do the others if the shared values are refused too)
-CHECKED_POINTS = 100
-
-
 def refused_at_initialisation(instance, values: dict, points, start_time: float) -> tuple[str | None, str] | None:
-    """Whether the unit refuses, at initialisation, `values` (what every point sets) with the
-    points' own values (`points`: {variable: value} per point, in order): None, or (the name of
-    the value refused, the unit's reason), or (None, its reason) when only their combination is.
+    """Whether the unit refuses, at initialisation, `values` (what every point sets) with every
+    point's own values (`points`: {variable: value} per point, in order): None, or (the name of
+    the value refused, the unit's reason) for the first point that initialises without them,
+    or (None, its reason) when only their combination is refused.
 
-    The values are refused when the first point that initialises without them does not with
-    them; their culprit is the first value with which alone that point does not. A point the
-    unit refuses on its own says nothing about them (it fails as a point): the next is tried,
-    up to CHECKED_POINTS. One initialisation when the first point takes them.
+    The values are refused only when no point initialises with them: a point that does (the
+    first, as a rule: one initialisation) ends the check, and the points refused with them fail
+    as points, the others run (beta_min_deg 80 refuses beta_deg 60, not 85).  A point the unit
+    refuses on its own says nothing about them (it fails as a point either way).  At most three
+    initialisations per point, each a few microseconds, against a run per point.
     """
     def reason(own: dict) -> str | None:
         try:
@@ -184,18 +181,20 @@ def refused_at_initialisation(instance, values: dict, points, start_time: float)
             return str(exc)
         return None
 
-    for own in list(points)[:CHECKED_POINTS]:
+    found = None
+    for own in points:
         why = reason({**values, **own})  # as the point runs (studies/batch.py)
         if why is None:
             return None
-        if reason(own) is not None:
-            continue  # the point itself is refused
+        if found is not None or reason(own) is not None:
+            continue  # refused on its own, or the culprit is named already
+        found = None, why
         for name, value in values.items():
             alone = reason({name: value, **own})
             if alone is not None:
-                return name, alone
-        return None, why
-    return None
+                found = name, alone
+                break
+    return found
 
 
 def _kernel_and_auto(data: bytes) -> tuple[bool, bool]:

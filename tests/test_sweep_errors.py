@@ -258,6 +258,19 @@ def test_a_grid_value_refused_at_initialisation_is_a_failed_point(earth_fmu):
         sweep(earth_fmu, grid={"M": [-1.0, 2.0]}, fixed={"R": -1.0}, workers=0, stop_time=0.1)
 
 
+@pytest.mark.parametrize("leans", [[60.0, 85.0], [85.0, 60.0]])
+def test_a_fixed_value_some_points_take_runs_those_points(earth_fmu, leans):
+    """beta_min 80 deg refuses a start lean of 60 deg (below it) but takes 85 deg: no point of the
+    sweep is refused for the fixed value alone, so the sweep runs, the 60 deg point failing with the
+    FMU's reason, whichever point comes first."""
+    table = sweep(earth_fmu, grid={"beta_deg": leans}, fixed={"beta_min_deg": 80.0}, workers=0, stop_time=0.1,
+                  ensemble=False)
+    status = dict(zip(table["beta_deg"], table["status"]))
+    assert status == {60.0: "error", 85.0: "ok"}, table
+    reason = dict(zip(table["beta_deg"], table["reason"]))[60.0]
+    assert "initial lean beta must lie between beta_min and pi - beta_min" in reason
+
+
 def test_the_check_of_fixed_values_is_one_initialisation(earth_fmu, monkeypatch):
     """Fixed values the FMU takes: one initialisation (no step) before the first point runs,
     then every point runs (one FMU run per point: ensemble=False)."""

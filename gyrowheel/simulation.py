@@ -155,18 +155,27 @@ class Messages:
         """The messages logged with status warning (fmi2Warning, fmi3Warning), each once, without
         the FMU's own `warning: ` prefix; a warning event (`warning: event NAME at t=T`, an
         event the scene set to warn, logged each time it fires) as one message per event:
-        `event NAME at t = T s`, or `event NAME: N times, t = T1 .. Tn s` (fired_events)."""
+        `event NAME at t = T s`, or `event NAME: N times, t = T1 .. Tn s` (fired_events), the words
+        of the CLI's events summary; a warning event that holds already at the start and fires no
+        more, `event NAME holds already at the start t=T` as logged, and one that fires later too
+        is counted from the start time."""
         plain: list[str] = []
         fired: list[tuple[str, float]] = []
+        at_start: dict[str, str] = {}  # name -> the message of an event holding at the start
         for s, m in self.lines:
             if s != 1:
                 continue
-            event = EVENT_LOGGED.fullmatch(m)
+            event = EVENT_LOGGED.fullmatch(m) or EVENT_AT_START.fullmatch(m)
             if event:
                 fired.append((event.group(1), float(event.group(2))))
+                if EVENT_AT_START.fullmatch(m):
+                    at_start[event.group(1)] = m.removeprefix("warning: ")
             else:
                 plain.append(m.removeprefix("warning: "))
-        return list(dict.fromkeys(plain)) + [f"event {phrase}" for phrase in fired_events(fired)]
+        names = list(dict.fromkeys(name for name, _ in fired))  # fired_events' order
+        return list(dict.fromkeys(plain)) + [
+            at_start[name] if name in at_start and sum(n == name for n, _ in fired) == 1 else f"event {phrase}"
+            for name, phrase in zip(names, fired_events(fired))]
 
 
 def fired_events(events: list[tuple[str, float]]) -> list[str]:

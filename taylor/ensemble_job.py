@@ -30,8 +30,8 @@ def check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
     """The job's numbers checked before the C library sees them (it can only say "bad job"):
     an ArgumentError naming the field, an ArgumentTypeError for one that is no number ('10', a
     string, is refused as every gyrowheel function refuses it: gyrowheel.arguments.number).
-    Returns the grid as a contiguous float array (empty: none); a grid not 1-D is refused
-    (ArgumentError naming its shape), not flattened.  Each error's `argument` names the field
+    Returns the grid as a contiguous float array (empty: grid None, no grid); a grid not 1-D
+    is refused (ArgumentError naming its shape), not flattened, and so is an empty one.  Each error's `argument` names the field
     (None only for t_start and t_end both not finite).
     rel_tol and abs_tol outside the FMU's ranges (fmu_build.scene.TOLERANCE_RANGES) are refused
     here, once, rather than by every trajectory's instance.  (math.isfinite on the scalars:
@@ -69,10 +69,13 @@ def check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
     except ValueError:
         raise ArgumentError(f"grid must be a sequence of communication points (numbers, s), got {grid!r}",
                             argument="grid") from None
-    if a.ndim != 1:  # ([[0.5], [1.0]] was flattened and run as [0.5, 1.0])
+    if a.ndim != 1:  # a nested list or a scalar: refused, not flattened
         raise ArgumentError(f"grid must be 1-D, a sequence of communication points (numbers, s), got shape "
                             f"{a.shape}", argument="grid")
     g = np.ascontiguousarray(a, dtype=float)
+    if not g.size:  # no point at all, not even t_end: not the same as no grid
+        raise ArgumentError(f"grid must hold the communication points up to t_end = {t1!r} (the last equal to it), "
+                            "got none; leave grid out (None) for a run straight to t_end", argument="grid")
     if g.size:
         if not np.all(np.isfinite(g)):
             raise ArgumentError("grid: communication points must be finite", argument="grid")

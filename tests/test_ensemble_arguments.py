@@ -31,6 +31,16 @@ def test_a_grid_that_is_not_1d_is_refused_with_its_shape(ens, grid, shape):
     assert list(res.status) == [STATUS_OK] and list(res.grid) == [0.0, 0.5, 1.0]
 
 
+@pytest.mark.parametrize("grid", [[], (), np.array([])])
+def test_an_empty_grid_is_refused_not_read_as_no_grid(grid):
+    """A grid ends at t_end (docs/taylor.md); an empty one was run as if grid were left out."""
+    with pytest.raises(ArgumentError, match=r"^grid must hold the communication points up to t_end = 1\.0 \(the "
+                                            r"last equal to it\), got none; leave grid out") as info:
+        check_job(0.0, 1.0, 1e-8, None, None, grid)
+    assert info.value.argument == "grid"
+    assert check_job(0.0, 1.0, 1e-8, None, None, None).size == 0  # no grid: the run to t_end
+
+
 @pytest.mark.parametrize("kwargs, argument, message", [
     (dict(t_end=-1.0), "t_end", "t_end = -1.0 must be greater than t_start = 0.0"),
     (dict(t_end=float("inf")), "t_end", "t_start and t_end must be finite, got 0.0 and inf"),

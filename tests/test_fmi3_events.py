@@ -129,6 +129,24 @@ def test_warning_events_are_the_same_from_fmi2_and_fmi3(builds, values):
         assert len(texts) == 1 and re.fullmatch(r"event slip: 2 times, t = \S+ \.\. \S+ s", texts[0]), texts
 
 
+def test_a_warning_event_holding_at_the_start_and_firing_later_is_one_warning(builds):
+    """lunar_rover at mu = 0.05 from 60 deg: the slip holds at the start and fires again later.
+    One warning counts both firings, in the words of the CLI's events summary (it was two
+    warnings, 'holds already at the start t=0' and 'event slip at t = ...')."""
+    from gyrowheel.cli import events_summary
+    for fmi in (2, 3):
+        events: list = []
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            gyrowheel.simulate(builds["lunar_rover", fmi], start_values={"mu": 0.05, "beta_deg": 60.0}, events=events)
+        texts = [str(w.message) for w in caught if issubclass(w.category, FmuWarning)]
+        slips = [t for name, t in events if name == "slip"]
+        assert len(slips) >= 2 and slips[0] == 0.0, (fmi, events)
+        phrase = f"slip: {len(slips)} times, t = 0 .. {slips[-1]:.6g} s"
+        assert texts == [f"event {phrase}"], (fmi, texts)
+        assert phrase in events_summary(events)
+
+
 @pytest.mark.parametrize("logged, read", [
     ("fmi3DoStep: event fall at t=0.5: simulation terminated at t=0.5", "event fall at t=0.5: simulation terminated "
                                                                         "at t=0.5"),

@@ -50,9 +50,10 @@ static double gw_scaled_rate(const gw_instance *I) {
 #define GW_RK4_UNSTABLE 3.0
 
 static int gw_fixed_unstable(gw_instance *I, double h, double h_lambda, const char *limit) {
-    GW_LOG_ERR(I, "%s is unstable at t=%.17g with max_step=%g: h |lambda| ~ %.3g (stable up to %s); "
-               "the dynamics are faster than the step: reduce max_step or use an adaptive solver",
-               gw_solver_name(I->solver_in_use), I->t, h, h_lambda, limit);
+    /* h: the grid's step, max_step or a little less (the communication step cut into equal ones) */
+    GW_LOG_ERR(I, "%s is unstable at t=%.17g with steps of h=%g (max_step=%g): h |lambda| ~ %.3g (stable "
+               "up to %s); the dynamics are faster than the step: reduce max_step or use an adaptive solver",
+               gw_solver_name(I->solver_in_use), I->t, h, I->max_step, h_lambda, limit);
     return 1;
 }
 

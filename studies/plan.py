@@ -136,10 +136,19 @@ def _times(target, stop_time, output_interval, start_time) -> tuple[float, float
     return float(stop), float(min(output_interval, stop - start_time))
 
 
-def _check_fixed(target, fixed: dict, where: dict, values: list, start_time: float) -> None:
+def _as_given(value):
+    """A value as the user gave it, for an error message: a number's text as the number."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return value
+
+
+def _check_fixed(target, fixed: dict, where: dict, values: list, start_time: float, shown: dict) -> None:
     """SweepSpecError when the unit refuses the values every point sets (`fixed`, named as
-    `where` says), as they are set or at initialisation with the points' values (`values`): the
-    target's optional refused(values, start_time, points), FmuTarget.refused."""
+    `where` says, quoted as `shown` has them where given in other units), as they are set or at
+    initialisation with the points' values (`values`): the target's optional
+    refused(values, start_time, points), FmuTarget.refused."""
     refused = getattr(target, "refused", None)
     found = refused(fixed, start_time, values) if refused is not None and fixed else None
     if found is None:
@@ -148,7 +157,7 @@ def _check_fixed(target, fixed: dict, where: dict, values: list, start_time: flo
     if name is None:  # only their combination
         raise SweepSpecError(f"{', '.join(where[n] for n in fixed)}: the unit refuses these values together for "
                              f"every point: {reason}")
-    raise SweepSpecError(f"{where[name]}: the unit refuses {fixed[name]!r} for every point: {reason}")
+    raise SweepSpecError(f"{where[name]}: the unit refuses {shown.get(name, fixed[name])!r} for every point: {reason}")
 
 
 def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, solver_settings: Mapping | None = None,
@@ -174,6 +183,7 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, sol
     derive_fn = UserFunction.parse(derive, "--derive") if derive is not None else None
     fixed_values: dict = {}
     where: dict = {}  # unit variable -> how the sweep's errors name where it was given
+    shown: dict = {}  # unit variable -> its value as given, where that is not the unit's (degrees)
     given = [(n, v, f"--set {n}") for n, v in (fixed or {}).items()]
     given += [(n, v, f"--{n.replace('_', '-')}") for n, v in (solver_settings or {}).items()]
     for n, v, flag in given:
@@ -182,6 +192,8 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, sol
             raise SweepSpecError(f"{base!r} given twice (--set, --solver/--rel-tol/--abs-tol/--max-step, "
                                  "or under another name)")
         fixed_values[base], where[base] = value, flag
+        if n != base:  # given under another name (beta_min_deg): its errors quote the value as given
+            shown[base] = _as_given(v)
     direct = [c for c in inputs.columns if res.known(c)]
     unknown = [c for c in inputs.columns if not res.known(c)]
     if unknown and derive_fn is None:
@@ -208,7 +220,7 @@ def make_plan(target, inputs: pd.DataFrame, *, fixed: Mapping | None = None, sol
                 raise SweepSpecError(f"--derive {derive_fn.ref}: must return a dict of unit values, got {extra!r}")
             own.update(res.resolve(n, v, f"--derive {derive_fn.ref}: point {point}: {n}") for n, v in extra.items())
         values.append(own)
-    _check_fixed(target, fixed_values, where, values, float(start_time))
+    _check_fixed(target, fixed_values, where, values, float(start_time), shown)
     settings = Settings(stop_time=stop, output_interval=interval, start_time=float(start_time), fixed=fixed_values,
                         ensemble=ensemble)
     metric_set = MetricSet.parse(metrics, metric_functions, outputs=list(target.outputs),

@@ -241,6 +241,13 @@ def test_api_a_fixed_value_refused_at_initialisation(earth_fmu, value, reason):
     assert str(caught.value).startswith(f"fixed['R']: the unit refuses {float(value)!r} for every point: {reason}")
 
 
+def test_a_refused_value_given_in_degrees_is_quoted_in_degrees(earth_fmu):
+    """beta_min_deg = 89.99 leaves no lean between beta_min and pi - beta_min for any point: the
+    refusal quotes 89.99 as given, not its 1.5706 rad."""
+    with pytest.raises(SweepSpecError, match=r"^--set beta_min_deg: the unit refuses 89\.99 for every point: "):
+        sweep(earth_fmu, grid={"beta_deg": [60.0, 85.0]}, fixed={"beta_min_deg": 89.99}, workers=0, stop_time=0.1)
+
+
 def test_fixed_values_refused_only_together_are_named_together(earth_fmu):
     """Each alone takes the start lean (80 deg); together the lean lies below beta_min."""
     with pytest.raises(SweepSpecError, match=r"^--set beta_min, --set beta: the unit refuses these values together "

@@ -273,6 +273,10 @@ static void test_fixed_step_stability(int solver, double h_lambda, int stable) {
         snprintf(said, sizeof said, "h |lambda| ~ %d.", (int)h_lambda);
         CHECK_LOG(said);
         CHECK_LOG(solver == EULER ? "(stable up to 2)" : "(stable up to 2.8)");
+        /* the grid's step (1 s in equal steps of at most max_step) and max_step as set, apart */
+        snprintf(said, sizeof said, "with steps of h=%g (max_step=%g)", 1.0 / ceil(p.k_fast / h_lambda),
+                 h_lambda / p.k_fast);
+        CHECK_LOG(said);
         CHECK_NEAR(getr(c, VR_Y1), 2.0, 0.0); /* back at the start */
     }
     fmi2FreeInstance(c);

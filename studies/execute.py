@@ -84,8 +84,14 @@ def check_size(plan, *, workers: int | None = None, scheduler: str | None = None
 
 
 def cores() -> int:
-    """This machine's cores as Python counts them (os.cpu_count(); 1 if it cannot say)."""
-    return os.cpu_count() or 1
+    """The cores this process may run on: its CPU affinity where the system reports one
+    (os.sched_getaffinity: `taskset -c 0 gyrowheel sweep ...` gives 1, so a LocalCluster does
+    not start more workers than it can run), else the machine's (os.cpu_count()); 1 if neither
+    can say."""
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except (AttributeError, OSError):  # no affinity on this system (macOS, Windows)
+        return os.cpu_count() or 1
 
 
 def check_workers(workers: int | None) -> None:

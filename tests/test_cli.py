@@ -210,7 +210,6 @@ def test_a_reader_that_goes_away_is_no_error(built):
 
 def test_the_sweep_says_where_it_runs(monkeypatch, capsys):
     """The sweep's first line says where it runs in words, with the number of workers."""
-    import os
     from types import SimpleNamespace
 
     import gyrowheel.api
@@ -222,7 +221,8 @@ def test_the_sweep_says_where_it_runs(monkeypatch, capsys):
         kwargs["on_start"](plan)
         raise gyrowheel.SweepSpecError("spy")
     monkeypatch.setattr(gyrowheel.api, "sweep", spy)
-    cores = os.cpu_count() or 1
+    from gyrowheel.studies.execute import cores as machine_cores
+    cores = machine_cores()
     for argv, where in ((["--workers", "2"], "a LocalCluster of 2 workers"),
                         (["--workers", "1"], "a LocalCluster of 1 worker"),
                         ([], f"a LocalCluster of {cores} worker{'s' * (cores != 1)} (one per core)"),

@@ -7,7 +7,6 @@ that answers but is no Dask scheduler ends the command with one line and exit 1,
 traceback."""
 from __future__ import annotations
 
-import os
 import re
 import socket
 import threading
@@ -17,7 +16,7 @@ from types import SimpleNamespace
 import pytest
 
 from gyrowheel.cli import main
-from gyrowheel.studies import SweepSpecError, sweep
+from gyrowheel.studies import SweepSpecError, execute, sweep
 
 
 @pytest.mark.parametrize("kwargs, message", [
@@ -178,7 +177,7 @@ def test_an_address_that_refuses_fails_within_seconds(earth_fmu, tmp_path, capsy
 def test_workers_far_above_the_cores_refused_at_once(earth_fmu, tmp_path, capsys):
     """--workers 1000 on 2 cores was still starting its LocalCluster after 120 s: more than 4
     worker processes per core is refused in one line before anything runs."""
-    cores = os.cpu_count() or 1
+    cores = execute.cores()
     t0 = time.monotonic()
     code = main(["sweep", str(earth_fmu), "--grid", "M=1,2", "--stop-time", "0.1", "--workers", str(4 * cores + 1),
                  "--no-progress", "-o", str(tmp_path / "t.csv")])
@@ -190,7 +189,17 @@ def test_workers_far_above_the_cores_refused_at_once(earth_fmu, tmp_path, capsys
         sweep(earth_fmu, grid={"M": [1.0]}, stop_time=0.1, workers=4 * cores + 1)
 
 
-CORES = os.cpu_count() or 1
+CORES = execute.cores()
+
+
+def test_the_cores_are_those_the_process_may_run_on(monkeypatch):
+    """Under `taskset -c 0` a LocalCluster of one worker per core starts one worker, not one per
+    core of the machine (its workers would share the one core they may use)."""
+    monkeypatch.setattr(execute.os, "sched_getaffinity", lambda pid: {0}, raising=False)
+    monkeypatch.setattr(execute.os, "cpu_count", lambda: 8)
+    assert execute.cores() == 1 and execute.local_workers(None, 10)[0] == 1
+    monkeypatch.delattr(execute.os, "sched_getaffinity")  # a system without affinity: the machine's
+    assert execute.cores() == 8 and execute.local_workers(None, 10) == (8, "8 workers (one per core)")
 
 
 @pytest.mark.parametrize("workers, points, used", [

@@ -3,7 +3,8 @@
  * communication step h is cut into n = ceil(h / max_step) equal substeps on a deterministic
  * grid (t_i = t0 + i h / n, the last one exactly t_end).  Both refuse a step beyond their
  * stability limit on the real axis (an estimate of h |lambda| from the step's own derivatives:
- * Euler's secant, RK4's stages), since such garbage can cross event indicators: a "fall" located
+ * Euler's secant along the step, RK4's stages and its secant at the step's end), since such
+ * garbage can cross event indicators: a "fall" located
  * at beta = -31 rad after one step of a wheel spinning at 1e5 rad/s.  Dense output: the cubic
  * Hermite of gw_solver.c.
  */

@@ -7,6 +7,7 @@ import math
 import os
 import re
 import warnings
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -165,17 +166,18 @@ class Messages:
         for s, m in self.lines:
             if s != 1:
                 continue
-            event = EVENT_LOGGED.fullmatch(m) or EVENT_AT_START.fullmatch(m)
+            start = EVENT_AT_START.fullmatch(m)
+            event = start or EVENT_LOGGED.fullmatch(m)
             if event:
                 fired.append((event.group(1), float(event.group(2))))
-                if EVENT_AT_START.fullmatch(m):
+                if start:
                     at_start[event.group(1)] = m.removeprefix("warning: ")
             else:
                 plain.append(m.removeprefix("warning: "))
-        names = list(dict.fromkeys(name for name, _ in fired))  # fired_events' order
+        counts = Counter(name for name, _ in fired)  # in the order of first firing, fired_events' order
         return list(dict.fromkeys(plain)) + [
-            at_start[name] if name in at_start and sum(n == name for n, _ in fired) == 1 else f"event {phrase}"
-            for name, phrase in zip(names, fired_events(fired))]
+            at_start[name] if name in at_start and counts[name] == 1 else f"event {phrase}"
+            for name, phrase in zip(counts, fired_events(fired))]
 
 
 def fired_events(events: list[tuple[str, float]]) -> list[str]:
@@ -292,8 +294,7 @@ def _grid_rows(result: np.ndarray, start: float, interval: float) -> np.ndarray:
     its grid, start + k interval (fmpy.simulation.simulateCS).  Those rows are dropped; the first
     and the last (a fall's, at its located time, or the stop time) are kept.  (n,) -> (m,), m <= n."""
     t = result["time"]
-    k = np.round((t - start) / interval)
-    keep = np.array([start + kk * interval == tt for kk, tt in zip(k.tolist(), t.tolist())], dtype=bool)
+    keep = start + np.round((t - start) / interval) * interval == t  # fmpy's float operations, bit for bit
     keep[0] = keep[-1] = True
     return result[keep]
 

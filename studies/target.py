@@ -171,8 +171,9 @@ def refused_at_initialisation(instance, values: dict, points, start_time: float)
     The values are refused only when no point initialises with them: a point that does (the
     first, as a rule: one initialisation) ends the check, and the points refused with them fail
     as points, the others run (beta_min_deg 80 refuses beta_deg 60, not 85).  A point the unit
-    refuses on its own says nothing about them (it fails as a point either way).  At most three
-    initialisations per point, each a few microseconds, against a run per point.
+    refuses on its own says nothing about them (it fails as a point either way).  Each point
+    checked costs one or two initialisations of a few microseconds (against a run per point),
+    the first that names the culprit one more per shared value.
     """
     def reason(own: dict) -> str | None:
         try:

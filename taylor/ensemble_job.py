@@ -31,8 +31,8 @@ def check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
     an ArgumentError naming the field, an ArgumentTypeError for one that is no number ('10', a
     string, is refused as every gyrowheel function refuses it: gyrowheel.arguments.number).
     Returns the grid as a contiguous float array (empty: grid None, no grid); a grid not 1-D
-    is refused (ArgumentError naming its shape), not flattened, and so is an empty one.  Each error's `argument` names the field
-    (None only for t_start and t_end both not finite).
+    is refused (ArgumentError naming its shape), not flattened, and so is an empty one.  Each
+    error's `argument` names the field (None only for t_start and t_end both not finite).
     rel_tol and abs_tol outside the FMU's ranges (fmu_build.scene.TOLERANCE_RANGES) are refused
     here, once, rather than by every trajectory's instance.  (math.isfinite on the scalars:
     numpy's took 2 us of a small run.)"""
@@ -76,13 +76,12 @@ def check_job(t_start, t_end, rel_tol, abs_tol, max_step, grid) -> np.ndarray:
     if not g.size:  # no point at all, not even t_end: not the same as no grid
         raise ArgumentError(f"grid must hold the communication points up to t_end = {t1!r} (the last equal to it), "
                             "got none; leave grid out (None) for a run straight to t_end", argument="grid")
-    if g.size:
-        if not np.all(np.isfinite(g)):
-            raise ArgumentError("grid: communication points must be finite", argument="grid")
-        if not (g[0] > t0 and np.all(np.diff(g) > 0)):
-            raise ArgumentError(f"grid: communication points must increase strictly after t_start = {t0!r}",
-                                argument="grid")
-        if g[-1] != t1:
-            raise ArgumentError(f"grid: the last communication point {float(g[-1])!r} must equal t_end = {t1!r}",
-                                argument="grid")
+    if not np.all(np.isfinite(g)):
+        raise ArgumentError("grid: communication points must be finite", argument="grid")
+    if not (g[0] > t0 and np.all(np.diff(g) > 0)):
+        raise ArgumentError(f"grid: communication points must increase strictly after t_start = {t0!r}",
+                            argument="grid")
+    if g[-1] != t1:
+        raise ArgumentError(f"grid: the last communication point {float(g[-1])!r} must equal t_end = {t1!r}",
+                            argument="grid")
     return g

@@ -25,9 +25,9 @@ def test_bench_quick_writes_figure_and_table(tmp_path):
 
 
 def test_dop853_ab_reference_is_a_git_ref_or_a_directory(tmp_path):
-    """benchmarks/dop853_ab.py compared against /work/main by default, a path only the project's
-    own machine has: from a clean clone it failed.  The reference is now a git ref of the
-    repository (default main) exported with git archive, or a directory (found in review)."""
+    """The reference of benchmarks/dop853_ab.py is a git ref of the repository (default main)
+    exported with git archive, or a directory; never a path that only one machine has, so that
+    the script runs from a clean clone."""
     import shutil
     import subprocess
     import sys
@@ -91,3 +91,31 @@ def test_to_heyoka_translates_an_ode_of_t_x_p():
     t, x, u, p = (ca.SX.sym(n, k) for n, k in (("t", 1), ("x", 2), ("u", 0), ("p", 1)))
     good = ca.Function("ode", [t, x, u, p], [ca.vertcat(x[1] * p, -ca.sin(x[0]) + t)], ["t", "x", "u", "p"], ["xdot"])
     assert len(to_heyoka(good, hy.make_vars("x0", "x1"), [2.0])) == 2
+
+
+def test_work_precision_repetitions_are_rounds_over_every_setting(monkeypatch):
+    """work_precision times each setting as the best of --repeat rounds, each round running every
+    setting of every method once (timed_rounds): a setting's repetitions spread over the run, not
+    back to back, so that a period of a slower machine does not decide a whole row.  Kept per
+    (method, setting): the fastest seconds and step_seconds; a peer's NaN step time stays NaN."""
+    bench = ROOT / "benchmarks"
+    sys.path.insert(0, str(bench))
+    try:
+        import work_precision as wp
+    finally:
+        sys.path.remove(str(bench))
+    calls = []
+
+    def one_round(sc, args, plain, base):
+        k = len(calls)
+        calls.append(k)
+        return [wp.Point("gyrowheel/taylor", 1e-4, [3.0, 1.0, 2.0][k], 1e-5, 0.0, step_seconds=[2.5, 0.5, 1.5][k]),
+                wp.Point("heyoka", 1e-4, [1.0, 4.0, 0.5][k], 2e-5, 0.0),
+                wp.Point("gyrowheel/taylor", 1e-7, [6.0, 7.0, 5.0][k], 1e-8, 0.0, step_seconds=[5.5, 6.5, 4.5][k])]
+    monkeypatch.setattr(wp, "timed_round", one_round)
+    points = wp.timed_rounds(None, None, None, 3, True)
+    assert calls == [0, 1, 2]
+    assert [(p.method, p.setting, p.seconds) for p in points] == [
+        ("gyrowheel/taylor", 1e-4, 1.0), ("heyoka", 1e-4, 0.5), ("gyrowheel/taylor", 1e-7, 5.0)]
+    assert [p.step_seconds for p in points][::2] == [0.5, 4.5]
+    assert points[1].step_seconds != points[1].step_seconds  # NaN

@@ -14,8 +14,9 @@
  * The widths (docs/performance.md, "The ensemble's lane count"): a lane slice of the Taylor
  * kernel is one vector register (gw_taylor_ops.h): 4 doubles with AVX2, 8 with AVX-512F (an
  * ensemble of 8 lanes there is built with 8-double slices, gyrowheel.taylor.lanes.slice_width;
- * per trajectory 0.63-0.78x the time of 4 lanes at N = 16 and 64, about the same at N = 8,
- * benchmarks/ensemble_scaling.py); without either (the portable build, SSE2 pairs on x86-64,
+ * per trajectory 0.63-0.78x the time of 4 lanes at N = 16 and 64 on one machine, 1.1-1.2x on
+ * another of the same CPU model, so gyrowheel.taylor.lanes.ensemble_lanes times both kernels
+ * there before it takes 8); without either (the portable build, SSE2 pairs on x86-64,
  * GW_NO_CLONES) 2 lanes measured fastest per trajectory, about half the time of 1 or 4 lanes at
  * N = 8, 16 and 64.
  *

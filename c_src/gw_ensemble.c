@@ -48,8 +48,9 @@ typedef int gw_unity_build_part; /* compiled on its own this file is empty: see 
     static __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 /* GW_ENSEMBLE_AVX512 (gyrowheel.taylor.lanes.slice_width: the CPU has AVX-512F, the lanes are a
  * multiple of 8): the kernel's slices are 8 doubles, one AVX-512 register in the x86-64-v4
- * clone that CPU runs (per trajectory 0.63-0.78x the time of 4-double slices at 8 lanes, N = 16
- * and 64, paper; benchmarks/ensemble_scaling.py).  Each lane's operations are those of a
+ * clone that CPU runs (on one machine per trajectory 0.63-0.78x the time of 4-double slices at
+ * 8 lanes, N = 16 and 64, paper, benchmarks/ensemble_scaling.py; on another no faster, so
+ * gyrowheel.taylor.lanes.ensemble_lanes times both).  Each lane's operations are those of a
  * 4-double slice, so the bits are the same.  Not without the clones: the portable code would
  * run the 8-double vectors as 2-double pieces through memory. */
 #if defined(GW_ENSEMBLE_AVX512) && GW_ENSEMBLE_AVX512
@@ -475,6 +476,30 @@ GW_API gw_status gw_ensemble_run_in(gw_ensemble_ctx *C, gw_logger_fn logger, voi
     for (l = 0; l < GW_ENS_LANES; l++) gw_ens_fill(E, &E->lane[l]);
     while (gw_ens_step(E, order) > 0) {
     }
+    return GW_OK;
+}
+
+/* `calls` calls of the batch kernel at the order of rel_tol (gw_taylor_order), every lane at the
+ * state x (nx) with inputs u (nu) and parameters p (np), in the context's batch memory: the
+ * arithmetic of an ensemble step without its control, which gyrowheel.taylor.lanes times to
+ * compare lane counts on the machine at hand.  The next run sets every lane afresh.  GW_OK, or
+ * GW_ERROR for rel_tol not > 0 or calls < 0 (nothing run). */
+GW_API gw_status gw_ensemble_kernel_calls(gw_ensemble_ctx *C, double rel_tol, long calls,
+                                          const double *x, const double *u, const double *p) {
+    gw_ensemble *E = &C->E;
+    const gw_model *m = E->m;
+    int i, l, order;
+    long k;
+    if (!(rel_tol > 0.0) || calls < 0) return GW_ERROR;
+    order = gw_taylor_order(rel_tol);
+    for (l = 0; l < GW_ENS_LANES; l++) {
+        E->t[l] = 0.0;
+        for (i = 0; i < m->nx; i++) E->x[(size_t)i * GW_ENS_LANES + l] = x[i];
+        for (i = 0; i < m->nu; i++) E->u[(size_t)i * GW_ENS_LANES + l] = u[i];
+        for (i = 0; i < m->np; i++) E->p[(size_t)i * GW_ENS_LANES + l] = p[i];
+    }
+    if (m->taylor.n_cst > 0) gw_tlb_cst(E->u, E->p, E->c);
+    for (k = 0; k < calls; k++) gw_tlb_series(order, E->t, E->x, E->c, E->wa[0]);
     return GW_OK;
 }
 

@@ -53,4 +53,12 @@ GW_API gw_status gw_ensemble_run_in(gw_ensemble_ctx *ctx, gw_logger_fn logger, v
                                     const gw_ensemble_job *job);
 GW_API void gw_ensemble_free(gw_ensemble_ctx *ctx);
 
+/* `calls` calls of the batch kernel at the order of rel_tol, every lane at state x (nx), inputs
+ * u (nu), parameters p (np): what a lane count costs per step on this machine, without the
+ * control (gyrowheel.taylor.lanes.ensemble_lanes times it).  GW_ERROR for rel_tol not > 0 or
+ * calls < 0. */
+#define GW_ENSEMBLE_KERNEL_CALLS 1 /* for gw_ensemble_lib.c, which also compiles older FMUs' runtimes */
+GW_API gw_status gw_ensemble_kernel_calls(gw_ensemble_ctx *ctx, double rel_tol, long calls,
+                                          const double *x, const double *u, const double *p);
+
 #endif /* GW_ENSEMBLE_H */

@@ -98,6 +98,21 @@ GW_EXPORT void *GW_LIB(new)(void) {
 GW_EXPORT void GW_LIB(free)(void *ctx);
 GW_EXPORT void GW_LIB(free)(void *ctx) { gw_ensemble_free((gw_ensemble_ctx *)ctx); }
 
+/* `calls` batch-kernel calls at the order of rel_tol, every lane at x, u, p
+ * (gw_ensemble_kernel_calls); 0, -1 for rel_tol not > 0 or calls < 0, -2 where the FMU's
+ * runtime has no gw_ensemble_kernel_calls (an FMU built by an earlier gyrowheel) */
+GW_EXPORT int GW_LIB(kernel_calls)(void *ctx, double rel_tol, long calls, const double *x,
+                                   const double *u, const double *p);
+GW_EXPORT int GW_LIB(kernel_calls)(void *ctx, double rel_tol, long calls, const double *x,
+                                   const double *u, const double *p) {
+#ifdef GW_ENSEMBLE_KERNEL_CALLS
+    return gw_ensemble_kernel_calls((gw_ensemble_ctx *)ctx, rel_tol, calls, x, u, p) == GW_OK ? 0 : -1;
+#else
+    (void)ctx, (void)rel_tol, (void)calls, (void)x, (void)u, (void)p;
+    return -2;
+#endif
+}
+
 /* one run (gw_ensemble_job's fields as arguments; span: t_start, t_end; tol: rel_tol, abs_tol,
  * max_step); ctx NULL: memory made and freed in this run */
 GW_EXPORT int GW_LIB(run)(void *ctx, long n, const double *p, const double *s,

@@ -3,8 +3,9 @@
 The plain path (gyrowheel.studies.batch.run_point) drives one FMU instance point after point;
 when the unit is a gyrowheel FMU that carries the Taylor kernel and its solver for the sweep is
 taylor (named, or auto, the default, in a model without mode switches: auto integrates with
-taylor there), the same points can run several at a time (the CPU's lane count,
-gyrowheel.taylor.lanes.cpu_lanes: 8 with AVX-512F, 4 with AVX2, else 2) with the Taylor coefficients of
+taylor there), the same points can run several at a time (the machine's lane count,
+gyrowheel.taylor.lanes.ensemble_lanes: 4 with AVX2, 8 or 4 with AVX-512F as they measure, else
+2) with the Taylor coefficients of
 all lanes computed together (c_src/gw_ensemble.c). Each lane is a full gw_instance advanced
 from communication point to communication point as fmi2DoStep advances it (same grid
 t_i = t0 + i h, the last landing on the stop time; the budget, event count and step guard of
@@ -41,7 +42,6 @@ _LOCK = threading.Lock()
 def _ensemble(target, payload):
     """The target's Ensemble (compiled once per machine, loaded once per process), or None."""
     from gyrowheel.taylor.ensemble import Ensemble, EnsembleError
-    from gyrowheel.taylor.lanes import cpu_lanes
 
     with _LOCK:
         if target.digest not in _ENSEMBLES:
@@ -55,7 +55,7 @@ def _ensemble(target, payload):
                 else:
                     shutil.copyfile(target.path, fmu)
                 try:
-                    _ENSEMBLES[target.digest] = Ensemble(fmu, lanes=cpu_lanes())
+                    _ENSEMBLES[target.digest] = Ensemble(fmu)  # the machine's lanes: ensemble_lanes
                 except EnsembleError:
                     _ENSEMBLES[target.digest] = None
         return _ENSEMBLES[target.digest]

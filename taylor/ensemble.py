@@ -45,8 +45,9 @@ __all__ = ["Ensemble", "EnsembleResult", "EnsembleError", "STATUS_OK", "STATUS_T
            "STATUS_ERROR", "LANES"]
 
 STATUS_OK, STATUS_TERMINATED, STATUS_ERROR = 0, 2, 3  # gw_status values
-# trajectories advanced together (GW_ENSEMBLE_LANES) by default: the CPU's count, chosen at run
-# time (gyrowheel.taylor.lanes.cpu_lanes: 8 with AVX-512F, 4 with AVX2, else 2); LANES = None
+# trajectories advanced together (GW_ENSEMBLE_LANES) by default: the machine's count, chosen at
+# run time (gyrowheel.taylor.lanes.ensemble_lanes: 4 with AVX2, 8 or 4 with AVX-512F as they
+# measure, else 2); LANES = None
 # means that choice, an integer passed as `lanes` overrides it.  docs/performance.md, "The
 # ensemble's lane count"
 LANES = None
@@ -274,8 +275,9 @@ class Ensemble:
 
     fmu: the .fmu, built by gyrowheel with the Taylor kernel (gyrowheel.build(..., taylor=True)):
     a path (str or os.PathLike) or the BuildResult of gyrowheel.build; lanes: trajectories
-    advanced together (default None: this CPU's count, gyrowheel.taylor.lanes.cpu_lanes, 8 with
-    AVX-512F, 4 with AVX2, else PORTABLE_LANES; any integer >= 1 overrides it, each width its own
+    advanced together (default None: this machine's count, gyrowheel.taylor.lanes.ensemble_lanes,
+    4 with AVX2, with AVX-512F 8 where its kernel measures faster than 4, else 4, else
+    PORTABLE_LANES; any integer >= 1 overrides it, each width its own
     cached library; `self.lanes` is the count built; a trajectory's result is the same bit for
     bit in any job and on 2 to 16 lanes; on 1 lane equal to rounding); cache: where the library
     (and the lane-count probe) is kept (default ~/.cache/gyrowheel/ensemble);
@@ -289,11 +291,12 @@ class Ensemble:
 
     def __init__(self, fmu: str | Path, lanes: int | None = LANES, cache: str | Path | None = None,
                  defines: dict | None = None):
-        from gyrowheel.taylor.lanes import cpu_lanes, slice_defines
+        from gyrowheel.taylor.lanes import ensemble_lanes, slice_defines
+        defines, fmu = _checked_defines(defines), _fmu_path(fmu)
         if lanes is None:
-            lanes = cpu_lanes(cache)
+            lanes = ensemble_lanes(fmu, cache, defines)
         _check_lanes(lanes)
-        lanes, defines, fmu = int(lanes), _checked_defines(defines), _fmu_path(fmu)
+        lanes = int(lanes)
         # the CPU's slice width (8 lanes per vector with AVX-512F), unless the caller's defines say
         defines = {**{k: str(v) for k, v in slice_defines(lanes, cache).items()}, **defines}
         # the front end is the installed runtime's (its functions and layout are what this class

@@ -1,4 +1,4 @@
-"""The ensemble's lane count for this CPU (trajectories advanced together by one Taylor kernel).
+"""The ensemble's lane count for this machine (trajectories advanced together by one Taylor kernel).
 
 `cpu_lanes()` asks c_src/gw_cpu_lanes.c, compiled once into a tiny shared library beside the
 ensemble libraries' cache (keyed by its source, flags and compiler) and loaded once per process:
@@ -11,10 +11,21 @@ ensemble libraries' cache (keyed by its source, flags and compiler) and loaded o
 CPU: 8 where the CPU has AVX-512F and lanes is a multiple of 8 (the library is then built with
 GW_ENSEMBLE_AVX512, `slice_defines`), else 4, 2 or 1, the largest that divides lanes.
 
+`ensemble_lanes(fmu)` is the count `Ensemble(fmu)` and the sweep engine take: cpu_lanes(), except
+where that is 8 (AVX-512F), which holds only where it measures faster.  An AVX-512 register does
+not make 8 lanes cheaper everywhere: on one 2-core virtual machine an 8-lane kernel call cost
+1.35-1.42 one-lane calls, on another of the same CPU model (AMD EPYC, family 25) 2.5, more than
+two 4-lane calls.  So there the model's kernel is timed once per process at 8 lanes (8-double
+slices) and at 4 (gw_ensemble_kernel_calls, about 5 ms once both libraries are compiled), and 8
+lanes are kept if a call costs at most WIDE_MARGIN times two 4-lane calls: a batch of 8 also waits
+longer for its slowest lane (at N = 8 the ensemble's time ratio of 8 to 4 lanes was 1.3-1.7 times
+the kernel's, at N = 16 and 64 1.0-1.4 times).
+
 The features come from the compiler's __builtin_cpu_supports (GCC, clang); another compiler or
 architecture answers PORTABLE_LANES at compile time.  `Ensemble(fmu)` and the sweep engine
-(gyrowheel.studies) take this count; `Ensemble(fmu, lanes=W)` overrides it.  A trajectory's
-result does not depend on the count (tests/test_ensemble.py), only the time does.
+(gyrowheel.studies) take this count, on AVX-512F the measured one (`ensemble_lanes`);
+`Ensemble(fmu, lanes=W)` overrides it.  A trajectory's result does not depend on the count
+(tests/test_ensemble.py), only the time does.
 
 Errors: CompileError (gyrowheel.fmu_build.compiler) if no C compiler can build the probe;
 ArgumentError for a `portable` value that is not an integer >= 1.  Measurements:
@@ -32,13 +43,20 @@ from gyrowheel.errors import ArgumentError
 from gyrowheel.fmu_build.compiler import compile_shared, compiler
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR
 
-__all__ = ["cpu_lanes", "cpu_features", "slice_width", "slice_defines", "PORTABLE_LANES"]
+__all__ = ["cpu_lanes", "cpu_features", "ensemble_lanes", "slice_width", "slice_defines", "PORTABLE_LANES",
+           "WIDE_MARGIN"]
 
 PORTABLE_LANES = 2  # GW_CPU_LANES_PORTABLE: neither AVX-512F nor AVX2, or no way to ask
 PROBE_SOURCE = "gw_cpu_lanes.c"
 _FEATURES = {2: "avx512f", 1: "avx2", 0: "portable"}
 _LOADED: dict[tuple, ctypes.CDLL] = {}
 _LOCK = threading.Lock()
+WIDE, NARROW = 8, 4  # the lane counts ensemble_lanes compares on AVX-512F
+WIDE_MARGIN = 0.85  # 8 lanes kept where their kernel call costs at most this x two 4-lane calls
+PROBE_REL_TOL = 1e-8  # the kernel's order timed: gw_taylor_order(1e-8), mid-range
+PROBE_ROUNDS, PROBE_SECONDS = 7, 2e-4  # interleaved rounds of about this long per lane count
+_MEASURED: dict[tuple, int] = {}  # ensemble_lanes' answers in this process, by defines
+_MEASURE_LOCK = threading.Lock()
 
 
 def _probe(cache: Path | None, portable: int) -> ctypes.CDLL:
@@ -90,3 +108,75 @@ def slice_defines(lanes: int, cache: str | os.PathLike | None = None) -> dict[st
     {"GW_ENSEMBLE_AVX512": 1} where slice_width is 8 (c_src/gw_ensemble.c: the 8-double slices
     of its x86-64-v4 clone), else {}."""
     return {"GW_ENSEMBLE_AVX512": 1} if slice_width(lanes, cache) == 8 else {}
+
+
+def ensemble_lanes(fmu, cache: str | os.PathLike | None = None, defines: dict | None = None) -> int:
+    """The lane count of Ensemble(fmu) (lanes=None) and of the sweep engine's batches on this
+    machine: cpu_lanes(cache), except that where that is 8 (AVX-512F) it is 8 only if one call of
+    the 8-lane kernel (8-double slices) of fmu's model costs at most WIDE_MARGIN (0.85) times two
+    calls of the 4-lane kernel, timed here (kernel_call_seconds, interleaved rounds), else 4.
+    Measured once per process and `defines` (the first model asked about stands for the
+    machine); the Ensemble libraries of both counts are compiled and cached as Ensemble's.
+    fmu, cache, defines: as Ensemble's.  Raises what Ensemble(fmu, lanes=8, ...) raises
+    (FmuError, EnsembleError, CompileError, ArgumentError naming a bad define)."""
+    cpu = cpu_lanes(cache)
+    if cpu != WIDE:
+        return cpu
+    from gyrowheel.taylor.ensemble import Ensemble, _checked_defines
+    key = tuple(sorted(_checked_defines(defines).items()))
+    with _MEASURE_LOCK:
+        if key not in _MEASURED:
+            wide, narrow = (Ensemble(fmu, lanes=w, cache=cache, defines=defines) for w in (WIDE, NARROW))
+            seconds = kernel_call_seconds([wide, narrow])
+            if seconds is None:  # the FMU's runtime cannot time its kernel: the CPU's count
+                return cpu
+            _MEASURED[key] = WIDE if seconds[0] <= WIDE_MARGIN * 2.0 * seconds[1] else NARROW
+        return _MEASURED[key]
+
+
+def kernel_call_seconds(ensembles: list) -> list[float] | None:
+    """Thread CPU seconds of one batch-kernel call of each Ensemble in `ensembles` (their
+    libraries' kernel_calls: every lane at the FMU's initial state, the order of rel_tol
+    PROBE_REL_TOL), the best of PROBE_ROUNDS rounds that time each in turn, so that all are timed
+    at the same moments (a virtual machine's speed changes for 0.1 s to seconds at a time).
+    None where an FMU's runtime has no kernel_calls (built by an earlier gyrowheel)."""
+    import time
+    d = ctypes.POINTER(ctypes.c_double)
+    calls, timers = [], []
+    for ens in ensembles:
+        fn = getattr(ens._lib, f"{ens.identifier}_ensemble_kernel_calls")
+        fn.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_long, d, d, d]
+        fn.restype = ctypes.c_int
+        free = getattr(ens._lib, f"{ens.identifier}_ensemble_free")
+        free.argtypes = [ctypes.c_void_p]
+        x = (ctypes.c_double * max(ens.nx, 1))(*ens.run(1e-9).x_final[0])  # the initial state, 1 ns on
+        u = (ctypes.c_double * max(ens.nu, 1))()
+        p = (ctypes.c_double * max(ens.np, 1))(*ens.default_parameters)
+        ctx = ctypes.c_void_p(ens._new_context())
+        if not ctx.value:
+            raise MemoryError("ensemble context: out of memory")
+        timers.append((fn, ctx, x, u, p, free))
+
+    def timed(k: int, n: int) -> float:
+        fn, ctx, x, u, p, _ = timers[k]
+        t0 = time.thread_time()
+        rc = fn(ctx, PROBE_REL_TOL, n, x, u, p)
+        if rc == -2:
+            raise LookupError
+        if rc != 0:
+            raise RuntimeError("kernel_calls refused its arguments")
+        return time.thread_time() - t0
+    try:
+        for k in range(len(timers)):  # calls per round: about PROBE_SECONDS
+            try:
+                calls.append(max(1, int(PROBE_SECONDS / max(timed(k, 20) / 20, 1e-9))))
+            except LookupError:
+                return None
+        best = [float("inf")] * len(timers)
+        for _ in range(PROBE_ROUNDS):
+            for k in range(len(timers)):
+                best[k] = min(best[k], timed(k, calls[k]) / calls[k])
+        return best
+    finally:
+        for fn, ctx, *_, free in timers:
+            free(ctx)

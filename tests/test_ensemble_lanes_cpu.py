@@ -16,7 +16,9 @@ import pytest
 from gyrowheel.errors import ArgumentError
 from gyrowheel.fmu_build.runtime import RUNTIME_DIR
 from gyrowheel.taylor.ensemble import Ensemble
-from gyrowheel.taylor.lanes import PORTABLE_LANES, cpu_features, cpu_lanes, slice_defines, slice_width
+from gyrowheel.taylor import lanes as lanes_module
+from gyrowheel.taylor.lanes import (PORTABLE_LANES, WIDE_MARGIN, cpu_features, cpu_lanes, ensemble_lanes,
+                                    kernel_call_seconds, slice_defines, slice_width)
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-shared", "-fPIC"]
 PROBE = RUNTIME_DIR / "gw_cpu_lanes.c"
@@ -76,17 +78,18 @@ def test_bad_portable_count_is_refused_naming_it(tmp_path):
             slice_width(bad, tmp_path)
 
 
-def test_ensemble_and_sweep_engine_take_the_cpu_count(example_build, tmp_path, monkeypatch):
-    """Ensemble(fmu).lanes is the CPU's count (what the library was built with: it reports its
-    GW_ENSEMBLE_LANES), lanes=W overrides it, and the sweep engine's batches run on the CPU's count;
-    the FMU does not carry the probe."""
+def test_ensemble_and_sweep_engine_take_the_machines_count(example_build, tmp_path, monkeypatch):
+    """Ensemble(fmu).lanes is the machine's count, ensemble_lanes (what the library was built
+    with: it reports its GW_ENSEMBLE_LANES), lanes=W overrides it, and the sweep engine's batches
+    run on that count; the FMU does not carry the probe."""
     import zipfile
 
     from gyrowheel.studies import ensemble_path, sweep
     fmu = example_build("paper_earth", taylor=True).fmu
     with zipfile.ZipFile(fmu) as zf:  # the probe is built from the installed runtime, not the FMU's
         assert "sources/gw_cpu_lanes.c" not in zf.namelist() and "sources/gw_ensemble.c" in zf.namelist()
-    want = cpu_lanes(tmp_path)
+    want = ensemble_lanes(fmu, tmp_path)
+    assert want == cpu_lanes(tmp_path) or (cpu_lanes(tmp_path), want) == (8, 4)
     assert Ensemble(fmu, cache=tmp_path).lanes == want
     other = 4 if want != 4 else 8
     assert Ensemble(fmu, lanes=other, cache=tmp_path).lanes == other
@@ -102,3 +105,77 @@ def test_ensemble_and_sweep_engine_take_the_cpu_count(example_build, tmp_path, m
                   output_interval=0.1, solver="taylor", workers=0)
     assert (table["status"] == "ok").all()
     assert seen and set(seen) == {want}
+
+
+def test_ensemble_lanes_keep_8_only_where_their_kernel_measures_faster(example_build, tmp_path, monkeypatch):
+    """With AVX-512F (cpu_lanes 8) the default is 8 lanes where one 8-lane kernel call costs at most
+    WIDE_MARGIN x two 4-lane calls, else 4; measured once per process and defines; without it the
+    CPU's count, nothing timed or built."""
+    fmu = example_build("paper_earth", taylor=True).fmu
+    timed = []
+
+    def seconds(ensembles):
+        timed.append([e.lanes for e in ensembles])
+        return answer
+    monkeypatch.setattr(lanes_module, "kernel_call_seconds", seconds)
+    monkeypatch.setattr(lanes_module, "_MEASURED", {})
+    monkeypatch.setattr(lanes_module, "cpu_lanes", lambda cache=None, portable=PORTABLE_LANES: 4)
+    assert ensemble_lanes(fmu, tmp_path) == 4 and timed == []
+    monkeypatch.setattr(lanes_module, "cpu_lanes", lambda cache=None, portable=PORTABLE_LANES: 8)
+    answer = [2.0 * WIDE_MARGIN * 1e-6, 1e-6]  # at the margin: 8
+    assert ensemble_lanes(fmu, tmp_path) == 8 and timed == [[8, 4]]
+    answer = [1.0, 1e-9]  # measured already in this process: not again
+    assert ensemble_lanes(fmu, tmp_path) == 8 and len(timed) == 1
+    answer = [2.0 * WIDE_MARGIN * 1.001e-6, 1e-6]  # just above: 4, for other defines
+    assert ensemble_lanes(fmu, tmp_path, {"GW_TAYLOR_EXTRA_ORDER": 4}) == 4 and len(timed) == 2
+    assert Ensemble(fmu, cache=tmp_path, defines={"GW_TAYLOR_EXTRA_ORDER": 4}).lanes == 4
+
+
+def test_kernel_calls_time_the_lane_counts_and_refuse_bad_arguments(example_build, tmp_path):
+    """kernel_call_seconds: one kernel call of each library, positive and finite, more lanes no
+    cheaper per call than fewer by more than rounding of the clock; the C entry refuses rel_tol
+    <= 0 and calls < 0 (-1) and runs 0 calls."""
+    import numpy as np
+    fmu = example_build("paper_earth", taylor=True).fmu
+    ens = [Ensemble(fmu, lanes=w, cache=tmp_path) for w in (8, 4, 1)]
+    seconds = kernel_call_seconds(ens)
+    assert all(np.isfinite(s) and s > 0.0 for s in seconds)
+    assert seconds[0] > 0.5 * seconds[2]  # 8 lanes cost at least about one lane
+    e = ens[1]
+    fn = getattr(e._lib, f"{e.identifier}_ensemble_kernel_calls")
+    d = ctypes.POINTER(ctypes.c_double)
+    fn.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_long, d, d, d]
+    ctx = ctypes.c_void_p(e._new_context())
+    x = (ctypes.c_double * e.nx)(*e.run(1e-9).x_final[0])
+    u, p = (ctypes.c_double * 1)(), (ctypes.c_double * e.np)(*e.default_parameters)
+    try:
+        assert [fn(ctx, tol, n, x, u, p) for tol, n in ((1e-8, 0), (1e-8, 3), (0.0, 3), (float("nan"), 3),
+                                                         (1e-8, -1))] == [0, 0, -1, -1, -1]
+    finally:
+        getattr(e._lib, f"{e.identifier}_ensemble_free")(ctx)
+    # the context's next run is untouched by the calls: the same bits as a fresh library's
+    again = e.run(2.0, starts={"gamma_dot": [5.0, 6.0]})
+    fresh = Ensemble(fmu, lanes=4, cache=tmp_path / "fresh").run(2.0, starts={"gamma_dot": [5.0, 6.0]})
+    assert np.array_equal(again.x_final, fresh.x_final)
+
+
+def test_fmu_without_kernel_calls_keeps_the_cpu_count(example_build, tmp_path, monkeypatch):
+    """An FMU whose runtime has no gw_ensemble_kernel_calls (built by an earlier gyrowheel) still
+    makes its ensemble library; its lanes cannot be timed, so the CPU's count stands."""
+    import zipfile
+    src = example_build("paper_earth", taylor=True).fmu
+    old = tmp_path / "old.fmu"
+    with zipfile.ZipFile(src) as zin, zipfile.ZipFile(old, "w") as zout:
+        for item in zin.infolist():
+            data = zin.read(item)
+            for name, first, last in (("gw_ensemble.h", "#define GW_ENSEMBLE_KERNEL_CALLS", ");\n"),
+                                      ("gw_ensemble.c", "GW_API gw_status gw_ensemble_kernel_calls(", "\n}\n")):
+                if item.filename == f"sources/{name}":  # the declaration and the definition cut out
+                    text = data.decode()
+                    start = text.index(first)
+                    data = (text[:start] + text[text.index(last, start) + len(last):]).encode()
+            zout.writestr(item, data)
+    monkeypatch.setattr(lanes_module, "_MEASURED", {})
+    monkeypatch.setattr(lanes_module, "cpu_lanes", lambda cache=None, portable=PORTABLE_LANES: 8)
+    assert kernel_call_seconds([Ensemble(old, lanes=4, cache=tmp_path)]) is None
+    assert ensemble_lanes(old, tmp_path) == 8 and lanes_module._MEASURED == {}

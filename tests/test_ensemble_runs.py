@@ -20,7 +20,7 @@ from c_programs import C_SRC
 from conftest import SCENES, STATES
 from gyrowheel.errors import ArgumentError, ArgumentTypeError, FmuError, UnknownNameError
 from gyrowheel.taylor.ensemble import LANES, STATUS_OK, STATUS_TERMINATED, Ensemble
-from gyrowheel.taylor.lanes import cpu_lanes
+from gyrowheel.taylor.lanes import ensemble_lanes
 from taylor_helpers import TAYLOR, fmu_runner
 
 
@@ -44,11 +44,11 @@ def _one_step_run(runner, stop: float, **values) -> float:
 
 def test_ensemble_equals_single_runs(paper, tmp_path):
     """N trajectories (g, gamma_dot varied; some fall) equal N fmi2DoStep runs with taylor, on the
-    default lanes (the CPU's, gyrowheel.taylor.lanes.cpu_lanes: the library reports the
+    default lanes (the machine's, gyrowheel.taylor.lanes.ensemble_lanes: the library reports the
     GW_ENSEMBLE_LANES it was built with, so the default reaches the C; the sweep engine uses it)."""
     built, runner = paper
     ens = Ensemble(built.fmu, cache=tmp_path)
-    assert LANES is None and ens.lanes == cpu_lanes(tmp_path)
+    assert LANES is None and ens.lanes == ensemble_lanes(built.fmu, tmp_path)
     g = np.array([9.81, 3.721, 1.625, 9.81, 9.81, 0.0, 9.81, 5.0, 9.81, 2.0])
     spin = np.array([6.0, 6.0, 6.0, 1.0, 0.5, 3.0, 8.0, 4.0, 0.2, 6.0])
     res = ens.run(20.0, parameters={"g": g, "beta_min": 0.1}, starts={"gamma_dot": spin}, rel_tol=1e-10)

@@ -8,8 +8,10 @@ rectangle), and a variant "M, R +-20 %" with also the mass and the radius per tr
 (1 + 0.2 u) times the scene's, u in [-1, 1] stratified the same way (frac((i + 1/2) sqrt 2),
 frac((i + 1/2) sqrt 3)).
   gyrowheel  gyrowheel.taylor.ensemble.Ensemble(lanes=W).run on the N trajectories, W = the CPU's
-             count (gyrowheel.taylor.lanes.cpu_lanes) and the other of 4 and 8: the whole call
-             (marshalling, the lanes' initialisation, integration), abs_tol = rel_tol x {1e-2, 1}
+             count (gyrowheel.taylor.lanes.cpu_lanes) and the other of 4 and 8, "(default)" the
+             count Ensemble(fmu) takes on this machine (ensemble_lanes: on AVX-512F 8 or 4 as
+             their kernels measure): the whole call (marshalling, the lanes' initialisation,
+             integration), abs_tol = rel_tol x {1e-2, 1}
   heyoka     taylor_adaptive_batch of heyoka.recommended_simd_size() (8 on AVX-512) on the FMU's own
              expression graph (taylor_vs_heyoka.to_heyoka; M and R as runtime parameters,
              heyoka.par, in the variant), the N trajectories in consecutive batches as a user
@@ -22,7 +24,8 @@ grid of tolerances (work_precision.tolerance_grid: --per-decade per decade, 4 by
 for both) that reaches it counts, per method.  Every time is thread CPU time,
 best of --repeat, all settings of all methods interleaved in each repetition; ratios compare
 per-trajectory times in this one run.  The table: time per trajectory of each method and
-heyoka / gyrowheel's best (above 1: the ensemble faster).
+heyoka / gyrowheel's default width (above 1: the ensemble faster; heyoka / the fastest width
+where --lanes leaves the default out).
 Also the fixed cost of one run: N = 1 to t_end = 1 ms (a handful of steps), and N = 4 to
 1e-9 s at rel_tol 1e-4 (what a run pays besides its steps).
 --against REF (a git revision, e.g. main, or a checkout directory; either layout of the project:
@@ -53,7 +56,7 @@ from work_precision import PER_DECADE, SCENARIOS, best_time, per_decade_option, 
 
 from gyrowheel.fmu_build import build_fmu, parse_scene  # noqa: E402
 from gyrowheel.taylor.ensemble import Ensemble  # noqa: E402
-from gyrowheel.taylor.lanes import cpu_lanes  # noqa: E402
+from gyrowheel.taylor.lanes import cpu_lanes, ensemble_lanes  # noqa: E402
 
 VARIANTS = {"nominal": "beta0, gamma_dot0 spread", "mass_radius": "beta0, gamma_dot0 spread, M, R +-20 %"}
 SPREAD = ("M", "R")  # the parameters of the variant mass_radius
@@ -212,17 +215,22 @@ def main() -> int:
         fns = built.spec.functions()
         start_names = [q.name for q in built.spec.starts]
         param_names = [q.name for q in built.spec.parameters]
-        ens = {f"gyrowheel W={w}": Ensemble(built.fmu, lanes=w, cache=work / "ens", defines=defines or None)
-               for w in lanes}
+        default = ensemble_lanes(built.fmu, work / "ens", defines or None)  # what Ensemble(fmu) takes
+        ens = {f"gyrowheel W={w}" + (" (default)" if w == default else ""):
+               Ensemble(built.fmu, lanes=w, cache=work / "ens", defines=defines or None) for w in lanes}
+        # the ratio: heyoka over Ensemble(fmu)'s width, or over the fastest width timed without it
+        ours_cols = [c for c in ens if c.endswith("(default)")] or list(ens)
         if args.against:
             ens[f"{args.against} W=4"] = ensemble_at(args.against, scene, work)
         hb = HeyokaBatch(g, param_names, simd)
         heyoka_name = f"heyoka batch {simd}"
         cols = list(ens) + [heyoka_name]
         print(f"### ensemble scaling, {args.scenario} scenario ({stop:g} s), time per trajectory (ms)\n")
-        print(f"CPU lanes (gyrowheel.taylor.lanes.cpu_lanes): {cpu}; heyoka.recommended_simd_size(): {simd}"
+        print(f"CPU lanes (gyrowheel.taylor.lanes.cpu_lanes): {cpu}; Ensemble(fmu)'s lanes on this machine "
+              f"(ensemble_lanes): {default}; heyoka.recommended_simd_size(): {simd}"
               + (f"; gyrowheel built with {defines}" if defines else "") + "\n")
-        print("| trajectories | target | N | " + " | ".join(cols) + " | heyoka / gyrowheel best |")
+        ratio_name = "heyoka / gyrowheel default" if ours_cols != list(ens) else "heyoka / gyrowheel best"
+        print("| trajectories | target | N | " + " | ".join(cols) + f" | {ratio_name} |")
         print("|---|---|---|" + "---|" * (len(cols) + 1))
         summary = {}
         for variant in args.variants:
@@ -245,14 +253,14 @@ def main() -> int:
                     for (name, tol, af), (sec, x) in timed.items():
                         if float(np.max(np.abs(x - ref))) <= target and sec < cheapest.get(name, (np.inf,))[0]:
                             cheapest[name] = (sec, tol)
-                    ours = [cheapest[c][0] for c in ens if c in cheapest]
+                    ours = [cheapest[c][0] for c in ours_cols if c in cheapest]
                     cells = " | ".join(f"{cheapest[c][0] / n * 1e3:.4f} (tol {cheapest[c][1]:.0e})" if c in cheapest
                                        else "-" for c in cols)
                     ratio = (cheapest[heyoka_name][0] / min(ours)) if ours and heyoka_name in cheapest else None
                     summary[variant, target, n] = ratio
                     print(f"| {VARIANTS[variant]} | {target:g} | {n} | {cells} | "
                           f"{'-' if ratio is None else f'{ratio:.2f}'} |", flush=True)
-        print("\nheyoka / gyrowheel per trajectory (above 1: the ensemble faster):\n")
+        print(f"\n{ratio_name}, per trajectory (above 1: the ensemble faster):\n")
         print("| trajectories | N | " + " | ".join(f"{t:g}" for t in args.targets) + " |")
         print("|---|---|" + "---|" * len(args.targets))
         for variant in args.variants:

@@ -195,6 +195,7 @@ class Scenario:
         self.energy_row = out_names.index("energy")
         self.reference = None
         self.counts: dict = {}  # solver_counts of a setting (run_internal)
+        self.refused: set = set()  # settings a solver refused (run_internal), reported once
         self.heyoka = None  # peers.Heyoka, its integrators compiled once (run_heyoka)
         self.E0 = float(np.array(self.fns["out"](0.0, self.x0, self.u, self.p)).ravel()[self.energy_row])
 
@@ -271,7 +272,9 @@ def run_internal(sc: Scenario, solver: str, settings, repeat: int, label: str = 
                 seconds = min(seconds, runner.last_call_seconds)
                 step_seconds = min(step_seconds, runner.last_seconds)
         except Exception as exc:  # a solver that cannot do this scenario at this setting
-            print(f"  {solver} {value:g}: {exc}", file=sys.stderr)
+            if (solver, label, value) not in sc.refused:  # said once, not in every round
+                sc.refused.add((solver, label, value))
+                print(f"  {solver} {value:g}: {exc}", file=sys.stderr)
             continue
         point = sc.score(f"gyrowheel/{solver}{label}", value, seconds, res[:-1], res[-1])
         point.step_seconds = step_seconds
@@ -511,8 +514,8 @@ def table(name: str, points: list[Point]) -> str:
             lines.append(f"| {row} | " + " | ".join(cell(per[t].get(row), t) for t in TARGETS) + " |")
     lines.append("")
     lines.append("Cheapest time to reach each final-state error (max abs error of the 8 states), thread CPU time "
-                 "of the whole call, best of the repetitions; in parentheses heyoka's time over it (above 1: "
-                 f"faster than heyoka; \"-\": not reached). gyrowheel's error floor: {floor:.1e}.")
+                 "of the whole call, best of the rounds (each round every setting once); in parentheses heyoka's "
+                 f"time over it (above 1: faster than heyoka; \"-\": not reached). gyrowheel's error floor: {floor:.1e}.")
     return "\n".join(lines)
 
 

@@ -97,6 +97,10 @@ def _check_lanes(lanes) -> None:
                             argument="lanes")
 
 
+# the unity file's own macros (library_source): a define of either would be a redefinition
+_RESERVED_DEFINES = {"GW_ENSEMBLE_LANES": "the lanes argument", "GW_ENSEMBLE_ID": "the FMU's model identifier"}
+
+
 def _checked_defines(defines) -> dict:
     """defines as {name: value text}; ArgumentError naming the field for anything else."""
     if defines is None:
@@ -107,6 +111,9 @@ def _checked_defines(defines) -> dict:
     for name, value in defines.items():
         if not isinstance(name, str) or not _C_NAME.fullmatch(name):
             raise ArgumentError(f"defines: {name!r} is not a C identifier", argument="defines")
+        if name in _RESERVED_DEFINES:
+            raise ArgumentError(f"defines: {name} is set by Ensemble itself ({_RESERVED_DEFINES[name]})",
+                                argument="defines")
         if isinstance(value, bool) or not isinstance(value, (int, np.integer, str)) or \
                 (isinstance(value, str) and ("\n" in value or "\\" in value)):
             raise ArgumentError(f"defines: {name} must be an integer or a one-line string, got {value!r}",
@@ -275,9 +282,10 @@ class Ensemble:
 
     fmu: the .fmu, built by gyrowheel with the Taylor kernel (gyrowheel.build(..., taylor=True)):
     a path (str or os.PathLike) or the BuildResult of gyrowheel.build; lanes: trajectories
-    advanced together (default None: this machine's count, gyrowheel.taylor.lanes.ensemble_lanes,
-    4 with AVX2, with AVX-512F 8 where its kernel measures faster than 4, else 4, else
-    PORTABLE_LANES; any integer >= 1 overrides it, each width its own
+    advanced together (default None: this machine's count, gyrowheel.taylor.lanes.ensemble_lanes:
+    8 with AVX-512F where the model's 8-lane kernel call measures at most 0.7x two 4-lane calls,
+    otherwise 4 there and with AVX2, PORTABLE_LANES without either; any integer >= 1 overrides
+    it, each width its own
     cached library; `self.lanes` is the count built; a trajectory's result is the same bit for
     bit in any job and on 2 to 16 lanes; on 1 lane equal to rounding); cache: where the library
     (and the lane-count probe) is kept (default ~/.cache/gyrowheel/ensemble);

@@ -18,7 +18,7 @@ from gyrowheel.fmu_build.runtime import RUNTIME_DIR
 from gyrowheel.taylor.ensemble import Ensemble
 from gyrowheel.taylor import lanes as lanes_module
 from gyrowheel.taylor.lanes import (PORTABLE_LANES, WIDE_MARGIN, cpu_features, cpu_lanes, ensemble_lanes,
-                                    kernel_call_seconds, slice_defines, slice_width)
+                                    kernel_call_ratio, kernel_call_seconds, slice_defines, slice_width)
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-shared", "-fPIC"]
 PROBE = RUNTIME_DIR / "gw_cpu_lanes.c"
@@ -71,8 +71,9 @@ def test_probe_is_strict_c99_and_falls_back_to_its_compile_time_default(cc, tmp_
 
 def test_bad_portable_count_is_refused_naming_it(tmp_path):
     for bad in (0, -2, 2.5, True, "4"):
-        with pytest.raises(ArgumentError, match="portable"):
+        with pytest.raises(ArgumentError, match="portable") as info:
             cpu_lanes(tmp_path, portable=bad)
+        assert info.value.argument == "portable"
     for bad in (0, -8, 8.0, True, "8"):
         with pytest.raises(ArgumentError, match="lanes"):
             slice_width(bad, tmp_path)
@@ -108,27 +109,57 @@ def test_ensemble_and_sweep_engine_take_the_machines_count(example_build, tmp_pa
 
 
 def test_ensemble_lanes_keep_8_only_where_their_kernel_measures_faster(example_build, tmp_path, monkeypatch):
-    """With AVX-512F (cpu_lanes 8) the default is 8 lanes where one 8-lane kernel call costs at most
-    WIDE_MARGIN x two 4-lane calls, else 4; measured once per process and defines; without it the
-    CPU's count, nothing timed or built."""
-    fmu = example_build("paper_earth", taylor=True).fmu
-    timed = []
+    """With AVX-512F (cpu_lanes 8) the default is 8 lanes where the median ratio of one 8-lane
+    kernel call to two 4-lane calls is at most WIDE_MARGIN, else 4; measured once per process,
+    model and defines (another model or other defines: measured again, so the order of the calls
+    does not matter); without AVX-512F the CPU's count, nothing timed.  Every call checks its
+    arguments as Ensemble does, measured before or not.  (The libraries are stand-ins here: what
+    is timed is tested below.)"""
+    import zipfile
 
-    def seconds(ensembles):
-        timed.append([e.lanes for e in ensembles])
+    import gyrowheel.taylor.ensemble as ensemble_mod
+    from gyrowheel.errors import ArgumentTypeError, FmuError
+    fmu = example_build("paper_earth", taylor=True).fmu
+    other = tmp_path / "other.fmu"  # another model's bytes: the same FMU with one more file
+    with zipfile.ZipFile(fmu) as zin, zipfile.ZipFile(other, "w") as zout:
+        for item in zin.infolist():
+            zout.writestr(item, zin.read(item))
+        zout.writestr("documentation/extra.txt", "another model")
+    timed, built = [], []
+
+    class StandIn:
+        def __init__(self, path, lanes=None, cache=None, defines=None):
+            built.append(lanes)
+            self.lanes = lanes
+
+    def ratio(wide, narrow):
+        timed.append((wide.lanes, narrow.lanes))
         return answer
-    monkeypatch.setattr(lanes_module, "kernel_call_seconds", seconds)
-    monkeypatch.setattr(lanes_module, "_MEASURED", {})
-    monkeypatch.setattr(lanes_module, "cpu_lanes", lambda cache=None, portable=PORTABLE_LANES: 4)
-    assert ensemble_lanes(fmu, tmp_path) == 4 and timed == []
+    with monkeypatch.context() as m:
+        m.setattr(ensemble_mod, "Ensemble", StandIn)
+        m.setattr(lanes_module, "kernel_call_ratio", ratio)
+        m.setattr(lanes_module, "_MEASURED", {})
+        m.setattr(lanes_module, "cpu_lanes", lambda cache=None, portable=PORTABLE_LANES: 4)
+        assert ensemble_lanes(fmu, tmp_path) == 4 and timed == [] and built == [4]
+        m.setattr(lanes_module, "_MEASURED", {})
+        m.setattr(lanes_module, "cpu_lanes", lambda cache=None, portable=PORTABLE_LANES: 8)
+        answer = WIDE_MARGIN  # at the margin: 8
+        assert ensemble_lanes(fmu, tmp_path) == 8 and timed == [(8, 4)]
+        answer = 5.0  # measured already for this model in this process: not again
+        assert ensemble_lanes(fmu, tmp_path) == 8 and len(timed) == 1
+        assert ensemble_lanes(other, tmp_path) == 4 and len(timed) == 2  # another model: its own
+        answer = WIDE_MARGIN * 1.001  # just above: 4, for other defines
+        assert ensemble_lanes(fmu, tmp_path, {"GW_TAYLOR_EXTRA_ORDER": 4}) == 4 and len(timed) == 3
+        assert ensemble_lanes(fmu, tmp_path) == 8 and len(timed) == 3
     monkeypatch.setattr(lanes_module, "cpu_lanes", lambda cache=None, portable=PORTABLE_LANES: 8)
-    answer = [2.0 * WIDE_MARGIN * 1e-6, 1e-6]  # at the margin: 8
-    assert ensemble_lanes(fmu, tmp_path) == 8 and timed == [[8, 4]]
-    answer = [1.0, 1e-9]  # measured already in this process: not again
-    assert ensemble_lanes(fmu, tmp_path) == 8 and len(timed) == 1
-    answer = [2.0 * WIDE_MARGIN * 1.001e-6, 1e-6]  # just above: 4, for other defines
-    assert ensemble_lanes(fmu, tmp_path, {"GW_TAYLOR_EXTRA_ORDER": 4}) == 4 and len(timed) == 2
-    assert Ensemble(fmu, cache=tmp_path, defines={"GW_TAYLOR_EXTRA_ORDER": 4}).lanes == 4
+    junk = tmp_path / "junk.fmu"
+    junk.write_bytes(b"not a zip")
+    for bad, error in ((tmp_path / "no_such.fmu", FmuError), (junk, FmuError), (123, ArgumentTypeError)):
+        with pytest.raises(error) as info:
+            ensemble_lanes(bad, tmp_path)
+        assert info.value.argument == "fmu"
+    with pytest.raises(ArgumentError, match="defines"):
+        ensemble_lanes(fmu, tmp_path, {"GW_ENSEMBLE_LANES": 8})
 
 
 def test_kernel_calls_time_the_lane_counts_and_refuse_bad_arguments(example_build, tmp_path):
@@ -141,6 +172,9 @@ def test_kernel_calls_time_the_lane_counts_and_refuse_bad_arguments(example_buil
     seconds = kernel_call_seconds(ens)
     assert all(np.isfinite(s) and s > 0.0 for s in seconds)
     assert seconds[0] > 0.5 * seconds[2]  # 8 lanes cost at least about one lane
+    rounds = kernel_call_seconds(ens[:2], per_round=True)
+    assert len(rounds) == lanes_module.PROBE_ROUNDS and all(len(r) == 2 and min(r) > 0.0 for r in rounds)
+    assert 0.0 < kernel_call_ratio(ens[0], ens[1]) < np.inf
     e = ens[1]
     fn = getattr(e._lib, f"{e.identifier}_ensemble_kernel_calls")
     d = ctypes.POINTER(ctypes.c_double)
@@ -178,4 +212,5 @@ def test_fmu_without_kernel_calls_keeps_the_cpu_count(example_build, tmp_path, m
     monkeypatch.setattr(lanes_module, "_MEASURED", {})
     monkeypatch.setattr(lanes_module, "cpu_lanes", lambda cache=None, portable=PORTABLE_LANES: 8)
     assert kernel_call_seconds([Ensemble(old, lanes=4, cache=tmp_path)]) is None
-    assert ensemble_lanes(old, tmp_path) == 8 and lanes_module._MEASURED == {}
+    assert ensemble_lanes(old, tmp_path) == 8 and list(lanes_module._MEASURED.values()) == [8]
+    assert ensemble_lanes(old, tmp_path) == 8  # kept: not timed again

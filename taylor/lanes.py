@@ -14,8 +14,8 @@ GW_ENSEMBLE_AVX512, `slice_defines`), else 4, 2 or 1, the largest that divides l
 `ensemble_lanes(fmu)` is the count `Ensemble(fmu)` and the sweep engine take: cpu_lanes(), except
 where that is 8 (AVX-512F), which holds only where it measures faster.  An AVX-512 register does
 not make 8 lanes cheaper everywhere: on one 2-core virtual machine an 8-lane kernel call cost
-1.35-1.42 one-lane calls, on another of the same CPU model (AMD EPYC, family 25) 2.5, more than
-two 4-lane calls.  So there the model's kernel is timed once per process and model at 8 lanes
+1.35-1.42 one-lane calls, on another of the same CPU model (AMD EPYC, family 25) 2.5-2.8, about
+two 4-lane calls or more.  So there the model's kernel is timed once per process and model at 8 lanes
 (8-double slices) and at 4 (gw_ensemble_kernel_calls), and 8 lanes are kept if the median over
 rounds of an 8-lane call's time over two 4-lane calls' is at most WIDE_MARGIN (0.7): a batch of 8
 also waits longer for its slowest lane, the more so with events (at N = 8 the ensemble's time

@@ -115,7 +115,8 @@ def slice_defines(lanes: int, cache: str | os.PathLike | None = None) -> dict[st
     return {"GW_ENSEMBLE_AVX512": 1} if slice_width(lanes, cache) == 8 else {}
 
 
-def ensemble_lanes(fmu, cache: str | os.PathLike | None = None, defines: dict | None = None) -> int:
+def ensemble_lanes(fmu, cache: str | os.PathLike | None = None, defines: dict | None = None, *,
+                   check: bool = True) -> int:
     """The lane count of Ensemble(fmu) (lanes=None) and of the sweep engine's batches on this
     machine: cpu_lanes(cache), except that where that is 8 (AVX-512F) it is 8 only if one call of
     the 8-lane kernel (8-double slices) of fmu's model costs at most WIDE_MARGIN (0.7) times two
@@ -125,27 +126,26 @@ def ensemble_lanes(fmu, cache: str | os.PathLike | None = None, defines: dict | 
     (built by an earlier gyrowheel) keeps cpu_lanes().
     fmu, cache, defines: as Ensemble's.  Raises what Ensemble(fmu, lanes=8, ...) raises
     (FmuError, EnsembleError, CompileError; ArgumentError naming a bad define, ArgumentTypeError
-    for an fmu that is no path), on every call."""
+    for an fmu that is no path), on every call.  check=False (Ensemble's own call, which builds
+    the library next and names its faults): nothing is built where nothing is measured."""
     from gyrowheel.taylor.ensemble import Ensemble, _checked_defines, _fmu_path
     checked, path = _checked_defines(defines), _fmu_path(fmu)
-    cpu = cpu_lanes(cache)
-    try:
-        key = (hashlib.sha256(path.read_bytes()).hexdigest(), tuple(sorted(checked.items())))
-    except OSError:  # no such file, a directory, ...: Ensemble names the fault
-        Ensemble(path, lanes=cpu, cache=cache, defines=checked)
-        raise
-    with _MEASURE_LOCK:
-        if key in _MEASURED:
-            return _MEASURED[key]
-        if cpu != WIDE:
+    cpu, key = cpu_lanes(cache), None
+    if cpu == WIDE:
+        try:
+            key = (hashlib.sha256(path.read_bytes()).hexdigest(), tuple(sorted(checked.items())))
+        except OSError:  # no such file, a directory, ...: Ensemble names the fault
+            pass
+    if key is None:
+        if check:
             Ensemble(path, lanes=cpu, cache=cache, defines=checked)  # its faults named here too
-            lanes = cpu
-        else:
+        return cpu
+    with _MEASURE_LOCK:
+        if key not in _MEASURED:
             wide, narrow = (Ensemble(path, lanes=w, cache=cache, defines=checked) for w in (WIDE, NARROW))
             ratio = kernel_call_ratio(wide, narrow)
-            lanes = cpu if ratio is None else WIDE if ratio <= WIDE_MARGIN else NARROW
-        _MEASURED[key] = lanes
-        return lanes
+            _MEASURED[key] = cpu if ratio is None else WIDE if ratio <= WIDE_MARGIN else NARROW
+        return _MEASURED[key]
 
 
 def kernel_call_ratio(wide, narrow) -> float | None:

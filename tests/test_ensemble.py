@@ -261,7 +261,8 @@ def test_ensembles_made_at_once_by_threads_on_a_cold_cache(paper, tmp_path, monk
     import gyrowheel.taylor.ensemble as ensemble_mod
     import gyrowheel.taylor.lanes as lanes_mod
 
-    monkeypatch.setattr(lanes_mod, "ensemble_lanes", lambda fmu, cache=None, defines=None: lanes_mod.cpu_lanes(cache))
+    monkeypatch.setattr(lanes_mod, "ensemble_lanes",
+                        lambda fmu, cache=None, defines=None, check=True: lanes_mod.cpu_lanes(cache))
 
     barrier = threading.Barrier(2, timeout=300)
     compile_shared = ensemble_mod.compile_shared
